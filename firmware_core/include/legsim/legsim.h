@@ -1,0 +1,299 @@
+/* legsim: fixed-step, allocation-free constraint kinematics and dynamics of a
+ * planar multibody leg in absolute coordinates q = (x, y, phi) per body.
+ *
+ * Plain C API. The solver state lives in storage the caller provides
+ * (legsim_sim_size() bytes, aligned to LEGSIM_STORAGE_ALIGN); nothing is
+ * allocated, ever. Every function returns a legsim_status; outputs are written
+ * only on LEGSIM_OK. SI units throughout (m, kg, s, N, N m, rad).
+ *
+ * Model (constant data, legsim_model_desc) and simulation (state + workspace,
+ * legsim_sim) are separate: every analysis is a function of the sim, which
+ * holds its compiled model.
+ */
+#ifndef LEGSIM_LEGSIM_H
+#define LEGSIM_LEGSIM_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "legsim/config.h" /* generated: LEGSIM_USE_FLOAT, capacities, feature switches */
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#if LEGSIM_USE_FLOAT
+typedef float legsim_real;
+#else
+typedef double legsim_real;
+#endif
+
+#define LEGSIM_FRAME (-1)        /* body index of the ground (the robot body) */
+#define LEGSIM_STORAGE_ALIGN 16  /* required alignment of the sim storage, bytes */
+
+/* ---- status ------------------------------------------------------------ */
+typedef enum legsim_status {
+  LEGSIM_OK = 0,
+  LEGSIM_ERR_NULL = 1,          /* a required pointer is NULL */
+  LEGSIM_ERR_STORAGE = 2,       /* storage too small or misaligned */
+  LEGSIM_ERR_MODEL = 3,         /* model description invalid (legsim_model_check tells why) */
+  LEGSIM_ERR_CAPACITY = 4,      /* model exceeds the compile-time capacity */
+  LEGSIM_ERR_BAD_INPUT = 5,     /* NaN/Inf, index out of range, or a nonsensical option */
+  LEGSIM_ERR_OUT_OF_STROKE = 6, /* a length command or assembly length outside the stroke */
+  LEGSIM_ERR_NOT_CONVERGED = 7, /* Newton iteration hit its limit */
+  LEGSIM_ERR_SINGULAR = 8,      /* constraint Jacobian (numerically) rank deficient: dead centre */
+  LEGSIM_ERR_UNREACHABLE = 9,   /* the lengths cannot be met: Newton diverged or stalled */
+  LEGSIM_ERR_NO_EQUILIBRIUM = 10, /* statics: the loads cannot be balanced (a free mechanism) */
+  LEGSIM_ERR_DISABLED = 11,     /* stripped at compile time or disabled by the scene options */
+  LEGSIM_ERR_STATE = 12,        /* state not finite or no pose assembled yet */
+  LEGSIM_ERR_DIVERGED = 13      /* the integrator produced a non-finite or exploding state */
+} legsim_status;
+
+const char *legsim_status_str(legsim_status s);
+
+/* ---- model description (data; double regardless of the build's real) --- */
+typedef enum legsim_joint_kind {
+  LEGSIM_JOINT_REVOLUTE_TO_FRAME = 0, /* point on body[0] = frame point (2 eqs) */
+  LEGSIM_JOINT_REVOLUTE = 1,          /* point on body[0] = point on body[1] (2 eqs) */
+  LEGSIM_JOINT_PRISMATIC = 2,         /* phi1 = phi0, centre of body[1] on the axis of body[0] (2 eqs) */
+  LEGSIM_JOINT_SLOT = 3               /* point on body[0] on the axis of body[1] (1 eq) */
+} legsim_joint_kind;
+
+typedef enum legsim_force_kind {
+  LEGSIM_FORCE_POINT = 0,        /* force value[0..1] (N, world) at point[0] of body[0] */
+  LEGSIM_FORCE_TORQUE = 1,       /* torque value[0] (N m) on body[0] */
+  LEGSIM_FORCE_SPRING_DAMPER = 2 /* linear spring-damper between point[0] of body[0] and point[1] of body[1] */
+} legsim_force_kind;
+
+typedef struct legsim_body_desc {
+  char name[LEGSIM_NAME_LEN];
+  double length_m;
+  double mass_kg;
+  double inertia_kgm2; /* about the centre of mass */
+} legsim_body_desc;
+
+typedef struct legsim_joint_desc {
+  char name[LEGSIM_NAME_LEN];
+  legsim_joint_kind kind;
+  int32_t body[2];     /* 0-based body indices; body[1] = LEGSIM_FRAME for revolute_to_frame */
+  double point[2][2];  /* body-fixed (xi, eta) on each body, or world (x, y) on the frame;
+                          prismatic: unused; slot: point[0] only */
+} legsim_joint_desc;
+
+typedef struct legsim_actuator_desc {
+  char name[LEGSIM_NAME_LEN];
+  int32_t joint;        /* a prismatic joint: cylinder body[0], rod body[1] */
+  double stroke_min_m;  /* length from the cylinder's proximal end to the rod's distal end */
+  double stroke_max_m;
+  double max_force_n;
+  double servo_kp_n_per_m;
+  double servo_kd_ns_per_m;
+} legsim_actuator_desc;
+
+typedef struct legsim_force_desc {
+  char name[LEGSIM_NAME_LEN];
+  legsim_force_kind kind;
+  int32_t body[2];       /* body[1] only for spring-dampers (LEGSIM_FRAME allowed) */
+  double point[2][2];    /* body-fixed (xi, eta), or world (x, y) on the frame */
+  double value[2];       /* point: (Fx, Fy) N; torque: value[0] N m */
+  double stiffness_n_per_m;
+  double damping_ns_per_m;
+  double rest_length_m;
+} legsim_force_desc;
+
+typedef struct legsim_coord_driver {
+  int32_t body;   /* 0-based */
+  int32_t coord;  /* 0: x, 1: y, 2: phi */
+  double value;   /* m or rad */
+} legsim_coord_driver;
+
+typedef struct legsim_pose_desc {
+  char name[LEGSIM_NAME_LEN];
+  int32_t n_drivers;
+  legsim_coord_driver driver[LEGSIM_MAX_POSE_DRIVERS];
+  double guess[LEGSIM_MAX_BODIES][3]; /* starting point of the assembly */
+} legsim_pose_desc;
+
+typedef struct legsim_model_desc {
+  char name[LEGSIM_NAME_LEN];
+  double gravity_mps2[2];
+  int32_t n_bodies, n_joints, n_actuators, n_forces, n_poses;
+  legsim_body_desc body[LEGSIM_MAX_BODIES];
+  legsim_joint_desc joint[LEGSIM_MAX_JOINTS];
+  legsim_actuator_desc actuator[LEGSIM_MAX_ACTUATORS];
+  legsim_force_desc force[LEGSIM_MAX_FORCES];
+  legsim_pose_desc pose[LEGSIM_MAX_POSES];
+  int32_t foot_body;       /* -1: none */
+  double foot_point[2];    /* (xi, eta) on foot_body */
+} legsim_model_desc;
+
+/* Checks a description. On error writes a one-line reason (e.g. "joint 'D': body 7
+ * does not exist") into msg (if not NULL) and returns LEGSIM_ERR_MODEL or
+ * LEGSIM_ERR_CAPACITY. */
+legsim_status legsim_model_check(const legsim_model_desc *model, char *msg, size_t msg_len);
+
+/* ---- options (per scene) ---------------------------------------------- */
+typedef enum legsim_integrator {
+  LEGSIM_INTEGRATOR_RK4 = 0,          /* explicit RK4 on the index-1 form + projection of q and qd */
+  LEGSIM_INTEGRATOR_GENERALIZED_ALPHA = 1 /* implicit index-3 generalized-alpha (Arnold & Bruls) */
+} legsim_integrator;
+
+/* Skip what a scene does not need (as MuJoCo's disable flags). */
+enum legsim_disable {
+  LEGSIM_DISABLE_GRAVITY = 1u << 0,
+  LEGSIM_DISABLE_FORCE_ELEMENTS = 1u << 1, /* point forces, torques, spring-dampers */
+  LEGSIM_DISABLE_REACTIONS = 1u << 2,      /* no multipliers at the end of a step */
+  LEGSIM_DISABLE_PROJECTION = 1u << 3,     /* RK4: no projection onto Phi = 0, Phi_q qd = 0 */
+  LEGSIM_DISABLE_ACTUATORS = 1u << 4,      /* actuators exert no force (passive joints) */
+  LEGSIM_DISABLE_STROKE_LIMITS = 1u << 5,  /* do not stop actuators at their stroke ends */
+  LEGSIM_DISABLE_ACCELERATIONS = 1u << 6   /* no qdd output at the end of a step */
+};
+
+typedef struct legsim_options {
+  legsim_integrator integrator;
+  double step_s;            /* fixed step h > 0 */
+  uint32_t disable;         /* legsim_disable flags */
+  double rho_inf;           /* generalized-alpha spectral radius at infinity, in [0, 1] */
+  int32_t max_newton_iter;  /* assembly, projection and implicit steps */
+  double newton_tol;        /* on the constraint residual (m, rad) and on corrections */
+} legsim_options;
+
+/* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-5 float). */
+legsim_options legsim_default_options(void);
+
+/* ---- simulation lifetime ---------------------------------------------- */
+typedef struct legsim_sim legsim_sim; /* opaque */
+
+size_t legsim_sim_size(void);
+
+/* Compiles the model into storage and assembles nothing yet (see legsim_assemble_pose). */
+legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_model_desc *model,
+                          const legsim_options *options, legsim_sim **out);
+legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options);
+
+/* ---- sizes and names --------------------------------------------------- */
+int32_t legsim_n_bodies(const legsim_sim *sim);
+int32_t legsim_n_coords(const legsim_sim *sim);       /* 3 * bodies */
+int32_t legsim_n_constraints(const legsim_sim *sim);  /* joint equations (16 or 15 for the leg) */
+int32_t legsim_n_joints(const legsim_sim *sim);
+int32_t legsim_n_actuators(const legsim_sim *sim);
+int32_t legsim_n_forces(const legsim_sim *sim);
+const legsim_model_desc *legsim_model(const legsim_sim *sim);
+
+/* ---- state ------------------------------------------------------------- */
+typedef struct legsim_report {
+  int32_t iterations;         /* Newton iterations of the last solve */
+  legsim_real residual;       /* max |Phi| after the last solve (m or rad) */
+  legsim_real condition;      /* estimate of cond(Phi_q) (sqrt of the Cholesky pivot ratio) */
+  uint32_t events;            /* legsim_event bits raised since the last legsim_clear_events */
+} legsim_report;
+
+enum legsim_event {
+  LEGSIM_EVENT_STROKE_MIN = 1u << 0,      /* an actuator reached its shortest length and stopped */
+  LEGSIM_EVENT_STROKE_MAX = 1u << 1,      /* an actuator reached its longest length and stopped */
+  LEGSIM_EVENT_FORCE_SATURATED = 1u << 2, /* a servo asked for more than max_force */
+  LEGSIM_EVENT_NEAR_SINGULAR = 1u << 3    /* condition estimate above LEGSIM_COND_WARN */
+};
+#define LEGSIM_COND_WARN 1e6
+
+legsim_status legsim_get_report(const legsim_sim *sim, legsim_report *out);
+legsim_status legsim_clear_events(legsim_sim *sim);
+/* Which actuators raised a stroke event (bit a = actuator a). */
+uint32_t legsim_stroke_event_mask(const legsim_sim *sim);
+
+double legsim_time(const legsim_sim *sim);
+uint64_t legsim_step_count(const legsim_sim *sim);
+/* n_coords values each. */
+legsim_status legsim_get_q(const legsim_sim *sim, legsim_real *q);
+legsim_status legsim_get_qd(const legsim_sim *sim, legsim_real *qd);
+legsim_status legsim_get_qdd(const legsim_sim *sim, legsim_real *qdd);
+/* Sets q and qd (qd may be NULL: zero) and time; does not project. */
+legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legsim_real *qd, double t_s);
+
+/* Constraint residual Phi(q) (n_constraints values) and its max-abs norm. */
+legsim_status legsim_constraints(const legsim_sim *sim, legsim_real *phi, legsim_real *max_abs);
+/* Dense constraint Jacobian, row-major n_constraints x n_coords. */
+legsim_status legsim_jacobian(const legsim_sim *sim, legsim_real *jac);
+
+legsim_status legsim_actuator_lengths(const legsim_sim *sim, legsim_real *length_m, legsim_real *rate_mps);
+/* Axial force of each actuator in the current state (N, > 0 extends). */
+legsim_status legsim_actuator_forces(const legsim_sim *sim, legsim_real *force_n);
+/* Foot point position (m, world). */
+legsim_status legsim_foot_position(const legsim_sim *sim, legsim_real *xy);
+
+/* ---- 1. assembly -------------------------------------------------------- */
+/* Newton-Raphson from the current q onto Phi(q) = 0 with the actuators at the
+ * given lengths (NULL: keep the current lengths). qd is set to zero.
+ * Reports out-of-stroke lengths, non-convergence, unreachable lengths and
+ * singular configurations; on failure q is left unchanged. */
+legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m);
+/* Assembles a named pose of the model from its guess, driving its coordinates. */
+legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose);
+
+/* ---- 2. velocity and acceleration analysis ------------------------------- */
+/* For driven actuator length rates (and accelerations), in the current q:
+ * solves Phi_q qd = -Phi_t and Phi_q qdd = gamma. Sets qd (and qdd). */
+legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps);
+legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2);
+
+/* ---- 3. inverse dynamics ------------------------------------------------- */
+/* Along a driven motion: assembles the lengths (from the current q), solves
+ * velocities and accelerations, then M qdd + Phi_q^T lambda = Q for lambda:
+ * actuator forces (driver multipliers) and joint reactions. Any of the output
+ * arrays may be NULL. */
+legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length_m,
+                                      const legsim_real *rate_mps, const legsim_real *accel_mps2,
+                                      legsim_real *actuator_force_n);
+
+/* ---- 4. statics ------------------------------------------------------------ */
+/* Equilibrium actuator forces and joint reactions in the current q (qd = 0)
+ * under the active loads (gravity and force elements). */
+legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n);
+
+typedef struct legsim_worst_case {
+  legsim_real max_reaction_n[LEGSIM_MAX_JOINTS];      /* max |force| over the sweep */
+  legsim_real max_actuator_force_n[LEGSIM_MAX_ACTUATORS]; /* max |F| over the sweep */
+  legsim_real at_length_m[LEGSIM_MAX_JOINTS][LEGSIM_MAX_ACTUATORS]; /* lengths where each max occurs */
+  legsim_real actuator_at_length_m[LEGSIM_MAX_ACTUATORS][LEGSIM_MAX_ACTUATORS];
+  int32_t n_poses;     /* poses evaluated */
+  int32_t n_failed;    /* grid points that could not be assembled (skipped, counted) */
+} legsim_worst_case;
+
+/* Worst-case statics over an n x n grid of the first two actuators' strokes
+ * (the paper's Section V). Leaves the sim at the last assembled pose. */
+legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst_case *out);
+
+/* ---- 5. forward dynamics ------------------------------------------------- */
+/* Advances n fixed steps with the selected integrator. Stops at the first
+ * failing step and returns its status (the state is that of the last good step). */
+legsim_status legsim_step(legsim_sim *sim, int32_t n_steps);
+
+/* ---- 6. reactions ---------------------------------------------------------- */
+typedef struct legsim_reaction {
+  legsim_real force_n[2];  /* force the joint applies to its first-listed body, world axes */
+  legsim_real moment_nm;   /* moment it applies about that body's centre of mass */
+} legsim_reaction;
+
+/* Reactions of every joint (n_joints entries) from the multipliers of the last
+ * dynamics, inverse-dynamics or statics solve (eq. (20) of the paper). */
+legsim_status legsim_reactions(const legsim_sim *sim, legsim_reaction *out);
+/* Raw multipliers (n_constraints values). */
+legsim_status legsim_multipliers(const legsim_sim *sim, legsim_real *lambda);
+
+/* ---- 7. actuators and loads ------------------------------------------------ */
+typedef enum legsim_actuator_mode {
+  LEGSIM_ACTUATOR_FORCE = 0,  /* apply a commanded axial force */
+  LEGSIM_ACTUATOR_LENGTH = 1  /* the servo holds a commanded length */
+} legsim_actuator_mode;
+
+/* |force| <= max_force and finite, else LEGSIM_ERR_BAD_INPUT (nothing changes). */
+legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n);
+/* Inside the stroke, else LEGSIM_ERR_OUT_OF_STROKE (nothing changes). */
+legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_real length_m);
+/* Sets a force element's value (point: 2 values N; torque: 1 value N m). */
+legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real *value);
+
+#ifdef __cplusplus
+}
+#endif
+#endif /* LEGSIM_LEGSIM_H */
