@@ -1,0 +1,62 @@
+// Actuators: force commands, the length servo (PD, saturated at max_force, and
+// saying so), and the hard stops at the stroke ends.
+#include "sim.hpp"
+
+namespace legsim {
+
+void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
+                            const VecQ &qd) {
+  (void)opt;
+  for (int a = 0; a < model.na; ++a) {
+    ActuatorState &st = d.act[a];
+    if (st.mode == LEGSIM_ACTUATOR_FORCE) {
+      st.force = st.setpoint;
+      continue;
+    }
+    const Actuator &ac = model.act[a];
+    real len, rate;
+    actuator_length(model, a, q, qd, len, rate);
+    real f = ac.kp * (st.setpoint - len) - ac.kd * rate;
+    // A real cylinder cannot push harder: saturate, and report it.
+    if (f > ac.fmax || f < -ac.fmax) {
+      f = f > 0 ? ac.fmax : -ac.fmax;
+      raise_event(d, LEGSIM_EVENT_FORCE_SATURATED);
+    }
+    st.force = f;
+  }
+}
+
+// After a step: an actuator beyond its stroke is put back on its end (a
+// projection onto Phi = 0 with that length driven) and its outward velocity is
+// removed: an inelastic hard stop. Raised as an event, never silent.
+legsim_status stroke_limits_enforce(Sim &sim, bool &stopped) {
+  stopped = false;
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  uint32_t mask = 0;
+  DriverValues &dv = d.drivers;
+  dv.ncoord = 0;
+  for (int a = 0; a < m.na; ++a) {
+    real len, rate;
+    actuator_length(m, a, d.q, d.qd, len, rate);
+    const Actuator &ac = m.act[a];
+    if (len >= ac.lmin && len <= ac.lmax) continue;
+    const bool low = len < ac.lmin;
+    mask |= 1u << a;
+    raise_event(d, low ? LEGSIM_EVENT_STROKE_MIN : LEGSIM_EVENT_STROKE_MAX);
+    dv.length[a] = low ? ac.lmin : ac.lmax;
+    const bool outward = low ? rate < 0 : rate > 0;
+    dv.rate[a] = outward ? real(0) : rate;
+    dv.accel[a] = 0;
+  }
+  if (!mask) return LEGSIM_OK;
+  stopped = true;
+  d.stroke_mask |= mask;
+  legsim_status s = layout_build(m, mask, 0, d.work);
+  if (s == LEGSIM_OK) s = layout_finish(d.work, dv);
+  if (s == LEGSIM_OK) s = assemble(sim, d.work, dv, d.q, m.minv);
+  if (s != LEGSIM_OK) return s;
+  return velocity_solve(sim, d.work, d.qd);
+}
+
+}  // namespace legsim

@@ -1,0 +1,495 @@
+// The plain C API: argument checks, state bookkeeping, and dispatch to the
+// analyses. Bad input is refused with a status before anything changes.
+#include <cstring>
+#include <new>
+
+#include "sim.hpp"
+
+using namespace legsim;
+
+static_assert(alignof(Sim) <= LEGSIM_STORAGE_ALIGN, "raise LEGSIM_STORAGE_ALIGN");
+
+namespace {
+
+Sim *as_sim(legsim_sim *s) { return reinterpret_cast<Sim *>(s); }
+const Sim *as_sim(const legsim_sim *s) { return reinterpret_cast<const Sim *>(s); }
+
+constexpr uint32_t kAllDisableFlags =
+    LEGSIM_DISABLE_GRAVITY | LEGSIM_DISABLE_FORCE_ELEMENTS | LEGSIM_DISABLE_REACTIONS |
+    LEGSIM_DISABLE_PROJECTION | LEGSIM_DISABLE_ACTUATORS | LEGSIM_DISABLE_STROKE_LIMITS |
+    LEGSIM_DISABLE_ACCELERATIONS;
+
+legsim_status options_check(const legsim_options *o) {
+  if (!o) return LEGSIM_ERR_NULL;
+  const bool integrator_ok =
+      (o->integrator == LEGSIM_INTEGRATOR_RK4 && LEGSIM_WITH_RK4) ||
+      (o->integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA && LEGSIM_WITH_GENERALIZED_ALPHA);
+  if (o->integrator != LEGSIM_INTEGRATOR_RK4 && o->integrator != LEGSIM_INTEGRATOR_GENERALIZED_ALPHA)
+    return LEGSIM_ERR_BAD_INPUT;
+  if (!integrator_ok) return LEGSIM_ERR_DISABLED;
+  if (!(std::isfinite(o->step_s) && o->step_s > 0 && o->step_s <= 1)) return LEGSIM_ERR_BAD_INPUT;
+  if (!(o->rho_inf >= 0 && o->rho_inf <= 1)) return LEGSIM_ERR_BAD_INPUT;
+  if (o->max_newton_iter < 1 || o->max_newton_iter > 1000) return LEGSIM_ERR_BAD_INPUT;
+  if (!(std::isfinite(o->newton_tol) && o->newton_tol > 0)) return LEGSIM_ERR_BAD_INPUT;
+  if (o->disable & ~kAllDisableFlags) return LEGSIM_ERR_BAD_INPUT;
+  return LEGSIM_OK;
+}
+
+bool finite_array(const legsim_real *x, int n) {
+  for (int i = 0; i < n; ++i)
+    if (!std::isfinite(x[i])) return false;
+  return true;
+}
+
+// Lengths inside every stroke (and finite), else the matching status.
+legsim_status lengths_check(const Model &m, const legsim_real *len) {
+  if (!finite_array(len, m.na)) return LEGSIM_ERR_BAD_INPUT;
+  for (int a = 0; a < m.na; ++a)
+    if (len[a] < m.act[a].lmin || len[a] > m.act[a].lmax) return LEGSIM_ERR_OUT_OF_STROKE;
+  return LEGSIM_OK;
+}
+
+// After the state changed outside a step: accelerations, multipliers and
+// reactions of the free dynamics at the new state.
+legsim_status state_refresh(Sim &sim) {
+  Data &d = sim.data;
+  const legsim_status s = dynamics_state_update(sim);
+  d.derivative_valid = s == LEGSIM_OK;
+  if (s == LEGSIM_OK) d.acc_aux = d.qdd;
+  return s;
+}
+
+legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord) {
+  legsim_status s = layout_build(sim.model, act_mask, ncoord, sim.data.work);
+  return s == LEGSIM_OK ? layout_finish(sim.data.work, sim.data.drivers) : s;
+}
+
+uint32_t all_actuators(const Model &m) { return (1u << m.na) - 1; }
+
+// Assembles d.work from d.q with geometric weights; commits q (qd = 0) on success.
+legsim_status assemble_commit(Sim &sim) {
+  Data &d = sim.data;
+  VecQ q = d.q;
+  const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight);
+  if (s != LEGSIM_OK) return s;
+  d.q = q;
+  d.qd.setZero();
+  d.assembled = true;
+  return state_refresh(sim);
+}
+
+}  // namespace
+
+extern "C" {
+
+legsim_status legsim_model_check(const legsim_model_desc *model, char *msg, size_t msg_len) {
+  return model_check(model, msg, msg_len);
+}
+
+legsim_options legsim_default_options(void) {
+  legsim_options o;
+  o.integrator = LEGSIM_INTEGRATOR_RK4;
+  o.step_s = 1e-3;
+  o.disable = 0;
+  o.rho_inf = 0.8;
+  o.max_newton_iter = 25;
+  o.newton_tol = LEGSIM_USE_FLOAT ? 1e-5 : 1e-10;
+  return o;
+}
+
+size_t legsim_sim_size(void) { return sizeof(Sim); }
+
+legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_model_desc *model,
+                          const legsim_options *options, legsim_sim **out) {
+  if (!storage || !model || !options || !out) return LEGSIM_ERR_NULL;
+  if (storage_bytes < sizeof(Sim) || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
+    return LEGSIM_ERR_STORAGE;
+  legsim_status s = options_check(options);
+  if (s != LEGSIM_OK) return s;
+  Sim *sim = new (storage) Sim;  // placement: the caller's storage, no heap
+  s = model_compile(model, sim->model);
+  if (s != LEGSIM_OK) return s;
+  sim->opt = *options;
+  Data &d = sim->data;
+  const Model &m = sim->model;
+  d.t = 0;
+  d.steps = 0;
+  d.assembled = false;
+  d.derivative_valid = false;
+  d.q.setZero();
+  d.qd.setZero();
+  d.qdd.setZero();
+  d.acc_aux.setZero();
+  d.lambda.setZero();
+  std::memset(d.reaction, 0, sizeof d.reaction);
+  std::memset(&d.report, 0, sizeof d.report);
+  std::memset(&d.drivers, 0, sizeof d.drivers);
+  d.stroke_mask = 0;
+  for (int a = 0; a < m.na; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0};
+  for (int f = 0; f < m.nf; ++f) {
+    d.force_value[f][0] = real(model->force[f].value[0]);
+    d.force_value[f][1] = real(model->force[f].value[1]);
+  }
+  s = layout_build(m, 0, 0, d.joints);
+  if (s == LEGSIM_OK) s = layout_finish(d.joints, d.drivers);
+  if (s != LEGSIM_OK) return s;
+  *out = reinterpret_cast<legsim_sim *>(sim);
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  const legsim_status s = options_check(options);
+  if (s != LEGSIM_OK) return s;
+  as_sim(sim)->opt = *options;
+  as_sim(sim)->data.derivative_valid = false;
+  return LEGSIM_OK;
+}
+
+int32_t legsim_n_bodies(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nb : 0; }
+int32_t legsim_n_coords(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nq : 0; }
+int32_t legsim_n_constraints(const legsim_sim *sim) { return sim ? as_sim(sim)->model.m : 0; }
+int32_t legsim_n_joints(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nj : 0; }
+int32_t legsim_n_actuators(const legsim_sim *sim) { return sim ? as_sim(sim)->model.na : 0; }
+int32_t legsim_n_forces(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nf : 0; }
+const legsim_model_desc *legsim_model(const legsim_sim *sim) {
+  return sim ? as_sim(sim)->model.desc : nullptr;
+}
+
+legsim_status legsim_get_report(const legsim_sim *sim, legsim_report *out) {
+  if (!sim || !out) return LEGSIM_ERR_NULL;
+  *out = as_sim(sim)->data.report;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_clear_events(legsim_sim *sim) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  as_sim(sim)->data.report.events = 0;
+  as_sim(sim)->data.stroke_mask = 0;
+  return LEGSIM_OK;
+}
+
+uint32_t legsim_stroke_event_mask(const legsim_sim *sim) {
+  return sim ? as_sim(sim)->data.stroke_mask : 0;
+}
+
+double legsim_time(const legsim_sim *sim) { return sim ? as_sim(sim)->data.t : 0.0; }
+uint64_t legsim_step_count(const legsim_sim *sim) { return sim ? as_sim(sim)->data.steps : 0; }
+
+legsim_status legsim_get_q(const legsim_sim *sim, legsim_real *q) {
+  if (!sim || !q) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  for (int k = 0; k < s.model.nq; ++k) q[k] = s.data.q[k];
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_get_qd(const legsim_sim *sim, legsim_real *qd) {
+  if (!sim || !qd) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  for (int k = 0; k < s.model.nq; ++k) qd[k] = s.data.qd[k];
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_get_qdd(const legsim_sim *sim, legsim_real *qdd) {
+  if (!sim || !qdd) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  if (s.opt.disable & LEGSIM_DISABLE_ACCELERATIONS) return LEGSIM_ERR_DISABLED;
+  for (int k = 0; k < s.model.nq; ++k) qdd[k] = s.data.qdd[k];
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legsim_real *qd,
+                               double t_s) {
+  if (!sim || !q) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const int n = s.model.nq;
+  if (!finite_array(q, n) || (qd && !finite_array(qd, n)) || !std::isfinite(t_s))
+    return LEGSIM_ERR_BAD_INPUT;
+  Data &d = s.data;
+  const VecQ q0 = d.q, qd0 = d.qd;
+  for (int k = 0; k < n; ++k) {
+    d.q[k] = q[k];
+    d.qd[k] = qd ? qd[k] : real(0);
+  }
+  const legsim_status st = state_refresh(s);
+  if (st != LEGSIM_OK) {
+    d.q = q0;
+    d.qd = qd0;
+    d.derivative_valid = false;
+    return st;
+  }
+  d.t = t_s;
+  d.assembled = true;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_constraints(const legsim_sim *sim, legsim_real *phi, legsim_real *max_abs) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  // the workspace is scratch: evaluating into it does not change the state
+  Sim &s = *const_cast<Sim *>(as_sim(sim));
+  Data &d = s.data;
+  rows_eval(s.model, d.joints, d.drivers, d.q, d.qd, d.rows);
+  if (phi)
+    for (int i = 0; i < s.model.m; ++i) phi[i] = d.rows.phi[i];
+  if (max_abs) *max_abs = rows_max_residual(d.joints, d.rows);
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_jacobian(const legsim_sim *sim, legsim_real *jac) {
+  if (!sim || !jac) return LEGSIM_ERR_NULL;
+  Sim &s = *const_cast<Sim *>(as_sim(sim));
+  Data &d = s.data;
+  const int n = s.model.nq;
+  rows_eval(s.model, d.joints, d.drivers, d.q, d.qd, d.rows);
+  for (int i = 0; i < s.model.m; ++i) {
+    for (int k = 0; k < n; ++k) jac[i * n + k] = 0;
+    for (int sl = 0; sl < 2; ++sl) {
+      const int b = d.joints.body[i][sl];
+      if (b < 0) continue;
+      for (int c = 0; c < 3; ++c) jac[i * n + 3 * b + c] += d.rows.coef[i][sl][c];
+    }
+  }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_actuator_lengths(const legsim_sim *sim, legsim_real *length_m, legsim_real *rate_mps) {
+  if (!sim || (!length_m && !rate_mps)) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  for (int a = 0; a < s.model.na; ++a) {
+    real l, r;
+    actuator_length(s.model, a, s.data.q, s.data.qd, l, r);
+    if (length_m) length_m[a] = l;
+    if (rate_mps) rate_mps[a] = r;
+  }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_actuator_forces(const legsim_sim *sim, legsim_real *force_n) {
+  if (!sim || !force_n) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  for (int a = 0; a < s.model.na; ++a) force_n[a] = s.data.act[a].force;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_foot_position(const legsim_sim *sim, legsim_real *xy) {
+  if (!sim || !xy) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  const int b = s.model.foot_body;
+  if (b < 0) return LEGSIM_ERR_BAD_INPUT;
+  const real phi = s.data.q[3 * b + 2];
+  const Vec2 p = Vec2(s.data.q[3 * b], s.data.q[3 * b + 1]) +
+                 s.model.foot_point.x() * axis_u(phi) + s.model.foot_point.y() * normal_n(phi);
+  xy[0] = p.x();
+  xy[1] = p.y();
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  Data &d = s.data;
+  if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
+  real len[kMaxActuators];
+  if (length_m) {
+    const legsim_status st = lengths_check(m, length_m);
+    if (st != LEGSIM_OK) return st;
+    for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
+  } else {
+    legsim_actuator_lengths(sim, len, nullptr);
+  }
+  for (int a = 0; a < m.na; ++a) {
+    d.drivers.length[a] = len[a];
+    d.drivers.rate[a] = d.drivers.accel[a] = 0;
+  }
+  d.drivers.ncoord = 0;
+  const legsim_status st = drivers_layout(s, all_actuators(m), 0);
+  return st == LEGSIM_OK ? assemble_commit(s) : st;
+}
+
+legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const legsim_model_desc *desc = s.model.desc;
+  if (pose < 0 || pose >= desc->n_poses) return LEGSIM_ERR_BAD_INPUT;
+  const legsim_pose_desc &p = desc->pose[pose];
+  Data &d = s.data;
+  d.drivers.ncoord = p.n_drivers;
+  for (int k = 0; k < p.n_drivers; ++k) d.drivers.coord[k] = p.driver[k];
+  legsim_status st = drivers_layout(s, 0, p.n_drivers);
+  if (st != LEGSIM_OK) return st;
+  const VecQ keep = d.q;
+  for (int b = 0; b < s.model.nb; ++b)
+    for (int c = 0; c < 3; ++c) d.q[3 * b + c] = real(p.guess[b][c]);
+  st = assemble_commit(s);
+  if (st != LEGSIM_OK) d.q = keep;
+  return st;
+}
+
+legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps) {
+  if (!sim || !rate_mps) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  Data &d = s.data;
+  if (!d.assembled) return LEGSIM_ERR_STATE;
+  if (!finite_array(rate_mps, m.na)) return LEGSIM_ERR_BAD_INPUT;
+  legsim_actuator_lengths(sim, d.drivers.length, nullptr);
+  for (int a = 0; a < m.na; ++a) {
+    d.drivers.rate[a] = rate_mps[a];
+    d.drivers.accel[a] = 0;
+  }
+  d.drivers.ncoord = 0;
+  legsim_status st = drivers_layout(s, all_actuators(m), 0);
+  if (st != LEGSIM_OK) return st;
+  VecQ qd = VecQ::Zero();
+  st = velocity_solve(s, d.work, qd);
+  if (st != LEGSIM_OK) return st;
+  d.qd = qd;
+  return state_refresh(s);
+}
+
+legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2) {
+  if (!sim || !accel_mps2) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  Data &d = s.data;
+  if (!d.assembled) return LEGSIM_ERR_STATE;
+  if (!finite_array(accel_mps2, m.na)) return LEGSIM_ERR_BAD_INPUT;
+  legsim_actuator_lengths(sim, d.drivers.length, d.drivers.rate);
+  for (int a = 0; a < m.na; ++a) d.drivers.accel[a] = accel_mps2[a];
+  d.drivers.ncoord = 0;
+  legsim_status st = drivers_layout(s, all_actuators(m), 0);
+  if (st != LEGSIM_OK) return st;
+  VecQ qdd;
+  st = acceleration_solve(s, d.work, qdd);
+  if (st != LEGSIM_OK) return st;
+  d.qdd = qdd;
+  d.derivative_valid = false;  // kinematic, not the dynamics' qdd
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length_m,
+                                      const legsim_real *rate_mps, const legsim_real *accel_mps2,
+                                      legsim_real *actuator_force_n) {
+  if (!sim || !length_m || !rate_mps || !accel_mps2) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  if (!s.data.assembled) return LEGSIM_ERR_STATE;
+  legsim_status st = lengths_check(s.model, length_m);
+  if (st != LEGSIM_OK) return st;
+  if (!finite_array(rate_mps, s.model.na) || !finite_array(accel_mps2, s.model.na))
+    return LEGSIM_ERR_BAD_INPUT;
+  st = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, actuator_force_n);
+  s.data.derivative_valid = false;
+  return st;
+}
+
+legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  if (!s.data.assembled) return LEGSIM_ERR_STATE;
+  const legsim_status st = statics_solve(s, actuator_force_n);
+  s.data.derivative_valid = false;
+  return st;
+}
+
+legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst_case *out) {
+  if (!sim || !out) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  if (!s.data.assembled) return LEGSIM_ERR_STATE;
+  if (n_grid < 2 || n_grid > 1000) return LEGSIM_ERR_BAD_INPUT;
+  const legsim_status st = statics_sweep(s, n_grid, out);
+  s.data.derivative_valid = false;
+  return st;
+}
+
+legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  if (n_steps < 0) return LEGSIM_ERR_BAD_INPUT;
+  Sim &s = *as_sim(sim);
+  Data &d = s.data;
+  if (!d.assembled || !all_finite(d.q, s.model.nq) || !all_finite(d.qd, s.model.nq))
+    return LEGSIM_ERR_STATE;
+  const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
+  for (int32_t i = 0; i < n_steps; ++i) {
+    legsim_status st = LEGSIM_OK;
+    if (!d.derivative_valid) st = state_refresh(s);
+    if (st == LEGSIM_OK) st = rk4 ? rk4_step(s) : generalized_alpha_step(s);
+    if (st != LEGSIM_OK) {
+      d.derivative_valid = false;  // a failed step may leave scratch in lambda
+      return st;
+    }
+    d.t += s.opt.step_s;
+    ++d.steps;
+    bool stopped = false;
+    if (!(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS)) {
+      st = stroke_limits_enforce(s, stopped);
+      if (st != LEGSIM_OK) return st;
+    }
+    if (rk4 || stopped) {
+      st = state_refresh(s);  // the end derivative: next step's first stage, and the reactions
+    } else {
+      actuator_forces_update(s.model, s.opt, d, d.q, d.qd);
+      reactions_update(s);
+    }
+    if (st != LEGSIM_OK) return st;
+    for (int k = 0; k < s.model.nq; ++k)
+      if (!(std::abs(d.q[k]) < real(1e6)) || !(std::abs(d.qd[k]) < real(1e9))) {
+        d.derivative_valid = false;
+        return LEGSIM_ERR_DIVERGED;
+      }
+  }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_reactions(const legsim_sim *sim, legsim_reaction *out) {
+  if (!sim || !out) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  if (s.opt.disable & LEGSIM_DISABLE_REACTIONS) return LEGSIM_ERR_DISABLED;
+  for (int j = 0; j < s.model.nj; ++j) out[j] = s.data.reaction[j];
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_multipliers(const legsim_sim *sim, legsim_real *lambda) {
+  if (!sim || !lambda) return LEGSIM_ERR_NULL;
+  const Sim &s = *as_sim(sim);
+  for (int i = 0; i < s.model.m; ++i) lambda[i] = s.data.lambda[i];
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  if (actuator < 0 || actuator >= s.model.na) return LEGSIM_ERR_BAD_INPUT;
+  if (!std::isfinite(force_n) || std::abs(force_n) > s.model.act[actuator].fmax)
+    return LEGSIM_ERR_BAD_INPUT;
+  s.data.act[actuator].mode = LEGSIM_ACTUATOR_FORCE;
+  s.data.act[actuator].setpoint = force_n;
+  s.data.act[actuator].force = force_n;
+  s.data.derivative_valid = false;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_real length_m) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  if (actuator < 0 || actuator >= s.model.na || !std::isfinite(length_m)) return LEGSIM_ERR_BAD_INPUT;
+  const Actuator &ac = s.model.act[actuator];
+  if (length_m < ac.lmin || length_m > ac.lmax) return LEGSIM_ERR_OUT_OF_STROKE;
+  s.data.act[actuator].mode = LEGSIM_ACTUATOR_LENGTH;
+  s.data.act[actuator].setpoint = length_m;
+  s.data.derivative_valid = false;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real *value) {
+  if (!sim || !value) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  if (force < 0 || force >= s.model.nf) return LEGSIM_ERR_BAD_INPUT;
+  const int nv = s.model.force[force].kind == LEGSIM_FORCE_POINT ? 2 : 1;
+  if (!finite_array(value, nv)) return LEGSIM_ERR_BAD_INPUT;
+  for (int i = 0; i < nv; ++i) s.data.force_value[force][i] = value[i];
+  s.data.derivative_valid = false;
+  return LEGSIM_OK;
+}
+
+}  // extern "C"

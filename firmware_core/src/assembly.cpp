@@ -1,0 +1,44 @@
+// Assembly: Newton-Raphson onto Phi(q) = 0 (joint equations plus drivers), with
+// the W-weighted minimum-norm correction dq = -W J^T (J W J^T)^-1 Phi, which is
+// Newton's step when the system is square and the nearest solution when it is not.
+#include "sim.hpp"
+
+namespace legsim {
+
+legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, VecQ &q_io,
+                       const real *w) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  const real tol = real(sim.opt.newton_tol);
+  VecQ q = q_io;
+  const VecQ zero = VecQ::Zero();
+  real first = -1;
+  d.report.iterations = 0;
+  for (int it = 0;; ++it) {
+    rows_eval(m, layout, dv, q, zero, d.rows);
+    const real r = rows_max_residual(layout, d.rows);
+    d.report.residual = r;
+    if (!std::isfinite(r)) return LEGSIM_ERR_UNREACHABLE;
+    if (first < 0) first = r;
+    if (r <= tol) break;
+    // Growth far past the start means Newton left the basin: the lengths are not reachable.
+    if (r > real(1e3) * (first + 1)) return LEGSIM_ERR_UNREACHABLE;
+    if (it >= sim.opt.max_newton_iter)
+      // Close but not there: slow convergence (near a dead centre); far: no solution.
+      return r < real(1e-4) ? LEGSIM_ERR_NOT_CONVERGED : LEGSIM_ERR_UNREACHABLE;
+    const legsim_status s = factor_build(layout, d.rows, w, d.factor);
+    d.report.condition = d.factor.condition;
+    if (s != LEGSIM_OK) return s;
+    d.report.iterations = it + 1;
+    d.rhs = d.rows.phi;
+    factor_solve(d.factor, d.rhs);
+    VecQ corr;
+    jt_times(m, layout, d.rows, d.rhs, corr);
+    for (int k = 0; k < m.nq; ++k) q[k] -= w[k] * corr[k];
+  }
+  if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
+  q_io = q;
+  return LEGSIM_OK;
+}
+
+}  // namespace legsim

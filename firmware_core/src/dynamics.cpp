@@ -1,0 +1,38 @@
+// Accelerations and multipliers: M qdd + Phi_q^T lambda = Q, Phi_q qdd = gamma,
+// by the Schur complement (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - gamma
+// (M is diagonal, so this is the whole cost).
+#include "sim.hpp"
+
+namespace legsim {
+
+legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  legsim_options opt = sim.opt;
+  // With actuator drivers in the system the drivers supply the actuator forces.
+  if (layout.m > m.m) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
+  applied_forces(m, opt, d, q, qd, d.force_q);
+  rows_eval(m, layout, d.drivers, q, qd, d.rows);
+  const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
+  d.report.condition = d.factor.condition;
+  if (s != LEGSIM_OK) return s;
+  VecQ tmp;
+  for (int k = 0; k < m.nq; ++k) tmp[k] = m.minv[k] * d.force_q[k];
+  j_times(layout, d.rows, tmp, d.lambda);
+  for (int i = 0; i < layout.m; ++i) d.lambda[i] -= d.rows.gamma[i];
+  factor_solve(d.factor, d.lambda);
+  jt_times(m, layout, d.rows, d.lambda, tmp);
+  for (int k = 0; k < m.nq; ++k) qdd[k] = m.minv[k] * (d.force_q[k] - tmp[k]);
+  return all_finite(qdd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+
+legsim_status dynamics_state_update(Sim &sim) {
+  Data &d = sim.data;
+  const legsim_status s = dynamics_solve(sim, d.joints, d.q, d.qd, d.qdd);
+  if (s != LEGSIM_OK) return s;
+  if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
+    reactions_from_multipliers(sim.model, d.joints, d.rows, d.lambda, d.reaction);
+  return LEGSIM_OK;
+}
+
+}  // namespace legsim

@@ -1,0 +1,84 @@
+// Implicit generalized-alpha on the index-3 form (Arnold & Bruls 2007):
+//   q1 = q0 + h v0 + h^2 (1/2 - beta) a0 + h^2 beta a1
+//   v1 = v0 + h (1 - gamma) a0 + h gamma a1
+//   (1 - am) a1 + am a0 = (1 - af) qdd1 + af qdd0
+//   M qdd1 + Phi_q^T lambda = Q(q1, v1),  Phi(q1) = 0
+// solved by Newton with the iteration matrix [beta' M, Phi_q^T; Phi_q, 0]
+// (beta' = (1 - am) / (h^2 beta (1 - af))): M is diagonal, so each iteration
+// is one factorization of Phi_q M^-1 Phi_q^T, the kernel of every other solve.
+#include "sim.hpp"
+
+namespace legsim {
+
+#if LEGSIM_WITH_GENERALIZED_ALPHA
+legsim_status generalized_alpha_step(Sim &sim) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  const int n = m.nq;
+  const real rho = real(sim.opt.rho_inf);
+  const real am = (2 * rho - 1) / (rho + 1), af = rho / (rho + 1);
+  const real gam = real(0.5) + af - am;
+  const real beta = real(0.25) * (gam + real(0.5)) * (gam + real(0.5));
+  const real h = real(sim.opt.step_s);
+  const real bprime = (1 - am) / (h * h * beta * (1 - af));
+  const real gprime = gam / (h * beta);  // dv1 / dq1
+  const real tol = real(sim.opt.newton_tol);
+
+  // predictor: qdd1 = qdd0, lambda1 = lambda0
+  VecQ &q1 = d.tq[0], &v1 = d.tq[1], &qdd1 = d.tq[2], &res = d.tq[3];
+  VecR lambda = d.lambda;
+  for (int k = 0; k < n; ++k) {
+    qdd1[k] = d.qdd[k];
+    const real a1 = (af * d.qdd[k] + (1 - af) * qdd1[k] - am * d.acc_aux[k]) / (1 - am);
+    q1[k] = d.q[k] + h * d.qd[k] + h * h * ((real(0.5) - beta) * d.acc_aux[k] + beta * a1);
+    v1[k] = d.qd[k] + h * ((1 - gam) * d.acc_aux[k] + gam * a1);
+  }
+  const Layout &lay = d.joints;
+  bool converged = false;
+  for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
+    applied_forces(m, sim.opt, d, q1, v1, d.force_q);
+    rows_eval(m, lay, d.drivers, q1, v1, d.rows);
+    legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
+    d.report.condition = d.factor.condition;
+    if (s != LEGSIM_OK) return s;
+    // r = M qdd + J^T lambda - Q
+    jt_times(m, lay, d.rows, lambda, res);
+    for (int k = 0; k < n; ++k) res[k] += m.mass[k] * qdd1[k] - d.force_q[k];
+    // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
+    VecQ tmp;
+    for (int k = 0; k < n; ++k) tmp[k] = m.minv[k] * res[k];
+    j_times(lay, d.rows, tmp, d.rhs);
+    for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
+    factor_solve(d.factor, d.rhs);
+    jt_times(m, lay, d.rows, d.rhs, tmp);
+    real dq_max = 0;
+    for (int k = 0; k < n; ++k) {
+      const real dq = -m.minv[k] * (res[k] + tmp[k]) / bprime;
+      q1[k] += dq;
+      v1[k] += gprime * dq;
+      qdd1[k] += bprime * dq;
+      const real a = std::abs(dq);
+      dq_max = a > dq_max ? a : dq_max;
+    }
+    for (int i = 0; i < lay.m; ++i) lambda[i] += d.rhs[i];
+    d.report.iterations = it + 1;
+    if (!std::isfinite(dq_max)) return LEGSIM_ERR_DIVERGED;
+    if (dq_max <= tol) {
+      converged = true;
+      break;
+    }
+  }
+  if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
+  for (int k = 0; k < n; ++k)
+    d.acc_aux[k] = (af * d.qdd[k] + (1 - af) * qdd1[k] - am * d.acc_aux[k]) / (1 - am);
+  d.q = q1;
+  d.qd = v1;
+  d.qdd = qdd1;
+  d.lambda = lambda;
+  return LEGSIM_OK;
+}
+#else
+legsim_status generalized_alpha_step(Sim &) { return LEGSIM_ERR_DISABLED; }
+#endif
+
+}  // namespace legsim

@@ -1,0 +1,61 @@
+// Explicit RK4 on the index-1 form (accelerations from the multiplier solve),
+// followed by the projection of positions onto Phi(q) = 0 and of velocities
+// onto Phi_q qd = 0, both M-weighted. The derivative at the start of a step is
+// the one left by the previous step's end (first same as last).
+#include "sim.hpp"
+
+namespace legsim {
+
+#if LEGSIM_WITH_RK4
+legsim_status rk4_step(Sim &sim) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  const int n = m.nq;
+  const real h = real(sim.opt.step_s), h2 = h / 2, h6 = h / 6;
+  VecQ &qs = d.tq[0], &vs = d.tq[1], &sum_v = d.tq[2], &sum_a = d.tq[3];
+  VecQ &a = d.tv[0];
+  // stage 1: (v0, a0) at the start
+  for (int k = 0; k < n; ++k) {
+    sum_v[k] = d.qd[k];
+    sum_a[k] = d.qdd[k];
+    qs[k] = d.q[k] + h2 * d.qd[k];
+    vs[k] = d.qd[k] + h2 * d.qdd[k];
+  }
+  // stages 2 and 3 at the midpoint, 4 at the end
+  static constexpr real kWeight[3] = {2, 2, 1};
+  for (int stage = 0; stage < 3; ++stage) {
+    const legsim_status s = dynamics_solve(sim, d.joints, qs, vs, a);
+    if (s != LEGSIM_OK) return s;
+    const real w = kWeight[stage];
+    const real hn = stage < 1 ? h2 : h;  // the next stage's distance from the start
+    for (int k = 0; k < n; ++k) {
+      sum_v[k] += w * vs[k];
+      sum_a[k] += w * a[k];
+      qs[k] = d.q[k] + hn * vs[k];
+      vs[k] = d.qd[k] + hn * a[k];
+    }
+  }
+  VecQ &q1 = d.tv[1], &v1 = d.tv[2];
+  for (int k = 0; k < n; ++k) {
+    q1[k] = d.q[k] + h6 * sum_v[k];
+    v1[k] = d.qd[k] + h6 * sum_a[k];
+  }
+  if (!all_finite(q1, n) || !all_finite(v1, n)) return LEGSIM_ERR_DIVERGED;
+  if (!(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
+    // positions (Newton, usually zero iterations at small steps), then velocities
+    legsim_status s = assemble(sim, d.joints, d.drivers, q1, m.minv);
+    if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
+    rows_eval(m, d.joints, d.drivers, q1, v1, d.rows);
+    s = factor_build(d.joints, d.rows, m.minv, d.factor);
+    if (s != LEGSIM_OK) return s;
+    project(m, d.joints, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
+  }
+  d.q = q1;
+  d.qd = v1;
+  return LEGSIM_OK;
+}
+#else
+legsim_status rk4_step(Sim &) { return LEGSIM_ERR_DISABLED; }
+#endif
+
+}  // namespace legsim

@@ -1,0 +1,31 @@
+// Velocity and acceleration analysis: Phi_q qd = nu and Phi_q qdd = gamma,
+// solved as the M-weighted projection of the current value (the unique answer
+// when the drivers fix every degree of freedom; the least-kinetic-energy one otherwise).
+#include "sim.hpp"
+
+namespace legsim {
+
+legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  rows_eval(m, layout, d.drivers, d.q, qd, d.rows);
+  const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
+  d.report.condition = d.factor.condition;
+  if (s != LEGSIM_OK) return s;
+  project(m, layout, d.rows, d.factor, m.minv, d.rows.nu, qd, d.rhs);
+  return all_finite(qd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+
+legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  rows_eval(m, layout, d.drivers, d.q, d.qd, d.rows);
+  const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
+  d.report.condition = d.factor.condition;
+  if (s != LEGSIM_OK) return s;
+  qdd.setZero();
+  project(m, layout, d.rows, d.factor, m.minv, d.rows.gamma, qdd, d.rhs);
+  return all_finite(qdd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+
+}  // namespace legsim

@@ -1,0 +1,117 @@
+// The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
+// the identity), assembled from the sparse rows, factored by Cholesky in
+// place. Hand-written so that no Eigen path can fall back to the heap.
+#include "sim.hpp"
+
+namespace legsim {
+
+namespace {
+#if LEGSIM_USE_FLOAT
+constexpr real kPivotFloor = real(1e-6);  // relative pivot below which J is taken as rank deficient
+#else
+constexpr real kPivotFloor = real(1e-13);
+#endif
+}  // namespace
+
+legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
+  const int m = layout.m;
+  f.m = m;
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j <= i; ++j) f.a(i, j) = 0;
+  for (int k = 0; k < layout.npairs; ++k) {
+    const Pair &p = layout.pair[k];
+    const real *ci = rows.coef[p.i][p.si];
+    const real *cj = rows.coef[p.j][p.sj];
+    const real *wb = w + 3 * layout.body[p.i][p.si];
+    f.a(p.i, p.j) += ci[0] * wb[0] * cj[0] + ci[1] * wb[1] * cj[1] + ci[2] * wb[2] * cj[2];
+  }
+  // Cholesky A = L L^T, lower triangle in place (column by column).
+  real max_diag = 0;
+  for (int i = 0; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
+  if (!(max_diag > 0) || !std::isfinite(max_diag)) {
+    f.condition = real(INFINITY);
+    return m == 0 ? LEGSIM_OK : LEGSIM_ERR_SINGULAR;
+  }
+  real pmin = max_diag, pmax = 0;
+  for (int j = 0; j < m; ++j) {
+    real d = f.a(j, j);
+    for (int k = 0; k < j; ++k) d -= f.a(j, k) * f.a(j, k);
+    if (!(d > kPivotFloor * max_diag)) {
+      f.condition = real(INFINITY);
+      return LEGSIM_ERR_SINGULAR;
+    }
+    pmin = d < pmin ? d : pmin;
+    pmax = d > pmax ? d : pmax;
+    const real ljj = std::sqrt(d);
+    f.a(j, j) = ljj;
+    const real inv = real(1) / ljj;
+    for (int i = j + 1; i < m; ++i) {
+      real s = f.a(i, j);
+      for (int k = 0; k < j; ++k) s -= f.a(i, k) * f.a(j, k);
+      f.a(i, j) = s * inv;
+    }
+  }
+  // cond(J W^1/2) ~ sqrt of the pivot spread of J W J^T: an estimate, cheap and monotone.
+  f.condition = std::sqrt(pmax / pmin);
+  return LEGSIM_OK;
+}
+
+void factor_solve(const Factor &f, VecR &x) {
+  const int m = f.m;
+  for (int i = 0; i < m; ++i) {
+    real s = x[i];
+    for (int k = 0; k < i; ++k) s -= f.a(i, k) * x[k];
+    x[i] = s / f.a(i, i);
+  }
+  for (int i = m - 1; i >= 0; --i) {
+    real s = x[i];
+    for (int k = i + 1; k < m; ++k) s -= f.a(k, i) * x[k];
+    x[i] = s / f.a(i, i);
+  }
+}
+
+void jt_times(const Model &model, const Layout &layout, const Rows &rows, const VecR &x, VecQ &y) {
+  for (int k = 0; k < model.nq; ++k) y[k] = 0;
+  for (int i = 0; i < layout.m; ++i)
+    for (int s = 0; s < 2; ++s) {
+      const int b = layout.body[i][s];
+      if (b < 0) continue;
+      const real *c = rows.coef[i][s];
+      y[3 * b] += c[0] * x[i];
+      y[3 * b + 1] += c[1] * x[i];
+      y[3 * b + 2] += c[2] * x[i];
+    }
+}
+
+void j_times(const Layout &layout, const Rows &rows, const VecQ &x, VecR &y) {
+  for (int i = 0; i < layout.m; ++i) {
+    real s = 0;
+    for (int k = 0; k < 2; ++k) {
+      const int b = layout.body[i][k];
+      if (b < 0) continue;
+      const real *c = rows.coef[i][k];
+      s += c[0] * x[3 * b] + c[1] * x[3 * b + 1] + c[2] * x[3 * b + 2];
+    }
+    y[i] = s;
+  }
+}
+
+void project(const Model &model, const Layout &layout, const Rows &rows, const Factor &f,
+             const real *w, const VecR &target, VecQ &x, VecR &tmp) {
+  j_times(layout, rows, x, tmp);
+  for (int i = 0; i < layout.m; ++i) tmp[i] -= target[i];
+  factor_solve(f, tmp);
+  VecQ corr;
+  jt_times(model, layout, rows, tmp, corr);
+  for (int k = 0; k < model.nq; ++k) x[k] -= w[k] * corr[k];
+}
+
+bool all_finite(const VecQ &v, int n) {
+  for (int k = 0; k < n; ++k)
+    if (!std::isfinite(v[k])) return false;
+  return true;
+}
+
+void raise_event(Data &d, uint32_t ev) { d.report.events |= ev; }
+
+}  // namespace legsim

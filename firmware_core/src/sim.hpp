@@ -1,0 +1,230 @@
+// Internal types of the core: the compiled model (constant), the per-sim data
+// (state and preallocated workspace), and the functions over them. Everything
+// is fixed-size; the capacities come from legsim/config.h.
+#pragma once
+
+#include <Eigen/Core>
+#include <cstdint>
+
+#include "legsim/legsim.h"
+
+namespace legsim {
+
+using real = legsim_real;
+using Vec2 = Eigen::Matrix<real, 2, 1>;
+using Vec3 = Eigen::Matrix<real, 3, 1>;
+
+constexpr int kMaxBodies = LEGSIM_MAX_BODIES;
+constexpr int kMaxCoords = 3 * LEGSIM_MAX_BODIES;
+constexpr int kMaxJoints = LEGSIM_MAX_JOINTS;
+constexpr int kMaxActuators = LEGSIM_MAX_ACTUATORS;
+constexpr int kMaxForces = LEGSIM_MAX_FORCES;
+constexpr int kMaxRows = LEGSIM_MAX_ROWS;
+// Entries of J W J^T that can be non-zero: a row touches at most two bodies,
+// and a body appears in a handful of rows, so this is far below kMaxRows^2.
+constexpr int kMaxPairs = 6 * kMaxRows;
+
+using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
+using VecR = Eigen::Matrix<real, kMaxRows, 1>;
+using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows>;
+
+// Unit axis u(phi) = (sin, -cos) and normal n(phi) = (cos, sin) of eq. (1).
+inline Vec2 axis_u(real phi) { return Vec2(std::sin(phi), -std::cos(phi)); }
+inline Vec2 normal_n(real phi) { return Vec2(std::cos(phi), std::sin(phi)); }
+// Rotation by +90 degrees: d/dphi of a body-fixed vector s is perp(s).
+inline Vec2 perp(const Vec2 &s) { return Vec2(-s.y(), s.x()); }
+inline real cross2(const Vec2 &a, const Vec2 &b) { return a.x() * b.y() - a.y() * b.x(); }
+
+// ---- compiled model (constant after legsim_init) ----
+struct Joint {
+  legsim_joint_kind kind;
+  int a, b;        // body indices; b = LEGSIM_FRAME for revolute_to_frame
+  Vec2 pa, pb;     // body-fixed (xi, eta), or world point when on the frame
+  int row, nrows;  // first row and count in the joint block of the Jacobian
+};
+
+struct Actuator {
+  int joint, cyl, rod;
+  real offset_m;  // (L_cyl + L_rod) / 2: length = (r_rod - r_cyl) . u_cyl + offset
+  real lmin, lmax, fmax, kp, kd;
+};
+
+struct ForceElement {
+  legsim_force_kind kind;
+  int a, b;
+  Vec2 pa, pb;
+  real k, c, l0;
+};
+
+struct Model {
+  const legsim_model_desc *desc;
+  int nb, nq, nj, na, nf;
+  int m;  // joint equations
+  real mass[kMaxCoords];  // diagonal of M: (m, m, J) per body
+  real minv[kMaxCoords];
+  real length[kMaxBodies];
+  Vec2 gravity;
+  Joint joint[kMaxJoints];
+  Actuator act[kMaxActuators];
+  ForceElement force[kMaxForces];
+  int foot_body;
+  Vec2 foot_point;
+  real unit_weight[kMaxCoords];  // W = I for geometric (assembly) corrections
+};
+
+// ---- rows of the constraint system: joint equations plus drivers ----
+enum class RowKind : uint8_t { Joint, ActuatorLength, Coordinate };
+
+struct RowSource {
+  RowKind kind;
+  uint8_t index;  // joint, actuator or coordinate index
+  uint8_t sub;    // equation within the joint
+};
+
+struct Pair {  // (J W J^T)(i, j) gets coef[i][si] . w . coef[j][sj]
+  uint8_t i, j, si, sj;
+};
+
+// Which equations make up the system and which entries of J W J^T can be
+// non-zero: constant for a scene, built once, not per step.
+struct Layout {
+  int m;
+  RowSource src[kMaxRows];
+  int8_t body[kMaxRows][2];  // -1: no body in this slot
+  int npairs;
+  Pair pair[kMaxPairs];
+};
+
+// Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
+struct Rows {
+  real coef[kMaxRows][2][3];  // d(row)/d(x, y, phi) of each slot's body
+  VecR phi;                   // Phi(q)
+  VecR nu;                    // Phi_q qd = nu (driver rates)
+  VecR gamma;                 // Phi_q qdd = gamma
+};
+
+struct DriverValues {
+  real length[kMaxActuators], rate[kMaxActuators], accel[kMaxActuators];
+  legsim_coord_driver coord[LEGSIM_MAX_POSE_DRIVERS];
+  int ncoord;
+};
+
+// Cholesky factor of J W J^T (lower triangle in place) with its condition estimate.
+struct Factor {
+  MatR a;
+  int m;
+  real condition;
+};
+
+struct ActuatorState {
+  legsim_actuator_mode mode;
+  real setpoint;  // N or m
+  real force;     // axial force in the current state, N
+};
+
+struct Data {
+  double t;
+  uint64_t steps;
+  bool assembled;
+  bool derivative_valid;  // qdd, lambda and acc_aux belong to the current state and commands
+  VecQ q, qd, qdd;
+  VecQ acc_aux;  // generalized-alpha auxiliary acceleration
+  VecR lambda;   // multipliers of the last dynamics/statics solve
+  legsim_reaction reaction[kMaxJoints];
+  ActuatorState act[kMaxActuators];
+  real force_value[kMaxForces][2];
+  legsim_report report;
+  uint32_t stroke_mask;
+
+  // workspace
+  Layout joints;  // the joint equations only: the forward-dynamics system
+  Layout work;    // joints plus drivers, for assembly and driven analyses
+  Rows rows;
+  Factor factor;
+  DriverValues drivers;
+  VecQ force_q;  // generalized applied forces Q
+  VecQ tq[4], tv[4];
+  VecR rhs;
+};
+
+struct Sim {
+  Model model;
+  legsim_options opt;
+  Data data;
+};
+
+// ---- model.cpp ----
+legsim_status model_check(const legsim_model_desc *desc, char *msg, size_t len);
+legsim_status model_compile(const legsim_model_desc *desc, Model &model);
+
+// ---- constraints.cpp ----
+// Builds a layout of the joint equations followed by driver rows for the
+// actuators in actuator_mask and for ncoord coordinate drivers.
+legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out);
+// Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
+legsim_status layout_finish(Layout &out, const DriverValues &drivers);
+// Evaluates Phi, the Jacobian and the velocity/acceleration right-hand sides.
+void rows_eval(const Model &model, const Layout &layout, const DriverValues &drivers, const VecQ &q,
+               const VecQ &qd, Rows &rows);
+real rows_max_residual(const Layout &layout, const Rows &rows);
+void actuator_length(const Model &model, int a, const VecQ &q, const VecQ &qd, real &length,
+                     real &rate);
+
+// ---- linear_solve.cpp ----
+// Factors J W J^T (W diagonal, n values). LEGSIM_ERR_SINGULAR on a vanishing pivot.
+legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f);
+void factor_solve(const Factor &f, VecR &x);  // in place
+// y = J^T x (n values), J x (m values)
+void jt_times(const Model &model, const Layout &layout, const Rows &rows, const VecR &x, VecQ &y);
+void j_times(const Layout &layout, const Rows &rows, const VecQ &x, VecR &y);
+// x <- x - W J^T (J W J^T)^-1 (J x - target): the W-weighted projection onto J x = target.
+void project(const Model &model, const Layout &layout, const Rows &rows, const Factor &f,
+             const real *w, const VecR &target, VecQ &x, VecR &tmp);
+
+// ---- forces.cpp ----
+// Q: gravity, force elements, actuator forces (by the current commands), per options.
+void applied_forces(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
+                    const VecQ &qd, VecQ &force_q);
+
+// ---- actuators.cpp ----
+// Axial force of each actuator from its command (servo law for length mode).
+void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
+                            const VecQ &qd);
+// Stops actuators at their stroke ends after a step (inelastic hard stop).
+legsim_status stroke_limits_enforce(Sim &sim, bool &stopped);
+
+// ---- dynamics.cpp ----
+// qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.
+legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
+legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
+
+// ---- assembly.cpp ----
+legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drivers, VecQ &q,
+                       const real *w);
+
+// ---- kinematics.cpp ----
+legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
+legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
+
+// ---- reactions.cpp ----
+void reactions_from_multipliers(const Model &model, const Layout &layout, const Rows &rows,
+                                const VecR &lambda, legsim_reaction *out);
+// Reactions of the joint equations from the stored multipliers at the current q.
+void reactions_update(Sim &sim);
+
+// ---- integrators ----
+legsim_status rk4_step(Sim &sim);
+legsim_status generalized_alpha_step(Sim &sim);
+
+// ---- statics.cpp / inverse_dynamics.cpp ----
+legsim_status statics_solve(Sim &sim, real *actuator_force);
+legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out);
+legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *rate,
+                                     const real *accel, real *actuator_force);
+
+// ---- helpers ----
+inline bool finite(real x) { return std::isfinite(x); }
+bool all_finite(const VecQ &v, int n);
+void raise_event(Data &d, uint32_t ev);
+
+}  // namespace legsim
