@@ -27,8 +27,11 @@ rho_inf = 0.8 as legsim's default), "trapezoidal_index2" (Exudyn's
 TrapezoidalIndex2: trapezoidal rule on index-2 (velocity) constraints; it
 gives the same numbers as GeneralizedAlpha with useNewmark=True,
 useIndex2Constraints=True, beta = 1/4, gamma = 1/2, the only way Exudyn allows
-index-2 constraints in generalized-alpha). Both use full Newton (no modified
-Newton) with tolerance 1e-12, the dense linear solver, fixed steps.
+index-2 constraints in generalized-alpha). Both use Exudyn's modified Newton
+(its default; the Jacobian is refreshed when convergence slows) with relative
+and absolute tolerances 1e-12 (Exudyn's defaults, 1e-8 / 1e-10, floor the
+error near 1e-11 m at h = 1e-5), the dense linear solver, fixed steps, no
+adaptive step reduction.
 
 Exudyn's explicit solvers (RK44, ODE23, DOPRI5, ...) refuse joints: Exudyn
 1.13.6 aborts with "SolverExplicit: explicit integrator detected object 7
@@ -138,17 +141,17 @@ class ExudynLeg:
         mbs.Assemble()
 
     def _settings(self, t_end: float, h: float, method: str, every: int, rho_inf: float,
-                  newton_tol: float):
+                  newton_tol: float, modified_newton: bool = True):
         n_steps = int(round(t_end / h))
         if abs(n_steps * h - t_end) > 1e-9 * max(1.0, t_end):
             raise ValueError(f"t_end={t_end} is not a multiple of h={h}")
         s = exu.SimulationSettings()
-        s.solutionSettings.writeSolutionToFile = False
-        s.solutionSettings.writeInitialValues = False
-        s.solutionSettings.sensorsWritePeriod = h * every
-        s.displayComputationTime = False
-        s.displayStatistics = False
-        s.linearSolverType = exu.LinearSolverType.EXUdense
+        s.solution.file.write = False
+        s.solution.file.writeInitialValues = False
+        s.solution.sensors.writePeriod = 0.5 * h  # every step (subsampled afterwards)
+        s.show.computationTime = False
+        s.show.statistics = False
+        s.linearSolver.solverType = exu.LinearSolverType.EXUdense
         ti = s.timeIntegration
         ti.numberOfSteps = n_steps
         ti.endTime = t_end
@@ -157,7 +160,7 @@ class ExudynLeg:
         ti.automaticStepSize = False
         ti.newton.relativeTolerance = newton_tol
         ti.newton.absoluteTolerance = newton_tol
-        ti.newton.useModifiedNewton = False
+        ti.newton.useModifiedNewton = modified_newton
         ti.newton.maxIterations = 25
         ti.generalizedAlpha.spectralRadius = rho_inf
         ti.generalizedAlpha.computeInitialAccelerations = True
@@ -175,19 +178,20 @@ class ExudynLeg:
         return s, solver, n_steps
 
     def simulate(self, t_end: float, h: float, method: str = "galpha", *, every: int = 1,
-                 rho_inf: float = 0.8, newton_tol: float = 1e-12) -> dict:
+                 rho_inf: float = 0.8, newton_tol: float = 1e-12,
+                 modified_newton: bool = True) -> dict:
         mbs = self.mbs
-        s, solver, n_steps = self._settings(t_end, h, method, every, rho_inf, newton_tol)
+        s, solver, n_steps = self._settings(t_end, h, method, every, rho_inf, newton_tol,
+                                            modified_newton)
         record = every > 0
         if record:
             sens = [mbs.AddSensor(eii.SensorNode(nodeNumber=nd, storeInternal=True,
                                                  writeToFile=False,
                                                  outputVariableType=exu.OutputVariableType.Coordinates))
                     for nd in self.nodes]
-            s.solutionSettings.sensorsWritePeriod = h * every
             mbs.Assemble()
         else:
-            s.solutionSettings.sensorsWritePeriod = 10.0 * t_end
+            s.solution.sensors.writePeriod = 10.0 * t_end
         t0 = time.perf_counter()
         ok = mbs.SolveDynamic(s, solverType=solver)
         wall = time.perf_counter() - t0
@@ -198,9 +202,16 @@ class ExudynLeg:
             data = [np.asarray(mbs.GetSensorStoredData(sn)) for sn in sens]
             t = data[0][:, 0]
             q = np.hstack([d[:, 1:4] for d in data]) + self.q0
-            if t[0] > 0.5 * h * every:  # prepend the initial state if not stored
+            if t[0] > 0.5 * h:  # prepend the initial state if not stored
                 t = np.concatenate([[0.0], t])
                 q = np.vstack([self.q0, q])
+            if len(t) != n_steps + 1:
+                raise RuntimeError(f"exudyn sensors stored {len(t)} samples, "
+                                   f"expected {n_steps + 1}")
+            keep = np.arange(0, n_steps + 1, every)
+            if keep[-1] != n_steps:
+                keep = np.append(keep, n_steps)
+            t, q = t[keep], q[keep]
         else:
             t = np.array([0.0, n_steps * h])
             q = np.vstack([self.q0, q_end])
@@ -213,7 +224,7 @@ class ExudynLeg:
 
 def run(scene: str, t_end: float, h: float, method: str = "galpha", *,
         variant: str = "revolute", every: int = 1, rho_inf: float = 0.8,
-        newton_tol: float = 1e-12, model_path=None) -> dict:
+        newton_tol: float = 1e-12, modified_newton: bool = True, model_path=None) -> dict:
     """Builds the leg, then integrates it with fixed step h.
 
     Returns dict(t (N,), q (N x 18, our absolute coordinates), wall_s (the
@@ -222,4 +233,5 @@ def run(scene: str, t_end: float, h: float, method: str = "galpha", *,
     final state, no sensors in the timed loop).
     """
     return ExudynLeg(scene, variant, model_path).simulate(
-        t_end, h, method, every=every, rho_inf=rho_inf, newton_tol=newton_tol)
+        t_end, h, method, every=every, rho_inf=rho_inf, newton_tol=newton_tol,
+        modified_newton=modified_newton)

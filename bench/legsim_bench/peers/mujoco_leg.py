@@ -89,7 +89,7 @@ def _rel(q: np.ndarray, parent: int | None, child: int) -> tuple:
 
 def build_xml(model: lm.LegModel, h: float, method: str = "rk4", *,
               solref=None, solimp=(0.9999, 0.9999, 0.001, 0.5, 2.0),
-              tolerance: float = 1e-12, iterations: int = 100) -> str:
+              tolerance: float = 1e-12, iterations: int = 100, refsafe: bool = True) -> str:
     """MJCF of the leg at the stand pose. ``solref`` None: (2 h, 1)."""
     if method not in _INTEGRATOR:
         raise ValueError(f"unknown method {method!r}; known: {METHODS}")
@@ -145,7 +145,7 @@ def build_xml(model: lm.LegModel, h: float, method: str = "rk4", *,
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{h!r}" integrator="{_INTEGRATOR[method]}" gravity="{_f([*model.gravity, 0.0])}"
           solver="Newton" iterations="{iterations}" tolerance="{tolerance!r}" ls_iterations="50">
-    <flag contact="disable"/>
+    <flag contact="disable" autoreset="disable" refsafe="{'enable' if refsafe else 'disable'}"/>
   </option>
   <default>
     <equality solref="{_f(solref)}" solimp="{_f(solimp)}"/>
@@ -256,6 +256,7 @@ class MujocoLeg:
             wall = time.perf_counter() - t0
         else:
             raise ValueError(loop)
+        bad = d.warning[mujoco.mjtWarning.mjWARN_BADQACC].number
         t = np.concatenate([[0.0], ts])
         qpos = np.vstack([np.zeros(nq), qpos])
         qvel = np.vstack([np.zeros(nv), qvel])
@@ -265,7 +266,7 @@ class MujocoLeg:
         q = np.array([self.q_of(qpos[k]) for k in keep])
         qd_end = self.qd_of(qpos[-1], qvel[-1])
         return {"t": t[keep], "q": q, "q_end": q[-1], "qd_end": qd_end, "wall_s": wall,
-                "ok": bool(np.all(np.isfinite(qpos))), "n_steps": n_steps,
+                "ok": bool(np.all(np.isfinite(qpos))) and bad == 0, "n_steps": n_steps,
                 "engine": f"mujoco {VERSION}", "method": self.method, "h": h,
                 "variant": self.model.variant, "scene": self.scene,
                 "qpos_end": qpos[-1].copy(), "loop": loop}
