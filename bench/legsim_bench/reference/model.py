@@ -50,7 +50,6 @@ from __future__ import annotations
 import math
 import tomllib
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Optional, Sequence
 
 import numpy as np
@@ -294,9 +293,6 @@ class LegModel:
         if frame_of[th].points[0] != (-self.bodies[th].length / 2, 0.0):
             raise ValueError("the thigh must be pinned at its proximal end")
         Lth = self.bodies[th].length
-
-        def pin_end(bi, pt):
-            return pt == (self.bodies[bi].length / 2, 0.0)
 
         revs = [j for j in self.joints if j.kind == "revolute"]
         upper = None
@@ -572,10 +568,6 @@ class LegModel:
         Q = np.einsum("bki,bk->i", K.J[:, :2, :], self._m[:, None] * g[None, :])
         Q = Q + K.load[1].T @ load + K.lg.T @ F
         return M, Q - h
-
-    def _servo(self, a: _Actuator, lcmd, l, ld):
-        F = a.kp * (lcmd - l) - a.kd * ld
-        return min(max(F, -a.max_force), a.max_force)
 
     def _forces(self, cmds, t, K, clip_t=None):
         F = np.zeros(self.na)
