@@ -1,0 +1,102 @@
+// The leg's controller as a state machine over frames: IDLE -> (RESET) -> LOCKSTEP <->
+// REALTIME, HALTED after a solver failure until the next RESET. Mode-independent: the run
+// loop (run_loop.cpp) feeds it frames and real-time ticks with the time they happened.
+//
+// Every frame is checked in this order: id and format (64-byte CAN FD), sequence counter,
+// values (NaN/Inf, DBC ranges, model limits), state. The first failure is answered with
+// one FAULT frame and nothing else changes. Every accepted CONTROL frame is answered with
+// one state sample; accepted ACT_CMD and LOAD_CMD frames are not answered.
+//
+// Command timeout: armed by an accepted ACT_CMD when a timeout is set; it trips when no
+// further ACT_CMD is accepted within the timeout, measured in simulated time in lockstep
+// (before the first step that would pass the timeout: ceil(timeout / h) steps after the
+// command) and in wall-clock time in real time (checked at every tick). A mode change
+// (START_RT, STOP_RT) restarts the window. Tripping puts the actuators in the safe state,
+// sends FAULT CMD_TIMEOUT once and sets the SAFE_STATE status bit; the next accepted
+// ACT_CMD leaves the safe state.
+#ifndef HIL_SIM_CONTROLLER_H
+#define HIL_SIM_CONTROLLER_H
+
+#include <cstdint>
+
+#include "frame.h"
+#include "protocol.h"
+#include "session.h"
+
+namespace hil {
+
+struct ControllerConfig {
+  uint32_t cmd_timeout_ms = 100;  // 0: none
+  SafeMode safe_mode = SafeMode::kZeroForce;
+  uint32_t decimation = 10;       // real time: one sample every N ticks
+  bool verbose = false;           // log faults and mode changes on stderr
+};
+
+class Controller {
+ public:
+  Controller(Session &session, FrameSink &sink, const ControllerConfig &config);
+
+  void on_frame(const Frame &frame, int64_t now_ns);
+  // One real-time tick (steps_per_tick steps); no-op outside REALTIME.
+  void rt_tick(int64_t now_ns);
+
+  SimState state() const { return state_; }
+  int64_t rt_period_ns() const { return rt_period_ns_; }
+  uint32_t rt_epoch() const { return rt_epoch_; }  // +1 at every START_RT
+  uint32_t rt_ticks() const { return rt_ticks_; }
+  void fill_heartbeat(HeartbeatInfo *hb) const;
+
+  uint32_t rx_frames() const { return rx_frames_; }
+  uint32_t rx_rejected() const { return rx_rejected_; }
+  uint32_t fault_count() const { return fault_count_; }
+
+ private:
+  struct SeqTrack {
+    bool have = false;
+    uint32_t last = 0;
+  };
+
+  void reject(const Fault &f);
+  void raise(const Fault &f);
+  void solver_fault(legsim_status st, const Request *req);
+  bool state_allows(const Request &req) const;
+  void handle_control(const Request &req, int64_t now_ns);
+  void handle_act(const Request &req, int64_t now_ns);
+  void handle_load(const Request &req);
+  // Steps n with the lockstep watchdog (or none in real time); false after a failure.
+  bool advance(uint32_t n, bool lockstep_watchdog, const Request *req);
+  void trip(double elapsed_ms);
+  uint32_t status_bits(uint32_t events) const;
+  void publish();
+
+  Session &session_;
+  FrameSink &sink_;
+  ControllerConfig config_;
+
+  SimState state_ = SimState::kIdle;
+  legsim_status legsim_ = LEGSIM_OK;
+  FaultCode last_fault_ = FaultCode::kNone;
+  bool fault_since_sample_ = false;
+  SeqTrack ctrl_seq_, act_seq_, load_seq_;
+
+  // command timeout
+  uint32_t timeout_ms_ = 0;
+  uint64_t timeout_steps_ = 0;
+  bool armed_ = false;
+  bool safe_ = false;
+  uint64_t steps_since_cmd_ = 0;
+  int64_t last_cmd_ns_ = 0;
+
+  // real time
+  int64_t rt_period_ns_ = 0;
+  uint32_t rt_epoch_ = 0;
+  uint32_t rt_ticks_ = 0;
+  uint32_t rt_decimation_ = 1;
+  uint32_t rt_steps_per_tick_ = 1;
+
+  uint32_t rx_frames_ = 0, rx_rejected_ = 0, fault_count_ = 0;
+};
+
+}  // namespace hil
+
+#endif

@@ -1,0 +1,211 @@
+// hil_sim: the legsim leg as a CAN FD node (SocketCAN), driven by the bench over can/legsim.dbc.
+#include <cerrno>
+#include <climits>
+#include <csignal>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include <sched.h>
+#include <sys/mman.h>
+#include <sys/signalfd.h>
+#include <unistd.h>
+
+#include "can_io.h"
+#include "controller.h"
+#include "jitter.h"
+#include "protocol.h"
+#include "run_loop.h"
+#include "session.h"
+
+namespace {
+
+const char kUsage[] =
+    "usage: hil_sim [options]\n"
+    "\n"
+    "Runs the legsim leg (compiled-in models/leg.toml) as a CAN FD node on a SocketCAN\n"
+    "interface, driven by the bench over can/legsim.dbc (see can/README.md). Lockstep mode\n"
+    "advances exactly N fixed steps per STEP frame and answers with a state sample; real-time\n"
+    "mode ticks at 1 / (steps per tick * step size) (1 kHz at h = 1 ms) with clock_nanosleep.\n"
+    "\n"
+    "options:\n"
+    "  --channel NAME        CAN interface (default vcan0); must be up with MTU 72 (CAN FD)\n"
+    "  --cmd-timeout-ms N    actuator-command timeout, 0 = none (default 100); simulated time in\n"
+    "                        lockstep, wall-clock time in real time; a RESET may override it\n"
+    "  --safe-state MODE     on a command timeout: zero-force (default) or hold-length\n"
+    "  --decimation N        real time: one state sample every N ticks (default 10)\n"
+    "  --heartbeat-ms N      HEARTBEAT period, 0 = none (default 100)\n"
+    "  --rt-priority N       SCHED_FIFO priority 1-99 and locked memory for real time\n"
+    "                        (default: none, normal scheduling)\n"
+    "  -v, --verbose         log faults and mode changes on stderr\n"
+    "  --version             print the protocol version and exit\n"
+    "  -h, --help            this help\n"
+    "\n"
+    "Exits 0 on SIGINT/SIGTERM/SIGHUP (real-time statistics on stderr), 1 on a socket or\n"
+    "setup error, 2 on a usage error. Without SocketCAN in the kernel, run it under\n"
+    "tools/with-vcan.\n";
+
+struct Options {
+  std::string channel = "vcan0";
+  hil::ControllerConfig controller;
+  hil::LoopConfig loop;
+  int rt_priority = 0;
+};
+
+bool parse_uint(const char *text, unsigned long max, unsigned long *out) {
+  if (text == nullptr || *text == '\0' || *text == '-') return false;
+  errno = 0;
+  char *end = nullptr;
+  unsigned long v = std::strtoul(text, &end, 10);
+  if (errno != 0 || *end != '\0' || v > max) return false;
+  *out = v;
+  return true;
+}
+
+// Returns -1 to go on, else the exit code.
+int parse_options(int argc, char **argv, Options *o) {
+  for (int i = 1; i < argc; ++i) {
+    std::string arg = argv[i];
+    std::string value;
+    bool has_value = false;
+    size_t eq = arg.find('=');
+    if (arg.rfind("--", 0) == 0 && eq != std::string::npos) {
+      value = arg.substr(eq + 1);
+      arg = arg.substr(0, eq);
+      has_value = true;
+    }
+    auto need = [&](const char *name) -> const char * {
+      if (has_value) return value.c_str();
+      if (i + 1 >= argc) {
+        std::fprintf(stderr, "hil_sim: %s needs a value (see --help)\n", name);
+        return nullptr;
+      }
+      return argv[++i];
+    };
+    auto bad = [&](const char *name, const char *v, const char *what) {
+      std::fprintf(stderr, "hil_sim: bad %s '%s': %s\n", name, v, what);
+      return 2;
+    };
+    unsigned long n = 0;
+    if (arg == "-h" || arg == "--help") {
+      std::fputs(kUsage, stdout);
+      return 0;
+    } else if (arg == "--version") {
+      std::printf("hil_sim (legsim) protocol %d\n", hil::kProtocolVersion);
+      return 0;
+    } else if (arg == "-v" || arg == "--verbose") {
+      o->controller.verbose = o->loop.verbose = true;
+    } else if (arg == "--channel") {
+      const char *v = need("--channel");
+      if (v == nullptr) return 2;
+      o->channel = v;
+    } else if (arg == "--cmd-timeout-ms") {
+      const char *v = need("--cmd-timeout-ms");
+      if (v == nullptr) return 2;
+      if (!parse_uint(v, 65534, &n)) return bad("--cmd-timeout-ms", v, "expected 0..65534");
+      o->controller.cmd_timeout_ms = static_cast<uint32_t>(n);
+    } else if (arg == "--safe-state") {
+      const char *v = need("--safe-state");
+      if (v == nullptr) return 2;
+      std::string s = v;
+      if (s == "zero-force")
+        o->controller.safe_mode = hil::SafeMode::kZeroForce;
+      else if (s == "hold-length")
+        o->controller.safe_mode = hil::SafeMode::kHoldLength;
+      else
+        return bad("--safe-state", v, "expected zero-force or hold-length");
+    } else if (arg == "--decimation") {
+      const char *v = need("--decimation");
+      if (v == nullptr) return 2;
+      if (!parse_uint(v, 10000, &n) || n == 0) return bad("--decimation", v, "expected 1..10000");
+      o->controller.decimation = static_cast<uint32_t>(n);
+    } else if (arg == "--heartbeat-ms") {
+      const char *v = need("--heartbeat-ms");
+      if (v == nullptr) return 2;
+      if (!parse_uint(v, 60000, &n)) return bad("--heartbeat-ms", v, "expected 0..60000");
+      o->loop.heartbeat_ms = static_cast<uint32_t>(n);
+    } else if (arg == "--rt-priority") {
+      const char *v = need("--rt-priority");
+      if (v == nullptr) return 2;
+      if (!parse_uint(v, 99, &n) || n == 0) return bad("--rt-priority", v, "expected 1..99");
+      o->rt_priority = static_cast<int>(n);
+    } else {
+      std::fprintf(stderr, "hil_sim: unknown option '%s' (see --help)\n", argv[i]);
+      return 2;
+    }
+  }
+  return -1;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+  Options opt;
+  int rc = parse_options(argc, argv, &opt);
+  if (rc >= 0) return rc;
+
+  // signals arrive on a descriptor the loops poll: no handler races, clean exit from any state
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGINT);
+  sigaddset(&mask, SIGTERM);
+  sigaddset(&mask, SIGHUP);
+  if (sigprocmask(SIG_BLOCK, &mask, nullptr) != 0) {
+    std::perror("hil_sim: sigprocmask");
+    return 1;
+  }
+  int sfd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+  if (sfd < 0) {
+    std::fprintf(stderr, "hil_sim: signalfd failed: %s\n", std::strerror(errno));
+    return 1;
+  }
+
+  hil::Session session;
+  std::string error;
+  if (!session.init(&error)) {
+    std::fprintf(stderr, "hil_sim: %s\n", error.c_str());
+    return 1;
+  }
+  hil::SocketCan can;
+  if (!can.open(opt.channel, &error)) {
+    std::fprintf(stderr, "hil_sim: %s\n", error.c_str());
+    return 1;
+  }
+  if (opt.rt_priority > 0) {
+    struct sched_param sp = {};
+    sp.sched_priority = opt.rt_priority;
+    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0)
+      std::fprintf(stderr, "hil_sim: warning: SCHED_FIFO %d refused (%s); normal scheduling\n",
+                   opt.rt_priority, std::strerror(errno));
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+      std::fprintf(stderr, "hil_sim: warning: mlockall failed (%s)\n", std::strerror(errno));
+  }
+
+  hil::Controller controller(session, can, opt.controller);
+  hil::JitterStats stats;
+  std::fprintf(stderr,
+               "hil_sim: listening on %s (protocol %d, cmd timeout %u ms, safe state %s, "
+               "decimation %u)\n",
+               opt.channel.c_str(), hil::kProtocolVersion, opt.controller.cmd_timeout_ms,
+               opt.controller.safe_mode == hil::SafeMode::kZeroForce ? "zero-force"
+                                                                      : "hold-length",
+               opt.controller.decimation);
+  hil::LoopResult res = hil::run_loop(can, controller, sfd, opt.loop, &stats);
+
+  if (res.signal != 0)
+    std::fprintf(stderr, "hil_sim: %s, exiting\n", strsignal(res.signal));
+  else
+    std::fprintf(stderr, "hil_sim: CAN socket failed: %s\n", std::strerror(res.socket_errno));
+  std::fprintf(stderr,
+               "hil_sim: %u frames received, %u rejected, %u faults sent, %u frames not sent\n",
+               controller.rx_frames(), controller.rx_rejected(), controller.fault_count(),
+               can.tx_errors());
+  if (stats.count() > 0) hil::print_rt_stats("last real-time run", stats,
+                                             controller.rt_period_ns() > 0
+                                                 ? 1e9 / controller.rt_period_ns()
+                                                 : 0.0);
+  can.close();
+  ::close(sfd);
+  return res.signal != 0 ? 0 : 1;
+}
