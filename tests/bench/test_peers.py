@@ -147,8 +147,9 @@ def test_mujoco_euler_converges_first_order():
 
 
 @needs_mujoco
-def test_mujoco_unstable_closure_is_reported():
+def test_mujoco_unstable_closure_is_reported(tmp_path, monkeypatch):
     # stiffer than refsafe allows and explicit Euler: the closure blows up
+    monkeypatch.chdir(tmp_path)  # MuJoCo writes its warning to ./MUJOCO_LOG.TXT
     r = mujoco_leg.run("free_fall", T_END, 1e-3, "euler", every=0, solref=(0.5e-3, 1.0),
                        refsafe=False)
     assert not r["ok"]
