@@ -75,7 +75,13 @@ legsim_status assemble_commit(Sim &sim) {
   d.q = q;
   d.qd.setZero();
   d.assembled = true;
-  return state_refresh(sim);
+  const legsim_report assembly = d.report;
+  const legsim_status st = state_refresh(sim);
+  // report the assembly's figures, not those of the free dynamics solved after it
+  d.report.iterations = assembly.iterations;
+  d.report.residual = assembly.residual;
+  d.report.condition = assembly.condition;
+  return st;
 }
 
 }  // namespace
@@ -425,9 +431,9 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
       st = stroke_limits_enforce(s, stopped);
       if (st != LEGSIM_OK) return st;
     }
-    if (rk4 || stopped) {
-      st = state_refresh(s);  // the end derivative: next step's first stage, and the reactions
-    } else {
+    if (stopped) {
+      st = state_refresh(s);  // the stop changed q and qd: derivative and reactions anew
+    } else if (!rk4) {  // RK4 leaves its end derivative and reactions itself
       actuator_forces_update(s.model, s.opt, d, d.q, d.qd);
       reactions_update(s);
     }

@@ -5,17 +5,20 @@
 
 namespace legsim {
 
-legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
+                             bool rows_ready) {
   const Model &m = sim.model;
   Data &d = sim.data;
   legsim_options opt = sim.opt;
   // With actuator drivers in the system the drivers supply the actuator forces.
   if (layout.m > m.m) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
   applied_forces(m, opt, d, q, qd, d.force_q);
-  rows_eval(m, layout, d.drivers, q, qd, d.rows);
-  const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
-  d.report.condition = d.factor.condition;
-  if (s != LEGSIM_OK) return s;
+  if (!rows_ready) {
+    rows_eval(m, layout, d.drivers, q, qd, d.rows);
+    const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
+    d.report.condition = d.factor.condition;
+    if (s != LEGSIM_OK) return s;
+  }
   VecQ tmp;
   for (int k = 0; k < m.nq; ++k) tmp[k] = m.minv[k] * d.force_q[k];
   j_times(layout, d.rows, tmp, d.lambda);

@@ -1,7 +1,8 @@
 // Explicit RK4 on the index-1 form (accelerations from the multiplier solve),
 // followed by the projection of positions onto Phi(q) = 0 and of velocities
 // onto Phi_q qd = 0, both M-weighted. The derivative at the start of a step is
-// the one left by the previous step's end (first same as last).
+// the one left by the previous step's end (first same as last), so a step
+// costs three stage solves and one end solve.
 #include "sim.hpp"
 
 namespace legsim {
@@ -41,17 +42,36 @@ legsim_status rk4_step(Sim &sim) {
     v1[k] = d.qd[k] + h6 * sum_a[k];
   }
   if (!all_finite(q1, n) || !all_finite(v1, n)) return LEGSIM_ERR_DIVERGED;
-  if (!(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
-    // positions (Newton, usually zero iterations at small steps), then velocities
-    legsim_status s = assemble(sim, d.joints, d.drivers, q1, m.minv);
+  // The end of the step: one evaluation of the rows at (q1, v1) serves the
+  // position check, the velocity projection and the end derivative, which is
+  // also the next step's first stage.
+  const Layout &lay = d.joints;
+  const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
+  rows_eval(m, lay, d.drivers, q1, v1, d.rows);
+  const real tol = real(sim.opt.newton_tol);
+  if (projection && rows_max_residual(lay, d.rows) > tol) {
+    const legsim_status s = assemble(sim, lay, d.drivers, q1, m.minv);  // M-weighted Newton
     if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
-    rows_eval(m, d.joints, d.drivers, q1, v1, d.rows);
-    s = factor_build(d.joints, d.rows, m.minv, d.factor);
-    if (s != LEGSIM_OK) return s;
-    project(m, d.joints, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
+    rows_eval(m, lay, d.drivers, q1, v1, d.rows);
   }
+  legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
+  d.report.condition = d.factor.condition;
+  if (s != LEGSIM_OK) return s;
+  if (projection) {
+    j_times(lay, d.rows, v1, d.rhs);
+    real drift = 0;
+    for (int i = 0; i < lay.m; ++i) drift = std::abs(d.rhs[i]) > drift ? std::abs(d.rhs[i]) : drift;
+    if (drift > tol) {
+      project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
+      rows_eval(m, lay, d.drivers, q1, v1, d.rows);  // gamma at the projected velocities
+    }
+  }
+  s = dynamics_solve(sim, lay, q1, v1, d.qdd, true);
+  if (s != LEGSIM_OK) return s;
   d.q = q1;
   d.qd = v1;
+  if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
+    reactions_from_multipliers(m, lay, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;
 }
 #else

@@ -195,7 +195,9 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &stopped);
 
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.
-legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
+// rows_ready: d.rows and d.factor already hold this (q, qd) on this layout.
+legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
+                             bool rows_ready = false);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 
 // ---- assembly.cpp ----

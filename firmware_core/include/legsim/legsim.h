@@ -194,7 +194,10 @@ enum legsim_event {
   LEGSIM_EVENT_FORCE_SATURATED = 1u << 2, /* a servo asked for more than max_force */
   LEGSIM_EVENT_NEAR_SINGULAR = 1u << 3    /* condition estimate above LEGSIM_COND_WARN */
 };
-#define LEGSIM_COND_WARN 1e6
+/* Condition estimates: above WARN an event is raised; an assembly that lands
+ * above SINGULAR is refused as a dead centre (LEGSIM_ERR_SINGULAR). */
+#define LEGSIM_COND_WARN 1e3
+#define LEGSIM_COND_SINGULAR 1e5
 
 legsim_status legsim_get_report(const legsim_sim *sim, legsim_report *out);
 legsim_status legsim_clear_events(legsim_sim *sim);

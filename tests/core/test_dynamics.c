@@ -1,0 +1,204 @@
+/* Forward dynamics: energy conservation of a conservative run, agreement of the
+ * two integrators, the slot reaction's direction, actuators (servo, saturation,
+ * stroke ends), scene options and bad commands. */
+#include <math.h>
+#include <stdio.h>
+
+#include "leg_fixture.h"
+#include "unity.h"
+
+static fixture_storage st, st2;
+
+void setUp(void) {}
+void tearDown(void) {}
+
+static legsim_options opts(legsim_integrator integ, double h) {
+  legsim_options o = legsim_default_options();
+  o.integrator = integ;
+  o.step_s = h;
+  return o;
+}
+
+/* Constant actuator forces, gravity, no damping: T + V - F.l is conserved. The
+ * forces hold the leg up so it swings without hitting a stroke end. */
+static double energy_drift(legsim_integrator integ, double rho, double h, double t_end) {
+  legsim_options o = opts(integ, h);
+  o.rho_inf = rho;
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, o);
+  const double force[NA] = {-60.0, 10.0};
+  for (int a = 0; a < NA; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, a, force[a]));
+  const double e0 = leg_energy(sim, force);
+  double worst = 0;
+  const int n = (int)(t_end / h + 0.5);
+  for (int i = 0; i < n; i += 10) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 10));
+    worst = fmax(worst, fabs(leg_energy(sim, force) - e0));
+  }
+  TEST_ASSERT_EQUAL_UINT32(0, legsim_stroke_event_mask(sim));
+  return worst / fabs(e0);
+}
+
+static void test_energy_is_conserved_with_constant_forces(void) {
+  const double rk4 = energy_drift(LEGSIM_INTEGRATOR_RK4, 0.8, 1e-3, 2.0);
+  const double ga = energy_drift(LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, 1.0, 1e-3, 2.0);
+  printf("relative energy drift over 2 s at h = 1 ms: rk4 %.3g, generalized-alpha (rho 1) %.3g\n", rk4, ga);
+  TEST_ASSERT_TRUE(rk4 < 1e-7);
+  TEST_ASSERT_TRUE(ga < 1e-4);
+  /* rho < 1 damps high frequencies only: still close */
+  TEST_ASSERT_TRUE(energy_drift(LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, 0.8, 1e-3, 0.5) < 1e-3);
+}
+
+static void run_free_fall(legsim_sim *sim, double t_end, double h, legsim_real *q) {
+  const int n = (int)(t_end / h + 0.5);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
+  TEST_ASSERT_DOUBLE_WITHIN(1e-9, t_end, legsim_time(sim));
+  legsim_get_q(sim, q);
+}
+
+static void test_integrators_agree_at_small_steps(void) {
+  legsim_real qa[NQ], qb[NQ], qc[NQ];
+  legsim_sim *a = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-4));
+  run_free_fall(a, 0.1, 1e-4, qa);
+  legsim_sim *b = leg_at_stand(&st2, &legsim_model_leg_revolute,
+                               opts(LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, 1e-4));
+  run_free_fall(b, 0.1, 1e-4, qb);
+  const double d_small = max_abs_diff(qa, qb, NQ);
+  b = leg_at_stand(&st2, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, 1e-3));
+  run_free_fall(b, 0.1, 1e-3, qc);
+  const double d_large = max_abs_diff(qa, qc, NQ);
+  printf("free fall 0.1 s, max |q_rk4 - q_ga|: h = 1e-4: %.3g, ga at 1e-3: %.3g\n", d_small, d_large);
+  TEST_ASSERT_TRUE(d_small < 1e-8);
+  /* second order: ten times the step, about a hundred times the difference */
+  TEST_ASSERT_TRUE(d_large > 30 * d_small && d_large < 300 * d_small);
+  legsim_real res;
+  legsim_constraints(b, NULL, &res);
+  TEST_ASSERT_TRUE(res < 1e-10); /* index 3: the positions satisfy Phi = 0 */
+}
+
+static void test_slot_reaction_is_normal_to_the_shank(void) {
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_slot, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
+  legsim_command_force(sim, 0, -80.0);
+  for (int i = 0; i < 5; ++i) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 20));
+    legsim_real q[NQ];
+    legsim_reaction r[NJ];
+    legsim_get_q(sim, q);
+    legsim_reactions(sim, r);
+    const double phi6 = q[17], ux = sin(phi6), uy = -cos(phi6);
+    const double along = r[7].force_n[0] * ux + r[7].force_n[1] * uy;
+    const double mag = hypot(r[7].force_n[0], r[7].force_n[1]);
+    TEST_ASSERT_TRUE(mag > 1e-3); /* it carries load */
+    TEST_ASSERT_DOUBLE_WITHIN(1e-9 * mag, 0.0, along);
+  }
+}
+
+static void test_servo_holds_a_length_and_saturation_is_reported(void) {
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
+  legsim_real len[NA], f[NA];
+  legsim_actuator_lengths(sim, len, NULL);
+  for (int a = 0; a < NA; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 3000));
+  legsim_real now[NA];
+  legsim_actuator_lengths(sim, now, NULL);
+  legsim_actuator_forces(sim, f);
+  /* the servo's steady error carries the static load: F = kp (l_cmd - l) */
+  const double kp = legsim_model_leg_revolute.actuator[0].servo_kp_n_per_m;
+  TEST_ASSERT_DOUBLE_WITHIN(1e-3, len[0] - now[0], f[0] / kp);
+  TEST_ASSERT_TRUE(fabs(now[0] - len[0]) < 0.01);
+  legsim_report rep;
+  legsim_get_report(sim, &rep);
+  TEST_ASSERT_FALSE(rep.events & LEGSIM_EVENT_FORCE_SATURATED);
+  /* a far command asks kp * 0.2 m = 4000 N > 1500 N */
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, 1, len[1] - 0.2));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 1));
+  legsim_get_report(sim, &rep);
+  TEST_ASSERT_TRUE(rep.events & LEGSIM_EVENT_FORCE_SATURATED);
+  legsim_actuator_forces(sim, f);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-9, -1500.0, f[1]);
+}
+
+static void test_stroke_end_stops_the_actuator_and_says_so(void) {
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
+  legsim_command_force(sim, 1, -400.0); /* retract the lower actuator hard */
+  double shortest = 1;
+  for (int i = 0; i < 400; ++i) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 1));
+    legsim_real len[NA];
+    legsim_actuator_lengths(sim, len, NULL);
+    shortest = fmin(shortest, len[1]);
+  }
+  legsim_report rep;
+  legsim_get_report(sim, &rep);
+  TEST_ASSERT_TRUE(rep.events & LEGSIM_EVENT_STROKE_MIN);
+  TEST_ASSERT_EQUAL_UINT32(2u, legsim_stroke_event_mask(sim));
+  TEST_ASSERT_TRUE(shortest >= 0.35 - 1e-9);
+  legsim_real res;
+  legsim_constraints(sim, NULL, &res);
+  TEST_ASSERT_TRUE(res < 1e-9);
+}
+
+static void test_scene_options_skip_what_is_disabled(void) {
+  legsim_options o = opts(LEGSIM_INTEGRATOR_RK4, 1e-3);
+  o.disable = LEGSIM_DISABLE_GRAVITY | LEGSIM_DISABLE_REACTIONS;
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, o);
+  legsim_real q0[NQ], q1[NQ];
+  legsim_get_q(sim, q0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 100));
+  legsim_get_q(sim, q1);
+  TEST_ASSERT_TRUE(max_abs_diff(q0, q1, NQ) < 1e-12); /* no load, no motion */
+  legsim_reaction r[NJ];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_DISABLED, legsim_reactions(sim, r));
+  o.disable = 1u << 30;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_set_options(sim, &o));
+}
+
+static void test_bad_commands_change_nothing(void) {
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
+  legsim_real f[NA];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 50.0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_command_force(sim, 0, NAN));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_command_force(sim, 0, INFINITY));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_command_force(sim, 0, 1500.1));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_command_force(sim, 2, 10.0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_command_length(sim, 0, NAN));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_OUT_OF_STROKE, legsim_command_length(sim, 0, 0.39));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_OUT_OF_STROKE, legsim_command_length(sim, 1, 0.71));
+  legsim_actuator_forces(sim, f);
+  TEST_ASSERT_EQUAL_DOUBLE(50.0, f[0]);
+  const legsim_real nan_load[2] = {NAN, 0};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_set_force(sim, 0, nan_load));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_step(sim, -1));
+  legsim_real q[NQ];
+  legsim_get_q(sim, q);
+  q[4] = NAN;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_set_state(sim, q, NULL, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 10));
+  legsim_get_q(sim, q);
+  for (int k = 0; k < NQ; ++k) TEST_ASSERT_FALSE(isnan(q[k]));
+}
+
+static void test_too_large_a_step_fails_with_a_status_never_nan(void) {
+  legsim_options o = opts(LEGSIM_INTEGRATOR_RK4, 0.2);
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, o);
+  legsim_command_force(sim, 0, 1500.0);
+  legsim_status s = LEGSIM_OK;
+  for (int i = 0; i < 50 && s == LEGSIM_OK; ++i) s = legsim_step(sim, 1);
+  legsim_real q[NQ];
+  legsim_get_q(sim, q);
+  for (int k = 0; k < NQ; ++k) TEST_ASSERT_TRUE(isfinite(q[k]));
+  printf("h = 0.2 s with 1500 N: %s after %llu steps\n", legsim_status_str(s),
+         (unsigned long long)legsim_step_count(sim));
+}
+
+int main(void) {
+  UNITY_BEGIN();
+  RUN_TEST(test_energy_is_conserved_with_constant_forces);
+  RUN_TEST(test_integrators_agree_at_small_steps);
+  RUN_TEST(test_slot_reaction_is_normal_to_the_shank);
+  RUN_TEST(test_servo_holds_a_length_and_saturation_is_reported);
+  RUN_TEST(test_stroke_end_stops_the_actuator_and_says_so);
+  RUN_TEST(test_scene_options_skip_what_is_disabled);
+  RUN_TEST(test_bad_commands_change_nothing);
+  RUN_TEST(test_too_large_a_step_fails_with_a_status_never_nan);
+  return UNITY_END();
+}
