@@ -1,0 +1,139 @@
+// legsim_cli: runs a scene file (scenes/cli/*.toml) and writes its results as JSON
+// or CSV.
+//
+//   legsim_cli SCENE.toml [--out FILE.json|FILE.csv] [--format json|csv]
+//
+// The scene names the model file (loaded at run time, host/model_toml.cpp) or
+// "builtin:leg" (the leg compiled in from models/leg.toml), the analysis and its
+// inputs; see host/scene_toml.hpp. Exit status: 0 ok, 1 the run failed (the output
+// holds the samples up to the failure and the status), 2 bad usage or a bad scene
+// or model (nothing is written).
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <string>
+
+#include "legsim/legsim.h"
+#include "legsim/models.h"
+#include "model_toml.hpp"
+#include "scene_toml.hpp"
+
+namespace {
+
+const char *kUsage =
+    "usage: legsim_cli SCENE.toml [--out FILE.json|FILE.csv] [--format json|csv]\n"
+    "  Runs the scene (model, analysis, inputs) and writes time, body coordinates,\n"
+    "  actuator lengths and forces, joint reactions, constraint residual and status.\n"
+    "  Without --out the output goes to stdout; the format follows --format, else the\n"
+    "  extension of --out, else JSON.\n";
+
+int usage_error(const std::string &msg) {
+  std::cerr << "legsim_cli: " << msg << "\n" << kUsage;
+  return 2;
+}
+
+bool ends_with(const std::string &s, const char *suffix) {
+  const size_t n = std::strlen(suffix);
+  return s.size() >= n && s.compare(s.size() - n, n, suffix) == 0;
+}
+
+}  // namespace
+
+int main(int argc, char **argv) {
+  std::string scene_path, out_path, format;
+  for (int i = 1; i < argc; ++i) {
+    const std::string a = argv[i];
+    if (a == "-h" || a == "--help") {
+      std::cout << kUsage;
+      return 0;
+    } else if (a == "--out" || a == "-o") {
+      if (++i >= argc) return usage_error("--out needs a file name");
+      out_path = argv[i];
+    } else if (a.rfind("--out=", 0) == 0) {
+      out_path = a.substr(6);
+    } else if (a == "--format") {
+      if (++i >= argc) return usage_error("--format needs json or csv");
+      format = argv[i];
+    } else if (a.rfind("--format=", 0) == 0) {
+      format = a.substr(9);
+    } else if (!a.empty() && a[0] == '-') {
+      return usage_error("unknown option " + a);
+    } else if (scene_path.empty()) {
+      scene_path = a;
+    } else {
+      return usage_error("one scene at a time (got " + scene_path + " and " + a + ")");
+    }
+  }
+  if (scene_path.empty()) return usage_error("no scene file given");
+  if (format.empty()) format = ends_with(out_path, ".csv") ? "csv" : "json";
+  if (format != "json" && format != "csv") return usage_error("--format must be json or csv");
+
+  legsim_host::Scene scene;
+  std::string err;
+  if (!legsim_host::load_scene(scene_path, scene, err)) {
+    std::cerr << "legsim_cli: error: " << err << "\n";
+    return 2;
+  }
+
+  // The model: compiled in, or loaded (and checked) at run time. It must outlive the sim.
+  legsim_model_desc model;
+  if (!scene.builtin.empty()) {
+    if (scene.builtin != "leg") {
+      std::cerr << "legsim_cli: error: " << scene_path << ": unknown builtin model '" << scene.builtin
+                << "' (this build has: leg)\n";
+      return 2;
+    }
+    const legsim_model_desc *found = nullptr;
+    std::string have;
+    for (int32_t v = 0; v < legsim_model_leg_variant_count; ++v) {
+      have += std::string(v ? ", " : "") + legsim_model_leg_variants[v].name;
+      if (scene.variant == legsim_model_leg_variants[v].name) found = legsim_model_leg_variants[v].model;
+    }
+    if (!found) {
+      std::cerr << "legsim_cli: error: " << scene_path << ": the builtin leg has no variant '"
+                << scene.variant << "' (available: " << have << ")\n";
+      return 2;
+    }
+    model = *found;
+  } else {
+    char msg[512];
+    const legsim_status st =
+        legsim_model_load_toml(scene.model_path.c_str(), scene.variant.c_str(), &model, msg, sizeof msg);
+    if (st != LEGSIM_OK) {
+      std::cerr << "legsim_cli: error: " << msg << " (model of " << scene_path << ")\n";
+      return 2;
+    }
+  }
+  if (!legsim_host::bind_scene(scene, model, err)) {
+    std::cerr << "legsim_cli: error: " << err << "\n";
+    return 2;
+  }
+
+  legsim_host::Result result;
+  legsim_host::run_scene(scene, model, result);
+
+  std::ostringstream text;
+  if (format == "csv")
+    legsim_host::write_csv(text, scene, model, result);
+  else
+    legsim_host::write_json(text, scene, model, result);
+  if (out_path.empty() || out_path == "-") {
+    std::cout << text.str();
+    std::cout.flush();
+  } else {
+    std::ofstream f(out_path, std::ios::binary);
+    f << text.str();
+    f.close();
+    if (!f) {
+      std::cerr << "legsim_cli: error: cannot write " << out_path << "\n";
+      return 2;
+    }
+  }
+  if (result.status != LEGSIM_OK) {
+    std::cerr << "legsim_cli: error: " << scene_path << ": " << result.error << "\n";
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,900 @@
+// Run-time model loader: models/leg.toml -> legsim_model_desc.
+//
+// A line-by-line port of firmware_core/tools/model_codegen.py (parse_model and its
+// helpers): same order of checks, same messages. Change both together; the tests in
+// tests/model compare the two (descriptions field by field, messages verbatim).
+//
+// toml++ may throw (toml::parse_error); so does this file internally (Fail) to keep
+// the port close to the Python. Everything is caught at the C boundary.
+#include "model_toml.hpp"
+
+#include <algorithm>
+#include <cerrno>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <new>
+#include <sstream>
+#include <string>
+#include <tuple>
+#include <utility>
+#include <vector>
+
+#include <toml++/toml.h>
+
+namespace {
+
+constexpr int kNameLen = LEGSIM_NAME_LEN;  // NUL included
+constexpr const char *kDefaultVariant = LEGSIM_DEFAULT_VARIANT;
+
+struct Fail {
+  legsim_status status;
+  std::string message;
+};
+
+[[noreturn]] void fail(const std::string &label, const std::string &problem,
+                       legsim_status status = LEGSIM_ERR_MODEL) {
+  throw Fail{status, label + ": " + problem};
+}
+
+std::string g(double x) {  // Python's "%g" % x
+  char buf[64];
+  std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+std::string q(const std::string &s) { return "'" + s + "'"; }
+
+using Node = const toml::node *;
+using Table = const toml::table *;
+
+bool is_table(Node v) { return v && v->is_table(); }
+bool is_int(Node v) { return v && v->is_integer(); }
+bool is_number(Node v) { return v && (v->is_integer() || v->is_floating_point()); }
+bool is_string(Node v) { return v && v->is_string(); }
+
+double to_double(Node v) {
+  if (v->is_integer()) return static_cast<double>(*v->value<int64_t>());
+  return v->as_floating_point()->get();
+}
+
+bool has(Table t, const std::string &key) { return t->get(key) != nullptr; }
+
+// Keys in sorted order (std::map order: bytewise, as Python's sorted()).
+std::vector<std::string> sorted_keys(Table t) {
+  std::vector<std::string> keys;
+  for (auto &&kv : *t) keys.emplace_back(kv.first.str());
+  std::sort(keys.begin(), keys.end());
+  return keys;
+}
+
+// Keys in file order (Python's dict order): by where each key first appears.
+std::vector<std::string> file_order_keys(Table t) {
+  std::vector<std::tuple<uint32_t, uint32_t, std::string>> v;
+  for (auto &&kv : *t) {
+    const auto &b = kv.first.source().begin;
+    v.emplace_back(b.line, b.column, std::string(kv.first.str()));
+  }
+  std::sort(v.begin(), v.end());
+  std::vector<std::string> keys;
+  for (auto &e : v) keys.push_back(std::get<2>(e));
+  return keys;
+}
+
+std::string join(const std::vector<std::string> &v, const char *sep) {
+  std::string s;
+  for (size_t i = 0; i < v.size(); ++i) {
+    if (i) s += sep;
+    s += v[i];
+  }
+  return s;
+}
+
+void check_keys(Table t, std::vector<std::string> allowed, const std::string &label) {
+  std::sort(allowed.begin(), allowed.end());
+  for (const auto &key : sorted_keys(t))
+    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end())
+      fail(label, "unknown key " + q(key) + " (allowed: " + join(allowed, ", ") + ")");
+}
+
+Node req(Table t, const std::string &key, const std::string &label) {
+  Node v = t->get(key);
+  if (!v) fail(label, "missing key " + q(key));
+  return v;
+}
+
+std::string get_string(Table t, const std::string &key, const std::string &label) {
+  Node v = req(t, key, label);
+  if (!is_string(v)) fail(label, q(key) + " must be a string");
+  return std::string(*v->value<std::string_view>());
+}
+
+bool name_char_ok(char c) {
+  return (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || (c >= '0' && c <= '9') || c == '_' ||
+         c == '-' || c == '.';
+}
+
+void check_name(const std::string &name, const std::string &label, const std::string &what = "name") {
+  const size_t n = name.size();
+  if (n < 1 || n > static_cast<size_t>(kNameLen - 1))
+    fail(label, what + " must be 1 to " + std::to_string(kNameLen - 1) + " characters (got " +
+                    std::to_string(n) + ")");
+  for (char c : name)
+    if (!name_char_ok(c))
+      fail(label, what + " " + q(name) + " may hold only letters, digits, '_', '-' and '.'");
+}
+
+bool is_ident(const std::string &s) {
+  if (s.empty()) return false;
+  for (size_t i = 0; i < s.size(); ++i) {
+    const char c = s[i];
+    const bool alpha = (c >= 'A' && c <= 'Z') || (c >= 'a' && c <= 'z') || c == '_';
+    const bool digit = c >= '0' && c <= '9';
+    if (!(alpha || (i > 0 && digit))) return false;
+  }
+  return true;
+}
+
+double as_real(Node v, const std::string &key, const std::string &label) {
+  if (!is_number(v)) fail(label, q(key) + " must be a number");
+  const double x = to_double(v);
+  if (!std::isfinite(x)) fail(label, q(key) + " is not finite");
+  return x;
+}
+
+double get_real(Table t, const std::string &key, const std::string &label) {
+  return as_real(req(t, key, label), key, label);
+}
+
+double get_positive(Table t, const std::string &key, const std::string &label) {
+  const double x = get_real(t, key, label);
+  if (!(x > 0.0)) fail(label, q(key) + " must be positive (got " + g(x) + ")");
+  return x;
+}
+
+double get_nonnegative(Table t, const std::string &key, const std::string &label) {
+  const double x = get_real(t, key, label);
+  if (!(x >= 0.0)) fail(label, q(key) + " must be non-negative (got " + g(x) + ")");
+  return x;
+}
+
+std::vector<double> as_vec(Node v, size_t n, const std::string &key, const std::string &label) {
+  const toml::array *a = v ? v->as_array() : nullptr;
+  bool ok = a && a->size() == n;
+  if (ok)
+    for (auto &&e : *a) ok = ok && is_number(&e);
+  if (!ok) fail(label, q(key) + " must be an array of " + std::to_string(n) + " numbers");
+  std::vector<double> out;
+  for (auto &&e : *a) out.push_back(to_double(&e));
+  for (double x : out)
+    if (!std::isfinite(x)) fail(label, q(key) + " is not finite");
+  return out;
+}
+
+std::vector<double> get_vec(Table t, const std::string &key, size_t n, const std::string &label) {
+  return as_vec(req(t, key, label), n, key, label);
+}
+
+int64_t get_int(Table t, const std::string &key, const std::string &label) {
+  Node v = req(t, key, label);
+  if (!is_int(v)) fail(label, q(key) + " must be an integer");
+  return *v->value<int64_t>();
+}
+
+std::vector<Table> get_table_array(Table t, const std::string &key, const std::string &label) {
+  std::vector<Table> out;
+  Node v = t->get(key);
+  if (!v) return out;
+  const toml::array *a = v->as_array();
+  bool ok = a != nullptr;
+  if (ok)
+    for (auto &&e : *a) ok = ok && e.is_table();
+  if (!ok) fail(label, q(key) + " must be an array of tables ([[" + key + "]])");
+  for (auto &&e : *a) out.push_back(e.as_table());
+  return out;
+}
+
+void capacity(size_t count, const std::string &what, const std::string &macro, int cap,
+              const std::string &label = "model") {
+  if (count > static_cast<size_t>(cap))
+    fail(label, std::to_string(count) + " " + what + " exceed the capacity " + macro + " = " +
+                    std::to_string(cap),
+         LEGSIM_ERR_CAPACITY);
+}
+
+void copy_name(char (&dst)[LEGSIM_NAME_LEN], const std::string &s) {
+  std::memset(dst, 0, sizeof dst);
+  std::memcpy(dst, s.data(), std::min(s.size(), sizeof dst - 1));
+}
+
+// ---- the model ----------------------------------------------------------------
+struct Body {
+  int64_t id;
+  std::string name;
+  double length, mass, inertia;
+};
+
+struct Ctx {
+  std::vector<std::pair<std::string, std::vector<double>>> frame;
+  std::vector<Body> bodies;  // by index (id - 1)
+
+  int body_ref(Node v, const std::string &key, const std::string &label) const {
+    if (!is_int(v)) fail(label, q(key) + " must be an integer body id");
+    const int64_t id = *v->value<int64_t>();
+    const int64_t n = static_cast<int64_t>(bodies.size());
+    if (id < 1 || id > n)
+      fail(label, "body " + std::to_string(id) + " does not exist (ids are 1.." + std::to_string(n) +
+                      ")");
+    return static_cast<int>(id - 1);
+  }
+
+  std::vector<double> end_point(int body, const std::string &end, Node at_value,
+                                const std::string &label) const {
+    const double half = bodies[body].length / 2.0;
+    if (end == "proximal") return {-half, 0.0};
+    if (end == "distal") return {half, 0.0};
+    return as_vec(at_value, 2, "at", label);
+  }
+
+  std::vector<double> frame_point(Table t, const std::string &label) const {
+    const std::string name = get_string(t, "point", label);
+    for (const auto &p : frame)
+      if (p.first == name) return p.second;
+    fail(label, "frame point " + q(name) + " does not exist");
+  }
+};
+
+const std::string &check_end(const std::string &end, const std::string &label) {
+  if (end != "proximal" && end != "distal" && end != "at")
+    fail(label, "bad end " + q(end) + " (expected proximal, distal or at)");
+  return end;
+}
+
+std::pair<int, std::vector<double>> single_point(const Ctx &ctx, Table t, const std::string &label) {
+  const int body = ctx.body_ref(req(t, "body", label), "body", label);
+  const std::string end = check_end(get_string(t, "end", label), label);
+  if (end == "at") return {body, ctx.end_point(body, end, req(t, "at", label), label)};
+  if (has(t, "at")) fail(label, "'at' given but the end is not \"at\"");
+  return {body, ctx.end_point(body, end, nullptr, label)};
+}
+
+std::vector<int> two_bodies(const Ctx &ctx, Table t, const std::string &label) {
+  Node v = req(t, "bodies", label);
+  const toml::array *a = v->as_array();
+  bool ok = a && a->size() == 2;
+  if (ok)
+    for (auto &&e : *a) ok = ok && e.is_integer();
+  if (!ok) fail(label, "'bodies' must be an array of 2 integer body ids");
+  std::vector<int> b = {ctx.body_ref(a->get(0), "bodies", label),
+                        ctx.body_ref(a->get(1), "bodies", label)};
+  if (b[0] == b[1])
+    fail(label, "bodies must differ (got " + std::to_string(*a->get(0)->value<int64_t>()) + " and " +
+                    std::to_string(*a->get(1)->value<int64_t>()) + ")");
+  return b;
+}
+
+std::vector<std::vector<double>> two_ends(const Ctx &ctx, Table t, const std::vector<int> &bodies,
+                                          const std::string &label, bool slot) {
+  Node v = req(t, "ends", label);
+  const toml::array *a = v->as_array();
+  bool ok = a && a->size() == 2;
+  if (ok)
+    for (auto &&e : *a) ok = ok && e.is_string();
+  if (!ok) fail(label, "'ends' must be an array of 2 strings");
+  const std::string v0(*a->get(0)->value<std::string_view>());
+  const std::string v1(*a->get(1)->value<std::string_view>());
+  std::vector<std::string> ends;
+  ends.push_back(check_end(v0, label));
+  if (slot) {
+    if (v1 != "axis") fail(label, "bad end " + q(v1) + " for the slot line (expected axis)");
+  } else {
+    ends.push_back(check_end(v1, label));
+  }
+  const size_t n_at = static_cast<size_t>(std::count(ends.begin(), ends.end(), "at"));
+  std::vector<Node> ats(ends.size(), nullptr);
+  if (n_at == 0) {
+    if (has(t, "at")) fail(label, "'at' given but no end is \"at\"");
+  } else if (n_at == 1) {
+    Node at = req(t, "at", label);
+    for (size_t i = 0; i < ends.size(); ++i)
+      if (ends[i] == "at") ats[i] = at;
+  } else {
+    Node at = req(t, "at", label);
+    const toml::array *aa = at->as_array();
+    if (!aa || aa->size() != 2)
+      fail(label, "'at' must be an array of 2 [xi, eta] arrays (both ends are \"at\")");
+    ats[0] = aa->get(0);
+    ats[1] = aa->get(1);
+  }
+  std::vector<std::vector<double>> pts;
+  for (size_t i = 0; i < ends.size(); ++i)
+    pts.push_back(ctx.end_point(bodies[i], ends[i], ats[i], label));
+  if (slot) pts.push_back({0.0, 0.0});
+  return pts;
+}
+
+struct Joint {
+  std::string name, kind;
+  int body[2];
+  double point[2][2];
+};
+
+void set_point(double (&dst)[2], const std::vector<double> &p) {
+  dst[0] = p[0];
+  dst[1] = p[1];
+}
+
+// override: a [variant.X] table, which names no joint (its key does).
+Joint parse_joint(const Ctx &ctx, const std::string &name, Table t, const std::string &label,
+                  bool override) {
+  static const std::vector<std::string> kinds = {"revolute_to_frame", "revolute", "prismatic", "slot"};
+  const std::string kind = get_string(t, "kind", label);
+  if (std::find(kinds.begin(), kinds.end(), kind) == kinds.end())
+    fail(label, "unknown kind " + q(kind) + " (expected revolute_to_frame, revolute, prismatic or slot)");
+  std::vector<std::string> keys;
+  if (kind == "revolute_to_frame")
+    keys = {"name", "kind", "body", "end", "at", "point"};
+  else if (kind == "prismatic")
+    keys = {"name", "kind", "bodies"};
+  else
+    keys = {"name", "kind", "bodies", "ends", "at"};
+  if (override) keys.erase(keys.begin());  // "name"
+  check_keys(t, keys, label);
+  Joint j{name, kind, {0, 0}, {{0.0, 0.0}, {0.0, 0.0}}};
+  if (kind == "revolute_to_frame") {
+    auto bp = single_point(ctx, t, label);
+    j.body[0] = bp.first;
+    j.body[1] = LEGSIM_FRAME;
+    set_point(j.point[0], bp.second);
+    set_point(j.point[1], ctx.frame_point(t, label));
+  } else if (kind == "prismatic") {
+    auto b = two_bodies(ctx, t, label);
+    j.body[0] = b[0];
+    j.body[1] = b[1];
+  } else {
+    auto b = two_bodies(ctx, t, label);
+    j.body[0] = b[0];
+    j.body[1] = b[1];
+    auto pts = two_ends(ctx, t, b, label, kind == "slot");
+    set_point(j.point[0], pts[0]);
+    set_point(j.point[1], pts[1]);
+  }
+  return j;
+}
+
+legsim_force_desc parse_force(const Ctx &ctx, const std::string &name, Table t) {
+  const std::string label = "force " + q(name);
+  const std::string kind = get_string(t, "kind", label);
+  if (kind != "point" && kind != "torque" && kind != "spring_damper")
+    fail(label, "unknown kind " + q(kind) + " (expected point, torque or spring_damper)");
+  legsim_force_desc f;
+  std::memset(&f, 0, sizeof f);
+  copy_name(f.name, name);
+  f.body[0] = 0;
+  f.body[1] = LEGSIM_FRAME;
+  if (kind == "point") {
+    f.kind = LEGSIM_FORCE_POINT;
+    check_keys(t, {"name", "kind", "body", "end", "at", "value"}, label);
+    auto bp = single_point(ctx, t, label);
+    f.body[0] = bp.first;
+    set_point(f.point[0], bp.second);
+    if (has(t, "value")) set_point(f.value, get_vec(t, "value", 2, label));
+  } else if (kind == "torque") {
+    f.kind = LEGSIM_FORCE_TORQUE;
+    check_keys(t, {"name", "kind", "body", "value"}, label);
+    f.body[0] = ctx.body_ref(req(t, "body", label), "body", label);
+    if (has(t, "value")) {
+      f.value[0] = get_real(t, "value", label);
+      f.value[1] = 0.0;
+    }
+  } else {
+    f.kind = LEGSIM_FORCE_SPRING_DAMPER;
+    std::vector<std::string> common = {"name", "kind", "at", "stiffness", "damping", "rest_length"};
+    if (has(t, "bodies")) {
+      auto keys = common;
+      keys.insert(keys.end(), {"bodies", "ends"});
+      check_keys(t, keys, label);
+      auto b = two_bodies(ctx, t, label);
+      f.body[0] = b[0];
+      f.body[1] = b[1];
+      auto pts = two_ends(ctx, t, b, label, false);
+      set_point(f.point[0], pts[0]);
+      set_point(f.point[1], pts[1]);
+    } else {
+      auto keys = common;
+      keys.insert(keys.end(), {"body", "end", "point"});
+      check_keys(t, keys, label);
+      auto bp = single_point(ctx, t, label);
+      f.body[0] = bp.first;
+      set_point(f.point[0], bp.second);
+      f.body[1] = LEGSIM_FRAME;
+      set_point(f.point[1], ctx.frame_point(t, label));
+    }
+    f.stiffness_n_per_m = get_nonnegative(t, "stiffness", label);
+    f.damping_ns_per_m = get_nonnegative(t, "damping", label);
+    f.rest_length_m = get_nonnegative(t, "rest_length", label);
+  }
+  return f;
+}
+
+// [variant.X] tables in file order, checked: X = { JOINT = {...}, ... }.
+std::vector<std::pair<std::string, Table>> variant_tables(Table doc,
+                                                          const std::vector<std::string> &joint_names) {
+  std::vector<std::pair<std::string, Table>> out;
+  Node vt = doc->get("variant");
+  if (!vt) return out;
+  if (!is_table(vt)) fail("model", "'variant' must be a table of [variant.NAME] tables");
+  Table vtab = vt->as_table();
+  for (const auto &vname : file_order_keys(vtab)) {
+    const std::string label = "variant " + q(vname);
+    if (!is_ident(vname) || vname.size() > static_cast<size_t>(kNameLen - 1))
+      fail(label, "the name must be a C identifier of at most " + std::to_string(kNameLen - 1) +
+                      " characters");
+    if (vname == kDefaultVariant) fail(label, "the default variant cannot be overridden");
+    Node v = vtab->get(vname);
+    if (!is_table(v)) fail(label, "must be a table of JOINT = { ... } overrides");
+    Table vtb = v->as_table();
+    for (const auto &jname : sorted_keys(vtb)) {
+      if (std::find(joint_names.begin(), joint_names.end(), jname) == joint_names.end())
+        fail(label, "no joint named " + q(jname));
+      if (!is_table(vtb->get(jname)))
+        fail(label, q(jname) + " must be a table (the joint's keys without its name)");
+    }
+    out.emplace_back(vname, vtb);
+  }
+  return out;
+}
+
+bool parse_driver_key(const std::string &key, int *coord, int64_t *id) {
+  size_t p;
+  if (key.compare(0, 3, "phi") == 0) {
+    *coord = 2;
+    p = 3;
+  } else if (!key.empty() && key[0] == 'x') {
+    *coord = 0;
+    p = 1;
+  } else if (!key.empty() && key[0] == 'y') {
+    *coord = 1;
+    p = 1;
+  } else {
+    return false;
+  }
+  const size_t nd = key.size() - p;
+  if (nd < 1 || nd > 9 || key[p] < '1' || key[p] > '9') return false;
+  int64_t v = 0;
+  for (size_t i = p; i < key.size(); ++i) {
+    if (key[i] < '0' || key[i] > '9') return false;
+    v = v * 10 + (key[i] - '0');
+  }
+  *id = v;
+  return true;
+}
+
+void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
+  static const std::vector<std::string> top_keys = {"name",     "gravity", "frame", "body",
+                                                    "joint",    "variant", "actuator", "force",
+                                                    "foot",     "pose"};
+  check_keys(doc, top_keys, "model");
+  const std::string name = get_string(doc, "name", "model");
+  check_name(name, "model");
+  std::vector<double> gravity =
+      has(doc, "gravity") ? get_vec(doc, "gravity", 2, "model") : std::vector<double>{0.0, -9.81};
+
+  Ctx ctx;
+  if (Node ft = doc->get("frame")) {
+    if (!is_table(ft)) fail("model", "'frame' must be a table of NAME = [x, y] points");
+    Table ftab = ft->as_table();
+    for (const auto &key : sorted_keys(ftab))
+      ctx.frame.emplace_back(key, as_vec(ftab->get(key), 2, key, "frame point " + q(key)));
+  }
+
+  // bodies
+  auto body_tables = get_table_array(doc, "body", "model");
+  if (body_tables.empty()) fail("model", "no [[body]]");
+  const size_t n = body_tables.size();
+  capacity(n, "bodies", "LEGSIM_MAX_BODIES", LEGSIM_MAX_BODIES);
+  std::vector<Body> parsed;
+  for (size_t k = 1; k <= n; ++k) {
+    Table tb = body_tables[k - 1];
+    std::string label = "body #" + std::to_string(k);
+    const std::string bname = get_string(tb, "name", label);
+    check_name(bname, label);
+    for (size_t k2 = 1; k2 <= parsed.size(); ++k2)
+      if (parsed[k2 - 1].name == bname)
+        fail(label, "duplicate name " + q(bname) + " (body #" + std::to_string(k2) + " has it too)");
+    label = "body " + q(bname);
+    check_keys(tb, {"id", "name", "length", "mass", "inertia"}, label);
+    Body b;
+    b.name = bname;
+    b.id = get_int(tb, "id", label);
+    b.length = get_positive(tb, "length", label);
+    b.mass = get_positive(tb, "mass", label);
+    b.inertia = has(tb, "inertia") ? get_positive(tb, "inertia", label)
+                                   : b.mass * b.length * b.length / 12.0;
+    parsed.push_back(b);
+  }
+  std::vector<const Body *> by_id(n + 1, nullptr);
+  for (const auto &b : parsed) {
+    const std::string label = "body " + q(b.name);
+    if (b.id < 1 || b.id > static_cast<int64_t>(n))
+      fail(label, "id " + std::to_string(b.id) + " out of range (ids must be 1.." + std::to_string(n) +
+                      ")");
+    if (by_id[b.id])
+      fail(label, "duplicate id " + std::to_string(b.id) + " (body " + q(by_id[b.id]->name) +
+                      " has it too)");
+    by_id[b.id] = &b;
+  }
+  for (size_t i = 1; i <= n; ++i) ctx.bodies.push_back(*by_id[i]);
+
+  // joints: names first (variants refer to them)
+  auto joint_tables = get_table_array(doc, "joint", "model");
+  capacity(joint_tables.size(), "joints", "LEGSIM_MAX_JOINTS", LEGSIM_MAX_JOINTS);
+  std::vector<std::string> joint_names;
+  for (size_t k = 1; k <= joint_tables.size(); ++k) {
+    const std::string label = "joint #" + std::to_string(k);
+    const std::string jname = get_string(joint_tables[k - 1], "name", label);
+    check_name(jname, label);
+    auto it = std::find(joint_names.begin(), joint_names.end(), jname);
+    if (it != joint_names.end())
+      fail(label, "duplicate name " + q(jname) + " (joint #" +
+                      std::to_string(it - joint_names.begin() + 1) + " has it too)");
+    joint_names.push_back(jname);
+  }
+
+  auto variants = variant_tables(doc, joint_names);
+  std::vector<std::string> names = {kDefaultVariant};
+  for (const auto &v : variants) names.push_back(v.first);
+  if (std::find(names.begin(), names.end(), variant) == names.end())
+    fail("model", "unknown variant " + q(variant) + " (available: " + join(names, ", ") + ")",
+         LEGSIM_ERR_BAD_INPUT);
+  Table overrides = nullptr;
+  for (const auto &v : variants)
+    if (v.first == variant) overrides = v.second;
+
+  std::vector<Joint> joints;
+  for (size_t k = 0; k < joint_tables.size(); ++k) {
+    const std::string &jname = joint_names[k];
+    Node ov = overrides ? overrides->get(jname) : nullptr;
+    if (ov)
+      joints.push_back(parse_joint(ctx, jname, ov->as_table(),
+                                   "joint " + q(jname) + " (variant " + q(variant) + ")", true));
+    else
+      joints.push_back(parse_joint(ctx, jname, joint_tables[k], "joint " + q(jname), false));
+  }
+
+  // actuators
+  auto act_tables = get_table_array(doc, "actuator", "model");
+  capacity(act_tables.size(), "actuators", "LEGSIM_MAX_ACTUATORS", LEGSIM_MAX_ACTUATORS);
+  std::vector<legsim_actuator_desc> actuators;
+  std::vector<std::string> act_names;
+  for (size_t k = 1; k <= act_tables.size(); ++k) {
+    Table ta = act_tables[k - 1];
+    std::string label = "actuator #" + std::to_string(k);
+    const std::string aname = get_string(ta, "name", label);
+    check_name(aname, label);
+    for (size_t k2 = 1; k2 <= act_names.size(); ++k2)
+      if (act_names[k2 - 1] == aname)
+        fail(label, "duplicate name " + q(aname) + " (actuator #" + std::to_string(k2) +
+                        " has it too)");
+    label = "actuator " + q(aname);
+    check_keys(ta, {"name", "joint", "stroke", "max_force", "servo_kp", "servo_kd"}, label);
+    const std::string jname = get_string(ta, "joint", label);
+    auto it = std::find(joint_names.begin(), joint_names.end(), jname);
+    if (it == joint_names.end()) fail(label, "joint " + q(jname) + " does not exist");
+    const int ji = static_cast<int>(it - joint_names.begin());
+    if (joints[ji].kind != "prismatic")
+      fail(label, "joint " + q(jname) + " is " + joints[ji].kind + ", not prismatic");
+    for (size_t k2 = 0; k2 < actuators.size(); ++k2)
+      if (actuators[k2].joint == ji)
+        fail(label, "joint " + q(jname) + " is already driven by actuator " + q(act_names[k2]));
+    const auto stroke = get_vec(ta, "stroke", 2, label);
+    if (!(stroke[0] > 0.0)) fail(label, "stroke min must be positive (got " + g(stroke[0]) + ")");
+    if (stroke[0] >= stroke[1])
+      fail(label, "stroke min " + g(stroke[0]) + " >= max " + g(stroke[1]));
+    legsim_actuator_desc a;
+    std::memset(&a, 0, sizeof a);
+    copy_name(a.name, aname);
+    a.joint = ji;
+    a.stroke_min_m = stroke[0];
+    a.stroke_max_m = stroke[1];
+    a.max_force_n = get_positive(ta, "max_force", label);
+    a.servo_kp_n_per_m = get_nonnegative(ta, "servo_kp", label);
+    a.servo_kd_ns_per_m = get_nonnegative(ta, "servo_kd", label);
+    actuators.push_back(a);
+    act_names.push_back(aname);
+  }
+
+  // force elements
+  auto force_tables = get_table_array(doc, "force", "model");
+  capacity(force_tables.size(), "force elements", "LEGSIM_MAX_FORCES", LEGSIM_MAX_FORCES);
+  std::vector<legsim_force_desc> forces;
+  std::vector<std::string> force_names;
+  for (size_t k = 1; k <= force_tables.size(); ++k) {
+    Table tf = force_tables[k - 1];
+    const std::string label = "force #" + std::to_string(k);
+    const std::string fname = get_string(tf, "name", label);
+    check_name(fname, label);
+    for (size_t k2 = 1; k2 <= force_names.size(); ++k2)
+      if (force_names[k2 - 1] == fname)
+        fail(label, "duplicate name " + q(fname) + " (force #" + std::to_string(k2) + " has it too)");
+    forces.push_back(parse_force(ctx, fname, tf));
+    force_names.push_back(fname);
+  }
+
+  // foot
+  int foot_body = LEGSIM_FRAME;
+  std::vector<double> foot_point = {0.0, 0.0};
+  if (Node tf = doc->get("foot")) {
+    if (!is_table(tf)) fail("model", "'foot' must be a table");
+    check_keys(tf->as_table(), {"body", "end", "at"}, "foot");
+    auto bp = single_point(ctx, tf->as_table(), "foot");
+    foot_body = bp.first;
+    foot_point = bp.second;
+  }
+
+  // poses
+  struct Driver {
+    int body, coord;
+    double value;
+  };
+  struct Pose {
+    std::string name;
+    std::vector<Driver> drivers;
+    std::vector<std::vector<double>> guess;
+  };
+  std::vector<Pose> poses;
+  if (Node tp = doc->get("pose")) {
+    if (!is_table(tp)) fail("model", "'pose' must be a table of [pose.NAME] tables");
+    Table ptab = tp->as_table();
+    capacity(ptab->size(), "poses", "LEGSIM_MAX_POSES", LEGSIM_MAX_POSES);
+    for (const auto &pname : file_order_keys(ptab)) {
+      const std::string label = "pose " + q(pname);
+      check_name(pname, label);
+      Node pn = ptab->get(pname);
+      if (!is_table(pn)) fail(label, "must be a table");
+      Table pt = pn->as_table();
+      Pose pose;
+      pose.name = pname;
+      for (const auto &key : sorted_keys(pt)) {
+        if (key == "guess") continue;
+        int coord = 0;
+        int64_t bid = 0;
+        if (!parse_driver_key(key, &coord, &bid))
+          fail(label, "unknown key " + q(key) + " (expected guess, phiN, xN or yN with N a body id)");
+        if (bid > static_cast<int64_t>(n))
+          fail(label, q(key) + ": body " + std::to_string(bid) + " does not exist (ids are 1.." +
+                          std::to_string(n) + ")");
+        pose.drivers.push_back({static_cast<int>(bid - 1), coord, as_real(pt->get(key), key, label)});
+      }
+      capacity(pose.drivers.size(), "drivers", "LEGSIM_MAX_POSE_DRIVERS", LEGSIM_MAX_POSE_DRIVERS,
+               label);
+      std::stable_sort(pose.drivers.begin(), pose.drivers.end(), [](const Driver &a, const Driver &b) {
+        return a.body != b.body ? a.body < b.body : a.coord < b.coord;
+      });
+      Node gv = req(pt, "guess", label);
+      const toml::array *ga = gv->as_array();
+      bool ok = ga && ga->size() == n;
+      if (ok)
+        for (auto &&row : *ga) {
+          const toml::array *r = row.as_array();
+          ok = ok && r && r->size() == 3;
+          if (ok)
+            for (auto &&e : *r) ok = ok && is_number(&e);
+        }
+      if (!ok)
+        fail(label, "'guess' must be an array of " + std::to_string(n) +
+                        " [x, y, phi] arrays (one per body)");
+      for (auto &&row : *ga) {
+        std::vector<double> r;
+        for (auto &&e : *row.as_array()) r.push_back(to_double(&e));
+        pose.guess.push_back(r);
+      }
+      for (const auto &r : pose.guess)
+        for (double x : r)
+          if (!std::isfinite(x)) fail(label, "'guess' is not finite");
+      poses.push_back(pose);
+    }
+  }
+
+  // ---- fill the description ----
+  std::memset(&m, 0, sizeof m);
+  copy_name(m.name, name);
+  m.gravity_mps2[0] = gravity[0];
+  m.gravity_mps2[1] = gravity[1];
+  m.n_bodies = static_cast<int32_t>(n);
+  m.n_joints = static_cast<int32_t>(joints.size());
+  m.n_actuators = static_cast<int32_t>(actuators.size());
+  m.n_forces = static_cast<int32_t>(forces.size());
+  m.n_poses = static_cast<int32_t>(poses.size());
+  for (size_t i = 0; i < n; ++i) {
+    copy_name(m.body[i].name, ctx.bodies[i].name);
+    m.body[i].length_m = ctx.bodies[i].length;
+    m.body[i].mass_kg = ctx.bodies[i].mass;
+    m.body[i].inertia_kgm2 = ctx.bodies[i].inertia;
+  }
+  for (size_t i = 0; i < joints.size(); ++i) {
+    const Joint &j = joints[i];
+    legsim_joint_desc &d = m.joint[i];
+    copy_name(d.name, j.name);
+    d.kind = j.kind == "revolute_to_frame" ? LEGSIM_JOINT_REVOLUTE_TO_FRAME
+             : j.kind == "revolute"        ? LEGSIM_JOINT_REVOLUTE
+             : j.kind == "prismatic"       ? LEGSIM_JOINT_PRISMATIC
+                                           : LEGSIM_JOINT_SLOT;
+    for (int s = 0; s < 2; ++s) {
+      d.body[s] = j.body[s];
+      d.point[s][0] = j.point[s][0];
+      d.point[s][1] = j.point[s][1];
+    }
+  }
+  for (size_t i = 0; i < actuators.size(); ++i) m.actuator[i] = actuators[i];
+  for (size_t i = 0; i < forces.size(); ++i) m.force[i] = forces[i];
+  for (size_t i = 0; i < poses.size(); ++i) {
+    legsim_pose_desc &p = m.pose[i];
+    copy_name(p.name, poses[i].name);
+    p.n_drivers = static_cast<int32_t>(poses[i].drivers.size());
+    for (size_t d = 0; d < poses[i].drivers.size(); ++d) {
+      p.driver[d].body = poses[i].drivers[d].body;
+      p.driver[d].coord = poses[i].drivers[d].coord;
+      p.driver[d].value = poses[i].drivers[d].value;
+    }
+    for (size_t b = 0; b < n; ++b)
+      for (int c = 0; c < 3; ++c) p.guess[b][c] = poses[i].guess[b][c];
+  }
+  m.foot_body = foot_body;
+  m.foot_point[0] = foot_point[0];
+  m.foot_point[1] = foot_point[1];
+}
+
+void put_msg(char *msg, size_t msg_len, const std::string &s) {
+  if (!msg || msg_len == 0) return;
+  const size_t k = std::min(s.size(), msg_len - 1);
+  std::memcpy(msg, s.data(), k);
+  msg[k] = '\0';
+}
+
+bool read_file(const char *path, std::string &text, std::string &err) {
+  std::ifstream f(path, std::ios::binary);
+  if (!f) {
+    err = std::string(path) + ": cannot read: " + std::strerror(errno);
+    return false;
+  }
+  std::ostringstream ss;
+  ss << f.rdbuf();
+  if (f.bad()) {
+    err = std::string(path) + ": cannot read: I/O error";
+    return false;
+  }
+  text = ss.str();
+  return true;
+}
+
+// Parses TOML; throws Fail on a syntax error (the library may throw or not).
+toml::table parse_toml(const std::string &text, const std::string &source) {
+#if TOML_EXCEPTIONS
+  try {
+    return toml::parse(std::string_view(text), std::string_view(source));
+  } catch (const toml::parse_error &e) {
+    const auto &b = e.source().begin;
+    throw Fail{LEGSIM_ERR_MODEL, source + ": TOML syntax error: " + std::string(e.description()) +
+                                     " (at line " + std::to_string(b.line) + ", column " +
+                                     std::to_string(b.column) + ")"};
+  }
+#else
+  toml::parse_result r = toml::parse(std::string_view(text), std::string_view(source));
+  if (!r) {
+    const auto &b = r.error().source().begin;
+    throw Fail{LEGSIM_ERR_MODEL, source + ": TOML syntax error: " +
+                                     std::string(r.error().description()) + " (at line " +
+                                     std::to_string(b.line) + ", column " + std::to_string(b.column) +
+                                     ")"};
+  }
+  return std::move(r.table());
+#endif
+}
+
+legsim_status parse_text(const std::string &text, const std::string &source, const char *variant,
+                         legsim_model_desc *out, char *msg, size_t msg_len) {
+  const std::string v = (variant && *variant) ? variant : kDefaultVariant;
+  try {
+    toml::table doc = parse_toml(text, source);
+    legsim_model_desc m;
+    try {
+      parse_model(&doc, v, m);
+    } catch (Fail &f) {
+      f.message = source + ": " + f.message;
+      throw;
+    }
+    char core_msg[256] = {0};
+    const legsim_status st = legsim_model_check(&m, core_msg, sizeof core_msg);
+    if (st != LEGSIM_OK) {
+      put_msg(msg, msg_len, source + ": " + core_msg);
+      return st;
+    }
+    *out = m;
+    put_msg(msg, msg_len, "");
+    return LEGSIM_OK;
+  } catch (const Fail &f) {
+    put_msg(msg, msg_len, f.message);
+    return f.status;
+  } catch (const std::bad_alloc &) {
+    put_msg(msg, msg_len, source + ": out of memory");
+    return LEGSIM_ERR_MODEL;
+  } catch (const std::exception &e) {
+    put_msg(msg, msg_len, source + ": " + e.what());
+    return LEGSIM_ERR_MODEL;
+  } catch (...) {
+    put_msg(msg, msg_len, source + ": unexpected error");
+    return LEGSIM_ERR_MODEL;
+  }
+}
+
+}  // namespace
+
+extern "C" legsim_status legsim_model_parse_toml(const char *text, size_t text_len,
+                                                 const char *source_name, const char *variant,
+                                                 legsim_model_desc *out, char *msg, size_t msg_len) {
+  if (!text || !out) {
+    put_msg(msg, msg_len, "legsim_model_parse_toml: text or out is NULL");
+    return LEGSIM_ERR_NULL;
+  }
+  try {
+    return parse_text(std::string(text, text_len), source_name ? source_name : "<memory>", variant,
+                      out, msg, msg_len);
+  } catch (...) {
+    put_msg(msg, msg_len, "out of memory");
+    return LEGSIM_ERR_MODEL;
+  }
+}
+
+extern "C" legsim_status legsim_model_load_toml(const char *path, const char *variant,
+                                                legsim_model_desc *out, char *msg, size_t msg_len) {
+  if (!path || !out) {
+    put_msg(msg, msg_len, "legsim_model_load_toml: path or out is NULL");
+    return LEGSIM_ERR_NULL;
+  }
+  try {
+    std::string text, err;
+    if (!read_file(path, text, err)) {
+      put_msg(msg, msg_len, err);
+      return LEGSIM_ERR_BAD_INPUT;
+    }
+    return parse_text(text, path, variant, out, msg, msg_len);
+  } catch (...) {
+    put_msg(msg, msg_len, std::string(path) + ": out of memory");
+    return LEGSIM_ERR_MODEL;
+  }
+}
+
+extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*names)[LEGSIM_NAME_LEN],
+                                                    int32_t max_names, int32_t *n_names, char *msg,
+                                                    size_t msg_len) {
+  if (!path || !n_names || (max_names > 0 && !names)) {
+    put_msg(msg, msg_len, "legsim_model_toml_variants: a required pointer is NULL");
+    return LEGSIM_ERR_NULL;
+  }
+  try {
+    std::string text, err;
+    if (!read_file(path, text, err)) {
+      put_msg(msg, msg_len, err);
+      return LEGSIM_ERR_BAD_INPUT;
+    }
+    toml::table doc = parse_toml(text, path);
+    std::vector<std::string> list = {kDefaultVariant};
+    if (const toml::table *vt = doc["variant"].as_table())
+      for (const auto &k : file_order_keys(vt)) list.push_back(k);
+    for (int32_t i = 0; i < max_names && i < static_cast<int32_t>(list.size()); ++i) {
+      std::memset(names[i], 0, LEGSIM_NAME_LEN);
+      std::memcpy(names[i], list[i].data(), std::min(list[i].size(), size_t(LEGSIM_NAME_LEN - 1)));
+    }
+    *n_names = static_cast<int32_t>(list.size());
+    put_msg(msg, msg_len, "");
+    return LEGSIM_OK;
+  } catch (const Fail &f) {
+    put_msg(msg, msg_len, f.message);
+    return f.status;
+  } catch (...) {
+    put_msg(msg, msg_len, std::string(path) + ": unexpected error");
+    return LEGSIM_ERR_MODEL;
+  }
+}

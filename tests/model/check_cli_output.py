@@ -1,0 +1,161 @@
+#!/usr/bin/env python3
+"""Checks legsim_cli's output (run from the source tree's root).
+
+    check_cli_output.py CLI SCENE.toml OUTDIR
+        runs the scene to JSON and to CSV: both parse, hold the expected keys and
+        columns, agree, and report status ok with a small constraint residual.
+    check_cli_output.py CLI --bad EXPECTED.tsv OUTDIR
+        runs each bad scene of EXPECTED.tsv: the exit status and the message on stderr
+        are the expected ones; a failed run (exit 1) still writes JSON with status "error".
+"""
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import tomllib
+
+failures = []
+
+
+def check(cond, what):
+    if not cond:
+        failures.append(what)
+    return cond
+
+
+def run(cli, scene, out=None, fmt=None):
+    cmd = [cli, scene]
+    if out:
+        cmd += ["--out", out]
+    if fmt:
+        cmd += ["--format", fmt]
+    return subprocess.run(cmd, capture_output=True, text=True, timeout=600)
+
+
+def check_good(cli, scene, outdir):
+    name = os.path.splitext(os.path.basename(scene))[0]
+    with open(scene, "rb") as f:
+        spec = tomllib.load(f)
+    analysis = spec["analysis"]
+    js, cs = os.path.join(outdir, name + ".json"), os.path.join(outdir, name + ".csv")
+    r = run(cli, scene, js)
+    if not check(r.returncode == 0, f"{name}: exit {r.returncode}: {r.stderr.strip()}"):
+        return
+    with open(js, encoding="utf-8") as f:
+        d = json.load(f)  # raises (test fails) if it is not JSON
+    for key in ("scene", "model", "analysis", "integrator", "step", "status", "status_code", "bodies",
+                "joints", "actuators", "samples"):
+        check(key in d, f"{name}: JSON lacks '{key}'")
+    check(d.get("status") == "ok" and d.get("status_code") == "LEGSIM_OK", f"{name}: status {d.get('status')}")
+    check(d.get("analysis") == analysis, f"{name}: analysis {d.get('analysis')}")
+    check(d["model"].get("variant") == spec.get("variant", "revolute"), f"{name}: variant")
+    bodies, joints, acts = d["bodies"], d["joints"], d["actuators"]
+    check(len(bodies) == 6 and len(joints) == 8 and len(acts) == 2, f"{name}: leg sizes")
+    samples = d["samples"]
+    if analysis == "statics_sweep":
+        w = d.get("worst_case")
+        if check(isinstance(w, dict), f"{name}: no worst_case"):
+            check(w["n_poses"] > 0, f"{name}: sweep evaluated no pose")
+            check(w["n_poses"] + w["n_failed"] == w["grid"] ** 2, f"{name}: sweep count")
+            check(set(w["reactions"]) == set(joints), f"{name}: worst-case reactions by joint")
+            check(set(w["actuators"]) == set(acts), f"{name}: worst-case actuators")
+            for j, v in w["reactions"].items():
+                check(v["max_force"] >= 0 and set(v["at_lengths"]) == set(acts), f"{name}: reaction {j}")
+    else:
+        check(len(samples) >= 1, f"{name}: no samples")
+        if analysis in ("dynamics", "inverse_dynamics"):
+            n = round(spec["duration"] / spec.get("step", 0.001))
+            every = spec.get("output_every", 1)
+            check(len(samples) >= n // every, f"{name}: {len(samples)} samples for {n} steps / {every}")
+            check(abs(samples[-1]["t"] - spec["duration"]) < 1e-9, f"{name}: last t {samples[-1]['t']}")
+        reactions_on = "reactions" not in spec.get("disable", [])
+        prev_t = -1.0
+        for s in samples:
+            check(s["t"] > prev_t, f"{name}: time not increasing")
+            prev_t = s["t"]
+            check(set(s["q"]) == set(bodies), f"{name}: q by body")
+            for b, c in s["q"].items():
+                check(set(c) == {"x", "y", "phi"} and all(math.isfinite(v) for v in c.values()),
+                      f"{name}: q of {b}")
+            check(set(s["actuators"]) == set(acts), f"{name}: actuators by name")
+            for a, v in s["actuators"].items():
+                check(set(v) == {"length", "rate", "force"}, f"{name}: actuator {a} keys")
+            if reactions_on and s["reactions"] is not None:
+                check(set(s["reactions"]) == set(joints), f"{name}: reactions by joint")
+                for j, v in s["reactions"].items():
+                    check(set(v) == {"fx", "fy", "moment"}, f"{name}: reaction {j} keys")
+            check(s["residual"] is not None and s["residual"] < 1e-6, f"{name}: residual {s['residual']}")
+            check(s["foot"] is not None, f"{name}: foot")
+        if analysis in ("statics",):
+            check(samples[0]["reactions"] is not None, f"{name}: statics without reactions")
+    # The same run as CSV (format from the extension).
+    r = run(cli, scene, cs)
+    if not check(r.returncode == 0, f"{name}: CSV run exit {r.returncode}: {r.stderr.strip()}"):
+        return
+    with open(cs, newline="", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+        header = list(rows[0].keys()) if rows else []
+    if analysis == "statics_sweep":
+        check(len(rows) == len(joints) + len(acts), f"{name}: CSV sweep rows")
+        check(header[:3] == ["item", "kind", "max_force"], f"{name}: CSV sweep header {header[:3]}")
+        return
+    check(len(rows) == len(samples), f"{name}: CSV has {len(rows)} rows for {len(samples)} samples")
+    want = ["t"] + [f"{b}.{c}" for b in bodies for c in ("x", "y", "phi")] + \
+        [f"{a}.{k}" for a in acts for k in ("length", "rate", "force")] + \
+        [f"{j}.{k}" for j in joints for k in ("fx", "fy", "moment")] + ["foot.x", "foot.y", "residual", "status"]
+    check(header == want, f"{name}: CSV header {header}")
+    for row, s in zip(rows, samples):
+        check(row["status"] == "ok", f"{name}: CSV status {row['status']}")
+        check(float(row["t"]) == s["t"], f"{name}: CSV t")
+        b0 = bodies[0]
+        check(float(row[f"{b0}.phi"]) == s["q"][b0]["phi"], f"{name}: CSV and JSON disagree")
+    # stdout and --format
+    r = run(cli, scene, None, "csv")
+    check(r.returncode == 0 and r.stdout.startswith("t,"), f"{name}: CSV on stdout")
+
+
+def check_bad(cli, table, outdir):
+    base = os.path.dirname(table)
+    with open(table, encoding="utf-8") as f:
+        rows = [line.rstrip("\n").split("\t") for line in f if line.strip() and not line.startswith("#")]
+    check(len(rows) >= 10, "too few bad scenes")
+    for scene, code, *texts in rows:
+        path = os.path.relpath(os.path.join(base, scene))
+        out = os.path.join(outdir, "bad_" + os.path.splitext(scene)[0] + ".json")
+        if os.path.exists(out):
+            os.remove(out)
+        r = run(cli, path, out)
+        check(r.returncode == int(code), f"{scene}: exit {r.returncode}, want {code}: {r.stderr.strip()}")
+        check(r.stderr.startswith("legsim_cli: error: "), f"{scene}: stderr {r.stderr.strip()!r}")
+        for t in texts:
+            check(t in r.stderr, f"{scene}: stderr lacks {t!r}: {r.stderr.strip()!r}")
+        if code == "1":
+            if check(os.path.exists(out), f"{scene}: a failed run wrote no output"):
+                with open(out, encoding="utf-8") as f:
+                    d = json.load(f)
+                check(d["status"] == "error" and d["status_code"].startswith("LEGSIM_ERR_") and d["error"],
+                      f"{scene}: JSON status {d.get('status')}")
+        else:
+            check(not os.path.exists(out), f"{scene}: output written for a bad scene")
+
+
+def main():
+    cli = sys.argv[1]
+    if sys.argv[2] == "--bad":
+        outdir = sys.argv[4]
+        os.makedirs(outdir, exist_ok=True)
+        check_bad(cli, sys.argv[3], outdir)
+    else:
+        outdir = sys.argv[3]
+        os.makedirs(outdir, exist_ok=True)
+        check_good(cli, sys.argv[2], outdir)
+    for f in failures:
+        print("FAIL", f)
+    print(f"{0 if failures else 1} passed, {1 if failures else 0} failed")
+    return 1 if failures else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
