@@ -1,0 +1,316 @@
+"""hil_sim over SocketCAN (vcan0): run inside tools/with-vcan.
+
+    tools/with-vcan python3 -m pytest tests/hil
+
+Lockstep determinism, free fall against the in-process expectation (hil_sim_expect, the C
+API without CAN), every kind of bad input (documented fault, nothing else changes), the
+command timeout, real time at 1 kHz with its jitter report, clean exits on signals.
+"""
+from __future__ import annotations
+
+import json
+import math
+import signal
+import subprocess
+import time
+
+import can
+import numpy as np
+import pytest
+
+from conftest import expect_path, hil_sim_path, vcan_problem
+from legsim_bench.can_link import (ACT_CMD, CONTROL, FaultCode, HilFault, SimState,
+                                   Status)
+
+PHYSICS = ("q", "qd", "lengths", "rates", "forces", "reactions")
+
+
+def physics(state) -> bytes:
+    """The state's float32 payload, bit for bit."""
+    return b"".join(np.asarray(getattr(state, k), dtype=np.float32).tobytes() for k in PHYSICS)
+
+
+# ---- options and errors (no bus needed) ---------------------------------------------------
+
+def test_help_and_usage_errors(hil_binary):
+    r = subprocess.run([str(hil_binary), "--help"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 0 and "--channel" in r.stdout and "--cmd-timeout-ms" in r.stdout
+    r = subprocess.run([str(hil_binary), "--bogus"], capture_output=True, text=True, timeout=30)
+    assert r.returncode == 2 and "unknown option '--bogus'" in r.stderr
+    r = subprocess.run([str(hil_binary), "--safe-state", "off"], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode == 2 and "zero-force or hold-length" in r.stderr
+
+
+def test_clear_error_without_the_interface(hil_binary):
+    r = subprocess.run([str(hil_binary), "--channel", "nocan7"], capture_output=True, text=True,
+                       timeout=30)
+    assert r.returncode == 1
+    if vcan_problem("lo") and "no SocketCAN" in vcan_problem("lo"):
+        assert "socket(AF_CAN) failed" in r.stderr and "tools/with-vcan" in r.stderr
+    else:
+        assert "no CAN interface 'nocan7'" in r.stderr
+
+
+# ---- lockstep -------------------------------------------------------------------------------
+
+def scripted_run(link) -> list:
+    """A scene with length and force commands; every state it produced."""
+    states = [link.reset("revolute", "rk4", 1e-3, hold_length=True)]
+    link.command_length("upper", 0.70)
+    link.command_length("lower", 0.50)
+    for k in range(8):
+        states.append(link.step(25))
+        link.command_force("lower", 40.0 * k)
+    link.set_load(0, 30.0, -100.0)
+    states.append(link.step(50))
+    return states
+
+
+def test_lockstep_is_deterministic(start_hil):
+    runs = []
+    for _ in range(2):
+        h = start_hil()
+        runs.append(scripted_run(h.link))
+    a, b = runs
+    assert len(a) == len(b) == 10
+    for sa, sb in zip(a, b):
+        assert physics(sa) == physics(sb)
+        assert (sa.t, sa.step_count, sa.residual, sa.status) == (sb.t, sb.step_count, sb.residual, sb.status)
+    assert a[-1].step_count == 250
+    assert not np.array_equal(a[0].q, a[-1].q)  # it moved
+
+
+def expectation(variant, integrator, steps, every, hold=False):
+    args = [str(expect_path()), "--variant", variant, "--integrator", integrator,
+            "--steps", str(steps), "--every", str(every)] + (["--hold-length"] if hold else [])
+    out = subprocess.run(args, capture_output=True, text=True, timeout=120, check=True).stdout
+    return [json.loads(line) for line in out.splitlines()]
+
+
+@pytest.mark.parametrize("variant", ["revolute", "slot"])
+@pytest.mark.parametrize("integrator", ["rk4", "generalized_alpha"])
+def test_free_fall_matches_the_in_process_expectation(hil, expect_binary, variant, integrator):
+    """Zero actuator forces, gravity: the CAN states are the in-process double states
+    rounded to float32, exactly; time and step count are exact."""
+    expected = expectation(variant, integrator, steps=200, every=50)
+    states = [hil.reset(variant, integrator, 1e-3, cmd_timeout_ms=0)]
+    states += [hil.step(50) for _ in range(4)]
+    assert len(states) == len(expected) == 5
+    for s, e in zip(states, expected):
+        assert s.step_count == e["step_count"] and s.t == e["t"]
+        for k in PHYSICS:
+            want = np.asarray(e[k], dtype=np.float32).astype(np.float64).reshape(np.shape(getattr(s, k)))
+            assert np.array_equal(getattr(s, k), want), (k, s.step_count)
+        assert s.residual == float(np.float32(e["residual"]))
+        assert s.state == SimState.LOCKSTEP and Status.ASSEMBLED in s.status
+    # the leg falls: the shank's centre goes down
+    assert states[-1].q[16] < states[0].q[16]
+
+
+# ---- bad input ------------------------------------------------------------------------------
+
+def bad_frames():
+    """(name, frame builder, expected fault code, expected signal). A builder runs right
+    before its frame is sent: the counters are those of the link at that moment."""
+    nan, inf = math.nan, math.inf
+
+    def act(**sig):  # an ACT_CMD with a fresh counter and any values
+        return lambda link: link.encode("ACT_CMD", {"Act_Seq": link._seq[ACT_CMD] + 1, **sig},
+                                        strict=False)
+
+    def ctrl(**sig):
+        base = {"Ctrl_StepSize": 1000000, "Ctrl_RtStepsPerTick": 1, "Ctrl_NSteps": 1}
+        return lambda link: link.encode("CONTROL", {**base, **sig}, strict=False)
+
+    def raw(fid, size, fd=True, extended=False):
+        return lambda link: can.Message(arbitration_id=fid, data=bytes(size), is_fd=fd,
+                                        is_extended_id=extended)
+
+    return [
+        ("NaN setpoint", act(Act_Mode_upper=1, Act_Setpoint_upper=nan),
+         FaultCode.NOT_FINITE, "Act_Setpoint_upper"),
+        ("Inf setpoint", act(Act_Mode_lower=2, Act_Setpoint_lower=inf),
+         FaultCode.NOT_FINITE, "Act_Setpoint_lower"),
+        ("length above the stroke", act(Act_Mode_upper=2, Act_Setpoint_upper=0.95),
+         FaultCode.OUT_OF_RANGE, "Act_Setpoint_upper"),
+        ("length below the stroke", act(Act_Mode_lower=2, Act_Setpoint_lower=0.10),
+         FaultCode.OUT_OF_RANGE, "Act_Setpoint_lower"),
+        ("force above max_force", act(Act_Mode_upper=1, Act_Setpoint_upper=2000.0),
+         FaultCode.OUT_OF_RANGE, "Act_Setpoint_upper"),
+        ("unknown actuator mode", act(Act_Mode_upper=3),
+         FaultCode.OUT_OF_RANGE, "Act_Mode_upper"),
+        ("stale ACT_CMD counter",
+         lambda link: link.encode("ACT_CMD", {"Act_Seq": link._seq[ACT_CMD], "Act_Mode_upper": 1,
+                                              "Act_Setpoint_upper": 10.0}),
+         FaultCode.STALE_SEQ, None),
+        ("stale CONTROL counter",
+         lambda link: ctrl(Ctrl_Seq=link._seq[CONTROL], Ctrl_Command=2, Ctrl_NSteps=5)(link),
+         FaultCode.STALE_SEQ, None),
+        ("unknown id 0x123", raw(0x123, 64), FaultCode.UNKNOWN_ID, None),
+        ("extended id", raw(ACT_CMD, 64, extended=True), FaultCode.UNKNOWN_ID, None),
+        ("48-byte FD frame", raw(ACT_CMD, 48), FaultCode.BAD_LENGTH, None),
+        ("classic CAN frame", raw(ACT_CMD, 8, fd=False), FaultCode.BAD_LENGTH, None),
+        ("STEP of 0 steps",
+         lambda link: ctrl(Ctrl_Seq=link._seq[CONTROL] + 1, Ctrl_Command=2, Ctrl_NSteps=0)(link),
+         FaultCode.OUT_OF_RANGE, "Ctrl_NSteps"),
+        ("unknown command", ctrl(Ctrl_Seq=2**32 - 1, Ctrl_Command=9),
+         FaultCode.OUT_OF_RANGE, "Ctrl_Command"),
+        ("RESET to a length outside the stroke",
+         ctrl(Ctrl_Seq=1, Ctrl_Command=1, Ctrl_UseLengths=1, Ctrl_Length_upper=0.3,
+              Ctrl_Length_lower=0.5),
+         FaultCode.OUT_OF_RANGE, "Ctrl_Length_upper"),
+        ("RESET with a NaN length",
+         ctrl(Ctrl_Seq=1, Ctrl_Command=1, Ctrl_UseLengths=1, Ctrl_Length_upper=0.6,
+              Ctrl_Length_lower=nan),
+         FaultCode.NOT_FINITE, "Ctrl_Length_lower"),
+        ("load on a force element the leg lacks",
+         lambda link: link.encode("LOAD_CMD", {"Load_Seq": link._seq[0x110] + 1, "Load_Index": 3}),
+         FaultCode.OUT_OF_RANGE, "Load_Index"),
+    ]
+
+
+def good_start(link):
+    link.reset("revolute", "rk4", 1e-3, cmd_timeout_ms=0)
+    link.command_length("upper", 0.70)
+    link.command_force("lower", 50.0)
+    return link.step(10)
+
+
+def test_bad_input_is_faulted_and_changes_nothing(hil, record_property):
+    good_start(hil)
+    reference = hil.step(30)
+    report = []
+    for name, build, code, sig in bad_frames():
+        good_start(hil)
+        hil.send_raw(build(hil))
+        f = hil.wait_fault(timeout=5)
+        report.append(f"{name}: {f}")
+        assert f.code == code, (name, str(f))
+        if sig:
+            assert f.signal == sig, (name, str(f))
+        s = hil.step(30)
+        assert physics(s) == physics(reference), name
+        assert (s.t, s.step_count, s.act_seq) == (reference.t, reference.step_count, reference.act_seq), name
+        # the fault, alone, came between the two samples
+        assert s.faults == [f] and s.last_fault == code and Status.FAULT in s.status, name
+        assert hil.faults() == []
+    record_property("faults", report)
+    print("\n" + "\n".join(report))
+
+
+def test_state_rules(hil):
+    hil.reset()
+    with pytest.raises(HilFault) as e:
+        hil.start_realtime()
+        hil.step(1)
+    assert e.value.fault.code == FaultCode.BAD_STATE and e.value.fault.detail == SimState.REALTIME
+    s = hil.stop_realtime()
+    assert s.state == SimState.LOCKSTEP
+
+
+# ---- command timeout ------------------------------------------------------------------------
+
+def test_command_timeout_lockstep_zero_force(hil):
+    hil.reset(hold_length=True)             # hil_sim's default: 100 ms, zero force
+    hil.command_length("upper", 0.70)
+    s = hil.step(100)                       # exactly the timeout after the command: still fine
+    assert not s.faults and Status.CMD_WATCHDOG in s.status
+    s = hil.step(50)
+    assert [f.code for f in s.faults] == [FaultCode.CMD_TIMEOUT]
+    f = s.faults[0]
+    assert f.detail == 100 and f.step_count == 100 and f.frame_id == ACT_CMD
+    assert Status.SAFE_STATE in s.status and Status.CMD_WATCHDOG not in s.status
+    assert np.all(s.forces == 0.0)
+    hil.command_length("upper", 0.70)       # a new command leaves the safe state
+    s = hil.step(1)
+    assert Status.SAFE_STATE not in s.status and not s.faults
+
+
+def test_command_timeout_hold_length_and_override(start_hil):
+    link = start_hil("--safe-state", "hold-length", "--cmd-timeout-ms", "20").link
+    link.reset()
+    link.command_force("upper", 0.0)
+    s = link.step(40)
+    assert [f.code for f in s.faults] == [FaultCode.CMD_TIMEOUT] and s.faults[0].step_count == 20
+    assert Status.SAFE_STATE in s.status
+    link.reset(cmd_timeout_ms=0)             # none for this session
+    link.command_force("upper", 0.0)
+    assert not link.step(200).faults
+
+
+# ---- real time ------------------------------------------------------------------------------
+
+def test_realtime_runs_at_1khz_and_reports_jitter(hil, record_property):
+    hil.reset(hold_length=True, cmd_timeout_ms=0)
+    s0 = hil.start_realtime(decimation=10)
+    t0 = time.monotonic()
+    samples = list(hil.states(2.0))
+    hb = hil.heartbeat(timeout=2)
+    s1 = hil.stop_realtime()
+    wall = time.monotonic() - t0
+    assert s0.state == SimState.REALTIME and s1.state == SimState.LOCKSTEP
+    assert hb.state == SimState.REALTIME and hb.rt_rate_hz == 1000.0
+    assert hb.rt_ticks > 0 and 0 < hb.jitter_mean_us <= hb.jitter_max_us
+    assert hb.jitter_p99_us <= hb.jitter_max_us + 1
+    # every period is a tick executed or an overrun skipped
+    elapsed_ticks = s1.step_count + hb.rt_overruns
+    assert 0.9 * wall * 1000 < elapsed_ticks < 1.05 * wall * 1000 + 50
+    assert len(samples) > 100 and all(b.step_count > a.step_count for a, b in zip(samples, samples[1:]))
+    assert all(s.step_count % 10 == 0 for s in samples)
+    figures = (f"real time 1 kHz for {wall:.2f} s: {s1.step_count} ticks, {hb.rt_overruns} overruns; "
+               f"wake-up lateness max {hb.jitter_max_us:.0f} us, mean {hb.jitter_mean_us:.1f} us, "
+               f"p99 {hb.jitter_p99_us:.0f} us; {len(samples)} samples")
+    record_property("realtime", figures)
+    print(figures)
+
+
+def test_command_timeout_realtime(hil):
+    hil.reset(cmd_timeout_ms=100)
+    hil.start_realtime(decimation=20)
+    t0 = time.monotonic()
+    hil.command_force("upper", 0.0)
+    f = hil.wait_fault(timeout=3, code=FaultCode.CMD_TIMEOUT)
+    waited = time.monotonic() - t0
+    hil.stop_realtime()
+    assert f.detail == 100 and f.value >= 100.0
+    assert 0.1 <= waited < 1.5
+
+
+# ---- exit -----------------------------------------------------------------------------------
+
+@pytest.mark.parametrize("sig", [signal.SIGTERM, signal.SIGINT])
+def test_signals_exit_cleanly_in_real_time(start_hil, sig):
+    h = start_hil()
+    h.link.reset(cmd_timeout_ms=0)
+    h.link.start_realtime()
+    time.sleep(0.3)
+    assert h.stop(sig) == 0
+    log = h.log()
+    assert "exiting" in log and "real-time run" in log and "lateness" in log
+
+
+def test_sigterm_in_lockstep(start_hil):
+    h = start_hil()
+    h.link.reset()
+    assert h.stop(signal.SIGTERM) == 0
+    assert "frames received" in h.log()
+
+
+# ---- figures --------------------------------------------------------------------------------
+
+def test_lockstep_throughput(hil, record_property):
+    hil.reset(cmd_timeout_ms=0)
+    n, t0 = 0, time.monotonic()
+    while time.monotonic() - t0 < 2.0:
+        hil.step(1)
+        n += 1
+    single = n / (time.monotonic() - t0)
+    t0 = time.monotonic()
+    s = hil.step(5000)
+    batch = 5000 / (time.monotonic() - t0)
+    assert s.step_count == n + 5000
+    figures = (f"lockstep over {hil.bus.channel_info}: step(1) round trips {single:.0f}/s, "
+               f"step(5000) {batch:.0f} steps/s")
+    record_property("lockstep", figures)
+    print(figures)
