@@ -434,8 +434,7 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
     if (stopped) {
       st = state_refresh(s);  // the stop changed q and qd: derivative and reactions anew
     } else if (!rk4) {  // RK4 leaves its end derivative and reactions itself
-      actuator_forces_update(s.model, s.opt, d, d.q, d.qd);
-      reactions_update(s);
+      st = generalized_alpha_reactions(s);
     }
     if (st != LEGSIM_OK) return st;
     for (int k = 0; k < s.model.nq; ++k)

@@ -29,9 +29,11 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   return all_finite(qdd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
-legsim_status dynamics_state_update(Sim &sim) {
+legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }
+
+legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd) {
   Data &d = sim.data;
-  const legsim_status s = dynamics_solve(sim, d.joints, d.q, d.qd, d.qdd);
+  const legsim_status s = dynamics_solve(sim, d.joints, d.q, d.qd, qdd);
   if (s != LEGSIM_OK) return s;
   if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
     reactions_from_multipliers(sim.model, d.joints, d.rows, d.lambda, d.reaction);

@@ -22,13 +22,3 @@ void reactions_from_multipliers(const Model &model, const Layout &layout, const 
 
 }  // namespace legsim
 
-namespace legsim {
-
-void reactions_update(Sim &sim) {
-  Data &d = sim.data;
-  if (sim.opt.disable & LEGSIM_DISABLE_REACTIONS) return;
-  rows_eval(sim.model, d.joints, d.drivers, d.q, d.qd, d.rows);
-  reactions_from_multipliers(sim.model, d.joints, d.rows, d.lambda, d.reaction);
-}
-
-}  // namespace legsim

@@ -199,6 +199,8 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &stopped);
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
+// lambda and reactions at the current state; the accelerations go to qdd
+legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd);
 
 // ---- assembly.cpp ----
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drivers, VecQ &q,
@@ -211,12 +213,11 @@ legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
 // ---- reactions.cpp ----
 void reactions_from_multipliers(const Model &model, const Layout &layout, const Rows &rows,
                                 const VecR &lambda, legsim_reaction *out);
-// Reactions of the joint equations from the stored multipliers at the current q.
-void reactions_update(Sim &sim);
 
 // ---- integrators ----
 legsim_status rk4_step(Sim &sim);
 legsim_status generalized_alpha_step(Sim &sim);
+legsim_status generalized_alpha_reactions(Sim &sim);
 
 // ---- statics.cpp / inverse_dynamics.cpp ----
 legsim_status statics_solve(Sim &sim, real *actuator_force);
