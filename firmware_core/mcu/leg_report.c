@@ -38,8 +38,12 @@ static int failed(const char *what, legsim_status s) {
  * u = (sin phi, -cos phi), n = (cos phi, sin phi) (models/leg.toml) */
 static void body_point(const legsim_real *q, int32_t body, const double *p, double *xy) {
   const double x = (double)q[3 * body], y = (double)q[3 * body + 1];
-  const double phi = (double)q[3 * body + 2];
-  const double s = sin(phi), c = cos(phi);
+  /* in the build's precision (no double sin/cos on the M4F just for printing) */
+#if LEGSIM_USE_FLOAT
+  const double s = (double)sinf(q[3 * body + 2]), c = (double)cosf(q[3 * body + 2]);
+#else
+  const double s = sin(q[3 * body + 2]), c = cos(q[3 * body + 2]);
+#endif
   xy[0] = x + p[0] * s + p[1] * c;
   xy[1] = y - p[0] * c + p[1] * s;
 }
