@@ -13,8 +13,33 @@ firmware_core/host/model_toml.cpp: keep the two in step (tests/model checks that
 descriptions and the messages agree).
 
 Capacities are the build's (legsim/config.h): the generated source checks them with
-#if/#error; --max-bodies etc. check them here too (same messages as the loader).
-Python 3.11+, standard library only.
+#if/#error; --config legsim/config.h (or --max-bodies etc.) checks them here too, with
+the loader's messages. Python 3.11+, standard library only.
+
+The format (models/leg.toml shows most of it; every key not listed is an error):
+  name = "..."  (1..23 of [A-Za-z0-9_.-]);  gravity = [gx, gy] (default [0, -9.81])
+  [frame]        NAME = [x, y]                       points fixed on the ground
+  [[body]]       id (1..n, body index id - 1), name, length > 0, mass > 0,
+                 inertia > 0 (default mass * length^2 / 12)
+  [[joint]]      name, kind and, by kind:
+    revolute_to_frame  body, end, point (a [frame] name)   -> body[1] = LEGSIM_FRAME
+    revolute           bodies = [i, j], ends = [e0, e1]
+    prismatic          bodies = [cylinder, rod]             (points unused: 0)
+    slot               bodies = [i, j], ends = [e0, "axis"] (point[0] on i, line = axis of j)
+  an end is "proximal" (-L/2, 0), "distal" (+L/2, 0) or "at": then at = [xi, eta]
+  (at = [[xi, eta], [xi, eta]] when both ends are "at").
+  [variant.X]    JOINT = { kind = ..., ... }  replaces that joint's keys (not its name)
+                 in variant X (a C identifier; "revolute" is the default variant's name)
+  [[actuator]]   name, joint (a prismatic joint's name), stroke = [min, max] (0 < min < max),
+                 max_force > 0, servo_kp >= 0, servo_kd >= 0
+  [[force]]      name, kind and, by kind:
+    point          body, end (+ at), value = [Fx, Fy] (default 0)
+    torque         body, value = T (default 0)
+    spring_damper  bodies, ends (+ at) -- or body, end (+ at), point = FRAME_POINT --
+                   stiffness >= 0, damping >= 0, rest_length >= 0
+  [foot]         body, end (+ at)
+  [pose.NAME]    phiN / xN / yN = value (drive coordinate phi / x / y of body N; sorted by
+                 body, then x, y, phi), guess = [[x, y, phi], ...] one row per body
 """
 from __future__ import annotations
 
@@ -619,13 +644,8 @@ def capacity_checks(models: list[tuple[str, dict]], symbol: str, src: str) -> st
     return "\n".join(o) + "\n"
 
 
-def write_if_changed(path: str, text: str):
-    try:
-        with open(path, encoding="utf-8") as f:
-            if f.read() == text:
-                return
-    except OSError:
-        pass
+def write_file(path: str, text: str):
+    """Always (re)written: the build tool compares its time with the inputs'."""
     d = os.path.dirname(path)
     if d:
         os.makedirs(d, exist_ok=True)
@@ -744,8 +764,8 @@ def main(argv=None) -> int:
         parent = os.path.basename(os.path.dirname(os.path.abspath(a.out_h)))
         include_as = f"legsim/{base}" if parent == "legsim" else base
     c_text, h_text = generate(a.toml, a.symbol, models, include_as)
-    write_if_changed(a.out_h, h_text)
-    write_if_changed(a.out_c, c_text)
+    write_file(a.out_h, h_text)
+    write_file(a.out_c, c_text)
     return 0
 
 

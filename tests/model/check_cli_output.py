@@ -64,6 +64,7 @@ def check_good(cli, scene, outdir):
             for j, v in w["reactions"].items():
                 check(v["max_force"] >= 0 and set(v["at_lengths"]) == set(acts), f"{name}: reaction {j}")
     else:
+        # Residual bound loose enough for a float build (newton_tol 1e-5 there).
         check(len(samples) >= 1, f"{name}: no samples")
         if analysis in ("dynamics", "inverse_dynamics"):
             n = round(spec["duration"] / spec.get("step", 0.001))
@@ -86,7 +87,7 @@ def check_good(cli, scene, outdir):
                 check(set(s["reactions"]) == set(joints), f"{name}: reactions by joint")
                 for j, v in s["reactions"].items():
                     check(set(v) == {"fx", "fy", "moment"}, f"{name}: reaction {j} keys")
-            check(s["residual"] is not None and s["residual"] < 1e-6, f"{name}: residual {s['residual']}")
+            check(s["residual"] is not None and s["residual"] < 1e-4, f"{name}: residual {s['residual']}")
             check(s["foot"] is not None, f"{name}: foot")
         if analysis in ("statics",):
             check(samples[0]["reactions"] is not None, f"{name}: statics without reactions")
