@@ -4,6 +4,9 @@
     check_cli_output.py CLI SCENE.toml OUTDIR
         runs the scene to JSON and to CSV: both parse, hold the expected keys and
         columns, agree, and report status ok with a small constraint residual.
+    check_cli_output.py CLI --same SCENE_A SCENE_B OUTDIR
+        the two scenes (same inputs, the model from the TOML file and compiled in) give
+        exactly the same samples.
     check_cli_output.py CLI --bad EXPECTED.tsv OUTDIR
         runs each bad scene of EXPECTED.tsv: the exit status and the message on stderr
         are the expected ones; a failed run (exit 1) still writes JSON with status "error".
@@ -142,9 +145,27 @@ def check_bad(cli, table, outdir):
             check(not os.path.exists(out), f"{scene}: output written for a bad scene")
 
 
+def check_same(cli, scene_a, scene_b, outdir):
+    """Two scenes that differ only in where the model comes from give the same numbers."""
+    out = []
+    for scene in (scene_a, scene_b):
+        path = os.path.join(outdir, "same_" + os.path.basename(scene) + ".json")
+        r = run(cli, scene, path)
+        if not check(r.returncode == 0, f"{scene}: exit {r.returncode}: {r.stderr.strip()}"):
+            return
+        with open(path, encoding="utf-8") as f:
+            out.append(json.load(f))
+    check(out[0]["samples"] == out[1]["samples"], f"{scene_a} and {scene_b} differ")
+    check(out[0]["samples"] and out[0]["samples"][0]["reactions"], "no reactions to compare")
+
+
 def main():
     cli = sys.argv[1]
-    if sys.argv[2] == "--bad":
+    if sys.argv[2] == "--same":
+        outdir = sys.argv[5]
+        os.makedirs(outdir, exist_ok=True)
+        check_same(cli, sys.argv[3], sys.argv[4], outdir)
+    elif sys.argv[2] == "--bad":
         outdir = sys.argv[4]
         os.makedirs(outdir, exist_ok=True)
         check_bad(cli, sys.argv[3], outdir)
