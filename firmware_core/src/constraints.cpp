@@ -148,6 +148,7 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   for (int i = 0; i < out.m; ++i)
     if (out.src[i].kind == RowKind::Coordinate) out.body[i][0] = int8_t(dv.coord[out.src[i].index].body);
   int np = 0;
+  for (int i = 0; i < out.m; ++i) out.first[i] = uint8_t(i);
   for (int i = 0; i < out.m; ++i)
     for (int j = 0; j <= i; ++j)
       for (int si = 0; si < 2; ++si)
@@ -155,6 +156,7 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
           out.pair[np++] = {uint8_t(i), uint8_t(j), uint8_t(si), uint8_t(sj)};
+          if (j < out.first[i]) out.first[i] = uint8_t(j);
         }
   out.npairs = np;
   return LEGSIM_OK;

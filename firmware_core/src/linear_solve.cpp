@@ -16,8 +16,10 @@ constexpr real kPivotFloor = real(1e-13);
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
   const int m = layout.m;
   f.m = m;
-  for (int i = 0; i < m; ++i)
-    for (int j = 0; j <= i; ++j) f.a(i, j) = 0;
+  for (int i = 0; i < m; ++i) {
+    f.first[i] = layout.first[i];
+    for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
+  }
   for (int k = 0; k < layout.npairs; ++k) {
     const Pair &p = layout.pair[k];
     const real *ci = rows.coef[p.i][p.si];
@@ -25,7 +27,8 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     const real *wb = w + 3 * layout.body[p.i][p.si];
     f.a(p.i, p.j) += ci[0] * wb[0] * cj[0] + ci[1] * wb[1] * cj[1] + ci[2] * wb[2] * cj[2];
   }
-  // Cholesky A = L L^T, lower triangle in place (column by column).
+  // Envelope Cholesky A = L L^T in place: the rows of J W J^T start late (a
+  // joint couples only to its neighbours) and fill-in never leaves the envelope.
   real max_diag = 0;
   for (int i = 0; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
   if (!(max_diag > 0) || !std::isfinite(max_diag)) {
@@ -33,23 +36,25 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     return m == 0 ? LEGSIM_OK : LEGSIM_ERR_SINGULAR;
   }
   real pmin = max_diag, pmax = 0;
-  for (int j = 0; j < m; ++j) {
-    real d = f.a(j, j);
-    for (int k = 0; k < j; ++k) d -= f.a(j, k) * f.a(j, k);
+  for (int i = 0; i < m; ++i) {
+    const int fi = f.first[i];
+    real *ai = &f.a(i, 0);
+    for (int j = fi; j < i; ++j) {
+      const real *aj = &f.a(j, 0);
+      const int k0 = fi > f.first[j] ? fi : f.first[j];
+      real s = ai[j];
+      for (int k = k0; k < j; ++k) s -= ai[k] * aj[k];
+      ai[j] = s / aj[j];
+    }
+    real d = ai[i];
+    for (int k = fi; k < i; ++k) d -= ai[k] * ai[k];
     if (!(d > kPivotFloor * max_diag)) {
       f.condition = real(INFINITY);
       return LEGSIM_ERR_SINGULAR;
     }
     pmin = d < pmin ? d : pmin;
     pmax = d > pmax ? d : pmax;
-    const real ljj = std::sqrt(d);
-    f.a(j, j) = ljj;
-    const real inv = real(1) / ljj;
-    for (int i = j + 1; i < m; ++i) {
-      real s = f.a(i, j);
-      for (int k = 0; k < j; ++k) s -= f.a(i, k) * f.a(j, k);
-      f.a(i, j) = s * inv;
-    }
+    ai[i] = std::sqrt(d);
   }
   // cond(J W^1/2) ~ sqrt of the pivot spread of J W J^T: an estimate, cheap and monotone.
   f.condition = std::sqrt(pmax / pmin);
@@ -59,14 +64,16 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
 void factor_solve(const Factor &f, VecR &x) {
   const int m = f.m;
   for (int i = 0; i < m; ++i) {
+    const real *ai = &f.a(i, 0);
     real s = x[i];
-    for (int k = 0; k < i; ++k) s -= f.a(i, k) * x[k];
-    x[i] = s / f.a(i, i);
+    for (int k = f.first[i]; k < i; ++k) s -= ai[k] * x[k];
+    x[i] = s / ai[i];
   }
   for (int i = m - 1; i >= 0; --i) {
-    real s = x[i];
-    for (int k = i + 1; k < m; ++k) s -= f.a(k, i) * x[k];
-    x[i] = s / f.a(i, i);
+    const real *ai = &f.a(i, 0);
+    x[i] /= ai[i];
+    const real xi = x[i];
+    for (int k = f.first[i]; k < i; ++k) x[k] -= ai[k] * xi;
   }
 }
 

@@ -26,7 +26,8 @@ constexpr int kMaxPairs = 6 * kMaxRows;
 
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
-using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows>;
+// row-major: the Cholesky inner products run along rows
+using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows, Eigen::RowMajor>;
 
 // Unit axis u(phi) = (sin, -cos) and normal n(phi) = (cos, sin) of eq. (1).
 inline Vec2 axis_u(real phi) { return Vec2(std::sin(phi), -std::cos(phi)); }
@@ -93,6 +94,7 @@ struct Layout {
   int8_t body[kMaxRows][2];  // -1: no body in this slot
   int npairs;
   Pair pair[kMaxPairs];
+  uint8_t first[kMaxRows];  // first non-zero column of each row of J W J^T: its envelope
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
@@ -113,6 +115,7 @@ struct DriverValues {
 struct Factor {
   MatR a;
   int m;
+  uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
 };
 
