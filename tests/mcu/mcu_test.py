@@ -118,13 +118,15 @@ def nm_lines(nm, *args):
 
 
 def cmd_symbols(args):
+    # (without the toolchain, mcu_build_* skipped and there is nothing to check)
+    if not tool("arm-none-eabi-gcc") or not tool("arm-none-eabi-nm"):
+        log("SKIP: arm-none-eabi-gcc / arm-none-eabi-nm not found (apt-get install "
+            "gcc-arm-none-eabi binutils-arm-none-eabi)")
+        return SKIP
     m = read_manifest(args.build_dir)
     nm = m.get("nm") or ""
     if not (nm and os.access(nm, os.X_OK)):
         nm = tool("arm-none-eabi-nm")
-    if not nm:
-        log("SKIP: arm-none-eabi-nm not found")
-        return SKIP
     bad = []
     for key in ("lib_core", "lib_models"):
         lib = m[key]
@@ -210,11 +212,14 @@ def close(a, b, tol):
 
 
 def cmd_qemu(args):
-    m = read_manifest(args.build_dir)
     qemu = tool("qemu-system-arm")
     if not qemu:
         log("SKIP: qemu-system-arm not found (apt-get install qemu-system-arm)")
         return SKIP
+    if not tool("arm-none-eabi-gcc"):
+        log("SKIP: arm-none-eabi-gcc not found, so no image was built")
+        return SKIP
+    m = read_manifest(args.build_dir)
     cmd = [qemu, "-M", m["board"], "-nographic", "-monitor", "none", "-serial", "none",
            "-semihosting-config", "enable=on,target=native", "-icount", "shift=0",
            "-kernel", m["image"]]
