@@ -163,7 +163,7 @@ class HilFault(HilError):
         self.fault = fault
 
 
-@dataclass
+@dataclass(eq=False)   # compared by identity: arrays have no single truth value
 class State:
     q: np.ndarray              # (18,) x, y, phi of bodies 1-6 (m, rad)
     qd: np.ndarray             # (18,)
@@ -531,7 +531,8 @@ class HilLink:
         return out
 
     def heartbeat(self, timeout: float | None = None) -> Heartbeat:
-        """The next HEARTBEAT (every 100 ms by default)."""
+        """The next HEARTBEAT (every 100 ms by default) sent after this call."""
+        self.poll(0)  # older ones still in the socket's buffer do not count
         self._heartbeats.clear()
         return self._wait(lambda: self._heartbeats.popleft() if self._heartbeats else None,
                           self.timeout if timeout is None else timeout, "HEARTBEAT")

@@ -112,6 +112,14 @@ def _random_state(rng):
             "forces": rng.uniform(-1500, 1500, 2), "reactions": rng.uniform(-2000, 2000, (8, 3))}
 
 
+@pytest.fixture
+def null_link():
+    """A HilLink on a bus that drops what is sent to it and never receives."""
+    bus = _NullBus()
+    yield HilLink(bus=bus)
+    bus.shutdown()
+
+
 class _NullBus(can.BusABC):
     def __init__(self):
         super().__init__(channel="null")
@@ -124,14 +132,14 @@ class _NullBus(can.BusABC):
         return None, False
 
 
-def test_state_assembled_from_frames_as_float32(db):
+def test_state_assembled_from_frames_as_float32(db, null_link):
     rng = np.random.default_rng(1)
     st = _random_state(rng)
     st["status_signals"] = {"St_Time": 0.123456789012345, "St_StepCount": 2**40 + 5,
                             "St_Status": int(Status.ASSEMBLED | Status.SAFE_STATE),
                             "St_State": 1, "St_ActSeq": 7, "St_CtrlSeq": 9,
                             "St_StepSize": 1000000, "St_Residual": 1e-11}
-    link = HilLink(bus=_NullBus())
+    link = null_link
     frames = _sample_frames(db, st, tick=(2**40 + 5) & 0xFFFFFFFF)
     # a heartbeat and a stray incomplete sample interleaved must not disturb it
     link._handle(_sample_frames(db, st, tick=3)[0])
@@ -156,8 +164,8 @@ def test_state_assembled_from_frames_as_float32(db):
     assert not link._partial  # the stray sample was dropped
 
 
-def test_fault_decoding_names_the_signal(db):
-    link = HilLink(bus=_NullBus())
+def test_fault_decoding_names_the_signal(db, null_link):
+    link = null_link
     start = db.get_message_by_name("ACT_CMD").get_signal_by_name("Act_Setpoint_upper").start
     link._handle(link.encode("FAULT", {"Fault_Code": 4, "Fault_FrameId": cl.ACT_CMD,
                                        "Fault_FrameLen": 64, "Fault_Seq": 3,
@@ -168,17 +176,16 @@ def test_fault_decoding_names_the_signal(db):
     assert "OUT_OF_RANGE" in str(f) and "Act_Setpoint_upper" in str(f)
 
 
-def test_encode_refuses_out_of_range_unless_raw():
-    link = HilLink(bus=_NullBus())
+def test_encode_refuses_out_of_range_unless_raw(null_link):
+    link = null_link
     with pytest.raises(Exception):
         link.encode("ACT_CMD", {"Act_Mode_upper": 7})
     msg = link.encode("ACT_CMD", {"Act_Mode_upper": 1, "Act_Setpoint_upper": math.nan}, strict=False)
     assert msg.is_fd and len(msg.data) == 64 and math.isnan(struct.unpack_from("<f", msg.data, 8)[0])
 
 
-def test_commands_encode_modes_and_counters(db):
-    bus = _NullBus()
-    link = HilLink(bus=bus)
+def test_commands_encode_modes_and_counters(db, null_link):
+    link, bus = null_link, null_link.bus
     s1 = link.command_force("upper", 100.0)
     s2 = link.command_length(1, 0.5)
     link.keepalive()

@@ -191,7 +191,8 @@ def test_bad_input_is_faulted_and_changes_nothing(hil, record_property):
             assert f.signal == sig, (name, str(f))
         s = hil.step(30)
         assert physics(s) == physics(reference), name
-        assert (s.t, s.step_count, s.act_seq) == (reference.t, reference.step_count, reference.act_seq), name
+        assert (s.t, s.step_count) == (reference.t, reference.step_count), name
+        assert s.act_seq == hil._seq[ACT_CMD], name  # the last good command, not the bad one
         # the fault, alone, came between the two samples
         assert s.faults == [f] and s.last_fault == code and Status.FAULT in s.status, name
         assert hil.faults() == []
@@ -242,27 +243,34 @@ def test_command_timeout_hold_length_and_override(start_hil):
 # ---- real time ------------------------------------------------------------------------------
 
 def test_realtime_runs_at_1khz_and_reports_jitter(hil, record_property):
+    """hil_sim alone for 2 s at 1 kHz (the bench sleeps: under emulation in the VM a busy
+    reader would share the one CPU), then its heartbeat's statistics."""
     hil.reset(hold_length=True, cmd_timeout_ms=0)
-    s0 = hil.start_realtime(decimation=10)
+    s0 = hil.start_realtime(decimation=50)
     t0 = time.monotonic()
-    samples = list(hil.states(2.0))
+    time.sleep(2.0)
     hb = hil.heartbeat(timeout=2)
     s1 = hil.stop_realtime()
     wall = time.monotonic() - t0
-    assert s0.state == SimState.REALTIME and s1.state == SimState.LOCKSTEP
+    samples = list(hil.states(0))
+    figures = (f"real time 1 kHz for {wall:.2f} s: {s1.step_count} ticks run, {hb.rt_overruns} "
+               f"overruns (skipped); wake-up lateness max {hb.jitter_max_us:.0f} us, mean "
+               f"{hb.jitter_mean_us:.1f} us, p99 {hb.jitter_p99_us:.0f} us; {len(samples)} samples")
+    record_property("realtime", figures)
+    print(figures)
+    assert s0.state == SimState.REALTIME and s0.step_count == 0
+    assert s1.state == SimState.LOCKSTEP
     assert hb.state == SimState.REALTIME and hb.rt_rate_hz == 1000.0
     assert hb.rt_ticks > 0 and 0 < hb.jitter_mean_us <= hb.jitter_max_us
     assert hb.jitter_p99_us <= hb.jitter_max_us + 1
-    # every period is a tick executed or an overrun skipped
-    elapsed_ticks = s1.step_count + hb.rt_overruns
-    assert 0.9 * wall * 1000 < elapsed_ticks < 1.05 * wall * 1000 + 50
-    assert len(samples) > 100 and all(b.step_count > a.step_count for a, b in zip(samples, samples[1:]))
-    assert all(s.step_count % 10 == 0 for s in samples)
-    figures = (f"real time 1 kHz for {wall:.2f} s: {s1.step_count} ticks, {hb.rt_overruns} overruns; "
-               f"wake-up lateness max {hb.jitter_max_us:.0f} us, mean {hb.jitter_mean_us:.1f} us, "
-               f"p99 {hb.jitter_p99_us:.0f} us; {len(samples)} samples")
-    record_property("realtime", figures)
-    print(figures)
+    # every period of the 1 kHz clock is a tick run or an overrun skipped
+    periods = s1.step_count + hb.rt_overruns
+    assert 0.9 * wall * 1000 < periods < 1.05 * wall * 1000 + 50
+    assert s1.step_count > 0.25 * wall * 1000
+    # one sample every 50 ticks, in order
+    assert all(s.step_count % 50 == 0 for s in samples)
+    assert len(samples) >= s1.step_count // 50 - 2
+    assert all(b.step_count > a.step_count for a, b in zip(samples, samples[1:]))
 
 
 def test_command_timeout_realtime(hil):
