@@ -155,7 +155,8 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
         for (int sj = 0; sj < 2; ++sj) {
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
-          out.pair[np++] = {uint8_t(i), uint8_t(j), uint8_t(si), uint8_t(sj)};
+          out.pair[np++] = {uint16_t(3 * (2 * i + si)), uint16_t(3 * (2 * j + sj)),
+                            uint16_t(i * kMaxRows + j)};
           if (j < out.first[i]) out.first[i] = uint8_t(j);
         }
   out.npairs = np;

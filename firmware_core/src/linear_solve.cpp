@@ -20,15 +20,24 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     f.first[i] = layout.first[i];
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
   }
+  // weight each row's coefficients once, then every non-zero entry is one dot product
+  real wc[kMaxRows][2][3];
+  for (int i = 0; i < m; ++i)
+    for (int sl = 0; sl < 2; ++sl) {
+      const int b = layout.body[i][sl];
+      if (b < 0) continue;
+      const real *c = rows.coef[i][sl], *wb = w + 3 * b;
+      wc[i][sl][0] = c[0] * wb[0];
+      wc[i][sl][1] = c[1] * wb[1];
+      wc[i][sl][2] = c[2] * wb[2];
+    }
+  const real *wflat = &wc[0][0][0], *cflat = &rows.coef[0][0][0];
+  real *aflat = f.a.data();
   for (int k = 0; k < layout.npairs; ++k) {
     const Pair &p = layout.pair[k];
-    const real *ci = rows.coef[p.i][p.si];
-    const real *cj = rows.coef[p.j][p.sj];
-    const real *wb = w + 3 * layout.body[p.i][p.si];
-    f.a(p.i, p.j) += ci[0] * wb[0] * cj[0] + ci[1] * wb[1] * cj[1] + ci[2] * wb[2] * cj[2];
+    const real *ci = wflat + p.ci, *cj = cflat + p.cj;
+    aflat[p.aij] += ci[0] * cj[0] + ci[1] * cj[1] + ci[2] * cj[2];
   }
-  // Envelope Cholesky A = L L^T in place: the rows of J W J^T start late (a
-  // joint couples only to its neighbours) and fill-in never leaves the envelope.
   real max_diag = 0;
   for (int i = 0; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
   if (!(max_diag > 0) || !std::isfinite(max_diag)) {

@@ -82,8 +82,11 @@ struct RowSource {
   uint8_t sub;    // equation within the joint
 };
 
-struct Pair {  // (J W J^T)(i, j) gets coef[i][si] . w . coef[j][sj]
-  uint8_t i, j, si, sj;
+// (J W J^T)(i, j) gets coef[i][si] . w . coef[j][sj]; the offsets into the
+// flattened coefficient and matrix arrays are worked out once, at layout time.
+struct Pair {
+  uint16_t ci, cj;  // (3 * (2 * row + slot)) of each side
+  uint16_t aij;     // i * kMaxRows + j
 };
 
 // Which equations make up the system and which entries of J W J^T can be
