@@ -85,8 +85,11 @@ void reject_frame(const Frame &frame, FaultCode code, uint32_t detail, Fault *fa
   fault->detail = detail;
 }
 
-bool stroke_ok(const legsim_model_desc *m, int a, double l) {
-  return l >= m->actuator[a].stroke_min_m && l <= m->actuator[a].stroke_max_m;
+// A float32 length is inside the stroke when it is inside the stroke's ends rounded to
+// float32 (0.8f is 0.800000012): the session then clamps it onto the exact stroke.
+bool stroke_ok(const legsim_model_desc *m, int a, float l) {
+  return l >= static_cast<float>(m->actuator[a].stroke_min_m) &&
+         l <= static_cast<float>(m->actuator[a].stroke_max_m);
 }
 
 void validate_control(const Request &req, Checker &c) {
@@ -158,9 +161,9 @@ void validate_act(const Request &req, const legsim_model_desc *m, Checker &c) {
     if (r.mode[a] == ActMode::kKeep) continue;  // setpoint ignored
     c.real(r.setpoint[a], sp_in_range[a], sp_bit[a]);
     if (m == nullptr || !c.ok()) continue;
-    double v = r.setpoint[a];
+    const float v = r.setpoint[a];
     if (r.mode[a] == ActMode::kForce)
-      c.model(std::fabs(v) <= m->actuator[a].max_force_n, sp_bit[a], v);
+      c.model(std::fabs(v) <= static_cast<float>(m->actuator[a].max_force_n), sp_bit[a], v);
     else
       c.model(stroke_ok(m, a, v), sp_bit[a], v);
   }

@@ -9,6 +9,17 @@
 
 namespace hil {
 
+namespace {
+
+// Lengths arrive as float32 and were checked against the stroke rounded to float32; the
+// core gets them on the exact stroke (a move of at most one float32 ulp).
+legsim_real on_stroke(const legsim_model_desc *m, int a, double l) {
+  return static_cast<legsim_real>(
+      std::clamp(l, m->actuator[a].stroke_min_m, m->actuator[a].stroke_max_m));
+}
+
+}  // namespace
+
 Session::~Session() {
   std::free(storage_[0]);
   std::free(storage_[1]);
@@ -65,7 +76,7 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
   if (st != LEGSIM_OK) return st;
   if (p.use_lengths) {
     legsim_real len[kActuators];
-    for (int a = 0; a < kActuators; ++a) len[a] = static_cast<legsim_real>(p.lengths[a]);
+    for (int a = 0; a < kActuators; ++a) len[a] = on_stroke(variant_model(p.variant), a, p.lengths[a]);
     st = legsim_assemble(sim, len);
     if (st != LEGSIM_OK) return st;
   }
@@ -104,7 +115,7 @@ legsim_status Session::command(int actuator, ActMode mode, double value) {
     case ActMode::kForce:
       return legsim_command_force(sim_, actuator, static_cast<legsim_real>(value));
     case ActMode::kLength:
-      return legsim_command_length(sim_, actuator, static_cast<legsim_real>(value));
+      return legsim_command_length(sim_, actuator, on_stroke(model(), actuator, value));
     case ActMode::kKeep:
       break;
   }
@@ -125,10 +136,7 @@ legsim_status Session::apply_safe_state(SafeMode mode) {
     if (mode == SafeMode::kZeroForce) {
       st = legsim_command_force(sim_, a, 0);
     } else {
-      // hold where it is, inside the stroke
-      double l = std::clamp(static_cast<double>(len[a]), m->actuator[a].stroke_min_m,
-                            m->actuator[a].stroke_max_m);
-      st = legsim_command_length(sim_, a, static_cast<legsim_real>(l));
+      st = legsim_command_length(sim_, a, on_stroke(m, a, len[a]));  // hold where it is
     }
   }
   return st;

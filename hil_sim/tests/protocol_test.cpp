@@ -354,6 +354,82 @@ void test_reset_failure_keeps_session() {
   CHECK(st.st_step_count == 11);
 }
 
+void test_solver_failures() {
+  Rig r;
+  r.feed(reset(1));
+  r.feed(step(2, 10));
+  // lengths inside both strokes that the leg cannot take at once: the core refuses the
+  // assembly, the running session goes on untouched
+  legsim_can_control_t m = control(3, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_use_lengths = 1;
+  m.ctrl_length_upper = 0.80f;
+  m.ctrl_length_lower = 0.35f;
+  auto out = r.feed(pack(m));
+  auto f = fault_of(out);
+  CHECK(out.size() == 1 && f.fault_code == 8 && f.fault_detail == LEGSIM_ERR_UNREACHABLE);
+  CHECK(f.fault_frame_id == LEGSIM_CAN_CONTROL_FRAME_ID && f.fault_seq == 3);
+  CHECK(status_of(r.feed(step(4, 1))).st_step_count == 11);
+
+  // generalized-alpha at h = 100 ms: Newton gives up at the second step -> HALTED
+  m = control(5, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_integrator = LEGSIM_CAN_CONTROL_CTRL_INTEGRATOR_GENERALIZED_ALPHA_CHOICE;
+  m.ctrl_step_size = 100000000;
+  r.feed(pack(m));
+  out = r.feed(step(6, 10));
+  f = fault_of(out);
+  auto st = status_of(out);
+  CHECK(f.fault_code == 8 && f.fault_detail == LEGSIM_ERR_NOT_CONVERGED && f.fault_seq == 6);
+  CHECK(out.size() == 7 && out.back().id == LEGSIM_CAN_ST_STATUS_FRAME_ID);
+  CHECK(st.st_state == LEGSIM_CAN_ST_STATUS_ST_STATE_HALTED_CHOICE);
+  CHECK(st.st_status & hil::kStatusHalted);
+  CHECK(st.st_legsim_status == LEGSIM_ERR_NOT_CONVERGED);
+  CHECK(st.st_step_count == f.fault_step_count && st.st_step_count < 10);
+  f = fault_of(r.feed(step(7, 1)));
+  CHECK(f.fault_code == 6 && f.fault_detail == 3);  // BAD_STATE: HALTED
+  f = fault_of(r.feed(act(1, 1, 0.0f)));
+  CHECK(f.fault_code == 6);
+  out = r.feed(reset(8));
+  CHECK(status_of(out).st_state == LEGSIM_CAN_ST_STATUS_ST_STATE_LOCKSTEP_CHOICE);
+  CHECK(status_of(out).st_legsim_status == 0 && status_of(out).st_last_fault == 0);
+
+  // the same in real time: the tick publishes the last good state, HALTED
+  r.feed(pack(m));
+  r.feed(pack(control(9, LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_RT_CHOICE)));
+  CHECK(r.ctl.rt_period_ns() == 100000000);
+  int faults = 0;
+  for (int i = 0; i < 5; ++i) {
+    r.ctl.rt_tick(i * 100000000LL);
+    faults += count(r.rec.take(), LEGSIM_CAN_FAULT_FRAME_ID);
+  }
+  CHECK(faults == 1 && r.ctl.state() == hil::SimState::kHalted);
+}
+
+void test_events_in_status() {
+  Rig r;
+  legsim_can_control_t m = control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_cmd_timeout = 65535;  // no timeout: the commands hold for the whole run
+  r.feed(pack(m));
+  // a length far from the current one saturates the upper servo; full force retracts the
+  // lower actuator to its shortest length
+  r.feed(act(1, 2, 0.80f, 1, -1500.0f));
+  auto st = status_of(r.feed(step(2, 20)));
+  CHECK(st.st_status & hil::kStatusForceSaturated);
+  uint16_t seen = 0;
+  uint8_t mask = 0;
+  for (uint32_t k = 0; k < 50; ++k) {
+    st = status_of(r.feed(step(3 + k, 20)));
+    seen |= st.st_status;
+    mask |= st.st_stroke_mask;
+  }
+  CHECK(seen & hil::kStatusStrokeMin);
+  CHECK(mask & 2u);  // the lower actuator
+  // events are cleared after each sample: a quiet step reports none
+  r.feed(act(2, 1, 0.0f, 1, 0.0f));
+  r.feed(reset(60));
+  st = status_of(r.feed(step(61, 1)));
+  CHECK(!(st.st_status & (hil::kStatusStrokeMax | hil::kStatusStrokeMin | hil::kStatusForceSaturated)));
+}
+
 void test_fuzz() {
   Rig r;
   r.feed(reset(1));
@@ -389,6 +465,8 @@ int main() {
   test_timeout_realtime();
   test_determinism();
   test_reset_failure_keeps_session();
+  test_solver_failures();
+  test_events_in_status();
   test_fuzz();
   std::printf("%d passed, %d failed\n", g_passed, g_failed);
   return g_failed == 0 ? 0 : 1;

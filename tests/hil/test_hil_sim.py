@@ -19,7 +19,7 @@ import numpy as np
 import pytest
 
 from conftest import expect_path, hil_sim_path, vcan_problem
-from legsim_bench.can_link import (ACT_CMD, CONTROL, FaultCode, HilFault, SimState,
+from legsim_bench.can_link import (ACT_CMD, CONTROL, ActMode, FaultCode, HilFault, SimState,
                                    Status)
 
 PHYSICS = ("q", "qd", "lengths", "rates", "forces", "reactions")
@@ -208,6 +208,38 @@ def test_state_rules(hil):
     assert e.value.fault.code == FaultCode.BAD_STATE and e.value.fault.detail == SimState.REALTIME
     s = hil.stop_realtime()
     assert s.state == SimState.LOCKSTEP
+
+
+# ---- solver failures and events ------------------------------------------------------------
+
+def test_solver_failures_are_faults_not_crashes(hil):
+    hil.reset()
+    hil.step(10)
+    with pytest.raises(HilFault) as e:      # both lengths inside their strokes, not at once
+        hil.reset(lengths=(0.80, 0.35))
+    assert e.value.fault.code == FaultCode.SOLVER and e.value.fault.detail == 9  # UNREACHABLE
+    assert hil.step(1).step_count == 11      # the session before that RESET goes on
+    hil.reset(integrator="generalized_alpha", step_s=0.1)
+    s = hil.step(10)                         # Newton gives up at h = 100 ms
+    assert s.state == SimState.HALTED and Status.HALTED in s.status and s.step_count < 10
+    assert [f.code for f in s.faults] == [FaultCode.SOLVER] and s.faults[0].detail == 7
+    assert s.legsim_status == 7 and s.faults[0].step_count == s.step_count
+    with pytest.raises(HilFault) as e:
+        hil.step(1)
+    assert e.value.fault.code == FaultCode.BAD_STATE and e.value.fault.detail == SimState.HALTED
+    assert hil.reset().state == SimState.LOCKSTEP
+
+
+def test_stroke_and_saturation_events_in_the_status(hil):
+    hil.reset(cmd_timeout_ms=0)
+    hil.command(upper=(ActMode.LENGTH, 0.80), lower=(ActMode.FORCE, -1500.0))
+    seen, mask = Status(0), 0
+    for _ in range(25):
+        s = hil.step(20)
+        seen |= s.status
+        mask |= s.stroke_mask
+    assert Status.FORCE_SATURATED in seen and Status.STROKE_MIN in seen and mask & 2
+    assert abs(s.lengths[1] - 0.35) < 1e-6   # at its shortest
 
 
 # ---- command timeout ------------------------------------------------------------------------
