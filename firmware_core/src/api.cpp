@@ -70,7 +70,7 @@ uint32_t all_actuators(const Model &m) { return (1u << m.na) - 1; }
 legsim_status assemble_commit(Sim &sim) {
   Data &d = sim.data;
   VecQ q = d.q;
-  const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight);
+  const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight, 1);
   if (s != LEGSIM_OK) return s;
   d.q = q;
   d.qd.setZero();

@@ -6,7 +6,7 @@
 namespace legsim {
 
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, VecQ &q_io,
-                       const real *w) {
+                       const real *w, int min_iterations) {
   const Model &m = sim.model;
   Data &d = sim.data;
   const real tol = real(sim.opt.newton_tol);
@@ -20,7 +20,7 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
     d.report.residual = r;
     if (!std::isfinite(r)) return LEGSIM_ERR_UNREACHABLE;
     if (first < 0) first = r;
-    if (r <= tol) break;
+    if (r <= tol && it >= min_iterations) break;
     // Growth far past the start means Newton left the basin: the lengths are not reachable.
     if (r > real(1e3) * (first + 1)) return LEGSIM_ERR_UNREACHABLE;
     if (it >= sim.opt.max_newton_iter)

@@ -209,8 +209,10 @@ legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd);
 
 // ---- assembly.cpp ----
+// min_iterations: 1 polishes a pose already within tolerance to round-off (the
+// assembly API); 0 leaves it (the per-step projection).
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drivers, VecQ &q,
-                       const real *w);
+                       const real *w, int min_iterations = 0);
 
 // ---- kinematics.cpp ----
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);

@@ -269,8 +269,8 @@ static void test_stand_pose_drivers(void) {
     TEST_ASSERT_EQUAL_INT32(2, p.driver[1].coord);
     TEST_ASSERT_EQUAL_DOUBLE(0.0, p.driver[1].value);
     // guess rows per body [x, y, phi].
-    TEST_ASSERT_EQUAL_DOUBLE(0.13, p.guess[0][0]);
-    TEST_ASSERT_EQUAL_DOUBLE(0.71, p.guess[0][2]);
+    TEST_ASSERT_EQUAL_DOUBLE(0.1309307341, p.guess[0][0]);
+    TEST_ASSERT_EQUAL_DOUBLE(0.7137243789, p.guess[0][2]);
     TEST_ASSERT_EQUAL_DOUBLE(-0.55, p.guess[5][1]);
     TEST_ASSERT_EQUAL_DOUBLE(0.0, p.guess[5][2]);
   }
