@@ -143,7 +143,6 @@ const DisableFlag kDisable[] = {
     {"projection", LEGSIM_DISABLE_PROJECTION},
     {"actuators", LEGSIM_DISABLE_ACTUATORS},
     {"stroke_limits", LEGSIM_DISABLE_STROKE_LIMITS},
-    {"accelerations", LEGSIM_DISABLE_ACCELERATIONS},
 };
 
 std::string dirname_of(const std::string &path) {
@@ -218,8 +217,7 @@ void parse_scene(Table doc, Scene &s) {
         }
       if (!ok)
         fail("'disable': unknown " + q(name) +
-             " (expected gravity, force_elements, reactions, projection, actuators, stroke_limits "
-             "or accelerations)");
+             " (expected gravity, force_elements, reactions, projection, actuators or stroke_limits)");
     }
   }
 

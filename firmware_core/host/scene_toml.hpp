@@ -14,8 +14,7 @@
 //   duration = 0.5                            # s (dynamics, inverse_dynamics)
 //   output_every = 10                         # steps between samples (default 1)
 //   disable = ["reactions", "gravity"]        # gravity, force_elements, reactions,
-//                                             # projection, actuators, stroke_limits,
-//                                             # accelerations
+//                                             # projection, actuators, stroke_limits
 //   rho_inf = 0.8                             # optional solver options
 //   max_newton_iter = 25
 //   newton_tol = 1e-10

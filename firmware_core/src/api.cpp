@@ -16,8 +16,7 @@ const Sim *as_sim(const legsim_sim *s) { return reinterpret_cast<const Sim *>(s)
 
 constexpr uint32_t kAllDisableFlags =
     LEGSIM_DISABLE_GRAVITY | LEGSIM_DISABLE_FORCE_ELEMENTS | LEGSIM_DISABLE_REACTIONS |
-    LEGSIM_DISABLE_PROJECTION | LEGSIM_DISABLE_ACTUATORS | LEGSIM_DISABLE_STROKE_LIMITS |
-    LEGSIM_DISABLE_ACCELERATIONS;
+    LEGSIM_DISABLE_PROJECTION | LEGSIM_DISABLE_ACTUATORS | LEGSIM_DISABLE_STROKE_LIMITS;
 
 legsim_status options_check(const legsim_options *o) {
   if (!o) return LEGSIM_ERR_NULL;
@@ -199,7 +198,6 @@ legsim_status legsim_get_qd(const legsim_sim *sim, legsim_real *qd) {
 legsim_status legsim_get_qdd(const legsim_sim *sim, legsim_real *qdd) {
   if (!sim || !qdd) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
-  if (s.opt.disable & LEGSIM_DISABLE_ACCELERATIONS) return LEGSIM_ERR_DISABLED;
   for (int k = 0; k < s.model.nq; ++k) qdd[k] = s.data.qdd[k];
   return LEGSIM_OK;
 }

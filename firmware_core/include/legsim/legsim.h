@@ -145,8 +145,7 @@ enum legsim_disable {
   LEGSIM_DISABLE_REACTIONS = 1u << 2,      /* no multipliers at the end of a step */
   LEGSIM_DISABLE_PROJECTION = 1u << 3,     /* RK4: no projection onto Phi = 0, Phi_q qd = 0 */
   LEGSIM_DISABLE_ACTUATORS = 1u << 4,      /* actuators exert no force (passive joints) */
-  LEGSIM_DISABLE_STROKE_LIMITS = 1u << 5,  /* do not stop actuators at their stroke ends */
-  LEGSIM_DISABLE_ACCELERATIONS = 1u << 6   /* no qdd output at the end of a step */
+  LEGSIM_DISABLE_STROKE_LIMITS = 1u << 5   /* do not stop actuators at their stroke ends */
 };
 
 typedef struct legsim_options {
