@@ -16,8 +16,10 @@ passed instead (``bus=``), e.g. ``can.Bus(interface="virtual", ...)`` in tests.
 
 Protocol (details in can/README.md):
 - every CONTROL frame (reset, step, start_realtime, stop_realtime) is answered by one state
-  sample (six frames, ST_STATUS last) or by a FAULT naming its sequence counter: the
-  methods wait for that answer and raise :class:`HilFault` on a fault;
+  sample (six frames, ST_STATUS last) or, when refused, by a FAULT naming its sequence
+  counter: the methods wait for that answer and raise :class:`HilFault` on a refusal. A
+  solver failure inside a STEP (or a real-time tick) is no refusal: the sample comes, in
+  state HALTED, with the SOLVER fault in ``State.faults``;
 - actuator and load commands are not answered; their faults, and the faults hil_sim raises
   on its own (command timeout, solver failure in real time), are collected in
   ``State.faults`` of the next sample and in :meth:`HilLink.faults`;
@@ -415,6 +417,8 @@ class HilLink:
                     return s
             for f in self._faults:
                 if f.frame_id == CONTROL and f.seq == seq:
+                    if f.code == FaultCode.SOLVER and command != Command.RESET:
+                        continue  # a failed step: its sample (HALTED) follows, with the fault
                     self._faults.remove(f)
                     raise HilFault(f)
             return None
