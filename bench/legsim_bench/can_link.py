@@ -44,7 +44,10 @@ import can
 import cantools
 import numpy as np
 
-DBC_PATH = Path(os.environ.get("LEGSIM_DBC", Path(__file__).resolve().parents[2] / "can" / "legsim.dbc"))
+# $LEGSIM_DBC, else can/legsim.dbc under $LEGSIM_ROOT, else in this checkout
+DBC_PATH = Path(os.environ.get("LEGSIM_DBC") or
+                Path(os.environ.get("LEGSIM_ROOT") or Path(__file__).resolve().parents[2])
+                / "can" / "legsim.dbc")
 
 BODIES = ("upper_cylinder", "upper_rod", "thigh", "lower_cylinder", "lower_rod", "shank")
 JOINTS = ("A", "upper_actuator", "B_thigh", "B_lower", "C_rod_thigh", "C_rod_shank",
