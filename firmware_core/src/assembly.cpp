@@ -39,8 +39,8 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
   // the condition where it landed: a converged dead centre is still a dead centre
   if (d.report.iterations > 0) {
     const legsim_status s = factor_build(layout, d.rows, w, d.factor);
-    d.report.condition = d.factor.condition;
     if (s != LEGSIM_OK) return s;
+    d.report.condition = factor_condition(d.factor);
   }
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
   if (d.report.condition > real(LEGSIM_COND_SINGULAR)) return LEGSIM_ERR_SINGULAR;

@@ -145,19 +145,55 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
 // The coordinate drivers' bodies are known once their values are: finish the
 // layout and list the entries of J W J^T that can be non-zero.
 legsim_status layout_finish(Layout &out, const DriverValues &dv) {
-  for (int i = 0; i < out.m; ++i)
+  const int m = out.m;
+  for (int i = 0; i < m; ++i)
     if (out.src[i].kind == RowKind::Coordinate) out.body[i][0] = int8_t(dv.coord[out.src[i].index].body);
+  auto share_body = [&](int i, int j) {
+    for (int si = 0; si < 2; ++si)
+      for (int sj = 0; sj < 2; ++sj)
+        if (out.body[i][si] >= 0 && out.body[i][si] == out.body[j][sj]) return true;
+    return false;
+  };
+  // reverse Cuthill-McKee: breadth-first from a least-coupled row, neighbours by degree
+  int degree[kMaxRows], order[kMaxRows], n = 0;
+  bool placed[kMaxRows];
+  for (int i = 0; i < m; ++i) {
+    degree[i] = 0;
+    placed[i] = false;
+    for (int j = 0; j < m; ++j) degree[i] += (j != i && share_body(i, j));
+  }
+  while (n < m) {
+    int start = -1;
+    for (int i = 0; i < m; ++i)
+      if (!placed[i] && (start < 0 || degree[i] < degree[start])) start = i;
+    placed[start] = true;
+    order[n++] = start;
+    for (int head = n - 1; head < n; ++head) {
+      for (;;) {  // the unplaced neighbours of order[head], lowest degree first
+        int next = -1;
+        for (int j = 0; j < m; ++j)
+          if (!placed[j] && share_body(order[head], j) && (next < 0 || degree[j] < degree[next]))
+            next = j;
+        if (next < 0) break;
+        placed[next] = true;
+        order[n++] = next;
+      }
+    }
+  }
+  for (int p = 0; p < m; ++p) out.perm[order[m - 1 - p]] = uint8_t(p);
   int np = 0;
-  for (int i = 0; i < out.m; ++i) out.first[i] = uint8_t(i);
-  for (int i = 0; i < out.m; ++i)
-    for (int j = 0; j <= i; ++j)
+  for (int p = 0; p < m; ++p) out.first[p] = uint8_t(p);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j)
       for (int si = 0; si < 2; ++si)
         for (int sj = 0; sj < 2; ++sj) {
+          const int pi = out.perm[i], pj = out.perm[j];
+          if (pj > pi || (i == j && sj < si)) continue;  // each lower entry (and diagonal pair) once
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
           out.pair[np++] = {uint16_t(3 * (2 * i + si)), uint16_t(3 * (2 * j + sj)),
-                            uint16_t(i * kMaxRows + j)};
-          if (j < out.first[i]) out.first[i] = uint8_t(j);
+                            uint16_t(pi * kMaxRows + pj)};
+          if (pj < out.first[pi]) out.first[pi] = uint8_t(pj);
         }
   out.npairs = np;
   return LEGSIM_OK;

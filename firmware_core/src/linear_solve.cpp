@@ -17,6 +17,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   const int m = layout.m;
   f.m = m;
   for (int i = 0; i < m; ++i) {
+    f.perm[i] = layout.perm[i];
     f.first[i] = layout.first[i];
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
   }
@@ -70,20 +71,76 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   return LEGSIM_OK;
 }
 
-void factor_solve(const Factor &f, VecR &x) {
+namespace {
+// L L^T y = y in the factor's own (permuted) order.
+void solve_in_place(const Factor &f, real *y) {
   const int m = f.m;
   for (int i = 0; i < m; ++i) {
     const real *ai = &f.a(i, 0);
-    real s = x[i];
-    for (int k = f.first[i]; k < i; ++k) s -= ai[k] * x[k];
-    x[i] = s / ai[i];
+    real s = y[i];
+    for (int k = f.first[i]; k < i; ++k) s -= ai[k] * y[k];
+    y[i] = s / ai[i];
   }
   for (int i = m - 1; i >= 0; --i) {
     const real *ai = &f.a(i, 0);
-    x[i] /= ai[i];
-    const real xi = x[i];
-    for (int k = f.first[i]; k < i; ++k) x[k] -= ai[k] * xi;
+    y[i] /= ai[i];
+    const real yi = y[i];
+    for (int k = f.first[i]; k < i; ++k) y[k] -= ai[k] * yi;
   }
+}
+
+// y = L L^T x in the factor's order.
+void multiply(const Factor &f, const real *x, real *y) {
+  const int m = f.m;
+  real t[kMaxRows];
+  for (int k = 0; k < m; ++k) t[k] = 0;
+  for (int i = 0; i < m; ++i)  // t = L^T x
+    for (int k = f.first[i]; k <= i; ++k) t[k] += f.a(i, k) * x[i];
+  for (int i = 0; i < m; ++i) {  // y = L t
+    real s = 0;
+    for (int k = f.first[i]; k <= i; ++k) s += f.a(i, k) * t[k];
+    y[i] = s;
+  }
+}
+
+real normalize(real *x, int m) {
+  real n = 0;
+  for (int i = 0; i < m; ++i) n += x[i] * x[i];
+  n = std::sqrt(n);
+  for (int i = 0; i < m; ++i) x[i] /= n;
+  return n;
+}
+}  // namespace
+
+void factor_solve(const Factor &f, VecR &x) {
+  const int m = f.m;
+  real y[kMaxRows];
+  for (int i = 0; i < m; ++i) y[f.perm[i]] = x[i];
+  solve_in_place(f, y);
+  for (int i = 0; i < m; ++i) x[i] = y[f.perm[i]];
+}
+
+real factor_condition(const Factor &f) {
+  // sqrt(lambda_max / lambda_min) of J W J^T by a few power and inverse-power
+  // iterations on the factor: the 2-norm condition of J W^1/2, to a few digits.
+  const int m = f.m;
+  if (m == 0) return 1;
+  real x[kMaxRows], y[kMaxRows];
+  for (int i = 0; i < m; ++i) x[i] = real(1) + real(i % 3) * real(0.25);
+  normalize(x, m);
+  real lmax = 0, lmin_inv = 0;
+  for (int it = 0; it < 12; ++it) {
+    multiply(f, x, y);
+    lmax = normalize(y, m);
+    for (int i = 0; i < m; ++i) x[i] = y[i];
+  }
+  for (int i = 0; i < m; ++i) x[i] = real(1) - real(i % 2) * real(0.5);
+  normalize(x, m);
+  for (int it = 0; it < 12; ++it) {
+    solve_in_place(f, x);
+    lmin_inv = normalize(x, m);
+  }
+  return std::sqrt(lmax * lmin_inv);
 }
 
 void jt_times(const Model &model, const Layout &layout, const Rows &rows, const VecR &x, VecQ &y) {

@@ -97,7 +97,10 @@ struct Layout {
   int8_t body[kMaxRows][2];  // -1: no body in this slot
   int npairs;
   Pair pair[kMaxPairs];
-  uint8_t first[kMaxRows];  // first non-zero column of each row of J W J^T: its envelope
+  // J W J^T is factored in a reverse Cuthill-McKee order of its rows (row i sits
+  // at position perm[i]), which keeps its envelope, and so the work, small.
+  uint8_t perm[kMaxRows];
+  uint8_t first[kMaxRows];  // by position: the first non-zero column, the envelope
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
@@ -118,6 +121,7 @@ struct DriverValues {
 struct Factor {
   MatR a;
   int m;
+  uint8_t perm[kMaxRows];   // row -> position, as in the layout
   uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
 };
@@ -180,6 +184,9 @@ void actuator_length(const Model &model, int a, const VecQ &q, const VecQ &qd, r
 // Factors J W J^T (W diagonal, n values). LEGSIM_ERR_SINGULAR on a vanishing pivot.
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f);
 void factor_solve(const Factor &f, VecR &x);  // in place
+// cond(J W^1/2) by power iterations on the factor: for reports that decide (assembly);
+// Factor::condition is the cheap pivot-spread estimate of every factorization.
+real factor_condition(const Factor &f);
 // y = J^T x (n values), J x (m values)
 void jt_times(const Model &model, const Layout &layout, const Rows &rows, const VecR &x, VecQ &y);
 void j_times(const Layout &layout, const Rows &rows, const VecQ &x, VecR &y);
