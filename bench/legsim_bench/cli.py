@@ -1,0 +1,438 @@
+"""legsim-bench: run scenes against hil_sim over CAN and check them against the bench's model.
+
+    legsim-bench scenes                         the shipped scenes (bench/scenes/)
+    legsim-bench run SCENE... [--start-hil]     record + check in one process (bus here)
+    legsim-bench record SCENE... [--start-hil]  only drive the bus and write recording.json
+    legsim-bench check RECORDING...             reference model, checks, table, CSV/JSON/PNG
+    legsim-bench demo [--build] [--all]         build, vcan0 (here or in the VM), hil_sim,
+                                                record, check: the README's main command
+    legsim-bench workprecision|options|stress   the benchmarks (their own options)
+
+SCENE is a path or a shipped scene's name ("demo" = the scene marked demo = true).
+Bus: --interface/--channel, else python-can's configuration (CAN_INTERFACE/CAN_CHANNEL,
+can.rc, ~/.canrc), else socketcan on vcan0.
+Exit status: 0 every check passed, 1 a check failed or a run did not complete, 2 usage,
+scene or setup error (no repository, no hil_sim, no bus).
+
+Imports are lazy: `record` loads python-can, cantools and numpy (for can_link) and nothing
+else, since it runs inside the QEMU VM where imports are slow.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import shlex
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+from .scene import RootNotFound, SceneError, find_root, load_scene, resolve_scene, shipped_scenes
+
+EXIT_OK, EXIT_FAIL, EXIT_SETUP = 0, 1, 2
+
+# lazily registered benchmark commands: name -> (module, help)
+BENCHMARKS = {
+    "workprecision": ("legsim_bench.workprecision", "work-precision diagrams of the integrators"),
+    "options": ("legsim_bench.options_cost", "cost of the solver options"),
+    "stress": ("legsim_bench.stress", "stress runs"),
+}
+
+
+class SetupError(RuntimeError):
+    pass
+
+
+def _err(msg: str) -> None:
+    print(f"legsim-bench: {msg}", file=sys.stderr)
+
+
+def _root(args) -> Path:
+    if getattr(args, "root", None):
+        os.environ["LEGSIM_ROOT"] = str(Path(args.root).resolve())
+    return find_root()
+
+
+def _out_base(args, root: Path) -> Path:
+    return Path(args.out) if getattr(args, "out", None) else root / "out" / "bench"
+
+
+def _add_bus(p: argparse.ArgumentParser) -> None:
+    g = p.add_argument_group("bus (python-can conventions)")
+    g.add_argument("--interface", "-i", help="python-can interface (default: CAN_INTERFACE, can.rc, "
+                   "~/.canrc, else socketcan)")
+    g.add_argument("--channel", "-c", help="channel (default: CAN_CHANNEL, can.rc, ~/.canrc, else vcan0)")
+    g.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for an answer (default 5)")
+    g.add_argument("--start-hil", action="store_true",
+                   help="start hil_sim on the channel for the run (socketcan; binary from "
+                   "$LEGSIM_HIL_SIM or build/host/hil_sim/hil_sim)")
+    g.add_argument("--hil-sim", metavar="PATH", help="hil_sim binary for --start-hil")
+
+
+def _progress_flag(args) -> bool | None:
+    return False if getattr(args, "no_progress", False) else None
+
+
+# ---- scenes ----------------------------------------------------------------------------------
+
+def cmd_scenes(args) -> int:
+    from .report import scene_table
+
+    root = _root(args)
+    rows = []
+    for p in shipped_scenes(root):
+        try:
+            sc = load_scene(p, root)
+            rows.append((sc.name, "demo" if sc.demo else "", sc.description))
+        except SceneError as e:
+            rows.append((p.stem, "BAD", str(e)))
+    if not rows:
+        print(f"no scenes in {root / 'bench' / 'scenes'}")
+        return EXIT_SETUP
+    print(scene_table(rows))
+    if args.verbose:
+        for p in shipped_scenes(root):
+            sc = load_scene(p, root)
+            print(f"\n{sc.name} ({p.relative_to(root)}): {sc.summary()}")
+            for c in sc.commands:
+                if c is not None:
+                    print(f"  {c.describe()}")
+            for k, v in sc.checks.tolerances().items():
+                print(f"  check {k} <= {v:g}")
+            for inj in sc.injections:
+                print(f"  inject at {sc.t(inj.step):g} s: {inj.label} -> {inj.expect}")
+    print(f"\n({len(rows)} scenes in {root / 'bench' / 'scenes'}; run one: legsim-bench run NAME)")
+    return EXIT_OK
+
+
+# ---- record ------------------------------------------------------------------------------------
+
+def _load_scenes(specs: list[str], root: Path):
+    if specs == ["all"]:
+        specs = [str(p) for p in shipped_scenes(root)]
+    return [load_scene(s, root) for s in specs]
+
+
+def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, Path | None, dict | None]]:
+    """Records every scene on one link (and one hil_sim with --start-hil)."""
+    from .runner import HilProcess, RecordingError, record, save_recording
+
+    hil = None
+    if getattr(args, "dry_run", False):
+        from .runner import ReferenceLink
+
+        out = []
+        with ReferenceLink(root) as link:
+            for sc in scenes:
+                print(f"recording {sc.name} (dry run: the reference model plays hil_sim): {sc.summary()}",
+                      flush=True)
+                rec = record(sc, link, progress=_progress_flag(args))
+                rec["dry_run"] = True
+                path = save_recording(rec, out_base / sc.name / "recording.json")
+                out.append((sc, path, rec))
+        return out
+    if args.start_hil:
+        if args.interface not in (None, "socketcan"):
+            raise SetupError("--start-hil needs the socketcan interface")
+        channel = args.channel or os.environ.get("CAN_CHANNEL") or "vcan0"
+        try:
+            hil = HilProcess(channel, args.hil_sim, log_path=out_base / "hil_sim.log").__enter__()
+        except RecordingError as e:
+            raise SetupError(str(e)) from None
+        print(f"hil_sim started on {channel} (pid {hil.proc.pid}, log {hil.log_path})", flush=True)
+    try:
+        t0 = time.monotonic()
+        from .can_link import HilLink  # python-can and cantools: slow in the VM
+        kwargs = {}
+        if args.start_hil and args.interface is None:
+            kwargs["interface"] = "socketcan"
+        try:
+            link = HilLink(args.interface or kwargs.get("interface"),
+                           args.channel or (hil.channel if hil else None),
+                           dbc=root / "can" / "legsim.dbc", timeout=args.timeout)
+        except Exception as e:  # noqa: BLE001 - python-can raises many kinds
+            raise SetupError(f"cannot open the CAN bus: {type(e).__name__}: {e}") from None
+        if args.verbose:
+            print(f"bus open ({time.monotonic() - t0:.1f} s to import and connect)", flush=True)
+        out = []
+        with link:
+            for sc in scenes:
+                print(f"recording {sc.name}: {sc.summary()}", flush=True)
+                rec = record(sc, link, progress=_progress_flag(args),
+                             log=lambda m: print(m, file=sys.stderr))
+                path = save_recording(rec, out_base / sc.name / "recording.json")
+                status = "complete" if rec["complete"] else "INCOMPLETE: " + "; ".join(
+                    e["error"] for e in rec["errors"])
+                nf = sum(len(s["faults"]) for s in rec["samples"])
+                print(f"  {len(rec['samples'])} samples, {nf} faults, {rec['wall_time_s']:.1f} s, "
+                      f"{status} -> {path}", flush=True)
+                out.append((sc, path, rec))
+        return out
+    finally:
+        if hil is not None:
+            rc = hil.stop()
+            if rc not in (0, None):
+                print(f"hil_sim exited {rc}: {hil.log()[-2000:]}", file=sys.stderr)
+
+
+def cmd_record(args) -> int:
+    root = _root(args)
+    scenes = _load_scenes(args.scenes, root)
+    out = _record_all(args, root, scenes, _out_base(args, root))
+    return EXIT_OK if all(r["complete"] for _, _, r in out) else EXIT_FAIL
+
+
+# ---- check -------------------------------------------------------------------------------------
+
+def _check_one(rec: dict, out_dir: Path, args, root: Path):
+    from .checks import evaluate
+    from .report import format_table, write_outputs
+
+    ev = evaluate(rec, root)
+    files = write_outputs(ev, out_dir)
+    if not args.no_plots:
+        from .plots import write_plots
+        files.update(write_plots(ev, out_dir))
+    print(format_table(ev, details=not args.brief))
+    print(f"  files: {out_dir}/ ({', '.join(sorted(p.name for p in files.values()))})")
+    return ev, files
+
+
+def _recording_paths(specs: list[str]) -> list[Path]:
+    paths = []
+    for s in specs:
+        p = Path(s)
+        if p.is_dir():
+            if (p / "recording.json").is_file():
+                paths.append(p / "recording.json")
+            else:
+                paths += sorted(p.glob("*/recording.json"))
+        else:
+            paths.append(p)
+    return paths
+
+
+def cmd_check(args) -> int:
+    from .runner import RecordingError, load_recording, save_recording
+
+    root = _root(args)
+    paths = _recording_paths(args.recordings)
+    if not paths:
+        _err("no recording given (a recording.json, or a directory holding */recording.json)")
+        return EXIT_SETUP
+    evs = []
+    for p in paths:
+        try:
+            rec = load_recording(p)
+        except RecordingError as e:
+            _err(str(e))
+            return EXIT_SETUP
+        out_dir = Path(args.out) / rec["scene_name"] if args.out else p.parent
+        if args.out:
+            save_recording(rec, out_dir / "recording.json")
+        ev, _ = _check_one(rec, out_dir, args, root)
+        evs.append(ev)
+        print()
+    return _final(evs)
+
+
+def _final(evs) -> int:
+    if len(evs) > 1:
+        w = max(len(e.scene.name) for e in evs)
+        print("summary")
+        for e in evs:
+            print(f"  {e.scene.name.ljust(w)}  {'PASS' if e.passed else 'FAIL'}  "
+                  f"{len(e.results) - e.n_failed}/{len(e.results)} checks")
+    ok = all(e.passed for e in evs)
+    print("ALL PASS" if ok else f"FAILED: {', '.join(e.scene.name for e in evs if not e.passed)}")
+    return EXIT_OK if ok else EXIT_FAIL
+
+
+# ---- run = record + check ----------------------------------------------------------------------
+
+def cmd_run(args) -> int:
+    root = _root(args)
+    scenes = _load_scenes(args.scenes, root)
+    out_base = _out_base(args, root)
+    recs = _record_all(args, root, scenes, out_base)
+    print()
+    evs = []
+    for sc, path, rec in recs:
+        ev, _ = _check_one(rec, path.parent, args, root)
+        evs.append(ev)
+        print()
+    return _final(evs)
+
+
+# ---- demo: everything from a clean checkout ------------------------------------------------------
+
+def _sh(cmd: list[str], cwd: Path, env=None) -> int:
+    print("+ " + " ".join(shlex.quote(c) for c in cmd), flush=True)
+    return subprocess.call(cmd, cwd=cwd, env=env)
+
+
+def cmd_demo(args) -> int:
+    from .runner import hil_sim_path
+
+    root = _root(args)
+    if args.build:
+        preset = args.preset
+        if _sh(["cmake", "--preset", preset], root) != 0:
+            raise SetupError(f"cmake --preset {preset} failed")
+        if _sh(["cmake", "--build", "--preset", preset, "--target", "hil_sim"], root) != 0:
+            raise SetupError("building hil_sim failed")
+    hil = Path(args.hil_sim) if args.hil_sim else hil_sim_path(root)
+    if not hil.is_file():
+        raise SetupError(f"hil_sim not found at {hil}: run with --build (or build it: cmake --preset "
+                         "host && cmake --build --preset host --target hil_sim)")
+    scenes = ["all"] if args.all else (args.scenes or ["demo"])
+    names = [s.name for s in _load_scenes(scenes, root)]
+    out_base = _out_base(args, root)
+    env = dict(os.environ)
+    bench_dir = str(Path(__file__).resolve().parents[1])
+    env["PYTHONPATH"] = bench_dir + (os.pathsep + env["PYTHONPATH"] if env.get("PYTHONPATH") else "")
+    env["LEGSIM_ROOT"] = str(root)
+    env["LEGSIM_HIL_SIM"] = str(hil.resolve())
+    env.setdefault("PYTHONUNBUFFERED", "1")
+    rec_cmd = [sys.executable, "-m", "legsim_bench", "record", "--start-hil",
+               "--interface", "socketcan", "--channel", "vcan0", "--out", str(out_base), *names]
+    print(f"recording {', '.join(names)} against hil_sim on vcan0 (tools/with-vcan: here if this "
+          "kernel has vcan, else in a QEMU VM)", flush=True)
+    rc = _sh([str(root / "tools" / "with-vcan"), *rec_cmd], root, env)
+    if rc in (124, 125):
+        raise SetupError(f"tools/with-vcan failed ({rc}: {'timeout' if rc == 124 else 'no vcan0 / VM failed'})")
+    paths = [out_base / n / "recording.json" for n in names]
+    missing = [p for p in paths if not p.is_file()]
+    if missing:
+        raise SetupError(f"no recording from the bus run (exit {rc}): {', '.join(map(str, missing))}")
+    print()
+    args.recordings = [str(p) for p in paths]
+    args.out = None
+    rc = cmd_check(args)
+    print("\nplots and data:")
+    for n in names:
+        pngs = sorted((out_base / n).glob("*.png"))
+        print(f"  {out_base / n}/  " + (" ".join(p.name for p in pngs) if pngs else "(no plots)"))
+    return rc
+
+
+# ---- benchmarks (lazy) ---------------------------------------------------------------------------
+
+def _benchmark(name: str):
+    module, help_ = BENCHMARKS[name]
+
+    def handler(args) -> int:
+        import importlib
+
+        try:
+            mod = importlib.import_module(module)
+        except ModuleNotFoundError as e:
+            if e.name == module:
+                _err(f"'{name}' is not available: module {module} is missing from this installation")
+                return EXIT_SETUP
+            raise
+        p = argparse.ArgumentParser(prog=f"legsim-bench {name}", description=help_)
+        mod.configure_parser(p)
+        ns = p.parse_args(args.rest)
+        return int(mod.run(ns) or 0)
+
+    return handler
+
+
+# ---- parser --------------------------------------------------------------------------------------
+
+def build_parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(prog="legsim-bench", description=__doc__.split("\n\n")[0],
+                                formatter_class=argparse.RawDescriptionHelpFormatter,
+                                epilog="Scene schema and examples: bench/README.md")
+    p.add_argument("--root", help="the legsim repository (default: $LEGSIM_ROOT, else found from "
+                   "the package or the working directory)")
+    p.add_argument("-v", "--verbose", action="store_true")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+    sub.required = True
+    _add = sub.add_parser
+
+    def add_parser(name, **kw):
+        q = _add(name, **kw)
+        if kw.get("add_help", True):
+            q.add_argument("-v", "--verbose", action="store_true", default=argparse.SUPPRESS,
+                           help="more output")
+        return q
+
+    sub.add_parser = add_parser
+
+    s = sub.add_parser("scenes", help="list the shipped scenes")
+    s.set_defaults(func=cmd_scenes)
+
+    def out_opts(q, what):
+        q.add_argument("--out", "-o", metavar="DIR", help=f"{what} (default: out/bench/ in the repository; "
+                       "one subdirectory per scene)")
+
+    def check_opts(q):
+        q.add_argument("--no-plots", action="store_true", help="no PNG plots (no matplotlib import)")
+        q.add_argument("--brief", action="store_true", help="details of the failing checks only")
+
+    s = sub.add_parser("run", help="run scenes on a live hil_sim: record + check")
+    s.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file or shipped name ('all', 'demo')")
+    _add_bus(s)
+    out_opts(s, "output directory")
+    check_opts(s)
+    s.add_argument("--no-progress", action="store_true", help="no progress bar")
+    s.add_argument("--dry-run", action="store_true",
+                   help="no bus: the reference model plays hil_sim (tries the scene, the checks, "
+                   "the report and the plots; says nothing about the core; no stroke stops)")
+    s.set_defaults(func=cmd_run)
+
+    s = sub.add_parser("record", help="only drive the bus and write the raw recording (for the VM)")
+    s.add_argument("scenes", nargs="+", metavar="SCENE")
+    _add_bus(s)
+    out_opts(s, "where recordings go: DIR/<scene>/recording.json")
+    s.add_argument("--no-progress", action="store_true")
+    s.set_defaults(func=cmd_record)
+
+    s = sub.add_parser("check", help="check recordings: reference model, table, CSV/JSON/PNG")
+    s.add_argument("recordings", nargs="+", metavar="RECORDING",
+                   help="recording.json, or a directory with recording.json or */recording.json")
+    s.add_argument("--out", "-o", metavar="DIR", help="write outputs to DIR/<scene>/ (default: beside "
+                   "the recording)")
+    check_opts(s)
+    s.set_defaults(func=cmd_check)
+
+    s = sub.add_parser("demo", help="build, bring up vcan0 (here or in the VM), start hil_sim, run "
+                       "the demo scene, check it, print the table and where the plots are")
+    s.add_argument("scenes", nargs="*", metavar="SCENE", help="scenes (default: the demo scene)")
+    s.add_argument("--all", action="store_true", help="every shipped scene (one VM boot)")
+    s.add_argument("--build", action="store_true", help="configure and build hil_sim first (cmake preset)")
+    s.add_argument("--preset", default="host", help="cmake preset for --build (default host)")
+    s.add_argument("--hil-sim", metavar="PATH", help="hil_sim binary (default $LEGSIM_HIL_SIM or "
+                   "build/host/hil_sim/hil_sim)")
+    out_opts(s, "output directory")
+    check_opts(s)
+    s.set_defaults(func=cmd_demo)
+
+    for name, (module, help_) in BENCHMARKS.items():
+        s = sub.add_parser(name, help=f"{help_} ({module}; its options: legsim-bench {name} --help)",
+                           add_help=False)
+        s.set_defaults(func=_benchmark(name), rest=[])
+    return p
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = build_parser()
+    args, extra = p.parse_known_args(argv)
+    if args.command in BENCHMARKS:
+        args.rest = extra  # the benchmark's own options, parsed by its module
+    elif extra:
+        p.error(f"unrecognized arguments: {' '.join(extra)}")
+    try:
+        return args.func(args)
+    except (SceneError, RootNotFound, SetupError) as e:
+        _err(str(e))
+        return EXIT_SETUP
+    except KeyboardInterrupt:
+        _err("interrupted")
+        return 130
+
+
+if __name__ == "__main__":
+    sys.exit(main())
