@@ -1,0 +1,15 @@
+#!/usr/bin/env bash
+# The main job, from a fresh Debian machine: installs what is missing
+# (tools/setup.sh), builds the host preset, then the bench brings up vcan0 (here,
+# or in a throwaway VM when the kernel has no CAN), starts hil_sim, drives the
+# demo scene over SocketCAN, checks it against its own model and prints the
+# check table and where the plots are. Extra arguments go to `legsim-bench demo`
+# (e.g. --all for every shipped scene).
+set -euo pipefail
+root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
+cd "$root"
+"$root/tools/setup.sh"
+cmake --preset host >/dev/null
+cmake --build --preset host
+export LEGSIM_ROOT="$root"
+exec "$root/.venv/bin/legsim-bench" demo "$@"
