@@ -363,7 +363,7 @@ def _slot_s(leg: Leg, q) -> float:
     return float(np.dot(u(q[3 * shank + 2]), D - C))
 
 
-def reference_run(scene: Scene, rec: dict, model_path, *, rtol=1e-11, atol=1e-12) -> dict:
+def reference_run(scene: Scene, rec: dict, model_path, *, rtol=1e-10, atol=1e-11) -> dict:
     """The reference model at the recorded sample steps, driven as hil_sim was."""
     from .reference import ForceCommand, LegModel, LengthCommand
 
@@ -391,6 +391,7 @@ def reference_run(scene: Scene, rec: dict, model_path, *, rtol=1e-11, atol=1e-12
         theta = theta.copy()
         theta[2] = _slot_s(Leg.from_toml(model_path, "slot"), np.asarray(rec["samples"][0]["q"], float))
     thetad = np.zeros(model.ndof)
+    theta0 = np.array(theta, float)
 
     # segments: where an actuator changes mode (within one the setpoints are a staircase)
     def modes(entry):
@@ -443,6 +444,7 @@ def reference_run(scene: Scene, rec: dict, model_path, *, rtol=1e-11, atol=1e-12
         theta, thetad = res.theta[-1].copy(), res.thetad[-1].copy()
         cur_len = res.lengths[-1].copy()
     out["nfev"] = nfev
+    out["theta0"] = theta0
     out["stroke"] = [a.stroke for a in model.actuators]
     return out
 
@@ -566,6 +568,8 @@ def evaluate(rec: dict, root: Path | None = None, *, scene: Scene | None = None,
             after0 &= window
         ref_note = f"{int(window.sum())}/{n} samples" + ("" if window.all() else
                                                           f" (to t={d['t'][window][-1]:.4f}s)")
+        slot_note = "" if scene.variant != "slot" else \
+            f"; slot s0 = {ref['theta0'][2]:.7f} m from the received pose at t = 0"
         dq = d["q"] - ref["q"]
         dq[:, 2::3] = _wrap(dq[:, 2::3])
         dq = dq.reshape(n, 6, 3)
@@ -574,7 +578,7 @@ def evaluate(rec: dict, root: Path | None = None, *, scene: Scene | None = None,
             results.append(CheckResult("positions x, y vs reference", v is not None and v <= ch.position_m,
                                        v, ch.position_m, "m",
                                        _where(d, r, _coord_label(leg, (c // 2) * 3 + c % 2)) if r >= 0 else "",
-                                       ref_note))
+                                       ref_note + slot_note))
         if ch.angle_rad is not None:
             v, r, c = _max_err(dq[..., 2], window)
             results.append(CheckResult("angles vs reference", v is not None and v <= ch.angle_rad, v,
@@ -599,6 +603,7 @@ def evaluate(rec: dict, root: Path | None = None, *, scene: Scene | None = None,
                                            v, ch.moment_nm, "N m",
                                            _where(d, r, f"{leg.joint_names[c]}.m") if r >= 0 else "", ref_note))
 
+    d["window"] = window   # samples the reference comparison covers
     # -- invariants of the received data
     if ch.residual is not None:
         res = constraint_residual(leg, d["q"])

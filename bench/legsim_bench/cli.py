@@ -279,8 +279,8 @@ def cmd_demo(args) -> int:
         preset = args.preset
         if _sh(["cmake", "--preset", preset], root) != 0:
             raise SetupError(f"cmake --preset {preset} failed")
-        if _sh(["cmake", "--build", "--preset", preset, "--target", "hil_sim"], root) != 0:
-            raise SetupError("building hil_sim failed")
+        if _sh(["cmake", "--build", "--preset", preset], root) != 0:
+            raise SetupError(f"cmake --build --preset {preset} failed")
     hil = Path(args.hil_sim) if args.hil_sim else hil_sim_path(root)
     if not hil.is_file():
         raise SetupError(f"hil_sim not found at {hil}: run with --build (or build it: cmake --preset "
@@ -402,7 +402,8 @@ def build_parser() -> argparse.ArgumentParser:
                        "the demo scene, check it, print the table and where the plots are")
     s.add_argument("scenes", nargs="*", metavar="SCENE", help="scenes (default: the demo scene)")
     s.add_argument("--all", action="store_true", help="every shipped scene (one VM boot)")
-    s.add_argument("--build", action="store_true", help="configure and build hil_sim first (cmake preset)")
+    s.add_argument("--build", action="store_true", help="configure and build first (cmake --preset, "
+                   "cmake --build --preset)")
     s.add_argument("--preset", default="host", help="cmake preset for --build (default host)")
     s.add_argument("--hil-sim", metavar="PATH", help="hil_sim binary (default $LEGSIM_HIL_SIM or "
                    "build/host/hil_sim/hil_sim)")

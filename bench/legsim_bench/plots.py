@@ -25,6 +25,15 @@ def _plt():
     return plt
 
 
+def _shade_outside(ax, ev):
+    """Grey where the reference does not apply (after a stroke stop)."""
+    w = ev.data.get("window")
+    if w is None or ev.ref is None or w.all() or not w.any():
+        return
+    t = ev.data["t"]
+    ax.axvspan(t[w][-1], t[-1], color="0.85", alpha=0.6, lw=0, label="reference not applicable")
+
+
 def _segments(leg, q):
     """(proximal, distal) world points of each body for one q (18,)."""
     out = []
@@ -59,7 +68,7 @@ def plot_motion(ev: Evaluation, path: Path, n_frames: int = 8) -> Path:
     ax.plot(foot[:, 0], foot[:, 1], "-", color="k", lw=1, label="foot, hil_sim")
     if ev.ref is not None:
         fr = _foot(leg, ev.ref["q"])
-        ok = np.all(np.isfinite(fr), axis=1)
+        ok = np.all(np.isfinite(fr), axis=1) & d.get("window", np.ones(n, bool))
         ax.plot(fr[ok, 0], fr[ok, 1], "--", color="tab:red", lw=1, label="foot, reference")
     for name, p in leg.frame.items():
         ax.plot(*p, "ks", ms=7)
@@ -87,6 +96,7 @@ def plot_actuators(ev: Evaluation, path: Path) -> Path:
         if ref is not None:
             ax.plot(ref["t"][m], ref["forces"][m, a], "--", lw=1, label="reference")
         ax.set_title(f"{ACTUATORS[a]} actuator force (N)")
+        _shade_outside(ax, ev)
         ax.grid(True, alpha=0.3)
         ax.legend(fontsize=8)
         ax = axes[1, a]
@@ -95,9 +105,12 @@ def plot_actuators(ev: Evaluation, path: Path) -> Path:
             ax.plot(ref["t"], ref["lengths"][:, a], "--", lw=1, label="reference")
         lo, hi = leg.actuators[a]["stroke"]
         span = np.nanmax(d["lengths"][:, a]) - np.nanmin(d["lengths"][:, a])
+        label = "stroke end"
         for e in (lo, hi):
             if np.nanmin(np.abs(d["lengths"][:, a] - e)) < max(3 * span, 0.01):
-                ax.axhline(e, color="tab:red", lw=0.8, ls=":", label="stroke end")
+                ax.axhline(e, color="tab:red", lw=0.8, ls=":", label=label)
+                label = None
+        _shade_outside(ax, ev)
         ax.set_title(f"{ACTUATORS[a]} actuator length (m)")
         ax.set_xlabel("t (s)")
         ax.grid(True, alpha=0.3)
@@ -125,6 +138,7 @@ def plot_reactions(ev: Evaluation, path: Path) -> Path:
                 ax.plot(ref["t"][m], ref["reactions"][m, j, c], "--", color="k", lw=0.8,
                         label="reference" if c == 0 else None)
         ax.set_title(f"{leg.joint_names[j]} ({leg.joints[j].kind})", fontsize=9)
+        _shade_outside(ax, ev)
         ax.grid(True, alpha=0.3)
         if j == 0:
             ax.legend(fontsize=7)
@@ -162,6 +176,7 @@ def plot_errors(ev: Evaluation, path: Path) -> Path | None:
             ax.axhline(tol, color="tab:red", ls="--", lw=1, label=f"tolerance {tol:g}")
             ax.legend(fontsize=8, loc="lower right")
         ax.set_ylabel(name, fontsize=8)
+        _shade_outside(ax, ev)
         ax.grid(True, which="both", alpha=0.3)
     np.atleast_1d(axes)[-1].set_xlabel("t (s)")
     fig.suptitle(f"{ev.scene.name}: |hil_sim - reference| (max over coordinates)")

@@ -31,7 +31,7 @@ VARIANTS = ("revolute", "slot")
 INTEGRATORS = ("rk4", "generalized_alpha")
 # legsim_disable bits (legsim.h), as Ctrl_Disable carries them
 DISABLE_FLAGS = {"gravity": 0, "force_elements": 1, "reactions": 2, "projection": 3,
-                 "actuators": 4, "stroke_limits": 5, "accelerations": 6}
+                 "actuators": 4, "stroke_limits": 5}
 # bench -> hil_sim frames of can/legsim.dbc and their sequence-counter signals
 FRAME_IDS = {"CONTROL": 0x080, "ACT_CMD": 0x100, "LOAD_CMD": 0x110}
 SEQ_SIGNALS = {"CONTROL": "Ctrl_Seq", "ACT_CMD": "Act_Seq", "LOAD_CMD": "Load_Seq"}
