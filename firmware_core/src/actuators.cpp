@@ -28,35 +28,43 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
 
 // After a step: an actuator beyond its stroke is put back on its end (a
 // projection onto Phi = 0 with that length driven) and its outward velocity is
-// removed: an inelastic hard stop. Raised as an event, never silent.
+// removed: an inelastic hard stop. Raised as an event, never silent. Stopping
+// one actuator can push another past its end, so the check repeats with the
+// stopped ones held until no actuator is out.
 legsim_status stroke_limits_enforce(Sim &sim, bool &stopped) {
   stopped = false;
   const Model &m = sim.model;
   Data &d = sim.data;
-  uint32_t mask = 0;
   DriverValues &dv = d.drivers;
   dv.ncoord = 0;
-  for (int a = 0; a < m.na; ++a) {
-    real len, rate;
-    actuator_length(m, a, d.q, d.qd, len, rate);
-    const Actuator &ac = m.act[a];
-    if (len >= ac.lmin && len <= ac.lmax) continue;
-    const bool low = len < ac.lmin;
-    mask |= 1u << a;
-    raise_event(d, low ? LEGSIM_EVENT_STROKE_MIN : LEGSIM_EVENT_STROKE_MAX);
-    dv.length[a] = low ? ac.lmin : ac.lmax;
-    const bool outward = low ? rate < 0 : rate > 0;
-    dv.rate[a] = outward ? real(0) : rate;
-    dv.accel[a] = 0;
+  uint32_t mask = 0;
+  for (int pass = 0; pass <= m.na; ++pass) {
+    uint32_t added = 0;
+    for (int a = 0; a < m.na; ++a) {
+      if (mask & (1u << a)) continue;
+      real len, rate;
+      actuator_length(m, a, d.q, d.qd, len, rate);
+      const Actuator &ac = m.act[a];
+      if (len >= ac.lmin && len <= ac.lmax) continue;
+      const bool low = len < ac.lmin;
+      added |= 1u << a;
+      raise_event(d, low ? LEGSIM_EVENT_STROKE_MIN : LEGSIM_EVENT_STROKE_MAX);
+      dv.length[a] = low ? ac.lmin : ac.lmax;
+      const bool outward = low ? rate < 0 : rate > 0;
+      dv.rate[a] = outward ? real(0) : rate;
+      dv.accel[a] = 0;
+    }
+    if (!added) break;
+    mask |= added;
+    stopped = true;
+    d.stroke_mask |= added;
+    legsim_status s = layout_build(m, mask, 0, d.work);
+    if (s == LEGSIM_OK) s = layout_finish(d.work, dv);
+    if (s == LEGSIM_OK) s = assemble(sim, d.work, dv, d.q, m.minv, AssemblyMode::Project);
+    if (s == LEGSIM_OK) s = velocity_solve(sim, d.work, d.qd);
+    if (s != LEGSIM_OK) return s;
   }
-  if (!mask) return LEGSIM_OK;
-  stopped = true;
-  d.stroke_mask |= mask;
-  legsim_status s = layout_build(m, mask, 0, d.work);
-  if (s == LEGSIM_OK) s = layout_finish(d.work, dv);
-  if (s == LEGSIM_OK) s = assemble(sim, d.work, dv, d.q, m.minv);
-  if (s != LEGSIM_OK) return s;
-  return velocity_solve(sim, d.work, d.qd);
+  return LEGSIM_OK;
 }
 
 }  // namespace legsim

@@ -69,7 +69,7 @@ uint32_t all_actuators(const Model &m) { return (1u << m.na) - 1; }
 legsim_status assemble_commit(Sim &sim) {
   Data &d = sim.data;
   VecQ q = d.q;
-  const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight, 1);
+  const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
   d.q = q;
   d.qd.setZero();
@@ -98,7 +98,7 @@ legsim_options legsim_default_options(void) {
   o.disable = 0;
   o.rho_inf = 0.8;
   o.max_newton_iter = 25;
-  o.newton_tol = LEGSIM_USE_FLOAT ? 1e-5 : 1e-10;
+  o.newton_tol = LEGSIM_USE_FLOAT ? 1e-6 : 1e-10;
   return o;
 }
 

@@ -6,7 +6,8 @@
 namespace legsim {
 
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, VecQ &q_io,
-                       const real *w, int min_iterations) {
+                       const real *w, AssemblyMode mode) {
+  const bool full = mode == AssemblyMode::Assemble;
   const Model &m = sim.model;
   Data &d = sim.data;
   const real tol = real(sim.opt.newton_tol);
@@ -20,7 +21,7 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
     d.report.residual = r;
     if (!std::isfinite(r)) return LEGSIM_ERR_UNREACHABLE;
     if (first < 0) first = r;
-    if (r <= tol && it >= min_iterations) break;
+    if (r <= tol && (it > 0 || !full)) break;
     // Growth far past the start means Newton left the basin: the lengths are not reachable.
     if (r > real(1e3) * (first + 1)) return LEGSIM_ERR_UNREACHABLE;
     if (it >= sim.opt.max_newton_iter)
@@ -37,13 +38,13 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
     for (int k = 0; k < m.nq; ++k) q[k] -= w[k] * corr[k];
   }
   // the condition where it landed: a converged dead centre is still a dead centre
-  if (d.report.iterations > 0) {
+  if (full) {
     const legsim_status s = factor_build(layout, d.rows, w, d.factor);
     if (s != LEGSIM_OK) return s;
     d.report.condition = factor_condition(d.factor);
+    if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
+    if (d.report.condition > real(LEGSIM_COND_SINGULAR)) return LEGSIM_ERR_SINGULAR;
   }
-  if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
-  if (d.report.condition > real(LEGSIM_COND_SINGULAR)) return LEGSIM_ERR_SINGULAR;
   q_io = q;
   return LEGSIM_OK;
 }

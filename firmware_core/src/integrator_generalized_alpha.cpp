@@ -88,8 +88,13 @@ legsim_status generalized_alpha_reactions(Sim &sim) {
     actuator_forces_update(sim.model, sim.opt, d, d.q, d.qd);
     return LEGSIM_OK;
   }
+  // the step's own multipliers seed the next step: keep them, so that
+  // reporting reactions never changes the trajectory
+  const VecR lambda = d.lambda;
   VecQ qdd;
-  return dynamics_state_reactions(sim, qdd);
+  const legsim_status s = dynamics_state_reactions(sim, qdd);
+  d.lambda = lambda;
+  return s;
 }
 #else
 legsim_status generalized_alpha_step(Sim &) { return LEGSIM_ERR_DISABLED; }

@@ -50,7 +50,7 @@ legsim_status rk4_step(Sim &sim) {
   rows_eval(m, lay, d.drivers, q1, v1, d.rows);
   const real tol = real(sim.opt.newton_tol);
   if (projection && rows_max_residual(lay, d.rows) > tol) {
-    const legsim_status s = assemble(sim, lay, d.drivers, q1, m.minv);  // M-weighted Newton
+    const legsim_status s = assemble(sim, lay, d.drivers, q1, m.minv, AssemblyMode::Project);  // M-weighted Newton
     if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
     rows_eval(m, lay, d.drivers, q1, v1, d.rows);
   }

@@ -20,7 +20,7 @@ legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *r
   legsim_status s = layout_build(m, (1u << m.na) - 1, 0, d.work);
   if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
   VecQ q = d.q;
-  if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv);
+  if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
   d.q = q;
   s = velocity_solve(sim, d.work, d.qd);

@@ -216,10 +216,12 @@ legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd);
 
 // ---- assembly.cpp ----
-// min_iterations: 1 polishes a pose already within tolerance to round-off (the
-// assembly API); 0 leaves it (the per-step projection).
+// Project: the per-step projection (stroke stops too): cheap, no polishing, no
+// condition estimate. Assemble: the analyses' assembly: at least one Newton
+// iteration, the 2-norm condition where it lands, dead centres refused.
+enum class AssemblyMode { Project, Assemble };
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drivers, VecQ &q,
-                       const real *w, int min_iterations = 0);
+                       const real *w, AssemblyMode mode);
 
 // ---- kinematics.cpp ----
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);

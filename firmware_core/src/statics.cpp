@@ -80,7 +80,7 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
       legsim_status s = layout_build(m, (1u << m.na) - 1, 0, d.work);
       if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
       VecQ q = d.q;
-      if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv);
+      if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
       if (s == LEGSIM_OK) {
         const VecQ keep = d.q;
         d.q = q;

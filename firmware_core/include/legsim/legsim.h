@@ -157,7 +157,7 @@ typedef struct legsim_options {
   double newton_tol;        /* on the constraint residual (m, rad) and on corrections */
 } legsim_options;
 
-/* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-5 float). */
+/* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-6 float). */
 legsim_options legsim_default_options(void);
 
 /* ---- simulation lifetime ---------------------------------------------- */
