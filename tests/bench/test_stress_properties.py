@@ -120,15 +120,11 @@ def test_constant_forces_step_reports_or_stays_on_the_manifold(fu, fl, integrato
             break
         assert c.constraint_residual() < 1e-8
         l, _ = c.actuator_lengths()
-        # the stroke stops keep every length inside its stroke; to 1e-4 m, not to the Newton
-        # tolerance: see test_a_stop_does_not_push_the_other_actuator_out_of_its_stroke
+        # the stroke stops keep every length inside its stroke (to the Newton tolerance)
         for a, (lo, hi) in enumerate(STROKES):
-            assert lo - 1e-4 <= l[a] <= hi + 1e-4
+            assert lo - 1e-8 <= l[a] <= hi + 1e-8
 
 
-@pytest.mark.xfail(strict=False, reason="core: stroke_limits_enforce checks the lengths once; "
-                   "the projection that stops one actuator can push the other past its end "
-                   "(found by the property above: 5e-6 m at h = 10 ms)")
 def test_a_stop_does_not_push_the_other_actuator_out_of_its_stroke():
     c = lc.Core(integrator="rk4", step=1e-2)
     c.assemble_pose("stand")
