@@ -59,9 +59,21 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &stopped) {
     stopped = true;
     d.stroke_mask |= added;
     legsim_status s = layout_build(m, mask, 0, d.work);
-    if (s == LEGSIM_OK) s = layout_finish(d.work, dv);
-    if (s == LEGSIM_OK) s = assemble(sim, d.work, dv, d.q, m.minv, AssemblyMode::Project);
+    if (s != LEGSIM_OK) return s;
+    s = layout_finish(d.work, dv);
+    if (s != LEGSIM_OK) return s;
+    const VecQ q0 = d.q, qd0 = d.qd;
+    s = assemble(sim, d.work, dv, d.q, m.minv, AssemblyMode::Project);
     if (s == LEGSIM_OK) s = velocity_solve(sim, d.work, d.qd);
+    if (s == LEGSIM_ERR_SINGULAR) {
+      // A stroke end that is also a dead centre (the leg's lower stroke ends
+      // where the knee is straight, as far as the geometry reaches): no stop can
+      // be projected there, and none is needed. Keep the integrated state, say so.
+      d.q = q0;
+      d.qd = qd0;
+      raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
+      return LEGSIM_OK;
+    }
     if (s != LEGSIM_OK) return s;
   }
   return LEGSIM_OK;

@@ -137,6 +137,28 @@ static void test_stroke_end_stops_the_actuator_and_says_so(void) {
   TEST_ASSERT_TRUE(res < 1e-9);
 }
 
+/* The lower stroke ends at 0.70 m, where the knee is straight: a stroke end at a
+ * dead centre. Driving into it must not fail the run, nor pass the end. */
+static void test_stroke_end_at_the_straight_knee(void) {
+  for (int integ = 0; integ < 2; ++integ) {
+    legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts((legsim_integrator)integ, 1e-3));
+    legsim_command_force(sim, 1, 300.0); /* extend the lower actuator: straighten the knee */
+    double longest = 0;
+    for (int i = 0; i < 1500; ++i) {
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 1));
+      legsim_real len[NA];
+      legsim_actuator_lengths(sim, len, NULL);
+      longest = fmax(longest, len[1]);
+    }
+    legsim_report rep;
+    legsim_get_report(sim, &rep);
+    printf("straight knee (%s): longest lower length %.9f, events 0x%x\n",
+           integ ? "generalized-alpha" : "rk4", longest, (unsigned)rep.events);
+    TEST_ASSERT_TRUE(longest <= 0.70 + 1e-9);
+    TEST_ASSERT_TRUE(longest > 0.6999); /* it went all the way to the straight knee */
+  }
+}
+
 static void test_scene_options_skip_what_is_disabled(void) {
   legsim_options o = opts(LEGSIM_INTEGRATOR_RK4, 1e-3);
   o.disable = LEGSIM_DISABLE_GRAVITY | LEGSIM_DISABLE_REACTIONS;
@@ -197,6 +219,7 @@ int main(void) {
   RUN_TEST(test_slot_reaction_is_normal_to_the_shank);
   RUN_TEST(test_servo_holds_a_length_and_saturation_is_reported);
   RUN_TEST(test_stroke_end_stops_the_actuator_and_says_so);
+  RUN_TEST(test_stroke_end_at_the_straight_knee);
   RUN_TEST(test_scene_options_skip_what_is_disabled);
   RUN_TEST(test_bad_commands_change_nothing);
   RUN_TEST(test_too_large_a_step_fails_with_a_status_never_nan);

@@ -191,7 +191,9 @@ enum legsim_event {
   LEGSIM_EVENT_STROKE_MIN = 1u << 0,      /* an actuator reached its shortest length and stopped */
   LEGSIM_EVENT_STROKE_MAX = 1u << 1,      /* an actuator reached its longest length and stopped */
   LEGSIM_EVENT_FORCE_SATURATED = 1u << 2, /* a servo asked for more than max_force */
-  LEGSIM_EVENT_NEAR_SINGULAR = 1u << 3    /* condition estimate above LEGSIM_COND_WARN */
+  LEGSIM_EVENT_NEAR_SINGULAR = 1u << 3    /* condition estimate above LEGSIM_COND_WARN, or a
+                                             stroke end at a dead centre, where no stop can
+                                             be projected (the state is left as integrated) */
 };
 /* Condition estimates: above WARN an event is raised; an assembly that lands
  * above SINGULAR is refused as a dead centre (LEGSIM_ERR_SINGULAR). */
