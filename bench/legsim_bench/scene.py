@@ -486,6 +486,9 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
         if c is not None:
             for t0 in c.schedule.breakpoints:
                 scene.to_step(t0, f"{c.name} step t0")
+    if timeout and rec * step_ns >= timeout * 1_000_000:
+        raise SceneError(f"{where}: an exchange every {rec * step_ns / 1e6:g} ms (record_every x step) "
+                         f"would let the {timeout} ms command timeout trip between ACT_CMDs")
 
     injections = []
     raw_inj = d.get("inject", [])

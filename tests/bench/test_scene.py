@@ -104,7 +104,7 @@ def test_defaults_and_grid():
 
 def test_step_breakpoints_and_injections_become_boundaries():
     text = BASE.replace("value = 0.0", "step = { t0 = 0.025, after = 50.0 }").replace(
-        "record_every = 10", "record_every = 10\ncmd_timeout_ms = 10")
+        "record_every = 10", "record_every = 10\ncmd_timeout_ms = 20")
     text += """
 [[inject]]
 at = 0.033
@@ -143,6 +143,7 @@ expect = "CMD_TIMEOUT"
     (("position_m = 1e-5", ""), "nothing to check"),
     (("record_every = 10", "record_every = 10\npose = \"crouch\""), "pose"),
     (("duration = 0.1", ""), "duration"),
+    (("record_every = 10", "record_every = 10\ncmd_timeout_ms = 10"), "command timeout trip"),
 ])
 def test_bad_scenes_are_refused_with_the_key(change, message):
     with pytest.raises(SceneError, match=message):
