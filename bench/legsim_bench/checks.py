@@ -22,7 +22,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .scene import ACTUATORS, FRAME_IDS, Scene, find_root
+from .scene import ACTUATORS, Scene, find_root
 
 __all__ = ["Leg", "CheckResult", "Evaluation", "evaluate", "reference_run", "constraint_residual",
            "static_balance", "float32_quantum", "STATUS_BITS"]
@@ -463,6 +463,7 @@ def _max_err(err, mask=None):
     """(value, row, col) of the largest |err| over the rows in mask."""
     e = np.abs(np.asarray(err, float))
     e = e.reshape(len(e), -1)
+    e = np.where(np.isnan(e), np.inf, e)   # a NaN received (or not computed) fails, never hides
     if mask is not None:
         e = np.where(np.asarray(mask)[:, None], e, np.nan)
     if not np.any(np.isfinite(e)):
@@ -568,6 +569,9 @@ def evaluate(rec: dict, root: Path | None = None, *, scene: Scene | None = None,
             after0 &= window
         ref_note = f"{int(window.sum())}/{n} samples" + ("" if window.all() else
                                                           f" (to t={d['t'][window][-1]:.4f}s)")
+        if stroke_idx is not None and ch.compare == "all":
+            ref_note += (f"; a stroke stop at t={d['t'][stroke_idx]:.4f}s (the reference has none: "
+                         "compare = \"until_stroke\" if the scene means it)")
         slot_note = "" if scene.variant != "slot" else \
             f"; slot s0 = {ref['theta0'][2]:.7f} m from the received pose at t = 0"
         dq = d["q"] - ref["q"]

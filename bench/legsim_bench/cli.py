@@ -27,7 +27,7 @@ import sys
 import time
 from pathlib import Path
 
-from .scene import RootNotFound, SceneError, find_root, load_scene, resolve_scene, shipped_scenes
+from .scene import RootNotFound, SceneError, find_root, load_scene, shipped_scenes
 
 EXIT_OK, EXIT_FAIL, EXIT_SETUP = 0, 1, 2
 

@@ -119,7 +119,7 @@ def _write_csv(path: Path, cols: list[str], rows) -> None:
 
 def write_outputs(ev: Evaluation, out: str | Path) -> dict[str, Path]:
     """samples.csv (every received sample), reference.csv (the reference at the same
-    times), checks.csv / checks.json (the table), run.json (scene, table, faults, summary)."""
+    times), checks.csv (the table) and checks.json (the table, tolerances, set-up, faults, summary)."""
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     files: dict[str, Path] = {}

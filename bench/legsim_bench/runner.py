@@ -26,7 +26,7 @@ import sys
 import time
 from pathlib import Path
 
-from .scene import ACTUATORS, FRAME_IDS, SEQ_SIGNALS, Scene, find_root, parse_scene
+from .scene import ACTUATORS, SEQ_SIGNALS, Scene, find_root, parse_scene
 
 FORMAT = "legsim-bench-recording/1"
 

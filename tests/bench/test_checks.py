@@ -422,3 +422,15 @@ def test_plots_are_written(step_rec, tmp_path):
     assert set(files) == {"motion", "actuators", "reactions", "errors"}
     for p in files.values():
         assert p.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n" and p.stat().st_size > 10_000
+
+
+def test_nan_in_the_received_data_fails(step_rec):
+    _, rec = step_rec
+
+    def nan(r):
+        r["samples"][3]["q"][7] = float("nan")
+        r["samples"][4]["reactions"][2] = float("nan")
+
+    f = failed(evaluate(perturbed(rec, nan), ROOT))
+    assert {"positions x, y vs reference", "reaction moments vs reference"} <= f
+    assert any(n.startswith("constraint residual") for n in f)
