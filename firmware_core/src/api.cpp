@@ -8,6 +8,8 @@
 using namespace legsim;
 
 static_assert(alignof(Sim) <= LEGSIM_STORAGE_ALIGN, "raise LEGSIM_STORAGE_ALIGN");
+static_assert(LEGSIM_MAX_ROWS <= 255, "row indices are stored in 8 bits");
+static_assert(LEGSIM_MAX_ACTUATORS <= 31, "actuator sets are 32-bit masks");
 
 namespace {
 
@@ -49,13 +51,76 @@ legsim_status lengths_check(const Model &m, const legsim_real *len) {
 }
 
 // After the state changed outside a step: accelerations, multipliers and
-// reactions of the free dynamics at the new state.
+// reactions of the free dynamics at the new state, and a fresh start of the
+// generalized-alpha history.
 legsim_status state_refresh(Sim &sim) {
   Data &d = sim.data;
   const legsim_status s = dynamics_state_update(sim);
   d.derivative_valid = s == LEGSIM_OK;
+  d.history_valid = s == LEGSIM_OK;
   if (s == LEGSIM_OK) d.acc_aux = d.qdd;
   return s;
+}
+
+// A changed command or load is a discontinuity of the forcing: both integrators
+// restart from the accelerations under the new forces (the generalized-alpha
+// history would otherwise carry the old ones and drop to first order). The same
+// value sent again changes nothing.
+void commands_changed(Data &d) {
+  d.derivative_valid = false;
+  d.history_valid = false;
+}
+
+// Everything a failed call must leave as it found: calls that can fail half-way
+// work on the live state and put this back.
+struct Snapshot {
+  VecQ q, qd, qdd, acc_aux;
+  VecR lambda;
+  legsim_reaction reaction[kMaxJoints];
+  real act_force[kMaxActuators];
+  double t;
+  uint64_t steps;
+  uint32_t stroke_mask;
+  bool assembled, derivative_valid, history_valid;
+
+  explicit Snapshot(const Data &d)
+      : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), lambda(d.lambda), t(d.t),
+        steps(d.steps), stroke_mask(d.stroke_mask), assembled(d.assembled),
+        derivative_valid(d.derivative_valid), history_valid(d.history_valid) {
+    for (int j = 0; j < kMaxJoints; ++j) reaction[j] = d.reaction[j];
+    for (int a = 0; a < kMaxActuators; ++a) act_force[a] = d.act[a].force;
+  }
+  void restore(Data &d) const {
+    d.q = q;
+    d.qd = qd;
+    d.qdd = qdd;
+    d.acc_aux = acc_aux;
+    d.lambda = lambda;
+    for (int j = 0; j < kMaxJoints; ++j) d.reaction[j] = reaction[j];
+    for (int a = 0; a < kMaxActuators; ++a) d.act[a].force = act_force[a];
+    d.t = t;
+    d.steps = steps;
+    d.stroke_mask = stroke_mask;
+    d.assembled = assembled;
+    d.derivative_valid = derivative_valid;
+    d.history_valid = history_valid;
+  }
+};
+
+// Runs a call on the live state; on failure, the state is put back as it was.
+template <typename F>
+legsim_status all_or_nothing(Sim &sim, F &&call) {
+  const Snapshot before(sim.data);
+  const legsim_status s = call();
+  if (s != LEGSIM_OK) before.restore(sim.data);
+  return s;
+}
+
+// Positions and velocities a sim may hold: finite and not absurd.
+bool state_sane(const VecQ &q, const VecQ &qd, int n) {
+  for (int k = 0; k < n; ++k)
+    if (!(std::abs(q[k]) < real(1e6)) || !(std::abs(qd[k]) < real(1e9))) return false;
+  return true;
 }
 
 legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord) {
@@ -121,6 +186,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.steps = 0;
   d.assembled = false;
   d.derivative_valid = false;
+  d.history_valid = false;
   d.q.setZero();
   d.qd.setZero();
   d.qdd.setZero();
@@ -148,6 +214,7 @@ legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options)
   if (s != LEGSIM_OK) return s;
   as_sim(sim)->opt = *options;
   as_sim(sim)->data.derivative_valid = false;
+  as_sim(sim)->data.history_valid = false;
   return LEGSIM_OK;
 }
 
@@ -210,21 +277,22 @@ legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legs
   if (!finite_array(q, n) || (qd && !finite_array(qd, n)) || !std::isfinite(t_s))
     return LEGSIM_ERR_BAD_INPUT;
   Data &d = s.data;
-  const VecQ q0 = d.q, qd0 = d.qd;
+  VecQ qn = VecQ::Zero(), qdn = VecQ::Zero();
   for (int k = 0; k < n; ++k) {
-    d.q[k] = q[k];
-    d.qd[k] = qd ? qd[k] : real(0);
+    qn[k] = q[k];
+    qdn[k] = qd ? qd[k] : real(0);
   }
-  const legsim_status st = state_refresh(s);
-  if (st != LEGSIM_OK) {
-    d.q = q0;
-    d.qd = qd0;
-    d.derivative_valid = false;
-    return st;
-  }
-  d.t = t_s;
-  d.assembled = true;
-  return LEGSIM_OK;
+  if (!state_sane(qn, qdn, n)) return LEGSIM_ERR_BAD_INPUT;
+  const uint32_t events = d.report.events;
+  const legsim_status st = all_or_nothing(s, [&] {
+    d.q = qn;
+    d.qd = qdn;
+    d.t = t_s;
+    d.assembled = true;
+    return state_refresh(s);
+  });
+  if (st != LEGSIM_OK) d.report.events = events;  // a refused state raises nothing
+  return st;
 }
 
 legsim_status legsim_constraints(const legsim_sim *sim, legsim_real *phi, legsim_real *max_abs) {
@@ -301,6 +369,8 @@ legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
     for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
   } else {
     legsim_actuator_lengths(sim, len, nullptr);
+    const legsim_status st = lengths_check(m, len);
+    if (st != LEGSIM_OK) return st;
   }
   for (int a = 0; a < m.na; ++a) {
     d.drivers.length[a] = len[a];
@@ -308,7 +378,7 @@ legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
   }
   d.drivers.ncoord = 0;
   const legsim_status st = drivers_layout(s, all_actuators(m), 0);
-  return st == LEGSIM_OK ? assemble_commit(s) : st;
+  return st == LEGSIM_OK ? all_or_nothing(s, [&] { return assemble_commit(s); }) : st;
 }
 
 legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
@@ -322,12 +392,11 @@ legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
   for (int k = 0; k < p.n_drivers; ++k) d.drivers.coord[k] = p.driver[k];
   legsim_status st = drivers_layout(s, 0, p.n_drivers);
   if (st != LEGSIM_OK) return st;
-  const VecQ keep = d.q;
-  for (int b = 0; b < s.model.nb; ++b)
-    for (int c = 0; c < 3; ++c) d.q[3 * b + c] = real(p.guess[b][c]);
-  st = assemble_commit(s);
-  if (st != LEGSIM_OK) d.q = keep;
-  return st;
+  return all_or_nothing(s, [&] {
+    for (int b = 0; b < s.model.nb; ++b)
+      for (int c = 0; c < 3; ++c) d.q[3 * b + c] = real(p.guess[b][c]);
+    return assemble_commit(s);
+  });
 }
 
 legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps) {
@@ -345,11 +414,13 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
   d.drivers.ncoord = 0;
   legsim_status st = drivers_layout(s, all_actuators(m), 0);
   if (st != LEGSIM_OK) return st;
-  VecQ qd = VecQ::Zero();
-  st = velocity_solve(s, d.work, qd);
-  if (st != LEGSIM_OK) return st;
-  d.qd = qd;
-  return state_refresh(s);
+  return all_or_nothing(s, [&] {
+    VecQ qd = VecQ::Zero();
+    const legsim_status v = velocity_solve(s, d.work, qd);
+    if (v != LEGSIM_OK) return v;
+    d.qd = qd;
+    return state_refresh(s);
+  });
 }
 
 legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2) {
@@ -369,6 +440,7 @@ legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *a
   if (st != LEGSIM_OK) return st;
   d.qdd = qdd;
   d.derivative_valid = false;  // kinematic, not the dynamics' qdd
+  d.history_valid = false;
   return LEGSIM_OK;
 }
 
@@ -382,18 +454,22 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
   if (st != LEGSIM_OK) return st;
   if (!finite_array(rate_mps, s.model.na) || !finite_array(accel_mps2, s.model.na))
     return LEGSIM_ERR_BAD_INPUT;
-  st = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, actuator_force_n);
-  s.data.derivative_valid = false;
-  return st;
+  return all_or_nothing(s, [&] {
+    const legsim_status r = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, actuator_force_n);
+    s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
+    return r;
+  });
 }
 
 legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
   if (!sim) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
-  const legsim_status st = statics_solve(s, actuator_force_n);
-  s.data.derivative_valid = false;
-  return st;
+  return all_or_nothing(s, [&] {
+    const legsim_status r = statics_solve(s, actuator_force_n);
+    s.data.derivative_valid = s.data.history_valid = false;
+    return r;
+  });
 }
 
 legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst_case *out) {
@@ -401,8 +477,8 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
   if (n_grid < 2 || n_grid > 1000) return LEGSIM_ERR_BAD_INPUT;
-  const legsim_status st = statics_sweep(s, n_grid, out);
-  s.data.derivative_valid = false;
+  const legsim_status st = statics_sweep(s, n_grid, out);  // leaves the last good pose
+  s.data.derivative_valid = s.data.history_valid = false;
   return st;
 }
 
@@ -415,31 +491,30 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
     return LEGSIM_ERR_STATE;
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   for (int32_t i = 0; i < n_steps; ++i) {
-    legsim_status st = LEGSIM_OK;
-    if (!d.derivative_valid) st = state_refresh(s);
-    if (st == LEGSIM_OK) st = rk4 ? rk4_step(s) : generalized_alpha_step(s);
-    if (st != LEGSIM_OK) {
-      d.derivative_valid = false;  // a failed step may leave scratch in lambda
-      return st;
-    }
-    d.t += s.opt.step_s;
-    ++d.steps;
-    bool stopped = false;
-    if (!(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS)) {
-      st = stroke_limits_enforce(s, stopped);
-      if (st != LEGSIM_OK) return st;
-    }
-    if (stopped) {
-      st = state_refresh(s);  // the stop changed q and qd: derivative and reactions anew
-    } else if (!rk4) {  // RK4 leaves its end derivative and reactions itself
-      st = generalized_alpha_reactions(s);
-    }
-    if (st != LEGSIM_OK) return st;
-    for (int k = 0; k < s.model.nq; ++k)
-      if (!(std::abs(d.q[k]) < real(1e6)) || !(std::abs(d.qd[k]) < real(1e9))) {
-        d.derivative_valid = false;
-        return LEGSIM_ERR_DIVERGED;
+    // a failed step leaves the state of the last good one
+    const legsim_status st = all_or_nothing(s, [&] {
+      legsim_status r = LEGSIM_OK;
+      // both start from the accelerations at the current state and commands
+      if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s);
+      if (r == LEGSIM_OK) r = rk4 ? rk4_step(s) : generalized_alpha_step(s);
+      bool stopped = false;
+      if (r == LEGSIM_OK && !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS))
+        r = stroke_limits_enforce(s, stopped);
+      if (r == LEGSIM_OK) {
+        if (stopped)
+          r = state_refresh(s);  // the stop changed q and qd: derivative and reactions anew
+        else if (!rk4)           // RK4 leaves its end derivative and reactions itself
+          r = generalized_alpha_reactions(s);
       }
+      if (r == LEGSIM_OK && !state_sane(d.q, d.qd, s.model.nq)) r = LEGSIM_ERR_DIVERGED;
+      if (r != LEGSIM_OK) return r;
+      if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
+      d.t += s.opt.step_s;
+      ++d.steps;
+      if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
+      return LEGSIM_OK;
+    });
+    if (st != LEGSIM_OK) return st;
   }
   return LEGSIM_OK;
 }
@@ -465,10 +540,11 @@ legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_rea
   if (actuator < 0 || actuator >= s.model.na) return LEGSIM_ERR_BAD_INPUT;
   if (!std::isfinite(force_n) || std::abs(force_n) > s.model.act[actuator].fmax)
     return LEGSIM_ERR_BAD_INPUT;
-  s.data.act[actuator].mode = LEGSIM_ACTUATOR_FORCE;
-  s.data.act[actuator].setpoint = force_n;
-  s.data.act[actuator].force = force_n;
-  s.data.derivative_valid = false;
+  ActuatorState &a = s.data.act[actuator];
+  if (a.mode != LEGSIM_ACTUATOR_FORCE || a.setpoint != force_n) commands_changed(s.data);
+  a.mode = LEGSIM_ACTUATOR_FORCE;
+  a.setpoint = force_n;
+  a.force = force_n;
   return LEGSIM_OK;
 }
 
@@ -478,9 +554,10 @@ legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_re
   if (actuator < 0 || actuator >= s.model.na || !std::isfinite(length_m)) return LEGSIM_ERR_BAD_INPUT;
   const Actuator &ac = s.model.act[actuator];
   if (length_m < ac.lmin || length_m > ac.lmax) return LEGSIM_ERR_OUT_OF_STROKE;
-  s.data.act[actuator].mode = LEGSIM_ACTUATOR_LENGTH;
-  s.data.act[actuator].setpoint = length_m;
-  s.data.derivative_valid = false;
+  ActuatorState &a = s.data.act[actuator];
+  if (a.mode != LEGSIM_ACTUATOR_LENGTH || a.setpoint != length_m) commands_changed(s.data);
+  a.mode = LEGSIM_ACTUATOR_LENGTH;
+  a.setpoint = length_m;
   return LEGSIM_OK;
 }
 
@@ -488,10 +565,15 @@ legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real
   if (!sim || !value) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   if (force < 0 || force >= s.model.nf) return LEGSIM_ERR_BAD_INPUT;
+  if (!LEGSIM_WITH_FORCE_ELEMENTS) return LEGSIM_ERR_DISABLED;
+  // a spring-damper's law is model data; point forces and torques take values
+  if (s.model.force[force].kind == LEGSIM_FORCE_SPRING_DAMPER) return LEGSIM_ERR_BAD_INPUT;
   const int nv = s.model.force[force].kind == LEGSIM_FORCE_POINT ? 2 : 1;
   if (!finite_array(value, nv)) return LEGSIM_ERR_BAD_INPUT;
-  for (int i = 0; i < nv; ++i) s.data.force_value[force][i] = value[i];
-  s.data.derivative_valid = false;
+  for (int i = 0; i < nv; ++i) {
+    if (s.data.force_value[force][i] != value[i]) commands_changed(s.data);
+    s.data.force_value[force][i] = value[i];
+  }
   return LEGSIM_OK;
 }
 

@@ -62,6 +62,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
     }
     for (int i = 0; i < lay.m; ++i) lambda[i] += d.rhs[i];
     d.report.iterations = it + 1;
+    d.report.residual = rows_max_residual(lay, d.rows);  // before this iteration's correction
     if (!std::isfinite(dq_max)) return LEGSIM_ERR_DIVERGED;
     if (dq_max <= tol) {
       converged = true;

@@ -49,7 +49,9 @@ legsim_status rk4_step(Sim &sim) {
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
   rows_eval(m, lay, d.drivers, q1, v1, d.rows);
   const real tol = real(sim.opt.newton_tol);
-  if (projection && rows_max_residual(lay, d.rows) > tol) {
+  d.report.iterations = 0;
+  d.report.residual = rows_max_residual(lay, d.rows);
+  if (projection && d.report.residual > tol) {
     const legsim_status s = assemble(sim, lay, d.drivers, q1, m.minv, AssemblyMode::Project);  // M-weighted Newton
     if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
     rows_eval(m, lay, d.drivers, q1, v1, d.rows);

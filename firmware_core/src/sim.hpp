@@ -136,7 +136,8 @@ struct Data {
   double t;
   uint64_t steps;
   bool assembled;
-  bool derivative_valid;  // qdd, lambda and acc_aux belong to the current state and commands
+  bool derivative_valid;  // qdd and lambda belong to the current state and commands (RK4's start)
+  bool history_valid;     // qdd and acc_aux are the generalized-alpha history of this state
   VecQ q, qd, qdd;
   VecQ acc_aux;  // generalized-alpha auxiliary acceleration
   VecR lambda;   // multipliers of the last dynamics/statics solve

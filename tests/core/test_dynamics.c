@@ -75,6 +75,65 @@ static void test_integrators_agree_at_small_steps(void) {
   TEST_ASSERT_TRUE(res < 1e-10); /* index 3: the positions satisfy Phi = 0 */
 }
 
+/* Re-sending the same command every step (as a controller does) must not
+ * restart the generalized-alpha history: it stays second order. */
+static void test_generalized_alpha_order_survives_resent_commands(void) {
+  legsim_real ref[NQ], q[NQ];
+  legsim_sim *sim = leg_at_stand(&st2, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-4));
+  legsim_command_force(sim, 0, 40.0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 3000));
+  legsim_get_q(sim, ref);
+  double err[2];
+  for (int e = 0; e < 2; ++e) {
+    const double h = e ? 1e-3 : 2e-3;
+    sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, h));
+    const int n = (int)(0.3 / h + 0.5);
+    for (int i = 0; i < n; ++i) {
+      legsim_command_force(sim, 0, 40.0);
+      legsim_command_force(sim, 1, 0.0);
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 1));
+    }
+    legsim_get_q(sim, q);
+    err[e] = max_abs_diff(q, ref, NQ);
+  }
+  printf("generalized-alpha with re-sent commands: error %.3g at h = 2 ms, %.3g at 1 ms (ratio %.2f)\n",
+         err[0], err[1], err[0] / err[1]);
+  TEST_ASSERT_TRUE(err[0] / err[1] > 3.0);
+}
+
+/* Newton-Euler of the shank, which is the second body of both its joints: the
+ * reported reactions (on the first bodies) act on it with the opposite sign. */
+static void test_reactions_balance_the_shank(void) {
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
+  const legsim_model_desc *m = legsim_model(sim);
+  legsim_command_force(sim, 0, 70.0);
+  legsim_command_force(sim, 1, -20.0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 150));
+  legsim_real q[NQ], qdd[NQ];
+  legsim_reaction r[NJ];
+  legsim_get_q(sim, q);
+  legsim_get_qdd(sim, qdd);
+  legsim_reactions(sim, r);
+  const int b = 5;                 /* shank */
+  const int joints[2] = {5, 7};    /* C_rod_shank (at its proximal end), D (at xi = -0.10) */
+  const double xi[2] = {-0.30, -0.10};
+  const double mass = m->body[b].mass_kg, inertia = m->body[b].inertia_kgm2;
+  double fx = mass * m->gravity_mps2[0], fy = mass * m->gravity_mps2[1], mz = 0;
+  for (int k = 0; k < 2; ++k) {
+    double p[2];
+    body_point(q, b, xi[k], 0, p);
+    const double sx = p[0] - q[3 * b], sy = p[1] - q[3 * b + 1];
+    const double rx = -r[joints[k]].force_n[0], ry = -r[joints[k]].force_n[1];
+    fx += rx;
+    fy += ry;
+    mz += sx * ry - sy * rx;
+  }
+  TEST_ASSERT_TRUE(fabs(fx) > 1.0); /* it is loaded and accelerating */
+  TEST_ASSERT_DOUBLE_WITHIN(1e-8, mass * qdd[3 * b], fx);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-8, mass * qdd[3 * b + 1], fy);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-8, inertia * qdd[3 * b + 2], mz);
+}
+
 static void test_slot_reaction_is_normal_to_the_shank(void) {
   legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_slot, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
   legsim_command_force(sim, 0, -80.0);
@@ -216,6 +275,8 @@ int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_energy_is_conserved_with_constant_forces);
   RUN_TEST(test_integrators_agree_at_small_steps);
+  RUN_TEST(test_generalized_alpha_order_survives_resent_commands);
+  RUN_TEST(test_reactions_balance_the_shank);
   RUN_TEST(test_slot_reaction_is_normal_to_the_shank);
   RUN_TEST(test_servo_holds_a_length_and_saturation_is_reported);
   RUN_TEST(test_stroke_end_stops_the_actuator_and_says_so);
