@@ -26,22 +26,28 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
   }
 }
 
-// After a step: an actuator beyond its stroke is put back on its end (a
-// projection onto Phi = 0 with that length driven) and its outward velocity is
-// removed: an inelastic hard stop. Raised as an event, never silent. Stopping
-// one actuator can push another past its end, so the check repeats with the
-// stopped ones held until no actuator is out.
-legsim_status stroke_limits_enforce(Sim &sim, bool &stopped) {
-  stopped = false;
+legsim_status stops_layout(Sim &sim) {
+  Data &d = sim.data;
+  legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn);
+  if (s == LEGSIM_OK) s = layout_finish(d.dyn, d.stop_drivers);
+  d.dyn.stops = true;
+  return s;
+}
+
+// After a step: an actuator past its stroke is put back on its end (a projection
+// onto Phi = 0 with that length held) and its velocity along the stroke removed:
+// an inelastic impact. From then on a length row holds it in the dynamics, and
+// its multiplier is the stop's force. Raised as an event, never silent. Putting
+// one actuator on its stop can push another past its end, so the check repeats.
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
+  changed = false;
   const Model &m = sim.model;
   Data &d = sim.data;
-  DriverValues &dv = d.drivers;
-  dv.ncoord = 0;
-  uint32_t mask = 0;
+  DriverValues &dv = d.stop_drivers;
   for (int pass = 0; pass <= m.na; ++pass) {
     uint32_t added = 0;
     for (int a = 0; a < m.na; ++a) {
-      if (mask & (1u << a)) continue;
+      if (d.stop_mask & (1u << a)) continue;
       real len, rate;
       actuator_length(m, a, d.q, d.qd, len, rate);
       const Actuator &ac = m.act[a];
@@ -50,33 +56,48 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &stopped) {
       added |= 1u << a;
       raise_event(d, low ? LEGSIM_EVENT_STROKE_MIN : LEGSIM_EVENT_STROKE_MAX);
       dv.length[a] = low ? ac.lmin : ac.lmax;
-      const bool outward = low ? rate < 0 : rate > 0;
-      dv.rate[a] = outward ? real(0) : rate;
-      dv.accel[a] = 0;
+      dv.rate[a] = dv.accel[a] = 0;
     }
     if (!added) break;
-    mask |= added;
-    stopped = true;
     d.stroke_mask |= added;
-    legsim_status s = layout_build(m, mask, 0, d.work);
-    if (s != LEGSIM_OK) return s;
-    s = layout_finish(d.work, dv);
-    if (s != LEGSIM_OK) return s;
+    const uint32_t before = d.stop_mask;
     const VecQ q0 = d.q, qd0 = d.qd;
-    s = assemble(sim, d.work, dv, d.q, m.minv, AssemblyMode::Project);
-    if (s == LEGSIM_OK) s = velocity_solve(sim, d.work, d.qd);
+    d.stop_mask |= added;
+    legsim_status s = stops_layout(sim);
+    if (s == LEGSIM_OK) s = assemble(sim, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
+    if (s == LEGSIM_OK) s = velocity_solve(sim, d.dyn, d.qd);
     if (s == LEGSIM_ERR_SINGULAR) {
       // A stroke end that is also a dead centre (the leg's lower stroke ends
       // where the knee is straight, as far as the geometry reaches): no stop can
-      // be projected there, and none is needed. Keep the integrated state, say so.
+      // be held there, and none is needed. Keep the integrated state, say so.
       d.q = q0;
       d.qd = qd0;
+      d.stop_mask = before;
       raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
-      return LEGSIM_OK;
+      return stops_layout(sim);
     }
     if (s != LEGSIM_OK) return s;
+    changed = true;
   }
   return LEGSIM_OK;
+}
+
+// A stop only pushes: the shortest-length stop pushes the rod out (force > 0),
+// the longest-length one pushes it in (force < 0). A stop asked to pull lets go.
+legsim_status stroke_stops_release(Sim &sim, bool &changed) {
+  changed = false;
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  for (int a = 0; a < m.na; ++a) {
+    if (!(d.stop_mask & (1u << a))) continue;
+    const bool at_min = d.stop_drivers.length[a] <= m.act[a].lmin;
+    const real f = d.act[a].stop_force;
+    if (at_min ? f >= 0 : f <= 0) continue;
+    d.stop_mask &= ~(1u << a);
+    d.act[a].stop_force = 0;
+    changed = true;
+  }
+  return changed ? stops_layout(sim) : LEGSIM_OK;
 }
 
 }  // namespace legsim

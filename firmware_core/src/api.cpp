@@ -77,27 +77,41 @@ struct Snapshot {
   VecQ q, qd, qdd, acc_aux;
   VecR lambda;
   legsim_reaction reaction[kMaxJoints];
-  real act_force[kMaxActuators];
+  real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
   double t;
   uint64_t steps;
-  uint32_t stroke_mask;
+  uint32_t stroke_mask, stop_mask;
   bool assembled, derivative_valid, history_valid;
 
   explicit Snapshot(const Data &d)
       : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), lambda(d.lambda), t(d.t),
-        steps(d.steps), stroke_mask(d.stroke_mask), assembled(d.assembled),
+        steps(d.steps), stroke_mask(d.stroke_mask), stop_mask(d.stop_mask), assembled(d.assembled),
         derivative_valid(d.derivative_valid), history_valid(d.history_valid) {
     for (int j = 0; j < kMaxJoints; ++j) reaction[j] = d.reaction[j];
-    for (int a = 0; a < kMaxActuators; ++a) act_force[a] = d.act[a].force;
+    for (int a = 0; a < kMaxActuators; ++a) {
+      act_force[a] = d.act[a].force;
+      stop_force[a] = d.act[a].stop_force;
+      stop_length[a] = d.stop_drivers.length[a];
+    }
   }
-  void restore(Data &d) const {
+  void restore(Sim &sim) const {
+    Data &d = sim.data;
     d.q = q;
     d.qd = qd;
     d.qdd = qdd;
     d.acc_aux = acc_aux;
     d.lambda = lambda;
     for (int j = 0; j < kMaxJoints; ++j) d.reaction[j] = reaction[j];
-    for (int a = 0; a < kMaxActuators; ++a) d.act[a].force = act_force[a];
+    for (int a = 0; a < kMaxActuators; ++a) {
+      d.act[a].force = act_force[a];
+      d.act[a].stop_force = stop_force[a];
+      d.stop_drivers.length[a] = stop_length[a];
+      d.stop_drivers.rate[a] = d.stop_drivers.accel[a] = 0;
+    }
+    if (d.stop_mask != stop_mask) {
+      d.stop_mask = stop_mask;
+      stops_layout(sim);  // the same rows as before: cannot fail
+    }
     d.t = t;
     d.steps = steps;
     d.stroke_mask = stroke_mask;
@@ -112,8 +126,17 @@ template <typename F>
 legsim_status all_or_nothing(Sim &sim, F &&call) {
   const Snapshot before(sim.data);
   const legsim_status s = call();
-  if (s != LEGSIM_OK) before.restore(sim.data);
+  if (s != LEGSIM_OK) before.restore(sim);
   return s;
+}
+
+// A state set from outside rests on no stroke stop (the next step finds any).
+legsim_status stops_clear(Sim &sim) {
+  Data &d = sim.data;
+  for (int a = 0; a < sim.model.na; ++a) d.act[a].stop_force = 0;
+  if (!d.stop_mask) return LEGSIM_OK;
+  d.stop_mask = 0;
+  return stops_layout(sim);
 }
 
 // Positions and velocities a sim may hold: finite and not absurd.
@@ -133,6 +156,7 @@ uint32_t all_actuators(const Model &m) { return (1u << m.na) - 1; }
 // Assembles d.work from d.q with geometric weights; commits q (qd = 0) on success.
 legsim_status assemble_commit(Sim &sim) {
   Data &d = sim.data;
+  if (const legsim_status st = stops_clear(sim); st != LEGSIM_OK) return st;
   VecQ q = d.q;
   const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
@@ -196,13 +220,16 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   std::memset(&d.report, 0, sizeof d.report);
   std::memset(&d.drivers, 0, sizeof d.drivers);
   d.stroke_mask = 0;
-  for (int a = 0; a < m.na; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0};
+  for (int a = 0; a < m.na; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
+  std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
+  d.stop_mask = 0;
   for (int f = 0; f < m.nf; ++f) {
     d.force_value[f][0] = real(model->force[f].value[0]);
     d.force_value[f][1] = real(model->force[f].value[1]);
   }
   s = layout_build(m, 0, 0, d.joints);
   if (s == LEGSIM_OK) s = layout_finish(d.joints, d.drivers);
+  if (s == LEGSIM_OK) s = stops_layout(*sim);
   if (s != LEGSIM_OK) return s;
   *out = reinterpret_cast<legsim_sim *>(sim);
   return LEGSIM_OK;
@@ -289,7 +316,8 @@ legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legs
     d.qd = qdn;
     d.t = t_s;
     d.assembled = true;
-    return state_refresh(s);
+    const legsim_status c = stops_clear(s);
+    return c == LEGSIM_OK ? state_refresh(s) : c;
   });
   if (st != LEGSIM_OK) d.report.events = events;  // a refused state raises nothing
   return st;
@@ -339,7 +367,7 @@ legsim_status legsim_actuator_lengths(const legsim_sim *sim, legsim_real *length
 legsim_status legsim_actuator_forces(const legsim_sim *sim, legsim_real *force_n) {
   if (!sim || !force_n) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
-  for (int a = 0; a < s.model.na; ++a) force_n[a] = s.data.act[a].force;
+  for (int a = 0; a < s.model.na; ++a) force_n[a] = s.data.act[a].force + s.data.act[a].stop_force;
   return LEGSIM_OK;
 }
 
@@ -416,7 +444,8 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
   if (st != LEGSIM_OK) return st;
   return all_or_nothing(s, [&] {
     VecQ qd = VecQ::Zero();
-    const legsim_status v = velocity_solve(s, d.work, qd);
+    legsim_status v = stops_clear(s);
+    if (v == LEGSIM_OK) v = velocity_solve(s, d.work, qd);
     if (v != LEGSIM_OK) return v;
     d.qd = qd;
     return state_refresh(s);
@@ -455,7 +484,8 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
   if (!finite_array(rate_mps, s.model.na) || !finite_array(accel_mps2, s.model.na))
     return LEGSIM_ERR_BAD_INPUT;
   return all_or_nothing(s, [&] {
-    const legsim_status r = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, actuator_force_n);
+    legsim_status r = stops_clear(s);
+    if (r == LEGSIM_OK) r = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, actuator_force_n);
     s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
     return r;
   });
@@ -466,7 +496,8 @@ legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
   return all_or_nothing(s, [&] {
-    const legsim_status r = statics_solve(s, actuator_force_n);
+    legsim_status r = stops_clear(s);
+    if (r == LEGSIM_OK) r = statics_solve(s, actuator_force_n);
     s.data.derivative_valid = s.data.history_valid = false;
     return r;
   });
@@ -477,7 +508,8 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
   if (n_grid < 2 || n_grid > 1000) return LEGSIM_ERR_BAD_INPUT;
-  const legsim_status st = statics_sweep(s, n_grid, out);  // leaves the last good pose
+  legsim_status st = stops_clear(s);
+  if (st == LEGSIM_OK) st = statics_sweep(s, n_grid, out);  // leaves the last good pose
   s.data.derivative_valid = s.data.history_valid = false;
   return st;
 }
@@ -497,15 +529,17 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
       // both start from the accelerations at the current state and commands
       if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s);
       if (r == LEGSIM_OK) r = rk4 ? rk4_step(s) : generalized_alpha_step(s);
-      bool stopped = false;
-      if (r == LEGSIM_OK && !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS))
-        r = stroke_limits_enforce(s, stopped);
+      bool stopped = false, released = false;
+      const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
+      if (r == LEGSIM_OK && stops) r = stroke_limits_enforce(s, stopped);
       if (r == LEGSIM_OK) {
         if (stopped)
-          r = state_refresh(s);  // the stop changed q and qd: derivative and reactions anew
+          r = state_refresh(s);  // the impact changed q and qd: derivative and reactions anew
         else if (!rk4)           // RK4 leaves its end derivative and reactions itself
           r = generalized_alpha_reactions(s);
       }
+      if (r == LEGSIM_OK && stops) r = stroke_stops_release(s, released);
+      if (r == LEGSIM_OK && released) r = state_refresh(s);
       if (r == LEGSIM_OK && !state_sane(d.q, d.qd, s.model.nq)) r = LEGSIM_ERR_DIVERGED;
       if (r != LEGSIM_OK) return r;
       if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start

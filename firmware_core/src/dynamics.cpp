@@ -10,11 +10,11 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   const Model &m = sim.model;
   Data &d = sim.data;
   legsim_options opt = sim.opt;
-  // With actuator drivers in the system the drivers supply the actuator forces.
-  if (layout.m > m.m) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
+  // Driven analyses: the drivers supply the actuator forces. Stops act besides them.
+  if (layout.m > m.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
   applied_forces(m, opt, d, q, qd, d.force_q);
   if (!rows_ready) {
-    rows_eval(m, layout, d.drivers, q, qd, d.rows);
+    rows_eval(m, layout, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.rows);
     const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
     d.report.condition = d.factor.condition;
     if (s != LEGSIM_OK) return s;
@@ -29,14 +29,23 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   return all_finite(qdd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
+void stop_forces_update(Sim &sim) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  int row = m.m;  // the stop rows follow the joints, in actuator order
+  for (int a = 0; a < m.na; ++a)
+    d.act[a].stop_force = (d.stop_mask & (1u << a)) ? -d.lambda[row++] : real(0);
+}
+
 legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }
 
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd) {
   Data &d = sim.data;
-  const legsim_status s = dynamics_solve(sim, d.joints, d.q, d.qd, qdd);
+  const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd);
   if (s != LEGSIM_OK) return s;
+  stop_forces_update(sim);
   if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
-    reactions_from_multipliers(sim.model, d.joints, d.rows, d.lambda, d.reaction);
+    reactions_from_multipliers(sim.model, d.dyn, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;
 }
 

@@ -33,11 +33,11 @@ legsim_status generalized_alpha_step(Sim &sim) {
     q1[k] = d.q[k] + h * d.qd[k] + h * h * ((real(0.5) - beta) * d.acc_aux[k] + beta * a1);
     v1[k] = d.qd[k] + h * ((1 - gam) * d.acc_aux[k] + gam * a1);
   }
-  const Layout &lay = d.joints;
+  const Layout &lay = d.dyn;
   bool converged = false;
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
     applied_forces(m, sim.opt, d, q1, v1, d.force_q);
-    rows_eval(m, lay, d.drivers, q1, v1, d.rows);
+    rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows);
     legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
     d.report.condition = d.factor.condition;
     if (s != LEGSIM_OK) return s;
@@ -76,6 +76,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   d.qd = v1;
   d.qdd = qdd1;
   d.lambda = lambda;
+  stop_forces_update(sim);
   return LEGSIM_OK;
 }
 
@@ -93,7 +94,7 @@ legsim_status generalized_alpha_reactions(Sim &sim) {
   // reporting reactions never changes the trajectory
   const VecR lambda = d.lambda;
   VecQ qdd;
-  const legsim_status s = dynamics_state_reactions(sim, qdd);
+  const legsim_status s = dynamics_state_reactions(sim, qdd);  // and the stops' forces
   d.lambda = lambda;
   return s;
 }

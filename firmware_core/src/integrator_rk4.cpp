@@ -25,7 +25,7 @@ legsim_status rk4_step(Sim &sim) {
   // stages 2 and 3 at the midpoint, 4 at the end
   static constexpr real kWeight[3] = {2, 2, 1};
   for (int stage = 0; stage < 3; ++stage) {
-    const legsim_status s = dynamics_solve(sim, d.joints, qs, vs, a);
+    const legsim_status s = dynamics_solve(sim, d.dyn, qs, vs, a);
     if (s != LEGSIM_OK) return s;
     const real w = kWeight[stage];
     const real hn = stage < 1 ? h2 : h;  // the next stage's distance from the start
@@ -45,16 +45,17 @@ legsim_status rk4_step(Sim &sim) {
   // The end of the step: one evaluation of the rows at (q1, v1) serves the
   // position check, the velocity projection and the end derivative, which is
   // also the next step's first stage.
-  const Layout &lay = d.joints;
+  const Layout &lay = d.dyn;
+  const DriverValues &dv = d.stop_drivers;
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
-  rows_eval(m, lay, d.drivers, q1, v1, d.rows);
+  rows_eval(m, lay, dv, q1, v1, d.rows);
   const real tol = real(sim.opt.newton_tol);
   d.report.iterations = 0;
   d.report.residual = rows_max_residual(lay, d.rows);
   if (projection && d.report.residual > tol) {
-    const legsim_status s = assemble(sim, lay, d.drivers, q1, m.minv, AssemblyMode::Project);  // M-weighted Newton
+    const legsim_status s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project);  // M-weighted Newton
     if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
-    rows_eval(m, lay, d.drivers, q1, v1, d.rows);
+    rows_eval(m, lay, dv, q1, v1, d.rows);
   }
   legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
   d.report.condition = d.factor.condition;
@@ -65,13 +66,14 @@ legsim_status rk4_step(Sim &sim) {
     for (int i = 0; i < lay.m; ++i) drift = std::abs(d.rhs[i]) > drift ? std::abs(d.rhs[i]) : drift;
     if (drift > tol) {
       project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
-      rows_eval(m, lay, d.drivers, q1, v1, d.rows);  // gamma at the projected velocities
+      rows_eval(m, lay, dv, q1, v1, d.rows);  // gamma at the projected velocities
     }
   }
   s = dynamics_solve(sim, lay, q1, v1, d.qdd, true);
   if (s != LEGSIM_OK) return s;
   d.q = q1;
   d.qd = v1;
+  stop_forces_update(sim);
   if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
     reactions_from_multipliers(m, lay, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;

@@ -8,7 +8,7 @@ namespace legsim {
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  rows_eval(m, layout, d.drivers, d.q, qd, d.rows);
+  rows_eval(m, layout, layout.stops ? d.stop_drivers : d.drivers, d.q, qd, d.rows);
   const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
   d.report.condition = d.factor.condition;
   if (s != LEGSIM_OK) return s;

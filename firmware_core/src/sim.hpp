@@ -101,6 +101,9 @@ struct Layout {
   // at position perm[i]), which keeps its envelope, and so the work, small.
   uint8_t perm[kMaxRows];
   uint8_t first[kMaxRows];  // by position: the first non-zero column, the envelope
+  // Its actuator rows are stroke stops (Data::stop_drivers; the actuators still
+  // push) rather than drivers that replace the actuators (Data::drivers).
+  bool stops;
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
@@ -128,8 +131,9 @@ struct Factor {
 
 struct ActuatorState {
   legsim_actuator_mode mode;
-  real setpoint;  // N or m
-  real force;     // axial force in the current state, N
+  real setpoint;    // N or m
+  real force;       // axial force it applies in the current state, N
+  real stop_force;  // axial force of the stroke stop it rests on (0 when free), N
 };
 
 struct Data {
@@ -148,7 +152,10 @@ struct Data {
   uint32_t stroke_mask;
 
   // workspace
-  Layout joints;  // the joint equations only: the forward-dynamics system
+  Layout joints;  // the joint equations only
+  Layout dyn;     // the forward-dynamics system: the joints plus the stops in use
+  uint32_t stop_mask;         // actuators resting on a stroke stop (the active set)
+  DriverValues stop_drivers;  // their stop lengths (rate and acceleration 0)
   Layout work;    // joints plus drivers, for assembly and driven analyses
   Rows rows;
   Factor factor;
@@ -204,8 +211,13 @@ void applied_forces(const Model &model, const legsim_options &opt, Data &d, cons
 // Axial force of each actuator from its command (servo law for length mode).
 void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
                             const VecQ &qd);
-// Stops actuators at their stroke ends after a step (inelastic hard stop).
-legsim_status stroke_limits_enforce(Sim &sim, bool &stopped);
+// Stroke stops after a step: an actuator past an end is put on it (inelastic
+// impact) and held there by a length row in the dynamics; one whose stop would
+// have to pull is let go. changed: the active set changed (derivative anew).
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed);
+legsim_status stroke_stops_release(Sim &sim, bool &changed);
+// Rebuilds Data::dyn for Data::stop_mask.
+legsim_status stops_layout(Sim &sim);
 
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.
@@ -213,6 +225,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &stopped);
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
+void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd);
 

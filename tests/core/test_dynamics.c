@@ -196,6 +196,53 @@ static void test_stroke_end_stops_the_actuator_and_says_so(void) {
   TEST_ASSERT_TRUE(res < 1e-9);
 }
 
+/* Resting on a stroke stop: the stop carries load, so the accelerations vanish and
+ * the reactions and the actuator's axial force are those of statics at that pose;
+ * a force away from the stop lets go of it. */
+static void test_resting_on_a_stop_matches_statics_and_releases(void) {
+  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, opts(LEGSIM_INTEGRATOR_RK4, 1e-3));
+  legsim_real len[NA];
+  legsim_actuator_lengths(sim, len, NULL);
+  legsim_command_length(sim, 0, len[0]);  /* the upper servo holds (and damps) */
+  legsim_command_force(sim, 1, -400.0);   /* the lower actuator pulls into its 0.35 m end */
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 4000));
+  legsim_real qd[NQ], qdd[NQ], f[NA], f_st[NA], now[NA];
+  legsim_reaction r[NJ], r_st[NJ];
+  legsim_get_qd(sim, qd);
+  legsim_get_qdd(sim, qdd);
+  legsim_actuator_lengths(sim, now, NULL);
+  legsim_actuator_forces(sim, f);
+  legsim_reactions(sim, r);
+  double vmax = 0, amax = 0;
+  for (int k = 0; k < NQ; ++k) {
+    vmax = fmax(vmax, fabs(qd[k]));
+    amax = fmax(amax, fabs(qdd[k]));
+  }
+  printf("on the stop: lower %.9f m, max |qd| %.2e, max |qdd| %.2e, forces %.3f %.3f N\n", now[1], vmax,
+         amax, f[0], f[1]);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-9, 0.35, now[1]);
+  TEST_ASSERT_TRUE(vmax < 1e-3 && amax < 1e-2);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_statics(sim, f_st));
+  legsim_reactions(sim, r_st);
+  TEST_ASSERT_DOUBLE_WITHIN(0.05, f_st[0], f[0]);
+  TEST_ASSERT_DOUBLE_WITHIN(0.05, f_st[1], f[1]);
+  TEST_ASSERT_TRUE(f[1] > -400.0 + 1.0); /* the stop takes part of the pull */
+  for (int j = 0; j < NJ; ++j) {
+    TEST_ASSERT_DOUBLE_WITHIN(0.05, r_st[j].force_n[0], r[j].force_n[0]);
+    TEST_ASSERT_DOUBLE_WITHIN(0.05, r_st[j].force_n[1], r[j].force_n[1]);
+  }
+  /* push away from the stop: it lets go */
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble(sim, now));
+  legsim_command_force(sim, 1, 0.0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 50));
+  legsim_command_force(sim, 1, -400.0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 200));
+  legsim_command_force(sim, 1, 300.0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 100));
+  legsim_actuator_lengths(sim, now, NULL);
+  TEST_ASSERT_TRUE(now[1] > 0.36);
+}
+
 /* The lower stroke ends at 0.70 m, where the knee is straight: a stroke end at a
  * dead centre. Driving into it must not fail the run, nor pass the end. */
 static void test_stroke_end_at_the_straight_knee(void) {
@@ -280,6 +327,7 @@ int main(void) {
   RUN_TEST(test_slot_reaction_is_normal_to_the_shank);
   RUN_TEST(test_servo_holds_a_length_and_saturation_is_reported);
   RUN_TEST(test_stroke_end_stops_the_actuator_and_says_so);
+  RUN_TEST(test_resting_on_a_stop_matches_statics_and_releases);
   RUN_TEST(test_stroke_end_at_the_straight_knee);
   RUN_TEST(test_scene_options_skip_what_is_disabled);
   RUN_TEST(test_bad_commands_change_nothing);
