@@ -36,6 +36,7 @@ BENCHMARKS = {
     "workprecision": ("legsim_bench.workprecision", "work-precision diagrams of the integrators"),
     "options": ("legsim_bench.options_cost", "cost of the solver options"),
     "stress": ("legsim_bench.stress", "stress runs"),
+    "mcu": ("legsim_bench.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
 }
 
 
