@@ -66,6 +66,9 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
     legsim_status s = stops_layout(sim);
     if (s == LEGSIM_OK) s = assemble(sim, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
     if (s == LEGSIM_OK) s = velocity_solve(sim, d.dyn, d.qd);
+    // velocity_solve left the factor of the system with the stop: a stop that
+    // nearly locks a dead centre would make every later solve ill-conditioned
+    if (s == LEGSIM_OK && factor_condition(d.factor) > real(LEGSIM_COND_WARN)) s = LEGSIM_ERR_SINGULAR;
     if (s == LEGSIM_ERR_SINGULAR) {
       // A stroke end that is also a dead centre (the leg's lower stroke ends
       // where the knee is straight, as far as the geometry reaches): no stop can
