@@ -182,6 +182,16 @@ def library_available(precision: str = "double") -> bool:
         return False
 
 
+def library_missing(precision: str = "double") -> bool:
+    """True, after saying where it was looked for, when the library is not built."""
+    try:
+        find_library(precision)
+        return False
+    except LibraryNotFound as e:
+        print(e, file=sys.stderr)
+        return True
+
+
 # ---- the types of legsim.h for one configuration --------------------------
 class Api:
     """A loaded library with its ctypes types and prototypes (one per library file)."""

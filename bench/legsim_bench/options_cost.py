@@ -292,11 +292,7 @@ def run(args) -> int:
     def log(s):
         print(s, flush=True)
 
-    if not lc.library_available("double"):
-        try:
-            lc.find_library("double")
-        except lc.LibraryNotFound as e:
-            print(e, file=sys.stderr)
+    if lc.library_missing("double"):
         return 2
     precs = [p for p in ("double", "float") if lc.library_available(p)]
     info = machine_info()

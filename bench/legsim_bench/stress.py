@@ -440,11 +440,7 @@ def run(args) -> int:
     def log(s):
         print(s, flush=True)
 
-    if not lc.library_available("double"):
-        try:
-            lc.find_library("double")
-        except lc.LibraryNotFound as e:
-            print(e, file=sys.stderr)
+    if lc.library_missing("double"):
         return 2
     info = machine_info()
     precs = [p for p in ("double", "float") if lc.library_available(p)]

@@ -26,6 +26,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 if importlib.util.find_spec("legsim_bench") is None:
     sys.path.insert(0, str(ROOT / "bench"))
+from legsim_bench.vcan import vcan_problem as _vcan_problem  # noqa: E402
 
 CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
 REQUIRE = os.environ.get("LEGSIM_HIL_REQUIRE") == "1"
@@ -40,18 +41,7 @@ def expect_path() -> Path:
 
 
 def vcan_problem(channel: str = CHANNEL) -> str | None:
-    """Why SocketCAN on `channel` cannot be used here, or None."""
-    try:
-        s = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
-    except (OSError, AttributeError) as e:
-        return f"no SocketCAN in this kernel ({e}); run under tools/with-vcan"
-    try:
-        s.bind((channel,))
-    except OSError as e:
-        return f"no CAN interface {channel} ({e}); run under tools/with-vcan"
-    finally:
-        s.close()
-    return None
+    return _vcan_problem(channel)
 
 
 def _skip_or_fail(reason: str):

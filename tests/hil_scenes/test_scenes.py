@@ -29,6 +29,7 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
+from legsim_bench.vcan import vcan_problem as _vcan_problem  # noqa: E402
 from legsim_bench.scene import load_scene, shipped_scenes  # noqa: E402
 
 CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
@@ -43,18 +44,7 @@ def _skip_or_fail(reason: str):
 
 
 def vcan_problem(channel: str = CHANNEL) -> str | None:
-    """Why SocketCAN on `channel` cannot be used here, or None."""
-    try:
-        s = socket.socket(socket.AF_CAN, socket.SOCK_RAW, socket.CAN_RAW)
-    except (OSError, AttributeError) as e:
-        return f"no SocketCAN in this kernel ({e}); run under tools/with-vcan"
-    try:
-        s.bind((channel,))
-    except OSError as e:
-        return f"no CAN interface {channel} ({e}); run under tools/with-vcan"
-    finally:
-        s.close()
-    return None
+    return _vcan_problem(channel)
 
 
 @pytest.fixture(scope="module")
