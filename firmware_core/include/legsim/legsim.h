@@ -165,7 +165,9 @@ typedef struct legsim_sim legsim_sim; /* opaque */
 
 size_t legsim_sim_size(void);
 
-/* Compiles the model into storage and assembles nothing yet (see legsim_assemble_pose). */
+/* Compiles the model into storage and assembles nothing yet (see legsim_assemble_pose).
+ * The description is kept by pointer (its names and poses are read later): it must
+ * outlive the sim and not change (the generated models are const data). */
 legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_model_desc *model,
                           const legsim_options *options, legsim_sim **out);
 legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options);
@@ -281,7 +283,9 @@ typedef struct legsim_reaction {
 /* Reactions of every joint (n_joints entries) from the multipliers of the last
  * dynamics, inverse-dynamics or statics solve (eq. (20) of the paper). */
 legsim_status legsim_reactions(const legsim_sim *sim, legsim_reaction *out);
-/* Raw multipliers (n_constraints values). */
+/* Raw multipliers (n_constraints values) of the last solve: after a generalized-alpha
+ * step those of its index-3 iteration (the reactions come from an acceleration-level
+ * solve at the same state, which is better conditioned; they differ at round-off). */
 legsim_status legsim_multipliers(const legsim_sim *sim, legsim_real *lambda);
 
 /* ---- 7. actuators and loads ------------------------------------------------ */
