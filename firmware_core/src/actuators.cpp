@@ -26,6 +26,16 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
   }
 }
 
+legsim_status work_layout(Sim &sim, uint32_t mask) {
+  Data &d = sim.data;
+  if (d.work_mask == int32_t(mask)) return LEGSIM_OK;
+  d.work_mask = -1;
+  legsim_status s = layout_build(sim.model, mask, 0, d.work);
+  if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
+  if (s == LEGSIM_OK) d.work_mask = int32_t(mask);
+  return s;
+}
+
 legsim_status stops_layout(Sim &sim) {
   Data &d = sim.data;
   legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn);

@@ -147,6 +147,8 @@ bool state_sane(const VecQ &q, const VecQ &qd, int n) {
 }
 
 legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord) {
+  if (ncoord == 0) return work_layout(sim, act_mask);
+  sim.data.work_mask = -1;  // coordinate rows: built for this call only
   legsim_status s = layout_build(sim.model, act_mask, ncoord, sim.data.work);
   return s == LEGSIM_OK ? layout_finish(sim.data.work, sim.data.drivers) : s;
 }
@@ -223,6 +225,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   for (int a = 0; a < m.na; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
   std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
   d.stop_mask = 0;
+  d.work_mask = -1;
   for (int f = 0; f < m.nf; ++f) {
     d.force_value[f][0] = real(model->force[f].value[0]);
     d.force_value[f][1] = real(model->force[f].value[1]);

@@ -17,8 +17,7 @@ legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *r
     d.drivers.accel[a] = accel[a];
   }
   d.drivers.ncoord = 0;
-  legsim_status s = layout_build(m, (1u << m.na) - 1, 0, d.work);
-  if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
+  legsim_status s = work_layout(sim, (1u << m.na) - 1);
   VecQ q = d.q;
   if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;

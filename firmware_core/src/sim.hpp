@@ -157,6 +157,7 @@ struct Data {
   uint32_t stop_mask;         // actuators resting on a stroke stop (the active set)
   DriverValues stop_drivers;  // their stop lengths (rate and acceleration 0)
   Layout work;    // joints plus drivers, for assembly and driven analyses
+  int32_t work_mask;  // the actuator set Layout work was built for; -1: none or with coordinates
   Rows rows;
   Factor factor;
   DriverValues drivers;
@@ -216,6 +217,9 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
 // have to pull is let go. changed: the active set changed (derivative anew).
 legsim_status stroke_limits_enforce(Sim &sim, bool &changed);
 legsim_status stroke_stops_release(Sim &sim, bool &changed);
+// Data::work for the joints plus length drivers of the actuators in mask (built
+// once per set: analyses called along a motion do not rebuild it).
+legsim_status work_layout(Sim &sim, uint32_t mask);
 // Rebuilds Data::dyn for Data::stop_mask.
 legsim_status stops_layout(Sim &sim);
 

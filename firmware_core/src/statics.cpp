@@ -32,8 +32,7 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
   const Model &m = sim.model;
   Data &d = sim.data;
   lock_all_actuators(sim);
-  legsim_status s = layout_build(m, (1u << m.na) - 1, 0, d.work);
-  if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
+  legsim_status s = work_layout(sim, (1u << m.na) - 1);
   if (s != LEGSIM_OK) return s;
   d.qd.setZero();
   s = dynamics_solve(sim, d.work, d.q, d.qd, d.qdd);
@@ -77,8 +76,7 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
         d.drivers.rate[a] = d.drivers.accel[a] = 0;
       }
       d.drivers.ncoord = 0;
-      legsim_status s = layout_build(m, (1u << m.na) - 1, 0, d.work);
-      if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
+      legsim_status s = work_layout(sim, (1u << m.na) - 1);
       VecQ q = d.q;
       if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
       if (s == LEGSIM_OK) {
