@@ -185,7 +185,9 @@ const legsim_model_desc *legsim_model(const legsim_sim *sim);
 typedef struct legsim_report {
   int32_t iterations;         /* Newton iterations of the last solve */
   legsim_real residual;       /* max |Phi| after the last solve (m or rad) */
-  legsim_real condition;      /* estimate of cond(Phi_q) (sqrt of the Cholesky pivot ratio) */
+  legsim_real condition;      /* condition of Phi_q M^-1/2 (or of Phi_q in assembly): after an
+                                 assembly its 2-norm condition (power iterations on the factor);
+                                 after a step the cheaper pivot-spread estimate of its last solve */
   uint32_t events;            /* legsim_event bits raised since the last legsim_clear_events */
 } legsim_report;
 
