@@ -39,9 +39,10 @@ void stop_forces_update(Sim &sim) {
 
 legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }
 
-legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd) {
+legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
-  const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd);
+  if (factor_ready) rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows);
+  const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd, factor_ready);
   if (s != LEGSIM_OK) return s;
   stop_forces_update(sim);
   if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))

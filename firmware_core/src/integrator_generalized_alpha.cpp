@@ -94,7 +94,8 @@ legsim_status generalized_alpha_reactions(Sim &sim) {
   // reporting reactions never changes the trajectory
   const VecR lambda = d.lambda;
   VecQ qdd;
-  const legsim_status s = dynamics_state_reactions(sim, qdd);  // and the stops' forces
+  // the last Newton iteration's factorization (at q within newton_tol) serves
+  const legsim_status s = dynamics_state_reactions(sim, qdd, true);  // and the stops' forces
   d.lambda = lambda;
   return s;
 }

@@ -231,7 +231,9 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
-legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd);
+// factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within
+// the Newton tolerance, near) the current q; only the rows are evaluated anew.
+legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready = false);
 
 // ---- assembly.cpp ----
 // Project: the per-step projection (stroke stops too): cheap, no polishing, no
