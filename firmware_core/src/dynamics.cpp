@@ -46,7 +46,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   if (s != LEGSIM_OK) return s;
   stop_forces_update(sim);
   if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
-    reactions_from_multipliers(sim.model, d.dyn, d.rows, d.lambda, d.reaction);
+    reactions_from_multipliers(sim.model, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;
 }
 

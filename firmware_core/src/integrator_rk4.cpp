@@ -75,7 +75,7 @@ legsim_status rk4_step(Sim &sim) {
   d.qd = v1;
   stop_forces_update(sim);
   if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
-    reactions_from_multipliers(m, lay, d.rows, d.lambda, d.reaction);
+    reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;
 }
 #else

@@ -25,7 +25,7 @@ legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *r
   s = velocity_solve(sim, d.work, d.qd);
   if (s == LEGSIM_OK) s = dynamics_solve(sim, d.work, d.q, d.qd, d.qdd);
   if (s != LEGSIM_OK) return s;
-  reactions_from_multipliers(m, d.work, d.rows, d.lambda, d.reaction);
+  reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   for (int a = 0; a < m.na; ++a) {
     d.act[a].force = -d.lambda[m.m + a];
     if (actuator_force) actuator_force[a] = d.act[a].force;

@@ -6,9 +6,10 @@
 
 namespace legsim {
 
-void reactions_from_multipliers(const Model &model, const Layout &layout, const Rows &rows,
-                                const VecR &lambda, legsim_reaction *out) {
-  (void)layout;  // the joint equations lead every layout, in joint order
+// The joint equations lead every layout, in joint order, so row j of a joint is
+// the same in the joints-only, dynamics (stops) and driven layouts.
+void reactions_from_multipliers(const Model &model, const Rows &rows, const VecR &lambda,
+                                legsim_reaction *out) {
   for (int j = 0; j < model.nj; ++j) {
     const Joint &jt = model.joint[j];
     real g[3] = {0, 0, 0};

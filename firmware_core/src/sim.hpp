@@ -248,8 +248,8 @@ legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
 legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
 
 // ---- reactions.cpp ----
-void reactions_from_multipliers(const Model &model, const Layout &layout, const Rows &rows,
-                                const VecR &lambda, legsim_reaction *out);
+void reactions_from_multipliers(const Model &model, const Rows &rows, const VecR &lambda,
+                                legsim_reaction *out);
 
 // ---- integrators ----
 legsim_status rk4_step(Sim &sim);

@@ -46,7 +46,7 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
   }
   if (!(worst <= kBalanceTol * scale)) return LEGSIM_ERR_NO_EQUILIBRIUM;
   d.qdd.setZero();
-  reactions_from_multipliers(m, d.work, d.rows, d.lambda, d.reaction);
+  reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   for (int a = 0; a < m.na; ++a) {
     d.act[a].force = -d.lambda[m.m + a];  // F = -lambda_driver: the driver pulls back on the rod
     if (actuator_force) actuator_force[a] = d.act[a].force;
