@@ -53,17 +53,24 @@ def plot_motion(ev: Evaluation, path: Path, n_frames: int = 8) -> Path:
     fig, ax = plt.subplots(figsize=(7, 7))
     n = len(d["t"])
     idx = np.unique(np.linspace(0, n - 1, min(n_frames, n)).round().astype(int))
-    cmap = plt.get_cmap("viridis")
+    cmap = plt.get_cmap("viridis", len(idx))
     widths = [5, 3, 4, 5, 3, 4]
     for k, i in enumerate(idx):
-        c = cmap(k / max(len(idx) - 1, 1))
+        c = cmap(k)
         for b, (p0, p1) in enumerate(_segments(leg, d["q"][i])):
             ax.plot([p0[0], p1[0]], [p0[1], p1[1]], "-", color=c, lw=widths[b % len(widths)],
                     alpha=0.85, solid_capstyle="round")
         f = _foot(leg, d["q"][i])
         ax.plot(f[0], f[1], "o", color=c, ms=5)
-        ax.annotate(f"{d['t'][i]:.3g}s", f, textcoords="offset points", xytext=(6, -4),
-                    fontsize=7, color=c)
+    # the instants' times on a colour bar, evenly spaced: labels beside the feet overlapped
+    # where the foot barely moves
+    import matplotlib as mpl
+    norm = mpl.colors.BoundaryNorm(np.arange(len(idx) + 1) - 0.5, len(idx))
+    cb = fig.colorbar(mpl.cm.ScalarMappable(norm=norm, cmap=cmap), ax=ax, shrink=0.8,
+                      ticks=np.arange(len(idx)))
+    cb.ax.set_yticklabels([f"{d['t'][i]:.4g}" for i in idx])
+    cb.ax.minorticks_off()
+    cb.set_label("t (s) of each instant")
     foot = _foot(leg, d["q"])
     ax.plot(foot[:, 0], foot[:, 1], "-", color="k", lw=1, label="foot, hil_sim")
     if ev.ref is not None:

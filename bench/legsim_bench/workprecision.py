@@ -1,6 +1,6 @@
 """Work-precision of legsim against the bench's reference and the peer engines.
 
-    legsim-bench workprecision [--quick] [--out DIR]
+    legsim-bench workprecision [--quick] [--step-sizes H...] [--out DIR | --update-results]
     python -m legsim_bench.workprecision [--quick] [--out DIR]      (from bench/)
 
 For each integrator of the core (RK4 + projection, generalized-alpha index 3),
@@ -34,9 +34,10 @@ Every peer method is first checked to converge to the same reference (error
 falls with h, at the finest h it is below 1e-5 and at most 1e-3 times the
 coarsest error); one that does not is reported and left out of the ratio.
 
-Outputs (``--out``, default bench/results): workprecision.csv, workprecision.md
-(tables, the ratio of legsim's time to the best peer's at equal error for
-error levels 1e-4 ... 1e-10, machine info) and workprecision.png (log-log).
+Outputs (``--out``, default out/bench-results/; ``--update-results``: the
+committed bench/results/): workprecision.csv, workprecision.md (tables, the
+ratio of legsim's time to the best peer's at equal error for error levels
+1e-4 ... 1e-10, machine info) and workprecision.png (log-log).
 ``--quick`` runs 3 step sizes and few repetitions (about a minute) and writes
 workprecision_quick.* instead.
 """
@@ -44,9 +45,7 @@ from __future__ import annotations
 
 import argparse
 import csv
-import datetime as _dt
 import math
-import os
 import platform
 import statistics
 import sys
@@ -58,9 +57,9 @@ from typing import Callable, Optional
 import numpy as np
 
 from . import core as lc
+from . import results
 
 REPO_ROOT = lc.REPO_ROOT
-DEFAULT_OUT = REPO_ROOT / "bench" / "results"
 MODEL_TOML = REPO_ROOT / "models" / "leg.toml"
 
 T_END = 0.1
@@ -434,21 +433,9 @@ def ratio_table(pts, meths, scene, conv, max_h=RANGE_MAX_H) -> list:
 
 # ---------------------------------------------------------------- output
 def machine_info() -> dict:
-    cpu = platform.processor() or ""
-    try:
-        for line in Path("/proc/cpuinfo").read_text().splitlines():
-            if line.startswith("model name"):
-                cpu = line.split(":", 1)[1].strip()
-                break
-    except OSError:
-        pass
-    info = {"cpu": cpu, "cores": os.cpu_count(), "date": _dt.datetime.now().isoformat(timespec="seconds"),
-            "python": platform.python_version(), "numpy": np.__version__,
-            "platform": platform.platform()}
-    try:
-        info["loadavg"] = " ".join(f"{x:.2f}" for x in os.getloadavg())
-    except OSError:
-        info["loadavg"] = "?"
+    """results.snapshot() (CPU, cores, load, date, commit) and the Python packages' versions."""
+    info = results.snapshot()
+    info.update(python=platform.python_version(), numpy=np.__version__)
     for mod in ("scipy", "matplotlib"):
         try:
             info[mod] = __import__(mod).__version__
@@ -465,21 +452,9 @@ def machine_info() -> dict:
 
 def describe_source(src: Path) -> str:
     """A source tree and its commit (git, or the COMMIT file of an exported tree)."""
-    import subprocess
-    src = Path(src)
-    commit = ""
-    if (src / ".git").exists():
-        r = subprocess.run(["git", "-C", str(src), "rev-parse", "--short", "HEAD"],
-                           capture_output=True, text=True)
-        if r.returncode == 0:
-            dirty = subprocess.run(["git", "-C", str(src), "status", "--porcelain", "--",
-                                    "firmware_core", "cmake", "CMakeLists.txt",
-                                    "CMakePresets.json", "models"],
-                                   capture_output=True, text=True).stdout.strip()
-            commit = r.stdout.strip() + (" with uncommitted changes" if dirty else "")
-    elif (src / "COMMIT").is_file():
-        commit = (src / "COMMIT").read_text().strip()[:12] + " (exported tree)"
-    return f"{src}" + (f" at {commit}" if commit else "")
+    c = results.commit(Path(src), paths=("firmware_core", "cmake", "CMakeLists.txt",
+                                          "CMakePresets.json", "models"))
+    return f"{src}" + ("" if c.startswith("unknown") else f" at {c}")
 
 
 def library_info() -> dict:
@@ -529,32 +504,37 @@ def write_csv(path: Path, pts) -> None:
                         f"{(p.per_sim_s() * T_END / n * 1e6):.4f}"])
 
 
+# one colour and one marker per engine, method and precision (float is not double dashed)
+STYLES = {
+    "legsim/rk4/double": ("tab:blue", "o", "-"),
+    "legsim/rk4-tol1e-13/double": ("tab:cyan", "P", ":"),
+    "legsim/galpha/double": ("tab:green", "s", "-"),
+    "legsim/rk4/float": ("tab:pink", "h", "--"),
+    "legsim/galpha/float": ("tab:olive", "d", "--"),
+    "exudyn/galpha": ("tab:red", "^", "-"),
+    "exudyn/trapezoidal_index2": ("tab:orange", "v", "-"),
+    "mujoco/rk4": ("tab:purple", "D", "-"),
+    "mujoco/euler": ("tab:brown", "x", "-"),
+}
+SCENE_LINES = ("-", ":")  # the reaction panel tells the scenes apart by line style
+
+
 def plot(path: Path, pts, meths, scenes, id_rows) -> bool:
     try:
         import matplotlib
         matplotlib.use("Agg")
         import matplotlib.pyplot as plt
+        from matplotlib.lines import Line2D
     except ImportError:
         return False
-    styles = {
-        "legsim/rk4/double": ("tab:blue", "o", "-"),
-        "legsim/rk4-tol1e-13/double": ("tab:cyan", "o", ":"),
-        "legsim/galpha/double": ("tab:green", "s", "-"),
-        "legsim/rk4/float": ("tab:blue", "o", "--"),
-        "legsim/galpha/float": ("tab:green", "s", "--"),
-        "exudyn/galpha": ("tab:red", "^", "-"),
-        "exudyn/trapezoidal_index2": ("tab:orange", "v", "-"),
-        "mujoco/rk4": ("tab:purple", "D", "-"),
-        "mujoco/euler": ("tab:brown", "x", "-"),
-    }
-    fig, axes = plt.subplots(2, 2, figsize=(14, 11))
+    fig, axes = plt.subplots(2, 2, figsize=(14, 12), layout="constrained")
     for ax, scene in zip(axes[0], scenes):
         for m in meths:
             ps = sorted([p for p in pts if p.method is m and p.scene == scene and p.ok],
                         key=lambda p: -p.h)
             if not ps:
                 continue
-            c, mk, ls = styles.get(m.key, (None, ".", "-"))
+            c, mk, ls = STYLES.get(m.key, ("tab:gray", ".", "-"))
             x = [p.per_sim_s(corrected=not m.is_legsim) for p in ps]
             y = [max(p.pos_err, 1e-16) for p in ps]
             ax.loglog(x, y, color=c, marker=mk, ls=ls, label=m.label, ms=5)
@@ -567,9 +547,17 @@ def plot(path: Path, pts, meths, scenes, id_rows) -> bool:
         ax.set_xlabel("wall time per simulated second (s), median")
         ax.set_ylabel("max |q - q_ref| over 18 coordinates (m, rad)")
         ax.grid(True, which="both", alpha=0.3)
-    axes[0][0].legend(fontsize=7, loc="lower left")
+    # one legend for both scenes, above the panels: inside, it covered curves
+    handles, labels = {}, {}
+    for ax in axes[0]:
+        for h, lab in zip(*ax.get_legend_handles_labels()):
+            handles.setdefault(lab, h)
+    if handles:
+        fig.legend(list(handles.values()), list(handles), loc="outside upper center", ncol=3,
+                   fontsize=8, title="grey band: the target's error range 1e-10 ... 1e-4; "
+                   "labels: step size h (s)", title_fontsize=8)
     ax = axes[1][0]
-    for scene, ls in zip(scenes, ("-", "--")):
+    for scene, ls in zip(scenes, SCENE_LINES):
         for m in meths:
             if not m.is_legsim:
                 continue
@@ -577,34 +565,41 @@ def plot(path: Path, pts, meths, scenes, id_rows) -> bool:
                          and math.isfinite(p.reac_err)], key=lambda p: -p.h)
             if not ps:
                 continue
-            c, mk, _ = styles.get(m.key, (None, ".", "-"))
+            c, mk, _ = STYLES.get(m.key, ("tab:gray", ".", "-"))
             ax.loglog([p.per_sim_s() for p in ps], [max(p.reac_err, 1e-16) for p in ps],
-                      color=c, marker=mk, ls=ls, ms=4,
-                      label=f"{m.label} ({scene})", alpha=1.0 if m.precision == "double" else 0.5)
+                      color=c, marker=mk, ls=ls, ms=4)
     ax.set_title("legsim joint reactions: max |R - R_ref| at t = 0.1 s vs time")
     ax.set_xlabel("wall time per simulated second (s), median")
     ax.set_ylabel("reaction error (N, N m)")
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=6)
+    # colours and markers as above; the legend only says which line style is which scene
+    ax.legend([Line2D([], [], color="k", ls=ls) for ls in SCENE_LINES[:len(scenes)]],
+              list(scenes), fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0),
+              title="scene", title_fontsize=8)
     ax = axes[1][1]
+    prec_colour = {"double": "tab:blue", "float": "tab:pink"}
     for r in id_rows:
-        for key, mk in (("force_err", "o"), ("reac_err", "s"), ("pos_err", "^")):
-            ax.loglog([r["per_call_s"] * 1e3], [max(r[key], 1e-16)], marker=mk, ls="",
-                      color="tab:blue" if r["precision"] == "double" else "tab:green",
-                      label=f"{r['precision']}: {key}")
-    ax.set_title("inverse dynamics (length sinusoid): error vs time per simulated s at 1 kHz")
-    ax.set_xlabel("wall time per simulated second at 1000 calls/s (s)")
+        for key, mk, what in (("force_err", "o", "actuator forces (N)"),
+                              ("reac_err", "s", "reactions (N, N m)"),
+                              ("pos_err", "^", "positions (m, rad)")):
+            ax.semilogy([r["per_call_s"] * 1e6], [max(r[key], 1e-16)], marker=mk, ls="", ms=7,
+                        color=prec_colour.get(r["precision"], "tab:gray"),
+                        label=f"{r['precision']}: {what}")
+    ax.set_title("inverse dynamics (length sinusoid): error vs time per call")
+    ax.set_xlabel("time per legsim_inverse_dynamics call (us), median")
     ax.set_ylabel("max error over 50 samples (N, N m, m)")
+    ax.margins(x=0.25)
+    ax.xaxis.set_major_locator(matplotlib.ticker.MaxNLocator(5))
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
+    if id_rows:
+        ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return True
 
 
 def write_md(path: Path, pts, meths, scenes, steps, conv, ratios, id_rows, info, libinfo, refs,
-             quick, elapsed, png_name, ratios_beyond=None, beyond=()) -> None:
+             quick, elapsed, png_name, ratios_beyond=None, beyond=(), info_end=None) -> None:
     L = []
     a = L.append
     a("# Work-precision: legsim vs Exudyn and MuJoCo on the leg")
@@ -612,12 +607,9 @@ def write_md(path: Path, pts, meths, scenes, steps, conv, ratios, id_rows, info,
     a(f"Generated by `legsim-bench workprecision{' --quick' if quick else ''}` "
       f"(bench/legsim_bench/workprecision.py) in {elapsed:.0f} s.")
     a("")
-    a("## Machine")
-    a("")
-    a(f"- CPU: {info['cpu']}, {info['cores']} cores; {info['platform']}")
-    a(f"- date: {info['date']}; load average at start / end: {info.get('load_start', '?')} / "
-      f"{info.get('loadavg', '?')} (the machine is shared: timings scatter, which is why "
-      "repetitions are interleaved across engines and medians are used)")
+    L.extend(results.machine_section(info, info_end)[:-1])
+    a("- the machine may be shared: timings scatter, which is why repetitions are interleaved "
+      "across engines and medians are used")
     a(f"- Python {info['python']}, numpy {info['numpy']}, scipy {info['scipy']}, matplotlib "
       f"{info['matplotlib']}, exudyn {info.get('exudyn', '?')}, mujoco {info.get('mujoco', '?')}")
     for prec, s in libinfo.items():
@@ -750,8 +742,10 @@ def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.description = __doc__.split("\n\n")[0]
     p.add_argument("--quick", action="store_true",
                    help="3 step sizes, few repetitions (about a minute); writes workprecision_quick.*")
-    p.add_argument("--out", default=str(DEFAULT_OUT), help="output directory (default bench/results)")
-    p.add_argument("--steps", type=float, nargs="+", default=None, help="step sizes (s)")
+    results.add_output_options(p)
+    p.add_argument("--step-sizes", type=float, nargs="+", default=None, metavar="H",
+                   help="step sizes (s), each dividing 0.1 s (default 1e-2 ... 1e-5)")
+    results.refuse_renamed(p, "--steps", "--step-sizes", "step sizes in s")
     p.add_argument("--scenes", nargs="+", default=list(SCENES), choices=list(SCENES))
     p.add_argument("--no-peers", action="store_true", help="legsim only")
     p.add_argument("--no-float", action="store_true", help="double build only")
@@ -767,8 +761,8 @@ def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
 def run(args) -> int:
     t_start = time.time()
     quick = bool(getattr(args, "quick", False))
-    steps = tuple(args.steps) if args.steps else (QUICK_STEPS if quick else STEPS)
-    beyond = () if (quick or args.no_beyond or args.steps) else STEPS_BEYOND
+    steps = tuple(args.step_sizes) if args.step_sizes else (QUICK_STEPS if quick else STEPS)
+    beyond = () if (quick or args.no_beyond or args.step_sizes) else STEPS_BEYOND
     for h in steps:
         if abs(T_END / h - round(T_END / h)) > 1e-9:
             print(f"step {h} does not divide {T_END} s", file=sys.stderr)
@@ -776,7 +770,7 @@ def run(args) -> int:
     target_s = args.target_s if args.target_s is not None else (0.15 if quick else 1.0)
     min_reps = args.min_reps if args.min_reps is not None else (3 if quick else 7)
     max_reps = args.max_reps if args.max_reps is not None else (15 if quick else 61)
-    out = Path(args.out)
+    out = results.output_dir(args)
     out.mkdir(parents=True, exist_ok=True)
     stem = "workprecision_quick" if quick else "workprecision"
 
@@ -791,7 +785,6 @@ def run(args) -> int:
             print(e, file=sys.stderr)
         return 2
     info = machine_info()
-    info["load_start"] = info.get("loadavg", "?")
     scenes = list(args.scenes)
     meths = methods(with_float=not args.no_float, with_peers=not args.no_peers)
     log(f"# methods: {', '.join(m.key for m in meths)}")
@@ -822,13 +815,13 @@ def run(args) -> int:
     ratios = {s: ratio_table(pts, meths, s, conv) for s in scenes}
     ratios_beyond = ({s: ratio_table(pts, meths, s, conv, max_h=max(beyond)) for s in scenes}
                      if beyond else None)
-    info.update({k: v for k, v in machine_info().items() if k == "loadavg"})
+    info_end = results.snapshot()
     csv_path, md_path, png_path = out / f"{stem}.csv", out / f"{stem}.md", out / f"{stem}.png"
     write_csv(csv_path, pts)
     have_png = plot(png_path, pts, meths, scenes, id_rows)
     write_md(md_path, pts, meths, scenes, steps, conv, ratios, id_rows, info, library_info(),
              refs, quick, time.time() - t_start, png_path.name if have_png else "(matplotlib absent)",
-             ratios_beyond=ratios_beyond, beyond=beyond)
+             ratios_beyond=ratios_beyond, beyond=beyond, info_end=info_end)
     log(f"# wrote {csv_path}, {md_path}" + (f", {png_path}" if have_png else ""))
     for s in scenes:
         log(f"## {s}")
