@@ -593,6 +593,8 @@ def plot(path: Path, pts, meths, scenes, id_rows) -> bool:
     ax.grid(True, which="both", alpha=0.3)
     if id_rows:
         ax.legend(fontsize=8, loc="upper left", bbox_to_anchor=(1.0, 1.0))
+    for ax in (*axes[0], axes[1][0]):  # over less than a decade the minor labels overlapped
+        ax.xaxis.set_minor_formatter(matplotlib.ticker.NullFormatter())
     fig.savefig(path, dpi=110)
     plt.close(fig)
     return True
