@@ -732,7 +732,8 @@ def _fault_checks(scene: Scene, rec: dict, d) -> list[CheckResult]:
                     got = i
                     break
             ok = got is not None and (trip is None or faults[got]["step"] == trip)
-            det = f"{inj['label']}: timeout {scene.cmd_timeout_ms} ms after the ACT_CMD at step {last_cmd}"
+            # the row's name carries the label: the detail does not repeat it
+            det = f"timeout {scene.cmd_timeout_ms} ms after the ACT_CMD at step {last_cmd}"
             if got is not None:
                 used.add(got)
                 f = faults[got]
@@ -759,7 +760,7 @@ def _fault_checks(scene: Scene, rec: dict, d) -> list[CheckResult]:
             break
         ok = got is not None
         near = [f["code"] for f in faults if f["step"] == inj["step"]]
-        det = f"{inj['label']}: frame 0x{inj['frame_id']:03x} len {inj['length']}"
+        det = f"frame 0x{inj['frame_id']:03x} len {inj['length']}"
         if inj.get("seq") is not None:
             det += f" seq {inj['seq']}"
         if got is not None:

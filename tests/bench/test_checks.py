@@ -196,6 +196,20 @@ def test_bad_input_faults_are_matched(bad_rec):
     assert all(r.got == r.want for r in rows)
 
 
+def test_a_fault_label_is_printed_once_per_line(bad_rec):
+    # it used to read "NaN force setpoint: NaN force setpoint: frame 0x100 ..."
+    sc, rec = bad_rec
+    text = format_table(evaluate(rec, ROOT), details=True)
+    labels = {inj.label for inj in sc.injections}
+    assert "NaN force setpoint" in labels
+    for label in labels:
+        lines = [l for l in text.splitlines() if label in l]
+        assert len(lines) == 2, (label, lines)   # the table row and its detail line
+        assert all(l.count(label) == 1 for l in lines), lines
+    detail = next(l for l in text.splitlines() if "NaN force setpoint: frame 0x" in l)
+    assert detail.strip().startswith("fault NOT_FINITE: NaN force setpoint: frame 0x100 len 64")
+
+
 # ---- perturbed recordings fail the right check --------------------------------------------
 
 def perturbed(rec, fn):
