@@ -1,18 +1,18 @@
-// legsim_cli: runs a scene file (scenes/cli/*.toml) and writes its results as JSON
-// or CSV.
+// legsim_cli: runs a scene file (scenes/*.toml, schema in scenes/README.md) and writes
+// its results as JSON or CSV, sample by sample as the run makes them.
 //
 //   legsim_cli SCENE.toml [--out FILE.json|FILE.csv] [--format json|csv]
+//   legsim_cli SCENE.toml --check
 //
 // The scene names the model file (loaded at run time, host/model_toml.cpp) or
-// "builtin:leg" (the leg compiled in from models/leg.toml), the analysis and its
-// inputs; see host/scene_toml.hpp. Exit status: 0 ok, 1 the run failed (the output
-// holds the samples up to the failure and the status), 2 bad usage or a bad scene
-// or model (nothing is written).
+// "builtin:leg" (the default: the leg compiled in from models/leg.toml), the analysis
+// and its inputs. Exit status: 0 ok, 1 the run failed (the output holds the samples up
+// to the failure; JSON also the status), 2 bad usage or a bad scene or model (nothing
+// is written).
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <iostream>
-#include <sstream>
 #include <string>
 
 #include "legsim/legsim.h"
@@ -24,10 +24,12 @@ namespace {
 
 const char *kUsage =
     "usage: legsim_cli SCENE.toml [--out FILE.json|FILE.csv] [--format json|csv]\n"
-    "  Runs the scene (model, analysis, inputs) and writes time, body coordinates,\n"
-    "  actuator lengths and forces, joint reactions, constraint residual and status.\n"
-    "  Without --out the output goes to stdout; the format follows --format, else the\n"
-    "  extension of --out, else JSON.\n";
+    "       legsim_cli SCENE.toml --check\n"
+    "  Runs the scene (model, analysis, inputs; scenes/README.md) and writes time, body\n"
+    "  coordinates, actuator lengths and forces, joint reactions, constraint residual and\n"
+    "  status, sample by sample. Without --out the output goes to stdout; the format\n"
+    "  follows --format, else the extension of --out, else JSON.\n"
+    "  --check: read the scene and its model, print the resolved scene as JSON, run nothing.\n";
 
 int usage_error(const std::string &msg) {
   std::cerr << "legsim_cli: " << msg << "\n" << kUsage;
@@ -43,11 +45,14 @@ bool ends_with(const std::string &s, const char *suffix) {
 
 int main(int argc, char **argv) {
   std::string scene_path, out_path, format;
+  bool check_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "-h" || a == "--help") {
       std::cout << kUsage;
       return 0;
+    } else if (a == "--check") {
+      check_only = true;
     } else if (a == "--out" || a == "-o") {
       if (++i >= argc) return usage_error("--out needs a file name");
       out_path = argv[i];
@@ -111,25 +116,33 @@ int main(int argc, char **argv) {
     return 2;
   }
 
-  legsim_host::Result result;
-  legsim_host::run_scene(scene, model, result);
+  if (check_only) {
+    legsim_host::write_resolved(std::cout, scene, model);
+    return 0;
+  }
 
-  std::ostringstream text;
-  if (format == "csv")
-    legsim_host::write_csv(text, scene, model, result);
-  else
-    legsim_host::write_json(text, scene, model, result);
-  if (out_path.empty() || out_path == "-") {
-    std::cout << text.str();
-    std::cout.flush();
-  } else {
-    std::ofstream f(out_path, std::ios::binary);
-    f << text.str();
-    f.close();
-    if (!f) {
+  // The output is opened only now (a bad scene or model writes nothing) and written as
+  // the run goes: a long run keeps no history in memory.
+  std::ofstream file;
+  const bool to_stdout = out_path.empty() || out_path == "-";
+  if (!to_stdout) {
+    file.open(out_path, std::ios::binary);
+    if (!file) {
       std::cerr << "legsim_cli: error: cannot write " << out_path << "\n";
       return 2;
     }
+  }
+  std::ostream &out = to_stdout ? std::cout : file;
+  legsim_host::JsonWriter json(out, scene, model);
+  legsim_host::CsvWriter csv(out, scene, model);
+  legsim_host::ResultWriter &writer = format == "csv" ? static_cast<legsim_host::ResultWriter &>(csv)
+                                                      : static_cast<legsim_host::ResultWriter &>(json);
+  legsim_host::Result result;
+  legsim_host::run_scene(scene, model, writer, result);
+  out.flush();
+  if (!out) {
+    std::cerr << "legsim_cli: error: cannot write " << (to_stdout ? "stdout" : out_path) << "\n";
+    return 2;
   }
   if (result.status != LEGSIM_OK) {
     std::cerr << "legsim_cli: error: " << scene_path << ": " << result.error << "\n";

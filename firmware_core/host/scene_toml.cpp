@@ -3,6 +3,7 @@
 #include "scene_toml.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -20,6 +21,8 @@ namespace legsim_host {
 namespace {
 
 constexpr double kTwoPi = 6.283185307179586476925286766559;
+constexpr double kGridTolS = 1e-9;               // a time is on the step grid within 1 ns
+constexpr int64_t kMaxRecordEvery = 10000000;    // the DBC's largest STEP (Ctrl_NSteps)
 
 struct SceneError {
   std::string message;
@@ -106,8 +109,13 @@ Signal parse_signal(Table t, const std::string &where) {
     fail(where + "give exactly one of 'value', 'sinusoid' or 'step'");
   Signal s;
   if (has_value) {
-    s.kind = Signal::kConstant;
-    s.value = real_of(t->get("value"), where + "'value'");
+    Node v = t->get("value");
+    if (v->is_string() && *v->value<std::string_view>() == "initial") {
+      s.kind = Signal::kInitial;  // the assembled length, filled in at run time
+    } else {
+      s.kind = Signal::kConstant;
+      s.value = real_of(v, where + "'value' (a number, or \"initial\")");
+    }
   } else if (has_sin) {
     Table st = t->get("sinusoid")->as_table();
     if (!st) fail(where + "'sinusoid' must be a table {offset, amplitude, frequency, phase}");
@@ -118,7 +126,7 @@ Signal parse_signal(Table t, const std::string &where) {
     s.amplitude = get_real(st, "amplitude", w, true, 0);
     s.frequency_hz = get_real(st, "frequency", w, true, 0);
     s.phase_rad = get_real(st, "phase", w, false, 0);
-    if (s.frequency_hz < 0) fail(w + "'frequency' must be >= 0 (Hz)");
+    if (!(s.frequency_hz > 0)) fail(w + "'frequency' must be > 0 (Hz; a constant is 'value')");
   } else {
     Table st = t->get("step")->as_table();
     if (!st) fail(where + "'step' must be a table {t0, before, after}");
@@ -126,7 +134,7 @@ Signal parse_signal(Table t, const std::string &where) {
     check_keys(st, {"t0", "before", "after"}, w);
     s.kind = Signal::kStep;
     s.t0 = get_real(st, "t0", w, true, 0);
-    s.before = get_real(st, "before", w, true, 0);
+    s.before = get_real(st, "before", w, false, 0);
     s.after = get_real(st, "after", w, true, 0);
   }
   return s;
@@ -151,21 +159,86 @@ std::string dirname_of(const std::string &path) {
   return path.substr(0, p + 1);
 }
 
+// Keys and values of the two former schemas (scenes/cli and bench/scenes) and what they are
+// now: an old file gets a message naming the new key (the bench says the same words).
+struct Renamed {
+  const char *old_key;
+  const char *message;
+};
+const Renamed kRenamedKeys[] = {
+    {"output_every", "'output_every' is now 'record_every' (steps between recorded samples)"},
+    {"decimation", "'decimation' is now 'record_every' (steps between recorded samples)"},
+    {"step",
+     "'step' is now 'step_s' (the step size, s); 'step = { t0, before, after }' is a step "
+     "signal in a [[command]]"},
+    {"foot_load", "'foot_load' is now a force element value: [forces] foot_load = [Fx, Fy] (N)"},
+};
+struct RenamedValue {
+  const char *old_value, *new_value;
+};
+const RenamedValue kRenamedValues[] = {
+    {"force_zero", "zero_force"}, {"zero-force", "zero_force"}, {"hold-length", "hold_length"}};
+
+std::string choice(Table t, const char *key, const char *const *options, size_t n,
+                   const std::string &dflt) {
+  const std::string v = get_string(t, key, "", false, dflt);
+  for (size_t i = 0; i < n; ++i)
+    if (v == options[i]) return v;
+  for (const auto &r : kRenamedValues)
+    if (v == r.old_value)
+      fail(std::string(key) + " = \"" + v + "\" is now " + key + " = \"" + r.new_value + "\"");
+  std::string list;
+  for (size_t i = 0; i < n; ++i) list += (i ? (i + 1 == n ? " or " : ", ") : "") + std::string(options[i]);
+  fail(q(key) + " must be " + list + " (got " + q(v) + ")");
+}
+
+// A time on the step grid: t = k h exactly (within 1 ns), as the bench requires.
+int64_t on_grid(double t, int64_t step_ns, const std::string &what) {
+  const double k = std::round(t * 1e9 / static_cast<double>(step_ns));
+  if (std::fabs(k * static_cast<double>(step_ns) / 1e9 - t) > kGridTolS)
+    fail(what + " " + num(t) + " s is not on the step grid (h = " + num(step_ns / 1e9) + " s)");
+  return static_cast<int64_t>(k);
+}
+
+std::string stem_of(const std::string &path) {
+  const size_t p = path.find_last_of('/');
+  std::string base = p == std::string::npos ? path : path.substr(p + 1);
+  const size_t dot = base.rfind('.');
+  return dot == std::string::npos || dot == 0 ? base : base.substr(0, dot);
+}
+
+bool is_name(const std::string &s) {
+  if (s.empty()) return false;
+  for (unsigned char c : s)
+    if (!(std::isalnum(c) || c == '_' || c == '-' || c == '.')) return false;
+  return true;
+}
+
 void parse_scene(Table doc, Scene &s) {
-  check_keys(doc, {"description", "model", "variant", "analysis", "integrator", "step", "duration",
-                   "output_every", "disable", "rho_inf", "max_newton_iter", "newton_tol", "pose",
-                   "lengths", "grid", "forces", "command"},
+  for (const auto &r : kRenamedKeys)
+    if (doc->get(r.old_key)) fail(r.message);
+  check_keys(doc, {"description", "name", "demo", "model", "variant", "analysis", "integrator",
+                   "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
+                   "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
+                   "forces", "command", "inject", "checks"},
              "");
   s.description = get_string(doc, "description", "", false);
-  s.model = get_string(doc, "model", "", true);
+  s.name = get_string(doc, "name", "", false, stem_of(s.path));
+  if (!is_name(s.name)) fail("'name' must be letters, digits, '_', '-', '.' (got " + q(s.name) + ")");
+  if (Node dv = doc->get("demo")) {
+    if (!dv->is_boolean()) fail("'demo' must be true or false");
+    s.demo = *dv->value<bool>();
+  }
+  s.model = get_string(doc, "model", "", false, "builtin:leg");
   if (s.model.rfind("builtin:", 0) == 0) {
     s.builtin = s.model.substr(8);
   } else {
-    s.model_path = (!s.model.empty() && s.model[0] == '/') ? s.model : dirname_of(s.path) + s.model;
+    if (s.model.empty()) fail("'model' must name a model file (or \"builtin:leg\")");
+    s.model_path = s.model[0] == '/' ? s.model : dirname_of(s.path) + s.model;
   }
   s.variant = get_string(doc, "variant", "", false, "revolute");
 
-  const std::string an = get_string(doc, "analysis", "", true);
+  const std::string an = get_string(doc, "analysis", "", false, "dynamics");
   const struct {
     const char *name;
     Analysis a;
@@ -184,17 +257,23 @@ void parse_scene(Table doc, Scene &s) {
     fail("'analysis' must be dynamics, statics, statics_sweep, inverse_dynamics or assembly (got " +
          q(an) + ")");
   const bool timed = s.analysis == Analysis::kDynamics || s.analysis == Analysis::kInverseDynamics;
+  const bool dynamics = s.analysis == Analysis::kDynamics;
+  auto only = [&](const char *key, bool applies, const char *which) {
+    if (doc->get(key) && !applies) fail(q(key) + " applies to " + which + " only");
+  };
 
   s.options = legsim_default_options();
-  const std::string integ = get_string(doc, "integrator", "", false, "rk4");
-  if (integ == "rk4")
-    s.options.integrator = LEGSIM_INTEGRATOR_RK4;
-  else if (integ == "generalized_alpha")
-    s.options.integrator = LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
-  else
-    fail("'integrator' must be rk4 or generalized_alpha (got " + q(integ) + ")");
-  s.options.step_s = get_real(doc, "step", "", false, s.options.step_s);
-  if (!(s.options.step_s > 0)) fail("'step' must be > 0 (got " + num(s.options.step_s) + ")");
+  static const char *const kIntegrators[] = {"rk4", "generalized_alpha"};
+  s.options.integrator = choice(doc, "integrator", kIntegrators, 2, "rk4") == "rk4"
+                             ? LEGSIM_INTEGRATOR_RK4
+                             : LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
+  // The step size in whole nanoseconds, 1 us .. 100 ms: what the DBC's RESET carries.
+  const double h = get_real(doc, "step_s", "", false, 0.001);
+  const double h_ns = std::round(h * 1e9);
+  if (!(h > 0) || std::fabs(h_ns / 1e9 - h) > 1e-15 || h_ns < 1000 || h_ns > 1e8)
+    fail("'step_s' must be a whole number of ns in 1 us .. 100 ms (got " + num(h) + ")");
+  s.step_ns = static_cast<int64_t>(h_ns);
+  s.options.step_s = h;
   s.options.rho_inf = get_real(doc, "rho_inf", "", false, s.options.rho_inf);
   if (!(s.options.rho_inf >= 0 && s.options.rho_inf <= 1))
     fail("'rho_inf' must be in [0, 1] (got " + num(s.options.rho_inf) + ")");
@@ -221,19 +300,27 @@ void parse_scene(Table doc, Scene &s) {
     }
   }
 
+  only("duration", timed, "dynamics and inverse_dynamics");
+  only("record_every", timed, "dynamics and inverse_dynamics");
   if (timed) {
     s.duration_s = get_real(doc, "duration", "", true, 0);
     if (!(s.duration_s > 0)) fail("'duration' must be > 0 (got " + num(s.duration_s) + ")");
-    const double n = std::round(s.duration_s / s.options.step_s);
-    if (n < 1 || n > 1e9)
-      fail("'duration' / 'step' must give 1 to 1e9 steps (got " + num(n) + ")");
+    // A whole number of steps, or refused: a run never ends at a time other than the one asked.
+    const double n = std::floor(s.duration_s * 1e9 / h_ns + 0.5);
+    if (std::fabs(n * h_ns / 1e9 - s.duration_s) > kGridTolS) {
+      const double lo = std::floor(s.duration_s * 1e9 / h_ns);
+      fail("'duration' " + num(s.duration_s) + " s is not a whole number of steps of " + num(h) + " s (" +
+           num(lo * h_ns / 1e9) + " or " + num((lo + 1) * h_ns / 1e9) + " s would be)");
+    }
+    if (n < 1 || n > 1e9) fail("'duration' / 'step_s' must give 1 to 1e9 steps (got " + num(n) + ")");
     s.n_steps = static_cast<int64_t>(n);
-  } else if (doc->get("duration")) {
-    fail("'duration' applies to dynamics and inverse_dynamics only");
+    s.record_every = get_int(doc, "record_every", "", 1, 1, kMaxRecordEvery);
   }
-  s.output_every = get_int(doc, "output_every", "", 1, 1, INT64_C(1000000000));
 
-  s.pose = get_string(doc, "pose", "", false);
+  if (Node pv = doc->get("pose")) {
+    if (!pv->is_string()) fail("'pose' must be the name of a pose of the model (e.g. pose = \"stand\")");
+    s.pose = std::string(*pv->value<std::string_view>());
+  }
   if (Node lv = doc->get("lengths")) {
     if (s.analysis == Analysis::kStaticsSweep) fail("'lengths' does not apply to statics_sweep");
     const toml::array *a = lv->as_array();
@@ -241,10 +328,25 @@ void parse_scene(Table doc, Scene &s) {
     for (auto &&e : *a) s.lengths.push_back(real_of(&e, "'lengths'"));
     s.has_lengths = true;
   }
-  if (doc->get("grid")) {
-    if (s.analysis != Analysis::kStaticsSweep) fail("'grid' applies to statics_sweep only");
-  }
+  only("grid", s.analysis == Analysis::kStaticsSweep, "statics_sweep");
   s.grid = static_cast<int32_t>(get_int(doc, "grid", "", 11, 2, 1000));
+
+  only("init", dynamics, "dynamics");
+  static const char *const kInits[] = {"zero_force", "hold_length"};
+  s.init = choice(doc, "init", kInits, 2, "zero_force") == "zero_force" ? ActuatorInit::kZeroForce
+                                                                          : ActuatorInit::kHoldLength;
+  // The bench's keys: the command watchdog of the CAN link, bad frames, the checks.
+  only("cmd_timeout_ms", dynamics, "dynamics (over CAN)");
+  only("safe_state", dynamics, "dynamics (over CAN)");
+  only("inject", dynamics, "dynamics (over CAN)");
+  s.cmd_timeout_ms = get_int(doc, "cmd_timeout_ms", "", 0, 0, 65534);
+  s.safe_state = choice(doc, "safe_state", kInits, 2, "zero_force");
+  if (Node iv = doc->get("inject")) {
+    const toml::array *a = iv->as_array();
+    if (!a || !a->is_array_of_tables()) fail("'inject' must be an array of tables ([[inject]])");
+  }
+  if (Node cv = doc->get("checks"))
+    if (!cv->is_table()) fail("'checks' must be a table ([checks])");
 
   if (Node fv = doc->get("forces")) {
     Table ft = fv->as_table();
@@ -281,6 +383,8 @@ void parse_scene(Table doc, Scene &s) {
       Command c;
       c.actuator = get_string(ct, "actuator", w0, true);
       const std::string w = "command " + q(c.actuator) + ": ";
+      for (const Command &o : s.commands)
+        if (o.actuator == c.actuator) fail(w + "a second command for the same actuator");
       const std::string mode = get_string(ct, "mode", w, true);
       if (mode == "force")
         c.mode = LEGSIM_ACTUATOR_FORCE;
@@ -291,6 +395,9 @@ void parse_scene(Table doc, Scene &s) {
       if (s.analysis == Analysis::kInverseDynamics && c.mode != LEGSIM_ACTUATOR_LENGTH)
         fail(w + "inverse_dynamics prescribes lengths: use mode = \"length\"");
       c.signal = parse_signal(ct, w);
+      if (c.signal.kind == Signal::kInitial && c.mode != LEGSIM_ACTUATOR_LENGTH)
+        fail(w + "value = \"initial\" is for mode = \"length\" (hold the assembled length)");
+      if (c.signal.kind == Signal::kStep) on_grid(c.signal.t0, s.step_ns, w + "step t0 =");
       s.commands.push_back(c);
     }
   }
@@ -341,6 +448,10 @@ double Signal::max() const {
     case kStep: return std::max(before, after);
     default: return value;
   }
+}
+
+const char *init_name(ActuatorInit i) {
+  return i == ActuatorInit::kZeroForce ? "zero_force" : "hold_length";
 }
 
 const char *analysis_name(Analysis a) {
@@ -471,7 +582,9 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
       for (size_t o = 0; o < c; ++o)
         if (s.commands[o].index == cmd.index) fail(w + "the actuator is commanded twice");
       const auto &ad = m.actuator[cmd.index];
-      if (cmd.mode == LEGSIM_ACTUATOR_LENGTH) {
+      if (cmd.signal.kind == Signal::kInitial) {
+        // the assembled length: in the stroke by construction
+      } else if (cmd.mode == LEGSIM_ACTUATOR_LENGTH) {
         if (cmd.signal.min() < ad.stroke_min_m || cmd.signal.max() > ad.stroke_max_m)
           fail(w + "lengths " + num(cmd.signal.min()) + ".." + num(cmd.signal.max()) +
                " m leave the stroke [" + num(ad.stroke_min_m) + ", " + num(ad.stroke_max_m) + "]");
@@ -508,8 +621,9 @@ std::string call_failed(const std::string &what, legsim_status st) {
 }
 
 // Reads the sim's state into a sample; forces: from the analysis (or NULL: the sim's).
-Sample record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_real *forces) {
-  Sample s;
+void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_real *forces,
+            Sample &s) {
+  s = Sample{};
   s.t = t;
   const int32_t nq = legsim_n_coords(sim), na = legsim_n_actuators(sim), nj = legsim_n_joints(sim),
                 nc = legsim_n_constraints(sim);
@@ -553,10 +667,9 @@ Sample record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsi
     s.events = rep.events;
   }
   legsim_clear_events(sim);
-  return s;
 }
 
-legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
+legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out, Result &res) {
   Storage storage(legsim_sim_size());
   if (!storage.p) {
     res.error = "out of memory";
@@ -594,11 +707,22 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
       return st;
     }
   }
-  std::vector<legsim_real> forces(std::max(na, 1));
+  std::vector<legsim_real> forces(std::max(na, 1)), assembled(std::max(na, 1));
+  if (na > 0) legsim_actuator_lengths(sim, assembled.data(), nullptr);
+  // value = "initial": the length each actuator was assembled at
+  std::vector<Command> commands = sc.commands;
+  for (Command &c : commands)
+    if (c.signal.kind == Signal::kInitial) c.signal.value = assembled[c.index];
+  Sample sample;
+  auto emit = [&](double t, const legsim_real *f) {
+    record(sim, m, t, f, sample);
+    out.sample(sample);
+    ++res.n_samples;
+  };
 
   switch (sc.analysis) {
     case Analysis::kAssembly:
-      res.samples.push_back(record(sim, m, legsim_time(sim), nullptr));
+      emit(legsim_time(sim), nullptr);
       return LEGSIM_OK;
 
     case Analysis::kStatics:
@@ -607,7 +731,7 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
         res.error = call_failed("statics", st);
         return st;
       }
-      res.samples.push_back(record(sim, m, legsim_time(sim), forces.data()));
+      emit(legsim_time(sim), forces.data());
       return LEGSIM_OK;
 
     case Analysis::kStaticsSweep:
@@ -621,17 +745,14 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
 
     case Analysis::kInverseDynamics: {
       // Uncommanded actuators hold their assembled length.
-      std::vector<legsim_real> hold(std::max(na, 1)), len(std::max(na, 1)), rate(std::max(na, 1)),
-          acc(std::max(na, 1));
-      if (na > 0) legsim_actuator_lengths(sim, hold.data(), nullptr);
-      const double h = sc.options.step_s;
+      std::vector<legsim_real> len(std::max(na, 1)), rate(std::max(na, 1)), acc(std::max(na, 1));
       for (int64_t k = 0; k <= sc.n_steps; ++k) {
-        const double t = static_cast<double>(k) * h;
+        const double t = static_cast<double>(k * sc.step_ns) / 1e9;
         for (int32_t a = 0; a < na; ++a) {
-          len[a] = hold[a];
+          len[a] = assembled[a];
           rate[a] = acc[a] = 0;
         }
-        for (const auto &c : sc.commands) {
+        for (const auto &c : commands) {
           len[c.index] = static_cast<legsim_real>(c.signal.at(t));
           rate[c.index] = static_cast<legsim_real>(c.signal.rate(t));
           acc[c.index] = static_cast<legsim_real>(c.signal.accel(t));
@@ -642,14 +763,23 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
           res.error = call_failed("inverse dynamics at t = " + num(t) + " s", st);
           return st;
         }
-        if (k % sc.output_every == 0) res.samples.push_back(record(sim, m, t, forces.data()));
+        if (k % sc.record_every == 0 || k == sc.n_steps) emit(t, forces.data());
       }
       return LEGSIM_OK;
     }
 
     case Analysis::kDynamics: {
+      // init: what every actuator does until a command says otherwise
+      for (int32_t a = 0; a < na; ++a) {
+        st = sc.init == ActuatorInit::kHoldLength ? legsim_command_length(sim, a, assembled[a])
+                                                   : legsim_command_force(sim, a, 0);
+        if (st != LEGSIM_OK) {
+          res.error = call_failed(std::string("init = ") + init_name(sc.init), st);
+          return st;
+        }
+      }
       auto apply = [&](double t) -> legsim_status {
-        for (const auto &c : sc.commands) {
+        for (const auto &c : commands) {
           const legsim_real v = static_cast<legsim_real>(c.signal.at(t));
           const legsim_status s2 = c.mode == LEGSIM_ACTUATOR_FORCE ? legsim_command_force(sim, c.index, v)
                                                                   : legsim_command_length(sim, c.index, v);
@@ -663,7 +793,7 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
       };
       st = apply(0.0);
       if (st != LEGSIM_OK) return st;
-      res.samples.push_back(record(sim, m, legsim_time(sim), nullptr));
+      emit(legsim_time(sim), nullptr);
       for (int64_t k = 1; k <= sc.n_steps; ++k) {
         const double t = legsim_time(sim);
         st = apply(t);
@@ -674,8 +804,7 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, Result &res) {
           res.error = call_failed("step from t = " + num(t) + " s", st);
           return st;
         }
-        if (k % sc.output_every == 0 || k == sc.n_steps)
-          res.samples.push_back(record(sim, m, legsim_time(sim), nullptr));
+        if (k % sc.record_every == 0 || k == sc.n_steps) emit(legsim_time(sim), nullptr);
       }
       return LEGSIM_OK;
     }
@@ -726,12 +855,16 @@ std::string csv_field(const std::string &s) {
   return o + "\"";
 }
 
+const char *kXyz[3] = {"x", "y", "phi"};
+
 }  // namespace
 
-legsim_status run_scene(const Scene &scene, const legsim_model_desc &model, Result &result) {
+legsim_status run_scene(const Scene &scene, const legsim_model_desc &model, ResultWriter &writer,
+                        Result &result) {
   result = Result{};
   try {
-    result.status = run(scene, model, result);
+    writer.begin();
+    result.status = run(scene, model, writer, result);
   } catch (const std::exception &e) {
     result.status = LEGSIM_ERR_STORAGE;
     result.error = e.what();
@@ -739,145 +872,210 @@ legsim_status run_scene(const Scene &scene, const legsim_model_desc &model, Resu
     result.status = LEGSIM_ERR_STORAGE;
     result.error = "unexpected error";
   }
+  try {
+    writer.end(result);
+  } catch (...) {
+    // the stream's own state tells the caller (a failed write)
+  }
   return result.status;
 }
 
-void write_json(std::ostream &o, const Scene &sc, const legsim_model_desc &m, const Result &r) {
-  const char *xyz[3] = {"x", "y", "phi"};
-  o << "{\n";
-  o << "  \"scene\": " << jstr(sc.path) << ",\n";
-  if (!sc.description.empty()) o << "  \"description\": " << jstr(sc.description) << ",\n";
-  o << "  \"model\": {\"name\": " << jstr(name_of(m.name)) << ", \"source\": " << jstr(sc.model)
-    << ", \"variant\": " << jstr(sc.variant) << "},\n";
-  o << "  \"analysis\": " << jstr(analysis_name(sc.analysis)) << ",\n";
-  o << "  \"integrator\": "
-    << jstr(sc.options.integrator == LEGSIM_INTEGRATOR_RK4 ? "rk4" : "generalized_alpha") << ",\n";
-  o << "  \"step\": " << jnum(sc.options.step_s) << ",\n";
-  o << "  \"output_every\": " << sc.output_every << ",\n";
-  o << "  \"status\": " << jstr(r.status == LEGSIM_OK ? "ok" : "error") << ",\n";
-  o << "  \"status_code\": " << jstr(status_enum_name(r.status)) << ",\n";
-  if (r.status != LEGSIM_OK) {
-    o << "  \"error\": " << jstr(r.error) << ",\n";
-    if (r.failed_at_s >= 0) o << "  \"failed_at\": " << jnum(r.failed_at_s) << ",\n";
+void write_resolved(std::ostream &o, const Scene &sc, const legsim_model_desc &m) {
+  o << "{\"scene\": " << jstr(sc.path) << ", \"name\": " << jstr(sc.name)
+    << ", \"model\": " << jstr(sc.model) << ", \"model_path\": " << jstr(sc.model_path)
+    << ", \"variant\": " << jstr(sc.variant) << ", \"analysis\": " << jstr(analysis_name(sc.analysis))
+    << ", \"integrator\": "
+    << jstr(sc.options.integrator == LEGSIM_INTEGRATOR_RK4 ? "rk4" : "generalized_alpha")
+    << ", \"step_ns\": " << sc.step_ns << ", \"n_steps\": " << sc.n_steps
+    << ", \"record_every\": " << sc.record_every << ", \"pose\": "
+    << (sc.pose_index >= 0 ? jstr(name_of(m.pose[sc.pose_index].name)) : "null") << ", \"lengths\": ";
+  if (sc.has_lengths) {
+    o << "[";
+    for (size_t i = 0; i < sc.lengths.size(); ++i) o << (i ? ", " : "") << jnum(sc.lengths[i]);
+    o << "]";
+  } else {
+    o << "null";
   }
-  auto names = [&](const char *key, int n, auto get) {
-    o << "  \"" << key << "\": [";
-    for (int i = 0; i < n; ++i) o << (i ? ", " : "") << jstr(get(i));
-    o << "],\n";
-  };
-  names("bodies", m.n_bodies, [&](int i) { return name_of(m.body[i].name); });
-  names("joints", m.n_joints, [&](int i) { return name_of(m.joint[i].name); });
-  names("actuators", m.n_actuators, [&](int i) { return name_of(m.actuator[i].name); });
-  if (r.has_worst_case) {
-    const legsim_worst_case &w = r.worst;
-    o << "  \"worst_case\": {\n    \"grid\": " << sc.grid << ", \"n_poses\": " << w.n_poses
-      << ", \"n_failed\": " << w.n_failed << ",\n    \"reactions\": {";
-    for (int j = 0; j < m.n_joints; ++j) {
-      o << (j ? ", " : "") << "\n      " << jstr(name_of(m.joint[j].name)) << ": {\"max_force\": "
-        << jnum(w.max_reaction_n[j]) << ", \"at_lengths\": {";
-      for (int a = 0; a < m.n_actuators; ++a)
-        o << (a ? ", " : "") << jstr(name_of(m.actuator[a].name)) << ": " << jnum(w.at_length_m[j][a]);
-      o << "}}";
-    }
-    o << "\n    },\n    \"actuators\": {";
-    for (int a = 0; a < m.n_actuators; ++a) {
-      o << (a ? ", " : "") << "\n      " << jstr(name_of(m.actuator[a].name)) << ": {\"max_force\": "
-        << jnum(w.max_actuator_force_n[a]) << ", \"at_lengths\": {";
-      for (int k = 0; k < m.n_actuators; ++k)
-        o << (k ? ", " : "") << jstr(name_of(m.actuator[k].name)) << ": "
-          << jnum(w.actuator_at_length_m[a][k]);
-      o << "}}";
-    }
-    o << "\n    }\n  },\n";
+  o << ", \"grid\": " << sc.grid << ", \"init\": " << jstr(init_name(sc.init))
+    << ", \"cmd_timeout_ms\": " << sc.cmd_timeout_ms << ", \"safe_state\": " << jstr(sc.safe_state)
+    << ", \"disable\": " << sc.options.disable << ", \"rho_inf\": " << jnum(sc.options.rho_inf)
+    << ", \"max_newton_iter\": " << sc.options.max_newton_iter
+    << ", \"newton_tol\": " << jnum(sc.options.newton_tol) << ", \"forces\": {";
+  for (size_t i = 0; i < sc.forces.size(); ++i) {
+    const ForceValue &f = sc.forces[i];
+    o << (i ? ", " : "") << jstr(f.name) << ": [";
+    for (int k = 0; k < f.n; ++k) o << (k ? ", " : "") << jnum(f.value[k]);
+    o << "]";
   }
-  o << "  \"samples\": [";
-  for (size_t i = 0; i < r.samples.size(); ++i) {
-    const Sample &s = r.samples[i];
-    o << (i ? "," : "") << "\n    {\"t\": " << jnum(s.t) << ",\n     \"q\": {";
-    for (int b = 0; b < m.n_bodies; ++b) {
-      o << (b ? ", " : "") << jstr(name_of(m.body[b].name)) << ": {";
-      for (int c = 0; c < 3; ++c) o << (c ? ", " : "") << "\"" << xyz[c] << "\": " << jnum(s.q[3 * b + c]);
-      o << "}";
+  o << "}, \"commands\": {";
+  for (size_t i = 0; i < sc.commands.size(); ++i) {
+    const Command &c = sc.commands[i];
+    const Signal &g = c.signal;
+    o << (i ? ", " : "") << jstr(c.actuator) << ": {\"mode\": "
+      << jstr(c.mode == LEGSIM_ACTUATOR_FORCE ? "force" : "length") << ", ";
+    switch (g.kind) {
+      case Signal::kConstant: o << "\"value\": " << jnum(g.value); break;
+      case Signal::kInitial: o << "\"value\": \"initial\""; break;
+      case Signal::kSinusoid:
+        o << "\"sinusoid\": {\"offset\": " << jnum(g.offset) << ", \"amplitude\": " << jnum(g.amplitude)
+          << ", \"frequency\": " << jnum(g.frequency_hz) << ", \"phase\": " << jnum(g.phase_rad) << "}";
+        break;
+      case Signal::kStep:
+        o << "\"step\": {\"t0\": " << jnum(g.t0) << ", \"before\": " << jnum(g.before)
+          << ", \"after\": " << jnum(g.after) << "}";
+        break;
     }
-    o << "},\n     \"actuators\": {";
-    for (int a = 0; a < m.n_actuators; ++a)
-      o << (a ? ", " : "") << jstr(name_of(m.actuator[a].name)) << ": {\"length\": " << jnum(s.length[a])
-        << ", \"rate\": " << jnum(s.rate[a]) << ", \"force\": " << jnum(s.force[a]) << "}";
-    o << "},\n     \"reactions\": ";
-    if (s.has_reactions) {
-      o << "{";
-      for (int j = 0; j < m.n_joints; ++j)
-        o << (j ? ", " : "") << jstr(name_of(m.joint[j].name)) << ": {\"fx\": " << jnum(s.reaction[3 * j])
-          << ", \"fy\": " << jnum(s.reaction[3 * j + 1]) << ", \"moment\": " << jnum(s.reaction[3 * j + 2])
-          << "}";
-      o << "}";
-    } else {
-      o << "null";
-    }
-    o << ",\n     \"foot\": ";
-    if (s.has_foot)
-      o << "{\"x\": " << jnum(s.foot[0]) << ", \"y\": " << jnum(s.foot[1]) << "}";
-    else
-      o << "null";
-    o << ", \"residual\": " << jnum(s.residual) << ", \"iterations\": " << s.iterations
-      << ", \"condition\": " << jnum(s.condition) << ", \"events\": [";
-    const auto ev = event_names(s.events);
-    for (size_t k = 0; k < ev.size(); ++k) o << (k ? ", " : "") << jstr(ev[k]);
-    o << "]}";
+    o << "}";
   }
-  o << (r.samples.empty() ? "]\n" : "\n  ]\n") << "}\n";
+  o << "}}\n";
 }
 
-void write_csv(std::ostream &o, const Scene &sc, const legsim_model_desc &m, const Result &r) {
+void JsonWriter::begin() {
+  o_ << "{\n";
+  o_ << "  \"scene\": " << jstr(sc_.path) << ",\n";
+  if (!sc_.description.empty()) o_ << "  \"description\": " << jstr(sc_.description) << ",\n";
+  o_ << "  \"model\": {\"name\": " << jstr(name_of(m_.name)) << ", \"source\": " << jstr(sc_.model)
+     << ", \"variant\": " << jstr(sc_.variant) << "},\n";
+  o_ << "  \"analysis\": " << jstr(analysis_name(sc_.analysis)) << ",\n";
+  o_ << "  \"integrator\": "
+     << jstr(sc_.options.integrator == LEGSIM_INTEGRATOR_RK4 ? "rk4" : "generalized_alpha") << ",\n";
+  o_ << "  \"step_s\": " << jnum(sc_.options.step_s) << ",\n";
+  o_ << "  \"record_every\": " << sc_.record_every << ",\n";
+  auto names = [&](const char *key, int n, auto get) {
+    o_ << "  \"" << key << "\": [";
+    for (int i = 0; i < n; ++i) o_ << (i ? ", " : "") << jstr(get(i));
+    o_ << "],\n";
+  };
+  names("bodies", m_.n_bodies, [&](int i) { return name_of(m_.body[i].name); });
+  names("joints", m_.n_joints, [&](int i) { return name_of(m_.joint[i].name); });
+  names("actuators", m_.n_actuators, [&](int i) { return name_of(m_.actuator[i].name); });
+  o_ << "  \"samples\": [";
+}
+
+void JsonWriter::sample(const Sample &s) {
+  const legsim_model_desc &m = m_;
+  o_ << (n_++ ? "," : "") << "\n    {\"t\": " << jnum(s.t) << ",\n     \"q\": {";
+  for (int b = 0; b < m.n_bodies; ++b) {
+    o_ << (b ? ", " : "") << jstr(name_of(m.body[b].name)) << ": {";
+    for (int c = 0; c < 3; ++c) o_ << (c ? ", " : "") << "\"" << kXyz[c] << "\": " << jnum(s.q[3 * b + c]);
+    o_ << "}";
+  }
+  o_ << "},\n     \"actuators\": {";
+  for (int a = 0; a < m.n_actuators; ++a)
+    o_ << (a ? ", " : "") << jstr(name_of(m.actuator[a].name)) << ": {\"length\": " << jnum(s.length[a])
+       << ", \"rate\": " << jnum(s.rate[a]) << ", \"force\": " << jnum(s.force[a]) << "}";
+  o_ << "},\n     \"reactions\": ";
+  if (s.has_reactions) {
+    o_ << "{";
+    for (int j = 0; j < m.n_joints; ++j)
+      o_ << (j ? ", " : "") << jstr(name_of(m.joint[j].name)) << ": {\"fx\": " << jnum(s.reaction[3 * j])
+         << ", \"fy\": " << jnum(s.reaction[3 * j + 1]) << ", \"moment\": " << jnum(s.reaction[3 * j + 2])
+         << "}";
+    o_ << "}";
+  } else {
+    o_ << "null";
+  }
+  o_ << ",\n     \"foot\": ";
+  if (s.has_foot)
+    o_ << "{\"x\": " << jnum(s.foot[0]) << ", \"y\": " << jnum(s.foot[1]) << "}";
+  else
+    o_ << "null";
+  o_ << ", \"residual\": " << jnum(s.residual) << ", \"iterations\": " << s.iterations
+     << ", \"condition\": " << jnum(s.condition) << ", \"events\": [";
+  const auto ev = event_names(s.events);
+  for (size_t k = 0; k < ev.size(); ++k) o_ << (k ? ", " : "") << jstr(ev[k]);
+  o_ << "]}";
+}
+
+void JsonWriter::end(const Result &r) {
+  const legsim_model_desc &m = m_;
+  o_ << (n_ ? "\n  ],\n" : "],\n");
   if (r.has_worst_case) {
-    // One row per joint reaction and per actuator force: the worst case of the sweep.
-    o << "item,kind,max_force";
-    for (int a = 0; a < m.n_actuators; ++a) o << ",at_" << csv_field(name_of(m.actuator[a].name));
-    o << ",status\n";
     const legsim_worst_case &w = r.worst;
+    o_ << "  \"worst_case\": {\n    \"grid\": " << sc_.grid << ", \"n_poses\": " << w.n_poses
+       << ", \"n_failed\": " << w.n_failed << ",\n    \"reactions\": {";
     for (int j = 0; j < m.n_joints; ++j) {
-      o << csv_field(name_of(m.joint[j].name)) << ",reaction," << num(w.max_reaction_n[j]);
-      for (int a = 0; a < m.n_actuators; ++a) o << "," << num(w.at_length_m[j][a]);
-      o << ",ok\n";
+      o_ << (j ? ", " : "") << "\n      " << jstr(name_of(m.joint[j].name)) << ": {\"max_force\": "
+         << jnum(w.max_reaction_n[j]) << ", \"at_lengths\": {";
+      for (int a = 0; a < m.n_actuators; ++a)
+        o_ << (a ? ", " : "") << jstr(name_of(m.actuator[a].name)) << ": " << jnum(w.at_length_m[j][a]);
+      o_ << "}}";
     }
+    o_ << "\n    },\n    \"actuators\": {";
     for (int a = 0; a < m.n_actuators; ++a) {
-      o << csv_field(name_of(m.actuator[a].name)) << ",actuator," << num(w.max_actuator_force_n[a]);
-      for (int k = 0; k < m.n_actuators; ++k) o << "," << num(w.actuator_at_length_m[a][k]);
-      o << ",ok\n";
+      o_ << (a ? ", " : "") << "\n      " << jstr(name_of(m.actuator[a].name)) << ": {\"max_force\": "
+         << jnum(w.max_actuator_force_n[a]) << ", \"at_lengths\": {";
+      for (int k = 0; k < m.n_actuators; ++k)
+        o_ << (k ? ", " : "") << jstr(name_of(m.actuator[k].name)) << ": "
+           << jnum(w.actuator_at_length_m[a][k]);
+      o_ << "}}";
     }
-    (void)sc;
+    o_ << "\n    }\n  },\n";
+  }
+  if (r.status != LEGSIM_OK) {
+    o_ << "  \"error\": " << jstr(r.error) << ",\n";
+    if (r.failed_at_s >= 0) o_ << "  \"failed_at\": " << jnum(r.failed_at_s) << ",\n";
+  }
+  o_ << "  \"status\": " << jstr(r.status == LEGSIM_OK ? "ok" : "error") << ",\n";
+  o_ << "  \"status_code\": " << jstr(status_enum_name(r.status)) << "\n}\n";
+  o_.flush();
+}
+
+void CsvWriter::begin() {
+  const legsim_model_desc &m = m_;
+  if (sc_.analysis == Analysis::kStaticsSweep) {
+    // One row per joint reaction and per actuator force: the worst case of the sweep.
+    o_ << "item,kind,max_force";
+    for (int a = 0; a < m.n_actuators; ++a) o_ << ",at_" << csv_field(name_of(m.actuator[a].name));
+    o_ << ",status\n";
     return;
   }
-  const char *xyz[3] = {"x", "y", "phi"};
-  o << "t";
+  o_ << "t";
   for (int b = 0; b < m.n_bodies; ++b)
-    for (int c = 0; c < 3; ++c) o << "," << csv_field(name_of(m.body[b].name) + "." + xyz[c]);
+    for (int c = 0; c < 3; ++c) o_ << "," << csv_field(name_of(m.body[b].name) + "." + kXyz[c]);
   for (int a = 0; a < m.n_actuators; ++a) {
     const std::string n = name_of(m.actuator[a].name);
-    o << "," << csv_field(n + ".length") << "," << csv_field(n + ".rate") << "," << csv_field(n + ".force");
+    o_ << "," << csv_field(n + ".length") << "," << csv_field(n + ".rate") << "," << csv_field(n + ".force");
   }
   for (int j = 0; j < m.n_joints; ++j) {
     const std::string n = name_of(m.joint[j].name);
-    o << "," << csv_field(n + ".fx") << "," << csv_field(n + ".fy") << "," << csv_field(n + ".moment");
+    o_ << "," << csv_field(n + ".fx") << "," << csv_field(n + ".fy") << "," << csv_field(n + ".moment");
   }
-  if (m.foot_body >= 0) o << ",foot.x,foot.y";
-  o << ",residual,status\n";
-  const int ncols = 1 + 3 * m.n_bodies + 3 * m.n_actuators + 3 * m.n_joints + (m.foot_body >= 0 ? 2 : 0) + 1;
-  for (const Sample &s : r.samples) {
-    o << num(s.t);
-    for (double x : s.q) o << "," << num(x);
-    for (int a = 0; a < m.n_actuators; ++a) o << "," << num(s.length[a]) << "," << num(s.rate[a]) << "," << num(s.force[a]);
-    for (int j = 0; j < m.n_joints; ++j)
-      for (int c = 0; c < 3; ++c) o << "," << (s.has_reactions ? num(s.reaction[3 * j + c]) : std::string());
-    if (m.foot_body >= 0) o << "," << (s.has_foot ? num(s.foot[0]) : "") << "," << (s.has_foot ? num(s.foot[1]) : "");
-    o << "," << num(s.residual) << ",ok\n";
+  if (m.foot_body >= 0) o_ << ",foot.x,foot.y";
+  o_ << ",residual,status\n";
+}
+
+void CsvWriter::sample(const Sample &s) {
+  const legsim_model_desc &m = m_;
+  o_ << num(s.t);
+  for (double x : s.q) o_ << "," << num(x);
+  for (int a = 0; a < m.n_actuators; ++a) o_ << "," << num(s.length[a]) << "," << num(s.rate[a]) << "," << num(s.force[a]);
+  // Reactions exist after a solve (not at the dynamics' t = 0, nor with reactions disabled):
+  // nan then, a number every CSV reader parses.
+  for (int j = 0; j < m.n_joints; ++j)
+    for (int c = 0; c < 3; ++c) o_ << "," << num(s.has_reactions ? s.reaction[3 * j + c] : NAN);
+  if (m.foot_body >= 0) o_ << "," << num(s.has_foot ? s.foot[0] : NAN) << "," << num(s.has_foot ? s.foot[1] : NAN);
+  o_ << "," << num(s.residual) << ",ok\n";
+}
+
+void CsvWriter::end(const Result &r) {
+  const legsim_model_desc &m = m_;
+  if (r.has_worst_case) {
+    const legsim_worst_case &w = r.worst;
+    for (int j = 0; j < m.n_joints; ++j) {
+      o_ << csv_field(name_of(m.joint[j].name)) << ",reaction," << num(w.max_reaction_n[j]);
+      for (int a = 0; a < m.n_actuators; ++a) o_ << "," << num(w.at_length_m[j][a]);
+      o_ << ",ok\n";
+    }
+    for (int a = 0; a < m.n_actuators; ++a) {
+      o_ << csv_field(name_of(m.actuator[a].name)) << ",actuator," << num(w.max_actuator_force_n[a]);
+      for (int k = 0; k < m.n_actuators; ++k) o_ << "," << num(w.actuator_at_length_m[a][k]);
+      o_ << ",ok\n";
+    }
   }
-  if (r.status != LEGSIM_OK) {
-    // A last row: when and how the run failed (the other columns empty).
-    o << (r.failed_at_s >= 0 ? num(r.failed_at_s) : std::string());
-    for (int i = 1; i < ncols; ++i) o << ",";
-    o << "," << status_enum_name(r.status) << "\n";
-  }
+  // A failed run: no row for the failure (its time and cause go to stderr and the exit
+  // status), so every row holds a complete state.
+  o_.flush();
 }
 
 }  // namespace legsim_host

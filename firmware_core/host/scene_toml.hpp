@@ -1,38 +1,11 @@
-// Host-only scene files for legsim_cli: what to load, which analysis to run, with
-// which inputs, and the JSON/CSV writers of the results. Uses the C API only.
+// Scene files (scenes/*.toml): what to load, which analysis to run with which inputs,
+// and the JSON/CSV writers of the results. Host only; uses the C API only.
 //
-// A scene (scenes/cli/*.toml):
-//
-//   description = "free text"                 # optional
-//   model = "../../models/leg.toml"           # relative to the scene file;
-//                                             # "builtin:leg" = the compiled-in leg
-//   variant = "revolute"                      # default "revolute"
-//   analysis = "dynamics"                     # dynamics | statics | statics_sweep |
-//                                             # inverse_dynamics | assembly
-//   integrator = "rk4"                        # rk4 | generalized_alpha (dynamics)
-//   step = 0.001                              # s, > 0 (default 0.001)
-//   duration = 0.5                            # s (dynamics, inverse_dynamics)
-//   output_every = 10                         # steps between samples (default 1)
-//   disable = ["reactions", "gravity"]        # gravity, force_elements, reactions,
-//                                             # projection, actuators, stroke_limits
-//   rho_inf = 0.8                             # optional solver options
-//   max_newton_iter = 25
-//   newton_tol = 1e-10
-//   pose = "stand"                            # pose assembled first (default: the
-//                                             # model's first pose, if it has one)
-//   lengths = [0.66, 0.62]                    # assembly/statics/dynamics: assemble the
-//                                             # actuators at these lengths after the pose
-//   grid = 11                                 # statics_sweep: n x n grid (default 11)
-//
-//   [forces]                                  # force element values
-//   foot_load = [0.0, 300.0]                  # point: [Fx, Fy] N; torque: N m
-//
-//   [[command]]                               # dynamics, inverse_dynamics
-//   actuator = "upper"
-//   mode = "force"                            # force | length (inverse_dynamics: length)
-//   value = 50.0                              # or one of:
-//   # sinusoid = { offset = 0.65, amplitude = 0.02, frequency = 1.0, phase = 0.0 }
-//   # step = { t0 = 0.1, before = 0.0, after = 50.0 }
+// The schema (every key, unit, default and range) is documented in scenes/README.md;
+// the bench reads the same files (bench/legsim_bench/scene.py) and both refuse the same
+// things with the same messages. Keys of the bench only ([checks], [[inject]],
+// cmd_timeout_ms, safe_state: the CAN link and its checks) are accepted here, type-checked
+// and otherwise ignored: legsim_cli has no bus.
 #ifndef LEGSIM_HOST_SCENE_TOML_HPP
 #define LEGSIM_HOST_SCENE_TOML_HPP
 
@@ -45,10 +18,11 @@
 
 namespace legsim_host {
 
-// A scalar input over time: constant, sinusoid or step.
+// A scalar input over time: constant, sinusoid, step, or "initial" (the actuator's
+// assembled length at t = 0, known only once the model is assembled).
 struct Signal {
-  enum Kind { kConstant, kSinusoid, kStep } kind = kConstant;
-  double value = 0;                                            // constant
+  enum Kind { kConstant, kSinusoid, kStep, kInitial } kind = kConstant;
+  double value = 0;                                            // constant (and initial, once known)
   double offset = 0, amplitude = 0, frequency_hz = 0, phase_rad = 0;  // sinusoid
   double t0 = 0, before = 0, after = 0;                        // step
   double at(double t) const;
@@ -75,23 +49,33 @@ struct ForceValue {
 enum class Analysis { kDynamics, kStatics, kStaticsSweep, kInverseDynamics, kAssembly };
 const char *analysis_name(Analysis a);
 
+// What the actuators do from t = 0 until (and unless) a command says otherwise.
+enum class ActuatorInit { kZeroForce, kHoldLength };
+const char *init_name(ActuatorInit i);  // "zero_force" | "hold_length"
+
 struct Scene {
   std::string path;         // the scene file as given
+  std::string name;         // 'name', else the file's stem
   std::string description;
-  std::string model;        // as written in the scene
+  bool demo = false;
+  std::string model = "builtin:leg";  // as written in the scene (default: the compiled-in leg)
   std::string model_path;   // resolved against the scene's folder ("" for builtin:)
   std::string builtin;      // "leg" for model = "builtin:leg"
   std::string variant = "revolute";
   Analysis analysis = Analysis::kDynamics;
-  legsim_options options{};
+  legsim_options options{};  // integrator, step_s, disable, solver options
+  int64_t step_ns = 1000000; // step_s in whole nanoseconds (the bench's and the DBC's unit)
   double duration_s = 0;
-  int64_t n_steps = 0;      // duration / step, rounded
-  int64_t output_every = 1;
+  int64_t n_steps = 0;      // duration / step_s, exactly (else the scene is refused)
+  int64_t record_every = 1;
   std::string pose;         // "" = the model's first pose, if any
   int32_t pose_index = -1;  // bound
   bool has_lengths = false;
   std::vector<double> lengths;
   int32_t grid = 11;
+  ActuatorInit init = ActuatorInit::kZeroForce;
+  int64_t cmd_timeout_ms = 0;            // bench only
+  std::string safe_state = "zero_force"; // bench only
   std::vector<ForceValue> forces;
   std::vector<Command> commands;
 };
@@ -103,6 +87,10 @@ bool load_scene(const std::string &path, Scene &scene, std::string &err);
 // Checks the scene against a model (names of actuators, forces, poses; lengths in
 // stroke; forces within max_force) and binds the names to indices.
 bool bind_scene(Scene &scene, const legsim_model_desc &model, std::string &err);
+
+// The resolved scene as one JSON object (legsim_cli --check): the values both scene
+// readers must agree on (tests/bench/test_scene.py compares them with the bench's).
+void write_resolved(std::ostream &out, const Scene &scene, const legsim_model_desc &model);
 
 // ---- results ----------------------------------------------------------------------
 struct Sample {
@@ -123,19 +111,57 @@ struct Result {
   legsim_status status = LEGSIM_OK;
   std::string error;                     // what failed, when status != OK
   double failed_at_s = -1;               // time of the failing step (dynamics, inverse dynamics)
-  std::vector<Sample> samples;
+  int64_t n_samples = 0;                 // samples written
   bool has_worst_case = false;
   legsim_worst_case worst{};
 };
 
-// Runs a bound scene on the model (which must outlive the call). Never throws.
-// Returns the status (also in result.status); samples up to a failure are kept.
-legsim_status run_scene(const Scene &scene, const legsim_model_desc &model, Result &result);
+// Receives the results as the run makes them: samples are written out one by one, not
+// kept (a long run needs no memory for its history).
+class ResultWriter {
+ public:
+  virtual ~ResultWriter() = default;
+  virtual void begin() = 0;
+  virtual void sample(const Sample &s) = 0;
+  virtual void end(const Result &r) = 0;  // the status, and the sweep's worst case
+};
 
-void write_json(std::ostream &out, const Scene &scene, const legsim_model_desc &model,
-                const Result &result);
-void write_csv(std::ostream &out, const Scene &scene, const legsim_model_desc &model,
-               const Result &result);
+// JSON: the set-up, then "samples" as they come, then the status. CSV: a header, then one
+// row per sample (a failed run ends with its last good sample: the failure is in the exit
+// status and on stderr, never in a row of empty fields).
+class JsonWriter : public ResultWriter {
+ public:
+  JsonWriter(std::ostream &out, const Scene &scene, const legsim_model_desc &model)
+      : o_(out), sc_(scene), m_(model) {}
+  void begin() override;
+  void sample(const Sample &s) override;
+  void end(const Result &r) override;
+
+ private:
+  std::ostream &o_;
+  const Scene &sc_;
+  const legsim_model_desc &m_;
+  int64_t n_ = 0;
+};
+
+class CsvWriter : public ResultWriter {
+ public:
+  CsvWriter(std::ostream &out, const Scene &scene, const legsim_model_desc &model)
+      : o_(out), sc_(scene), m_(model) {}
+  void begin() override;
+  void sample(const Sample &s) override;
+  void end(const Result &r) override;
+
+ private:
+  std::ostream &o_;
+  const Scene &sc_;
+  const legsim_model_desc &m_;
+};
+
+// Runs a bound scene on the model (which must outlive the call), handing each sample to
+// the writer as it is made. Never throws. Returns the status (also in result.status).
+legsim_status run_scene(const Scene &scene, const legsim_model_desc &model, ResultWriter &writer,
+                        Result &result);
 
 // "LEGSIM_ERR_DIVERGED" etc.
 const char *status_enum_name(legsim_status s);

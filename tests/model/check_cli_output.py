@@ -41,14 +41,14 @@ def check_good(cli, scene, outdir):
     name = os.path.splitext(os.path.basename(scene))[0]
     with open(scene, "rb") as f:
         spec = tomllib.load(f)
-    analysis = spec["analysis"]
+    analysis = spec.get("analysis", "dynamics")
     js, cs = os.path.join(outdir, name + ".json"), os.path.join(outdir, name + ".csv")
     r = run(cli, scene, js)
     if not check(r.returncode == 0, f"{name}: exit {r.returncode}: {r.stderr.strip()}"):
         return
     with open(js, encoding="utf-8") as f:
         d = json.load(f)  # raises (test fails) if it is not JSON
-    for key in ("scene", "model", "analysis", "integrator", "step", "status", "status_code", "bodies",
+    for key in ("scene", "model", "analysis", "integrator", "step_s", "record_every", "status", "status_code", "bodies",
                 "joints", "actuators", "samples"):
         check(key in d, f"{name}: JSON lacks '{key}'")
     check(d.get("status") == "ok" and d.get("status_code") == "LEGSIM_OK", f"{name}: status {d.get('status')}")
@@ -70,8 +70,10 @@ def check_good(cli, scene, outdir):
         # Residual bound loose enough for a float build (newton_tol 1e-5 there).
         check(len(samples) >= 1, f"{name}: no samples")
         if analysis in ("dynamics", "inverse_dynamics"):
-            n = round(spec["duration"] / spec.get("step", 0.001))
-            every = spec.get("output_every", 1)
+            n = round(spec["duration"] / spec.get("step_s", 0.001))
+            check(abs(n * spec.get("step_s", 0.001) - spec["duration"]) < 1e-9, f"{name}: duration off the grid")
+            every = spec.get("record_every", 1)
+            check(d["record_every"] == every, f"{name}: record_every {d['record_every']}")
             check(len(samples) >= n // every, f"{name}: {len(samples)} samples for {n} steps / {every}")
             check(abs(samples[-1]["t"] - spec["duration"]) < 1e-9, f"{name}: last t {samples[-1]['t']}")
         reactions_on = "reactions" not in spec.get("disable", [])
@@ -141,6 +143,20 @@ def check_bad(cli, table, outdir):
                     d = json.load(f)
                 check(d["status"] == "error" and d["status_code"].startswith("LEGSIM_ERR_") and d["error"],
                       f"{scene}: JSON status {d.get('status')}")
+            # The same failed run as CSV: the samples up to the failure, every field a number
+            # (no row of empty fields for the failure: that is in the exit status and stderr).
+            cs = out[:-len(".json")] + ".csv"
+            r = run(cli, path, cs)
+            check(r.returncode == 1, f"{scene}: CSV run exit {r.returncode}")
+            with open(cs, newline="", encoding="utf-8") as f:
+                rows = list(csv.reader(f))
+            check(len(rows) >= 1 and rows[0][0] in ("t", "item"), f"{scene}: CSV header {rows[:1]}")
+            for row in rows[1:]:
+                check(len(row) == len(rows[0]) and all(v != "" for v in row),
+                      f"{scene}: CSV row with empty fields {row[:4]}...")
+                check(row[-1] == "ok", f"{scene}: CSV row status {row[-1]}")
+            if "failed_at" in d and len(rows) > 1:
+                check(float(rows[-1][0]) <= d["failed_at"], f"{scene}: a CSV row after the failure")
         else:
             check(not os.path.exists(out), f"{scene}: output written for a bad scene")
 
