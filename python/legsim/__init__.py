@@ -1,2 +1,36 @@
-"""legsim: the Python API of the legsim core (a ctypes binding of legsim.h)."""
+"""legsim: the Python API of the legsim core.
+
+Loads the core's shared library (``liblegsim.so`` in double, ``liblegsim_f32.so``
+in float) in-process through ctypes and wraps its C API (legsim.h): models from
+TOML files or compiled in, options, assembly, velocity and acceleration analysis,
+inverse dynamics, statics and its worst-case sweep, forward dynamics, reactions.
+Values are numpy arrays in SI units; every failing status raises a
+:class:`LegsimError` subclass carrying the status code and its C name.
+
+    >>> import legsim
+    >>> sim = legsim.Sim("models/leg.toml", integrator="rk4", step=1e-3)
+    >>> q = sim.assemble_pose("stand")
+    >>> sim.statics()            # actuator forces holding the leg (N)
+    array([-93.9289570005...,   1.3866057692...])
+"""
+from ._lib import LIB_NAMES, Library, find_library, library_available, load_library
+from .errors import (BadInputError, CapacityError, DisabledError, DivergedError, LayoutMismatch,
+                     LegsimError, LibraryNotFound, ModelError, NoEquilibriumError,
+                     NotConvergedError, NullError, OutOfStrokeError, SingularError, StateError,
+                     Status, StorageError, UnreachableError, error_for, status_name)
+from .model import Model, builtin_variants, model_variants
+from .sim import (COND_SINGULAR, COND_WARN, DISABLE, EVENTS, INTEGRATORS, Report, Sim, WorstCase,
+                  disable_mask)
+
 __version__ = "0.1.0"
+
+__all__ = [
+    "Sim", "Model", "Report", "WorstCase", "Library", "Status",
+    "model_variants", "builtin_variants", "find_library", "library_available", "load_library",
+    "status_name", "error_for", "disable_mask",
+    "LegsimError", "NullError", "StorageError", "ModelError", "CapacityError", "BadInputError",
+    "OutOfStrokeError", "NotConvergedError", "SingularError", "UnreachableError",
+    "NoEquilibriumError", "DisabledError", "StateError", "DivergedError",
+    "LibraryNotFound", "LayoutMismatch",
+    "DISABLE", "EVENTS", "INTEGRATORS", "COND_WARN", "COND_SINGULAR", "LIB_NAMES",
+]
