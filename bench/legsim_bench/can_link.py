@@ -242,18 +242,75 @@ def bus_config(interface: str | None = None, channel: str | int | None = None,
     return cfg
 
 
+def _config_file_with(key: str) -> str | None:
+    """The last of python-can's config files whose [default] section sets `key` (later files
+    override earlier ones in can.util.load_file_config)."""
+    import configparser
+
+    found = None
+    for name in can.util.CONFIG_FILES:
+        path = Path(name).expanduser()
+        if not path.is_file():
+            continue
+        cp = configparser.ConfigParser()
+        try:
+            cp.read(path)
+        except configparser.Error:
+            continue
+        if cp.has_option("default", key) or (key == "interface" and cp.has_option("default", "bustype")):
+            found = str(path)
+    return found
+
+
+def bus_origin(interface: str | None, channel: str | int | None, cfg: dict,
+               given_by: dict[str, str] | None = None) -> dict[str, str]:
+    """Where bus_config() took the interface and the channel from, in python-can's order:
+    the arguments (named as in `given_by`, default --interface/--channel), can.rc, the
+    environment, a config file, else the bench's default."""
+    given = {"interface": interface, "channel": channel}
+    env = can.util.load_environment_config()
+    out = {}
+    for key in ("interface", "channel"):
+        value = str(cfg.get(key))
+        rc = can.rc.get(key, can.rc.get("bustype") if key == "interface" else None)
+        if given[key] is not None:
+            out[key] = (given_by or {}).get(key, f"--{key}")
+        elif rc is not None and str(rc) == value:
+            out[key] = "can.rc"
+        elif key in env and str(env[key]) == value:
+            out[key] = f"CAN_{key.upper()}"
+        elif (f := _config_file_with(key)) is not None:
+            out[key] = f
+        else:
+            out[key] = "default"
+    return out
+
+
+def describe_bus(cfg: dict, origin: dict[str, str] | None = None) -> str:
+    """'socketcan channel vcan0, CAN FD (interface: default, channel: CAN_CHANNEL)'."""
+    text = f"{cfg.get('interface')} channel {cfg.get('channel')}" + (", CAN FD" if cfg.get("fd") else "")
+    if origin:
+        text += f" (interface: {origin['interface']}, channel: {origin['channel']})"
+    return text
+
+
 class HilLink:
     """One bench's connection to hil_sim. Not thread-safe: use it from one thread."""
 
     def __init__(self, interface: str | None = None, channel: str | int | None = None, *,
                  bus: can.BusABC | None = None, dbc: str | os.PathLike | None = None,
-                 timeout: float = 5.0, **bus_kwargs):
+                 timeout: float = 5.0, given_by: dict[str, str] | None = None, **bus_kwargs):
         self.db = cantools.database.load_file(str(dbc or DBC_PATH), strict=True)
         self.timeout = timeout
         self._own_bus = bus is None
         if bus is None:
             filters = [{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in HIL_IDS]
-            bus = can.Bus(**bus_config(interface, channel, **bus_kwargs), can_filters=filters)
+            cfg = bus_config(interface, channel, **bus_kwargs)
+            #: which bus this is and where its configuration came from (for the user)
+            self.description = describe_bus(cfg, bus_origin(interface, channel, cfg, given_by))
+            bus = can.Bus(**cfg, can_filters=filters)
+        else:
+            self.description = f"a given bus: {bus.channel_info}"
         self.bus = bus
         self._seq = {CONTROL: 0, ACT_CMD: 0, LOAD_CMD: 0}
         self._partial: dict[int, dict[int, dict]] = {}   # tick -> frame id -> signals

@@ -143,18 +143,28 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
         print(f"hil_sim started on {channel} (pid {hil.proc.pid}, log {hil.log_path})", flush=True)
     try:
         t0 = time.monotonic()
-        from .can_link import HilLink  # python-can and cantools: slow in the VM
-        kwargs = {}
-        if args.start_hil and args.interface is None:
-            kwargs["interface"] = "socketcan"
+        # python-can and cantools: slow in the VM
+        from .can_link import HilLink, bus_config, bus_origin, describe_bus
+        interface, channel = args.interface, args.channel
+        given_by = {}
+        if hil is not None:  # --start-hil: socketcan on hil_sim's channel unless named
+            if interface is None:
+                interface, given_by["interface"] = "socketcan", "--start-hil"
+            if channel is None:
+                channel = hil.channel
+                given_by["channel"] = "CAN_CHANNEL" if os.environ.get("CAN_CHANNEL") else "--start-hil"
         try:
-            link = HilLink(args.interface or kwargs.get("interface"),
-                           args.channel or (hil.channel if hil else None),
-                           dbc=root / "can" / "legsim.dbc", timeout=args.timeout)
+            link = HilLink(interface, channel, dbc=root / "can" / "legsim.dbc",
+                           timeout=args.timeout, given_by=given_by)
         except Exception as e:  # noqa: BLE001 - python-can raises many kinds
-            raise SetupError(f"cannot open the CAN bus: {type(e).__name__}: {e}") from None
-        if args.verbose:
-            print(f"bus open ({time.monotonic() - t0:.1f} s to import and connect)", flush=True)
+            try:
+                cfg = bus_config(interface, channel)
+                which = " " + describe_bus(cfg, bus_origin(interface, channel, cfg, given_by))
+            except Exception:  # noqa: BLE001 - the configuration itself is what failed
+                which = ""
+            raise SetupError(f"cannot open the CAN bus{which}: {type(e).__name__}: {e}") from None
+        print(f"bus: {link.description}" + (f", open in {time.monotonic() - t0:.1f} s (import "
+              "and connect)" if args.verbose else ""), flush=True)
         out = []
         with link:
             for sc in scenes:

@@ -116,6 +116,18 @@ def run(args) -> int:
                          worst=worst, worst_key=worst_key, compared=compared, tol=tol,
                          ok=qemu.returncode == 0 and compared > 0 and worst <= tol))
     out.mkdir(parents=True, exist_ok=True)
+    text = report(rows, before, results.snapshot(root))
+    (out / "mcu.md").write_text(text)
+    print(text)
+    return 0 if all(r["ok"] for r in rows) else 1
+
+
+def _count(x) -> str:
+    return f"{x:,}" if isinstance(x, int) else str(x)
+
+
+def report(rows: list[dict], before: dict, after: dict) -> str:
+    """mcu.md: the machine section (results.machine_section) and one row per image."""
     lines = [
         "# MCU cost: the leg on Cortex-M under QEMU",
         "",
@@ -124,7 +136,7 @@ def run(args) -> int:
         "the images read a 25 MHz timer around each step: 40-instruction resolution). "
         "Instructions, not cycles.",
         "",
-        *results.machine_section(before, results.snapshot(root)),
+        *results.machine_section(before, after),
         "## Images",
         "",
         "| image | board | exit | flash (.text + .data) | RAM (.data + .bss) | sim size | stack used | "
@@ -136,14 +148,12 @@ def run(args) -> int:
         lines.append(
             f"| `{r['image']}` | {r['board']} | {r['exit']} | {r['text'] + r['data']:,} | "
             f"{r['data'] + r['bss']:,} | {r['sim']} | {r['stack']} | "
-            f"{r['insns'].get('rk4', '?'):,} | {r['insns'].get('generalized_alpha', '?'):,} | "
+            f"{_count(r['insns'].get('rk4', '?'))} | {_count(r['insns'].get('generalized_alpha', '?'))} | "
             f"{r['worst']:.2e} ({r['compared']}; worst: {r['worst_key']}) | {r['tol']:g} | "
             f"{'yes' if r['ok'] else 'NO'} |")
     lines += ["", "RAM includes the sim's static storage and the fixed stack (firmware_core/mcu/CMakeLists.txt); "
               "the targets for the Cortex-M4F image are 64 KB of flash and 16 KB of RAM.", ""]
-    (out / "mcu.md").write_text("\n".join(lines))
-    print("\n".join(lines))
-    return 0 if all(r["ok"] for r in rows) else 1
+    return "\n".join(lines)
 
 
 if __name__ == "__main__":
