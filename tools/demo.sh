@@ -5,11 +5,14 @@
 # demo scene over SocketCAN, checks it against its own model and prints the
 # check table and where the plots are. Extra arguments go to `legsim-bench demo`
 # (e.g. --all for every shipped scene).
+# Logs of the set-up and the build: out/logs/ (a failing stage prints its tail).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
-"$root/tools/setup.sh"
-cmake --preset host >/dev/null
-cmake --build --preset host
-export LEGSIM_ROOT="$root"
+# shellcheck source=tools/setup.sh
+. "$root/tools/setup.sh"
+legsim_setup || exit 1
+legsim_build host || exit 1
+export LEGSIM_ROOT="$root" PYTHONUNBUFFERED=1
+echo "demo: legsim-bench demo $*" >&2
 exec "$root/.venv/bin/legsim-bench" demo "$@"
