@@ -59,6 +59,7 @@ bool Controller::state_allows(const Request &req) const {
 }
 
 void Controller::on_frame(const Frame &frame, int64_t now_ns) {
+  finish_step();  // frames act after the STEP before them, however it was worked
   ++rx_frames_;
   Request req;
   Fault f;
@@ -130,10 +131,11 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
                      p.variant, p.integrator, p.pose, p.step_ns);
       break;
     }
-    case Command::kStep:
+    case Command::kStep:  // worked by work(), answered when done
       ctrl_seq_ = {true, req.seq};
-      advance(r.n_steps, true, &req);
-      break;
+      step_req_ = req;
+      step_total_ = step_left_ = r.n_steps;  // validated: >= 1
+      return;
     case Command::kStartRt:
       ctrl_seq_ = {true, req.seq};
       rt_steps_per_tick_ = r.steps_per_tick;
@@ -215,6 +217,46 @@ bool Controller::advance(uint32_t n, bool lockstep_watchdog, const Request *req)
   return true;
 }
 
+uint64_t Controller::work(uint64_t max_steps) {
+  if (step_left_ == 0 || max_steps == 0) return 0;
+  const uint64_t before = session_.step_count();
+  const uint64_t n = std::min(step_left_, max_steps);
+  const bool ok = advance(static_cast<uint32_t>(n), true, &step_req_);
+  const uint64_t done = session_.step_count() - before;
+  step_left_ -= std::min(step_left_, n);
+  if (!ok || done < n) step_left_ = 0;  // failed (HALTED): the last good state is the answer
+  if (step_left_ == 0) end_step();
+  return done;
+}
+
+void Controller::finish_step() {
+  while (step_left_ > 0) work(step_left_);
+}
+
+void Controller::end_step() {
+  step_left_ = step_total_ = 0;
+  publish();
+}
+
+Controller::Shutdown Controller::shutdown() {
+  Shutdown out;
+  if (step_left_ > 0) {
+    out.step_cut = true;
+    out.step_total = step_total_;
+    out.step_done = step_total_ - step_left_;
+    step_left_ = step_total_ = 0;  // not answered: the bench sees the heartbeat stop
+  }
+  if (session_.active()) {
+    out.safe_status = session_.apply_safe_state(config_.safe_mode);
+    out.safe_applied = out.safe_status == LEGSIM_OK;
+    if (out.safe_applied) {
+      safe_ = true;
+      armed_ = false;
+    }
+  }
+  return out;
+}
+
 void Controller::rt_tick(int64_t now_ns) {
   if (state_ != SimState::kRealtime) return;
   if (armed_ && now_ns - last_cmd_ns_ > static_cast<int64_t>(timeout_ms_) * 1000000)
@@ -237,6 +279,7 @@ uint32_t Controller::status_bits(uint32_t events) const {
   if (safe_) s |= kStatusSafeState;
   if (fault_since_sample_) s |= kStatusFault;
   if (armed_) s |= kStatusCmdWatchdog;
+  if (step_left_ > 0) s |= kStatusStepping;
   return s;
 }
 

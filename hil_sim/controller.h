@@ -2,6 +2,15 @@
 // REALTIME, HALTED after a solver failure until the next RESET. Mode-independent: the run
 // loop (run_loop.cpp) feeds it frames and real-time ticks with the time they happened.
 //
+// A STEP is worked in slices: on_frame() accepts it and work() advances it, a bounded
+// number of steps per call, so the run loop keeps its heartbeat and reads signals while a
+// long STEP runs. The slicing never changes a result: legsim_step(n) is n single steps,
+// and the command timeout splits a STEP at the same steps whatever the slices (the sample
+// of STEP n is bit-identical however it was sliced). The answer (one state sample) goes
+// out when the last step is done. A frame given to on_frame() during a STEP first finishes
+// the STEP (the run loop does not read frames during a STEP: they wait in the socket, in
+// order, which keeps the lockstep exchange deterministic).
+//
 // Every frame is checked in this order: id and format (64-byte CAN FD), sequence counter,
 // values (NaN/Inf, DBC ranges, model limits), state. The first failure is answered with
 // one FAULT frame and nothing else changes. Every accepted CONTROL frame is answered with
@@ -37,6 +46,24 @@ class Controller {
   Controller(Session &session, FrameSink &sink, const ControllerConfig &config);
 
   void on_frame(const Frame &frame, int64_t now_ns);
+  // A STEP is accepted and not finished yet.
+  bool stepping() const { return step_left_ > 0; }
+  uint64_t step_left() const { return step_left_; }
+  // Advances the STEP in progress by at most max_steps steps (> 0); when its last step is
+  // done (or a step fails) the STEP is answered. Returns the steps done; 0 when idle.
+  uint64_t work(uint64_t max_steps);
+  // Works the STEP in progress to its end (tests, and on_frame during a STEP).
+  void finish_step();
+  // On exit (signal or socket failure): a STEP in progress is abandoned, unanswered, after
+  // the steps already done (the session is at a whole step, as after any STEP); the
+  // actuators of an active session are put in the safe state (config safe_mode).
+  struct Shutdown {
+    bool step_cut = false;
+    uint64_t step_done = 0, step_total = 0;
+    bool safe_applied = false;
+    legsim_status safe_status = LEGSIM_OK;
+  };
+  Shutdown shutdown();
   // One real-time tick (steps_per_tick steps); no-op outside REALTIME.
   void rt_tick(int64_t now_ns);
 
@@ -63,6 +90,7 @@ class Controller {
   void handle_control(const Request &req, int64_t now_ns);
   void handle_act(const Request &req, int64_t now_ns);
   void handle_load(const Request &req);
+  void end_step();
   // Steps n with the lockstep watchdog (or none in real time); false after a failure.
   bool advance(uint32_t n, bool lockstep_watchdog, const Request *req);
   void trip(double elapsed_ms);
@@ -93,6 +121,10 @@ class Controller {
   uint32_t rt_ticks_ = 0;
   uint32_t rt_decimation_ = 1;
   uint32_t rt_steps_per_tick_ = 1;
+
+  // the STEP in progress
+  uint64_t step_left_ = 0, step_total_ = 0;
+  Request step_req_;
 
   uint32_t rx_frames_ = 0, rx_rejected_ = 0, fault_count_ = 0;
 };

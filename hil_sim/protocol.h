@@ -51,6 +51,7 @@ enum StatusBit : uint32_t {
   kStatusHalted = 1u << 7,
   kStatusFault = 1u << 8,
   kStatusCmdWatchdog = 1u << 9,
+  kStatusStepping = 1u << 10,  // heartbeats only: a STEP is being worked (never in a sample)
 };
 // legsim_report events -> status bits
 uint32_t status_from_events(uint32_t events);

@@ -1,6 +1,7 @@
 // hil_sim's protocol and controller against the real core, with frames in memory (no CAN):
 // validation faults, "a bad frame changes nothing", the command timeout, determinism,
-// solver failures, and a fuzz run that must not crash.
+// solver failures, a STEP worked in slices (same frames whatever the slicing, cut short by a
+// shutdown at a whole step), and a fuzz run that must not crash.
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -135,8 +136,10 @@ struct Rig {
       std::exit(1);
     }
   }
+  // The frame, and the STEP it starts worked to its end in one go.
   std::vector<hil::Frame> feed(const hil::Frame &f, int64_t now_ns = 0) {
     ctl.on_frame(f, now_ns);
+    ctl.finish_step();
     return rec.take();
   }
 };
@@ -430,6 +433,99 @@ void test_events_in_status() {
   CHECK(!(st.st_status & (hil::kStatusStrokeMax | hil::kStatusStrokeMin | hil::kStatusForceSaturated)));
 }
 
+// A scene with a command timeout that trips in the middle of a STEP, a load, a STEP
+// ending exactly at the timeout, and a STEP on which Newton gives up (HALTED). slice = 0:
+// every STEP in one go; else slice steps per work() call. Every frame sent, in order.
+std::vector<hil::Frame> sliced_scene(uint64_t slice) {
+  Rig r;
+  std::vector<hil::Frame> all;
+  auto run = [&](const hil::Frame &f) {
+    r.ctl.on_frame(f, 0);
+    if (slice == 0) {
+      r.ctl.finish_step();
+    } else {
+      while (r.ctl.stepping()) {
+        const uint64_t left = r.ctl.step_left();
+        const uint64_t done = r.ctl.work(slice);
+        // a sample goes out only with the STEP's last step
+        CHECK(done <= slice && (r.ctl.stepping() == (count(r.rec.frames, LEGSIM_CAN_ST_STATUS_FRAME_ID) == 0)));
+        if (r.ctl.stepping()) CHECK(r.ctl.step_left() == left - done);
+        hil::HeartbeatInfo hb;
+        r.ctl.fill_heartbeat(&hb);
+        CHECK(((hb.status & hil::kStatusStepping) != 0) == r.ctl.stepping());
+      }
+    }
+    auto out = r.rec.take();
+    all.insert(all.end(), out.begin(), out.end());
+  };
+  run(reset(1, 0, 1));
+  run(act(1, 2, 0.62f, 1, 40.0f));
+  run(step(2, 250));  // the 100 ms timeout trips after step 100
+  run(act(2, 1, -30.0f));
+  legsim_can_load_cmd_t l;
+  legsim_can_load_cmd_init(&l);
+  l.load_seq = 1;
+  l.load_value1 = 20.0f;
+  l.load_value2 = -80.0f;
+  hil::Frame lf = fd_frame(LEGSIM_CAN_LOAD_CMD_FRAME_ID);
+  legsim_can_load_cmd_pack(lf.data, &l, 64);
+  run(lf);
+  run(step(3, 100));  // ends exactly at the timeout: trips at the next STEP's first step
+  run(step(4, 37));
+  legsim_can_control_t m = control(5, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_integrator = LEGSIM_CAN_CONTROL_CTRL_INTEGRATOR_GENERALIZED_ALPHA_CHOICE;
+  m.ctrl_step_size = 100000000;
+  run(pack(m));
+  run(step(6, 10));  // Newton gives up at the second step: FAULT, then the HALTED sample
+  return all;
+}
+
+void test_slicing_changes_nothing() {
+  const auto whole = sliced_scene(0);
+  CHECK(count(whole, LEGSIM_CAN_FAULT_FRAME_ID) == 3);  // two timeouts, one solver failure
+  CHECK(count(whole, LEGSIM_CAN_ST_STATUS_FRAME_ID) == 6);
+  for (uint64_t slice : {1u, 7u, 64u, 1000u}) {
+    const auto cut = sliced_scene(slice);
+    bool same = cut.size() == whole.size();
+    for (size_t i = 0; same && i < whole.size(); ++i)
+      same = cut[i].id == whole[i].id && std::memcmp(cut[i].data, whole[i].data, 64) == 0;
+    CHECK(same);
+    if (!same) std::fprintf(stderr, "  slices of %llu steps differ\n", static_cast<unsigned long long>(slice));
+  }
+}
+
+// A shutdown in the middle of a STEP: the steps done stay done (the state is that of a
+// whole number of steps, bit for bit), the STEP is not answered, the actuators are safe.
+void test_shutdown_mid_step() {
+  Rig r;
+  r.feed(reset(1, 0, 1));
+  r.feed(act(1, 1, 300.0f, 1, -200.0f));
+  r.ctl.on_frame(step(2, 90), 0);
+  CHECK(r.ctl.work(33) == 33 && r.ctl.stepping());
+  auto sd = r.ctl.shutdown();
+  CHECK(sd.step_cut && sd.step_done == 33 && sd.step_total == 90);
+  CHECK(sd.safe_applied && sd.safe_status == LEGSIM_OK);
+  CHECK(!r.ctl.stepping() && r.rec.take().empty());  // unanswered
+  CHECK(r.session.step_count() == 33);
+  hil::Sample cut, ref;
+  CHECK(r.session.sample(&cut) == LEGSIM_OK);
+  Rig q;  // the same 33 steps in one STEP
+  q.feed(reset(1, 0, 1));
+  q.feed(act(1, 1, 300.0f, 1, -200.0f));
+  q.feed(step(2, 33));
+  CHECK(q.session.sample(&ref) == LEGSIM_OK);
+  CHECK(std::memcmp(cut.q, ref.q, sizeof cut.q) == 0 && std::memcmp(cut.qd, ref.qd, sizeof cut.qd) == 0);
+  CHECK(cut.t == ref.t);
+  CHECK(cut.force[0] == 0 && cut.force[1] == 0);  // zero-force safe state
+  hil::HeartbeatInfo hb;
+  r.ctl.fill_heartbeat(&hb);
+  CHECK((hb.status & hil::kStatusSafeState) && !(hb.status & hil::kStatusStepping));
+  // without a STEP in progress nothing is cut
+  Rig idle;
+  sd = idle.ctl.shutdown();
+  CHECK(!sd.step_cut && !sd.safe_applied);
+}
+
 void test_fuzz() {
   Rig r;
   r.feed(reset(1));
@@ -447,6 +543,7 @@ void test_fuzz() {
     // keep steps small so the fuzz stays fast
     if (f.id == LEGSIM_CAN_CONTROL_FRAME_ID && f.data[4] == 2) f.data[14] = f.data[15] = f.data[13] = 0;
     r.ctl.on_frame(f, i * 1000000LL);
+    r.ctl.finish_step();
     frames_out += r.rec.take().size();
   }
   CHECK(frames_out > 0);
@@ -467,6 +564,8 @@ int main() {
   test_reset_failure_keeps_session();
   test_solver_failures();
   test_events_in_status();
+  test_slicing_changes_nothing();
+  test_shutdown_mid_step();
   test_fuzz();
   std::printf("%d passed, %d failed\n", g_passed, g_failed);
   return g_failed == 0 ? 0 : 1;
