@@ -341,7 +341,7 @@ def _timeline(scene: Scene, rec: dict, faults: list[dict]) -> list[tuple[int, li
         events.append((c["step"], 1, [tuple(c[a]) if a in c else None for a in ACTUATORS]))
     for f in faults:
         if f["code"] == "CMD_TIMEOUT":
-            v = [("force", 0.0)] * 2 if scene.safe_state == "zero-force" else [("length", None)] * 2
+            v = [("force", 0.0)] * 2 if scene.safe_state == "zero_force" else [("length", None)] * 2
             events.append((f["step"], 0, v))
     events.sort(key=lambda e: (e[0], e[1]))
     out = []
@@ -484,8 +484,11 @@ def evaluate(rec: dict, root: Path | None = None, *, scene: Scene | None = None,
 
     root = root or find_root()
     scene = scene or scene_of(rec, root)
+    if not scene.over_can:   # statics, sweep, inverse dynamics, assembly: run in legsim_cli
+        from .analyses import evaluate_analysis
+        return evaluate_analysis(rec, scene, root)
     ch = scene.checks
-    model_path = root / "models" / "leg.toml"
+    model_path = scene.model_path or root / "models" / "leg.toml"   # the scene's model file
     leg = Leg.from_toml(model_path, scene.variant)
     results: list[CheckResult] = []
     ev = Evaluation(scene, rec, results, leg=leg)
@@ -744,7 +747,7 @@ def _fault_checks(scene: Scene, rec: dict, d) -> list[CheckResult]:
                     det += "; " + safe
                 else:
                     det += "; SAFE_STATE set until the next ACT_CMD" + \
-                        (", actuator forces 0" if scene.safe_state == "zero-force" else "")
+                        (", actuator forces 0" if scene.safe_state == "zero_force" else "")
             else:
                 det += " -> no " + want
             out.append(CheckResult(f"fault {want}: {inj['label']}", ok, None, None, "",
@@ -810,6 +813,6 @@ def _safe_state_ok(scene, rec, d, trip_step) -> str:
             return f"SAFE_STATE missing at step {k}"
         if nxt_cmd is not None and k > nxt_cmd and on:
             return f"SAFE_STATE still set at step {k} after the ACT_CMD at step {nxt_cmd}"
-        if in_safe and scene.safe_state == "zero-force" and np.any(d["forces"][i] != 0):
+        if in_safe and scene.safe_state == "zero_force" and np.any(d["forces"][i] != 0):
             return f"actuator forces {d['forces'][i].tolist()} at step {k} in the safe state"
     return ""

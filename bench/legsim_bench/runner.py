@@ -83,10 +83,19 @@ def _progress(total: int, desc: str, enabled: bool | None):
 def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dict:
     """Runs `scene` on the hil_sim behind `link` (a can_link.HilLink) and returns the recording.
     hil_sim errors (no answer, a refused RESET/STEP, HALTED) end the run early; they are in
-    recording["errors"] and the checks fail on them."""
+    recording["errors"] and the checks fail on them.
+
+    Only dynamics has frames in the DBC: a scene of another analysis runs in legsim_cli (the
+    core on this host, legsim_bench.analyses) and `link` is not used. A scene with its own
+    model file needs a hil_sim started with --model FILE (HilProcess.for_scene)."""
+    log = log or (lambda msg: None)
+    if not scene.over_can:
+        from .analyses import record_analysis
+        return record_analysis(scene, FORMAT, log=log)
     from .can_link import ACT_CMD, CONTROL, LOAD_CMD, ActMode, HilError, HilFault, SimState
 
-    log = log or (lambda msg: None)
+    if hasattr(link, "use_model"):       # the reference model playing hil_sim: same model file
+        link.use_model(scene.model_path)
     rec: dict = {
         "format": FORMAT, "scene_name": scene.name,
         "scene_path": str(scene.path) if scene.path else None, "scene_source": scene.source,
@@ -271,7 +280,8 @@ def hil_sim_path(root: Path | None = None) -> Path:
 
 
 class HilProcess:
-    """hil_sim started on a channel for the length of a `with` block (stderr to a log file)."""
+    """hil_sim started on a channel for the length of a `with` block (stderr to a log file).
+    args: more options, e.g. scene.hil_args() = ["--model", FILE] for a scene's own model."""
 
     def __init__(self, channel: str = "vcan0", binary: str | os.PathLike | None = None,
                  args: list[str] | None = None, log_path: str | os.PathLike | None = None):
@@ -285,6 +295,11 @@ class HilProcess:
         self.log_path = Path(log_path) if log_path else Path(
             os.environ.get("TMPDIR", "/tmp")) / f"hil_sim_bench_{os.getpid()}.log"
         self.proc: subprocess.Popen | None = None
+
+    @classmethod
+    def for_scene(cls, scene: Scene, channel: str = "vcan0", binary=None, log_path=None) -> "HilProcess":
+        """A hil_sim that runs the scene's model (the compiled-in leg, or --model FILE)."""
+        return cls(channel, binary, scene.hil_args(), log_path)
 
     def __enter__(self) -> "HilProcess":
         self.log_path.parent.mkdir(parents=True, exist_ok=True)
@@ -348,6 +363,11 @@ class ReferenceLink:
         self._pending: list = []
         self._fault_count = 0
         self.model = None
+        self.model_path = self.root / "models" / "leg.toml"
+
+    def use_model(self, path) -> None:
+        """The model file of the next RESET (a scene's own, or models/leg.toml)."""
+        self.model_path = Path(path) if path else self.root / "models" / "leg.toml"
 
     def __enter__(self):
         return self
@@ -393,7 +413,7 @@ class ReferenceLink:
         from .reference import LegModel
 
         np = self.np
-        self.model = LegModel.from_toml(self.root / "models" / "leg.toml", variant=variant)
+        self.model = LegModel.from_toml(self.model_path, variant=variant)
         self.h_ns = round(step_s * 1e9)
         self.variant, self.integrator = variant, integrator
         th = self.model.stand_theta()

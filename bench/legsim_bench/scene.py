@@ -1,10 +1,13 @@
-"""Bench scenes: what to run against hil_sim and what to check (TOML, schema in bench/README.md).
+"""Scenes (scenes/*.toml, schema in scenes/README.md): what to run and what to check.
+
+legsim_cli reads the same files (firmware_core/host/scene_toml.cpp) with the same rules and
+messages; dynamics runs on hil_sim over CAN, the other analyses in legsim_cli.
 
 Pure Python (tomllib, math): `legsim-bench record` runs where imports are slow (the QEMU VM),
 so nothing here pulls numpy, scipy or matplotlib.
 
     from legsim_bench.scene import load_scene, shipped_scenes, find_root
-    sc = load_scene("upper_step_50N")          # a shipped scene by name, or a path
+    sc = load_scene("upper_step_50N")          # a scene of scenes/ by name, or a path
     sc.n_steps, sc.boundaries(), sc.setpoints(k)
 
 Times in a scene are seconds; the bench works on the step grid: a time t is step round(t / h)
@@ -21,14 +24,21 @@ import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
-__all__ = ["Scene", "SceneError", "RootNotFound", "Schedule", "ActuatorCommand", "Injection",
+__all__ = ["Scene", "ModelInfo", "SceneError", "RootNotFound", "Schedule", "ActuatorCommand", "Injection",
            "Checks", "StrokeCheck", "load_scene", "parse_scene", "find_root", "shipped_scenes",
-           "resolve_scene", "fault_codes", "ACTUATORS", "VARIANTS", "INTEGRATORS",
+           "resolve_scene", "fault_codes", "scenes_dir", "ACTUATORS", "VARIANTS", "INTEGRATORS",
+           "ANALYSES", "BUILTIN_MODEL", "RENAMED_KEYS", "DEFAULT_CHECKS",
            "DISABLE_FLAGS", "FRAME_IDS", "SEQ_SIGNALS", "FD_LENGTHS"]
 
 ACTUATORS = ("upper", "lower")
-VARIANTS = ("revolute", "slot")
+VARIANTS = ("revolute", "slot")          # Ctrl_Variant of the DBC (a model file may have more)
 INTEGRATORS = ("rk4", "generalized_alpha")
+ANALYSES = ("dynamics", "statics", "statics_sweep", "inverse_dynamics", "assembly")
+TIMED = ("dynamics", "inverse_dynamics")
+BUILTIN_MODEL = "builtin:leg"
+# legsim_default_options() of legsim.h (tests compare them with legsim_cli --check)
+DEFAULT_OPTIONS = {"rho_inf": 0.8, "max_newton_iter": 25, "newton_tol": 1e-10}
+MAX_RECORD_EVERY = 10_000_000           # the DBC's largest STEP (Ctrl_NSteps)
 # legsim_disable bits (legsim.h), as Ctrl_Disable carries them
 DISABLE_FLAGS = {"gravity": 0, "force_elements": 1, "reactions": 2, "projection": 3,
                  "actuators": 4, "stroke_limits": 5}
@@ -75,7 +85,8 @@ def find_root(start: str | os.PathLike | None = None) -> Path:
 
 
 def scenes_dir(root: Path | None = None) -> Path:
-    return (root or find_root()) / "bench" / "scenes"
+    """scenes/: the one folder of scenes, shared with legsim_cli."""
+    return (root or find_root()) / "scenes"
 
 
 def fault_codes(dbc: str | os.PathLike | None = None) -> dict[str, int]:
@@ -220,6 +231,36 @@ class Checks:
         return {k: getattr(self, k) for k in CHECK_KEYS if getattr(self, k) is not None}
 
 
+@dataclass(frozen=True)
+class ModelInfo:
+    """What the scene reader needs of a model file (its own reading of the TOML: pure Python,
+    no core): variant names, actuators (name, stroke, max_force), pose and force names."""
+    path: Path
+    builtin: bool                      # the compiled-in leg (models/leg.toml at build time)
+    variants: tuple[str, ...]
+    actuators: tuple[tuple[str, tuple[float, float], float], ...]
+    poses: tuple[str, ...]
+    forces: tuple[tuple[str, str], ...]   # (name, kind)
+
+    @classmethod
+    def read(cls, path: Path, builtin: bool, where: str) -> "ModelInfo":
+        try:
+            data = tomllib.loads(Path(path).read_text())
+        except OSError as e:
+            raise SceneError(f"{where}: model {path}: cannot read: {e.strerror or e}") from None
+        except tomllib.TOMLDecodeError as e:
+            raise SceneError(f"{where}: model {path}: not valid TOML: {e}") from None
+        try:
+            acts = tuple((str(a["name"]), (float(a["stroke"][0]), float(a["stroke"][1])),
+                          float(a["max_force"])) for a in data.get("actuator", []))
+            forces = tuple((str(f["name"]), str(f.get("kind", ""))) for f in data.get("force", []))
+        except (KeyError, TypeError, ValueError, IndexError) as e:
+            raise SceneError(f"{where}: model {path}: bad [[actuator]] or [[force]] ({e!r})") from None
+        variants = ("revolute", *[str(v) for v in data.get("variant", {})])
+        return cls(Path(path), builtin, variants, acts, tuple(str(p) for p in data.get("pose", {})),
+                   forces)
+
+
 @dataclass
 class Scene:
     name: str
@@ -231,9 +272,9 @@ class Scene:
     step_ns: int
     n_steps: int
     record_every: int
-    pose: int
-    lengths: tuple[float, float] | None
-    init: str                          # "force_zero" | "hold_length" (Ctrl_ActInit)
+    pose: int                          # index of the pose in the model (Ctrl_Pose)
+    lengths: tuple[float, ...] | None
+    init: str                          # "zero_force" | "hold_length" (Ctrl_ActInit)
     cmd_timeout_ms: int                # 0 = none
     safe_state: str                    # what hil_sim does on a command timeout (its default)
     disable: tuple[str, ...]
@@ -242,6 +283,35 @@ class Scene:
     injections: tuple[Injection, ...]
     checks: Checks
     demo: bool = False
+    analysis: str = "dynamics"
+    model: str = BUILTIN_MODEL         # as written in the scene
+    model_info: ModelInfo | None = None
+    pose_name: str = "stand"
+    forces: dict = field(default_factory=dict)   # force element name -> tuple of values
+    grid: int = 11
+    rho_inf: float = DEFAULT_OPTIONS["rho_inf"]
+    max_newton_iter: int = DEFAULT_OPTIONS["max_newton_iter"]
+    newton_tol: float = DEFAULT_OPTIONS["newton_tol"]
+
+    @property
+    def model_path(self) -> Path | None:
+        """The model file: the scene's own, or models/leg.toml for the compiled-in leg (the
+        file it was compiled from: the reference model reads it)."""
+        return self.model_info.path if self.model_info else None
+
+    @property
+    def builtin_model(self) -> bool:
+        return self.model_info is None or self.model_info.builtin
+
+    @property
+    def over_can(self) -> bool:
+        """Dynamics runs on hil_sim over CAN; the other analyses have no frames in the DBC and
+        run in legsim_cli (the core on the host), checked against the same reference model."""
+        return self.analysis == "dynamics"
+
+    def hil_args(self) -> list[str]:
+        """hil_sim's options for this scene: --model FILE unless it is the compiled-in leg."""
+        return [] if self.builtin_model else ["--model", str(self.model_path)]
 
     @property
     def step_s(self) -> float:
@@ -275,11 +345,7 @@ class Scene:
         return sorted(k for k in b if 0 <= k < self.n_steps)
 
     def to_step(self, t: float, what: str = "time") -> int:
-        k = round(t * 1e9 / self.step_ns)
-        if abs(k * self.step_s - t) > GRID_TOL_S:
-            raise SceneError(f"{self._where()}: {what} {t!r} s is not on the step grid "
-                             f"(h = {self.step_s:g} s)")
-        return k
+        return _on_grid(self._where(), t, self.step_ns, what)
 
     def setpoints(self, k: int, initial_lengths=None) -> list[tuple[str, float] | None]:
         """(mode, value) per actuator at step k (None: no command for it)."""
@@ -297,10 +363,45 @@ class Scene:
         return any(i.is_silence and i.step <= k < i.step + i.silence_steps for i in self.injections)
 
     def summary(self) -> str:
+        if not self.over_can:
+            how = f"{self.analysis} in legsim_cli (no CAN frames for it)"
+            if self.analysis == "inverse_dynamics":
+                how += f", {self.duration:g} s ({self.n_steps} steps, a sample every {self.record_every})"
+            return f"{self.variant}, {how}" + ("" if self.builtin_model else f", model {self.model}")
         h = self.step_s
         hs = f"{h * 1e3:g} ms" if h >= 1e-4 else f"{h * 1e6:g} us"
         return (f"{self.variant}, {self.integrator}, h = {hs}, {self.duration:g} s "
-                f"({self.n_steps} steps, a sample every {self.record_every})")
+                f"({self.n_steps} steps, a sample every {self.record_every})"
+                + ("" if self.builtin_model else f", model {self.model}"))
+
+    def resolved(self) -> dict:
+        """The values legsim_cli --check prints for the same file (tests compare the two)."""
+        cmds = {}
+        for c in self.commands:
+            if c is None:
+                continue
+            s = c.schedule
+            if s.kind == "hold":
+                sig = {"value": s.value}
+            elif s.kind == "initial":
+                sig = {"value": "initial"}
+            elif s.kind == "step":
+                sig = {"step": {"t0": s.t0, "before": s.before, "after": s.after}}
+            else:
+                sig = {"sinusoid": {"offset": s.offset, "amplitude": s.amplitude,
+                                    "frequency": s.frequency, "phase": s.phase}}
+            cmds[c.name] = {"mode": c.mode, **sig}
+        timed = self.analysis in TIMED
+        return {"name": self.name, "model": self.model,
+                "model_path": "" if self.model == BUILTIN_MODEL else str(self.model_path),
+                "variant": self.variant, "analysis": self.analysis, "integrator": self.integrator,
+                "step_ns": self.step_ns, "n_steps": self.n_steps if timed else 0,
+                "record_every": self.record_every, "pose": self.pose_name,
+                "lengths": list(self.lengths) if self.lengths is not None else None,
+                "grid": self.grid, "init": self.init, "cmd_timeout_ms": self.cmd_timeout_ms,
+                "safe_state": self.safe_state, "disable": self.disable_bits, "rho_inf": self.rho_inf,
+                "max_newton_iter": self.max_newton_iter, "newton_tol": self.newton_tol,
+                "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds}
 
     def _where(self) -> str:
         return str(self.path) if self.path else self.name
@@ -308,9 +409,42 @@ class Scene:
 
 # ---- parsing ---------------------------------------------------------------------------
 
-_TOP_KEYS = {"name", "description", "demo", "variant", "integrator", "step", "duration",
-             "record_every", "decimation", "pose", "lengths", "init", "cmd_timeout_ms",
-             "safe_state", "disable", "foot_load", "command", "inject", "checks"}
+_TOP_KEYS = {"description", "name", "demo", "model", "variant", "analysis", "integrator",
+             "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
+             "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
+             "forces", "command", "inject", "checks"}
+# The keys and values of the two former schemas and what they are now (legsim_cli says the
+# same words: firmware_core/host/scene_toml.cpp).
+RENAMED_KEYS = {
+    "output_every": "'output_every' is now 'record_every' (steps between recorded samples)",
+    "decimation": "'decimation' is now 'record_every' (steps between recorded samples)",
+    "step": "'step' is now 'step_s' (the step size, s); 'step = { t0, before, after }' is a step "
+            "signal in a [[command]]",
+    "foot_load": "'foot_load' is now a force element value: [forces] foot_load = [Fx, Fy] (N)",
+}
+RENAMED_VALUES = {"force_zero": "zero_force", "zero-force": "zero_force", "hold-length": "hold_length"}
+ACTUATOR_MODES = ("zero_force", "hold_length")
+# [checks] keys that apply to each analysis, and the tolerances used when a scene gives none
+_DYN_CHECKS = set(CHECK_KEYS) | {"compare", "stroke", "resolution_ratio"}
+CHECKS_FOR = {
+    "dynamics": _DYN_CHECKS,
+    "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
+                "balance_n", "balance_nm"},
+    "statics_sweep": {"statics_force_n", "statics_reaction_n"},
+    "inverse_dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n",
+                         "moment_nm"},
+    "assembly": {"position_m", "angle_rad", "residual"},
+}
+DEFAULT_CHECKS = {
+    "dynamics": {"position_m": 1e-5, "angle_rad": 1e-5, "reaction_n": 0.01, "moment_nm": 1e-3,
+                 "actuator_force_n": 0.01, "residual": 1e-6},
+    "statics": {"position_m": 1e-8, "angle_rad": 1e-8, "residual": 1e-8, "statics_force_n": 1e-6,
+                "statics_reaction_n": 1e-6, "balance_n": 1e-6, "balance_nm": 1e-6},
+    "statics_sweep": {"statics_force_n": 1e-6, "statics_reaction_n": 1e-6},
+    "inverse_dynamics": {"position_m": 1e-8, "angle_rad": 1e-8, "residual": 1e-8,
+                         "actuator_force_n": 1e-6, "reaction_n": 1e-6, "moment_nm": 1e-6},
+    "assembly": {"position_m": 1e-8, "angle_rad": 1e-8, "residual": 1e-8},
+}
 
 
 def _num(where, key, v, *, positive=False, finite=True) -> float:
@@ -333,6 +467,8 @@ def _int(where, key, v, lo=None, hi=None) -> int:
 
 
 def _choice(where, key, v, options) -> str:
+    if isinstance(v, str) and v in RENAMED_VALUES and v not in options:
+        raise SceneError(f'{where}: {key} = "{v}" is now {key} = "{RENAMED_VALUES[v]}"')
     if not isinstance(v, str) or v.lower() not in options:
         raise SceneError(f"{where}: {key} must be one of {', '.join(options)}, not {v!r}")
     return v.lower()
@@ -342,6 +478,19 @@ def _unknown(where, d: dict, allowed) -> None:
     extra = sorted(set(d) - set(allowed))
     if extra:
         raise SceneError(f"{where}: unknown key(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})")
+
+
+def _fmt(x: float) -> str:
+    """Shortest round-trip form, as legsim_cli writes numbers (std::to_chars)."""
+    r = repr(float(x))
+    return r[:-2] if r.endswith(".0") else r
+
+
+def _on_grid(where: str, t: float, step_ns: int, what: str) -> int:
+    k = round(t * 1e9 / step_ns)
+    if abs(k * step_ns / 1e9 - t) > GRID_TOL_S:
+        raise SceneError(f"{where}: {what} {_fmt(t)} s is not on the step grid (h = {_fmt(step_ns / 1e9)} s)")
+    return k
 
 
 def _pair(where, key, v) -> tuple[float, float]:
@@ -359,7 +508,7 @@ def _schedule(where: str, c: dict) -> Schedule:
         v = c["value"]
         if v == "initial":
             return Schedule("initial")
-        return Schedule("hold", value=_num(where, "value", v))
+        return Schedule("hold", value=_num(where, "value (a number, or \"initial\")", v))
     if k == "step":
         s = c["step"]
         if not isinstance(s, dict):
@@ -384,68 +533,176 @@ def _schedule(where: str, c: dict) -> Schedule:
                     phase=_num(where, "phase", s.get("phase", 0.0)))
 
 
-def _model_limits(root: Path | None) -> dict | None:
-    """Strokes and max forces from models/leg.toml, to refuse impossible commands early."""
-    try:
-        path = (root or find_root()) / "models" / "leg.toml"
-        data = tomllib.loads(path.read_text())
-    except (RootNotFound, OSError, tomllib.TOMLDecodeError):
-        return None
-    out = {}
-    for a in data.get("actuator", []):
-        out[a["name"]] = (tuple(map(float, a["stroke"])), float(a["max_force"]))
-    return out
+def _model(where: str, spec, path: Path | None, root: Path | None) -> ModelInfo:
+    """The scene's model: "builtin:leg" (hil_sim's and legsim_cli's compiled-in leg; the bench
+    reads the file it was compiled from, models/leg.toml) or a file relative to the scene."""
+    if not isinstance(spec, str) or not spec:
+        raise SceneError(f"{where}: model must name a model file (or \"{BUILTIN_MODEL}\")")
+    if spec.startswith("builtin:"):
+        if spec != BUILTIN_MODEL:
+            raise SceneError(f"{where}: unknown builtin model {spec[8:]!r} (this build has: leg)")
+        try:
+            r = root or find_root()
+        except RootNotFound as e:
+            raise SceneError(f"{where}: {e}") from None
+        return ModelInfo.read(r / "models" / "leg.toml", True, where)
+    p = Path(spec)
+    if not p.is_absolute():
+        p = (path.parent if path is not None else Path.cwd()) / p
+    return ModelInfo.read(p, False, where)
 
 
 def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path | None = None,
                 name: str | None = None) -> Scene:
-    """A Scene from TOML text (SceneError on anything that cannot be run)."""
+    """A Scene from TOML text (SceneError on anything that cannot be run). The rules are
+    legsim_cli's (scenes/README.md); on top, what the bench cannot do says why."""
     path = Path(path) if path is not None else None
     where = str(path) if path else (name or "scene")
     try:
         d = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{where}: not valid TOML: {e}") from None
+    for old, msg in RENAMED_KEYS.items():
+        if old in d:
+            raise SceneError(f"{where}: {msg}")
     _unknown(where, d, _TOP_KEYS)
     sname = d.get("name") or name or (path.stem if path else "scene")
     if not isinstance(sname, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", sname):
         raise SceneError(f"{where}: name must be letters, digits, '_', '-', '.': {sname!r}")
+    if not isinstance(d.get("demo", False), bool):
+        raise SceneError(f"{where}: demo must be true or false")
 
-    variant = _choice(where, "variant", d.get("variant", "revolute"), VARIANTS)
+    analysis = _choice(where, "analysis", d.get("analysis", "dynamics"), ANALYSES)
+    timed = analysis in TIMED
+    dynamics = analysis == "dynamics"
+
+    def only(key, applies, which):
+        if key in d and not applies:
+            raise SceneError(f"{where}: '{key}' applies to {which} only")
+
+    model_spec = d.get("model", BUILTIN_MODEL)
+    info = _model(where, model_spec, path, root)
+    variant = d.get("variant", "revolute")
+    if not isinstance(variant, str) or variant not in info.variants:
+        raise SceneError(f"{where}: variant {variant!r} is not in the model {info.path.name} "
+                         f"(available: {', '.join(info.variants)})")
     integrator = _choice(where, "integrator", d.get("integrator", "rk4"), INTEGRATORS)
-    h = _num(where, "step", d.get("step", 0.001), positive=True)
+    h = _num(where, "step_s", d.get("step_s", 0.001))
     step_ns = round(h * 1e9)
-    if abs(step_ns / 1e9 - h) > 1e-15 or not 1000 <= step_ns <= 100_000_000:
-        raise SceneError(f"{where}: step must be a whole number of ns in 1 us .. 100 ms, not {h!r}")
-    dur = _num(where, "duration", d.get("duration"), positive=True) if "duration" in d else None
-    if dur is None:
-        raise SceneError(f"{where}: duration (s) is required")
-    n_steps = round(dur * 1e9 / step_ns)
-    if abs(n_steps * step_ns / 1e9 - dur) > GRID_TOL_S or n_steps < 1:
-        raise SceneError(f"{where}: duration {dur!r} s is not a whole number of steps of {h!r} s")
-    if "record_every" in d and "decimation" in d:
-        raise SceneError(f"{where}: give record_every or decimation (the same thing), not both")
-    rec = _int(where, "record_every", d.get("record_every", d.get("decimation", 10)), 1, 10_000_000)
-
-    pose = d.get("pose", "stand")
-    if pose == "stand":
-        pose = 0
-    pose = _int(where, "pose", pose, 0, 1)
-    if pose != 0:
-        raise SceneError(f"{where}: only pose 'stand' (0) exists in leg.toml")
-    lengths = _pair(where, "lengths", d["lengths"]) if "lengths" in d else None
-    init = _choice(where, "init", d.get("init", "force_zero"), ("force_zero", "hold_length"))
-    timeout = _int(where, "cmd_timeout_ms", d.get("cmd_timeout_ms", 0), 0, 65534)
-    safe = _choice(where, "safe_state", d.get("safe_state", "zero-force"), ("zero-force", "hold-length"))
+    if not h > 0 or abs(step_ns / 1e9 - h) > 1e-15 or not 1000 <= step_ns <= 100_000_000:
+        raise SceneError(f"{where}: 'step_s' must be a whole number of ns in 1 us .. 100 ms (got {_fmt(h)})")
+    rho_inf = _num(where, "rho_inf", d.get("rho_inf", DEFAULT_OPTIONS["rho_inf"]))
+    if not 0 <= rho_inf <= 1:
+        raise SceneError(f"{where}: 'rho_inf' must be in [0, 1] (got {_fmt(rho_inf)})")
+    max_iter = _int(where, "max_newton_iter", d.get("max_newton_iter", DEFAULT_OPTIONS["max_newton_iter"]),
+                    1, 1000)
+    newton_tol = _num(where, "newton_tol", d.get("newton_tol", DEFAULT_OPTIONS["newton_tol"]), positive=True)
     disable = d.get("disable", [])
     if not isinstance(disable, list):
         raise SceneError(f"{where}: disable must be a list of names")
     disable = tuple(_choice(where, "disable", x, tuple(DISABLE_FLAGS)) for x in disable)
-    foot = _pair(where, "foot_load", d["foot_load"]) if "foot_load" in d else None
 
-    limits = _model_limits(root)
+    only("duration", timed, "dynamics and inverse_dynamics")
+    only("record_every", timed, "dynamics and inverse_dynamics")
+    n_steps, rec = 0, 1
+    if timed:
+        if "duration" not in d:
+            raise SceneError(f"{where}: missing key 'duration' (s)")
+        dur = _num(where, "duration", d["duration"], positive=True)
+        n_steps = math.floor(dur * 1e9 / step_ns + 0.5)
+        if abs(n_steps * step_ns / 1e9 - dur) > GRID_TOL_S:
+            lo = math.floor(dur * 1e9 / step_ns)
+            raise SceneError(f"{where}: 'duration' {_fmt(dur)} s is not a whole number of steps of "
+                             f"{_fmt(h)} s ({_fmt(lo * step_ns / 1e9)} or {_fmt((lo + 1) * step_ns / 1e9)} "
+                             "s would be)")
+        if not 1 <= n_steps <= 1e9:
+            raise SceneError(f"{where}: 'duration' / 'step_s' must give 1 to 1e9 steps")
+        rec = _int(where, "record_every", d.get("record_every", 1), 1, MAX_RECORD_EVERY)
+
+    pose_name = d.get("pose", info.poses[0] if info.poses else None)
+    if pose_name is None:
+        raise SceneError(f"{where}: the model has no pose to assemble")
+    if not isinstance(pose_name, str):
+        raise SceneError(f"{where}: pose must be the name of a pose of the model (e.g. pose = \"stand\")")
+    if pose_name not in info.poses:
+        raise SceneError(f"{where}: pose {pose_name!r} is not in the model (poses: "
+                         f"{', '.join(info.poses) or 'none'})")
+    pose = info.poses.index(pose_name)
+    lengths = None
+    if "lengths" in d:
+        if analysis == "statics_sweep":
+            raise SceneError(f"{where}: 'lengths' does not apply to statics_sweep")
+        v = d["lengths"]
+        if not isinstance(v, list) or len(v) != len(info.actuators):
+            raise SceneError(f"{where}: 'lengths' must hold {len(info.actuators)} values, one per actuator")
+        lengths = tuple(_num(where, "lengths", x) for x in v)
+        for a, (an, (smin, smax), _) in enumerate(info.actuators):
+            if not smin <= lengths[a] <= smax:
+                raise SceneError(f"{where}: lengths[{a}] = {_fmt(lengths[a])} m is outside the stroke of "
+                                 f"actuator '{an}' [{_fmt(smin)}, {_fmt(smax)}]")
+    only("grid", analysis == "statics_sweep", "statics_sweep")
+    grid = _int(where, "grid", d.get("grid", 11), 2, 1000)
+    only("init", dynamics, "dynamics")
+    init = _choice(where, "init", d.get("init", "zero_force"), ACTUATOR_MODES)
+    for key in ("cmd_timeout_ms", "safe_state", "inject"):
+        only(key, dynamics, "dynamics (over CAN)")
+    timeout = _int(where, "cmd_timeout_ms", d.get("cmd_timeout_ms", 0), 0, 65534)
+    safe = _choice(where, "safe_state", d.get("safe_state", "zero_force"), ACTUATOR_MODES)
+
+    forces = {}
+    fv = d.get("forces", {})
+    if not isinstance(fv, dict):
+        raise SceneError(f"{where}: 'forces' must be a table: NAME = [Fx, Fy] or NAME = torque")
+    kinds = dict(info.forces)
+    for fname, v in fv.items():
+        w = f"forces.{fname}"
+        vals = [v] if not isinstance(v, list) else v
+        if not 1 <= len(vals) <= 2:
+            raise SceneError(f"{where}: {w} must be a number or an array of 1 or 2 numbers")
+        vals = tuple(_num(where, w, x) for x in vals)
+        if fname not in kinds:
+            raise SceneError(f"{where}: {w}: the model has no force element '{fname}'")
+        if kinds[fname] == "point" and len(vals) != 2:
+            raise SceneError(f"{where}: {w}: a point force takes [Fx, Fy] (N)")
+        if kinds[fname] == "torque" and len(vals) != 1:
+            raise SceneError(f"{where}: {w}: a torque takes one value (N m)")
+        if kinds[fname] == "spring_damper":
+            raise SceneError(f"{where}: {w}: a spring_damper has no value to set")
+        forces[fname] = vals
+
+    # The bench knows the leg: the DBC carries two actuators, upper and lower, and its
+    # reference model the one force element foot_load.
+    act_names = tuple(a[0] for a in info.actuators)
+    if act_names != ACTUATORS:
+        raise SceneError(f"{where}: the bench runs the leg's actuators {', '.join(ACTUATORS)} (the DBC's "
+                         f"signals and the reference model); the model has {', '.join(act_names) or 'none'}")
+    extra = sorted(set(forces) - {"foot_load"})
+    if extra:
+        raise SceneError(f"{where}: the bench's reference model knows the force element foot_load only "
+                         f"(got {', '.join(extra)})")
+    foot = forces.get("foot_load")
+    load_index = [f[0] for f in info.forces].index("foot_load") if foot is not None else 0
+    if load_index != 0:
+        raise SceneError(f"{where}: foot_load is force element #{load_index} of the model; the bench "
+                         "sends it as LOAD_CMD Load_Index 0 (the leg's first [[force]])")
+    if variant != "revolute" and analysis in ("statics", "statics_sweep", "inverse_dynamics"):
+        raise SceneError(f"{where}: {analysis} of the {variant!r} variant: the bench's reference model "
+                         "has statics and inverse dynamics for the revolute knee only (2 lengths, 2 dof)")
+    if dynamics:
+        # what RESET and the frames cannot carry: refused, with the reason
+        if variant not in VARIANTS:
+            raise SceneError(f"{where}: over CAN the variant is Ctrl_Variant: revolute or slot (got {variant!r})")
+        if pose > 1:
+            raise SceneError(f"{where}: over CAN the pose is Ctrl_Pose 0..1; {pose_name!r} is pose #{pose}")
+        for key, dv in DEFAULT_OPTIONS.items():
+            if key in d and d[key] != dv:
+                raise SceneError(f"{where}: {key} = {d[key]!r}: RESET carries no solver options and hil_sim "
+                                 f"runs the core's default ({dv!r}); dynamics over CAN cannot use another")
+
     cmds: list[ActuatorCommand | None] = [None, None]
     raw_cmds = d.get("command", [])
+    if raw_cmds and not timed:
+        raise SceneError(f"{where}: [[command]] applies to dynamics and inverse_dynamics only")
     if not isinstance(raw_cmds, list):
         raise SceneError(f"{where}: command must be an array of tables [[command]]")
     for i, c in enumerate(raw_cmds):
@@ -458,11 +715,15 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
         if cmds[a] is not None:
             raise SceneError(f"{cw}: a second command for actuator {act}")
         mode = _choice(cw, "mode", c.get("mode"), ("force", "length"))
+        if analysis == "inverse_dynamics" and mode != "length":
+            raise SceneError(f"{cw}: inverse_dynamics prescribes lengths: use mode = \"length\"")
         sch = _schedule(cw, c)
         if sch.kind == "initial" and mode != "length":
             raise SceneError(f"{cw}: value = \"initial\" is for mode = \"length\" (hold the assembled length)")
-        if limits and act in limits and sch.extremes() is not None:
-            (smin, smax), fmax = limits[act]
+        if sch.kind == "step":
+            _on_grid(where, sch.t0, step_ns, f"command '{act}': step t0 =")
+        if sch.extremes() is not None:
+            _, (smin, smax), fmax = info.actuators[a]
             lo, hi = sch.extremes()
             if mode == "force" and max(abs(lo), abs(hi)) > fmax:
                 raise SceneError(f"{cw}: |force| up to {max(abs(lo), abs(hi)):g} N exceeds max_force {fmax:g} N")
@@ -481,13 +742,11 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                   record_every=rec, pose=pose, lengths=lengths, init=init,
                   cmd_timeout_ms=timeout, safe_state=safe, disable=disable, foot_load=foot,
                   commands=(cmds[0], cmds[1]), injections=(), checks=Checks(),
-                  demo=bool(d.get("demo", False)))
-    for c in scene.commands:
-        if c is not None:
-            for t0 in c.schedule.breakpoints:
-                scene.to_step(t0, f"{c.name} step t0")
+                  demo=bool(d.get("demo", False)), analysis=analysis, model=model_spec,
+                  model_info=info, pose_name=pose_name, forces=forces, grid=grid, rho_inf=rho_inf,
+                  max_newton_iter=max_iter, newton_tol=newton_tol)
     if timeout and rec * step_ns >= timeout * 1_000_000:
-        raise SceneError(f"{where}: an exchange every {rec * step_ns / 1e6:g} ms (record_every x step) "
+        raise SceneError(f"{where}: an exchange every {rec * step_ns / 1e6:g} ms (record_every x step_s) "
                          f"would let the {timeout} ms command timeout trip between ACT_CMDs")
 
     injections = []
@@ -550,10 +809,12 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                                     expect_signal=str(esig) if esig is not None else None))
     scene.injections = tuple(sorted(injections, key=lambda i: i.step))
 
-    ch = d.get("checks", {})
+    ch = d.get("checks")
+    if ch is None:
+        ch = dict(DEFAULT_CHECKS[analysis])   # scenes/README.md: the tolerances without [checks]
     if not isinstance(ch, dict):
         raise SceneError(f"{where}: [checks] must be a table")
-    _unknown(f"{where} [checks]", ch, set(CHECK_KEYS) | {"compare", "stroke", "resolution_ratio"})
+    _unknown(f"{where} [checks] ({analysis})", ch, CHECKS_FOR[analysis])
     kw = {k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch}
     if "compare" in ch:
         kw["compare"] = _choice(f"{where} [checks]", "compare", ch["compare"], ("all", "until_stroke"))
