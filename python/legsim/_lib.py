@@ -170,12 +170,13 @@ class Library:
     Get one with :func:`load_library` (cached per file).
     """
 
-    def __init__(self, path: Path, precision: str):
+    def __init__(self, path: Path, precision: str | None = None):
         self.path = Path(path)
-        self.precision = precision
         self.cdll = C.CDLL(str(self.path))
-        self.config, self.config_source = _build_facts(self.cdll, self.path, precision)
+        guess = precision or ("float" if "_f32" in self.path.name else "double")
+        self.config, self.config_source = _build_facts(self.cdll, self.path, guess)
         use_float = bool(self.config["LEGSIM_USE_FLOAT"])
+        self.precision = precision = precision or ("float" if use_float else "double")
         if use_float != (precision == "float"):
             raise LayoutMismatch(f"{self.path}: asked for {precision}, but the library is built "
                                  f"with LEGSIM_USE_FLOAT={int(use_float)}")
@@ -345,11 +346,20 @@ class Library:
 _LIBRARIES: dict = {}
 
 
-def load_library(precision: str = "double", lib_path=None) -> Library:
-    """The loaded :class:`Library` for this precision (found by :func:`find_library`;
-    cached per file)."""
-    path = find_library(precision, lib_path)
-    key = (str(path), precision)
+def load_library(precision: str | None = None, lib_path=None) -> Library:
+    """The loaded :class:`Library` (found by :func:`find_library`; cached per file).
+
+    precision: "double" or "float"; None means "double", or, when ``lib_path`` is a
+    file, whatever that library is built with."""
+    if precision is None and lib_path is not None and Path(lib_path).is_file():
+        path = Path(lib_path).resolve()
+    else:
+        path = find_library(precision or "double", lib_path)
+    key = str(path)
     if key not in _LIBRARIES:
         _LIBRARIES[key] = Library(path, precision)
-    return _LIBRARIES[key]
+    lib = _LIBRARIES[key]
+    if precision is not None and lib.precision != precision:
+        raise LayoutMismatch(f"{path}: asked for {precision}, but the library is "
+                             f"{lib.precision}")
+    return lib

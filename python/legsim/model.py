@@ -45,7 +45,7 @@ class Model:
 
     # ---- construction ----
     @classmethod
-    def from_toml(cls, path, variant: str | None = None, *, precision: str = "double",
+    def from_toml(cls, path, variant: str | None = None, *, precision: str | None = None,
                   lib_path=None) -> "Model":
         """Loads ``variant`` ("revolute" by default, else a ``[variant.X]`` of the file)
         of the model file at ``path`` with the library's loader."""
@@ -61,7 +61,7 @@ class Model:
 
     @classmethod
     def from_toml_string(cls, text: str, variant: str | None = None, *,
-                         source_name: str = "<string>", precision: str = "double",
+                         source_name: str = "<string>", precision: str | None = None,
                          lib_path=None) -> "Model":
         """Like :meth:`from_toml` for TOML text in memory; ``source_name`` stands for the
         file in messages."""
@@ -77,7 +77,7 @@ class Model:
 
     @classmethod
     def builtin(cls, variant: str = DEFAULT_VARIANT, *, symbol: str = "leg",
-                precision: str = "double", lib_path=None) -> "Model":
+                precision: str | None = None, lib_path=None) -> "Model":
         """The model compiled into the library (``legsim_model_<symbol>_<variant>``,
         generated at build time from ``models/leg.toml``). The description is copied,
         so it lives as long as this object."""
@@ -186,7 +186,7 @@ def _need_loader(lib: Library):
                         f"{lib.path} has no run-time model loader (rebuild the host libraries)")
 
 
-def model_variants(path, *, precision: str = "double", lib_path=None) -> list[str]:
+def model_variants(path, *, precision: str | None = None, lib_path=None) -> list[str]:
     """Variant names of a model file: "revolute", then its ``[variant.X]`` tables in file
     order (read by the library's loader; load one to validate it)."""
     lib = load_library(precision, lib_path)
@@ -202,7 +202,7 @@ def model_variants(path, *, precision: str = "double", lib_path=None) -> list[st
     return [_name(names[i].value) for i in range(min(n.value, cap))]
 
 
-def builtin_variants(*, symbol: str = "leg", precision: str = "double", lib_path=None) -> list[str]:
+def builtin_variants(*, symbol: str = "leg", precision: str | None = None, lib_path=None) -> list[str]:
     """Names of the variants of a compiled-in model (``legsim_model_<symbol>_variants``)."""
     lib = load_library(precision, lib_path)
 

@@ -115,7 +115,8 @@ class Sim:
         Model variant, "revolute" by default (the leg also has "slot").
     precision : "double" or "float"
         Which library: ``liblegsim.so`` or ``liblegsim_f32.so``. Default: the
-        model's library for a Model, else "double".
+        model's library for a Model, that of ``lib_path`` if it names a file, else
+        "double".
     lib_path : path, optional
         The library file or its directory (see :func:`legsim.find_library`).
     integrator : "rk4" or "galpha"
@@ -143,10 +144,10 @@ class Sim:
             if variant is not None and variant != model.variant:
                 raise ValueError("variant is given by the Model; load the other variant instead")
             lib = model.library if precision is None and lib_path is None \
-                else load_library(precision or model.library.precision, lib_path)
+                else load_library(precision, lib_path)
             model = model.for_library(lib)
         else:
-            lib = load_library(precision or "double", lib_path)
+            lib = load_library(precision, lib_path)
             if model is None:
                 model = Model.builtin(variant or "revolute", precision=lib.precision,
                                       lib_path=lib.path)
