@@ -6,11 +6,13 @@
     legsim-bench check RECORDING...             reference model, checks, table, CSV/JSON/PNG
     legsim-bench demo [--build] [--all]         build, vcan0 (here or in the VM), hil_sim,
                                                 record, check: the README's main command
-    legsim-bench workprecision|options|stress   the benchmarks (their own options)
+    legsim-bench workprecision|options|stress|mcu   the benchmarks (their own options; results
+                                                in out/bench-results/, --update-results for
+                                                the committed bench/results/)
 
 SCENE is a path or a shipped scene's name ("demo" = the scene marked demo = true).
 Bus: --interface/--channel, else python-can's configuration (CAN_INTERFACE/CAN_CHANNEL,
-can.rc, ~/.canrc), else socketcan on vcan0.
+can.rc, ~/.canrc), else socketcan on vcan0; `record` and `run` print which bus they opened.
 Exit status: 0 every check passed, 1 a check failed or a run did not complete, 2 usage,
 scene or setup error (no repository, no hil_sim, no bus).
 
