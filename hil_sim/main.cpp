@@ -19,6 +19,7 @@
 #include "protocol.h"
 #include "run_loop.h"
 #include "session.h"
+#include "model_toml.hpp"
 
 namespace {
 
@@ -35,6 +36,9 @@ const char kUsage[] =
     "  --cmd-timeout-ms N    actuator-command timeout, 0 = none (default 100); simulated time in\n"
     "                        lockstep, wall-clock time in real time; a RESET may override it\n"
     "  --safe-state MODE     on a command timeout: zero-force (default) or hold-length\n"
+    "  --model FILE.toml     run this model file (loaded at start by the host loader) instead of\n"
+    "                        the compiled-in leg; it needs the DBC's leg: 6 bodies, 8 joints,\n"
+    "                        2 actuators, and both variants Ctrl_Variant names (revolute, slot)\n"
     "  --decimation N        real time: one state sample every N ticks (default 10)\n"
     "  --heartbeat-ms N      HEARTBEAT period, 0 = none (default 100)\n"
     "  --rt-priority N       SCHED_FIFO priority 1-99 and locked memory for real time\n"
@@ -52,6 +56,7 @@ struct Options {
   hil::ControllerConfig controller;
   hil::LoopConfig loop;
   int rt_priority = 0;
+  std::string model_file;  // "" = the compiled-in leg
 };
 
 bool parse_uint(const char *text, unsigned long max, unsigned long *out) {
@@ -106,6 +111,10 @@ int parse_options(int argc, char **argv, Options *o) {
       if (v == nullptr) return 2;
       if (!parse_uint(v, 65534, &n)) return bad("--cmd-timeout-ms", v, "expected 0..65534");
       o->controller.cmd_timeout_ms = static_cast<uint32_t>(n);
+    } else if (arg == "--model") {
+      const char *v = need("--model");
+      if (v == nullptr) return 2;
+      o->model_file = v;
     } else if (arg == "--safe-state") {
       const char *v = need("--safe-state");
       if (v == nullptr) return 2;
@@ -162,6 +171,22 @@ int main(int argc, char **argv) {
     return 1;
   }
 
+  // --model: both variants of the file, checked by the loader (and by session.init below
+  // against the DBC's leg); they live to the end of main, past every session.
+  legsim_model_desc file_models[2];
+  if (!opt.model_file.empty()) {
+    const char *variants[2] = {"revolute", "slot"};
+    for (int v = 0; v < 2; ++v) {
+      char msg[512] = "";
+      if (legsim_model_load_toml(opt.model_file.c_str(), variants[v], &file_models[v], msg,
+                                 sizeof msg) != LEGSIM_OK) {
+        std::fprintf(stderr, "hil_sim: --model: %s\n", msg);
+        return 2;
+      }
+    }
+    hil::Session::use_models(&file_models[0], &file_models[1]);
+    std::fprintf(stderr, "hil_sim: model %s (variants revolute, slot)\n", opt.model_file.c_str());
+  }
   hil::Session session;
   std::string error;
   if (!session.init(&error)) {

@@ -25,12 +25,17 @@ Session::~Session() {
   std::free(storage_[1]);
 }
 
+namespace {
+const legsim_model_desc *g_variant_models[2] = {&legsim_model_leg_revolute, &legsim_model_leg_slot};
+}  // namespace
+
 const legsim_model_desc *Session::variant_model(int variant) {
-  switch (variant) {
-    case 0: return &legsim_model_leg_revolute;
-    case 1: return &legsim_model_leg_slot;
-    default: return nullptr;
-  }
+  return variant == 0 || variant == 1 ? g_variant_models[variant] : nullptr;
+}
+
+void Session::use_models(const legsim_model_desc *revolute, const legsim_model_desc *slot) {
+  g_variant_models[0] = revolute;
+  g_variant_models[1] = slot;
 }
 
 bool Session::init(std::string *error) {

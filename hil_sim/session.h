@@ -55,8 +55,11 @@ class Session {
   // Allocates storage and checks that both compiled-in variants match the DBC's leg.
   bool init(std::string *error);
 
-  // The compiled-in model of a variant (0 revolute, 1 slot); nullptr if out of range.
+  // The model of a variant (0 revolute, 1 slot); nullptr if out of range. The compiled-in
+  // leg, unless use_models() gave others (hil_sim --model FILE).
   static const legsim_model_desc *variant_model(int variant);
+  // Before init(): the models RESET builds from; they must outlive every session.
+  static void use_models(const legsim_model_desc *revolute, const legsim_model_desc *slot);
 
   legsim_status reset(const ResetParams &params);
   bool active() const { return sim_ != nullptr; }
