@@ -41,11 +41,13 @@ from pathlib import Path
 
 import numpy as np
 
+import legsim
+
 from . import core as lc
 from . import results
 
 REPO_ROOT = lc.REPO_ROOT
-FLAGS = tuple(lc.DISABLE)  # legsim.h's enum legsim_disable
+FLAGS = tuple(legsim.DISABLE)  # legsim.h's enum legsim_disable
 SWITCHES = ("LEGSIM_WITH_GENERALIZED_ALPHA", "LEGSIM_WITH_RK4", "LEGSIM_WITH_STATICS",
             "LEGSIM_WITH_INVERSE_DYNAMICS", "LEGSIM_WITH_FORCE_ELEMENTS")
 H = 1e-3
@@ -55,7 +57,7 @@ FOOT_LOAD = (0.0, 50.0)
 
 # ---------------------------------------------------------------- run time
 def scene_core(precision, integrator, disable):
-    c = lc.Core(precision=precision, integrator=integrator, step=H, disable=disable)
+    c = legsim.Sim(precision=precision, integrator=integrator, step=H, disable=disable)
     c.assemble_pose("stand")
     c.command_force(0, 50.0)
     c.command_force(1, 0.0)
@@ -78,16 +80,16 @@ def time_flags(precisions, integrators, reps, log) -> list:
         for k, (prec, integ, name, fl) in enumerate(cases):
             c = scene_core(prec, integ, fl)
             try:
-                samples[k].append(c.timed_step(N_STEPS) * 1e-9 / N_STEPS)
+                samples[k].append(lc.timed_step(c, N_STEPS) * 1e-9 / N_STEPS)
                 status[k] = "ok"
-            except lc.LegsimError as e:
-                status[k] = e.name
+            except legsim.LegsimError as e:
+                status[k] = e.status_name
             if r == 0:
                 # iterations per step (a separate, untimed run)
                 c2 = scene_core(prec, integ, fl)
                 its = []
                 for _ in range(N_STEPS):
-                    if c2.step_status(1) != lc.OK:
+                    if lc.step_status(c2, 1) != legsim.Status.OK:
                         break
                     its.append(c2.report().iterations)
                 iters[k] = float(np.mean(its)) if its else float("nan")
@@ -295,7 +297,7 @@ def run(args) -> int:
 
     if lc.library_missing("double"):
         return 2
-    precs = [p for p in ("double", "float") if lc.library_available(p)]
+    precs = [p for p in ("double", "float") if legsim.library_available(p)]
     info = results.snapshot()
     log(f"# run-time flags ({reps} repetitions)")
     rows = time_flags(precs, ("rk4", "galpha"), reps, log)

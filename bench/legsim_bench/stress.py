@@ -48,6 +48,8 @@ from pathlib import Path
 
 import numpy as np
 
+import legsim
+
 from . import core as lc
 from . import results
 
@@ -62,13 +64,15 @@ INACCURATE = 1e-2  # step growth: relative energy error that counts as a silent 
 
 # the statuses legsim.h documents for each call of the random sequences
 ALLOWED = {
-    "command_force": {lc.OK, lc.ERR_BAD_INPUT},
-    "command_length": {lc.OK, lc.ERR_OUT_OF_STROKE, lc.ERR_BAD_INPUT},
-    "set_force": {lc.OK, lc.ERR_BAD_INPUT},
-    "step": {lc.OK, lc.ERR_SINGULAR, lc.ERR_NOT_CONVERGED, lc.ERR_DIVERGED, lc.ERR_UNREACHABLE},
-    "assemble_pose": {lc.OK},
+    "command_force": {legsim.Status.OK, legsim.Status.ERR_BAD_INPUT},
+    "command_length": {legsim.Status.OK, legsim.Status.ERR_OUT_OF_STROKE,
+                       legsim.Status.ERR_BAD_INPUT},
+    "set_force": {legsim.Status.OK, legsim.Status.ERR_BAD_INPUT},
+    "step": {legsim.Status.OK, legsim.Status.ERR_SINGULAR, legsim.Status.ERR_NOT_CONVERGED,
+             legsim.Status.ERR_DIVERGED, legsim.Status.ERR_UNREACHABLE},
+    "assemble_pose": {legsim.Status.OK},
 }
-STEP_FAILURES = ALLOWED["step"] - {lc.OK}
+STEP_FAILURES = ALLOWED["step"] - {legsim.Status.OK}
 
 
 # ---------------------------------------------------------------- energy
@@ -94,14 +98,14 @@ class Energy:
         vg = -float(np.sum(self.m * (r[:, 0] * self.g[0] + r[:, 1] * self.g[1])))
         return vg - float(np.dot(forces, lengths))
 
-    def total(self, c: lc.Core, forces) -> tuple:
+    def total(self, c: legsim.Sim, forces) -> tuple:
         q, qd = c.q, c.qd
         T = self.kinetic(qd)
         return T, T + self.potential(q, forces, c.actuator_lengths()[0])
 
 
 def conservative_core(precision, integrator, h=H, stroke_limits=False):
-    c = lc.Core(precision=precision, integrator=integrator, step=h,
+    c = legsim.Sim(precision=precision, integrator=integrator, step=h,
                 disable=() if stroke_limits else ("stroke_limits",))
     c.assemble_pose("stand")
     c.command_force(0, CONSERVATIVE_FORCES[0])
@@ -126,9 +130,9 @@ def long_run(precision, integrator, n_steps, log, stroke_limits=False) -> dict:
     t0 = time.perf_counter()
     while done < n_steps:
         n = min(CHUNK, n_steps - done)
-        st = c.step_status(n)
-        if st != lc.OK:
-            status = lc.status_name(st)
+        st = lc.step_status(c, n)
+        if st != legsim.Status.OK:
+            status = legsim.status_name(st)
             break
         done += n
         q, qd = c.q, c.qd
@@ -171,17 +175,17 @@ def step_growth(precision, integrator, log, t_sim=1.0, max_doublings=14) -> dict
     for _ in range(max_doublings):
         try:
             c = conservative_core(precision, integrator, h)
-        except lc.LegsimError as e:  # e.g. h > 1 s is refused by the options check
-            rows.append({"h": h, "status": e.name, "where": "legsim_init", "steps": 0,
+        except legsim.LegsimError as e:  # e.g. h > 1 s is refused by the options check
+            rows.append({"h": h, "status": e.status_name, "where": "legsim_init", "steps": 0,
                          "finite": True})
             failure = rows[-1]
             break
         _, E0 = en.total(c, F)
         n = max(20, int(round(t_sim / h)))
-        st, done, max_res, max_dE, max_T = lc.OK, 0, 0.0, 0.0, 0.0
+        st, done, max_res, max_dE, max_T = legsim.Status.OK, 0, 0.0, 0.0, 0.0
         while done < n:
-            st = c.step_status(1)
-            if st != lc.OK:
+            st = lc.step_status(c, 1)
+            if st != legsim.Status.OK:
                 break
             done += 1
             T, E = en.total(c, F)
@@ -193,17 +197,17 @@ def step_growth(precision, integrator, log, t_sim=1.0, max_doublings=14) -> dict
         try:
             R = c.reactions()
             finite = finite and bool(np.all(np.isfinite(R)))
-        except lc.LegsimError:
+        except legsim.LegsimError:
             pass
         rep = c.report()
-        row = {"h": h, "status": lc.status_name(st), "where": "legsim_step", "steps": done,
-               "n": n, "t_fail": done * h if st != lc.OK else None, "finite": finite,
+        row = {"h": h, "status": legsim.status_name(st), "where": "legsim_step", "steps": done,
+               "n": n, "t_fail": done * h if st != legsim.Status.OK else None, "finite": finite,
                "max_residual": max_res, "dE_max": max_dE,
                "rel_dE": max_dE / max_T if max_T > 0 else float("nan"),
                "events": rep.event_names(), "condition": rep.condition,
                "iterations": rep.iterations}
         rows.append(row)
-        if st != lc.OK:
+        if st != legsim.Status.OK:
             failure = row
             break
         h *= 2
@@ -257,55 +261,55 @@ def random_sequence(seed: int, n_segments: int) -> list:
 
 def run_sequence(precision, integrator, ops, h=H) -> dict:
     """Runs ops; checks statuses and finiteness after every call; a digest of q, qd."""
-    c = lc.Core(precision=precision, integrator=integrator, step=h)
+    c = legsim.Sim(precision=precision, integrator=integrator, step=h)
     c.assemble_pose("stand")
     counts = Counter()
     bad = []
     recoveries = 0
     events = Counter()
     digest = hashlib.sha256()
-    lib = c.lib
-    R = c.api.real
+    lib = c.library.cdll
+    R = c.library.real
     max_res = 0.0
     for i, (op, args) in enumerate(ops):
         if op == "command_force":
-            st = lib.legsim_command_force(c.sim, args[0], args[1])
+            st = lib.legsim_command_force(c.handle, args[0], args[1])
         elif op == "command_length":
-            st = lib.legsim_command_length(c.sim, args[0], args[1])
+            st = lib.legsim_command_length(c.handle, args[0], args[1])
         elif op == "set_force":
-            st = lib.legsim_set_force(c.sim, args[0], (R * 2)(*args[1]))
+            st = lib.legsim_set_force(c.handle, args[0], (R * 2)(*args[1]))
         else:
-            st = lib.legsim_step(c.sim, args[0])
-        counts[(op, lc.status_name(st))] += 1
+            st = lib.legsim_step(c.handle, args[0])
+        counts[(op, legsim.status_name(st))] += 1
         if st not in ALLOWED[op]:
-            bad.append(f"op {i} {op}{args}: {lc.status_name(st)}")
+            bad.append(f"op {i} {op}{args}: {legsim.status_name(st)}")
         q, qd = c.q, c.qd
         if not (np.all(np.isfinite(q)) and np.all(np.isfinite(qd))):
-            bad.append(f"op {i} {op}{args}: non-finite state after {lc.status_name(st)}")
+            bad.append(f"op {i} {op}{args}: non-finite state after {legsim.status_name(st)}")
             break
         if op == "step":
             rep = c.report()
             for name in rep.event_names():
                 events[name] += 1
             c.clear_events()
-            if st == lc.OK:
+            if st == legsim.Status.OK:
                 max_res = max(max_res, c.constraint_residual())
                 try:
                     if not np.all(np.isfinite(c.reactions())):
                         bad.append(f"op {i}: non-finite reactions")
-                except lc.LegsimError:
+                except legsim.LegsimError:
                     pass
             else:
                 recoveries += 1
-                st2 = lib.legsim_assemble_pose(c.sim, 0)
-                counts[("assemble_pose", lc.status_name(st2))] += 1
+                st2 = lib.legsim_assemble_pose(c.handle, 0)
+                counts[("assemble_pose", legsim.status_name(st2))] += 1
                 if st2 not in ALLOWED["assemble_pose"]:
-                    bad.append(f"op {i}: recovery assemble_pose {lc.status_name(st2)}")
+                    bad.append(f"op {i}: recovery assemble_pose {legsim.status_name(st2)}")
                     break
                 # the recovery starts from rest in the stand pose with the commands kept
-        digest.update(c.q_bytes())
+        digest.update(c.state_bytes())
     return {"counts": counts, "bad": bad, "recoveries": recoveries, "events": events,
-            "digest": digest.hexdigest(), "final": c.q_bytes().hex(), "max_residual": max_res,
+            "digest": digest.hexdigest(), "final": c.state_bytes().hex(), "max_residual": max_res,
             "steps": c.step_count, "time": c.time}
 
 
@@ -445,7 +449,7 @@ def run(args) -> int:
     if lc.library_missing("double"):
         return 2
     info = results.snapshot()
-    precs = [p for p in ("double", "float") if lc.library_available(p)]
+    precs = [p for p in ("double", "float") if legsim.library_available(p)]
     integs = ("rk4", "galpha")
     problems = []
     log(f"# 1. long runs ({n_long} steps)")
@@ -458,7 +462,7 @@ def run(args) -> int:
             continue  # reported: with the stops on the case is not conservative
         if r["status"] != "LEGSIM_OK":
             problems.append(f"long run {r['precision']} {r['integrator']}: {r['status']}")
-        tol = 10 * lc.load(r["precision"]).lib.legsim_default_options().newton_tol
+        tol = 10 * legsim.load_library(r["precision"]).default_options().newton_tol
         if r["stroke_mask"] or any(lo < s0 - tol or hi > s1 + tol for lo, hi, (s0, s1) in
                                    zip(r["lmin"], r["lmax"], STROKES)):
             problems.append(f"long run {r['precision']} {r['integrator']}: left the strokes")

@@ -56,6 +56,8 @@ from typing import Callable, Optional
 
 import numpy as np
 
+import legsim
+
 from . import core as lc
 from . import results
 
@@ -96,15 +98,15 @@ class Method:
 def legsim_runner(precision: str, integrator: str, **options):
     def run(scene: str, h: float, t_end: float) -> dict:
         fu, fl = SCENES[scene]
-        c = lc.Core(precision=precision, integrator=integrator, step=h, **options)
+        c = legsim.Sim(precision=precision, integrator=integrator, step=h, **options)
         c.assemble_pose("stand")
         c.command_force(0, fu)
         c.command_force(1, fl)
         n = int(round(t_end / h))
         try:
-            wall_ns = c.timed_step(n)
-        except lc.LegsimError as e:
-            return {"ok": False, "status": e.name, "q_end": None, "R_end": None,
+            wall_ns = lc.timed_step(c, n)
+        except legsim.LegsimError as e:
+            return {"ok": False, "status": e.status_name, "q_end": None, "R_end": None,
                     "wall_s": float("nan"), "n_steps": n}
         return {"ok": True, "status": "LEGSIM_OK", "q_end": c.q, "R_end": c.reactions(),
                 "wall_s": wall_ns * 1e-9, "n_steps": n, "residual": c.constraint_residual(),
@@ -126,8 +128,8 @@ def methods(with_float: bool = True, with_peers: bool = True) -> list:
     out = []
     precs = ("double", "float") if with_float else ("double",)
     for prec in precs:
-        if not lc.library_available(prec):
-            print(f"# legsim {prec}: {lc.LIB_NAMES[prec]} not built, skipped", file=sys.stderr)
+        if not legsim.library_available(prec):
+            print(f"# legsim {prec}: {legsim.LIB_NAMES[prec]} not built, skipped", file=sys.stderr)
             continue
         for integ in ("rk4", "galpha"):
             out.append(Method(f"legsim/{integ}/{prec}", "legsim", integ, prec,
@@ -306,9 +308,9 @@ def inverse_dynamics_study(precisions, reps: int, log) -> list:
     ref = m.inverse_dynamics(L, Ld, Ldd)
     rows = []
     for prec in precisions:
-        if not lc.library_available(prec):
+        if not legsim.library_available(prec):
             continue
-        c = lc.Core(precision=prec)
+        c = legsim.Sim(precision=prec)
         c.assemble_pose("stand")
         F = np.zeros((ID_SAMPLES, 2))
         R = np.zeros((ID_SAMPLES, c.n_joints, 3))
@@ -324,10 +326,10 @@ def inverse_dynamics_study(precisions, reps: int, log) -> list:
                "max_force": float(np.max(np.abs(ref.actuator_forces))),
                "max_reaction": float(np.max(np.abs(ref.reactions)))}
         # timing: the ctypes call only, over the prebuilt sample arrays, repeated
-        R_ = c.api.real
+        R_ = c.library.real
         args = [((R_ * 2)(*L[k]), (R_ * 2)(*Ld[k]), (R_ * 2)(*Ldd[k])) for k in range(ID_SAMPLES)]
         out = (R_ * 2)()
-        fn, sim = c.lib.legsim_inverse_dynamics, c.sim
+        fn, sim = c.library.cdll.legsim_inverse_dynamics, c.handle
         per_call = []
         for _ in range(reps):
             c.assemble_pose("stand")
@@ -336,7 +338,7 @@ def inverse_dynamics_study(precisions, reps: int, log) -> list:
                 fn(sim, a, b, d, out)
             per_call.append((time.perf_counter_ns() - t0) * 1e-9 / ID_SAMPLES)
         # the ctypes call cost alone (a trivial API function with the same binding)
-        ft = c.lib.legsim_time
+        ft = c.library.cdll.legsim_time
         t0 = time.perf_counter_ns()
         for _ in range(20000):
             ft(sim)
@@ -460,8 +462,8 @@ def describe_source(src: Path) -> str:
 def library_info() -> dict:
     out = {}
     for prec in ("double", "float"):
-        if lc.library_available(prec):
-            api = lc.load(prec)
+        if legsim.library_available(prec):
+            api = legsim.load_library(prec)
             cache = None
             for d in (api.path.parent, api.path.parent.parent):
                 if (d / "CMakeCache.txt").is_file():
@@ -779,11 +781,11 @@ def run(args) -> int:
     def log(s):
         print(s, flush=True)
 
-    if not lc.library_available("double"):
-        print(str(lc.LibraryNotFound("liblegsim.so not built")), file=sys.stderr)
+    if not legsim.library_available("double"):
+        print(str(legsim.LibraryNotFound("liblegsim.so not built")), file=sys.stderr)
         try:
-            lc.find_library("double")
-        except lc.LibraryNotFound as e:
+            legsim.find_library("double")
+        except legsim.LibraryNotFound as e:
             print(e, file=sys.stderr)
         return 2
     info = machine_info()

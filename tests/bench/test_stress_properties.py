@@ -28,9 +28,10 @@ ROOT = Path(__file__).resolve().parents[2]
 if importlib.util.find_spec("legsim_bench") is None:
     sys.path.insert(0, str(ROOT / "bench"))
 
+import legsim  # noqa: E402
 from legsim_bench import core as lc  # noqa: E402
 
-if not lc.library_available("double"):
+if not legsim.library_available("double"):
     pytest.skip("liblegsim.so is not built (cmake --build build/host, or set LEGSIM_LIB_DIR)",
                 allow_module_level=True)
 
@@ -39,7 +40,7 @@ from hypothesis import strategies as st  # noqa: E402
 
 from legsim_bench.stress import ALLOWED, STROKES, run_sequence  # noqa: E402
 
-PRECISIONS = ["double"] + (["float"] if lc.library_available("float") else [])
+PRECISIONS = ["double"] + (["float"] if legsim.library_available("float") else [])
 FMAX = 1500.0
 
 actuator = st.integers(0, 1)
@@ -90,7 +91,7 @@ def test_random_commands_never_nan_and_only_documented_statuses(segs, integrator
     r = run_sequence(precision, integrator, flatten(segs), h=h)
     assert r["bad"] == [], r["bad"]
     for (op, name), _ in r["counts"].items():
-        assert name in {lc.status_name(s) for s in ALLOWED[op]}, (op, name)
+        assert name in {legsim.status_name(s) for s in ALLOWED[op]}, (op, name)
 
 
 @settings(max_examples=10, deadline=None)
@@ -107,15 +108,15 @@ def test_identical_sequences_give_identical_bytes(segs, integrator, precision):
 @given(fu=st.floats(-FMAX, FMAX), fl=st.floats(-FMAX, FMAX),
        integrator=st.sampled_from(["rk4", "galpha"]), h=st.sampled_from([1e-3, 1e-2, 5e-2]))
 def test_constant_forces_step_reports_or_stays_on_the_manifold(fu, fl, integrator, h):
-    c = lc.Core(integrator=integrator, step=h)
+    c = legsim.Sim(integrator=integrator, step=h)
     c.assemble_pose("stand")
     c.command_force(0, fu)
     c.command_force(1, fl)
     for _ in range(20):
-        s = c.step_status(5)
-        assert s in ALLOWED["step"], lc.status_name(s)
+        s = lc.step_status(c, 5)
+        assert s in ALLOWED["step"], legsim.status_name(s)
         assert np.all(np.isfinite(c.q)) and np.all(np.isfinite(c.qd))
-        if s != lc.OK:
+        if s != legsim.Status.OK:
             c.assemble_pose("stand")  # the state left behind is usable
             break
         assert c.constraint_residual() < 1e-8
@@ -126,7 +127,7 @@ def test_constant_forces_step_reports_or_stays_on_the_manifold(fu, fl, integrato
 
 
 def test_a_stop_does_not_push_the_other_actuator_out_of_its_stroke():
-    c = lc.Core(integrator="rk4", step=1e-2)
+    c = legsim.Sim(integrator="rk4", step=1e-2)
     c.assemble_pose("stand")
     c.command_force(0, -100.0)
     c.command_force(1, -16.0)
@@ -139,6 +140,6 @@ def test_a_stop_does_not_push_the_other_actuator_out_of_its_stroke():
 
 
 def test_strokes_in_the_stress_module_match_the_library():
-    c = lc.Core()
-    assert [c.stroke(a) for a in range(c.n_actuators)] == [tuple(s) for s in STROKES]
-    assert c.max_force(0) == FMAX and c.max_force(1) == FMAX
+    c = legsim.Sim()
+    assert [tuple(s) for s in c.model.strokes] == [tuple(s) for s in STROKES]
+    assert list(c.model.max_forces) == [FMAX, FMAX]
