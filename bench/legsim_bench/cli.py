@@ -1,6 +1,6 @@
 """legsim-bench: run scenes against hil_sim over CAN and check them against the bench's model.
 
-    legsim-bench scenes                         the shipped scenes (bench/scenes/)
+    legsim-bench scenes                         the shipped scenes (scenes/)
     legsim-bench run SCENE... [--start-hil]     record + check in one process (bus here)
     legsim-bench record SCENE... [--start-hil]  only drive the bus and write recording.json
     legsim-bench check RECORDING...             reference model, checks, table, CSV/JSON/PNG
@@ -90,7 +90,7 @@ def cmd_scenes(args) -> int:
         except SceneError as e:
             rows.append((p.stem, "BAD", str(e)))
     if not rows:
-        print(f"no scenes in {root / 'bench' / 'scenes'}")
+        print(f"no scenes in {root / 'scenes'}")
         return EXIT_SETUP
     print(scene_table(rows))
     if args.verbose:
@@ -104,7 +104,7 @@ def cmd_scenes(args) -> int:
                 print(f"  check {k} <= {v:g}")
             for inj in sc.injections:
                 print(f"  inject at {sc.t(inj.step):g} s: {inj.label} -> {inj.expect}")
-    print(f"\n({len(rows)} scenes in {root / 'bench' / 'scenes'}; run one: legsim-bench run NAME)")
+    print(f"\n({len(rows)} scenes in {root / 'scenes'}; run one: legsim-bench run NAME)")
     return EXIT_OK
 
 
@@ -170,6 +170,10 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
         out = []
         with link:
             for sc in scenes:
+                if hil is not None and sc.over_can and hil.args != sc.hil_args():
+                    # the scene's own model file: a hil_sim started with --model FILE
+                    hil.stop()
+                    hil = HilProcess.for_scene(sc, hil.channel, args.hil_sim, hil.log_path).__enter__()
                 print(f"recording {sc.name}: {sc.summary()}", flush=True)
                 rec = record(sc, link, progress=_progress_flag(args),
                              log=lambda m: print(m, file=sys.stderr))

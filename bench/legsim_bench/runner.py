@@ -96,6 +96,9 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
 
     if hasattr(link, "use_model"):       # the reference model playing hil_sim: same model file
         link.use_model(scene.model_path)
+    elif not scene.builtin_model:
+        log(f"{scene.name}: model {scene.model_path}: hil_sim must run it (hil_sim --model FILE; "
+            "--start-hil does that)")
     rec: dict = {
         "format": FORMAT, "scene_name": scene.name,
         "scene_path": str(scene.path) if scene.path else None, "scene_source": scene.source,
