@@ -8,10 +8,15 @@ Values are numpy arrays in SI units; every failing status raises a
 :class:`LegsimError` subclass carrying the status code and its C name.
 
     >>> import legsim
-    >>> sim = legsim.Sim("models/leg.toml", integrator="rk4", step=1e-3)
+    >>> sim = legsim.Sim("models/leg.toml", integrator="rk4", step=1e-3)  # from the repository root
     >>> q = sim.assemble_pose("stand")
-    >>> sim.statics()            # actuator forces holding the leg (N)
-    array([-93.9289570005...,   1.3866057692...])
+    >>> sim.statics().round(3)   # actuator forces holding the leg (N)
+    array([-93.929,   1.387])
+    >>> sim.assemble([0.80, 0.35])
+    Traceback (most recent call last):
+    legsim.UnreachableError: legsim_assemble: LEGSIM_ERR_UNREACHABLE (lengths cannot be reached)
+
+See python/README.md for the whole API.
 """
 from ._lib import LIB_NAMES, Library, find_library, library_available, load_library
 from .errors import (BadInputError, CapacityError, DisabledError, DivergedError, LayoutMismatch,

@@ -147,3 +147,7 @@ class LibraryNotFound(FileNotFoundError):
 
 class LayoutMismatch(RuntimeError):
     """The library's structs differ from this binding's mirror of legsim.h."""
+
+# Tracebacks name them as users import them: legsim.UnreachableError.
+for _cls in (LegsimError, *ERRORS.values(), LibraryNotFound, LayoutMismatch, Status):
+    _cls.__module__ = "legsim"

@@ -40,6 +40,14 @@ def test_stand_pose_facts(stand, precision):
     assert 1.0 <= rep.condition < legsim.COND_WARN and rep.event_names() == []
 
 
+def test_slot_variant_from_the_file(stand, model_toml):
+    """The paper's knee (eq. (18)): one equation less, the same stand pose."""
+    s = stand(str(model_toml), variant="slot")
+    assert s.variant == "slot" and s.n_constraints == 15 and s.model.joint_names[-1] == "D"
+    np.testing.assert_allclose(s.foot(), STAND_FOOT, atol=1e-7)
+    assert s.constraint_residual() <= 1e-10
+
+
 def _potential(s: legsim.Sim, masses, foot_load) -> float:
     """Potential (J) of gravity and of a constant foot load in the current pose."""
     q = s.q.reshape(-1, 3)

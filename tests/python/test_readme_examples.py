@@ -3,6 +3,7 @@ written, from the repository root, and print what their comments say."""
 from __future__ import annotations
 
 import contextlib
+import doctest
 import io
 import re
 
@@ -43,3 +44,10 @@ def test_python_readme_example(root, monkeypatch):
     assert lines[1] == "statics: [-93.929   1.387] N"
     assert lines[2].startswith("t = 0.100 s")
     assert lines[-1].startswith("LEGSIM_ERR_UNREACHABLE - ")
+
+
+def test_package_docstring_example(root, monkeypatch):
+    import legsim
+    monkeypatch.chdir(root)
+    r = doctest.testmod(legsim, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert r.attempted >= 4 and r.failed == 0
