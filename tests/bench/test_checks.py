@@ -31,7 +31,7 @@ TOML = ROOT / "models" / "leg.toml"
 STEP = """
 description = "short step (test)"
 integrator = "rk4"
-step = 0.001
+step_s = 0.001
 duration = 0.04
 record_every = 5
 [[command]]
@@ -53,9 +53,10 @@ residual = 1e-6
 
 HOLD = """
 description = "short hold under 300 N (test)"
-step = 0.001
+step_s = 0.001
 duration = 0.03
 record_every = 10
+[forces]
 foot_load = [0.0, 300.0]
 [[command]]
 actuator = "upper"
