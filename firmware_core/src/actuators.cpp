@@ -72,6 +72,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
     d.stroke_mask |= added;
     const uint32_t before = d.stop_mask;
     const VecQ q0 = d.q, qd0 = d.qd;
+    const legsim_report report0 = d.report;
     d.stop_mask |= added;
     legsim_status s = stops_layout(sim);
     if (s == LEGSIM_OK) s = assemble(sim, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
@@ -83,9 +84,14 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
       // A stroke end that is also a dead centre (the leg's lower stroke ends
       // where the knee is straight, as far as the geometry reaches): no stop can
       // be held there, and none is needed. Keep the integrated state, say so.
+      // The report stays that of the step (the failed factorization's infinite
+      // condition is not the state's).
       d.q = q0;
       d.qd = qd0;
       d.stop_mask = before;
+      d.report.iterations = report0.iterations;
+      d.report.residual = report0.residual;
+      d.report.condition = report0.condition;
       raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
       return stops_layout(sim);
     }

@@ -1,7 +1,10 @@
 // The plain C API: argument checks, state bookkeeping, and dispatch to the
-// analyses. Bad input is refused with a status before anything changes.
+// analyses. Bad input is refused with a status before anything changes; a call
+// that fails half-way puts everything back (all_or_nothing), and a result that
+// is not finite is refused rather than passed on (outputs_check).
 #include <cstring>
 #include <new>
+#include <type_traits>
 
 #include "sim.hpp"
 
@@ -11,40 +14,137 @@ static_assert(alignof(Sim) <= LEGSIM_STORAGE_ALIGN, "raise LEGSIM_STORAGE_ALIGN"
 static_assert(LEGSIM_MAX_ROWS <= 255, "row indices are stored in 8 bits");
 static_assert(LEGSIM_MAX_ACTUATORS <= 31, "actuator sets are 32-bit masks");
 
+namespace legsim {
+
+Snapshot::Snapshot(const Data &d)
+    : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), lambda(d.lambda), report(d.report),
+      t(d.t), steps(d.steps), stroke_mask(d.stroke_mask), stop_mask(d.stop_mask),
+      assembled(d.assembled), derivative_valid(d.derivative_valid),
+      history_valid(d.history_valid) {
+  for (int j = 0; j < kMaxJoints; ++j) reaction[j] = d.reaction[j];
+  for (int a = 0; a < kMaxActuators; ++a) {
+    act_force[a] = d.act[a].force;
+    stop_force[a] = d.act[a].stop_force;
+    stop_length[a] = d.stop_drivers.length[a];
+  }
+}
+
+void Snapshot::restore(Sim &sim) const {
+  Data &d = sim.data;
+  d.q = q;
+  d.qd = qd;
+  d.qdd = qdd;
+  d.acc_aux = acc_aux;
+  d.lambda = lambda;
+  d.report = report;
+  for (int j = 0; j < kMaxJoints; ++j) d.reaction[j] = reaction[j];
+  for (int a = 0; a < kMaxActuators; ++a) {
+    d.act[a].force = act_force[a];
+    d.act[a].stop_force = stop_force[a];
+    d.stop_drivers.length[a] = stop_length[a];
+    d.stop_drivers.rate[a] = d.stop_drivers.accel[a] = 0;
+  }
+  if (d.stop_mask != stop_mask) {
+    d.stop_mask = stop_mask;
+    stops_layout(sim);  // the same rows as before: cannot fail
+  }
+  d.t = t;
+  d.steps = steps;
+  d.stroke_mask = stroke_mask;
+  d.assembled = assembled;
+  d.derivative_valid = derivative_valid;
+  d.history_valid = history_valid;
+}
+
+bool state_sane(const VecQ &q, const VecQ &qd, int n) {
+  for (int k = 0; k < n; ++k)
+    if (!(std::abs(q[k]) < real(LEGSIM_MAX_ABS_Q)) || !(std::abs(qd[k]) < real(LEGSIM_MAX_ABS_QD)))
+      return false;
+  return true;
+}
+
+// Once per call (per step): everything a caller can read is finite.
+legsim_status outputs_check(const Sim &sim) {
+  const Model &m = sim.model;
+  const Data &d = sim.data;
+  if (!state_sane(d.q, d.qd, m.nq) || !all_finite(d.qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
+  bool ok = finite(d.report.residual) && finite(d.report.condition);
+  for (int i = 0; i < kMaxRows; ++i) ok = ok && finite(d.lambda[i]);
+  for (int j = 0; j < m.nj; ++j)
+    ok = ok && finite(d.reaction[j].force_n[0]) && finite(d.reaction[j].force_n[1]) &&
+         finite(d.reaction[j].moment_nm);
+  for (int a = 0; a < m.na; ++a) ok = ok && finite(d.act[a].force) && finite(d.act[a].stop_force);
+  return ok ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+
+}  // namespace legsim
+
 namespace {
 
 Sim *as_sim(legsim_sim *s) { return reinterpret_cast<Sim *>(s); }
 const Sim *as_sim(const legsim_sim *s) { return reinterpret_cast<const Sim *>(s); }
 
+// One rule for every entry point: a handle is a sim only if legsim_init made it.
+legsim_status sim_check(const legsim_sim *s) {
+  if (!s) return LEGSIM_ERR_NULL;
+  if (reinterpret_cast<uintptr_t>(s) % LEGSIM_STORAGE_ALIGN) return LEGSIM_ERR_STORAGE;
+  uint32_t magic;
+  std::memcpy(&magic, s, sizeof magic);  // Sim::magic is the first member
+  return magic == kSimMagic ? LEGSIM_OK : LEGSIM_ERR_STORAGE;
+}
+bool sim_ok(const legsim_sim *s) { return sim_check(s) == LEGSIM_OK; }
+
+#define CHECK_SIM(h)                                 \
+  do {                                               \
+    const legsim_status check_ = sim_check(h);       \
+    if (check_ != LEGSIM_OK) return check_;          \
+  } while (0)
+
+// The integer a C caller stored in an enum field, read as such: a value outside
+// the enum must be checked before it is ever held in the C++ enum type.
+template <typename E>
+long long raw_enum(const E &field) {
+  std::underlying_type_t<E> v;
+  std::memcpy(&v, &field, sizeof v);
+  return static_cast<long long>(v);
+}
+
 constexpr uint32_t kAllDisableFlags =
     LEGSIM_DISABLE_GRAVITY | LEGSIM_DISABLE_FORCE_ELEMENTS | LEGSIM_DISABLE_REACTIONS |
     LEGSIM_DISABLE_PROJECTION | LEGSIM_DISABLE_ACTUATORS | LEGSIM_DISABLE_STROKE_LIMITS;
 
+bool within(double x, double lo, double hi) { return x >= lo && x <= hi; }  // false for NaN
+
 legsim_status options_check(const legsim_options *o) {
   if (!o) return LEGSIM_ERR_NULL;
-  const bool integrator_ok =
-      (o->integrator == LEGSIM_INTEGRATOR_RK4 && LEGSIM_WITH_RK4) ||
-      (o->integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA && LEGSIM_WITH_GENERALIZED_ALPHA);
-  if (o->integrator != LEGSIM_INTEGRATOR_RK4 && o->integrator != LEGSIM_INTEGRATOR_GENERALIZED_ALPHA)
+  const long long integ = raw_enum(o->integrator);
+  if (integ != LEGSIM_INTEGRATOR_RK4 && integ != LEGSIM_INTEGRATOR_GENERALIZED_ALPHA)
     return LEGSIM_ERR_BAD_INPUT;
-  if (!integrator_ok) return LEGSIM_ERR_DISABLED;
-  if (!(std::isfinite(o->step_s) && o->step_s > 0 && o->step_s <= 1)) return LEGSIM_ERR_BAD_INPUT;
-  if (!(o->rho_inf >= 0 && o->rho_inf <= 1)) return LEGSIM_ERR_BAD_INPUT;
-  if (o->max_newton_iter < 1 || o->max_newton_iter > 1000) return LEGSIM_ERR_BAD_INPUT;
-  if (!(std::isfinite(o->newton_tol) && o->newton_tol > 0)) return LEGSIM_ERR_BAD_INPUT;
+  if (!within(o->step_s, LEGSIM_MIN_STEP_S, LEGSIM_MAX_STEP_S)) return LEGSIM_ERR_BAD_INPUT;
+  if (!within(o->rho_inf, 0, 1)) return LEGSIM_ERR_BAD_INPUT;
+  if (o->max_newton_iter < 1 || o->max_newton_iter > LEGSIM_MAX_NEWTON_ITER) return LEGSIM_ERR_BAD_INPUT;
+  if (!within(o->newton_tol, LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL)) return LEGSIM_ERR_BAD_INPUT;
   if (o->disable & ~kAllDisableFlags) return LEGSIM_ERR_BAD_INPUT;
-  return LEGSIM_OK;
+  const bool compiled = integ == LEGSIM_INTEGRATOR_RK4 ? LEGSIM_WITH_RK4 : LEGSIM_WITH_GENERALIZED_ALPHA;
+  return compiled ? LEGSIM_OK : LEGSIM_ERR_DISABLED;
 }
 
-bool finite_array(const legsim_real *x, int n) {
+bool same_options(const legsim_options &a, const legsim_options &b) {
+  return a.integrator == b.integrator && a.step_s == b.step_s && a.disable == b.disable &&
+         a.rho_inf == b.rho_inf && a.max_newton_iter == b.max_newton_iter &&
+         a.newton_tol == b.newton_tol;
+}
+
+// Finite and |x| <= bound (false for NaN).
+bool bounded_array(const legsim_real *x, int n, double bound) {
   for (int i = 0; i < n; ++i)
-    if (!std::isfinite(x[i])) return false;
+    if (!(std::abs(x[i]) <= real(bound))) return false;
   return true;
 }
 
 // Lengths inside every stroke (and finite), else the matching status.
 legsim_status lengths_check(const Model &m, const legsim_real *len) {
-  if (!finite_array(len, m.na)) return LEGSIM_ERR_BAD_INPUT;
+  if (!bounded_array(len, m.na, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
   for (int a = 0; a < m.na; ++a)
     if (len[a] < m.act[a].lmin || len[a] > m.act[a].lmax) return LEGSIM_ERR_OUT_OF_STROKE;
   return LEGSIM_OK;
@@ -71,65 +171,6 @@ void commands_changed(Data &d) {
   d.history_valid = false;
 }
 
-// Everything a failed call must leave as it found: calls that can fail half-way
-// work on the live state and put this back.
-struct Snapshot {
-  VecQ q, qd, qdd, acc_aux;
-  VecR lambda;
-  legsim_reaction reaction[kMaxJoints];
-  real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
-  double t;
-  uint64_t steps;
-  uint32_t stroke_mask, stop_mask;
-  bool assembled, derivative_valid, history_valid;
-
-  explicit Snapshot(const Data &d)
-      : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), lambda(d.lambda), t(d.t),
-        steps(d.steps), stroke_mask(d.stroke_mask), stop_mask(d.stop_mask), assembled(d.assembled),
-        derivative_valid(d.derivative_valid), history_valid(d.history_valid) {
-    for (int j = 0; j < kMaxJoints; ++j) reaction[j] = d.reaction[j];
-    for (int a = 0; a < kMaxActuators; ++a) {
-      act_force[a] = d.act[a].force;
-      stop_force[a] = d.act[a].stop_force;
-      stop_length[a] = d.stop_drivers.length[a];
-    }
-  }
-  void restore(Sim &sim) const {
-    Data &d = sim.data;
-    d.q = q;
-    d.qd = qd;
-    d.qdd = qdd;
-    d.acc_aux = acc_aux;
-    d.lambda = lambda;
-    for (int j = 0; j < kMaxJoints; ++j) d.reaction[j] = reaction[j];
-    for (int a = 0; a < kMaxActuators; ++a) {
-      d.act[a].force = act_force[a];
-      d.act[a].stop_force = stop_force[a];
-      d.stop_drivers.length[a] = stop_length[a];
-      d.stop_drivers.rate[a] = d.stop_drivers.accel[a] = 0;
-    }
-    if (d.stop_mask != stop_mask) {
-      d.stop_mask = stop_mask;
-      stops_layout(sim);  // the same rows as before: cannot fail
-    }
-    d.t = t;
-    d.steps = steps;
-    d.stroke_mask = stroke_mask;
-    d.assembled = assembled;
-    d.derivative_valid = derivative_valid;
-    d.history_valid = history_valid;
-  }
-};
-
-// Runs a call on the live state; on failure, the state is put back as it was.
-template <typename F>
-legsim_status all_or_nothing(Sim &sim, F &&call) {
-  const Snapshot before(sim.data);
-  const legsim_status s = call();
-  if (s != LEGSIM_OK) before.restore(sim);
-  return s;
-}
-
 // A state set from outside rests on no stroke stop (the next step finds any).
 legsim_status stops_clear(Sim &sim) {
   Data &d = sim.data;
@@ -137,13 +178,6 @@ legsim_status stops_clear(Sim &sim) {
   if (!d.stop_mask) return LEGSIM_OK;
   d.stop_mask = 0;
   return stops_layout(sim);
-}
-
-// Positions and velocities a sim may hold: finite and not absurd.
-bool state_sane(const VecQ &q, const VecQ &qd, int n) {
-  for (int k = 0; k < n; ++k)
-    if (!(std::abs(q[k]) < real(1e6)) || !(std::abs(qd[k]) < real(1e9))) return false;
-  return true;
 }
 
 legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord) {
@@ -201,8 +235,10 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   if (storage_bytes < sizeof(Sim) || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
     return LEGSIM_ERR_STORAGE;
   legsim_status s = options_check(options);
-  if (s != LEGSIM_OK) return s;
+  if (s == LEGSIM_OK) s = model_check(model, nullptr, 0);
+  if (s != LEGSIM_OK) return s;  // the storage (and any sim in it) untouched
   Sim *sim = new (storage) Sim;  // placement: the caller's storage, no heap
+  sim->magic = 0;                // not a sim until complete
   s = model_compile(model, sim->model);
   if (s != LEGSIM_OK) return s;
   sim->opt = *options;
@@ -222,7 +258,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   std::memset(&d.report, 0, sizeof d.report);
   std::memset(&d.drivers, 0, sizeof d.drivers);
   d.stroke_mask = 0;
-  for (int a = 0; a < m.na; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
+  for (int a = 0; a < kMaxActuators; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
   std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
   d.stop_mask = 0;
   d.work_mask = -1;
@@ -234,66 +270,72 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   if (s == LEGSIM_OK) s = layout_finish(d.joints, d.drivers);
   if (s == LEGSIM_OK) s = stops_layout(*sim);
   if (s != LEGSIM_OK) return s;
+  sim->magic = kSimMagic;
   *out = reinterpret_cast<legsim_sim *>(sim);
   return LEGSIM_OK;
 }
 
 legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   const legsim_status s = options_check(options);
   if (s != LEGSIM_OK) return s;
-  as_sim(sim)->opt = *options;
-  as_sim(sim)->data.derivative_valid = false;
-  as_sim(sim)->data.history_valid = false;
+  Sim &sm = *as_sim(sim);
+  if (same_options(sm.opt, *options)) return LEGSIM_OK;  // sent again: changes nothing
+  sm.opt = *options;
+  commands_changed(sm.data);
   return LEGSIM_OK;
 }
 
-int32_t legsim_n_bodies(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nb : 0; }
-int32_t legsim_n_coords(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nq : 0; }
-int32_t legsim_n_constraints(const legsim_sim *sim) { return sim ? as_sim(sim)->model.m : 0; }
-int32_t legsim_n_joints(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nj : 0; }
-int32_t legsim_n_actuators(const legsim_sim *sim) { return sim ? as_sim(sim)->model.na : 0; }
-int32_t legsim_n_forces(const legsim_sim *sim) { return sim ? as_sim(sim)->model.nf : 0; }
+int32_t legsim_n_bodies(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nb : 0; }
+int32_t legsim_n_coords(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nq : 0; }
+int32_t legsim_n_constraints(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.m : 0; }
+int32_t legsim_n_joints(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nj : 0; }
+int32_t legsim_n_actuators(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.na : 0; }
+int32_t legsim_n_forces(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nf : 0; }
 const legsim_model_desc *legsim_model(const legsim_sim *sim) {
-  return sim ? as_sim(sim)->model.desc : nullptr;
+  return sim_ok(sim) ? as_sim(sim)->model.desc : nullptr;
 }
 
 legsim_status legsim_get_report(const legsim_sim *sim, legsim_report *out) {
-  if (!sim || !out) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!out) return LEGSIM_ERR_NULL;
   *out = as_sim(sim)->data.report;
   return LEGSIM_OK;
 }
 
 legsim_status legsim_clear_events(legsim_sim *sim) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   as_sim(sim)->data.report.events = 0;
   as_sim(sim)->data.stroke_mask = 0;
   return LEGSIM_OK;
 }
 
 uint32_t legsim_stroke_event_mask(const legsim_sim *sim) {
-  return sim ? as_sim(sim)->data.stroke_mask : 0;
+  return sim_ok(sim) ? as_sim(sim)->data.stroke_mask : 0;
 }
 
-double legsim_time(const legsim_sim *sim) { return sim ? as_sim(sim)->data.t : 0.0; }
-uint64_t legsim_step_count(const legsim_sim *sim) { return sim ? as_sim(sim)->data.steps : 0; }
+double legsim_time(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.t : 0.0; }
+uint64_t legsim_step_count(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.steps : 0; }
 
 legsim_status legsim_get_q(const legsim_sim *sim, legsim_real *q) {
-  if (!sim || !q) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!q) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   for (int k = 0; k < s.model.nq; ++k) q[k] = s.data.q[k];
   return LEGSIM_OK;
 }
 
 legsim_status legsim_get_qd(const legsim_sim *sim, legsim_real *qd) {
-  if (!sim || !qd) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!qd) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   for (int k = 0; k < s.model.nq; ++k) qd[k] = s.data.qd[k];
   return LEGSIM_OK;
 }
 
 legsim_status legsim_get_qdd(const legsim_sim *sim, legsim_real *qdd) {
-  if (!sim || !qdd) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!qdd) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   for (int k = 0; k < s.model.nq; ++k) qdd[k] = s.data.qdd[k];
   return LEGSIM_OK;
@@ -301,20 +343,19 @@ legsim_status legsim_get_qdd(const legsim_sim *sim, legsim_real *qdd) {
 
 legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legsim_real *qd,
                                double t_s) {
-  if (!sim || !q) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!q) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   const int n = s.model.nq;
-  if (!finite_array(q, n) || (qd && !finite_array(qd, n)) || !std::isfinite(t_s))
-    return LEGSIM_ERR_BAD_INPUT;
+  if (!within(t_s, -LEGSIM_MAX_TIME_S, LEGSIM_MAX_TIME_S)) return LEGSIM_ERR_BAD_INPUT;
   Data &d = s.data;
   VecQ qn = VecQ::Zero(), qdn = VecQ::Zero();
   for (int k = 0; k < n; ++k) {
     qn[k] = q[k];
     qdn[k] = qd ? qd[k] : real(0);
   }
-  if (!state_sane(qn, qdn, n)) return LEGSIM_ERR_BAD_INPUT;
-  const uint32_t events = d.report.events;
-  const legsim_status st = all_or_nothing(s, [&] {
+  if (!state_sane(qn, qdn, n)) return LEGSIM_ERR_BAD_INPUT;  // NaN too
+  return all_or_nothing(s, [&] {
     d.q = qn;
     d.qd = qdn;
     d.t = t_s;
@@ -322,12 +363,10 @@ legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legs
     const legsim_status c = stops_clear(s);
     return c == LEGSIM_OK ? state_refresh(s) : c;
   });
-  if (st != LEGSIM_OK) d.report.events = events;  // a refused state raises nothing
-  return st;
 }
 
 legsim_status legsim_constraints(const legsim_sim *sim, legsim_real *phi, legsim_real *max_abs) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   // the workspace is scratch: evaluating into it does not change the state
   Sim &s = *const_cast<Sim *>(as_sim(sim));
   Data &d = s.data;
@@ -339,7 +378,8 @@ legsim_status legsim_constraints(const legsim_sim *sim, legsim_real *phi, legsim
 }
 
 legsim_status legsim_jacobian(const legsim_sim *sim, legsim_real *jac) {
-  if (!sim || !jac) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!jac) return LEGSIM_ERR_NULL;
   Sim &s = *const_cast<Sim *>(as_sim(sim));
   Data &d = s.data;
   const int n = s.model.nq;
@@ -356,7 +396,8 @@ legsim_status legsim_jacobian(const legsim_sim *sim, legsim_real *jac) {
 }
 
 legsim_status legsim_actuator_lengths(const legsim_sim *sim, legsim_real *length_m, legsim_real *rate_mps) {
-  if (!sim || (!length_m && !rate_mps)) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!length_m && !rate_mps) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   for (int a = 0; a < s.model.na; ++a) {
     real l, r;
@@ -368,14 +409,16 @@ legsim_status legsim_actuator_lengths(const legsim_sim *sim, legsim_real *length
 }
 
 legsim_status legsim_actuator_forces(const legsim_sim *sim, legsim_real *force_n) {
-  if (!sim || !force_n) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!force_n) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   for (int a = 0; a < s.model.na; ++a) force_n[a] = s.data.act[a].force + s.data.act[a].stop_force;
   return LEGSIM_OK;
 }
 
 legsim_status legsim_foot_position(const legsim_sim *sim, legsim_real *xy) {
-  if (!sim || !xy) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!xy) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   const int b = s.model.foot_body;
   if (b < 0) return LEGSIM_ERR_BAD_INPUT;
@@ -388,7 +431,7 @@ legsim_status legsim_foot_position(const legsim_sim *sim, legsim_real *xy) {
 }
 
 legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
@@ -413,7 +456,7 @@ legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
 }
 
 legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   Sim &s = *as_sim(sim);
   const legsim_model_desc *desc = s.model.desc;
   if (pose < 0 || pose >= desc->n_poses) return LEGSIM_ERR_BAD_INPUT;
@@ -431,12 +474,13 @@ legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
 }
 
 legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps) {
-  if (!sim || !rate_mps) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!rate_mps) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
   if (!d.assembled) return LEGSIM_ERR_STATE;
-  if (!finite_array(rate_mps, m.na)) return LEGSIM_ERR_BAD_INPUT;
+  if (!bounded_array(rate_mps, m.na, LEGSIM_MAX_RATE_MPS)) return LEGSIM_ERR_BAD_INPUT;
   legsim_actuator_lengths(sim, d.drivers.length, nullptr);
   for (int a = 0; a < m.na; ++a) {
     d.drivers.rate[a] = rate_mps[a];
@@ -450,75 +494,96 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
     legsim_status v = stops_clear(s);
     if (v == LEGSIM_OK) v = velocity_solve(s, d.work, qd);
     if (v != LEGSIM_OK) return v;
+    // a velocity a state may not hold is refused here, not at the next step
+    if (!state_sane(d.q, qd, m.nq)) return LEGSIM_ERR_DIVERGED;
     d.qd = qd;
     return state_refresh(s);
   });
 }
 
 legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2) {
-  if (!sim || !accel_mps2) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!accel_mps2) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
   if (!d.assembled) return LEGSIM_ERR_STATE;
-  if (!finite_array(accel_mps2, m.na)) return LEGSIM_ERR_BAD_INPUT;
+  if (!bounded_array(accel_mps2, m.na, LEGSIM_MAX_ACCEL_MPS2)) return LEGSIM_ERR_BAD_INPUT;
   legsim_actuator_lengths(sim, d.drivers.length, d.drivers.rate);
   for (int a = 0; a < m.na; ++a) d.drivers.accel[a] = accel_mps2[a];
   d.drivers.ncoord = 0;
   legsim_status st = drivers_layout(s, all_actuators(m), 0);
   if (st != LEGSIM_OK) return st;
-  VecQ qdd;
-  st = acceleration_solve(s, d.work, qdd);
-  if (st != LEGSIM_OK) return st;
-  d.qdd = qdd;
-  d.derivative_valid = false;  // kinematic, not the dynamics' qdd
-  d.history_valid = false;
-  return LEGSIM_OK;
+  return all_or_nothing(s, [&] {
+    VecQ qdd;
+    const legsim_status r = acceleration_solve(s, d.work, qdd);
+    if (r != LEGSIM_OK) return r;
+    d.qdd = qdd;
+    d.derivative_valid = false;  // kinematic, not the dynamics' qdd
+    d.history_valid = false;
+    return LEGSIM_OK;
+  });
 }
 
 legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length_m,
                                       const legsim_real *rate_mps, const legsim_real *accel_mps2,
                                       legsim_real *actuator_force_n) {
-  if (!sim || !length_m || !rate_mps || !accel_mps2) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!length_m || !rate_mps || !accel_mps2) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
   legsim_status st = lengths_check(s.model, length_m);
   if (st != LEGSIM_OK) return st;
-  if (!finite_array(rate_mps, s.model.na) || !finite_array(accel_mps2, s.model.na))
+  if (!bounded_array(rate_mps, s.model.na, LEGSIM_MAX_RATE_MPS) ||
+      !bounded_array(accel_mps2, s.model.na, LEGSIM_MAX_ACCEL_MPS2))
     return LEGSIM_ERR_BAD_INPUT;
-  return all_or_nothing(s, [&] {
+  real force[kMaxActuators];
+  st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, actuator_force_n);
+    if (r == LEGSIM_OK) r = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, force);
     s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
     return r;
   });
+  if (st == LEGSIM_OK && actuator_force_n)
+    for (int a = 0; a < s.model.na; ++a) actuator_force_n[a] = force[a];
+  return st;
 }
 
 legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
-  return all_or_nothing(s, [&] {
+  real force[kMaxActuators];
+  const legsim_status st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = statics_solve(s, actuator_force_n);
+    if (r == LEGSIM_OK) r = statics_solve(s, force);
     s.data.derivative_valid = s.data.history_valid = false;
     return r;
   });
+  if (st == LEGSIM_OK && actuator_force_n)
+    for (int a = 0; a < s.model.na; ++a) actuator_force_n[a] = force[a];
+  return st;
 }
 
 legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst_case *out) {
-  if (!sim || !out) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!out) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
-  if (n_grid < 2 || n_grid > 1000) return LEGSIM_ERR_BAD_INPUT;
-  legsim_status st = stops_clear(s);
-  if (st == LEGSIM_OK) st = statics_sweep(s, n_grid, out);  // leaves the last good pose
-  s.data.derivative_valid = s.data.history_valid = false;
+  if (n_grid < 2 || n_grid > LEGSIM_MAX_GRID) return LEGSIM_ERR_BAD_INPUT;
+  legsim_worst_case wc;
+  const legsim_status st = all_or_nothing(s, [&] {
+    legsim_status r = stops_clear(s);
+    if (r == LEGSIM_OK) r = statics_sweep(s, n_grid, &wc);  // leaves the last pose solved
+    s.data.derivative_valid = s.data.history_valid = false;
+    return r;
+  });
+  if (st == LEGSIM_OK) *out = wc;
   return st;
 }
 
 legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   if (n_steps < 0) return LEGSIM_ERR_BAD_INPUT;
   Sim &s = *as_sim(sim);
   Data &d = s.data;
@@ -526,7 +591,8 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
     return LEGSIM_ERR_STATE;
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   for (int32_t i = 0; i < n_steps; ++i) {
-    // a failed step leaves the state of the last good one
+    // a failed step leaves the state of the last good one (all_or_nothing also
+    // refuses a step whose state, accelerations, multipliers or report are not finite)
     const legsim_status st = all_or_nothing(s, [&] {
       legsim_status r = LEGSIM_OK;
       // both start from the accelerations at the current state and commands
@@ -543,7 +609,6 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
       }
       if (r == LEGSIM_OK && stops) r = stroke_stops_release(s, released);
       if (r == LEGSIM_OK && released) r = state_refresh(s);
-      if (r == LEGSIM_OK && !state_sane(d.q, d.qd, s.model.nq)) r = LEGSIM_ERR_DIVERGED;
       if (r != LEGSIM_OK) return r;
       if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
       d.t += s.opt.step_s;
@@ -557,7 +622,8 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
 }
 
 legsim_status legsim_reactions(const legsim_sim *sim, legsim_reaction *out) {
-  if (!sim || !out) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!out) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   if (s.opt.disable & LEGSIM_DISABLE_REACTIONS) return LEGSIM_ERR_DISABLED;
   for (int j = 0; j < s.model.nj; ++j) out[j] = s.data.reaction[j];
@@ -565,18 +631,18 @@ legsim_status legsim_reactions(const legsim_sim *sim, legsim_reaction *out) {
 }
 
 legsim_status legsim_multipliers(const legsim_sim *sim, legsim_real *lambda) {
-  if (!sim || !lambda) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!lambda) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
   for (int i = 0; i < s.model.m; ++i) lambda[i] = s.data.lambda[i];
   return LEGSIM_OK;
 }
 
 legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   Sim &s = *as_sim(sim);
   if (actuator < 0 || actuator >= s.model.na) return LEGSIM_ERR_BAD_INPUT;
-  if (!std::isfinite(force_n) || std::abs(force_n) > s.model.act[actuator].fmax)
-    return LEGSIM_ERR_BAD_INPUT;
+  if (!(std::abs(force_n) <= s.model.act[actuator].fmax)) return LEGSIM_ERR_BAD_INPUT;  // NaN too
   ActuatorState &a = s.data.act[actuator];
   if (a.mode != LEGSIM_ACTUATOR_FORCE || a.setpoint != force_n) commands_changed(s.data);
   a.mode = LEGSIM_ACTUATOR_FORCE;
@@ -586,7 +652,7 @@ legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_rea
 }
 
 legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_real length_m) {
-  if (!sim) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
   Sim &s = *as_sim(sim);
   if (actuator < 0 || actuator >= s.model.na || !std::isfinite(length_m)) return LEGSIM_ERR_BAD_INPUT;
   const Actuator &ac = s.model.act[actuator];
@@ -599,14 +665,15 @@ legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_re
 }
 
 legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real *value) {
-  if (!sim || !value) return LEGSIM_ERR_NULL;
+  CHECK_SIM(sim);
+  if (!value) return LEGSIM_ERR_NULL;
   Sim &s = *as_sim(sim);
   if (force < 0 || force >= s.model.nf) return LEGSIM_ERR_BAD_INPUT;
   if (!LEGSIM_WITH_FORCE_ELEMENTS) return LEGSIM_ERR_DISABLED;
   // a spring-damper's law is model data; point forces and torques take values
   if (s.model.force[force].kind == LEGSIM_FORCE_SPRING_DAMPER) return LEGSIM_ERR_BAD_INPUT;
   const int nv = s.model.force[force].kind == LEGSIM_FORCE_POINT ? 2 : 1;
-  if (!finite_array(value, nv)) return LEGSIM_ERR_BAD_INPUT;
+  if (!bounded_array(value, nv, LEGSIM_MAX_FORCE_N)) return LEGSIM_ERR_BAD_INPUT;
   for (int i = 0; i < nv; ++i) {
     if (s.data.force_value[force][i] != value[i]) commands_changed(s.data);
     s.data.force_value[force][i] = value[i];

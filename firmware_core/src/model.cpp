@@ -1,6 +1,7 @@
 // Model checks and compilation of a legsim_model_desc into the solver's Model.
 #include <cmath>
 #include <cstring>
+#include <type_traits>
 
 #include "sim.hpp"
 
@@ -49,8 +50,19 @@ legsim_status fail(char *msg, size_t len, legsim_status s, Parts... parts) {
   return s;
 }
 
-bool finite_pos(double x) { return std::isfinite(x) && x > 0.0; }
-bool finite2(const double p[2]) { return std::isfinite(p[0]) && std::isfinite(p[1]); }
+// In [lo, hi] (false for NaN): the sane ranges of legsim.h.
+bool in(double x, double lo, double hi) { return x >= lo && x <= hi; }
+bool coord(double x) { return in(x, -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD); }
+bool coord2(const double p[2]) { return coord(p[0]) && coord(p[1]); }
+
+// The integer a C caller stored in an enum field, read without holding it in
+// the enum type (a value outside the enum would be undefined behaviour in C++).
+template <typename E>
+long long raw_enum(const E &field) {
+  std::underlying_type_t<E> v;
+  std::memcpy(&v, &field, sizeof v);
+  return static_cast<long long>(v);
+}
 
 int joint_rows(legsim_joint_kind k) { return k == LEGSIM_JOINT_SLOT ? 1 : 2; }
 
@@ -69,19 +81,25 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
                 int(d->n_forces), " forces, ", int(d->n_poses), " poses; this build holds ",
                 LEGSIM_MAX_BODIES, ", ", LEGSIM_MAX_JOINTS, ", ", LEGSIM_MAX_ACTUATORS, ", ",
                 LEGSIM_MAX_FORCES, ", ", LEGSIM_MAX_POSES);
-  if (!finite2(d->gravity_mps2)) return fail(msg, len, bad, "gravity is not finite");
+  if (!in(d->gravity_mps2[0], -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2) ||
+      !in(d->gravity_mps2[1], -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2))
+    return fail(msg, len, bad, "gravity outside +-LEGSIM_MAX_GRAVITY_MPS2 (or not finite)");
   for (int i = 0; i < d->n_bodies; ++i) {
     const legsim_body_desc &b = d->body[i];
-    if (!finite_pos(b.length_m) || !finite_pos(b.mass_kg) || !finite_pos(b.inertia_kgm2))
+    if (!in(b.length_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
+        !in(b.mass_kg, LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG) ||
+        !in(b.inertia_kgm2, LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2))
       return fail(msg, len, bad, "body '", Name{b.name},
-                  "': length, mass and inertia must be finite and > 0");
+                  "': length, mass and inertia must be finite and within their ranges "
+                  "(LEGSIM_MIN/MAX_*, legsim.h)");
   }
   auto body_ok = [&](int b) { return b >= 0 && b < d->n_bodies; };
   int rows = 0;
   for (int j = 0; j < d->n_joints; ++j) {
     const legsim_joint_desc &jd = d->joint[j];
-    if (jd.kind < LEGSIM_JOINT_REVOLUTE_TO_FRAME || jd.kind > LEGSIM_JOINT_SLOT)
-      return fail(msg, len, bad, "joint '", Name{jd.name}, "': unknown kind ", int(jd.kind));
+    const long long kind = raw_enum(jd.kind);
+    if (kind < LEGSIM_JOINT_REVOLUTE_TO_FRAME || kind > LEGSIM_JOINT_SLOT)
+      return fail(msg, len, bad, "joint '", Name{jd.name}, "': unknown kind ", int(kind));
     if (!body_ok(jd.body[0]))
       return fail(msg, len, bad, "joint '", Name{jd.name}, "': body index ", int(jd.body[0]),
                   " does not exist");
@@ -91,8 +109,8 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
                   " is not valid for its kind");
     if (!to_frame && jd.body[0] == jd.body[1])
       return fail(msg, len, bad, "joint '", Name{jd.name}, "': joins a body to itself");
-    if (!finite2(jd.point[0]) || !finite2(jd.point[1]))
-      return fail(msg, len, bad, "joint '", Name{jd.name}, "': point not finite");
+    if (!coord2(jd.point[0]) || !coord2(jd.point[1]))
+      return fail(msg, len, bad, "joint '", Name{jd.name}, "': point outside +-LEGSIM_MAX_COORD (or not finite)");
     rows += joint_rows(jd.kind);
   }
   if (rows + d->n_actuators + LEGSIM_MAX_POSE_DRIVERS > LEGSIM_MAX_ROWS)
@@ -101,30 +119,38 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
                 LEGSIM_MAX_ROWS - int(d->n_actuators) - LEGSIM_MAX_POSE_DRIVERS);
   for (int a = 0; a < d->n_actuators; ++a) {
     const legsim_actuator_desc &ad = d->actuator[a];
-    if (ad.joint < 0 || ad.joint >= d->n_joints || d->joint[ad.joint].kind != LEGSIM_JOINT_PRISMATIC)
+    if (ad.joint < 0 || ad.joint >= d->n_joints || raw_enum(d->joint[ad.joint].kind) != LEGSIM_JOINT_PRISMATIC)
       return fail(msg, len, bad, "actuator '", Name{ad.name}, "': joint index ", int(ad.joint),
                   " is not a prismatic joint");
-    if (!finite_pos(ad.stroke_min_m) || !std::isfinite(ad.stroke_max_m) ||
-        ad.stroke_max_m <= ad.stroke_min_m)
-      return fail(msg, len, bad, "actuator '", Name{ad.name}, "': stroke must satisfy 0 < min < max");
-    if (!finite_pos(ad.max_force_n) || !std::isfinite(ad.servo_kp_n_per_m) ||
-        !std::isfinite(ad.servo_kd_ns_per_m) || ad.servo_kp_n_per_m < 0 || ad.servo_kd_ns_per_m < 0)
+    if (!in(ad.stroke_min_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
+        !in(ad.stroke_max_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) || ad.stroke_max_m <= ad.stroke_min_m)
       return fail(msg, len, bad, "actuator '", Name{ad.name},
-                  "': max force must be > 0 and servo gains >= 0, all finite");
+                  "': stroke must satisfy LEGSIM_MIN_LENGTH_M <= min < max <= LEGSIM_MAX_COORD");
+    if (!in(ad.max_force_n, LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N) ||
+        !in(ad.servo_kp_n_per_m, 0, LEGSIM_MAX_STIFFNESS_N_PER_M) ||
+        !in(ad.servo_kd_ns_per_m, 0, LEGSIM_MAX_DAMPING_NS_PER_M))
+      return fail(msg, len, bad, "actuator '", Name{ad.name},
+                  "': max force and servo gains must be finite and within their ranges "
+                  "(LEGSIM_MAX_FORCE_N, _STIFFNESS_N_PER_M, _DAMPING_NS_PER_M)");
   }
   for (int f = 0; f < d->n_forces; ++f) {
     const legsim_force_desc &fd = d->force[f];
-    if (fd.kind < LEGSIM_FORCE_POINT || fd.kind > LEGSIM_FORCE_SPRING_DAMPER)
-      return fail(msg, len, bad, "force '", Name{fd.name}, "': unknown kind ", int(fd.kind));
+    const long long kind = raw_enum(fd.kind);
+    if (kind < LEGSIM_FORCE_POINT || kind > LEGSIM_FORCE_SPRING_DAMPER)
+      return fail(msg, len, bad, "force '", Name{fd.name}, "': unknown kind ", int(kind));
     const bool spring = fd.kind == LEGSIM_FORCE_SPRING_DAMPER;
     const bool a_ok = body_ok(fd.body[0]) || (spring && fd.body[0] == LEGSIM_FRAME);
     const bool b_ok = !spring || body_ok(fd.body[1]) || fd.body[1] == LEGSIM_FRAME;
     if (!a_ok || !b_ok || (spring && fd.body[0] == fd.body[1]))
       return fail(msg, len, bad, "force '", Name{fd.name}, "': body does not exist");
-    if (!finite2(fd.point[0]) || !finite2(fd.point[1]) || !finite2(fd.value) ||
-        !std::isfinite(fd.stiffness_n_per_m) || !std::isfinite(fd.damping_ns_per_m) ||
-        !std::isfinite(fd.rest_length_m) || fd.rest_length_m < 0)
-      return fail(msg, len, bad, "force '", Name{fd.name}, "': numbers must be finite (rest length >= 0)");
+    if (!coord2(fd.point[0]) || !coord2(fd.point[1]) ||
+        !in(fd.value[0], -LEGSIM_MAX_FORCE_N, LEGSIM_MAX_FORCE_N) ||
+        !in(fd.value[1], -LEGSIM_MAX_FORCE_N, LEGSIM_MAX_FORCE_N) ||
+        !in(fd.stiffness_n_per_m, 0, LEGSIM_MAX_STIFFNESS_N_PER_M) ||
+        !in(fd.damping_ns_per_m, 0, LEGSIM_MAX_DAMPING_NS_PER_M) ||
+        !in(fd.rest_length_m, 0, LEGSIM_MAX_COORD))
+      return fail(msg, len, bad, "force '", Name{fd.name},
+                  "': numbers must be finite and within their ranges (LEGSIM_MAX_*, legsim.h)");
   }
   for (int p = 0; p < d->n_poses; ++p) {
     const legsim_pose_desc &pd = d->pose[p];
@@ -133,15 +159,15 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
                   " drivers, at most ", LEGSIM_MAX_POSE_DRIVERS);
     for (int k = 0; k < pd.n_drivers; ++k)
       if (!body_ok(pd.driver[k].body) || pd.driver[k].coord < 0 || pd.driver[k].coord > 2 ||
-          !std::isfinite(pd.driver[k].value))
+          !coord(pd.driver[k].value))
         return fail(msg, len, bad, "pose '", Name{pd.name}, "': driver ", k, " is invalid");
     for (int b = 0; b < d->n_bodies; ++b)
       for (int c = 0; c < 3; ++c)
-        if (!std::isfinite(pd.guess[b][c]))
-          return fail(msg, len, bad, "pose '", Name{pd.name}, "': guess not finite");
+        if (!coord(pd.guess[b][c]))
+          return fail(msg, len, bad, "pose '", Name{pd.name}, "': guess outside +-LEGSIM_MAX_COORD (or not finite)");
   }
-  if (d->foot_body != -1 && (!body_ok(d->foot_body) || !finite2(d->foot_point)))
-    return fail(msg, len, bad, "foot: body index ", int(d->foot_body), " does not exist");
+  if (d->foot_body != -1 && (!body_ok(d->foot_body) || !coord2(d->foot_point)))
+    return fail(msg, len, bad, "foot: body index ", int(d->foot_body), " does not exist (or point out of range)");
   if (msg && len > 0) msg[0] = '\0';
   return LEGSIM_OK;
 }

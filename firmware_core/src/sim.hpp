@@ -166,11 +166,50 @@ struct Data {
   VecR rhs;
 };
 
+// legsim_init writes kSimMagic last, when the sim is complete; every entry point
+// checks it, so storage that never went through legsim_init is refused alike.
+constexpr uint32_t kSimMagic = 0x4C454753u;  // "LEGS"
+
 struct Sim {
+  uint32_t magic;
   Model model;
   legsim_options opt;
   Data data;
 };
+
+// Everything a failed call must leave as it found it (the state, what the next
+// step starts from, and the report): calls that can fail half-way work on the
+// live state and put this back.
+struct Snapshot {
+  VecQ q, qd, qdd, acc_aux;
+  VecR lambda;
+  legsim_reaction reaction[kMaxJoints];
+  real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
+  legsim_report report;
+  double t;
+  uint64_t steps;
+  uint32_t stroke_mask, stop_mask;
+  bool assembled, derivative_valid, history_valid;
+
+  explicit Snapshot(const Data &d);
+  void restore(Sim &sim) const;
+};
+
+// Runs a call on the live state; on failure, the state is put back as it was.
+// On success the outputs are checked once: a non-finite or absurd result is
+// refused (LEGSIM_ERR_DIVERGED) rather than passed on.
+legsim_status outputs_check(const Sim &sim);
+template <typename F>
+legsim_status all_or_nothing(Sim &sim, F &&call) {
+  const Snapshot before(sim.data);
+  legsim_status s = call();
+  if (s == LEGSIM_OK) s = outputs_check(sim);
+  if (s != LEGSIM_OK) before.restore(sim);
+  return s;
+}
+
+// Positions and velocities a sim may hold: finite and within LEGSIM_MAX_ABS_Q/QD.
+bool state_sane(const VecQ &q, const VecQ &qd, int n);
 
 // ---- model.cpp ----
 legsim_status model_check(const legsim_model_desc *desc, char *msg, size_t len);

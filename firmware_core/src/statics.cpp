@@ -47,11 +47,17 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
   if (!(worst <= kBalanceTol * scale)) return LEGSIM_ERR_NO_EQUILIBRIUM;
   d.qdd.setZero();
   reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
+  bool finite_result = true;
+  for (int j = 0; j < m.nj; ++j)
+    finite_result = finite_result && finite(d.reaction[j].force_n[0]) &&
+                    finite(d.reaction[j].force_n[1]) && finite(d.reaction[j].moment_nm);
   for (int a = 0; a < m.na; ++a) {
     d.act[a].force = -d.lambda[m.m + a];  // F = -lambda_driver: the driver pulls back on the rod
+    finite_result = finite_result && finite(d.act[a].force);
     if (actuator_force) actuator_force[a] = d.act[a].force;
   }
-  return LEGSIM_OK;
+  // loads a float cannot balance: refused, not reported as infinite reactions
+  return finite_result ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
 legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
@@ -76,23 +82,23 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
         d.drivers.rate[a] = d.drivers.accel[a] = 0;
       }
       d.drivers.ncoord = 0;
+      // a grid point that fails leaves nothing behind (state, report)
+      const Snapshot before(d);
       legsim_status s = work_layout(sim, (1u << m.na) - 1);
       VecQ q = d.q;
       if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
       if (s == LEGSIM_OK) {
-        const VecQ keep = d.q;
         d.q = q;
         s = statics_solve(sim, nullptr);
-        if (s != LEGSIM_OK) d.q = keep;
       }
       if (s != LEGSIM_OK) {
+        before.restore(sim);
         ++out->n_failed;
         continue;
       }
       ++out->n_poses;
       for (int k = 0; k < m.nj; ++k) {
-        const real f = std::sqrt(d.reaction[k].force_n[0] * d.reaction[k].force_n[0] +
-                                 d.reaction[k].force_n[1] * d.reaction[k].force_n[1]);
+        const real f = std::hypot(d.reaction[k].force_n[0], d.reaction[k].force_n[1]);
         if (f > out->max_reaction_n[k]) {
           out->max_reaction_n[k] = f;
           for (int a = 0; a < m.na; ++a) out->at_length_m[k][a] = len[a];
@@ -107,7 +113,10 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
       }
     }
   }
-  return out->n_poses > 0 ? LEGSIM_OK : LEGSIM_ERR_UNREACHABLE;
+  if (out->n_poses == 0) return LEGSIM_ERR_UNREACHABLE;
+  for (int k = 0; k < m.nj; ++k)
+    if (!finite(out->max_reaction_n[k])) return LEGSIM_ERR_DIVERGED;
+  return LEGSIM_OK;
 }
 #else
 legsim_status statics_solve(Sim &, real *) { return LEGSIM_ERR_DISABLED; }

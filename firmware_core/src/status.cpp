@@ -5,7 +5,7 @@ extern "C" const char *legsim_status_str(legsim_status s) {
   switch (s) {
     case LEGSIM_OK: return "ok";
     case LEGSIM_ERR_NULL: return "null pointer argument";
-    case LEGSIM_ERR_STORAGE: return "storage too small or misaligned";
+    case LEGSIM_ERR_STORAGE: return "storage too small or misaligned, or not a sim made by legsim_init";
     case LEGSIM_ERR_MODEL: return "invalid model description";
     case LEGSIM_ERR_CAPACITY: return "model exceeds the compile-time capacity";
     case LEGSIM_ERR_BAD_INPUT: return "bad input (NaN/Inf, index or option out of range)";
@@ -16,7 +16,7 @@ extern "C" const char *legsim_status_str(legsim_status s) {
     case LEGSIM_ERR_NO_EQUILIBRIUM: return "no static equilibrium (the locked leg is a mechanism)";
     case LEGSIM_ERR_DISABLED: return "disabled by the scene options or stripped from this build";
     case LEGSIM_ERR_STATE: return "state not valid (not assembled or not finite)";
-    case LEGSIM_ERR_DIVERGED: return "integration diverged (non-finite state)";
+    case LEGSIM_ERR_DIVERGED: return "diverged: a non-finite or absurd result";
   }
   return "unknown status";
 }

@@ -9,6 +9,11 @@
  * Model (constant data, legsim_model_desc) and simulation (state + workspace,
  * legsim_sim) are separate: every analysis is a function of the sim, which
  * holds its compiled model.
+ *
+ * Every call is all or nothing: a call that returns an error leaves the sim
+ * exactly as it found it (state, what the next step starts from, report). On
+ * LEGSIM_OK every output and the report are finite. Inputs are range-checked
+ * (the LEGSIM_MAX_* / LEGSIM_MIN_* ranges below), finite-but-absurd values too.
  */
 #ifndef LEGSIM_LEGSIM_H
 #define LEGSIM_LEGSIM_H
@@ -31,11 +36,44 @@ typedef double legsim_real;
 #define LEGSIM_FRAME (-1)        /* body index of the ground (the robot body) */
 #define LEGSIM_STORAGE_ALIGN 16  /* required alignment of the sim storage, bytes */
 
+/* ---- ranges ---------------------------------------------------------------
+ * Sane magnitudes, inclusive. Outside them a model is refused (legsim_model_check,
+ * LEGSIM_ERR_MODEL; the TOML loader and the code generator give the same ranges),
+ * an option or call input with LEGSIM_ERR_BAD_INPUT, and a result with
+ * LEGSIM_ERR_DIVERGED. They keep every product the solver forms finite in float. */
+/* model description */
+#define LEGSIM_MAX_COORD 1e3          /* |x|, |y| (m), |phi| (rad): points, guesses, pose drivers */
+#define LEGSIM_MAX_GRAVITY_MPS2 1e3   /* |g| per component */
+#define LEGSIM_MIN_LENGTH_M 1e-3      /* body lengths and stroke ends: [MIN, MAX_COORD] m */
+#define LEGSIM_MIN_MASS_KG 1e-3
+#define LEGSIM_MAX_MASS_KG 1e6
+#define LEGSIM_MIN_INERTIA_KGM2 1e-12
+#define LEGSIM_MAX_INERTIA_KGM2 1e6
+#define LEGSIM_MAX_FORCE_N 1e6        /* max_force (and >= LEGSIM_MIN_FORCE_N), loads |F| N and |T| N m */
+#define LEGSIM_MIN_FORCE_N 1e-3
+#define LEGSIM_MAX_STIFFNESS_N_PER_M 1e9  /* servo kp and spring stiffness, >= 0 */
+#define LEGSIM_MAX_DAMPING_NS_PER_M 1e7   /* servo kd and spring damping, >= 0 */
+/* (spring rest lengths: [0, LEGSIM_MAX_COORD] m) */
+/* options */
+#define LEGSIM_MIN_STEP_S 1e-6
+#define LEGSIM_MAX_STEP_S 0.1
+#define LEGSIM_MIN_NEWTON_TOL 1e-15   /* m, rad */
+#define LEGSIM_MAX_NEWTON_TOL 1e-3
+#define LEGSIM_MAX_NEWTON_ITER 1000
+/* state and call inputs */
+#define LEGSIM_MAX_ABS_Q 1e6          /* a state's |x|, |y| (m), |phi| (rad): below */
+#define LEGSIM_MAX_ABS_QD 1e9         /* a state's velocities (m/s, rad/s): below */
+#define LEGSIM_MAX_TIME_S 1e9         /* |t| given to legsim_set_state */
+#define LEGSIM_MAX_RATE_MPS 1e3       /* driven actuator length rates */
+#define LEGSIM_MAX_ACCEL_MPS2 1e6     /* driven actuator length accelerations */
+#define LEGSIM_MAX_GRID 1000          /* legsim_statics_sweep: n_grid in [2, MAX] */
+
 /* ---- status ------------------------------------------------------------ */
 typedef enum legsim_status {
   LEGSIM_OK = 0,
   LEGSIM_ERR_NULL = 1,          /* a required pointer is NULL */
-  LEGSIM_ERR_STORAGE = 2,       /* storage too small or misaligned */
+  LEGSIM_ERR_STORAGE = 2,       /* storage too small or misaligned, or a sim handle that
+                                   legsim_init did not make (every function checks) */
   LEGSIM_ERR_MODEL = 3,         /* model description invalid (legsim_model_check tells why) */
   LEGSIM_ERR_CAPACITY = 4,      /* model exceeds the compile-time capacity */
   LEGSIM_ERR_BAD_INPUT = 5,     /* NaN/Inf, index out of range, or a nonsensical option */
@@ -46,7 +84,9 @@ typedef enum legsim_status {
   LEGSIM_ERR_NO_EQUILIBRIUM = 10, /* statics: the loads cannot be balanced (a free mechanism) */
   LEGSIM_ERR_DISABLED = 11,     /* stripped at compile time or disabled by the scene options */
   LEGSIM_ERR_STATE = 12,        /* state not finite or no pose assembled yet */
-  LEGSIM_ERR_DIVERGED = 13      /* the integrator produced a non-finite or exploding state */
+  LEGSIM_ERR_DIVERGED = 13      /* a step or solve produced a non-finite or absurd result
+                                   (beyond LEGSIM_MAX_ABS_Q / LEGSIM_MAX_ABS_QD, or
+                                   non-finite accelerations, multipliers or reactions) */
 } legsim_status;
 
 const char *legsim_status_str(legsim_status s);
@@ -150,11 +190,12 @@ enum legsim_disable {
 
 typedef struct legsim_options {
   legsim_integrator integrator;
-  double step_s;            /* fixed step h > 0 */
+  double step_s;            /* fixed step h in [LEGSIM_MIN_STEP_S, LEGSIM_MAX_STEP_S] */
   uint32_t disable;         /* legsim_disable flags */
   double rho_inf;           /* generalized-alpha spectral radius at infinity, in [0, 1] */
-  int32_t max_newton_iter;  /* assembly, projection and implicit steps */
-  double newton_tol;        /* on the constraint residual (m, rad) and on corrections */
+  int32_t max_newton_iter;  /* assembly, projection and implicit steps: 1 .. LEGSIM_MAX_NEWTON_ITER */
+  double newton_tol;        /* on the constraint residual (m, rad) and on corrections:
+                               [LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL] */
 } legsim_options;
 
 /* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-6 float). */
@@ -166,10 +207,13 @@ typedef struct legsim_sim legsim_sim; /* opaque */
 size_t legsim_sim_size(void);
 
 /* Compiles the model into storage and assembles nothing yet (see legsim_assemble_pose).
+ * Model and options are checked before the storage is touched; should a later
+ * step fail, the storage holds no sim (other functions refuse it). 
  * The description is kept by pointer (its names and poses are read later): it must
  * outlive the sim and not change (the generated models are const data). */
 legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_model_desc *model,
                           const legsim_options *options, legsim_sim **out);
+/* The same options sent again change nothing; new ones restart both integrators. */
 legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options);
 
 /* ---- sizes and names --------------------------------------------------- */
@@ -182,6 +226,7 @@ int32_t legsim_n_forces(const legsim_sim *sim);
 const legsim_model_desc *legsim_model(const legsim_sim *sim);
 
 /* ---- state ------------------------------------------------------------- */
+/* Never NaN or Inf: a refused call leaves the report as it was. */
 typedef struct legsim_report {
   int32_t iterations;         /* Newton iterations of the last solve */
   legsim_real residual;       /* max |Phi| after the last solve (m or rad) */
@@ -215,7 +260,8 @@ uint64_t legsim_step_count(const legsim_sim *sim);
 legsim_status legsim_get_q(const legsim_sim *sim, legsim_real *q);
 legsim_status legsim_get_qd(const legsim_sim *sim, legsim_real *qd);
 legsim_status legsim_get_qdd(const legsim_sim *sim, legsim_real *qdd);
-/* Sets q and qd (qd may be NULL: zero) and time; does not project. */
+/* Sets q and qd (qd may be NULL: zero) and time; does not project. |q| < LEGSIM_MAX_ABS_Q,
+ * |qd| < LEGSIM_MAX_ABS_QD, |t_s| <= LEGSIM_MAX_TIME_S, else LEGSIM_ERR_BAD_INPUT. */
 legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legsim_real *qd, double t_s);
 
 /* Constraint residual Phi(q) (n_constraints values) and its max-abs norm. */
@@ -239,8 +285,10 @@ legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m);
 legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose);
 
 /* ---- 2. velocity and acceleration analysis ------------------------------- */
-/* For driven actuator length rates (and accelerations), in the current q:
- * solves Phi_q qd = -Phi_t and Phi_q qdd = gamma. Sets qd (and qdd). */
+/* For driven actuator length rates (|rate| <= LEGSIM_MAX_RATE_MPS) and accelerations
+ * (|accel| <= LEGSIM_MAX_ACCEL_MPS2), in the current q: solves Phi_q qd = -Phi_t and
+ * Phi_q qdd = gamma. Sets qd (and qdd). A resulting qd a state may not hold (near a
+ * dead centre) is refused with LEGSIM_ERR_DIVERGED. */
 legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps);
 legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2);
 
@@ -267,13 +315,16 @@ typedef struct legsim_worst_case {
   int32_t n_failed;    /* grid points that could not be assembled (skipped, counted) */
 } legsim_worst_case;
 
-/* Worst-case statics over an n x n grid of the first two actuators' strokes
- * (the paper's Section V). Leaves the sim at the last assembled pose. */
+/* Worst-case statics over an n x n grid (n in [2, LEGSIM_MAX_GRID]) of the first two
+ * actuators' strokes (the paper's Section V). On LEGSIM_OK leaves the sim at the last
+ * pose solved; on an error (no grid point solved: LEGSIM_ERR_UNREACHABLE) changes nothing.
+ * A grid point that fails changes nothing either (it is counted in n_failed). */
 legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst_case *out);
 
 /* ---- 5. forward dynamics ------------------------------------------------- */
-/* Advances n fixed steps with the selected integrator. Stops at the first
- * failing step and returns its status (the state is that of the last good step). */
+/* Advances n fixed steps with the selected integrator. Each step is all or nothing:
+ * the call stops at the first failing step and returns its status, with the state
+ * (and report) of the last good step (legsim_step_count tells how many were made). */
 legsim_status legsim_step(legsim_sim *sim, int32_t n_steps);
 
 /* ---- 6. reactions ---------------------------------------------------------- */
@@ -300,7 +351,8 @@ typedef enum legsim_actuator_mode {
 legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n);
 /* Inside the stroke, else LEGSIM_ERR_OUT_OF_STROKE (nothing changes). */
 legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_real length_m);
-/* Sets a force element's value (point: 2 values N; torque: 1 value N m). */
+/* Sets a force element's value (point: 2 values N; torque: 1 value N m), each
+ * |value| <= LEGSIM_MAX_FORCE_N, else LEGSIM_ERR_BAD_INPUT (nothing changes). */
 legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real *value);
 
 #ifdef __cplusplus
