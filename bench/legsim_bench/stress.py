@@ -3,7 +3,7 @@
     legsim-bench stress [--quick] [--n-steps N] [--out DIR | --update-results]
     python -m legsim_bench.stress [--quick] [--out DIR]        (from bench/)
 
-Driven in-process through :mod:`legsim_bench.core`, for each integrator (RK4 +
+Driven in-process through the legsim Python API (python/legsim), for each integrator (RK4 +
 projection, generalized-alpha) and each build (double, float):
 
 1. Long runs: 10^6 steps at h = 1 ms (1000 s) of the conservative case:

@@ -4,8 +4,8 @@
     python -m legsim_bench.workprecision [--quick] [--out DIR]      (from bench/)
 
 For each integrator of the core (RK4 + projection, generalized-alpha index 3),
-in the double and the float build (driven in-process through the ctypes
-binding :mod:`legsim_bench.core`), and for each peer engine method (Exudyn
+in the double and the float build (driven in-process through the legsim
+Python API, python/legsim), and for each peer engine method (Exudyn
 generalized-alpha and trapezoidal index 2, MuJoCo RK4 and semi-implicit
 Euler, :mod:`legsim_bench.peers`), at each fixed step h from 1e-2 to 1e-5 s:
 
