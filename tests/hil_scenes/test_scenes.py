@@ -1,13 +1,15 @@
-"""Every shipped bench scene (bench/scenes/*.toml), end to end against hil_sim over SocketCAN.
+"""Every scene of scenes/*.toml (and the heavy-shank scene of fixtures/, which names its own
+model file), end to end through the bench: dynamics against hil_sim over SocketCAN, the other
+analyses in legsim_cli (no CAN frames for them), all checked against the reference model.
 
 Needs vcan0 (CAN FD) and a built hil_sim, so it runs inside tools/with-vcan (tools/test.sh):
 
     tools/with-vcan env TMPDIR=/dev/shm python3 -m pytest -q tests/hil_scenes
 
-One hil_sim (from $LEGSIM_HIL_SIM, else build/host/hil_sim/hil_sim) and one CAN link for
-the module; each scene RESETs its own session, is recorded, then checked against the
-bench's reference model exactly as `legsim-bench run` does (no plots: matplotlib stays out
-of the VM). Recordings and the check tables go to $LEGSIM_SCENES_OUT (default
+One hil_sim per model (from $LEGSIM_HIL_SIM, else build/host/hil_sim/hil_sim; with
+--model FILE for a scene's own model) and one CAN link for the module; each scene RESETs its
+own session, is recorded, then checked against the bench's reference model exactly as
+`legsim-bench run` does (no plots: matplotlib stays out of the VM). Recordings and the check tables go to $LEGSIM_SCENES_OUT (default
 out/hil_scenes/ in the repository) for `legsim-bench check` on the host, where the plots
 are cheap.
 
@@ -34,7 +36,9 @@ from legsim_bench.scene import load_scene, shipped_scenes  # noqa: E402
 
 CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
 REQUIRE = os.environ.get("LEGSIM_HIL_REQUIRE") == "1"
+FIXTURES = Path(__file__).resolve().parent / "fixtures"
 SCENES = [p.stem for p in shipped_scenes(ROOT)]
+OWN_MODEL = FIXTURES / "heavy_shank_free_fall.toml"   # models/heavy_shank.toml: shank + 2 kg
 
 
 def _skip_or_fail(reason: str):
@@ -54,47 +58,95 @@ def out_dir() -> Path:
     return d
 
 
-@pytest.fixture(scope="module")
-def link(out_dir):
-    problem = vcan_problem()
-    if problem:
-        _skip_or_fail(problem)
-    from legsim_bench.runner import HilProcess, hil_sim_path
+class Hil:
+    """hil_sim for the scene's model (restarted with --model FILE when it changes) and one link."""
 
-    binary = hil_sim_path(ROOT)
-    if not binary.is_file():
-        _skip_or_fail(f"{binary} not built (cmake --preset host && cmake --build --preset host)")
-    with HilProcess(CHANNEL, binary, log_path=out_dir / "hil_sim.log") as hil:
+    def __init__(self, out_dir: Path):
+        self.out_dir, self.proc, self.link, self.args = out_dir, None, None, None
+
+    def for_scene(self, sc):
         from legsim_bench.can_link import HilLink
+        from legsim_bench.runner import HilProcess, hil_sim_path
 
-        with HilLink(interface="socketcan", channel=CHANNEL, dbc=ROOT / "can" / "legsim.dbc",
-                     timeout=10.0) as lk:
+        if not sc.over_can:
+            return None                      # legsim_cli: no bus
+        if self.proc is None or self.args != sc.hil_args():
+            problem = vcan_problem()
+            if problem:
+                _skip_or_fail(problem)
+            binary = hil_sim_path(ROOT)
+            if not binary.is_file():
+                _skip_or_fail(f"{binary} not built (cmake --preset host && cmake --build --preset host)")
+            self.close_proc()
+            self.proc = HilProcess.for_scene(sc, CHANNEL, binary, self.out_dir / "hil_sim.log").__enter__()
+            self.args = sc.hil_args()
+            if self.link is None:
+                self.link = HilLink(interface="socketcan", channel=CHANNEL, dbc=ROOT / "can" / "legsim.dbc",
+                                    timeout=10.0).__enter__()
             try:
-                lk.heartbeat(timeout=10.0)
+                self.link.heartbeat(timeout=10.0)
             except Exception as e:  # noqa: BLE001
-                pytest.fail(f"hil_sim did not come up on {CHANNEL}: {e}\n{hil.log()}")
-            yield lk
-        assert hil.proc.poll() is None, f"hil_sim died: {hil.log()}"
+                pytest.fail(f"hil_sim {' '.join(self.args)} did not come up on {CHANNEL}: {e}\n{self.proc.log()}")
+        return self.link
+
+    def close_proc(self):
+        if self.proc is not None:
+            alive = self.proc.proc.poll() is None
+            log = self.proc.log()
+            self.proc.stop()
+            self.proc = None
+            assert alive, f"hil_sim died: {log}"
+
+
+@pytest.fixture(scope="module")
+def hil(out_dir):
+    h = Hil(out_dir)
+    yield h
+    h.close_proc()
+    if h.link is not None:
+        h.link.__exit__(None, None, None)
 
 
 def test_shipped_scenes_exist():
-    assert len(SCENES) >= 7, SCENES
+    assert len(SCENES) >= 12, SCENES
 
 
-@pytest.mark.parametrize("name", SCENES)
-def test_scene(name, link, out_dir):
+def _run(spec, hil, out_dir):
     from legsim_bench.checks import evaluate
     from legsim_bench.report import format_table, write_outputs
     from legsim_bench.runner import record, save_recording
 
-    sc = load_scene(name, ROOT)
-    rec = record(sc, link, progress=False)
+    sc = load_scene(spec, ROOT)
+    rec = record(sc, hil.for_scene(sc), progress=False)
     d = out_dir / sc.name
     save_recording(rec, d / "recording.json")
-    assert rec["complete"], f"{name}: run did not complete: {rec['errors']}"
+    assert rec["complete"], f"{sc.name}: run did not complete: {rec['errors']}"
     ev = evaluate(rec, ROOT)
     write_outputs(ev, d)
     table = format_table(ev)
     (d / "table.txt").write_text(table + "\n")
     print(table)
     assert ev.passed, "\n" + table
+    return rec
+
+
+@pytest.mark.parametrize("name", SCENES)
+def test_scene(name, hil, out_dir):
+    _run(name, hil, out_dir)
+
+
+def test_a_scene_with_its_own_model_file_runs_on_hil_sim_and_differs_from_the_stock_leg(hil, out_dir):
+    """heavy_shank_free_fall: hil_sim --model models/heavy_shank.toml, checked against the
+    reference built from the same file (positions within 1e-5 m); the stock leg's free fall,
+    from the same pose with the same commands, is another motion (far more than 1e-5 m)."""
+    import numpy as np
+
+    heavy = _run(OWN_MODEL, hil, out_dir)
+    stock = _run("free_fall", hil, out_dir)
+    qh = np.array([s["q"] for s in heavy["samples"]])
+    qs = np.array([s["q"] for s in stock["samples"]])
+    assert qh.shape == qs.shape
+    assert np.max(np.abs(qh[0] - qs[0])) < 1e-6          # the same stand pose to start
+    xy = np.delete(np.arange(18), np.s_[2::3])
+    # then another motion: at the end 100x the position tolerance apart (legsim_cli: 2.0 mm in x)
+    assert np.max(np.abs(qh[-1, xy] - qs[-1, xy])) > 100 * 1e-5
