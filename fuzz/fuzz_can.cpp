@@ -1,0 +1,273 @@
+// Fuzz target: hil_sim's CAN frame handling (protocol + controller + session on the real
+// core), frames in memory, no socket.
+//
+// The input is a sequence of operations (fuzz/README.md, "The CAN input format"):
+//   op byte: bits 0-1 what, bits 2-7 milliseconds the clock advances first
+//     0 frame:     id selector, flags, len, then len payload bytes (zeros past the end)
+//                  selector < 0xF0: one of kIds; else a raw id in the next 4 bytes (LE)
+//                  flags: bit 0 extended id, bit 1 RTR, bit 2 classic CAN (else FD)
+//     1 work:      one byte n: Controller::work(n + 1) (a slice of a STEP in progress)
+//     2 rt tick:   Controller::rt_tick(now)
+//     3 heartbeat: fill_heartbeat + encode_heartbeat
+// A STEP's Ctrl_NSteps inside the DBC's range is reduced to 1..kMaxStepsPerFrame (the
+// value is still valid; out-of-range values are left for the validation to refuse), and at
+// most kMaxTicks real-time ticks run per input: the run stays short.
+//
+// Invariants (a violation aborts, which libFuzzer records as a crash):
+// - every frame hil_sim sends is one of its DBC messages, 11-bit id, CAN FD, 64 bytes, and
+//   every signal is inside its DBC range (finite), except where the DBC says otherwise
+//   (Fault_Value of a NOT_FINITE fault is the offending NaN/Inf);
+// - samples go out whole: ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS;
+// - a rejected frame is answered with exactly one FAULT and changes nothing: a twin
+//   controller that never sees the rejected frames sends the same samples (bit for bit,
+//   but for the fault bit and last-fault code of ST_STATUS) and the same solver and
+//   timeout faults.
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "controller.h"
+#include "protocol.h"
+#include "session.h"
+
+extern "C" {
+#include "can_tx_checks.h"
+#include "legsim_can.h"
+#include "legsim_can_layout.h"
+}
+
+namespace {
+
+constexpr uint32_t kMaxStepsPerFrame = 64;
+constexpr int kMaxTicks = 256;
+
+const uint32_t kIds[] = {
+    LEGSIM_CAN_CONTROL_FRAME_ID,  LEGSIM_CAN_ACT_CMD_FRAME_ID,   LEGSIM_CAN_LOAD_CMD_FRAME_ID,
+    LEGSIM_CAN_CONTROL_FRAME_ID,  LEGSIM_CAN_ACT_CMD_FRAME_ID,   LEGSIM_CAN_LOAD_CMD_FRAME_ID,
+    LEGSIM_CAN_FAULT_FRAME_ID,    LEGSIM_CAN_ST_POS_FRAME_ID,    LEGSIM_CAN_ST_STATUS_FRAME_ID,
+    LEGSIM_CAN_HEARTBEAT_FRAME_ID, 0x000u,                       0x7ffu,
+    0x123u};
+constexpr size_t kNIds = sizeof kIds / sizeof kIds[0];
+
+[[noreturn]] void violated(const char *what, const std::string &detail) {
+  std::fprintf(stderr, "fuzz_can: invariant violated: %s: %s\n", what, detail.c_str());
+  std::abort();
+}
+
+class Recorder : public hil::FrameSink {
+ public:
+  bool send(const hil::Frame &f) override {
+    frames.push_back(f);
+    return true;
+  }
+  std::vector<hil::Frame> take() {
+    std::vector<hil::Frame> out;
+    out.swap(frames);
+    return out;
+  }
+  std::vector<hil::Frame> frames;
+};
+
+struct Rig {
+  hil::Session session;
+  Recorder rec;
+  hil::Controller ctl;
+  Rig() : ctl(session, rec, hil::ControllerConfig{}) {
+    std::string err;
+    if (!session.init(&err)) violated("session init", err);
+  }
+};
+
+std::string hex_id(uint32_t id) {
+  char b[16];
+  std::snprintf(b, sizeof b, "0x%x", id);
+  return b;
+}
+
+// A frame sent by hil_sim, against the DBC.
+void check_tx_frame(const hil::Frame &f) {
+  if (f.extended || f.rtr || !f.fd || f.len != hil::kFdPayload)
+    violated("sent frame format", hex_id(f.id) + " len " + std::to_string(f.len));
+  can_tx_signal sig[32];
+  const int n = can_tx_check(f.id, f.data, f.len, sig, 32);
+  if (n < 0) violated("sent frame", hex_id(f.id) + " is not a frame hil_sim sends (or does not unpack)");
+  if (n > 32) violated("sent frame", "more signals than the check holds");
+  const bool not_finite_fault = f.id == LEGSIM_CAN_FAULT_FRAME_ID &&
+                                sig[0].value == static_cast<double>(hil::FaultCode::kNotFinite);
+  for (int i = 0; i < n; ++i) {
+    if (sig[i].in_range) continue;
+    if (not_finite_fault && std::strcmp(sig[i].name, "Fault_Value") == 0 && !std::isfinite(sig[i].value))
+      continue;  // the DBC: "may be NaN/Inf for NOT_FINITE"
+    char v[64];
+    std::snprintf(v, sizeof v, "%.17g", sig[i].value);
+    violated("sent signal outside its DBC range", std::string(sig[i].name) + " = " + v);
+  }
+}
+
+// Checks a stream of sent frames (format, ranges, whole samples) and returns what the
+// twin comparison looks at: samples with the fault bookkeeping masked, and the faults that
+// are not rejections (solver, command timeout) without their counter.
+std::vector<std::vector<uint8_t>> checked(const std::vector<hil::Frame> &frames, int *sample_pos) {
+  std::vector<std::vector<uint8_t>> out;
+  for (const hil::Frame &f : frames) {
+    check_tx_frame(f);
+    const bool in_sample = f.id >= LEGSIM_CAN_ST_POS_FRAME_ID && f.id <= LEGSIM_CAN_ST_STATUS_FRAME_ID;
+    if (in_sample) {
+      if (f.id != LEGSIM_CAN_ST_POS_FRAME_ID + static_cast<uint32_t>(*sample_pos))
+        violated("sample frames out of order", hex_id(f.id) + " at position " + std::to_string(*sample_pos));
+      *sample_pos = (*sample_pos + 1) % hil::kSampleFrames;
+    } else if (*sample_pos != 0) {
+      violated("sample interrupted", hex_id(f.id) + " inside a sample");
+    }
+    std::vector<uint8_t> key(f.data, f.data + f.len);
+    key.insert(key.begin(), {static_cast<uint8_t>(f.id >> 8), static_cast<uint8_t>(f.id)});
+    if (f.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) {
+      legsim_can_st_status_t m;
+      legsim_can_st_status_unpack(&m, f.data, f.len);
+      m.st_status &= static_cast<uint16_t>(~hil::kStatusFault);
+      m.st_last_fault = 0;
+      legsim_can_st_status_pack(key.data() + 2, &m, f.len);
+    } else if (f.id == LEGSIM_CAN_FAULT_FRAME_ID) {
+      legsim_can_fault_t m;
+      legsim_can_fault_unpack(&m, f.data, f.len);
+      m.fault_count = 0;
+      legsim_can_fault_pack(key.data() + 2, &m, f.len);
+    }
+    out.push_back(key);
+  }
+  return out;
+}
+
+bool is_rejection(const std::vector<hil::Frame> &frames) {
+  if (frames.size() != 1 || frames[0].id != LEGSIM_CAN_FAULT_FRAME_ID) return false;
+  const uint8_t code = frames[0].data[0];  // Fault_Code: bits 0..7
+  return code >= static_cast<uint8_t>(hil::FaultCode::kUnknownId) &&
+         code <= static_cast<uint8_t>(hil::FaultCode::kBadState);
+}
+
+class Reader {
+ public:
+  Reader(const uint8_t *d, size_t n) : d_(d), n_(n) {}
+  bool more() const { return i_ < n_; }
+  uint8_t byte() { return i_ < n_ ? d_[i_++] : 0; }
+
+ private:
+  const uint8_t *d_;
+  size_t n_, i_ = 0;
+};
+
+hil::Frame read_frame(Reader &r) {
+  hil::Frame f;
+  const uint8_t sel = r.byte();
+  if (sel < 0xF0) {
+    f.id = kIds[sel % kNIds];
+  } else {
+    uint32_t id = 0;
+    for (int k = 0; k < 4; ++k) id |= static_cast<uint32_t>(r.byte()) << (8 * k);
+    f.id = id;
+  }
+  const uint8_t flags = r.byte();
+  f.extended = flags & 1;
+  f.rtr = flags & 2;
+  f.fd = !(flags & 4);
+  f.id &= f.extended ? 0x1fffffffu : 0x7ffu;  // what SocketCAN can deliver
+  f.len = static_cast<uint8_t>(r.byte() % (hil::kFdPayload + 1));
+  for (int k = 0; k < f.len; ++k) f.data[k] = r.byte();
+  // A STEP within the DBC's range stays valid but short.
+  if (f.id == LEGSIM_CAN_CONTROL_FRAME_ID && !f.extended && f.fd && f.len == hil::kFdPayload &&
+      f.data[LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_BIT / 8] == LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE) {
+    uint8_t *p = f.data + LEGSIM_CAN_CONTROL_CTRL_N_STEPS_START_BIT / 8;
+    uint32_t n = static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
+                 static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
+    if (legsim_can_control_ctrl_n_steps_is_in_range(n) && n > kMaxStepsPerFrame) {
+      n = 1 + (n - 1) % kMaxStepsPerFrame;
+      for (int k = 0; k < 4; ++k) p[k] = static_cast<uint8_t>(n >> (8 * k));
+    }
+  }
+  return f;
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  Rig a, b;  // a gets every frame; b never sees the frames a rejects
+  int pos_a = 0, pos_b = 0;
+  std::vector<std::vector<uint8_t>> seen_a, seen_b;
+  auto collect = [](Rig &rig, int *pos, std::vector<std::vector<uint8_t>> &seen) {
+    for (auto &k : checked(rig.rec.take(), pos)) seen.push_back(std::move(k));
+  };
+  Reader r(data, size);
+  int64_t now_ns = 0;
+  int ticks = 0;
+  uint32_t hb_counter = 0;
+  while (r.more()) {
+    const uint8_t op = r.byte();
+    now_ns += static_cast<int64_t>(op >> 2) * 1000000;
+    switch (op & 3) {
+      case 0: {
+        const hil::Frame f = read_frame(r);
+        // The STEP before the frame is finished first (on_frame does so too): the frame's
+        // own answer is then all that a.rec holds.
+        a.ctl.finish_step();
+        b.ctl.finish_step();
+        collect(a, &pos_a, seen_a);
+        collect(b, &pos_b, seen_b);
+        a.ctl.on_frame(f, now_ns);
+        std::vector<hil::Frame> reply = a.rec.take();
+        const bool rejected = is_rejection(reply);
+        for (const hil::Frame &g : reply) {
+          if (g.id == LEGSIM_CAN_FAULT_FRAME_ID && reply.size() != 1)
+            violated("a FAULT with other frames", "for frame " + hex_id(f.id));
+        }
+        for (auto &k : checked(reply, &pos_a))
+          if (!rejected) seen_a.push_back(std::move(k));
+        if (!rejected) b.ctl.on_frame(f, now_ns);
+        collect(b, &pos_b, seen_b);
+        break;
+      }
+      case 1: {
+        const uint64_t n = static_cast<uint64_t>(r.byte()) + 1;
+        a.ctl.work(n);
+        b.ctl.work(n);
+        break;
+      }
+      case 2:
+        if (++ticks > kMaxTicks) break;
+        a.ctl.rt_tick(now_ns);
+        b.ctl.rt_tick(now_ns);
+        break;
+      case 3: {
+        hil::HeartbeatInfo hb;
+        hb.counter = hb_counter++;
+        a.ctl.fill_heartbeat(&hb);
+        hil::Frame f;
+        hil::encode_heartbeat(hb, &f);
+        check_tx_frame(f);
+        break;
+      }
+    }
+    collect(a, &pos_a, seen_a);
+    collect(b, &pos_b, seen_b);
+  }
+  a.ctl.finish_step();
+  b.ctl.finish_step();
+  collect(a, &pos_a, seen_a);
+  collect(b, &pos_b, seen_b);
+  if (pos_a != 0) violated("sample cut short", "the input's last sample is incomplete");
+  if (seen_a != seen_b) {
+    size_t i = 0;
+    while (i < seen_a.size() && i < seen_b.size() && seen_a[i] == seen_b[i]) ++i;
+    violated("a rejected frame changed something",
+             "sent frame " + std::to_string(i) + " differs from the twin's (" +
+                 std::to_string(seen_a.size()) + " vs " + std::to_string(seen_b.size()) + " frames)");
+  }
+  // Shutdown: the safe state, and whatever it sends, is valid too.
+  a.ctl.shutdown();
+  collect(a, &pos_a, seen_a);
+  return 0;
+}

@@ -1,0 +1,148 @@
+// Fuzz target: the scene loader (firmware_core/host/scene_toml.cpp), TOML text in.
+//
+// The text is written to a scratch file (load_scene reads a path), read and checked,
+// bound against the compiled-in leg (the scene's variant if the leg has it, else the
+// revolute knee; a model file named by the scene is not read), written out resolved, and
+// run on a short horizon (at most kMaxSteps steps, a statics grid of at most kMaxGrid):
+// - every input gives true or false with a message, never a crash or undefined behaviour;
+// - a scene that loads is accepted within the documented ranges (step counts, record
+//   interval): the run is streamed sample by sample (the 1e9-step regression);
+// - every sample of a run is finite (the C API's "never NaN on OK").
+#include <unistd.h>
+
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <sstream>
+#include <string>
+
+#include "legsim/legsim.h"
+#include "legsim/models.h"
+#include "scene_toml.hpp"
+
+namespace {
+
+constexpr int64_t kMaxSteps = 100;
+constexpr int32_t kMaxGrid = 4;
+
+[[noreturn]] void violated(const std::string &what) {
+  std::fprintf(stderr, "fuzz_scene: invariant violated: %s\n", what.c_str());
+  std::abort();
+}
+
+// A scratch file of this process (libFuzzer's -jobs/-fork run several processes), removed
+// at exit. Kept in static char arrays: they outlive the exit handlers.
+char g_scratch_dir[4096], g_scratch_file[4200];
+
+void remove_scratch() {
+  std::remove(g_scratch_file);
+  rmdir(g_scratch_dir);
+}
+
+const char *scratch_path() {
+  if (g_scratch_file[0] == '\0') {
+    const char *tmp = std::getenv("TMPDIR");
+    std::snprintf(g_scratch_dir, sizeof g_scratch_dir, "%s/legsim_fuzz_scene.XXXXXX",
+                  tmp && *tmp ? tmp : "/tmp");
+    if (!mkdtemp(g_scratch_dir)) violated("cannot make a scratch directory");
+    std::snprintf(g_scratch_file, sizeof g_scratch_file, "%s/scene.toml", g_scratch_dir);
+    std::atexit(remove_scratch);
+  }
+  return g_scratch_file;
+}
+
+void finite(double x, const std::string &what) {
+  if (!std::isfinite(x)) violated("sample " + what + " = " + std::to_string(x));
+}
+void finite(const std::vector<double> &v, const std::string &what) {
+  for (size_t i = 0; i < v.size(); ++i) finite(v[i], what + "[" + std::to_string(i) + "]");
+}
+
+// The CLI's two writers, and the checks, on every sample.
+class CheckingWriter : public legsim_host::ResultWriter {
+ public:
+  CheckingWriter(const legsim_host::Scene &s, const legsim_model_desc &m)
+      : json_(out_, s, m), csv_(out_, s, m) {}
+  void begin() override {
+    json_.begin();
+    csv_.begin();
+  }
+  void sample(const legsim_host::Sample &s) override {
+    ++n_;
+    finite(s.t, "t");
+    finite(s.q, "q");
+    finite(s.length, "length");
+    finite(s.rate, "rate");
+    finite(s.force, "force");
+    finite(s.reaction, "reaction");
+    finite(s.foot[0], "foot x");
+    finite(s.foot[1], "foot y");
+    finite(s.residual, "residual");
+    finite(s.condition, "condition");
+    json_.sample(s);
+    csv_.sample(s);
+    out_.str("");  // streamed: nothing is kept
+  }
+  void end(const legsim_host::Result &r) override {
+    if (r.status == LEGSIM_OK && !r.error.empty()) violated("OK with an error message: " + r.error);
+    if (r.status != LEGSIM_OK && r.error.empty()) violated("a failed run without a message");
+    if (r.n_samples != n_) violated("n_samples differs from the samples written");
+    json_.end(r);
+    csv_.end(r);
+  }
+
+ private:
+  std::ostringstream out_;
+  legsim_host::JsonWriter json_;
+  legsim_host::CsvWriter csv_;
+  int64_t n_ = 0;
+};
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  const std::string path = scratch_path();
+  FILE *f = std::fopen(path.c_str(), "wb");
+  if (!f) violated("cannot write the scratch file " + path);
+  if (size > 0 && std::fwrite(data, 1, size, f) != size) violated("short write to " + path);
+  std::fclose(f);
+
+  legsim_host::Scene scene;
+  std::string err;
+  if (!legsim_host::load_scene(path, scene, err)) {
+    if (err.empty()) violated("load_scene refused without a message");
+    return 0;
+  }
+  if (!err.empty()) violated("load_scene accepted with a message: " + err);
+  // The documented ranges (scenes/README.md): 1 .. 1e9 steps, record_every 1 .. 1e7.
+  if (scene.n_steps < 0 || scene.n_steps > 1000000000) violated("n_steps out of range");
+  if (scene.record_every < 1 || scene.record_every > 10000000) violated("record_every out of range");
+
+  const legsim_model_desc *model = &legsim_model_leg_revolute;
+  for (int32_t v = 0; v < legsim_model_leg_variant_count; ++v)
+    if (scene.variant == legsim_model_leg_variants[v].name) model = legsim_model_leg_variants[v].model;
+  if (!legsim_host::bind_scene(scene, *model, err)) {
+    if (err.empty()) violated("bind_scene refused without a message");
+    return 0;
+  }
+  std::ostringstream resolved;
+  legsim_host::write_resolved(resolved, scene, *model);
+
+  // A short horizon: the loader's job is checked above; the run shows it streams.
+  if (scene.n_steps > kMaxSteps) scene.n_steps = kMaxSteps;
+  if (scene.grid > kMaxGrid) scene.grid = kMaxGrid;
+  CheckingWriter writer(scene, *model);
+  legsim_host::Result result;
+  const legsim_status st = legsim_host::run_scene(scene, *model, writer, result);
+  if (st != result.status) violated("run_scene's status differs from result.status");
+  if (result.has_worst_case) {
+    for (int32_t j = 0; j < model->n_joints; ++j) {
+      finite(result.worst.max_reaction_n[j], "worst-case reaction");
+    }
+    for (int32_t a = 0; a < model->n_actuators; ++a)
+      finite(result.worst.max_actuator_force_n[a], "worst-case actuator force");
+  }
+  return 0;
+}

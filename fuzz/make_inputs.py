@@ -1,0 +1,166 @@
+#!/usr/bin/env python3
+"""Fuzz inputs made at build time (nothing large is committed):
+
+  can-seeds DBC OUTDIR    seed sequences for fuzz_can, frames encoded from can/legsim.dbc
+                          with cantools (the input format: fuzz/README.md)
+  deep-keys OUTDIR        issue 10's stack overflow in toml++ 3.3.0: a key and a table
+                          header of 50,000 dotted parts (about 100 KB each), as a model
+                          file and as a scene file
+
+Files are rewritten only when their content changes (no needless rebuilds of tests).
+"""
+import argparse
+import math
+import os
+import struct
+import sys
+
+# fuzz_can.cpp's kIds: the selector of a frame's id
+SEL = {'CONTROL': 0, 'ACT_CMD': 1, 'LOAD_CMD': 2, 'FAULT': 6, 'ST_POS': 7, 'HEARTBEAT': 9,
+       'UNKNOWN': 12}
+RESET, STEP, START_RT, STOP_RT = 1, 2, 3, 4
+KEEP, FORCE, LENGTH = 0, 1, 2
+
+
+def write_if_changed(path, data):
+    try:
+        with open(path, 'rb') as f:
+            if f.read() == data:
+                return
+    except OSError:
+        pass
+    with open(path, 'wb') as f:
+        f.write(data)
+
+
+class Seq:
+    """One fuzz_can input: operations as fuzz_can.cpp reads them."""
+
+    def __init__(self, db):
+        self.db = db
+        self.out = bytearray()
+
+    def op(self, what, ms=0):
+        assert 0 <= ms < 64
+        self.out.append((ms << 2) | what)
+
+    def frame(self, name, signals=None, ms=0, flags=0, length=64, raw_id=None, payload=None):
+        self.op(0, ms)
+        if raw_id is not None:
+            self.out += bytes([0xF0]) + struct.pack('<I', raw_id)
+        else:
+            self.out.append(SEL[name])
+        self.out += bytes([flags, length])
+        if payload is None:
+            msg = self.db.get_message_by_name(name)
+            full = {s.name: 0 for s in msg.signals}
+            full.update(signals or {})
+            payload = msg.encode(full, strict=False, padding=False)
+        self.out += bytes(payload[:length]).ljust(length, b'\0')
+        return self
+
+    def control(self, seq, command, ms=0, **kw):
+        sig = {'Ctrl_Seq': seq, 'Ctrl_Command': command, 'Ctrl_StepSize': 1000000,
+               'Ctrl_NSteps': 1, 'Ctrl_RtStepsPerTick': 1}
+        sig.update({f'Ctrl_{k}': v for k, v in kw.items()})
+        return self.frame('CONTROL', sig, ms)
+
+    def act(self, seq, mode_u, sp_u, mode_l=KEEP, sp_l=0.0, ms=0):
+        return self.frame('ACT_CMD', {'Act_Seq': seq, 'Act_Mode_upper': mode_u,
+                                      'Act_Setpoint_upper': sp_u, 'Act_Mode_lower': mode_l,
+                                      'Act_Setpoint_lower': sp_l}, ms)
+
+    def load(self, seq, index, v1, v2=0.0, ms=0):
+        return self.frame('LOAD_CMD', {'Load_Seq': seq, 'Load_Index': index, 'Load_Value1': v1,
+                                       'Load_Value2': v2}, ms)
+
+    def work(self, n):
+        self.op(1)
+        self.out.append(n - 1)
+        return self
+
+    def tick(self, ms=1):
+        self.op(2, ms)
+        return self
+
+    def heartbeat(self, ms=0):
+        self.op(3, ms)
+        return self
+
+
+def can_seeds(db):
+    S = lambda: Seq(db)  # noqa: E731
+    nan, inf = math.nan, math.inf
+    return {
+        'reset_step': S().control(1, RESET).control(2, STEP, NSteps=25).heartbeat(),
+        'force_and_length': S().control(1, RESET).act(1, FORCE, 200.0, LENGTH, 0.5)
+        .control(2, STEP, NSteps=20).act(2, LENGTH, 0.6, FORCE, -100.0)
+        .control(3, STEP, NSteps=20).heartbeat(),
+        'slot_generalized_alpha': S().control(1, RESET, Variant=1, Integrator=1, ActInit=1)
+        .control(2, STEP, NSteps=30).heartbeat(),
+        'use_lengths': S().control(1, RESET, UseLengths=1, Length_upper=0.6, Length_lower=0.5)
+        .control(2, STEP, NSteps=5),
+        'load_foot': S().control(1, RESET).load(1, 0, 300.0, -50.0).control(2, STEP, NSteps=10),
+        'disable_flags': S().control(1, RESET, Disable=63, StepSize=100000)
+        .control(2, STEP, NSteps=10),
+        'realtime': S().control(1, RESET).control(2, START_RT, RtStepsPerTick=2, RtDecimation=3)
+        .tick().tick().tick().act(1, FORCE, 50.0).tick().tick().tick().heartbeat()
+        .control(3, STOP_RT),
+        'realtime_timeout': S().control(1, RESET, CmdTimeout=5).control(2, START_RT)
+        .act(1, FORCE, 10.0).tick(2).tick(10).tick(10).control(3, STOP_RT),
+        'lockstep_timeout': S().control(1, RESET, CmdTimeout=3).act(1, LENGTH, 0.6)
+        .control(2, STEP, NSteps=10).heartbeat(),
+        'sliced_step': S().control(1, RESET).control(2, STEP, NSteps=50).work(3).work(7)
+        .heartbeat().act(1, FORCE, 20.0).control(3, STEP, NSteps=40).work(1),
+        'bad_frames': S().control(1, STEP, NSteps=5).act(1, FORCE, 1.0).control(1, RESET)
+        .act(1, FORCE, nan).act(2, KEEP, 0.0, LENGTH, inf).act(3, FORCE, 1e5)
+        .act(4, LENGTH, 5.0).load(1, 3, 1.0).control(1, STEP, NSteps=5)
+        .control(2, STEP, NSteps=0).control(3, 9).control(4, RESET, Pose=1, Variant=1)
+        .frame('ACT_CMD', {'Act_Seq': 9, 'Act_Mode_upper': FORCE, 'Act_Setpoint_upper': 1.0},
+               flags=4, length=8)
+        .frame('ACT_CMD', {'Act_Seq': 10}, flags=1)
+        .frame('ACT_CMD', {'Act_Seq': 11}, length=48)
+        .frame('UNKNOWN', payload=b'\xff' * 64)
+        .frame('ST_POS', payload=b'\x01' * 64)
+        .frame(None, raw_id=0x1234567, flags=1, payload=b'\0' * 64)
+        .control(5, STEP, NSteps=3),
+    }
+
+
+def deep_keys(outdir, parts):
+    key = '.'.join(['a'] * parts)
+    files = {
+        'model_dotted_key_50000.toml': f'name = "x"\n{key} = 1\n',
+        'model_dotted_table_50000.toml': f'name = "x"\n[{key}]\nz = 1\n',
+        'scene_dotted_key_50000.toml': f'analysis = "statics"\n{key} = 1\n',
+        'scene_dotted_table_50000.toml': f'analysis = "statics"\n[{key}]\nz = 1\n',
+    }
+    for name, text in files.items():
+        sub = os.path.join(outdir, name.split('_', 1)[0])
+        os.makedirs(sub, exist_ok=True)
+        write_if_changed(os.path.join(sub, name), text.encode())
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest='cmd', required=True)
+    c = sub.add_parser('can-seeds')
+    c.add_argument('dbc')
+    c.add_argument('outdir')
+    d = sub.add_parser('deep-keys')
+    d.add_argument('outdir')
+    d.add_argument('--parts', type=int, default=50000)
+    args = ap.parse_args()
+    if args.cmd == 'can-seeds':
+        import cantools
+        db = cantools.database.load_file(args.dbc, strict=True)
+        os.makedirs(args.outdir, exist_ok=True)
+        for name, seq in can_seeds(db).items():
+            write_if_changed(os.path.join(args.outdir, name + '.bin'), bytes(seq.out))
+    else:
+        deep_keys(args.outdir, args.parts)
+    return 0
+
+
+if __name__ == '__main__':
+    sys.exit(main())
