@@ -115,6 +115,7 @@ class Status(enum.IntFlag):
     HALTED = 1 << 7
     FAULT = 1 << 8
     CMD_WATCHDOG = 1 << 9
+    STEPPING = 1 << 10  # heartbeats only: a STEP is being worked
 
 
 # legsim_disable flags for reset(disable=...)

@@ -30,7 +30,7 @@ __all__ = ["Leg", "CheckResult", "Evaluation", "evaluate", "reference_run", "con
 # St_Status bits (can/legsim.dbc)
 STATUS_BITS = {"ASSEMBLED": 0, "REALTIME": 1, "SAFE_STATE": 2, "STROKE_MIN": 3, "STROKE_MAX": 4,
                "FORCE_SATURATED": 5, "NEAR_SINGULAR": 6, "HALTED": 7, "FAULT": 8,
-               "CMD_WATCHDOG": 9}
+               "CMD_WATCHDOG": 9, "STEPPING": 10}
 
 
 def u(phi):
