@@ -7,6 +7,7 @@
 // toml++ may throw (toml::parse_error); so does this file internally (Fail) to keep
 // the port close to the Python. Everything is caught at the C boundary.
 #include "model_toml.hpp"
+#include "toml_limits.hpp"
 
 #include <algorithm>
 #include <cerrno>
@@ -15,7 +16,6 @@
 #include <cstring>
 #include <fstream>
 #include <new>
-#include <sstream>
 #include <string>
 #include <tuple>
 #include <utility>
@@ -159,6 +159,19 @@ double get_nonnegative(Table t, const std::string &key, const std::string &label
   return x;
 }
 
+// The sane ranges of legsim.h (LEGSIM_MAX_* / LEGSIM_MIN_*), with model_codegen.py's message.
+double ranged(double x, double lo, double hi, const std::string &key, const std::string &label) {
+  if (!(x >= lo && x <= hi))
+    fail(label, q(key) + " must be in [" + g(lo) + ", " + g(hi) + "] (got " + g(x) + ")");
+  return x;
+}
+
+std::vector<double> ranged_vec(std::vector<double> v, double lo, double hi, const std::string &key,
+                               const std::string &label) {
+  for (double x : v) ranged(x, lo, hi, key, label);
+  return v;
+}
+
 std::vector<double> as_vec(Node v, size_t n, const std::string &key, const std::string &label) {
   const toml::array *a = v ? v->as_array() : nullptr;
   bool ok = a && a->size() == n;
@@ -234,7 +247,8 @@ struct Ctx {
     const double half = bodies[body].length / 2.0;
     if (end == "proximal") return {-half, 0.0};
     if (end == "distal") return {half, 0.0};
-    return as_vec(at_value, 2, "at", label);
+    return ranged_vec(as_vec(at_value, 2, "at", label), -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "at",
+                      label);
   }
 
   std::vector<double> frame_point(Table t, const std::string &label) const {
@@ -379,13 +393,16 @@ legsim_force_desc parse_force(const Ctx &ctx, const std::string &name, Table t) 
     auto bp = single_point(ctx, t, label);
     f.body[0] = bp.first;
     set_point(f.point[0], bp.second);
-    if (has(t, "value")) set_point(f.value, get_vec(t, "value", 2, label));
+    if (has(t, "value"))
+      set_point(f.value, ranged_vec(get_vec(t, "value", 2, label), -LEGSIM_MAX_FORCE_N,
+                                    LEGSIM_MAX_FORCE_N, "value", label));
   } else if (kind == "torque") {
     f.kind = LEGSIM_FORCE_TORQUE;
     check_keys(t, {"name", "kind", "body", "value"}, label);
     f.body[0] = ctx.body_ref(req(t, "body", label), "body", label);
     if (has(t, "value")) {
-      f.value[0] = get_real(t, "value", label);
+      f.value[0] = ranged(get_real(t, "value", label), -LEGSIM_MAX_FORCE_N, LEGSIM_MAX_FORCE_N,
+                          "value", label);
       f.value[1] = 0.0;
     }
   } else {
@@ -411,9 +428,12 @@ legsim_force_desc parse_force(const Ctx &ctx, const std::string &name, Table t) 
       f.body[1] = LEGSIM_FRAME;
       set_point(f.point[1], ctx.frame_point(t, label));
     }
-    f.stiffness_n_per_m = get_nonnegative(t, "stiffness", label);
-    f.damping_ns_per_m = get_nonnegative(t, "damping", label);
-    f.rest_length_m = get_nonnegative(t, "rest_length", label);
+    f.stiffness_n_per_m = ranged(get_nonnegative(t, "stiffness", label), 0.0,
+                                 LEGSIM_MAX_STIFFNESS_N_PER_M, "stiffness", label);
+    f.damping_ns_per_m = ranged(get_nonnegative(t, "damping", label), 0.0,
+                                LEGSIM_MAX_DAMPING_NS_PER_M, "damping", label);
+    f.rest_length_m = ranged(get_nonnegative(t, "rest_length", label), 0.0, LEGSIM_MAX_COORD,
+                             "rest_length", label);
   }
   return f;
 }
@@ -480,13 +500,16 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
   check_name(name, "model");
   std::vector<double> gravity =
       has(doc, "gravity") ? get_vec(doc, "gravity", 2, "model") : std::vector<double>{0.0, -9.81};
+  ranged_vec(gravity, -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2, "gravity", "model");
 
   Ctx ctx;
   if (Node ft = doc->get("frame")) {
     if (!is_table(ft)) fail("model", "'frame' must be a table of NAME = [x, y] points");
     Table ftab = ft->as_table();
     for (const auto &key : sorted_keys(ftab))
-      ctx.frame.emplace_back(key, as_vec(ftab->get(key), 2, key, "frame point " + q(key)));
+      ctx.frame.emplace_back(key, ranged_vec(as_vec(ftab->get(key), 2, key, "frame point " + q(key)),
+                                             -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, key,
+                                             "frame point " + q(key)));
   }
 
   // bodies
@@ -508,10 +531,13 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
     Body b;
     b.name = bname;
     b.id = get_int(tb, "id", label);
-    b.length = get_positive(tb, "length", label);
-    b.mass = get_positive(tb, "mass", label);
+    b.length = ranged(get_positive(tb, "length", label), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
+                      "length", label);
+    b.mass = ranged(get_positive(tb, "mass", label), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass",
+                    label);
     b.inertia = has(tb, "inertia") ? get_positive(tb, "inertia", label)
                                    : b.mass * b.length * b.length / 12.0;
+    ranged(b.inertia, LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "inertia", label);
     parsed.push_back(b);
   }
   std::vector<const Body *> by_id(n + 1, nullptr);
@@ -592,15 +618,19 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
     if (!(stroke[0] > 0.0)) fail(label, "stroke min must be positive (got " + g(stroke[0]) + ")");
     if (stroke[0] >= stroke[1])
       fail(label, "stroke min " + g(stroke[0]) + " >= max " + g(stroke[1]));
+    ranged_vec(stroke, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD, "stroke", label);
     legsim_actuator_desc a;
     std::memset(&a, 0, sizeof a);
     copy_name(a.name, aname);
     a.joint = ji;
     a.stroke_min_m = stroke[0];
     a.stroke_max_m = stroke[1];
-    a.max_force_n = get_positive(ta, "max_force", label);
-    a.servo_kp_n_per_m = get_nonnegative(ta, "servo_kp", label);
-    a.servo_kd_ns_per_m = get_nonnegative(ta, "servo_kd", label);
+    a.max_force_n = ranged(get_positive(ta, "max_force", label), LEGSIM_MIN_FORCE_N,
+                           LEGSIM_MAX_FORCE_N, "max_force", label);
+    a.servo_kp_n_per_m = ranged(get_nonnegative(ta, "servo_kp", label), 0.0,
+                                LEGSIM_MAX_STIFFNESS_N_PER_M, "servo_kp", label);
+    a.servo_kd_ns_per_m = ranged(get_nonnegative(ta, "servo_kd", label), 0.0,
+                                 LEGSIM_MAX_DAMPING_NS_PER_M, "servo_kd", label);
     actuators.push_back(a);
     act_names.push_back(aname);
   }
@@ -665,7 +695,9 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
         if (bid > static_cast<int64_t>(n))
           fail(label, q(key) + ": body " + std::to_string(bid) + " does not exist (ids are 1.." +
                           std::to_string(n) + ")");
-        pose.drivers.push_back({static_cast<int>(bid - 1), coord, as_real(pt->get(key), key, label)});
+        const double value =
+            ranged(as_real(pt->get(key), key, label), -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, key, label);
+        pose.drivers.push_back({static_cast<int>(bid - 1), coord, value});
       }
       capacity(pose.drivers.size(), "drivers", "LEGSIM_MAX_POSE_DRIVERS", LEGSIM_MAX_POSE_DRIVERS,
                label);
@@ -693,6 +725,7 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
       for (const auto &r : pose.guess)
         for (double x : r)
           if (!std::isfinite(x)) fail(label, "'guess' is not finite");
+      for (const auto &r : pose.guess) ranged_vec(r, -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "guess", label);
       poses.push_back(pose);
     }
   }
@@ -753,24 +786,30 @@ void put_msg(char *msg, size_t msg_len, const std::string &s) {
   msg[k] = '\0';
 }
 
+// Reads at most one byte past the TOML size limit: a larger file is refused by
+// the limits check without being read whole.
 bool read_file(const char *path, std::string &text, std::string &err) {
   std::ifstream f(path, std::ios::binary);
   if (!f) {
     err = std::string(path) + ": cannot read: " + std::strerror(errno);
     return false;
   }
-  std::ostringstream ss;
-  ss << f.rdbuf();
+  text.resize(kTomlMaxBytes + 1);
+  f.read(&text[0], static_cast<std::streamsize>(text.size()));
   if (f.bad()) {
     err = std::string(path) + ": cannot read: I/O error";
     return false;
   }
-  text = ss.str();
+  text.resize(static_cast<size_t>(f.gcount()));
   return true;
 }
 
-// Parses TOML; throws Fail on a syntax error (the library may throw or not).
+// Parses TOML; throws Fail on a syntax error (the library may throw or not), and
+// on input outside the limits the parser is known to fail on (toml_limits.hpp).
 toml::table parse_toml(const std::string &text, const std::string &source) {
+  std::string why;
+  if (!toml_input_within_limits(text, why))
+    throw Fail{LEGSIM_ERR_MODEL, source + ": TOML input refused: " + why};
 #if TOML_EXCEPTIONS
   try {
     return toml::parse(std::string_view(text), std::string_view(source));

@@ -40,6 +40,19 @@ The format (models/leg.toml shows most of it; every key not listed is an error):
   [foot]         body, end (+ at)
   [pose.NAME]    phiN / xN / yN = value (drive coordinate phi / x / y of body N; sorted by
                  body, then x, y, phi), guess = [[x, y, phi], ...] one row per body
+
+Sane ranges (inclusive; legsim.h's LEGSIM_MAX_* / LEGSIM_MIN_*, which the core checks too):
+  gravity components |g| <= 1e3 m/s^2; frame points, "at" points, pose driver values and
+  guesses |x| <= 1e3 (m or rad); body length [1e-3, 1e3] m, mass [1e-3, 1e6] kg, inertia
+  [1e-12, 1e6] kg m^2 (the default too); stroke ends [1e-3, 1e3] m; max_force [1e-3, 1e6] N;
+  point loads and torques |F| <= 1e6 N (N m); servo_kp and stiffness [0, 1e9] N/m; servo_kd
+  and damping [0, 1e7] N s/m; rest_length [0, 1e3] m. Outside: "ITEM: 'KEY' must be in
+  [LO, HI] (got X)".
+
+The text is bounded before it is parsed (as the run-time loader does for toml++, see
+firmware_core/host/toml_limits.hpp): at most 1 MiB, valid UTF-8, non-ASCII only inside
+strings and comments, keys and table headers of at most 16 dotted parts, brackets nested
+at most 16 deep. Else "FILE: TOML input refused: REASON (line N)".
 """
 from __future__ import annotations
 
@@ -88,6 +101,25 @@ IDENT_RE = re.compile(r"[A-Za-z_][A-Za-z0-9_]*")
 DRIVER_RE = re.compile(r"(phi|x|y)([1-9][0-9]{0,8})")
 DRIVER_COORD = {"x": 0, "y": 1, "phi": 2}
 FRAME = -1
+
+# Sane ranges: legsim.h's LEGSIM_MAX_* / LEGSIM_MIN_* (check_codegen_messages.py checks
+# that they agree with the header), the same in host/model_toml.cpp.
+MAX_COORD = 1e3        # LEGSIM_MAX_COORD
+MAX_GRAVITY = 1e3      # LEGSIM_MAX_GRAVITY_MPS2
+MIN_LENGTH = 1e-3      # LEGSIM_MIN_LENGTH_M
+MIN_MASS = 1e-3        # LEGSIM_MIN_MASS_KG
+MAX_MASS = 1e6         # LEGSIM_MAX_MASS_KG
+MIN_INERTIA = 1e-12    # LEGSIM_MIN_INERTIA_KGM2
+MAX_INERTIA = 1e6      # LEGSIM_MAX_INERTIA_KGM2
+MIN_FORCE = 1e-3       # LEGSIM_MIN_FORCE_N
+MAX_FORCE = 1e6        # LEGSIM_MAX_FORCE_N
+MAX_STIFFNESS = 1e9    # LEGSIM_MAX_STIFFNESS_N_PER_M
+MAX_DAMPING = 1e7      # LEGSIM_MAX_DAMPING_NS_PER_M
+
+# Bounds on the TOML text (host/toml_limits.hpp: kTomlMaxBytes, kTomlMaxKeyParts, kTomlMaxNesting).
+TOML_MAX_BYTES = 1024 * 1024
+TOML_MAX_KEY_PARTS = 16
+TOML_MAX_NESTING = 16
 
 
 class ModelError(Exception):
@@ -173,6 +205,18 @@ def get_nonnegative(tbl: dict, key: str, label: str) -> float:
     return x
 
 
+def ranged(x: float, lo: float, hi: float, key: str, label: str) -> float:
+    if not lo <= x <= hi:
+        fail(label, f"'{key}' must be in [{g(lo)}, {g(hi)}] (got {g(x)})")
+    return x
+
+
+def ranged_vec(v: list[float], lo: float, hi: float, key: str, label: str) -> list[float]:
+    for x in v:
+        ranged(x, lo, hi, key, label)
+    return v
+
+
 def as_vec(v, n: int, key: str, label: str) -> list[float]:
     if not isinstance(v, list) or len(v) != n or not all(is_number(e) for e in v):
         fail(label, f"'{key}' must be an array of {n} numbers")
@@ -230,7 +274,7 @@ class Ctx:
             return [-half, 0.0]
         if end == "distal":
             return [half, 0.0]
-        return as_vec(at_value, 2, "at", label)
+        return ranged_vec(as_vec(at_value, 2, "at", label), -MAX_COORD, MAX_COORD, "at", label)
 
     def frame_point(self, tbl: dict, label: str) -> list[float]:
         name = get_string(tbl, "point", label)
@@ -327,12 +371,14 @@ def parse_force(ctx: Ctx, name: str, tbl: dict) -> dict:
         check_keys(tbl, ["name", "kind", "body", "end", "at", "value"], label)
         f["body"][0], f["point"][0] = single_point(ctx, tbl, label)
         if "value" in tbl:
-            f["value"] = get_vec(tbl, "value", 2, label)
+            f["value"] = ranged_vec(get_vec(tbl, "value", 2, label), -MAX_FORCE, MAX_FORCE,
+                                    "value", label)
     elif kind == "torque":
         check_keys(tbl, ["name", "kind", "body", "value"], label)
         f["body"][0] = ctx.body_ref(req(tbl, "body", label), "body", label)
         if "value" in tbl:
-            f["value"] = [get_real(tbl, "value", label), 0.0]
+            f["value"] = [ranged(get_real(tbl, "value", label), -MAX_FORCE, MAX_FORCE, "value",
+                                 label), 0.0]
     else:
         common = ["name", "kind", "at", "stiffness", "damping", "rest_length"]
         if "bodies" in tbl:
@@ -344,9 +390,12 @@ def parse_force(ctx: Ctx, name: str, tbl: dict) -> dict:
             f["body"][0], f["point"][0] = single_point(ctx, tbl, label)
             f["body"][1] = FRAME
             f["point"][1] = ctx.frame_point(tbl, label)
-        f["stiffness"] = get_nonnegative(tbl, "stiffness", label)
-        f["damping"] = get_nonnegative(tbl, "damping", label)
-        f["rest_length"] = get_nonnegative(tbl, "rest_length", label)
+        f["stiffness"] = ranged(get_nonnegative(tbl, "stiffness", label), 0.0, MAX_STIFFNESS,
+                                "stiffness", label)
+        f["damping"] = ranged(get_nonnegative(tbl, "damping", label), 0.0, MAX_DAMPING, "damping",
+                              label)
+        f["rest_length"] = ranged(get_nonnegative(tbl, "rest_length", label), 0.0, MAX_COORD,
+                                  "rest_length", label)
     return f
 
 
@@ -380,6 +429,7 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
     name = get_string(doc, "name", "model")
     check_name(name, "model")
     gravity = get_vec(doc, "gravity", 2, "model") if "gravity" in doc else list(DEFAULT_GRAVITY)
+    ranged_vec(gravity, -MAX_GRAVITY, MAX_GRAVITY, "gravity", "model")
 
     ctx = Ctx(caps)
     if "frame" in doc:
@@ -387,7 +437,8 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
         if not is_table(ft):
             fail("model", "'frame' must be a table of NAME = [x, y] points")
         for key in sorted(ft):
-            ctx.frame[key] = as_vec(ft[key], 2, key, f"frame point '{key}'")
+            ctx.frame[key] = ranged_vec(as_vec(ft[key], 2, key, f"frame point '{key}'"),
+                                        -MAX_COORD, MAX_COORD, key, f"frame point '{key}'")
 
     # bodies
     body_tables = get_table_array(doc, "body", "model")
@@ -406,12 +457,13 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
         label = f"body '{bname}'"
         check_keys(tb, BODY_KEYS, label)
         bid = get_int(tb, "id", label)
-        length = get_positive(tb, "length", label)
-        mass = get_positive(tb, "mass", label)
+        length = ranged(get_positive(tb, "length", label), MIN_LENGTH, MAX_COORD, "length", label)
+        mass = ranged(get_positive(tb, "mass", label), MIN_MASS, MAX_MASS, "mass", label)
         if "inertia" in tb:
             inertia = get_positive(tb, "inertia", label)
         else:
             inertia = mass * length * length / 12.0
+        ranged(inertia, MIN_INERTIA, MAX_INERTIA, "inertia", label)
         parsed.append({"id": bid, "name": bname, "length": length, "mass": mass,
                        "inertia": inertia})
     by_id: dict[int, dict] = {}
@@ -477,11 +529,15 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
             fail(label, f"stroke min must be positive (got {g(stroke[0])})")
         if stroke[0] >= stroke[1]:
             fail(label, f"stroke min {g(stroke[0])} >= max {g(stroke[1])}")
+        ranged_vec(stroke, MIN_LENGTH, MAX_COORD, "stroke", label)
         actuators.append({
             "name": aname, "joint": ji, "stroke": stroke,
-            "max_force": get_positive(ta, "max_force", label),
-            "kp": get_nonnegative(ta, "servo_kp", label),
-            "kd": get_nonnegative(ta, "servo_kd", label)})
+            "max_force": ranged(get_positive(ta, "max_force", label), MIN_FORCE, MAX_FORCE,
+                                "max_force", label),
+            "kp": ranged(get_nonnegative(ta, "servo_kp", label), 0.0, MAX_STIFFNESS, "servo_kp",
+                         label),
+            "kd": ranged(get_nonnegative(ta, "servo_kd", label), 0.0, MAX_DAMPING, "servo_kd",
+                         label)})
 
     # force elements
     force_tables = get_table_array(doc, "force", "model")
@@ -527,7 +583,8 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
                 bid = int(m.group(2))
                 if bid > n:
                     fail(label, f"'{key}': body {bid} does not exist (ids are 1..{n})")
-                drivers.append((bid - 1, DRIVER_COORD[m.group(1)], as_real(pt[key], key, label)))
+                value = ranged(as_real(pt[key], key, label), -MAX_COORD, MAX_COORD, key, label)
+                drivers.append((bid - 1, DRIVER_COORD[m.group(1)], value))
             capacity(len(drivers), "drivers", "LEGSIM_MAX_POSE_DRIVERS", caps.get("pose_drivers"),
                      label)
             drivers.sort(key=lambda d: (d[0], d[1]))
@@ -538,6 +595,8 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
             guess = [[float(e) for e in r] for r in gv]
             if not all(math.isfinite(e) for r in guess for e in r):
                 fail(label, "'guess' is not finite")
+            for r in guess:
+                ranged_vec(r, -MAX_COORD, MAX_COORD, "guess", label)
             poses.append({"name": pname, "drivers": drivers, "guess": guess})
 
     return {"name": name, "gravity": gravity, "bodies": ctx.bodies, "joints": joints,
@@ -688,13 +747,119 @@ def generate(src: str, symbol: str, models: list[tuple[str, dict]], include_as: 
     return "\n".join(c) + "\n", "\n".join(h)
 
 
+# ---- bounds on the text (a mirror of host/toml_limits.cpp: same scan, same messages) ----
+def _utf8_length(raw: bytes, i: int) -> int:
+    """Length of the valid UTF-8 sequence at raw[i] (1..4), or 0."""
+    c = raw[i]
+    if c < 0x80:
+        return 1
+    if 0xC2 <= c <= 0xDF:
+        n, cp = 2, c & 0x1F
+    elif 0xE0 <= c <= 0xEF:
+        n, cp = 3, c & 0x0F
+    elif 0xF0 <= c <= 0xF4:
+        n, cp = 4, c & 0x07
+    else:
+        return 0
+    if i + n > len(raw):
+        return 0
+    for k in range(1, n):
+        if raw[i + k] & 0xC0 != 0x80:
+            return 0
+        cp = (cp << 6) | (raw[i + k] & 0x3F)
+    if cp < (0, 0, 0x80, 0x800, 0x10000)[n] or cp > 0x10FFFF or 0xD800 <= cp <= 0xDFFF:
+        return 0
+    return n
+
+
+def toml_input_within_limits(raw: bytes) -> str | None:
+    """None when the text is within the limits, else the reason (host/toml_limits.hpp)."""
+    if len(raw) > TOML_MAX_BYTES:
+        return f"larger than {TOML_MAX_BYTES} bytes"
+    NORMAL, COMMENT, BASIC, LITERAL, MULTI_BASIC, MULTI_LITERAL = range(6)
+    mode, line, depth, dots, i, size = NORMAL, 1, 0, 0, 0, len(raw)
+
+    def escapable(i: int) -> bool:
+        return i + 1 < size and raw[i + 1] != 0x0A and raw[i + 1] < 0x80
+
+    while i < size:
+        c = raw[i]
+        if c >= 0x80:
+            n = _utf8_length(raw, i)
+            if n == 0:
+                return f"invalid UTF-8 (line {line})"
+            if mode == NORMAL:
+                return f"a non-ASCII character outside a string or comment (line {line})"
+            i += n
+            continue
+        if c == 0x0A:
+            line += 1
+            dots = 0
+            if mode in (COMMENT, BASIC, LITERAL):
+                mode = NORMAL
+            i += 1
+            continue
+        ch = chr(c)
+        if mode == NORMAL:
+            if ch == "#":
+                mode = COMMENT
+            elif ch in "\"'":
+                multi = raw[i:i + 3] == (b'"""' if ch == '"' else b"'''")
+                if ch == '"':
+                    mode = MULTI_BASIC if multi else BASIC
+                else:
+                    mode = MULTI_LITERAL if multi else LITERAL
+                if multi:
+                    i += 2
+            elif ch in "[{":
+                dots = 0
+                depth += 1
+                if depth > TOML_MAX_NESTING:
+                    return (f"arrays, inline tables or headers nested deeper than "
+                            f"{TOML_MAX_NESTING} (line {line})")
+            elif ch in "]}":
+                dots = 0
+                if depth > 0:
+                    depth -= 1
+            elif ch in "=,":
+                dots = 0
+            elif ch == ".":
+                dots += 1
+                if dots >= TOML_MAX_KEY_PARTS:
+                    return (f"a key or table header of more than {TOML_MAX_KEY_PARTS} dotted "
+                            f"parts (line {line})")
+        elif mode == BASIC:
+            if ch == "\\" and escapable(i):
+                i += 1
+            elif ch == '"':
+                mode = NORMAL
+        elif mode == LITERAL:
+            if ch == "'":
+                mode = NORMAL
+        elif mode in (MULTI_BASIC, MULTI_LITERAL):
+            quote = '"' if mode == MULTI_BASIC else "'"
+            if mode == MULTI_BASIC and ch == "\\" and escapable(i):
+                i += 1
+            elif ch == quote and raw[i:i + 3] == quote.encode() * 3:
+                run = 3
+                while run < 5 and i + run < size and raw[i + run] == c:
+                    run += 1
+                i += run - 1
+                mode = NORMAL
+        i += 1
+    return None
+
+
 def load_all(path: str, caps: dict) -> list[tuple[str, dict]]:
     """Every variant of the file, validated; raises ModelError("PATH: ITEM: PROBLEM")."""
     try:
         with open(path, "rb") as f:
-            raw = f.read()
+            raw = f.read(TOML_MAX_BYTES + 1)  # a larger file is refused unread
     except OSError as e:
         raise ModelError(ERR_BAD_INPUT, f"{path}: cannot read: {e.strerror}")
+    why = toml_input_within_limits(raw)
+    if why is not None:
+        raise ModelError(ERR_MODEL, f"{path}: TOML input refused: {why}")
     try:
         doc = tomllib.loads(raw.decode("utf-8"))
     except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:

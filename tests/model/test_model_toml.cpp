@@ -3,6 +3,7 @@
 // (host/model_toml.cpp); every bad model gives the expected status and message.
 //
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -17,6 +18,7 @@
 #include "legsim/models.h"       // models/leg.toml, generated as C (legsim_models)
 #include "legsim/leg_cxx_models.h"  // models/leg.toml, generated and compiled as C++
 #include "model_toml.hpp"
+#include "toml_limits.hpp"
 #include "unity.h"
 
 void setUp(void) {}
@@ -416,6 +418,85 @@ static void test_parse_from_memory(void) {
   TEST_ASSERT_EQUAL_STRING("mem: body 'extra': 'length' must be positive (got -1)", msg);
 }
 
+// ---- hostile text: bounded before toml++ sees it -------------------------------------------
+// toml++ 3.3.0 overflows the stack on a key or header of 50,000 dotted parts (about 100 KB)
+// and reaches code it marks unreachable on `zz = 1` followed by a non-ASCII letter; the
+// small cases are fixtures (expected.tsv, both tools), the large ones are made here and
+// in check_codegen_messages.py, with the same messages.
+static std::string leg_text() {
+  std::ifstream f(kLeg, std::ios::binary);
+  std::stringstream ss;
+  ss << f.rdbuf();
+  return ss.str();
+}
+
+static void expect_refused(const std::string &text, const std::string &why) {
+  legsim_model_desc d;
+  std::memset(&d, 0, sizeof d);
+  char msg[512] = {0};
+  const legsim_status st = legsim_model_parse_toml(text.data(), text.size(), "mem", nullptr, &d, msg, sizeof msg);
+  TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_ERR_MODEL, st, msg);
+  TEST_ASSERT_EQUAL_STRING(("mem: TOML input refused: " + why).c_str(), msg);
+}
+
+static std::string repeat(const std::string &part, int n, const std::string &sep) {
+  std::string s;
+  for (int i = 0; i < n; ++i) s += (i ? sep : "") + part;
+  return s;
+}
+
+static void test_hostile_text_is_refused_before_parsing(void) {
+  const std::string parts = "a key or table header of more than 16 dotted parts (line 1)";
+  expect_refused(repeat("a", 50000, ".") + " = 1\n", parts);
+  expect_refused("[" + repeat("a", 50000, ".") + "]\n", parts);
+  expect_refused("[[" + repeat("b", 50000, ".") + "]]\n", parts);
+  expect_refused(repeat("\"q\"", 50000, ".") + " = 1\n", parts);
+  const std::string nested = "arrays, inline tables or headers nested deeper than 16 (line 1)";
+  expect_refused("a = " + std::string(10000, '[') + std::string(10000, ']') + "\n", nested);
+  expect_refused("a = " + repeat("{b = ", 10000, "") + "1" + std::string(10000, '}') + "\n", nested);
+  expect_refused("zz = 1\n\xce\xb1\n", "a non-ASCII character outside a string or comment (line 2)");
+  const std::string leg = leg_text();
+  const long last = std::count(leg.begin(), leg.end(), '\n') + 1;
+  expect_refused(leg + "\xc3\xa9 = 1\n",
+                 "a non-ASCII character outside a string or comment (line " + std::to_string(last) + ")");
+  expect_refused("a = \"\xed\xa0\x80\"\n", "invalid UTF-8 (line 1)");  // a surrogate
+  // larger than 1 MiB: refused from memory, and from a file without reading it whole
+  std::string big = leg_text();
+  big += "#" + std::string(kTomlMaxBytes - big.size(), 'x');
+  expect_refused(big, "larger than 1048576 bytes");
+  const std::string path = (std::filesystem::temp_directory_path() / "legsim_test_big_model.toml").string();
+  {
+    std::ofstream f(path, std::ios::binary);
+    f << big;
+  }
+  legsim_model_desc d;
+  char msg[512] = {0};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, legsim_model_load_toml(path.c_str(), nullptr, &d, msg, sizeof msg));
+  TEST_ASSERT_EQUAL_STRING((path + ": TOML input refused: larger than 1048576 bytes").c_str(), msg);
+  std::filesystem::remove(path);
+}
+
+static void test_text_within_the_limits_still_loads(void) {
+  // exactly 1 MiB, 16 dotted parts, nesting 16, non-ASCII in comments and strings
+  std::string text = leg_text() + "# \xc3\xa9t\xc3\xa9, \xce\xb1, \xf0\x9f\xa6\xbf\n";
+  text += "#" + std::string(kTomlMaxBytes - text.size() - 2, 'x') + "\n";
+  TEST_ASSERT_EQUAL_size_t(kTomlMaxBytes, text.size());
+  legsim_model_desc d;
+  char msg[512] = {0};
+  TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, legsim_model_parse_toml(text.data(), text.size(), "mem", nullptr, &d, msg, sizeof msg), msg);
+  TEST_ASSERT_TRUE(compare(d, legsim_model_leg_revolute).empty());
+  std::string why;
+  TEST_ASSERT_TRUE(toml_input_within_limits(repeat("a", 16, ".") + " = 1.5\n", why));
+  TEST_ASSERT_TRUE(toml_input_within_limits("a = " + std::string(16, '[') + std::string(16, ']'), why));
+  TEST_ASSERT_TRUE(toml_input_within_limits("s = \"\\\"\xc3\xa9.[{\" # \xc3\xa9\nt = '''\xc3\xa9\n'''''\nu = 1979-05-27T07:32:00.999", why));
+  TEST_ASSERT_FALSE(toml_input_within_limits(repeat("a", 17, ".") + " = 1", why));
+  TEST_ASSERT_EQUAL_STRING("a key or table header of more than 16 dotted parts (line 1)", why.c_str());
+  // a name with non-ASCII letters in a string: the loader's own message, no crash
+  const std::string named = "name = \"b\xc3\xa9in\"\n";
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, legsim_model_parse_toml(named.data(), named.size(), "mem", nullptr, &d, msg, sizeof msg));
+  TEST_ASSERT_EQUAL_STRING("mem: model: name 'b\xc3\xa9in' may hold only letters, digits, '_', '-' and '.'", msg);
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_leg_generated_equals_loaded);
@@ -429,5 +510,7 @@ int main(void) {
   RUN_TEST(test_every_fixture_is_listed);
   RUN_TEST(test_loader_api_errors);
   RUN_TEST(test_parse_from_memory);
+  RUN_TEST(test_hostile_text_is_refused_before_parsing);
+  RUN_TEST(test_text_within_the_limits_still_loads);
   return UNITY_END();
 }

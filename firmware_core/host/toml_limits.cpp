@@ -1,0 +1,138 @@
+// A one-pass scanner of TOML text: it tracks only what the limits need (strings,
+// comments, bracket depth, dots between key separators), not the grammar; the
+// parser still judges the syntax. Mirrored line by line in
+// firmware_core/tools/model_codegen.py (toml_input_within_limits).
+#include "toml_limits.hpp"
+
+namespace {
+
+enum class Mode { Normal, Comment, Basic, Literal, MultiBasic, MultiLiteral };
+
+// Length of the valid UTF-8 sequence at text[i] (1..4), or 0 if it is not one.
+std::size_t utf8_length(std::string_view text, std::size_t i) {
+  const auto b = [&](std::size_t k) { return static_cast<unsigned char>(text[k]); };
+  const unsigned char c = b(i);
+  if (c < 0x80) return 1;
+  std::size_t n;
+  unsigned long cp;
+  if (c >= 0xC2 && c <= 0xDF) {
+    n = 2;
+    cp = c & 0x1Fu;
+  } else if (c >= 0xE0 && c <= 0xEF) {
+    n = 3;
+    cp = c & 0x0Fu;
+  } else if (c >= 0xF0 && c <= 0xF4) {
+    n = 4;
+    cp = c & 0x07u;
+  } else {
+    return 0;  // a continuation byte, an overlong lead (C0, C1) or past F4
+  }
+  if (i + n > text.size()) return 0;
+  for (std::size_t k = 1; k < n; ++k) {
+    if ((b(i + k) & 0xC0u) != 0x80u) return 0;
+    cp = (cp << 6) | (b(i + k) & 0x3Fu);
+  }
+  const unsigned long min_cp[5] = {0, 0, 0x80, 0x800, 0x10000};
+  if (cp < min_cp[n] || cp > 0x10FFFF || (cp >= 0xD800 && cp <= 0xDFFF)) return 0;
+  return n;
+}
+
+bool starts(std::string_view text, std::size_t i, const char *three) {
+  return i + 3 <= text.size() && text.compare(i, 3, three) == 0;
+}
+
+// After a backslash: an ASCII character other than a newline, skipped as escaped
+// (a backslash before a newline continues a multi-line string; the line is counted).
+bool escapable(std::string_view text, std::size_t i) {
+  return i + 1 < text.size() && text[i + 1] != '\n' && static_cast<unsigned char>(text[i + 1]) < 0x80;
+}
+
+bool refuse(std::string &why, const std::string &what, long line) {
+  why = what + " (line " + std::to_string(line) + ")";
+  return false;
+}
+
+}  // namespace
+
+bool toml_input_within_limits(std::string_view text, std::string &why) {
+  if (text.size() > kTomlMaxBytes) {
+    why = "larger than " + std::to_string(kTomlMaxBytes) + " bytes";
+    return false;
+  }
+  Mode mode = Mode::Normal;
+  long line = 1;
+  int depth = 0, dots = 0;
+  std::size_t i = 0;
+  while (i < text.size()) {
+    const char c = text[i];
+    const std::size_t n = utf8_length(text, i);
+    if (n == 0) return refuse(why, "invalid UTF-8", line);
+    if (n > 1) {
+      if (mode == Mode::Normal)
+        return refuse(why, "a non-ASCII character outside a string or comment", line);
+      i += n;
+      continue;
+    }
+    if (c == '\n') {
+      ++line;
+      dots = 0;  // a key never spans lines
+      if (mode == Mode::Comment || mode == Mode::Basic || mode == Mode::Literal) mode = Mode::Normal;
+      ++i;
+      continue;
+    }
+    switch (mode) {
+      case Mode::Normal:
+        if (c == '#') {
+          mode = Mode::Comment;
+        } else if (c == '"' || c == '\'') {
+          const bool multi = starts(text, i, c == '"' ? "\"\"\"" : "'''");
+          mode = c == '"' ? (multi ? Mode::MultiBasic : Mode::Basic)
+                          : (multi ? Mode::MultiLiteral : Mode::Literal);
+          if (multi) i += 2;
+        } else if (c == '[' || c == '{') {
+          dots = 0;
+          if (++depth > kTomlMaxNesting)
+            return refuse(why,
+                          "arrays, inline tables or headers nested deeper than " +
+                              std::to_string(kTomlMaxNesting),
+                          line);
+        } else if (c == ']' || c == '}') {
+          dots = 0;
+          if (depth > 0) --depth;
+        } else if (c == '=' || c == ',') {
+          dots = 0;
+        } else if (c == '.') {
+          // a float or a time has one dot; a dotted key has parts - 1
+          if (++dots >= kTomlMaxKeyParts)
+            return refuse(why,
+                          "a key or table header of more than " + std::to_string(kTomlMaxKeyParts) +
+                              " dotted parts",
+                          line);
+        }
+        break;
+      case Mode::Comment: break;
+      case Mode::Basic:
+        if (c == '\\' && escapable(text, i)) ++i;  // the escaped character
+        else if (c == '"') mode = Mode::Normal;
+        break;
+      case Mode::Literal:
+        if (c == '\'') mode = Mode::Normal;
+        break;
+      case Mode::MultiBasic:
+      case Mode::MultiLiteral: {
+        const char quote = mode == Mode::MultiBasic ? '"' : '\'';
+        if (mode == Mode::MultiBasic && c == '\\' && escapable(text, i)) {
+          ++i;
+        } else if (c == quote && starts(text, i, mode == Mode::MultiBasic ? "\"\"\"" : "'''")) {
+          std::size_t run = 3;  // up to two quotes of the content may end it: """"" is legal
+          while (run < 5 && i + run < text.size() && text[i + run] == quote) ++run;
+          i += run - 1;
+          mode = Mode::Normal;
+        }
+        break;
+      }
+    }
+    ++i;
+  }
+  return true;
+}
