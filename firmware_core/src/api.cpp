@@ -256,6 +256,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.lambda.setZero();
   std::memset(d.reaction, 0, sizeof d.reaction);
   std::memset(&d.report, 0, sizeof d.report);
+  std::memset(&d.failure, 0, sizeof d.failure);
   std::memset(&d.drivers, 0, sizeof d.drivers);
   d.stroke_mask = 0;
   for (int a = 0; a < kMaxActuators; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
@@ -300,6 +301,13 @@ legsim_status legsim_get_report(const legsim_sim *sim, legsim_report *out) {
   CHECK_SIM(sim);
   if (!out) return LEGSIM_ERR_NULL;
   *out = as_sim(sim)->data.report;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_failure_report(const legsim_sim *sim, legsim_report *out) {
+  CHECK_SIM(sim);
+  if (!out) return LEGSIM_ERR_NULL;
+  *out = as_sim(sim)->data.failure;
   return LEGSIM_OK;
 }
 

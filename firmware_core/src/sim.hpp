@@ -149,6 +149,7 @@ struct Data {
   ActuatorState act[kMaxActuators];
   real force_value[kMaxForces][2];
   legsim_report report;
+  legsim_report failure;  // the figures of the last call that failed (legsim_failure_report)
   uint32_t stroke_mask;
 
   // workspace
@@ -204,7 +205,10 @@ legsim_status all_or_nothing(Sim &sim, F &&call) {
   const Snapshot before(sim.data);
   legsim_status s = call();
   if (s == LEGSIM_OK) s = outputs_check(sim);
-  if (s != LEGSIM_OK) before.restore(sim);
+  if (s != LEGSIM_OK) {
+    sim.data.failure = sim.data.report;  // where the solver stopped, kept apart
+    before.restore(sim);
+  }
   return s;
 }
 

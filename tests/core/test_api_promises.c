@@ -153,6 +153,11 @@ static void test_refused_step_leaves_the_report(void) {
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NOT_CONVERGED, legsim_step(b, 1));
   assert_same(a, b, "after a step that did not converge");
   assert_finite_outputs(b, "after a step that did not converge");
+  /* where it stopped is told apart */
+  legsim_report why;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_failure_report(b, &why));
+  TEST_ASSERT_EQUAL_INT(1, why.iterations);
+  TEST_ASSERT_TRUE(why.residual > 0);
 }
 
 /* Every OK step reports a finite condition: a stroke end at a dead centre (the
@@ -296,6 +301,7 @@ static void check_refused_everywhere(legsim_sim *s) {
   TEST_ASSERT_EQUAL_INT(want, legsim_assemble(s, len));
   TEST_ASSERT_EQUAL_INT(want, legsim_set_options(s, &o));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_report(s, &r));
+  TEST_ASSERT_EQUAL_INT(want, legsim_failure_report(s, &r));
   TEST_ASSERT_EQUAL_INT(want, legsim_clear_events(s));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_q(s, v));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_qd(s, v));

@@ -141,9 +141,13 @@ static void test_dead_centre_is_reported_with_its_condition(void) {
    * in line (a dead centre): the driven Jacobian loses rank. */
   legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, legsim_default_options());
   const legsim_real dead[NA] = {0.75, 0.6244998};
+  legsim_report before, rep;
+  legsim_get_report(sim, &before);
   const legsim_status s = legsim_assemble(sim, dead);
-  legsim_report rep;
+  /* the sim's report is its state's, untouched; the refusal's figures are the failure report's */
   legsim_get_report(sim, &rep);
+  TEST_ASSERT_EQUAL_MEMORY(&before, &rep, sizeof rep);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_failure_report(sim, &rep));
   printf("dead centre: %s, condition %g, residual %g, iterations %d\n", legsim_status_str(s),
          rep.condition, rep.residual, (int)rep.iterations);
   TEST_ASSERT_TRUE(s == LEGSIM_ERR_SINGULAR || s == LEGSIM_ERR_NOT_CONVERGED);

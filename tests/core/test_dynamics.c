@@ -364,14 +364,17 @@ static void test_bad_commands_change_nothing(void) {
 
 static void test_too_large_a_step_fails_with_a_status_never_nan(void) {
   legsim_options o = opts(LEGSIM_INTEGRATOR_RK4, 0.2);
-  legsim_sim *sim = leg_at_stand(&st, &legsim_model_leg_revolute, o);
+  legsim_sim *sim = NULL;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_init(st.bytes, sizeof st.bytes, &legsim_model_leg_revolute, &o, &sim));
+  o = opts(LEGSIM_INTEGRATOR_RK4, LEGSIM_MAX_STEP_S); /* the largest step allowed */
+  sim = leg_at_stand(&st, &legsim_model_leg_revolute, o);
   legsim_command_force(sim, 0, 1500.0);
   legsim_status s = LEGSIM_OK;
   for (int i = 0; i < 50 && s == LEGSIM_OK; ++i) s = legsim_step(sim, 1);
   legsim_real q[NQ];
   legsim_get_q(sim, q);
   for (int k = 0; k < NQ; ++k) TEST_ASSERT_TRUE(isfinite(q[k]));
-  printf("h = 0.2 s with 1500 N: %s after %llu steps\n", legsim_status_str(s),
+  printf("h = %g s with 1500 N: %s after %llu steps\n", LEGSIM_MAX_STEP_S, legsim_status_str(s),
          (unsigned long long)legsim_step_count(sim));
 }
 

@@ -250,6 +250,13 @@ enum legsim_event {
 #define LEGSIM_COND_SINGULAR 1e5
 
 legsim_status legsim_get_report(const legsim_sim *sim, legsim_report *out);
+/* The figures where the last failing call stopped inside the solver (its Newton
+ * iterations, residual and condition, e.g. a dead centre's; the events it raised):
+ * a diagnosis of the failure, kept apart from the sim's report, which a failing
+ * call leaves as it was. Unlike that report, these figures may be non-finite (a
+ * singular factorization has an infinite condition). All zero until a call fails
+ * in the solver (checks at entry leave it too). */
+legsim_status legsim_failure_report(const legsim_sim *sim, legsim_report *out);
 legsim_status legsim_clear_events(legsim_sim *sim);
 /* Which actuators raised a stroke event (bit a = actuator a). */
 uint32_t legsim_stroke_event_mask(const legsim_sim *sim);
