@@ -32,7 +32,15 @@ legsim_logged() {
   shift
   mkdir -p "$legsim_logs"
   echo "### $(date '+%F %T') $*" >>"$log"
+  # A line every 30 s while it runs (apt and pip take minutes on a fresh machine).
+  local t0=$SECONDS ticker
+  (while sleep 30; do
+     echo "setup:   ... $((SECONDS - t0)) s: $(tail -n 1 "$log" | tr -d '\r' | cut -c1-110)" >&2
+   done) &
+  ticker=$!
   "$@" >>"$log" 2>&1 </dev/null || rc=$?
+  kill "$ticker" 2>/dev/null
+  wait "$ticker" 2>/dev/null
   if ((rc)); then
     echo "setup: FAILED (exit status $rc): $*" >&2
     echo "----- last 40 lines of $log -----" >&2
@@ -57,8 +65,10 @@ legsim_apt() {
   mkdir -p "$legsim_logs" && : >"$log"
   legsim_say "installing ${#missing[@]} Debian packages (log: $log): ${missing[*]}"
   local apt=("${sudo_cmd[@]}" env DEBIAN_FRONTEND=noninteractive apt-get -o DPkg::Lock::Timeout=600)
+  local t0=$SECONDS
   legsim_logged setup-apt "${apt[@]}" update &&
-    legsim_logged setup-apt "${apt[@]}" install -y --no-install-recommends "${missing[@]}"
+    legsim_logged setup-apt "${apt[@]}" install -y --no-install-recommends "${missing[@]}" &&
+    legsim_say "Debian packages installed ($((SECONDS - t0)) s)"
 }
 
 legsim_venv() {
@@ -83,10 +93,10 @@ legsim_venv() {
   local log=$legsim_logs/setup-pip.log
   mkdir -p "$legsim_logs" && : >"$log"
   legsim_say "installing the Python API (python/) and the bench (bench/) into $venv (log: $log)"
-  local pip=(env PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1 "$venv/bin/python" -m pip)
+  local pip=(env PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1 "$venv/bin/python" -m pip) t0=$SECONDS
   legsim_logged setup-pip "${pip[@]}" install --upgrade pip &&
     legsim_logged setup-pip "${pip[@]}" install -e "$legsim_root/python" -e "$legsim_root/bench[test,peers]" &&
-    touch "$stamp"
+    touch "$stamp" && legsim_say "Python packages installed ($((SECONDS - t0)) s)"
 }
 
 legsim_setup() {
@@ -100,6 +110,7 @@ legsim_build() {
   local preset=$1 log=$legsim_logs/build-$1.log
   mkdir -p "$legsim_logs" && : >"$log"
   legsim_say "configuring the $preset preset (log: $log)"
+  local t0=$SECONDS
   legsim_logged "build-$preset" cmake --preset "$preset" \
     -DPython3_EXECUTABLE="$legsim_root/.venv/bin/python" || return 1
   legsim_say "building the $preset preset"
@@ -118,6 +129,7 @@ legsim_build() {
     echo "setup: FAILED: cmake --build --preset $preset (exit status $rc); full log: $log" >&2
     return 1
   fi
+  legsim_say "built the $preset preset ($((SECONDS - t0)) s)"
 }
 
 if [[ ${BASH_SOURCE[0]} == "$0" ]]; then
