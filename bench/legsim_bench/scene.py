@@ -39,6 +39,14 @@ BUILTIN_MODEL = "builtin:leg"
 # legsim_default_options() of legsim.h (tests compare them with legsim_cli --check)
 DEFAULT_OPTIONS = {"rho_inf": 0.8, "max_newton_iter": 25, "newton_tol": 1e-10}
 MAX_RECORD_EVERY = 10_000_000           # the DBC's largest STEP (Ctrl_NSteps)
+# The bounds legsim_cli applies (firmware_core/host/scene_toml.cpp, toml_limits.hpp, legsim.h).
+MAX_TOML_BYTES = 1024 * 1024
+MAX_SAMPLES = 1_000_000                 # n_steps / record_every + 1
+MAX_FREQUENCY_HZ = 1e3
+MAX_PHASE_RAD = 1e3                     # LEGSIM_MAX_COORD
+MAX_TIME_S = 1e9                        # LEGSIM_MAX_TIME_S
+MAX_FORCE_N = 1e6                       # LEGSIM_MAX_FORCE_N
+NEWTON_TOL_RANGE = (1e-15, 1e-3)        # LEGSIM_MIN/MAX_NEWTON_TOL
 # legsim_disable bits (legsim.h), as Ctrl_Disable carries them
 DISABLE_FLAGS = {"gravity": 0, "force_elements": 1, "reactions": 2, "projection": 3,
                  "actuators": 4, "stroke_limits": 5}
@@ -517,7 +525,10 @@ def _schedule(where: str, c: dict) -> Schedule:
         for key in ("t0", "after"):
             if key not in s:
                 raise SceneError(f"{where}: step needs {key}")
-        return Schedule("step", t0=_num(where, "step.t0", s["t0"]),
+        t0 = _num(where, "step.t0", s["t0"])
+        if not 0 <= t0 <= MAX_TIME_S:
+            raise SceneError(f"{where}: step: 't0' must be in [0, {MAX_TIME_S:g}] s (got {_fmt(t0)})")
+        return Schedule("step", t0=t0,
                         before=_num(where, "step.before", s.get("before", 0.0)),
                         after=_num(where, "step.after", s["after"]))
     s = c["sinusoid"]
@@ -527,10 +538,16 @@ def _schedule(where: str, c: dict) -> Schedule:
     for key in ("offset", "amplitude", "frequency"):
         if key not in s:
             raise SceneError(f"{where}: sinusoid needs {key}")
+    freq = _num(where, "frequency", s["frequency"], positive=True)
+    if freq > MAX_FREQUENCY_HZ:
+        raise SceneError(f"{where}: frequency must be at most {MAX_FREQUENCY_HZ:g} Hz (got {_fmt(freq)})")
+    phase = _num(where, "phase", s.get("phase", 0.0))
+    if abs(phase) > MAX_PHASE_RAD:
+        raise SceneError(f"{where}: phase must be in [-{MAX_PHASE_RAD:g}, {MAX_PHASE_RAD:g}] rad "
+                         f"(got {_fmt(phase)})")
     return Schedule("sinusoid", offset=_num(where, "offset", s["offset"]),
                     amplitude=_num(where, "amplitude", s["amplitude"]),
-                    frequency=_num(where, "frequency", s["frequency"], positive=True),
-                    phase=_num(where, "phase", s.get("phase", 0.0)))
+                    frequency=freq, phase=phase)
 
 
 def _model(where: str, spec, path: Path | None, root: Path | None) -> ModelInfo:
@@ -558,10 +575,14 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
     legsim_cli's (scenes/README.md); on top, what the bench cannot do says why."""
     path = Path(path) if path is not None else None
     where = str(path) if path else (name or "scene")
+    if len(text.encode("utf-8", "surrogatepass")) > MAX_TOML_BYTES:
+        raise SceneError(f"{where}: TOML input refused: larger than {MAX_TOML_BYTES} bytes")
     try:
         d = tomllib.loads(text)
     except tomllib.TOMLDecodeError as e:
         raise SceneError(f"{where}: not valid TOML: {e}") from None
+    except RecursionError:  # tomllib recurses per nesting level
+        raise SceneError(f"{where}: TOML input refused: nested too deeply") from None
     for old, msg in RENAMED_KEYS.items():
         if old in d:
             raise SceneError(f"{where}: {msg}")
@@ -597,6 +618,9 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
     max_iter = _int(where, "max_newton_iter", d.get("max_newton_iter", DEFAULT_OPTIONS["max_newton_iter"]),
                     1, 1000)
     newton_tol = _num(where, "newton_tol", d.get("newton_tol", DEFAULT_OPTIONS["newton_tol"]), positive=True)
+    if not NEWTON_TOL_RANGE[0] <= newton_tol <= NEWTON_TOL_RANGE[1]:
+        raise SceneError(f"{where}: 'newton_tol' must be in [{NEWTON_TOL_RANGE[0]:g}, "
+                         f"{NEWTON_TOL_RANGE[1]:g}] (m, rad; got {_fmt(newton_tol)})")
     disable = d.get("disable", [])
     if not isinstance(disable, list):
         raise SceneError(f"{where}: disable must be a list of names")
@@ -618,6 +642,9 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
         if not 1 <= n_steps <= 1e9:
             raise SceneError(f"{where}: 'duration' / 'step_s' must give 1 to 1e9 steps")
         rec = _int(where, "record_every", d.get("record_every", 1), 1, MAX_RECORD_EVERY)
+        if n_steps // rec + 1 > MAX_SAMPLES:
+            raise SceneError(f"{where}: 'duration' / ('step_s' x 'record_every') asks for "
+                             f"{n_steps // rec + 1} samples, more than {MAX_SAMPLES}: raise 'record_every'")
 
     pose_name = d.get("pose", info.poses[0] if info.poses else None)
     if pose_name is None:
@@ -660,6 +687,8 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
         if not 1 <= len(vals) <= 2:
             raise SceneError(f"{where}: {w} must be a number or an array of 1 or 2 numbers")
         vals = tuple(_num(where, w, x) for x in vals)
+        if any(abs(x) > MAX_FORCE_N for x in vals):
+            raise SceneError(f"{where}: {w} must be within +-{MAX_FORCE_N:g} (N or N m)")
         if fname not in kinds:
             raise SceneError(f"{where}: {w}: the model has no force element '{fname}'")
         if kinds[fname] == "point" and len(vals) != 2:
@@ -869,4 +898,6 @@ def _is_demo(path: Path) -> bool:
 
 def load_scene(spec: str | os.PathLike, root: Path | None = None) -> Scene:
     path = resolve_scene(spec, root)
+    if path.stat().st_size > MAX_TOML_BYTES:  # refused before it is read
+        raise SceneError(f"{path}: TOML input refused: larger than {MAX_TOML_BYTES} bytes")
     return parse_scene(path.read_text(), path, root=root)

@@ -1,6 +1,7 @@
 // Scene files for legsim_cli: parsing (toml++), binding to a model, running the
 // analyses through the C API, and writing JSON or CSV. Host only.
 #include "scene_toml.hpp"
+#include "toml_limits.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -23,6 +24,10 @@ namespace {
 constexpr double kTwoPi = 6.283185307179586476925286766559;
 constexpr double kGridTolS = 1e-9;               // a time is on the step grid within 1 ns
 constexpr int64_t kMaxRecordEvery = 10000000;    // the DBC's largest STEP (Ctrl_NSteps)
+// Output is streamed, but a run still may not ask for more rows than a file can sensibly
+// hold (about 1 GB of CSV): n_steps / record_every + 1 <= kMaxSamples.
+constexpr int64_t kMaxSamples = 1000000;
+constexpr double kMaxFrequencyHz = 1e3;          // command sinusoids
 
 struct SceneError {
   std::string message;
@@ -127,6 +132,11 @@ Signal parse_signal(Table t, const std::string &where) {
     s.frequency_hz = get_real(st, "frequency", w, true, 0);
     s.phase_rad = get_real(st, "phase", w, false, 0);
     if (!(s.frequency_hz > 0)) fail(w + "'frequency' must be > 0 (Hz; a constant is 'value')");
+    if (s.frequency_hz > kMaxFrequencyHz)
+      fail(w + "'frequency' must be at most " + num(kMaxFrequencyHz) + " Hz (got " + num(s.frequency_hz) + ")");
+    if (std::fabs(s.phase_rad) > LEGSIM_MAX_COORD)
+      fail(w + "'phase' must be in [-" + num(LEGSIM_MAX_COORD) + ", " + num(LEGSIM_MAX_COORD) + "] rad (got " +
+           num(s.phase_rad) + ")");
   } else {
     Table st = t->get("step")->as_table();
     if (!st) fail(where + "'step' must be a table {t0, before, after}");
@@ -136,6 +146,8 @@ Signal parse_signal(Table t, const std::string &where) {
     s.t0 = get_real(st, "t0", w, true, 0);
     s.before = get_real(st, "before", w, false, 0);
     s.after = get_real(st, "after", w, true, 0);
+    if (!(s.t0 >= 0 && s.t0 <= LEGSIM_MAX_TIME_S))
+      fail(w + "'t0' must be in [0, " + num(LEGSIM_MAX_TIME_S) + "] s (got " + num(s.t0) + ")");
   }
   return s;
 }
@@ -280,7 +292,9 @@ void parse_scene(Table doc, Scene &s) {
   s.options.max_newton_iter =
       static_cast<int32_t>(get_int(doc, "max_newton_iter", "", s.options.max_newton_iter, 1, 1000));
   s.options.newton_tol = get_real(doc, "newton_tol", "", false, s.options.newton_tol);
-  if (!(s.options.newton_tol > 0)) fail("'newton_tol' must be > 0");
+  if (!(s.options.newton_tol >= LEGSIM_MIN_NEWTON_TOL && s.options.newton_tol <= LEGSIM_MAX_NEWTON_TOL))
+    fail("'newton_tol' must be in [" + num(LEGSIM_MIN_NEWTON_TOL) + ", " + num(LEGSIM_MAX_NEWTON_TOL) +
+         "] (m, rad; got " + num(s.options.newton_tol) + ")");
 
   if (Node dv = doc->get("disable")) {
     const toml::array *a = dv->as_array();
@@ -315,6 +329,9 @@ void parse_scene(Table doc, Scene &s) {
     if (n < 1 || n > 1e9) fail("'duration' / 'step_s' must give 1 to 1e9 steps (got " + num(n) + ")");
     s.n_steps = static_cast<int64_t>(n);
     s.record_every = get_int(doc, "record_every", "", 1, 1, kMaxRecordEvery);
+    if (s.n_steps / s.record_every + 1 > kMaxSamples)
+      fail("'duration' / ('step_s' x 'record_every') asks for " + std::to_string(s.n_steps / s.record_every + 1) +
+           " samples, more than " + std::to_string(kMaxSamples) + ": raise 'record_every'");
   }
 
   if (Node pv = doc->get("pose")) {
@@ -365,6 +382,9 @@ void parse_scene(Table doc, Scene &s) {
       } else {
         fail(w + " must be a number or an array of 1 or 2 numbers");
       }
+      for (int i = 0; i < f.n; ++i)
+        if (std::fabs(f.value[i]) > LEGSIM_MAX_FORCE_N)
+          fail(w + " must be within +-" + num(LEGSIM_MAX_FORCE_N) + " (N or N m; got " + num(f.value[i]) + ")");
       s.forces.push_back(f);
     }
   }
@@ -409,9 +429,14 @@ bool read_text(const std::string &path, std::string &text, std::string &err) {
     err = path + ": cannot read: " + std::strerror(errno);
     return false;
   }
-  std::ostringstream ss;
-  ss << f.rdbuf();
-  text = ss.str();
+  // Read at most one byte past the limit: a larger file is refused without being held.
+  text.resize(kTomlMaxBytes + 1);
+  f.read(text.data(), static_cast<std::streamsize>(text.size()));
+  text.resize(static_cast<size_t>(f.gcount()));
+  if (f.bad()) {
+    err = path + ": cannot read: " + std::strerror(errno);
+    return false;
+  }
   return true;
 }
 
@@ -489,6 +514,11 @@ bool load_scene(const std::string &path, Scene &scene, std::string &err) {
   try {
     std::string text;
     if (!read_text(path, text, err)) return false;
+    std::string why;
+    if (!toml_input_within_limits(text, why)) {
+      err = path + ": TOML input refused: " + why;
+      return false;
+    }
     Scene s;
     s.path = path;
 #if TOML_EXCEPTIONS
