@@ -3,6 +3,8 @@
 
   can-seeds DBC OUTDIR    seed sequences for fuzz_can, frames encoded from can/legsim.dbc
                           with cantools (the input format: fuzz/README.md)
+  toml-dict OUT FILE...   a libFuzzer dictionary for the TOML targets: TOML's own tokens
+                          and every key and short string value of the given files
   deep-keys OUTDIR        issue 10's stack overflow in toml++ 3.3.0: a key and a table
                           header of 50,000 dotted parts (about 100 KB each), as a model
                           file and as a scene file
@@ -141,12 +143,55 @@ def deep_keys(outdir, parts):
         write_if_changed(os.path.join(sub, name), text.encode())
 
 
+TOML_TOKENS = ['=', '[', ']', '[[', ']]', '{', '}', ',', '.', '"', "'", '"""', "'''", '#', '\n',
+               'true', 'false', 'inf', '-inf', 'nan', '+nan', '0x', '0o', '0b', '1e300', '-1e300',
+               '1e-320', '5e-324', '1e9', '1e10', '2147483648', '9223372036854775807',
+               '-9223372036854775808', '1979-05-27T07:32:00Z', '\\u00e9', '\u00e9']
+
+
+def dict_entry(word):
+    """A libFuzzer dictionary line: printable ASCII as is, the rest as \\xNN."""
+    out = []
+    for b in word.encode():
+        c = chr(b)
+        out.append(c if 0x20 <= b < 0x7f and c not in '"\\' else f'\\x{b:02x}')
+    return '"' + ''.join(out) + '"'
+
+
+def toml_dict(out, files):
+    import tomllib
+    words = set(TOML_TOKENS)
+
+    def walk(v):
+        if isinstance(v, dict):
+            for k, x in v.items():
+                words.add(k)
+                walk(x)
+        elif isinstance(v, list):
+            for x in v:
+                walk(x)
+        elif isinstance(v, str) and len(v) <= 32:
+            words.add(v)
+
+    for path in files:
+        try:
+            with open(path, 'rb') as f:
+                walk(tomllib.load(f))
+        except (OSError, ValueError, RecursionError):  # TOMLDecodeError, UnicodeDecodeError
+            pass  # fixtures that are bad on purpose
+    words.discard('')
+    write_if_changed(out, ('\n'.join(dict_entry(w) for w in sorted(words)) + '\n').encode())
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     sub = ap.add_subparsers(dest='cmd', required=True)
     c = sub.add_parser('can-seeds')
     c.add_argument('dbc')
     c.add_argument('outdir')
+    t = sub.add_parser('toml-dict')
+    t.add_argument('out')
+    t.add_argument('files', nargs='+')
     d = sub.add_parser('deep-keys')
     d.add_argument('outdir')
     d.add_argument('--parts', type=int, default=50000)
@@ -157,6 +202,8 @@ def main():
         os.makedirs(args.outdir, exist_ok=True)
         for name, seq in can_seeds(db).items():
             write_if_changed(os.path.join(args.outdir, name + '.bin'), bytes(seq.out))
+    elif args.cmd == 'toml-dict':
+        toml_dict(args.out, args.files)
     else:
         deep_keys(args.outdir, args.parts)
     return 0
