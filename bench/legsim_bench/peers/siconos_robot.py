@@ -18,11 +18,18 @@ the smooth part needs no bilateral constraint:
 with A = dq/dz (39 x 7: the 13 bodies' world poses), b = dA/dt z', M_b the
 bodies' masses and inertias, Q gravity, F the actuator forces (force mode, or
 the servo law of leg.toml) -- all from RobotModel.kinematics (read only). The
-feet are NOT held: each foot is a Siconos interaction with the ground line, a
-``LagrangianScleronomousR`` with h(z) = (n.(p - g), t.(p - g)) and its
-Jacobian (the foot's), and a ``NewtonImpactFrictionNSL(e = 0, e_t = 0, mu,
-2)``: unilateral contact with exact 2D Coulomb friction (one coefficient mu;
-the scene says which). Siconos decides stick, slip and lift-off every step.
+feet are NOT held: each foot is a Siconos interaction with the ground line,
+y = (n.(p - g), t.(p - g)) (normal gap, tangential position), and a
+``NewtonImpactFrictionNSL(e = 0, e_t = 0, mu, 2)``: unilateral contact with
+exact 2D Coulomb friction (one coefficient mu; the scene says which). Siconos
+decides stick, slip and lift-off every step. The relation is a
+``LagrangianLinearTIR`` y = C z + e whose C (the foot's Jacobian) and e (so
+that y is the exact gap) are rewritten in place at the start of every step:
+a Python subclass of ``LagrangianScleronomousR`` (the nonlinear relation)
+crashes Siconos 4.4 in MoreauJeanOSI::computeFreeOutput (a segmentation
+fault, reproduced with a single ball), so the contact rows are the relation
+linearized at the step's start (Siconos would evaluate them at each Newton
+iterate; the difference is O(h) per step on a first-order scheme).
 
 Time stepping: ``MoreauJeanOSI(theta)`` (default theta = 0.5), ``TimeStepping``
 with its Newton loop on the smooth part (tolerance 1e-10, no force Jacobians
@@ -67,7 +74,12 @@ def probe() -> tuple:
         last = (r.stderr.strip().splitlines() or ["no output"])[-1]
         return False, (f"{SYSTEM_PYTHON} cannot import siconos/scipy ({last}); install Debian's "
                        "python3-siconos and python3-scipy")
-    return True, r.stdout.strip()
+    try:   # siconos.__version__ says "0" in Debian's build: ask dpkg
+        v = subprocess.run(["dpkg-query", "-W", "-f=${Version}", "python3-siconos"],
+                           capture_output=True, text=True, timeout=30).stdout.strip()
+    except (OSError, subprocess.SubprocessError):
+        v = ""
+    return True, v or r.stdout.strip()
 
 
 def available() -> bool:
@@ -95,6 +107,7 @@ def run(scene: str, h: float, *, theta: float = 0.5, solver: str = "lemke", ever
     if r.returncode != 0:
         raise RuntimeError(f"siconos run failed ({r.returncode}): {r.stderr.strip()[-2000:]}")
     out = json.loads(r.stdout.strip().splitlines()[-1])
+    out["engine"] = f"siconos {probe()[1]}"
     for k in ("t", "z", "normal", "tangential", "q"):
         out[k] = np.array(out[k], float)
     return out
@@ -119,7 +132,6 @@ def compare(scene: str, h: float, *, sample_dt: float = 1e-3, ref=None, robot_pa
 def simulate(scene_name: str, h: float, *, theta: float = 0.5, solver: str = "lemke", every: int = 1,
              t_end=None, robot_path=None) -> dict:
     """The Siconos run itself (needs siconos: the system Python)."""
-    import siconos
     import siconos.kernel as sk
     import siconos.numerics as sn
 
@@ -176,6 +188,7 @@ def simulate(scene_name: str, h: float, *, theta: float = 0.5, solver: str = "le
     ds = RobotDS(z0.copy(), np.zeros(7), M0)
     ds.setFExtPtr(np.zeros(7))         # makes Siconos allocate its forces vector
     ds.computeMass()
+    mass = float(ds.mass()[0, 0])      # the model's total mass: every body moves with x
     nsds = sk.NonSmoothDynamicalSystem(0.0, t_end)
     nsds.insertDynamicalSystem(ds)
     inters = []
@@ -198,7 +211,6 @@ def simulate(scene_name: str, h: float, *, theta: float = 0.5, solver: str = "le
     sim.setNewtonTolerance(1e-10)
     sim.setNewtonMaxIteration(50)
 
-    bodies = rs.angle_bodies(robot)
     ts, zs, qs = [0.0], [z0.copy()], [robot.absolute_q(z0)]
     wall = 0.0
     k = 0
@@ -224,12 +236,11 @@ def simulate(scene_name: str, h: float, *, theta: float = 0.5, solver: str = "le
             qs.append(robot.absolute_q(z))
     N = [float(l_[0] / h) if l_.size else 0.0 for l_ in lam]
     T = [float(l_[1] / h) if l_.size > 1 else 0.0 for l_ in lam]
-    del bodies
     return {"t": ts, "z": [list(map(float, z)) for z in zs], "q": [list(map(float, q)) for q in qs],
             "normal": N, "tangential": T, "wall_s": wall, "per_step_s": wall / max(k, 1),
-            "n_steps": k, "ok": ok and k == n_steps, "engine": f"siconos {siconos.__version__}",
+            "n_steps": k, "ok": ok and k == n_steps, "engine": "siconos",
             "method": f"moreau-jean theta={theta} {solver}", "h": h, "scene": scene_name,
-            "mass": float(np.sum(robot._m))}
+            "mass": mass}
 
 
 def main(argv=None) -> int:
