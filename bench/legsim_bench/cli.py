@@ -39,6 +39,8 @@ BENCHMARKS = {
     "options": ("legsim_bench.options_cost", "cost of the solver options"),
     "stress": ("legsim_bench.stress", "stress runs"),
     "mcu": ("legsim_bench.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
+    "robot-peers": ("legsim_bench.peers.robot_results",
+                    "the two-leg robot in MuJoCo and Siconos against the bench's reference"),
 }
 
 

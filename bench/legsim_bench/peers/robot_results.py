@@ -90,20 +90,28 @@ def write(out: Path, **kw) -> Path:
     return path
 
 
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(description="The two-leg robot in MuJoCo and Siconos: error against "
-                                            "the bench's reference and cost per step")
+def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
+    """The options of `legsim-bench robot-peers` (and of python -m legsim_bench.peers.robot_results)."""
     results.add_output_options(p)
     p.add_argument("--repeats", type=int, default=3, help="MuJoCo timing repeats (best of)")
     p.add_argument("--scenes", nargs="+", choices=SCENES, default=list(SCENES))
     p.add_argument("--no-siconos", action="store_true", help="MuJoCo only")
-    a = p.parse_args(argv)
+    return p
+
+
+def run(a) -> int:
     if a.repeats < 1:
-        p.error("--repeats must be at least 1")
+        raise SystemExit("robot-peers: --repeats must be at least 1")
     path = write(results.output_dir(a), scenes=tuple(a.scenes), repeats=a.repeats,
                  siconos_h=() if a.no_siconos else SICONOS_H)
     print(path)
     return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description="The two-leg robot in MuJoCo and Siconos: error against "
+                                            "the bench's reference and cost per step")
+    return run(configure_parser(p).parse_args(argv))
 
 
 if __name__ == "__main__":
