@@ -16,6 +16,7 @@ static const struct {
     FACT(LEGSIM_MAX_FORCES),
     FACT(LEGSIM_MAX_POSES),
     FACT(LEGSIM_MAX_POSE_DRIVERS),
+    FACT(LEGSIM_MAX_CONTACTS),
     FACT(LEGSIM_MAX_ROWS),
     FACT(LEGSIM_WITH_RK4),
     FACT(LEGSIM_WITH_GENERALIZED_ALPHA),
@@ -29,6 +30,7 @@ static const struct {
     SIZE(legsim_report),
     SIZE(legsim_reaction),
     SIZE(legsim_worst_case),
+    SIZE(legsim_contact),
 };
 
 #define N_FACTS ((int32_t)(sizeof facts / sizeof facts[0]))

@@ -832,6 +832,350 @@ toml::table parse_toml(const std::string &text, const std::string &source) {
 #endif
 }
 
+// ---- a robot file: a box with leg files placed on it (docs/design/robot-on-ground.md) ----
+// The port of model_codegen.py's parse_robot and robot_guess: same checks, messages and
+// floating-point operations (the descriptions must agree bit for bit).
+constexpr double kMaxFriction = LEGSIM_MAX_FRICTION;
+constexpr double kMaxSlope = 1.5;         // rad, as legsim_model_check
+constexpr double kCongruentTol = 1e-12;   // m: attach points against the leg's frame
+
+bool is_robot(Table doc) { return has(doc, "box") && has(doc, "leg"); }
+
+std::string path_join(const std::string &base, const std::string &file) {  // os.path.join
+  if (base.empty() || (!file.empty() && file[0] == '/')) return file;
+  return base.back() == '/' ? base + file : base + "/" + file;
+}
+
+std::string dir_name(const std::string &path) {  // os.path.dirname
+  const size_t k = path.rfind('/');
+  if (k == std::string::npos) return "";
+  std::string d = path.substr(0, k + 1);
+  while (d.size() > 1 && d.back() == '/') d.pop_back();
+  return d;
+}
+
+toml::table read_leg_toml(const std::string &path, const std::string &label, const std::string &shown) {
+  std::string text, err;
+  if (!read_file(path.c_str(), text, err)) {
+    const size_t k = err.find(": cannot read: ");
+    fail(label, "file " + q(shown) + err.substr(k), LEGSIM_ERR_BAD_INPUT);
+  }
+  try {
+    return parse_toml(text, shown);
+  } catch (Fail &f) {
+    // parse_toml's message starts with the source name: "SHOWN: TOML ..."
+    fail(label, "file " + q(shown) + f.message.substr(shown.size()));
+  }
+}
+
+struct Leg {
+  std::string name, prefix;
+  double sign;
+  double off[2];
+  legsim_model_desc model;
+  int body0;
+};
+
+void box_xy_to_body(const double xy[2], double (&out)[2]) {
+  out[0] = -xy[1];
+  out[1] = xy[0];
+}
+
+std::vector<std::vector<double>> robot_guess(const std::vector<Leg> &legs, const double gpoint[2],
+                                             double slope, const std::string &legs_pose, double mid,
+                                             const std::string &label) {
+  std::vector<std::vector<double>> rows = {{0.0, 0.0, 0.0}};
+  std::vector<std::vector<double>> feet;
+  for (const Leg &leg : legs) {
+    const legsim_model_desc &lm = leg.model;
+    const double sign = leg.sign;
+    int pi = -1;
+    for (int p = 0; p < lm.n_poses; ++p)
+      if (legs_pose == lm.pose[p].name) pi = p;
+    if (pi < 0) fail(label, "leg " + q(leg.name) + " has no pose " + q(legs_pose));
+    for (int b = 0; b < lm.n_bodies; ++b) {
+      const double *r = lm.pose[pi].guess[b];
+      rows.push_back({leg.off[0] + sign * r[0], leg.off[1] + r[1], sign * r[2]});
+    }
+    const std::vector<double> &fb = rows[static_cast<size_t>(leg.body0 + lm.foot_body)];
+    const double bx = fb[0], by = fb[1], bphi = fb[2];
+    const double xi = lm.foot_point[0], eta = sign * lm.foot_point[1];
+    feet.push_back({bx + xi * std::sin(bphi) + eta * std::cos(bphi),
+                    by - xi * std::cos(bphi) + eta * std::sin(bphi)});
+  }
+  double theta, m0, m1;
+  if (feet.size() > 1) {
+    theta = std::atan2(feet[0][1] - feet[1][1], feet[0][0] - feet[1][0]);
+    m0 = 0.5 * (feet[0][0] + feet[1][0]);
+    m1 = 0.5 * (feet[0][1] + feet[1][1]);
+  } else {
+    theta = 0.0;
+    m0 = feet[0][0];
+    m1 = feet[0][1];
+  }
+  const double psi = slope - theta;
+  const double c = std::cos(psi), s = std::sin(psi);
+  const double ct = std::cos(slope), st = std::sin(slope);
+  const double r0 = gpoint[0] + mid * ct - (c * m0 - s * m1);
+  const double r1 = gpoint[1] + mid * st - (s * m0 + c * m1);
+  std::vector<std::vector<double>> out;
+  for (const auto &row : rows) {
+    const double x = row[0], y = row[1], phi = row[2];
+    const double v[3] = {r0 + c * x - s * y, r1 + s * x + c * y, phi + psi};
+    for (double e : v)
+      if (!(std::abs(e) <= LEGSIM_MAX_COORD))
+        fail(label, "'guess' must be in [" + g(-LEGSIM_MAX_COORD) + ", " + g(LEGSIM_MAX_COORD) + "]");
+    out.push_back({v[0], v[1], v[2]});
+  }
+  return out;
+}
+
+void parse_robot(Table doc, const std::string &base_dir, const std::string &variant,
+                 legsim_model_desc &m) {
+  check_keys(doc, {"name", "gravity", "box", "leg", "ground", "pose"}, "robot");
+  const std::string name = get_string(doc, "name", "robot");
+  check_name(name, "robot");
+  std::vector<double> gravity =
+      has(doc, "gravity") ? get_vec(doc, "gravity", 2, "robot") : std::vector<double>{0.0, -9.81};
+  ranged_vec(gravity, -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2, "gravity", "robot");
+  if (variant != kDefaultVariant)
+    fail("robot", "unknown variant " + q(variant) + " (available: " + kDefaultVariant + ")",
+         LEGSIM_ERR_BAD_INPUT);
+
+  Node bn = doc->get("box");
+  if (!is_table(bn)) fail("robot", "'box' must be a table");
+  Table bt = bn->as_table();
+  check_keys(bt, {"name", "mass", "inertia", "size"}, "box");
+  const std::string bname = has(bt, "name") ? get_string(bt, "name", "box") : "box";
+  check_name(bname, "box");
+  const auto size = ranged_vec(get_vec(bt, "size", 2, "box"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
+                               "size", "box");
+  std::vector<legsim_body_desc> bodies(1);
+  std::memset(&bodies[0], 0, sizeof bodies[0]);
+  copy_name(bodies[0].name, bname);
+  bodies[0].length_m = size[0];
+  bodies[0].mass_kg =
+      ranged(get_positive(bt, "mass", "box"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "box");
+  bodies[0].inertia_kgm2 = ranged(get_positive(bt, "inertia", "box"), LEGSIM_MIN_INERTIA_KGM2,
+                                  LEGSIM_MAX_INERTIA_KGM2, "inertia", "box");
+  std::vector<legsim_joint_desc> joints;
+  std::vector<legsim_actuator_desc> actuators;
+  std::vector<legsim_force_desc> forces;
+  std::vector<legsim_contact_desc> contacts;
+  std::vector<Leg> legs;
+
+  auto leg_tables = get_table_array(doc, "leg", "robot");
+  if (leg_tables.empty()) fail("robot", "no [[leg]]");
+  for (size_t k = 1; k <= leg_tables.size(); ++k) {
+    Table tl = leg_tables[k - 1];
+    std::string label = "leg #" + std::to_string(k);
+    const std::string lname = get_string(tl, "name", label);
+    check_name(lname, label);
+    for (size_t k2 = 1; k2 <= legs.size(); ++k2)
+      if (legs[k2 - 1].name == lname)
+        fail(label, "duplicate name " + q(lname) + " (leg #" + std::to_string(k2) + " has it too)");
+    label = "leg " + q(lname);
+    check_keys(tl, {"name", "file", "variant", "prefix", "mirror", "attach"}, label);
+    const std::string lfile = get_string(tl, "file", label);
+    const std::string lvariant = has(tl, "variant") ? get_string(tl, "variant", label) : kDefaultVariant;
+    const std::string prefix = has(tl, "prefix") ? get_string(tl, "prefix", label) : lname + ".";
+    for (const Leg &other : legs)
+      if (other.prefix == prefix) fail(label, "prefix " + q(prefix) + " is taken by leg " + q(other.name));
+    bool mirror = false;
+    if (Node mv = tl->get("mirror")) {
+      if (!mv->is_boolean()) fail(label, "'mirror' must be true or false");
+      mirror = *mv->value<bool>();
+    }
+    Node an = req(tl, "attach", label);
+    if (!is_table(an)) fail(label, "'attach' must be a table of POINT = [x, y]");
+    Table attach = an->as_table();
+    toml::table ldoc = read_leg_toml(path_join(base_dir, lfile), label, lfile);
+    if (is_robot(&ldoc)) fail(label, "file " + q(lfile) + " is a robot file, not a leg");
+    Leg leg;
+    leg.name = lname;
+    leg.prefix = prefix;
+    try {
+      parse_model(&ldoc, lvariant, leg.model);
+    } catch (Fail &f) {
+      f.message = label + ": " + lfile + ": " + f.message;
+      throw;
+    }
+    const legsim_model_desc &lm = leg.model;
+    Table frame = ldoc.get("frame") ? ldoc.get("frame")->as_table() : nullptr;
+    std::vector<std::string> fnames = frame ? sorted_keys(frame) : std::vector<std::string>{};
+    if (fnames.empty()) fail(label, "the leg file has no [frame] points to attach");
+    if (sorted_keys(attach) != fnames)
+      fail(label, "'attach' must name the leg file's frame points (" + join(fnames, ", ") + ")");
+    const double sign = mirror ? -1.0 : 1.0;
+    std::vector<std::vector<double>> offs;
+    for (const auto &key : fnames) {
+      const auto a = ranged_vec(as_vec(attach->get(key), 2, key, label), -LEGSIM_MAX_COORD,
+                                LEGSIM_MAX_COORD, key, label);
+      const auto fp = as_vec(frame->get(key), 2, key, label);
+      offs.push_back({a[0] - sign * fp[0], a[1] - fp[1]});
+    }
+    for (const auto &o : offs)
+      if (std::abs(o[0] - offs[0][0]) > kCongruentTol || std::abs(o[1] - offs[0][1]) > kCongruentTol)
+        fail(label, "the box points are not congruent with the leg's frame");
+    leg.off[0] = offs[0][0];
+    leg.off[1] = offs[0][1];
+    if (lm.foot_body == LEGSIM_FRAME) fail(label, "the leg file has no [foot]");
+    const int b0 = static_cast<int>(bodies.size()), j0 = static_cast<int>(joints.size());
+    leg.body0 = b0;
+    leg.sign = sign;
+    auto mir = [&](const double p[2], double (&out)[2]) {
+      out[0] = p[0];
+      out[1] = sign * p[1];
+    };
+    auto on_box = [&](const double p[2], double (&out)[2]) {
+      const double xy[2] = {leg.off[0] + sign * p[0], leg.off[1] + p[1]};
+      box_xy_to_body(xy, out);
+    };
+    auto named = [&](const std::string &what, const char *n, char (&dst)[LEGSIM_NAME_LEN]) {
+      const std::string full = prefix + n;
+      check_name(full, label, what);
+      copy_name(dst, full);
+    };
+    for (int b = 0; b < lm.n_bodies; ++b) {
+      legsim_body_desc bd = lm.body[b];
+      named("body name", lm.body[b].name, bd.name);
+      bodies.push_back(bd);
+    }
+    for (int j = 0; j < lm.n_joints; ++j) {
+      const legsim_joint_desc &lj = lm.joint[j];
+      legsim_joint_desc nj = lj;
+      named("joint name", lj.name, nj.name);
+      nj.body[0] = lj.body[0] + b0;
+      nj.body[1] = lj.body[1] + b0;
+      mir(lj.point[0], nj.point[0]);
+      mir(lj.point[1], nj.point[1]);
+      if (lj.kind == LEGSIM_JOINT_REVOLUTE_TO_FRAME) {
+        nj.kind = LEGSIM_JOINT_REVOLUTE;
+        nj.body[1] = 0;
+        on_box(lj.point[1], nj.point[1]);
+      }
+      joints.push_back(nj);
+    }
+    for (int a = 0; a < lm.n_actuators; ++a) {
+      legsim_actuator_desc na = lm.actuator[a];
+      named("actuator name", lm.actuator[a].name, na.name);
+      na.joint = lm.actuator[a].joint + j0;
+      actuators.push_back(na);
+    }
+    for (int fi = 0; fi < lm.n_forces; ++fi) {
+      const legsim_force_desc &f = lm.force[fi];
+      legsim_force_desc nf = f;
+      named("force name", f.name, nf.name);
+      mir(f.point[0], nf.point[0]);
+      mir(f.point[1], nf.point[1]);
+      for (int s = 0; s < 2; ++s) {
+        if (f.body[s] == LEGSIM_FRAME) {
+          if (f.kind == LEGSIM_FORCE_SPRING_DAMPER) {
+            nf.body[s] = 0;
+            on_box(f.point[s], nf.point[s]);
+          }
+        } else {
+          nf.body[s] = f.body[s] + b0;
+        }
+      }
+      if (f.kind == LEGSIM_FORCE_POINT) {
+        nf.value[0] = sign * f.value[0];
+        nf.value[1] = f.value[1];
+      } else if (f.kind == LEGSIM_FORCE_TORQUE) {
+        nf.value[0] = sign * f.value[0];
+        nf.value[1] = 0.0;
+      }
+      forces.push_back(nf);
+    }
+    legsim_contact_desc c;
+    std::memset(&c, 0, sizeof c);
+    named("contact name", "foot", c.name);
+    c.body = lm.foot_body + b0;
+    mir(lm.foot_point, c.point);
+    contacts.push_back(c);
+    legs.push_back(leg);
+  }
+
+  Node gn = req(doc, "ground", "robot");
+  if (!is_table(gn)) fail("robot", "'ground' must be a table");
+  Table gt = gn->as_table();
+  check_keys(gt, {"point", "slope", "mu_static", "mu_kinetic"}, "ground");
+  const std::vector<double> gpoint =
+      has(gt, "point") ? ranged_vec(get_vec(gt, "point", 2, "ground"), -LEGSIM_MAX_COORD,
+                                    LEGSIM_MAX_COORD, "point", "ground")
+                       : std::vector<double>{0.0, 0.0};
+  const double slope =
+      has(gt, "slope") ? ranged(get_real(gt, "slope", "ground"), -kMaxSlope, kMaxSlope, "slope", "ground")
+                       : 0.0;
+  const double mu_s =
+      ranged(get_nonnegative(gt, "mu_static", "ground"), 0.0, kMaxFriction, "mu_static", "ground");
+  const double mu_k =
+      ranged(get_nonnegative(gt, "mu_kinetic", "ground"), 0.0, kMaxFriction, "mu_kinetic", "ground");
+  if (mu_k > mu_s) fail("ground", "mu_kinetic " + g(mu_k) + " > mu_static " + g(mu_s));
+
+  struct Pose {
+    std::string name;
+    std::vector<std::vector<double>> guess;
+  };
+  std::vector<Pose> poses;
+  if (Node tp = doc->get("pose")) {
+    if (!is_table(tp)) fail("robot", "'pose' must be a table of [pose.NAME] tables");
+    Table ptab = tp->as_table();
+    capacity(ptab->size(), "poses", "LEGSIM_MAX_POSES", LEGSIM_MAX_POSES, "robot");
+    for (const auto &pname : file_order_keys(ptab)) {
+      const std::string label = "pose " + q(pname);
+      check_name(pname, label);
+      Node pn = ptab->get(pname);
+      if (!is_table(pn)) fail(label, "must be a table");
+      Table pt = pn->as_table();
+      check_keys(pt, {"legs", "feet_mid", "contact"}, label);
+      const std::string legs_pose = has(pt, "legs") ? get_string(pt, "legs", label) : "stand";
+      const double mid = has(pt, "feet_mid") ? ranged(get_real(pt, "feet_mid", label), -LEGSIM_MAX_COORD,
+                                                      LEGSIM_MAX_COORD, "feet_mid", label)
+                                             : 0.0;
+      const std::string state = has(pt, "contact") ? get_string(pt, "contact", label) : "stuck";
+      if (state != "stuck") fail(label, "'contact' must be \"stuck\" (got " + q(state) + ")");
+      if (legs.size() > 2) fail(label, "a pose on the ground needs one or two legs");
+      const double gp[2] = {gpoint[0], gpoint[1]};
+      poses.push_back({pname, robot_guess(legs, gp, slope, legs_pose, mid, label)});
+    }
+  }
+
+  // the capacities last: every other check of the file comes first, in any build
+  capacity(bodies.size(), "bodies", "LEGSIM_MAX_BODIES", LEGSIM_MAX_BODIES, "robot");
+  capacity(joints.size(), "joints", "LEGSIM_MAX_JOINTS", LEGSIM_MAX_JOINTS, "robot");
+  capacity(actuators.size(), "actuators", "LEGSIM_MAX_ACTUATORS", LEGSIM_MAX_ACTUATORS, "robot");
+  capacity(forces.size(), "force elements", "LEGSIM_MAX_FORCES", LEGSIM_MAX_FORCES, "robot");
+  capacity(contacts.size(), "contacts", "LEGSIM_MAX_CONTACTS", LEGSIM_MAX_CONTACTS, "robot");
+  // ---- fill the description ----
+  std::memset(&m, 0, sizeof m);
+  copy_name(m.name, name);
+  m.gravity_mps2[0] = gravity[0];
+  m.gravity_mps2[1] = gravity[1];
+  m.n_bodies = static_cast<int32_t>(bodies.size());
+  m.n_joints = static_cast<int32_t>(joints.size());
+  m.n_actuators = static_cast<int32_t>(actuators.size());
+  m.n_forces = static_cast<int32_t>(forces.size());
+  m.n_poses = static_cast<int32_t>(poses.size());
+  m.n_contacts = static_cast<int32_t>(contacts.size());
+  for (size_t i = 0; i < bodies.size(); ++i) m.body[i] = bodies[i];
+  for (size_t i = 0; i < joints.size(); ++i) m.joint[i] = joints[i];
+  for (size_t i = 0; i < actuators.size(); ++i) m.actuator[i] = actuators[i];
+  for (size_t i = 0; i < forces.size(); ++i) m.force[i] = forces[i];
+  for (size_t i = 0; i < contacts.size(); ++i) m.contact[i] = contacts[i];
+  for (size_t i = 0; i < poses.size(); ++i) {
+    copy_name(m.pose[i].name, poses[i].name);
+    for (size_t b = 0; b < bodies.size(); ++b)
+      for (int c = 0; c < 3; ++c) m.pose[i].guess[b][c] = poses[i].guess[b][c];
+  }
+  m.foot_body = LEGSIM_FRAME;
+  m.ground.point[0] = gpoint[0];
+  m.ground.point[1] = gpoint[1];
+  m.ground.slope_rad = slope;
+  m.ground.mu_static = mu_s;
+  m.ground.mu_kinetic = mu_k;
+}
+
 legsim_status parse_text(const std::string &text, const std::string &source, const char *variant,
                          legsim_model_desc *out, char *msg, size_t msg_len) {
   const std::string v = (variant && *variant) ? variant : kDefaultVariant;
@@ -839,7 +1183,10 @@ legsim_status parse_text(const std::string &text, const std::string &source, con
     toml::table doc = parse_toml(text, source);
     legsim_model_desc m;
     try {
-      parse_model(&doc, v, m);
+      if (is_robot(&doc))
+        parse_robot(&doc, dir_name(source), v, m);
+      else
+        parse_model(&doc, v, m);
     } catch (Fail &f) {
       f.message = source + ": " + f.message;
       throw;

@@ -38,7 +38,9 @@ legsim_status work_layout(Sim &sim, uint32_t mask) {
 
 legsim_status stops_layout(Sim &sim) {
   Data &d = sim.data;
-  legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn);
+  uint8_t contacts[kMaxContacts];
+  contact_rows_of_states(sim.model, d, contacts);
+  legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn, contacts);
   if (s == LEGSIM_OK) s = layout_finish(d.dyn, d.stop_drivers);
   d.dyn.stops = true;
   return s;

@@ -27,6 +27,10 @@ Snapshot::Snapshot(const Data &d)
     stop_force[a] = d.act[a].stop_force;
     stop_length[a] = d.stop_drivers.length[a];
   }
+  for (int k = 0; k < kMaxContacts; ++k) {
+    contact[k] = d.contact[k];
+    stick[k] = d.stop_drivers.stick[k];
+  }
 }
 
 void Snapshot::restore(Sim &sim) const {
@@ -44,7 +48,13 @@ void Snapshot::restore(Sim &sim) const {
     d.stop_drivers.length[a] = stop_length[a];
     d.stop_drivers.rate[a] = d.stop_drivers.accel[a] = 0;
   }
-  if (d.stop_mask != stop_mask) {
+  bool rows_changed = d.stop_mask != stop_mask;
+  for (int k = 0; k < kMaxContacts; ++k) {
+    rows_changed = rows_changed || d.contact[k].state != contact[k].state;
+    d.contact[k] = contact[k];
+    d.stop_drivers.stick[k] = stick[k];
+  }
+  if (rows_changed) {
     d.stop_mask = stop_mask;
     stops_layout(sim);  // the same rows as before: cannot fail
   }
@@ -74,6 +84,7 @@ legsim_status outputs_check(const Sim &sim) {
     ok = ok && finite(d.reaction[j].force_n[0]) && finite(d.reaction[j].force_n[1]) &&
          finite(d.reaction[j].moment_nm);
   for (int a = 0; a < m.na; ++a) ok = ok && finite(d.act[a].force) && finite(d.act[a].stop_force);
+  for (int k = 0; k < m.nc; ++k) ok = ok && finite(d.contact[k].normal) && finite(d.contact[k].tangential);
   return ok ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
@@ -180,6 +191,15 @@ legsim_status stops_clear(Sim &sim) {
   return stops_layout(sim);
 }
 
+// A state assembled or set from outside rests on no contact (legsim_assemble_on_ground
+// and legsim_set_contact_state put feet on the ground).
+legsim_status contacts_release(Sim &sim) {
+  bool any = false;
+  for (int k = 0; k < sim.model.nc; ++k) any = any || sim.data.contact[k].state != LEGSIM_CONTACT_FREE;
+  contacts_free(sim);
+  return any ? stops_layout(sim) : LEGSIM_OK;
+}
+
 legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord) {
   if (ncoord == 0) return work_layout(sim, act_mask);
   sim.data.work_mask = -1;  // coordinate rows: built for this call only
@@ -193,6 +213,7 @@ uint32_t all_actuators(const Model &m) { return (1u << m.na) - 1; }
 legsim_status assemble_commit(Sim &sim) {
   Data &d = sim.data;
   if (const legsim_status st = stops_clear(sim); st != LEGSIM_OK) return st;
+  if (const legsim_status st = contacts_release(sim); st != LEGSIM_OK) return st;
   VecQ q = d.q;
   const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
@@ -263,6 +284,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
   d.stop_mask = 0;
   d.work_mask = -1;
+  contacts_free(*sim);
   for (int f = 0; f < m.nf; ++f) {
     d.force_value[f][0] = real(model->force[f].value[0]);
     d.force_value[f][1] = real(model->force[f].value[1]);
@@ -293,6 +315,7 @@ int32_t legsim_n_constraints(const legsim_sim *sim) { return sim_ok(sim) ? as_si
 int32_t legsim_n_joints(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nj : 0; }
 int32_t legsim_n_actuators(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.na : 0; }
 int32_t legsim_n_forces(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nf : 0; }
+int32_t legsim_n_contacts(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->model.nc : 0; }
 const legsim_model_desc *legsim_model(const legsim_sim *sim) {
   return sim_ok(sim) ? as_sim(sim)->model.desc : nullptr;
 }
@@ -368,7 +391,8 @@ legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legs
     d.qd = qdn;
     d.t = t_s;
     d.assembled = true;
-    const legsim_status c = stops_clear(s);
+    legsim_status c = stops_clear(s);
+    if (c == LEGSIM_OK) c = contacts_release(s);
     return c == LEGSIM_OK ? state_refresh(s) : c;
   });
 }
@@ -687,6 +711,115 @@ legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real
     s.data.force_value[force][i] = value[i];
   }
   return LEGSIM_OK;
+}
+
+legsim_status legsim_contacts(const legsim_sim *sim, legsim_contact *out) {
+  CHECK_SIM(sim);
+  if (!out) return LEGSIM_ERR_NULL;
+  if (!LEGSIM_WITH_CONTACT) return LEGSIM_ERR_DISABLED;
+  const Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  for (int k = 0; k < m.nc; ++k) {
+    const ContactData &c = s.data.contact[k];
+    Vec2 p, v;
+    contact_point(m, k, s.data.q, s.data.qd, p, v);
+    legsim_contact &o = out[k];
+    o.state = legsim_contact_state(c.state);
+    o.normal_n = c.normal;
+    o.tangential_n = c.tangential;
+    o.friction_use = c.normal > 0 ? std::abs(c.tangential) / c.normal : real(0);
+    o.position[0] = p.x();
+    o.position[1] = p.y();
+    o.slip_mps = v.dot(m.ground_t);
+    o.impulse_ns[0] = o.impulse_ns[1] = 0;
+  }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_set_contact_state(legsim_sim *sim, int32_t k, legsim_contact_state state) {
+  CHECK_SIM(sim);
+  if (!LEGSIM_WITH_CONTACT) return LEGSIM_ERR_DISABLED;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  Data &d = s.data;
+  const long long st = raw_enum(state);
+  if (k < 0 || k >= m.nc || (st != LEGSIM_CONTACT_FREE && st != LEGSIM_CONTACT_STUCK))
+    return LEGSIM_ERR_BAD_INPUT;
+  if (!d.assembled) return LEGSIM_ERR_STATE;
+  Vec2 p, v;
+  contact_point(m, k, d.q, d.qd, p, v);
+  const real gap = m.ground_n.dot(p - m.ground_point);
+  if (st == LEGSIM_CONTACT_STUCK && !(std::abs(gap) <= real(s.opt.newton_tol))) return LEGSIM_ERR_STATE;
+  if (d.contact[k].state == st) return LEGSIM_OK;  // sent again: changes nothing
+  return all_or_nothing(s, [&] {
+    d.contact[k].state = uint8_t(st);
+    d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
+    legsim_status r = stops_layout(s);
+    if (r == LEGSIM_OK && st == LEGSIM_CONTACT_STUCK) {
+      // the foot stops where it is: its velocity onto the new rows (an inelastic impact)
+      VecQ qd = d.qd;
+      r = velocity_solve(s, d.dyn, qd);
+      if (r == LEGSIM_OK) d.qd = qd;
+    }
+    return r == LEGSIM_OK ? state_refresh(s) : r;
+  });
+}
+
+legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *length_m,
+                                        legsim_real feet_mid_m) {
+  CHECK_SIM(sim);
+  if (!LEGSIM_WITH_CONTACT) return LEGSIM_ERR_DISABLED;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  Data &d = s.data;
+  if (m.nc < 1 || m.nc > 2 || !(std::abs(feet_mid_m) <= real(LEGSIM_MAX_COORD))) return LEGSIM_ERR_BAD_INPUT;
+  if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
+  real len[kMaxActuators];
+  if (length_m) {
+    for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
+  } else {
+    legsim_actuator_lengths(sim, len, nullptr);
+  }
+  const legsim_status lc = lengths_check(m, len);
+  if (lc != LEGSIM_OK) return lc;
+  for (int a = 0; a < m.na; ++a) {
+    d.drivers.length[a] = len[a];
+    d.drivers.rate[a] = d.drivers.accel[a] = 0;
+  }
+  d.drivers.ncoord = 0;
+  d.drivers.feet_mid = feet_mid_m;
+  // joints, lengths, each foot's normal gap and the feet's midpoint along the line
+  uint8_t normal_only[kMaxContacts];
+  for (int k = 0; k < m.nc; ++k) normal_only[k] = kContactNormal;
+  d.work_mask = -1;  // built for this call only
+  legsim_status st = layout_build(m, all_actuators(m), 0, d.work, normal_only, true);
+  if (st == LEGSIM_OK) st = layout_finish(d.work, d.drivers);
+  if (st != LEGSIM_OK) return st;
+  return all_or_nothing(s, [&] {
+    legsim_status r = stops_clear(s);
+    if (r != LEGSIM_OK) return r;
+    VecQ q = d.q;
+    r = assemble(s, d.work, d.drivers, q, m.unit_weight, AssemblyMode::Assemble);
+    if (r != LEGSIM_OK) return r;
+    d.q = q;
+    d.qd.setZero();
+    d.assembled = true;
+    const VecQ zero = VecQ::Zero();
+    for (int k = 0; k < m.nc; ++k) {
+      Vec2 p, v;
+      contact_point(m, k, d.q, zero, p, v);
+      d.contact[k].state = uint8_t(LEGSIM_CONTACT_STUCK);
+      d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
+    }
+    r = stops_layout(s);
+    if (r != LEGSIM_OK) return r;
+    const legsim_report assembly = d.report;
+    r = state_refresh(s);
+    d.report.iterations = assembly.iterations;
+    d.report.residual = assembly.residual;
+    d.report.condition = assembly.condition;
+    return r;
+  });
 }
 
 }  // extern "C"

@@ -100,6 +100,20 @@ void actuator_row(const Actuator &ac, const DriverValues &dv, int index, const B
   out.gamma[row] = dv.accel[index] - 2 * a.w * dd.dot(a.n) + a.w * a.w * d.dot(a.u);
 }
 
+// Contact rows: a foot point p = r + s on the ground line through g along t, normal n.
+// Normal: n.(p - g) = 0; tangential: t.(p - g) - stick = 0; both with gamma = w^2 e.s.
+void contact_row(const Model &m, const Vec2 &e, int k, const BodyPose *pose, real target,
+                 int slot, real weight, int row, Rows &out) {
+  const Contact &c = m.contact[k];
+  const BodyPose &b = pose[c.body];
+  const Vec2 sp = offset(b, c.point);
+  if (slot == 0) out.phi[row] = out.gamma[row] = 0;
+  out.phi[row] += weight * e.dot(b.r + sp - m.ground_point) - (slot == 0 ? target : real(0));
+  set_coef(out.coef[row][slot], weight * e, weight * e.dot(perp(sp)));
+  out.gamma[row] += weight * b.w * b.w * e.dot(sp);
+  out.nu[row] = 0;
+}
+
 void coordinate_row(const legsim_coord_driver &c, const VecQ &q, int row, Rows &out) {
   const int k = 3 * c.body + c.coord;
   out.phi[row] = q[k] - real(c.value);
@@ -110,7 +124,8 @@ void coordinate_row(const legsim_coord_driver &c, const VecQ &q, int row, Rows &
 
 }  // namespace
 
-legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out) {
+legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out,
+                           const uint8_t *contacts, bool mid) {
   int m = 0;
   for (int j = 0; j < model.nj; ++j) {
     const Joint &jt = model.joint[j];
@@ -135,6 +150,23 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
     out.src[m] = {RowKind::Coordinate, uint8_t(c), 0};
     out.body[m][0] = -1;
     out.body[m][1] = -1;
+    ++m;
+  }
+  // contacts: the normal row, then (stuck) the tangential one
+  for (int k = 0; contacts && k < model.nc; ++k)
+    for (int r = 0; r < contacts[k]; ++r) {
+      if (m >= kMaxRows) return LEGSIM_ERR_CAPACITY;
+      out.src[m] = {r == 0 ? RowKind::ContactNormal : RowKind::ContactTangent, uint8_t(k), 0};
+      out.body[m][0] = int8_t(model.contact[k].body);
+      out.body[m][1] = -1;
+      ++m;
+    }
+  // assembly on the ground: the midpoint of the (one or two) feet along the line
+  if (mid) {
+    if (m >= kMaxRows || model.nc < 1 || model.nc > 2) return LEGSIM_ERR_CAPACITY;
+    out.src[m] = {RowKind::ContactMid, 0, 0};
+    out.body[m][0] = int8_t(model.contact[0].body);
+    out.body[m][1] = int8_t(model.nc > 1 ? model.contact[kMaxContacts > 1 ? 1 : 0].body : -1);
     ++m;
   }
   out.m = m;
@@ -226,6 +258,21 @@ void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv,
         coordinate_row(dv.coord[s.index], q, i, rows);
         ++i;
         break;
+      case RowKind::ContactNormal:
+        contact_row(model, model.ground_n, s.index, pose, 0, 0, 1, i, rows);
+        ++i;
+        break;
+      case RowKind::ContactTangent:
+        contact_row(model, model.ground_t, s.index, pose, dv.stick[s.index], 0, 1, i, rows);
+        ++i;
+        break;
+      case RowKind::ContactMid: {
+        const real w = model.nc > 1 ? real(0.5) : real(1);
+        for (int k = 0; k < model.nc; ++k)
+          contact_row(model, model.ground_t, k, pose, dv.feet_mid, k, w, i, rows);
+        ++i;
+        break;
+      }
     }
   }
 }

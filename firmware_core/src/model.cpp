@@ -113,10 +113,15 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
       return fail(msg, len, bad, "joint '", Name{jd.name}, "': point outside +-LEGSIM_MAX_COORD (or not finite)");
     rows += joint_rows(jd.kind);
   }
-  if (rows + d->n_actuators + LEGSIM_MAX_POSE_DRIVERS > LEGSIM_MAX_ROWS)
+  if (d->n_contacts < 0)
+    return fail(msg, len, bad, "model '", Name{d->name}, "': counts must be >= 0 (bodies >= 1)");
+  if (d->n_contacts > LEGSIM_MAX_CONTACTS)
+    return fail(msg, len, LEGSIM_ERR_CAPACITY, "model has ", int(d->n_contacts),
+                " contacts; this build holds ", LEGSIM_MAX_CONTACTS);
+  if (rows + d->n_actuators + LEGSIM_MAX_POSE_DRIVERS + 2 * d->n_contacts > LEGSIM_MAX_ROWS)
     return fail(msg, len, LEGSIM_ERR_CAPACITY, "model has ", rows,
                 " joint equations; this build holds ",
-                LEGSIM_MAX_ROWS - int(d->n_actuators) - LEGSIM_MAX_POSE_DRIVERS);
+                LEGSIM_MAX_ROWS - int(d->n_actuators) - LEGSIM_MAX_POSE_DRIVERS - 2 * int(d->n_contacts));
   for (int a = 0; a < d->n_actuators; ++a) {
     const legsim_actuator_desc &ad = d->actuator[a];
     if (ad.joint < 0 || ad.joint >= d->n_joints || raw_enum(d->joint[ad.joint].kind) != LEGSIM_JOINT_PRISMATIC)
@@ -168,6 +173,20 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
   }
   if (d->foot_body != -1 && (!body_ok(d->foot_body) || !coord2(d->foot_point)))
     return fail(msg, len, bad, "foot: body index ", int(d->foot_body), " does not exist (or point out of range)");
+  for (int k = 0; k < d->n_contacts; ++k) {
+    const legsim_contact_desc &c = d->contact[k];
+    if (!body_ok(c.body) || !coord2(c.point))
+      return fail(msg, len, bad, "contact '", Name{c.name}, "': body index ", int(c.body),
+                  " does not exist (or point outside +-LEGSIM_MAX_COORD)");
+    for (int k2 = 0; k2 < k; ++k2)
+      if (d->contact[k2].body == c.body)
+        return fail(msg, len, bad, "contact '", Name{c.name}, "': its body has a contact already");
+  }
+  const legsim_ground_desc &gd = d->ground;
+  if (!coord2(gd.point) || !in(gd.slope_rad, -1.5, 1.5))
+    return fail(msg, len, bad, "ground: point outside +-LEGSIM_MAX_COORD or |slope| > 1.5 rad (or not finite)");
+  if (!in(gd.mu_kinetic, 0, LEGSIM_MAX_FRICTION) || !in(gd.mu_static, gd.mu_kinetic, LEGSIM_MAX_FRICTION))
+    return fail(msg, len, bad, "ground: need 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION");
   if (msg && len > 0) msg[0] = '\0';
   return LEGSIM_OK;
 }
@@ -233,6 +252,18 @@ legsim_status model_compile(const legsim_model_desc *d, Model &m) {
   }
   m.foot_body = d->foot_body;
   m.foot_point = Vec2(real(d->foot_point[0]), real(d->foot_point[1]));
+  m.nc = d->n_contacts;
+  for (int k = 0; k < m.nc; ++k) {
+    m.contact[k].body = d->contact[k].body;
+    m.contact[k].point = Vec2(real(d->contact[k].point[0]), real(d->contact[k].point[1]));
+  }
+  const legsim_ground_desc &gd = d->ground;
+  m.ground_point = Vec2(real(gd.point[0]), real(gd.point[1]));
+  const real slope = real(gd.slope_rad);  // in the build's real: no double trigonometry on a float MCU
+  m.ground_t = Vec2(std::cos(slope), std::sin(slope));
+  m.ground_n = perp(m.ground_t);
+  m.mu_s = real(gd.mu_static);
+  m.mu_k = real(gd.mu_kinetic);
   return LEGSIM_OK;
 }
 

@@ -20,9 +20,12 @@ constexpr int kMaxJoints = LEGSIM_MAX_JOINTS;
 constexpr int kMaxActuators = LEGSIM_MAX_ACTUATORS;
 constexpr int kMaxForces = LEGSIM_MAX_FORCES;
 constexpr int kMaxRows = LEGSIM_MAX_ROWS;
+constexpr int kMaxContacts = LEGSIM_CONTACT_SLOTS;  // >= 1 slot; the model's count may be 0
 // Entries of J W J^T that can be non-zero: a row touches at most two bodies,
-// and a body appears in a handful of rows, so this is far below kMaxRows^2.
-constexpr int kMaxPairs = 6 * kMaxRows;
+// and a body appears in a handful of rows, so this is far below kMaxRows^2. A
+// robot's box is in every hip row (12 of them for two legs): 286 pairs for the
+// two-leg robot with all four stops, against 6 * 43 = 258 the one-leg rule gives.
+constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows;
 
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
@@ -57,9 +60,15 @@ struct ForceElement {
   real k, c, l0;
 };
 
+// A foot point that can touch the ground line.
+struct Contact {
+  int body;
+  Vec2 point;  // body-fixed (xi, eta)
+};
+
 struct Model {
   const legsim_model_desc *desc;
-  int nb, nq, nj, na, nf;
+  int nb, nq, nj, na, nf, nc;
   int m;  // joint equations
   real mass[kMaxCoords];  // diagonal of M: (m, m, J) per body
   real minv[kMaxCoords];
@@ -71,10 +80,18 @@ struct Model {
   int foot_body;
   Vec2 foot_point;
   real unit_weight[kMaxCoords];  // W = I for geometric (assembly) corrections
+  Contact contact[kMaxContacts];
+  Vec2 ground_point, ground_t, ground_n;  // the line, its tangent and upward normal
+  real mu_s, mu_k;
 };
 
 // ---- rows of the constraint system: joint equations plus drivers ----
-enum class RowKind : uint8_t { Joint, ActuatorLength, Coordinate };
+// Contact rows: the foot's normal gap, its tangential offset from the stick point,
+// and (assembly on the ground) the midpoint of two feet along the line.
+enum class RowKind : uint8_t { Joint, ActuatorLength, Coordinate, ContactNormal, ContactTangent, ContactMid };
+
+// Which rows a contact contributes to a layout.
+enum ContactRows : uint8_t { kContactNone = 0, kContactNormal = 1, kContactStuck = 2 };
 
 struct RowSource {
   RowKind kind;
@@ -118,6 +135,8 @@ struct DriverValues {
   real length[kMaxActuators], rate[kMaxActuators], accel[kMaxActuators];
   legsim_coord_driver coord[LEGSIM_MAX_POSE_DRIVERS];
   int ncoord;
+  real stick[kMaxContacts];  // a stuck contact's stick point: its coordinate along the line (m)
+  real feet_mid;             // ContactMid target (m along the line)
 };
 
 // Cholesky factor of J W J^T (lower triangle in place) with its condition estimate.
@@ -134,6 +153,11 @@ struct ActuatorState {
   real setpoint;    // N or m
   real force;       // axial force it applies in the current state, N
   real stop_force;  // axial force of the stroke stop it rests on (0 when free), N
+};
+
+struct ContactData {
+  uint8_t state;     // legsim_contact_state
+  real normal, tangential;  // N, T of the last solve (0 when free)
 };
 
 struct Data {
@@ -156,7 +180,8 @@ struct Data {
   Layout joints;  // the joint equations only
   Layout dyn;     // the forward-dynamics system: the joints plus the stops in use
   uint32_t stop_mask;         // actuators resting on a stroke stop (the active set)
-  DriverValues stop_drivers;  // their stop lengths (rate and acceleration 0)
+  DriverValues stop_drivers;  // their stop lengths (rate and acceleration 0), the stick points
+  ContactData contact[kMaxContacts];
   Layout work;    // joints plus drivers, for assembly and driven analyses
   int32_t work_mask;  // the actuator set Layout work was built for; -1: none or with coordinates
   Rows rows;
@@ -186,6 +211,8 @@ struct Snapshot {
   VecR lambda;
   legsim_reaction reaction[kMaxJoints];
   real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
+  ContactData contact[kMaxContacts];
+  real stick[kMaxContacts];
   legsim_report report;
   double t;
   uint64_t steps;
@@ -222,7 +249,9 @@ legsim_status model_compile(const legsim_model_desc *desc, Model &model);
 // ---- constraints.cpp ----
 // Builds a layout of the joint equations followed by driver rows for the
 // actuators in actuator_mask and for ncoord coordinate drivers.
-legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out);
+// contacts (NULL: none): per contact its ContactRows; mid: one ContactMid row (assembly).
+legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out,
+                           const uint8_t *contacts = nullptr, bool mid = false);
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
 legsim_status layout_finish(Layout &out, const DriverValues &drivers);
 // Evaluates Phi, the Jacobian and the velocity/acceleration right-hand sides.
@@ -263,8 +292,18 @@ legsim_status stroke_stops_release(Sim &sim, bool &changed);
 // Data::work for the joints plus length drivers of the actuators in mask (built
 // once per set: analyses called along a motion do not rebuild it).
 legsim_status work_layout(Sim &sim, uint32_t mask);
-// Rebuilds Data::dyn for Data::stop_mask.
+// Rebuilds Data::dyn for Data::stop_mask and the contacts' states.
 legsim_status stops_layout(Sim &sim);
+
+// ---- contact.cpp ----
+// World position and velocity of contact k's foot point.
+void contact_point(const Model &model, int k, const VecQ &q, const VecQ &qd, Vec2 &pos, Vec2 &vel);
+// The rows of each contact in the dynamics (stuck: 2, free: 0), for layout_build.
+void contact_rows_of_states(const Model &model, const Data &d, uint8_t *rows);
+// N and T of the stuck contacts from the multipliers of Data::dyn (rows after the stops).
+void contact_forces_update(Sim &sim);
+// Every contact free (a state set or assembled from outside).
+void contacts_free(Sim &sim);
 
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.

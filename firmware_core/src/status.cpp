@@ -17,6 +17,7 @@ extern "C" const char *legsim_status_str(legsim_status s) {
     case LEGSIM_ERR_DISABLED: return "disabled by the scene options or stripped from this build";
     case LEGSIM_ERR_STATE: return "state not valid (not assembled or not finite)";
     case LEGSIM_ERR_DIVERGED: return "diverged: a non-finite or absurd result";
+    case LEGSIM_ERR_CONTACT: return "the contact problem has no usable solution";
   }
   return "unknown status";
 }

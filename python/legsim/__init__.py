@@ -19,12 +19,13 @@ Values are numpy arrays in SI units; every failing status raises a
 See python/README.md for the whole API.
 """
 from ._lib import LIB_NAMES, Library, find_library, library_available, load_library
-from .errors import (BadInputError, CapacityError, DisabledError, DivergedError, LayoutMismatch,
+from .errors import (BadInputError, CapacityError, ContactError, DisabledError, DivergedError, LayoutMismatch,
                      LegsimError, LibraryNotFound, ModelError, NoEquilibriumError,
                      NotConvergedError, NullError, OutOfStrokeError, SingularError, StateError,
                      Status, StorageError, UnreachableError, error_for, status_name)
 from .model import Model, builtin_variants, model_variants
-from .sim import (COND_SINGULAR, COND_WARN, DISABLE, EVENTS, INTEGRATORS, Report, Sim, WorstCase,
+from .sim import (COND_SINGULAR, COND_WARN, CONTACT_DTYPE, CONTACT_STATES, DISABLE, EVENTS,
+                  INTEGRATORS, Report, Sim, WorstCase,
                   disable_mask)
 
 __version__ = "0.1.0"
@@ -35,7 +36,8 @@ __all__ = [
     "status_name", "error_for", "disable_mask",
     "LegsimError", "NullError", "StorageError", "ModelError", "CapacityError", "BadInputError",
     "OutOfStrokeError", "NotConvergedError", "SingularError", "UnreachableError",
-    "NoEquilibriumError", "DisabledError", "StateError", "DivergedError",
+    "NoEquilibriumError", "DisabledError", "StateError", "DivergedError", "ContactError",
     "LibraryNotFound", "LayoutMismatch",
     "DISABLE", "EVENTS", "INTEGRATORS", "COND_WARN", "COND_SINGULAR", "LIB_NAMES",
+    "CONTACT_STATES", "CONTACT_DTYPE",
 ]

@@ -45,7 +45,7 @@ STORAGE_ALIGN = 16  # LEGSIM_STORAGE_ALIGN (also checked against the library's f
 # every fact the mirror needs (legsim/config.h names)
 _CONFIG_KEYS = ("LEGSIM_USE_FLOAT", "LEGSIM_NAME_LEN", "LEGSIM_MAX_BODIES", "LEGSIM_MAX_JOINTS",
                 "LEGSIM_MAX_ACTUATORS", "LEGSIM_MAX_FORCES", "LEGSIM_MAX_POSES",
-                "LEGSIM_MAX_POSE_DRIVERS")
+                "LEGSIM_MAX_POSE_DRIVERS", "LEGSIM_MAX_CONTACTS")
 
 
 # ---- discovery -------------------------------------------------------------
@@ -193,6 +193,7 @@ class Library:
         MB, MJ = cfg["LEGSIM_MAX_BODIES"], cfg["LEGSIM_MAX_JOINTS"]
         MA, MF = cfg["LEGSIM_MAX_ACTUATORS"], cfg["LEGSIM_MAX_FORCES"]
         MP, MPD = cfg["LEGSIM_MAX_POSES"], cfg["LEGSIM_MAX_POSE_DRIVERS"]
+        MC = max(1, cfg.get("LEGSIM_MAX_CONTACTS", 0))  # LEGSIM_CONTACT_SLOTS
         d, i32 = C.c_double, C.c_int32
 
         class BodyDesc(C.Structure):
@@ -220,13 +221,26 @@ class Library:
             _fields_ = [("name", C.c_char * NL), ("n_drivers", i32),
                         ("driver", CoordDriver * MPD), ("guess", (d * 3) * MB)]
 
+        class ContactDesc(C.Structure):
+            _fields_ = [("name", C.c_char * NL), ("body", i32), ("point", d * 2)]
+
+        class GroundDesc(C.Structure):
+            _fields_ = [("point", d * 2), ("slope_rad", d), ("mu_static", d), ("mu_kinetic", d)]
+
         class ModelDesc(C.Structure):
             _fields_ = [("name", C.c_char * NL), ("gravity_mps2", d * 2),
                         ("n_bodies", i32), ("n_joints", i32), ("n_actuators", i32),
                         ("n_forces", i32), ("n_poses", i32),
                         ("body", BodyDesc * MB), ("joint", JointDesc * MJ),
                         ("actuator", ActuatorDesc * MA), ("force", ForceDesc * MF),
-                        ("pose", PoseDesc * MP), ("foot_body", i32), ("foot_point", d * 2)]
+                        ("pose", PoseDesc * MP), ("foot_body", i32), ("foot_point", d * 2),
+                        ("n_contacts", i32), ("contact", ContactDesc * MC),
+                        ("ground", GroundDesc)]
+
+        class Contact(C.Structure):
+            _fields_ = [("state", C.c_int), ("normal_n", real), ("tangential_n", real),
+                        ("friction_use", real), ("position", real * 2), ("slip_mps", real),
+                        ("impulse_ns", real * 2)]
 
         class Options(C.Structure):
             _fields_ = [("integrator", C.c_int), ("step_s", d), ("disable", C.c_uint32),
@@ -247,13 +261,15 @@ class Library:
 
         self.ModelDesc, self.Options, self.Report = ModelDesc, Options, Report
         self.Reaction, self.WorstCase = Reaction, WorstCase
+        self.Contact = Contact
 
     def _check_layout(self):
         """Each struct of the mirror has the library's size (when it says)."""
         cfg = self.config
         pairs = [("legsim_real", self.real), ("legsim_model_desc", self.ModelDesc),
                  ("legsim_options", self.Options), ("legsim_report", self.Report),
-                 ("legsim_reaction", self.Reaction), ("legsim_worst_case", self.WorstCase)]
+                 ("legsim_reaction", self.Reaction), ("legsim_worst_case", self.WorstCase),
+                 ("legsim_contact", self.Contact)]
         bad = [f"{n}: library {cfg[f'sizeof({n})']} bytes, binding {C.sizeof(t)}"
                for n, t in pairs
                if f"sizeof({n})" in cfg and cfg[f"sizeof({n})"] != C.sizeof(t)]
@@ -309,6 +325,10 @@ class Library:
             "legsim_command_force": (st, [P, C.c_int32, R]),
             "legsim_command_length": (st, [P, C.c_int32, R]),
             "legsim_set_force": (st, [P, C.c_int32, RP]),
+            "legsim_n_contacts": (C.c_int32, [P]),
+            "legsim_contacts": (st, [P, C.POINTER(self.Contact)]),
+            "legsim_set_contact_state": (st, [P, C.c_int32, C.c_int]),
+            "legsim_assemble_on_ground": (st, [P, RP, R]),
             # the run-time model loader (firmware_core/host/model_toml.hpp)
             "legsim_model_load_toml": (st, [C.c_char_p, C.c_char_p, MP, C.c_char_p, C.c_size_t]),
             "legsim_model_parse_toml": (st, [C.c_char_p, C.c_size_t, C.c_char_p, C.c_char_p, MP,

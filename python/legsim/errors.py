@@ -30,6 +30,7 @@ class Status(enum.IntEnum):
     ERR_DISABLED = 11        # stripped at compile time or disabled by the options
     ERR_STATE = 12           # state not finite or no pose assembled yet
     ERR_DIVERGED = 13        # the integrator produced a non-finite or exploding state
+    ERR_CONTACT = 14         # the contact problem has no usable solution
 
     @property
     def c_name(self) -> str:
@@ -120,6 +121,11 @@ class DivergedError(LegsimError):
     """LEGSIM_ERR_DIVERGED: the integrator produced a non-finite or exploding state."""
 
 
+class ContactError(LegsimError):
+    """LEGSIM_ERR_CONTACT: the contact problem has no usable solution (redundant or
+    inconsistent contacts)."""
+
+
 ERRORS: dict[Status, type[LegsimError]] = {
     Status.ERR_NULL: NullError, Status.ERR_STORAGE: StorageError, Status.ERR_MODEL: ModelError,
     Status.ERR_CAPACITY: CapacityError, Status.ERR_BAD_INPUT: BadInputError,
@@ -127,6 +133,7 @@ ERRORS: dict[Status, type[LegsimError]] = {
     Status.ERR_SINGULAR: SingularError, Status.ERR_UNREACHABLE: UnreachableError,
     Status.ERR_NO_EQUILIBRIUM: NoEquilibriumError, Status.ERR_DISABLED: DisabledError,
     Status.ERR_STATE: StateError, Status.ERR_DIVERGED: DivergedError,
+    Status.ERR_CONTACT: ContactError,
 }
 for _s, _cls in ERRORS.items():
     _cls.status_code = int(_s)

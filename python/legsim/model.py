@@ -79,8 +79,10 @@ class Model:
     def builtin(cls, variant: str = DEFAULT_VARIANT, *, symbol: str = "leg",
                 precision: str | None = None, lib_path=None) -> "Model":
         """The model compiled into the library (``legsim_model_<symbol>_<variant>``,
-        generated at build time from ``models/leg.toml``). The description is copied,
-        so it lives as long as this object."""
+        generated at build time: symbol "leg" from ``models/leg.toml``, "robot" from
+        ``models/robot.toml`` when the build's capacities hold it, e.g.
+        ``Model.builtin(symbol="robot")``). The description is copied, so it lives as
+        long as this object."""
         lib = load_library(precision, lib_path)
         sym = f"legsim_model_{symbol}_{variant}"
         try:
@@ -169,6 +171,19 @@ class Model:
     def foot(self) -> tuple[int, np.ndarray]:
         """(body index or -1, body-fixed point (xi, eta) in m) of the foot."""
         return int(self.desc.foot_body), np.array(self.desc.foot_point[:], dtype=float)
+
+    @property
+    def contact_names(self) -> list[str]:
+        """Names of the foot contacts (a robot's ``right.foot``, ``left.foot``)."""
+        n = getattr(self.desc, "n_contacts", 0)
+        return [_name(c.name) for c in self.desc.contact[:n]] if n else []
+
+    @property
+    def ground(self) -> dict:
+        """The ground line: ``point`` (m), ``slope`` (rad), ``mu_static``, ``mu_kinetic``."""
+        gd = self.desc.ground
+        return {"point": np.array(gd.point[:], dtype=float), "slope": float(gd.slope_rad),
+                "mu_static": float(gd.mu_static), "mu_kinetic": float(gd.mu_kinetic)}
 
     def __repr__(self) -> str:
         return (f"<legsim.Model {self.name!r} variant {self.variant!r} from {self.source}, "

@@ -46,6 +46,15 @@ EVENTS = {
 }
 """Event bits of legsim.h (``enum legsim_event``) by name."""
 
+CONTACT_STATES = {"free": 0, "stuck": 1, "sliding": 2}
+"""``legsim_contact_state`` of legsim.h by name."""
+
+CONTACT_DTYPE = np.dtype([("state", "U8"), ("normal", "f8"), ("tangential", "f8"),
+                          ("friction_use", "f8"), ("position", "f8", (2,)), ("slip", "f8"),
+                          ("impulse", "f8", (2,))])
+"""Fields of :meth:`Sim.contacts`: state name, N and T (N), |T|/N, foot position (m),
+slip velocity along the ground (m/s), last impact impulse (normal, tangential; N s)."""
+
 COND_WARN = 1e3       # condition estimate above which "near_singular" is raised
 COND_SINGULAR = 1e5   # an assembly landing above this is refused (SingularError)
 
@@ -183,6 +192,8 @@ class Sim:
         self._abuf = (R * max(1, self.n_actuators))()
         self._abuf2 = (R * max(1, self.n_actuators))()
         self._rbuf = (lib.Reaction * max(1, self.n_joints))()
+        self.n_contacts = int(L.legsim_n_contacts(out)) if hasattr(L, "legsim_n_contacts") else 0
+        self._ctbuf = (lib.Contact * max(1, self.n_contacts))()
 
     def __repr__(self) -> str:
         return (f"<legsim.Sim {self.model.name!r} {self.variant} {self.precision} "
@@ -469,6 +480,53 @@ class Sim:
             raise ValueError(f"duration {duration!r} s is not a whole number of steps of "
                              f"{self.step_size!r} s")
         self.step(int(round(n)))
+
+    # ---- foot contact (a robot model) ----
+    def _contact(self, contact) -> int:
+        if isinstance(contact, str):
+            names = self.model.contact_names
+            if contact not in names:
+                raise ValueError(f"no contact {contact!r}; the model has {names}")
+            return names.index(contact)
+        return int(contact)
+
+    def contacts(self) -> np.ndarray:
+        """Per contact (n_contacts,) a record of CONTACT_DTYPE: ``state`` ("free", "stuck",
+        "sliding"), ``normal`` N and ``tangential`` T (N: the ground's force on the foot
+        is N n + T t, n the ground line's upward normal, t its tangent), ``friction_use``
+        |T|/N, ``position`` (x, y) m, ``slip`` (m/s along t), ``impulse`` (N s)."""
+        self._check(self.library.cdll.legsim_contacts(self.handle, self._ctbuf), "legsim_contacts")
+        names = {v: k for k, v in CONTACT_STATES.items()}
+        out = np.zeros(self.n_contacts, dtype=CONTACT_DTYPE)
+        for k, c in enumerate(self._ctbuf[:self.n_contacts]):
+            out[k] = (names.get(int(c.state), str(c.state)), c.normal_n, c.tangential_n,
+                      c.friction_use, tuple(c.position), c.slip_mps, tuple(c.impulse_ns))
+        return out
+
+    def set_contact(self, contact: Union[int, str], state: str) -> None:
+        """Sets a contact (index or name, e.g. "right.foot") "stuck" at its foot's current
+        point (on the ground line, else StateError) or "free"."""
+        if state not in ("free", "stuck"):
+            raise ValueError(f"state must be 'free' or 'stuck', not {state!r}")
+        self._check(self.library.cdll.legsim_set_contact_state(
+            self.handle, self._contact(contact), CONTACT_STATES[state]), "legsim_set_contact_state")
+
+    def assemble_on_ground(self, lengths=None, feet_mid: float = 0.0,
+                           pose: Union[str, int, None] = "stand") -> np.ndarray:
+        """The stance of a robot: both feet on the ground line, their midpoint at
+        ``feet_mid`` (m along the line), the actuators at ``lengths`` (m; None: the
+        lengths of ``pose``), the box pose following; qd = 0 and the contacts stuck.
+        Starts from ``pose``'s guess (None: from the current q). Returns q."""
+        if pose is not None:
+            self.assemble_pose(pose)
+        arr = None if lengths is None else self._arr(lengths, self.n_actuators, "lengths")
+        self._check(self.library.cdll.legsim_assemble_on_ground(self.handle, arr, float(feet_mid)),
+                    "legsim_assemble_on_ground")
+        return self.q
+
+    def box(self) -> np.ndarray:
+        """(x m, y m, phi rad) of body 0 (a robot's box)."""
+        return self.q[:3]
 
     # ---- commands ----
     def command_force(self, actuator: Union[int, str], force_n: float) -> None:

@@ -46,7 +46,14 @@ def main():
             rc = mod.main([path, "--symbol", "t", "--check", "--config", config_h])
         return subprocess.CompletedProcess([], rc, out.getvalue(), err.getvalue())
 
-    for good in ("models/leg.toml", f"{FIXTURES}/good_mini.toml"):
+    goods = ["models/leg.toml", f"{FIXTURES}/good_mini.toml"]
+    # the two-leg robot, where the build's capacities hold it (else the capacity message)
+    robot_fits = all(int(caps.get(k, 0)) >= n for k, n in (
+        ("LEGSIM_MAX_BODIES", 13), ("LEGSIM_MAX_JOINTS", 16), ("LEGSIM_MAX_ACTUATORS", 4),
+        ("LEGSIM_MAX_CONTACTS", 2)))
+    if robot_fits:
+        goods.append("models/robot.toml")
+    for good in goods:
         r = run(good)
         if r.returncode == 0:
             passed += 1

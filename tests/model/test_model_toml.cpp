@@ -17,6 +17,12 @@
 #include "legsim/mini_models.h"  // tests/model/fixtures/good_mini.toml, generated as C
 #include "legsim/models.h"       // models/leg.toml, generated as C (legsim_models)
 #include "legsim/leg_cxx_models.h"  // models/leg.toml, generated and compiled as C++
+#if __has_include("legsim/robot_models.h")
+#include "legsim/robot_models.h"  // models/robot.toml, generated when the capacities hold it
+#define HAVE_ROBOT 1
+#else
+#define HAVE_ROBOT 0
+#endif
 #include "model_toml.hpp"
 #include "toml_limits.hpp"
 #include "unity.h"
@@ -129,6 +135,17 @@ std::string compare(const legsim_model_desc &a, const legsim_model_desc &b) {
   }
   eq_int(a.foot_body, b.foot_body, "foot_body");
   for (int c = 0; c < 2; ++c) eq_real(a.foot_point[c], b.foot_point[c], "foot_point");
+  eq_int(a.n_contacts, b.n_contacts, "n_contacts");
+  for (int i = 0; i < LEGSIM_CONTACT_SLOTS; ++i) {
+    const std::string w = "contact[" + std::to_string(i) + "].";
+    eq_name(a.contact[i].name, b.contact[i].name, w + "name");
+    eq_int(a.contact[i].body, b.contact[i].body, w + "body");
+    for (int c = 0; c < 2; ++c) eq_real(a.contact[i].point[c], b.contact[i].point[c], w + "point");
+  }
+  for (int c = 0; c < 2; ++c) eq_real(a.ground.point[c], b.ground.point[c], "ground.point");
+  eq_real(a.ground.slope_rad, b.ground.slope_rad, "ground.slope_rad");
+  eq_real(a.ground.mu_static, b.ground.mu_static, "ground.mu_static");
+  eq_real(a.ground.mu_kinetic, b.ground.mu_kinetic, "ground.mu_kinetic");
   return g_diff;
 }
 
@@ -497,6 +514,70 @@ static void test_text_within_the_limits_still_loads(void) {
   TEST_ASSERT_EQUAL_STRING("mem: model: name 'b\xc3\xa9in' may hold only letters, digits, '_', '-' and '.'", msg);
 }
 
+
+// ---- the robot file: a box with the leg file placed twice -------------------------------
+static void test_robot_generated_equals_loaded(void) {
+#if HAVE_ROBOT
+  TEST_ASSERT_EQUAL_INT32(1, legsim_model_robot_variant_count);
+  check_same("models/robot.toml", legsim_model_robot_variants, legsim_model_robot_variant_count);
+#else
+  TEST_IGNORE_MESSAGE("this build's capacities do not hold the robot");
+#endif
+}
+
+static void test_robot_mapping(void) {
+  legsim_model_desc r, leg = load_ok(kLeg, "revolute");
+  std::memset(&r, 0, sizeof r);
+  char msg[512] = {0};
+  const legsim_status st = legsim_model_load_toml("models/robot.toml", nullptr, &r, msg, sizeof msg);
+  if (LEGSIM_MAX_BODIES < 13 || LEGSIM_MAX_CONTACTS < 2) {
+    TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_ERR_CAPACITY, st, msg);
+    return;
+  }
+  TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, st, msg);
+  TEST_ASSERT_EQUAL_INT32(13, r.n_bodies);
+  TEST_ASSERT_EQUAL_INT32(16, r.n_joints);
+  TEST_ASSERT_EQUAL_INT32(4, r.n_actuators);
+  TEST_ASSERT_EQUAL_INT32(2, r.n_contacts);
+  TEST_ASSERT_EQUAL_INT32(-1, r.foot_body);
+  TEST_ASSERT_EQUAL_STRING("box", r.body[0].name);
+  TEST_ASSERT_EQUAL_DOUBLE(20.0, r.body[0].mass_kg);
+  TEST_ASSERT_EQUAL_STRING("left.thigh", r.body[9].name);
+  // the right leg: translated; the left: reflected (body-fixed eta negated)
+  const int d = find_joint(leg, "D"), a = find_joint(leg, "A");
+  TEST_ASSERT_EQUAL_INT32(leg.joint[d].body[0] + 1, r.joint[d].body[0]);
+  TEST_ASSERT_EQUAL_INT32(leg.joint[d].body[0] + 7, r.joint[8 + d].body[0]);
+  TEST_ASSERT_EQUAL_DOUBLE(leg.joint[d].point[1][0], r.joint[8 + d].point[1][0]);
+  TEST_ASSERT_EQUAL_DOUBLE(-leg.joint[d].point[1][1], r.joint[8 + d].point[1][1]);
+  // frame joint A -> a revolute to the box at its attach point (x, y) = (+-0.20, 0.10),
+  // in box body coordinates (xi, eta) = (-y, x)
+  TEST_ASSERT_EQUAL_INT(LEGSIM_JOINT_REVOLUTE, r.joint[a].kind);
+  TEST_ASSERT_EQUAL_INT32(0, r.joint[a].body[1]);
+  TEST_ASSERT_EQUAL_DOUBLE(-0.10, r.joint[a].point[1][0]);
+  TEST_ASSERT_EQUAL_DOUBLE(0.20, r.joint[a].point[1][1]);
+  TEST_ASSERT_EQUAL_DOUBLE(-0.20, r.joint[8 + a].point[1][1]);
+  TEST_ASSERT_EQUAL_STRING("right.upper", r.actuator[0].name);
+  TEST_ASSERT_EQUAL_STRING("left.lower", r.actuator[3].name);
+  TEST_ASSERT_EQUAL_INT32(8 + leg.actuator[1].joint, r.actuator[3].joint);
+  TEST_ASSERT_EQUAL_STRING("right.foot", r.contact[0].name);
+  TEST_ASSERT_EQUAL_INT32(1 + leg.foot_body, r.contact[0].body);
+  TEST_ASSERT_EQUAL_INT32(7 + leg.foot_body, r.contact[1].body);
+  TEST_ASSERT_EQUAL_DOUBLE(0.6, r.ground.mu_static);
+  TEST_ASSERT_EQUAL_DOUBLE(0.5, r.ground.mu_kinetic);
+  // the stand's guess: the feet on the ground line (y = 0) at +-0.633 m, the box 1 m up
+  TEST_ASSERT_EQUAL_STRING("stand", r.pose[0].name);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-9, 1.0, r.pose[0].guess[0][1]);
+  for (int k = 0; k < 2; ++k) {
+    const double *gq = r.pose[0].guess[r.contact[k].body];
+    const double xi = r.contact[k].point[0], eta = r.contact[k].point[1];
+    const double fx = gq[0] + xi * std::sin(gq[2]) + eta * std::cos(gq[2]);
+    const double fy = gq[1] - xi * std::cos(gq[2]) + eta * std::sin(gq[2]);
+    TEST_ASSERT_DOUBLE_WITHIN(1e-9, k == 0 ? 0.6330127019 : -0.6330127019, fx);
+    TEST_ASSERT_DOUBLE_WITHIN(1e-12, 0.0, fy);
+  }
+  TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, legsim_model_check(&r, msg, sizeof msg), msg);
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_leg_generated_equals_loaded);
@@ -504,6 +585,8 @@ int main(void) {
   RUN_TEST(test_mini_generated_equals_loaded);
   RUN_TEST(test_variant_names_in_codegen_order);
   RUN_TEST(test_leg_mapping);
+  RUN_TEST(test_robot_generated_equals_loaded);
+  RUN_TEST(test_robot_mapping);
   RUN_TEST(test_stand_pose_drivers);
   RUN_TEST(test_generated_models_pass_the_core_check);
   RUN_TEST(test_bad_fixtures_give_expected_errors);

@@ -67,6 +67,7 @@ typedef double legsim_real;
 #define LEGSIM_MAX_RATE_MPS 1e3       /* driven actuator length rates */
 #define LEGSIM_MAX_ACCEL_MPS2 1e6     /* driven actuator length accelerations */
 #define LEGSIM_MAX_GRID 1000          /* legsim_statics_sweep: n_grid in [2, MAX] */
+#define LEGSIM_MAX_FRICTION 10.0      /* ground friction coefficients: 0 <= mu_kinetic <= mu_static <= MAX */
 
 /* ---- status ------------------------------------------------------------ */
 typedef enum legsim_status {
@@ -84,9 +85,11 @@ typedef enum legsim_status {
   LEGSIM_ERR_NO_EQUILIBRIUM = 10, /* statics: the loads cannot be balanced (a free mechanism) */
   LEGSIM_ERR_DISABLED = 11,     /* stripped at compile time or disabled by the scene options */
   LEGSIM_ERR_STATE = 12,        /* state not finite or no pose assembled yet */
-  LEGSIM_ERR_DIVERGED = 13      /* a step or solve produced a non-finite or absurd result
+  LEGSIM_ERR_DIVERGED = 13,     /* a step or solve produced a non-finite or absurd result
                                    (beyond LEGSIM_MAX_ABS_Q / LEGSIM_MAX_ABS_QD, or
                                    non-finite accelerations, multipliers or reactions) */
+  LEGSIM_ERR_CONTACT = 14       /* the contact problem has no usable solution (redundant or
+                                   inconsistent contacts); the state stays the last good one */
 } legsim_status;
 
 const char *legsim_status_str(legsim_status s);
@@ -154,6 +157,27 @@ typedef struct legsim_pose_desc {
   double guess[LEGSIM_MAX_BODIES][3]; /* starting point of the assembly */
 } legsim_pose_desc;
 
+/* A foot point that can touch the ground line (docs/design/robot-on-ground.md). */
+typedef struct legsim_contact_desc {
+  char name[LEGSIM_NAME_LEN];
+  int32_t body;        /* 0-based; each contact on a body of its own */
+  double point[2];     /* body-fixed (xi, eta), |.| <= LEGSIM_MAX_COORD */
+} legsim_contact_desc;
+
+/* The ground: the line through point at angle slope_rad (counter-clockwise), tangent
+ * t = (cos, sin), upward normal n = (-sin, cos); Coulomb friction with
+ * 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. |point| <= LEGSIM_MAX_COORD,
+ * |slope_rad| < pi/2. Unused (all zero) in a model without contacts. */
+typedef struct legsim_ground_desc {
+  double point[2];
+  double slope_rad;
+  double mu_static;
+  double mu_kinetic;
+} legsim_ground_desc;
+
+/* At least one array slot even in a build without contacts (C has no empty arrays). */
+#define LEGSIM_CONTACT_SLOTS (LEGSIM_MAX_CONTACTS > 0 ? LEGSIM_MAX_CONTACTS : 1)
+
 typedef struct legsim_model_desc {
   char name[LEGSIM_NAME_LEN];
   double gravity_mps2[2];
@@ -163,8 +187,11 @@ typedef struct legsim_model_desc {
   legsim_actuator_desc actuator[LEGSIM_MAX_ACTUATORS];
   legsim_force_desc force[LEGSIM_MAX_FORCES];
   legsim_pose_desc pose[LEGSIM_MAX_POSES];
-  int32_t foot_body;       /* -1: none */
+  int32_t foot_body;       /* -1: none (a robot's feet are its contacts) */
   double foot_point[2];    /* (xi, eta) on foot_body */
+  int32_t n_contacts;      /* 0 .. LEGSIM_MAX_CONTACTS */
+  legsim_contact_desc contact[LEGSIM_CONTACT_SLOTS];
+  legsim_ground_desc ground;
 } legsim_model_desc;
 
 /* Checks a description. On error writes a one-line reason (e.g. "joint 'D': body 7
@@ -223,6 +250,7 @@ int32_t legsim_n_constraints(const legsim_sim *sim);  /* joint equations (16 or 
 int32_t legsim_n_joints(const legsim_sim *sim);
 int32_t legsim_n_actuators(const legsim_sim *sim);
 int32_t legsim_n_forces(const legsim_sim *sim);
+int32_t legsim_n_contacts(const legsim_sim *sim);
 const legsim_model_desc *legsim_model(const legsim_sim *sim);
 
 /* ---- state ------------------------------------------------------------- */
@@ -361,6 +389,47 @@ legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_re
 /* Sets a force element's value (point: 2 values N; torque: 1 value N m), each
  * |value| <= LEGSIM_MAX_FORCE_N, else LEGSIM_ERR_BAD_INPUT (nothing changes). */
 legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real *value);
+
+/* ---- 8. foot contact with the ground ---------------------------------------
+ * A model with contacts (n_contacts > 0; a robot file) has per contact a state.
+ * STUCK: two rows hold the foot point at its stick point on the ground line
+ * (normal and tangential), solved with the joints in every analysis and both
+ * integrators; FREE: no rows. (SLIDING is reserved for the transitions, not yet
+ * made: docs/design/robot-on-ground.md.) The ground force on a foot is
+ * F = N n + T t (n the line's upward normal, t its tangent). Builds with
+ * LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
+typedef enum legsim_contact_state {
+  LEGSIM_CONTACT_FREE = 0,
+  LEGSIM_CONTACT_STUCK = 1,
+  LEGSIM_CONTACT_SLIDING = 2
+} legsim_contact_state;
+
+typedef struct legsim_contact {
+  legsim_contact_state state;
+  legsim_real normal_n;      /* N: ground force along the upward normal (> 0 pushes up) */
+  legsim_real tangential_n;  /* T: along the tangent (cos slope, sin slope) */
+  legsim_real friction_use;  /* |T| / N (0 when N <= 0 or free) */
+  legsim_real position[2];   /* foot point, world (m) */
+  legsim_real slip_mps;      /* foot velocity along the tangent (m/s) */
+  legsim_real impulse_ns[2]; /* last impact impulse (normal, tangential; N s): 0 so far */
+} legsim_contact;
+
+/* n_contacts entries: the state of the last solve (step, statics, assembly). */
+legsim_status legsim_contacts(const legsim_sim *sim, legsim_contact *out);
+/* Sets contact k (0 .. n_contacts - 1) STUCK at its foot's current point (which must be
+ * on the ground line within the Newton tolerance, else LEGSIM_ERR_STATE) or FREE
+ * (SLIDING: LEGSIM_ERR_BAD_INPUT). Solves the dynamics at the current state anew
+ * (all or nothing: a set that makes the system singular changes nothing). */
+legsim_status legsim_set_contact_state(legsim_sim *sim, int32_t k, legsim_contact_state state);
+/* The stance: Newton from the current q (e.g. legsim_assemble_pose of a robot's
+ * "stand", whose guess has the feet on the ground already) onto the joints, the
+ * actuators at length_m (NULL: their current lengths) and one or two contacts on
+ * the ground line, the midpoint of their points at feet_mid_m along the line from
+ * its point (|feet_mid_m| <= LEGSIM_MAX_COORD). The box pose follows. qd = 0 and
+ * every contact STUCK where it landed. Needs 1 or 2 contacts (else LEGSIM_ERR_BAD_INPUT);
+ * errors as legsim_assemble, nothing changes on failure. */
+legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *length_m,
+                                        legsim_real feet_mid_m);
 
 #ifdef __cplusplus
 }

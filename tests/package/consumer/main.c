@@ -6,7 +6,7 @@
 #include "legsim/legsim.h"
 #include "legsim/models.h" /* the compiled-in leg, generated from models/leg.toml */
 
-static _Alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[32 * 1024]; /* >= legsim_sim_size() */
+static _Alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[64 * 1024]; /* >= legsim_sim_size() */
 
 int main(void) {
   legsim_options opt = legsim_default_options(); /* RK4, h = 1 ms */

@@ -1,0 +1,92 @@
+"""The two-leg robot (models/robot.toml) in the core through the Python API, against
+the bench's independent reference (legsim_bench.reference.robot.RobotModel).
+
+The robot is compiled in when the build's capacities hold it (host defaults) and loads
+from its file by the library's loader; the stand assembly (both feet stuck on the ground
+line) must give the reference's closed-form pose, and the stuck feet's ground forces,
+with gravity, must balance the whole robot's momentum rate.
+"""
+from __future__ import annotations
+
+import sys
+
+import numpy as np
+import pytest
+
+import legsim
+
+from conftest import ROOT
+
+try:
+    import legsim_bench.reference  # noqa: F401
+except ImportError:  # the bench is not installed: its source tree
+    sys.path.insert(0, str(ROOT / "bench"))
+from legsim_bench.reference.robot import RobotModel  # noqa: E402
+
+ROBOT = ROOT / "models" / "robot.toml"
+
+
+def _robot_sim(**kw) -> legsim.Sim:
+    lib = legsim.load_library("double")
+    if lib.config["LEGSIM_MAX_BODIES"] < 13 or lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
+        pytest.skip(f"{lib.path} is built without room for the robot")
+    return legsim.Sim(str(ROBOT), **kw)
+
+
+@pytest.fixture(scope="module")
+def ref():
+    return RobotModel.from_toml(ROBOT)
+
+
+def test_robot_file_and_compiled_in_robot_are_one_model():
+    s = _robot_sim()
+    b = legsim.Model.builtin(symbol="robot")
+    assert bytes(s.model.desc) == bytes(b.desc)
+    assert s.model.contact_names == ["right.foot", "left.foot"]
+    assert s.n_bodies == 13 and s.n_constraints == 32 and s.n_contacts == 2
+    assert s.model.ground["mu_static"] == 0.6 and s.model.ground["mu_kinetic"] == 0.5
+
+
+def test_stand_assembly_matches_the_reference(ref):
+    s = _robot_sim()
+    lengths = ref.stand_lengths()
+    q = s.assemble_on_ground(lengths, feet_mid=0.0)
+    a = ref.assemble(lengths, feet_mid=0.0)
+    # the reference's closed form against the core's Newton: round-off apart
+    assert np.max(np.abs(q - a.q)) < 1e-12
+    assert abs(s.box()[1] - 1.000) < 5e-4
+    c = s.contacts()
+    assert list(c["state"]) == ["stuck", "stuck"]
+    assert np.max(np.abs(c["position"] - a.feet)) < 1e-12
+    assert abs(c["position"][0, 0] - 0.6330) < 5e-5 and abs(c["position"][1, 0] + 0.6330) < 5e-5
+    assert np.max(np.abs(c["position"][:, 1])) < 1e-14          # on the line y = 0
+    assert np.max(np.abs(s.actuator_lengths()[0] - lengths)) < 1e-12
+    # from the robot file's own stand pose (its guess has the feet on the line already)
+    q2 = s.assemble_on_ground()
+    assert np.max(np.abs(q2 - a.q)) < 1e-9
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+def test_stuck_feet_hold_and_ground_forces_balance_the_robot(ref, integrator):
+    s = _robot_sim(integrator=integrator)
+    s.assemble_on_ground(ref.stand_lengths())
+    for a, L in enumerate(ref.stand_lengths()):
+        s.command_length(a, L)   # the servos hold the stand
+    feet0 = s.contacts()["position"].copy()
+    s.step(100)
+    c = s.contacts()
+    assert list(c["state"]) == ["stuck", "stuck"]
+    assert np.max(np.abs(c["position"] - feet0)) < 1e-9        # the feet do not move
+    # momentum rate of the whole robot = gravity + ground forces (joint forces cancel)
+    m = np.repeat(s.model.masses, 2)
+    qdd = s.qdd.reshape(-1, 3)[:, :2].reshape(-1)
+    lhs = (m * qdd).reshape(-1, 2).sum(axis=0)
+    weight = s.model.masses.sum() * s.model.gravity
+    ground = np.array([0.0, 1.0]) * c["normal"].sum() + np.array([1.0, 0.0]) * c["tangential"].sum()
+    # RK4: qdd and the ground forces come from one solve, so they balance to round-off.
+    # Generalized-alpha reports its index-3 qdd, and forces from the acceleration-level
+    # solve at the same state (legsim_multipliers' note): they differ by its own
+    # acceleration error (5e-5 N of 318 N here).
+    tol = 1e-9 if integrator == "rk4" else 1e-6
+    assert np.max(np.abs(lhs - weight - ground)) < tol * s.model.masses.sum() * 9.81
+    assert c["normal"].sum() > 0.9 * s.model.masses.sum() * 9.81
