@@ -90,3 +90,39 @@ def test_stuck_feet_hold_and_ground_forces_balance_the_robot(ref, integrator):
     tol = 1e-9 if integrator == "rk4" else 1e-6
     assert np.max(np.abs(lhs - weight - ground)) < tol * s.model.masses.sum() * 9.81
     assert c["normal"].sum() > 0.9 * s.model.masses.sum() * 9.81
+
+
+def test_fig7_scene_a_matches_the_reference(ref):
+    """Design section 7, Scene A: from the servo stand at rest, the right upper actuator
+    switches to force mode at its hold force + 50 N for 0.1 s, the other three stay on
+    their servos; RK4 at h = 1 ms against the reference's DOP853 (rtol 1e-11). RK4's
+    global error is O(h^4) ~ (1e-3)^4 times the motion's fourth derivative scale: the
+    box moves 4 mm in 0.1 s, so 1e-9 m (rad, N/1e3) is a safe bound."""
+    from legsim_bench.reference import ForceCommand, LengthCommand
+    servo = [LengthCommand(float(x)) for x in ref.stand_lengths()]
+    z_eq = ref.equilibrium(servo)
+    start = ref.simulate(0.0, t_eval=[0.0], actuators=servo, i0=z_eq[[2, 3, 4]])
+    hold = float(start.actuator_forces[0, 0])
+    cmds = [ForceCommand(hold + 50.0)] + servo[1:]
+    r = ref.simulate(0.1, t_eval=[0.0, 0.1], actuators=cmds, i0=z_eq[[2, 3, 4]])
+
+    s = _robot_sim(integrator="rk4", step=1e-3)
+    s.set_state(start.q[0])
+    s.set_contact("right.foot", "stuck")
+    s.set_contact("left.foot", "stuck")
+    for a in range(1, 4):
+        s.command_length(a, servo[a].length)
+    s.command_force(0, hold + 50.0)
+    s.run(0.1)
+    q = s.q
+    assert np.max(np.abs(q[:3] - r.q[-1][:3])) < 1e-9                  # box (x, y, phi)
+    assert abs(q[3 * 3 + 2] - r.q[-1][3 * 3 + 2]) < 1e-9               # right phi3 (thigh)
+    assert abs(q[3 * 6 + 2] - r.q[-1][3 * 6 + 2]) < 1e-9               # right phi6 (shank)
+    c = s.contacts()
+    print("scene A errors: box", np.abs(q[:3] - r.q[-1][:3]).max(), "phi3", abs(q[11] - r.q[-1][11]),
+          "phi6", abs(q[20] - r.q[-1][20]), "N", np.abs(c["normal"] - r.normal[-1]).max(),
+          "T", np.abs(c["tangential"] - r.tangential[-1]).max(), "N, T", c["normal"], c["tangential"])
+    assert np.max(np.abs(c["normal"] - r.normal[-1])) < 1e-6
+    assert np.max(np.abs(c["tangential"] - r.tangential[-1])) < 1e-6
+    # the figures of design section 7
+    assert abs(q[3 * 3 + 2] - 1.07133) < 1e-5 and abs(q[3 * 6 + 2] + 0.01484) < 1e-5
