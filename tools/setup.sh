@@ -18,8 +18,10 @@ legsim_logs=${LEGSIM_LOG_DIR:-$legsim_root/out/logs}
 # What a fresh Debian 12 root lacks and the project needs (build, tests, the MCU
 # images under QEMU, the vcan VM). libgl1: exudyn's wheel (a peer engine of the
 # bench) links libGL.so.1. pkgconf: the installed package's pkg-config file is tested.
+# python3-siconos, python3-scipy: the two-leg robot's Siconos peer runs in the system
+# Python (Siconos is not on PyPI; bench/legsim_bench/peers/siconos_robot.py).
 legsim_debs=(build-essential cmake ninja-build pkgconf python3 python3-venv
-             libeigen3-dev libtomlplusplus-dev libgl1
+             libeigen3-dev libtomlplusplus-dev libgl1 python3-siconos python3-scipy
              gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
              qemu-system-arm qemu-system-x86 qemu-system-data iproute2 kmod cpio xz-utils)
 
