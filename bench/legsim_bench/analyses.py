@@ -26,7 +26,8 @@ import numpy as np
 
 from .scene import ACTUATORS, Scene, find_root
 
-__all__ = ["cli_path", "record_analysis", "evaluate_analysis"]
+__all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
+           "robot_arrays", "robot_growth"]
 
 
 def cli_path(root: Path | None = None) -> Path:
@@ -119,6 +120,8 @@ def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
     from .checks import CheckResult, Evaluation, Leg, _slot_s, constraint_residual, static_balance
     from .reference import LegModel
 
+    if scene.robot:
+        return evaluate_robot(rec, scene, root)
     root = root or find_root()
     ch = scene.checks
     model_path = scene.model_path or root / "models" / "leg.toml"
@@ -231,4 +234,192 @@ def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
                   lambda r, c: f"{where_t(d, r)} {leg.joint_names[c // 2]}.f{'xy'[c % 2]}")
         tol_check("reaction moments vs reference", "moment_nm", dr[..., 2], "N m",
                   lambda r, c: f"{where_t(d, r)} {leg.joint_names[c]}.m")
+    return ev
+
+
+# ---- the robot (a model with contacts): legsim_cli against RobotModel ---------------------------
+
+def _robot_schedule(s, initial: float):
+    """A scene schedule as the reference's (legsim_bench.reference.commands)."""
+    from .reference.commands import Step, Sinusoid
+    if s.kind == "hold":
+        return float(s.value)
+    if s.kind == "initial":
+        return float(initial)
+    if s.kind == "step":
+        return Step(float(s.before), float(s.after), float(s.t0))
+    return Sinusoid(float(s.offset), float(s.amplitude), float(s.frequency), float(s.phase))
+
+
+def robot_reference(scene: Scene, times, root: Path | None = None):
+    """(RobotModel, RobotResult) of a robot dynamics scene at the given times: the scene's
+    stand (at its `lengths`), both feet stuck, its commands (uncommanded actuators as `init`
+    says). The reference has both feet stuck throughout: a scene with a free foot is refused
+    (ValueError)."""
+    from .reference import ForceCommand, LengthCommand
+    from .reference.robot import RobotModel
+    if any(v != "stuck" for v in scene.contacts.values()):
+        raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
+    model = RobotModel.from_toml(scene.model_path)
+    start = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
+    cmds = []
+    for a in range(model.na):
+        c = scene.commands[a]
+        if c is None:
+            cmds.append(LengthCommand(float(start.lengths[a])) if scene.init == "hold_length"
+                        else ForceCommand(0.0))
+            continue
+        sch = _robot_schedule(c.schedule, float(start.lengths[a]))
+        cmds.append(ForceCommand(sch) if c.mode == "force" else LengthCommand(sch))
+    t = np.asarray(times, float)
+    r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
+                       gravity="gravity" not in scene.disable)
+    return model, r
+
+
+def robot_arrays(out: dict) -> dict:
+    """The CLI's robot samples as arrays: t, q (N, 3 nb), forces, lengths (N, na), reactions
+    (N, nj, 3), normal, tangential (N, nc), state (N, nc) names, feet (N, nc, 2), residual."""
+    d = _arrays(out)
+    S, names = out["samples"], out.get("contacts", [])
+
+    def num(v):
+        return float("nan") if v is None else float(v)
+
+    def per(key):
+        return np.array([[num(s["contacts"][c][key]) if s.get("contacts") else math.nan for c in names]
+                         for s in S], float)
+    d["normal"], d["tangential"] = per("normal"), per("tangential")
+    d["feet"] = np.stack([per("x"), per("y")], axis=-1)
+    d["state"] = np.array([[s["contacts"][c]["state"] if s.get("contacts") else "" for c in names]
+                           for s in S])
+    d["residual"] = np.array([num(s["residual"]) for s in S], float)
+    return d
+
+
+def _cosh_rate(t, y, rate0, extra=None):
+    """The rate l of y = c (cosh(l t) - 1) [+ k extra] fitted over the run (the linear response
+    of an unstable mode to a constant push from rest; `extra` absorbs a second-order term)."""
+    from scipy.optimize import curve_fit
+    c0 = y[-1] / (math.cosh(rate0 * t[-1]) - 1.0)
+    if extra is None:
+        f = lambda tt, c, lam: c * (np.cosh(lam * tt) - 1.0)  # noqa: E731
+        p0 = [c0, rate0]
+    else:
+        f = lambda tt, c, lam, k: c * (np.cosh(lam * tt) - 1.0) + k * extra  # noqa: E731
+        p0 = [c0, rate0, 0.0]
+    p, _ = curve_fit(f, t, y, p0=p0, maxfev=20000)
+    return float(p[1])
+
+
+def robot_growth(model, d: dict) -> dict:
+    """Predicted and measured growth of a constant-force stand that drifts away.
+
+    Predicted: RobotModel.linearize about the stand with the equal_friction statics forces
+    (sway, heave: its two real positive eigenvalues). Measured from the run: the box's x
+    (the sway mode is antisymmetric, the only unstable one in x; the pitch oscillation is
+    fitted with it) and its y (the heave mode, the only symmetric one; the sway's square
+    enters y at second order and is fitted with it)."""
+    from scipy.optimize import curve_fit
+    from .reference import ForceCommand
+    F = model.statics().actuator_forces
+    rates = model.linearize([ForceCommand(float(f)) for f in F]).growth_rates
+    t = d["t"]
+    x, y = d["q"][:, 0] - d["q"][0, 0], d["q"][:, 1] - d["q"][0, 1]
+    sway = lambda tt, a, lam, b, w: a * (np.cosh(lam * tt) - 1.0) + b * (1.0 - np.cos(w * tt))  # noqa: E731
+    w0 = 11.76   # the pitch oscillation, rad/s (design section 4)
+    p, _ = curve_fit(sway, t, x, p0=[x[-1] / (math.cosh(rates[0] * t[-1]) - 1.0), rates[0], 0.0, w0],
+                     maxfev=20000)
+    return {"predicted": (float(rates[0]), float(rates[1])),
+            "measured": (float(p[1]), _cosh_rate(t, y, rates[1], extra=x ** 2))}
+
+
+def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
+    """The checks of a robot scene run in legsim_cli against RobotModel (an Evaluation)."""
+    from .checks import CheckResult, Evaluation
+
+    ch = scene.checks
+    results: list = []
+    ev = Evaluation(scene, rec, results)
+    out = rec.get("cli_output")
+    ok = rec.get("complete") and out is not None
+    n = len(out.get("samples", [])) if out else 0
+    results.append(CheckResult(f"run: legsim_cli robot {scene.analysis}", bool(ok), float(n), None, "samples",
+                               "", "; ".join(e["error"] for e in rec["errors"]) or
+                               f"status {out.get('status_code')} ({rec.get('cli')})"))
+    if not ok:
+        return ev
+    d = robot_arrays(out)
+    t = d["t"]
+    where_t = lambda r: f"t={t[r]:.4f}s"  # noqa: E731
+    bodies, acts, joints, feet = out["bodies"], out["actuators"], out["joints"], out.get("contacts", [])
+
+    def tol_check(name, key, err, unit, label, detail=""):
+        tol = getattr(ch, key)
+        if tol is None:
+            return
+        v, r, c = _max(err)
+        results.append(CheckResult(name, v <= tol, v, tol, unit, label(r, c), detail))
+
+    def pose_checks(q_ref, detail=""):
+        dq = d["q"] - q_ref
+        dq[:, 2::3] = _wrap(dq[:, 2::3])
+        xy = np.delete(dq, np.s_[2::3], axis=1)
+        tol_check("positions x, y vs RobotModel", "position_m", xy, "m",
+                  lambda r, c: f"{where_t(r)} {bodies[c // 2]}.{'xy'[c % 2]}")
+        tol_check("angles vs RobotModel", "angle_rad", dq[:, 2::3], "rad",
+                  lambda r, c: f"{where_t(r)} {bodies[c]}.phi", detail)
+        tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
+                  lambda r, c: where_t(r))
+
+    from .reference.robot import RobotModel
+    if scene.analysis == "assembly":
+        model = RobotModel.from_toml(scene.model_path)
+        a = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
+        pose_checks(a.q[None], f"box ({a.q[0]:.6f}, {a.q[1]:.6f}, {a.q[2]:.6f})")
+        return ev
+    try:
+        model, r = robot_reference(scene, t, root)
+    except ValueError as e:
+        results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
+        return ev
+    # Table II of the paper: the right leg's phi3 (thigh) and phi6 (shank) at the end
+    k3, k6 = 3 * 3 + 2, 3 * 6 + 2
+    table2 = (f"at t = {t[-1]:g} s right phi3 = {d['q'][-1, k3]:.5f} rad ({math.degrees(d['q'][-1, k3]):.3f} deg), "
+              f"phi6 = {d['q'][-1, k6]:.5f} rad ({math.degrees(d['q'][-1, k6]):.3f} deg); box "
+              f"({1e3 * (d['q'][-1, 0] - d['q'][0, 0]):+.2f}, {1e3 * (d['q'][-1, 1] - d['q'][0, 1]):+.2f}) mm, "
+              f"{d['q'][-1, 2] - d['q'][0, 2]:+.5f} rad")
+    pose_checks(r.q, table2)
+    # Forces where the core has solved them: not the first sample (the first step solves
+    # them), nor a sample at a command's breakpoint (it holds the forces of the step that
+    # ended there, under the command before; the reference's are the new command's).
+    bps = {round(b * 1e9) for c in scene.commands if c is not None for b in c.schedule.breakpoints}
+    solved = np.array([s["reactions"] is not None and round(s["t"] * 1e9) not in bps for s in out["samples"]])
+    solved[0] = False
+    tol_check("actuator forces vs RobotModel", "actuator_force_n", (d["forces"] - r.actuator_forces)[solved], "N",
+              lambda r_, c: f"t={t[solved][r_]:.4f}s {acts[c]}")
+    ground = np.concatenate([d["normal"] - r.normal, d["tangential"] - r.tangential], axis=1)[solved]
+    tt = t[solved]
+    tol_check("ground forces N, T per foot vs RobotModel", "ground_force_n", ground, "N",
+              lambda r_, c: f"t={tt[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
+              f"at t = {t[-1]:g} s N {', '.join(f'{x:.2f}' for x in d['normal'][-1])}, "
+              f"T {', '.join(f'{x:+.2f}' for x in d['tangential'][-1])} N")
+    stuck = bool(np.all(d["state"] == "stuck"))
+    results.append(CheckResult("contact states: both feet stuck throughout (RobotModel's stance)", stuck,
+                               None, None, "", "", f"states at the end: {', '.join(d['state'][-1])}"))
+    if ch.reaction_n is not None:
+        dr = (d["reactions"] - r.reactions)[solved]
+        tol_check("joint reaction forces vs RobotModel", "reaction_n", dr[..., 0:2].reshape(len(tt), -1), "N",
+                  lambda r_, c: f"t={tt[r_]:.4f}s {joints[c // 2]}.f{'xy'[c % 2]}")
+    if ch.stays_put_m is not None:
+        disp = d["q"] - d["q"][0]
+        tol_check("stays put: largest displacement from the first sample", "stays_put_m",
+                  np.delete(disp, np.s_[2::3], axis=1), "m", lambda r_, c: f"{where_t(r_)} {bodies[c // 2]}")
+    if ch.growth_rel is not None:
+        g = robot_growth(model, d)
+        rel = np.array([(m_ - p_) / p_ for m_, p_ in zip(g["measured"], g["predicted"])])
+        tol_check("growth rates of the drift vs RobotModel's linearized modes", "growth_rel", rel[None], "",
+                  lambda r_, c: ("sway", "heave")[c],
+                  f"sway {g['measured'][0]:.4f} /s (predicted {g['predicted'][0]:.4f}), heave "
+                  f"{g['measured'][1]:.4f} /s (predicted {g['predicted'][1]:.4f})")
     return ev

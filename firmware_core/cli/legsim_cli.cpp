@@ -5,7 +5,8 @@
 //   legsim_cli SCENE.toml --check
 //
 // The scene names the model file (loaded at run time, host/model_toml.cpp) or
-// "builtin:leg" (the default: the leg compiled in from models/leg.toml), the analysis
+// "builtin:leg" (the default: the leg compiled in from models/leg.toml; "builtin:robot"
+// the two-leg robot of models/robot.toml when the build holds it), the analysis
 // and its inputs. Exit status: 0 ok, 1 the run failed (the output holds the samples up
 // to the failure; JSON also the status), 2 bad usage or a bad scene or model (nothing
 // is written).
@@ -17,6 +18,12 @@
 
 #include "legsim/legsim.h"
 #include "legsim/models.h"
+#if __has_include("legsim/robot_models.h")
+#include "legsim/robot_models.h"  // models/robot.toml, compiled in when the capacities hold it
+#define LEGSIM_CLI_HAS_ROBOT 1
+#else
+#define LEGSIM_CLI_HAS_ROBOT 0
+#endif
 #include "model_toml.hpp"
 #include "scene_toml.hpp"
 
@@ -85,20 +92,31 @@ int main(int argc, char **argv) {
   // The model: compiled in, or loaded (and checked) at run time. It must outlive the sim.
   legsim_model_desc model;
   if (!scene.builtin.empty()) {
+    // The compiled-in models: the leg (models/leg.toml) and, when this build's capacities
+    // hold it, the robot (models/robot.toml).
+    const legsim_model_variant *variants = legsim_model_leg_variants;
+    int32_t n_variants = legsim_model_leg_variant_count;
+    const char *builtins = LEGSIM_CLI_HAS_ROBOT ? "leg, robot" : "leg";
+#if LEGSIM_CLI_HAS_ROBOT
+    if (scene.builtin == "robot") {
+      variants = legsim_model_robot_variants;
+      n_variants = legsim_model_robot_variant_count;
+    } else
+#endif
     if (scene.builtin != "leg") {
       std::cerr << "legsim_cli: error: " << scene_path << ": unknown builtin model '" << scene.builtin
-                << "' (this build has: leg)\n";
+                << "' (this build has: " << builtins << ")\n";
       return 2;
     }
     const legsim_model_desc *found = nullptr;
     std::string have;
-    for (int32_t v = 0; v < legsim_model_leg_variant_count; ++v) {
-      have += std::string(v ? ", " : "") + legsim_model_leg_variants[v].name;
-      if (scene.variant == legsim_model_leg_variants[v].name) found = legsim_model_leg_variants[v].model;
+    for (int32_t v = 0; v < n_variants; ++v) {
+      have += std::string(v ? ", " : "") + variants[v].name;
+      if (scene.variant == variants[v].name) found = variants[v].model;
     }
     if (!found) {
-      std::cerr << "legsim_cli: error: " << scene_path << ": the builtin leg has no variant '"
-                << scene.variant << "' (available: " << have << ")\n";
+      std::cerr << "legsim_cli: error: " << scene_path << ": the builtin " << scene.builtin
+                << " has no variant '" << scene.variant << "' (available: " << have << ")\n";
       return 2;
     }
     model = *found;

@@ -226,13 +226,32 @@ bool is_name(const std::string &s) {
   return true;
 }
 
+// Keys of the robot's design (docs/design/robot-on-ground.md section 6) that this core does
+// not have yet: refused by name, so a scene never runs without what it asked for.
+struct NotYet {
+  const char *key;
+  const char *message;
+};
+const NotYet kNotYetKeys[] = {
+    {"contact_law",
+     "'contact_law' is not in this core yet (only the stuck/free contact of "
+     "docs/design/robot-on-ground.md section 8): leave it out"},
+    {"statics_rule",
+     "'statics_rule' is not in this core yet (the statics of a stance on the ground is not made): "
+     "leave it out"},
+    {"box_load",
+     "'box_load' is not in this core yet (the robot has no force element on the box): leave it out"},
+};
+
 void parse_scene(Table doc, Scene &s) {
   for (const auto &r : kRenamedKeys)
     if (doc->get(r.old_key)) fail(r.message);
+  for (const auto &r : kNotYetKeys)
+    if (doc->get(r.key)) fail(r.message);
   check_keys(doc, {"description", "name", "demo", "model", "variant", "analysis", "integrator",
                    "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
                    "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
-                   "forces", "command", "inject", "checks"},
+                   "forces", "command", "contact", "inject", "checks"},
              "");
   s.description = get_string(doc, "description", "", false);
   s.name = get_string(doc, "name", "", false, stem_of(s.path));
@@ -421,6 +440,33 @@ void parse_scene(Table doc, Scene &s) {
       s.commands.push_back(c);
     }
   }
+
+  if (Node cv = doc->get("contact")) {
+    if (!dynamics && s.analysis != Analysis::kAssembly)
+      fail("[[contact]] applies to dynamics and assembly only");
+    const toml::array *a = cv->as_array();
+    if (!a || !a->is_array_of_tables()) fail("'contact' must be an array of tables ([[contact]])");
+    int k = 0;
+    for (auto &&e : *a) {
+      ++k;
+      Table ct = e.as_table();
+      const std::string w0 = "contact #" + std::to_string(k) + ": ";
+      check_keys(ct, {"name", "state"}, w0);
+      ContactInit c;
+      c.name = get_string(ct, "name", w0, true);
+      const std::string w = "contact " + q(c.name) + ": ";
+      for (const ContactInit &o : s.contacts)
+        if (o.name == c.name) fail(w + "a second [[contact]] for the same contact");
+      const std::string state = get_string(ct, "state", w, true);
+      if (state == "stuck")
+        c.state = LEGSIM_CONTACT_STUCK;
+      else if (state == "free")
+        c.state = LEGSIM_CONTACT_FREE;
+      else
+        fail(w + "'state' must be stuck or free (got " + q(state) + ")");
+      s.contacts.push_back(c);
+    }
+  }
 }
 
 bool read_text(const std::string &path, std::string &text, std::string &err) {
@@ -506,6 +552,7 @@ const char *status_enum_name(legsim_status s) {
     case LEGSIM_ERR_DISABLED: return "LEGSIM_ERR_DISABLED";
     case LEGSIM_ERR_STATE: return "LEGSIM_ERR_STATE";
     case LEGSIM_ERR_DIVERGED: return "LEGSIM_ERR_DIVERGED";
+    case LEGSIM_ERR_CONTACT: return "LEGSIM_ERR_CONTACT";
   }
   return "LEGSIM_ERR_UNKNOWN";
 }
@@ -601,6 +648,23 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
       if (k == LEGSIM_FORCE_TORQUE && f.n != 1)
         fail("forces." + f.name + ": a torque takes one value (N m)");
     }
+    // contacts: a robot's feet (the core has them stuck or free, in assembly and dynamics)
+    if (m.n_contacts > 0 && s.analysis != Analysis::kDynamics && s.analysis != Analysis::kAssembly)
+      fail(std::string(analysis_name(s.analysis)) +
+           " of a model with contacts is not in this core yet (its driven analyses do not see the "
+           "feet's rows): run dynamics or assembly");
+    for (size_t c = 0; c < s.contacts.size(); ++c) {
+      ContactInit &ci = s.contacts[c];
+      ci.index = -1;
+      std::string list;
+      for (int32_t k = 0; k < m.n_contacts; ++k) {
+        list += (k ? ", " : "") + name_of(m.contact[k].name);
+        if (name_of(m.contact[k].name) == ci.name) ci.index = k;
+      }
+      if (ci.index < 0)
+        fail("contact " + q(ci.name) + ": the model has no contact " + q(ci.name) + " (contacts: " +
+             (list.empty() ? "none" : list) + ")");
+    }
     // commands
     for (size_t c = 0; c < s.commands.size(); ++c) {
       Command &cmd = s.commands[c];
@@ -688,6 +752,10 @@ void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_
       s.foot[1] = xy[1];
     }
   }
+  if (const int32_t nk = legsim_n_contacts(sim); nk > 0) {
+    s.contacts.resize(nk);
+    if (legsim_contacts(sim, s.contacts.data()) != LEGSIM_OK) s.contacts.clear();
+  }
   legsim_real max_abs = 0;
   if (legsim_constraints(sim, buf.data(), &max_abs) == LEGSIM_OK) s.residual = max_abs;
   legsim_report rep;
@@ -727,7 +795,36 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
     }
   }
   const int32_t na = legsim_n_actuators(sim);
-  if (sc.has_lengths) {
+  const int32_t nk = legsim_n_contacts(sim);
+  if (nk > 0) {
+    // A robot stands on the ground: the feet on the line, their midpoint where the pose put
+    // it (its guess has them there), the box pose following; every contact stuck.
+    std::vector<legsim_contact> c(nk);
+    st = legsim_contacts(sim, c.data());
+    double mid = 0;
+    const legsim_ground_desc &g = m.ground;
+    for (const auto &k : c)
+      mid += ((k.position[0] - g.point[0]) * std::cos(g.slope_rad) +
+              (k.position[1] - g.point[1]) * std::sin(g.slope_rad)) / nk;
+    std::vector<legsim_real> len(sc.lengths.begin(), sc.lengths.end());
+    if (st == LEGSIM_OK)
+      st = legsim_assemble_on_ground(sim, sc.has_lengths ? len.data() : nullptr, static_cast<legsim_real>(mid));
+    if (st != LEGSIM_OK) {
+      std::string l;
+      for (size_t i = 0; i < sc.lengths.size(); ++i) l += (i ? ", " : "") + num(sc.lengths[i]);
+      res.error = call_failed(sc.has_lengths ? "assembling on the ground at the lengths [" + l + "]"
+                                             : std::string("assembling on the ground"), st);
+      return st;
+    }
+    for (const auto &ci : sc.contacts) {
+      st = legsim_set_contact_state(sim, ci.index, ci.state);
+      if (st != LEGSIM_OK) {
+        res.error = call_failed("setting contact " + q(ci.name) + " " +
+                                    (ci.state == LEGSIM_CONTACT_FREE ? "free" : "stuck"), st);
+        return st;
+      }
+    }
+  } else if (sc.has_lengths) {
     std::vector<legsim_real> len(sc.lengths.begin(), sc.lengths.end());
     st = legsim_assemble(sim, len.data());
     if (st != LEGSIM_OK) {
@@ -823,7 +920,16 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
       };
       st = apply(0.0);
       if (st != LEGSIM_OK) return st;
-      emit(legsim_time(sim), nullptr);
+      // A robot's first sample: the assembly's multipliers are not the dynamics' forces
+      // (the first step solves those), so its reactions and ground forces are null, as the
+      // leg's reactions are.
+      record(sim, m, legsim_time(sim), nullptr, sample);
+      if (legsim_n_contacts(sim) > 0) {
+        sample.has_reactions = false;
+        sample.contact_forces = false;
+      }
+      out.sample(sample);
+      ++res.n_samples;
       for (int64_t k = 1; k <= sc.n_steps; ++k) {
         const double t = legsim_time(sim);
         st = apply(t);
@@ -886,6 +992,25 @@ std::string csv_field(const std::string &s) {
 }
 
 const char *kXyz[3] = {"x", "y", "phi"};
+
+const char *contact_state_name(legsim_contact_state st) {
+  switch (st) {
+    case LEGSIM_CONTACT_FREE: return "free";
+    case LEGSIM_CONTACT_STUCK: return "stuck";
+    case LEGSIM_CONTACT_SLIDING: return "sliding";
+  }
+  return "unknown";
+}
+// Per contact, in this order: state, then the numbers (JSON keys and CSV column suffixes).
+const char *kContactNumbers[] = {"normal", "tangential", "friction_use", "x", "y", "slip", "impulse_n",
+                                 "impulse_t"};
+double contact_number(const legsim_contact &c, int i) {
+  const legsim_real v[] = {c.normal_n, c.tangential_n, c.friction_use, c.position[0],
+                           c.position[1], c.slip_mps, c.impulse_ns[0], c.impulse_ns[1]};
+  return v[i];
+}
+constexpr int kNContactNumbers = 8;
+constexpr int kNContactForces = 3;  // normal, tangential, friction_use: from a solve
 
 }  // namespace
 
@@ -957,6 +1082,10 @@ void write_resolved(std::ostream &o, const Scene &sc, const legsim_model_desc &m
     }
     o << "}";
   }
+  o << "}, \"contacts\": {";
+  for (size_t i = 0; i < sc.contacts.size(); ++i)
+    o << (i ? ", " : "") << jstr(sc.contacts[i].name) << ": "
+      << jstr(sc.contacts[i].state == LEGSIM_CONTACT_FREE ? "free" : "stuck");
   o << "}}\n";
 }
 
@@ -979,6 +1108,17 @@ void JsonWriter::begin() {
   names("bodies", m_.n_bodies, [&](int i) { return name_of(m_.body[i].name); });
   names("joints", m_.n_joints, [&](int i) { return name_of(m_.joint[i].name); });
   names("actuators", m_.n_actuators, [&](int i) { return name_of(m_.actuator[i].name); });
+  if (m_.n_contacts > 0) {
+    // a robot: its feet, the ground line, and the drawn length of each body (plots)
+    names("contacts", m_.n_contacts, [&](int i) { return name_of(m_.contact[i].name); });
+    const legsim_ground_desc &g = m_.ground;
+    o_ << "  \"ground\": {\"point\": [" << jnum(g.point[0]) << ", " << jnum(g.point[1])
+       << "], \"slope\": " << jnum(g.slope_rad) << ", \"mu_static\": " << jnum(g.mu_static)
+       << ", \"mu_kinetic\": " << jnum(g.mu_kinetic) << "},\n";
+    o_ << "  \"body_lengths\": [";
+    for (int b = 0; b < m_.n_bodies; ++b) o_ << (b ? ", " : "") << jnum(m_.body[b].length_m);
+    o_ << "],\n";
+  }
   o_ << "  \"samples\": [";
 }
 
@@ -1010,6 +1150,24 @@ void JsonWriter::sample(const Sample &s) {
     o_ << "{\"x\": " << jnum(s.foot[0]) << ", \"y\": " << jnum(s.foot[1]) << "}";
   else
     o_ << "null";
+  if (m.n_contacts > 0) {
+    o_ << ",\n     \"contacts\": ";
+    if (static_cast<int>(s.contacts.size()) == m.n_contacts) {
+      o_ << "{";
+      for (int k = 0; k < m.n_contacts; ++k) {
+        const legsim_contact &c = s.contacts[k];
+        o_ << (k ? ", " : "") << jstr(name_of(m.contact[k].name)) << ": {\"state\": "
+           << jstr(contact_state_name(c.state));
+        for (int i = 0; i < kNContactNumbers; ++i)
+          o_ << ", \"" << kContactNumbers[i]
+             << "\": " << (i < kNContactForces && !s.contact_forces ? "null" : jnum(contact_number(c, i)));
+        o_ << "}";
+      }
+      o_ << "}";
+    } else {
+      o_ << "null";
+    }
+  }
   o_ << ", \"residual\": " << jnum(s.residual) << ", \"iterations\": " << s.iterations
      << ", \"condition\": " << jnum(s.condition) << ", \"events\": [";
   const auto ev = event_names(s.events);
@@ -1072,6 +1230,11 @@ void CsvWriter::begin() {
     o_ << "," << csv_field(n + ".fx") << "," << csv_field(n + ".fy") << "," << csv_field(n + ".moment");
   }
   if (m.foot_body >= 0) o_ << ",foot.x,foot.y";
+  for (int k = 0; k < m.n_contacts; ++k) {
+    const std::string n = name_of(m.contact[k].name);
+    o_ << "," << csv_field(n + ".state");
+    for (int i = 0; i < kNContactNumbers; ++i) o_ << "," << csv_field(n + "." + kContactNumbers[i]);
+  }
   o_ << ",residual,status\n";
 }
 
@@ -1085,6 +1248,12 @@ void CsvWriter::sample(const Sample &s) {
   for (int j = 0; j < m.n_joints; ++j)
     for (int c = 0; c < 3; ++c) o_ << "," << num(s.has_reactions ? s.reaction[3 * j + c] : NAN);
   if (m.foot_body >= 0) o_ << "," << num(s.has_foot ? s.foot[0] : NAN) << "," << num(s.has_foot ? s.foot[1] : NAN);
+  const bool have_contacts = static_cast<int>(s.contacts.size()) == m.n_contacts;
+  for (int k = 0; k < m.n_contacts; ++k) {
+    o_ << "," << (have_contacts ? contact_state_name(s.contacts[k].state) : "nan");
+    for (int i = 0; i < kNContactNumbers; ++i)
+      o_ << "," << num(have_contacts && (i >= kNContactForces || s.contact_forces) ? contact_number(s.contacts[k], i) : NAN);
+  }
   o_ << "," << num(s.residual) << ",ok\n";
 }
 

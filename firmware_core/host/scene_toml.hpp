@@ -46,6 +46,14 @@ struct ForceValue {
   double value[2] = {0, 0};
 };
 
+// [[contact]]: a contact's state at t = 0 (a robot: its feet start stuck where the stand
+// assembly puts them; "free" lifts a foot's rows).
+struct ContactInit {
+  std::string name;
+  int32_t index = -1;  // bound against the model
+  legsim_contact_state state = LEGSIM_CONTACT_STUCK;
+};
+
 enum class Analysis { kDynamics, kStatics, kStaticsSweep, kInverseDynamics, kAssembly };
 const char *analysis_name(Analysis a);
 
@@ -78,6 +86,7 @@ struct Scene {
   std::string safe_state = "zero_force"; // bench only
   std::vector<ForceValue> forces;
   std::vector<Command> commands;
+  std::vector<ContactInit> contacts;     // [[contact]] (models with contacts only)
 };
 
 // Reads and checks a scene file (everything that does not need the model).
@@ -105,6 +114,8 @@ struct Sample {
   int32_t iterations = 0;
   double condition = 0;
   uint32_t events = 0;
+  std::vector<legsim_contact> contacts;  // n_contacts (a robot's feet)
+  bool contact_forces = true;            // false: their forces are not solved yet (null)
 };
 
 struct Result {

@@ -265,7 +265,7 @@ def _expected_messages():
     rows = [line.rstrip("\n").split("\t") for line in (BAD / "expected.tsv").read_text().splitlines()
             if line.strip() and not line.startswith("#")]
     return [(name, texts[0]) for name, code, *texts in rows
-            if name.startswith(("old_", "duration_", "step_", "limit_"))]
+            if name.startswith(("old_", "duration_", "step_", "limit_", "robot_"))]
 
 
 @pytest.mark.parametrize("name, text", _expected_messages(), ids=lambda v: str(v)[:40])

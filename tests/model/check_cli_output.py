@@ -20,6 +20,8 @@ import sys
 import tomllib
 
 failures = []
+# per contact in legsim_cli's output, after its state (firmware_core/host/scene_toml.cpp)
+CONTACT_NUMBERS = ("normal", "tangential", "friction_use", "x", "y", "slip", "impulse_n", "impulse_t")
 
 
 def check(cond, what):
@@ -55,7 +57,15 @@ def check_good(cli, scene, outdir):
     check(d.get("analysis") == analysis, f"{name}: analysis {d.get('analysis')}")
     check(d["model"].get("variant") == spec.get("variant", "revolute"), f"{name}: variant")
     bodies, joints, acts = d["bodies"], d["joints"], d["actuators"]
-    check(len(bodies) == 6 and len(joints) == 8 and len(acts) == 2, f"{name}: leg sizes")
+    contacts = d.get("contacts", [])
+    robot = bool(contacts)
+    if robot:  # models/robot.toml: the box on two legs, a contact per foot
+        check(len(bodies) == 13 and len(joints) == 16 and len(acts) == 4 and len(contacts) == 2,
+              f"{name}: robot sizes")
+        check(set(d["ground"]) == {"point", "slope", "mu_static", "mu_kinetic"}, f"{name}: ground")
+        check(len(d["body_lengths"]) == len(bodies), f"{name}: body_lengths")
+    else:
+        check(len(bodies) == 6 and len(joints) == 8 and len(acts) == 2, f"{name}: leg sizes")
     samples = d["samples"]
     if analysis == "statics_sweep":
         w = d.get("worst_case")
@@ -93,7 +103,17 @@ def check_good(cli, scene, outdir):
                 for j, v in s["reactions"].items():
                     check(set(v) == {"fx", "fy", "moment"}, f"{name}: reaction {j} keys")
             check(s["residual"] is not None and s["residual"] < 1e-4, f"{name}: residual {s['residual']}")
-            check(s["foot"] is not None, f"{name}: foot")
+            if robot:
+                check(s["foot"] is None and set(s["contacts"]) == set(contacts), f"{name}: contacts by name")
+                for c, v in s["contacts"].items():
+                    check(set(v) == {"state", *CONTACT_NUMBERS}, f"{name}: contact {c} keys")
+                    check(v["state"] in ("free", "stuck", "sliding"), f"{name}: contact {c} state")
+                    check(all(v[k] is None or math.isfinite(v[k]) for k in CONTACT_NUMBERS),
+                          f"{name}: contact {c} numbers")
+                    # a stuck foot is on the ground line (robot.toml's: y = 0)
+                    check(v["state"] != "stuck" or abs(v["y"]) < 1e-9, f"{name}: stuck {c} off the ground")
+            else:
+                check(s["foot"] is not None, f"{name}: foot")
         if analysis in ("statics",):
             check(samples[0]["reactions"] is not None, f"{name}: statics without reactions")
     # The same run as CSV (format from the extension).
@@ -110,7 +130,9 @@ def check_good(cli, scene, outdir):
     check(len(rows) == len(samples), f"{name}: CSV has {len(rows)} rows for {len(samples)} samples")
     want = ["t"] + [f"{b}.{c}" for b in bodies for c in ("x", "y", "phi")] + \
         [f"{a}.{k}" for a in acts for k in ("length", "rate", "force")] + \
-        [f"{j}.{k}" for j in joints for k in ("fx", "fy", "moment")] + ["foot.x", "foot.y", "residual", "status"]
+        [f"{j}.{k}" for j in joints for k in ("fx", "fy", "moment")] + \
+        ([f"{c}.{k}" for c in contacts for k in ("state", *CONTACT_NUMBERS)] if robot else ["foot.x", "foot.y"]) + \
+        ["residual", "status"]
     check(header == want, f"{name}: CSV header {header}")
     for row, s in zip(rows, samples):
         check(row["status"] == "ok", f"{name}: CSV status {row['status']}")
