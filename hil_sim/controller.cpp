@@ -63,15 +63,15 @@ void Controller::on_frame(const Frame &frame, int64_t now_ns) {
   ++rx_frames_;
   Request req;
   Fault f;
-  if (!decode_frame(frame, &req, &f)) return reject(f);
+  if (!decode_frame(frame, &req, &f, Session::legs())) return reject(f);
   if (req.kind == Request::Kind::kForeign) return;
 
   // sequence counter: greater than the last accepted of its id (a RESET starts anew)
   const bool is_reset =
       req.kind == Request::Kind::kControl && req.control.command == Command::kReset;
   SeqTrack *track = req.kind == Request::Kind::kControl ? &ctrl_seq_
-                    : req.kind == Request::Kind::kAct   ? &act_seq_
-                                                        : &load_seq_;
+                    : req.kind == Request::Kind::kAct   ? &act_seq_[req.leg]
+                                                        : &load_seq_[req.leg];
   if (!is_reset && track->have && req.seq <= track->last) {
     f = Fault{};
     f.code = FaultCode::kStaleSeq;
@@ -118,8 +118,8 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
       last_fault_ = FaultCode::kNone;
       state_ = SimState::kLockstep;
       ctrl_seq_ = {true, req.seq};
-      act_seq_ = {};
-      load_seq_ = {};
+      for (int k = 0; k < kMaxLegs; ++k) act_seq_[k] = load_seq_[k] = {};
+      last_act_id_ = kActCmdFrameId;
       timeout_ms_ = r.cmd_timeout_ms == kCmdTimeoutDefault ? config_.cmd_timeout_ms
                     : r.cmd_timeout_ms == kCmdTimeoutNone  ? 0
                                                            : r.cmd_timeout_ms;
@@ -157,10 +157,12 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
 
 void Controller::handle_act(const Request &req, int64_t now_ns) {
   for (int a = 0; a < kActuators; ++a) {
-    legsim_status st = session_.command(a, req.act.mode[a], req.act.setpoint[a]);
+    legsim_status st =
+        session_.command(req.leg * kActuators + a, req.act.mode[a], req.act.setpoint[a]);
     if (st != LEGSIM_OK) return solver_fault(st, &req);
   }
-  act_seq_ = {true, req.seq};
+  act_seq_[req.leg] = {true, req.seq};
+  last_act_id_ = req.id;
   armed_ = timeout_ms_ > 0;
   safe_ = false;
   steps_since_cmd_ = 0;
@@ -169,9 +171,10 @@ void Controller::handle_act(const Request &req, int64_t now_ns) {
 
 void Controller::handle_load(const Request &req) {
   const double v[2] = {req.load.value[0], req.load.value[1]};
-  legsim_status st = session_.set_load(req.load.index, v);
+  const int force = req.leg * Session::forces_per_leg(session_.model()) + req.load.index;
+  legsim_status st = session_.set_load(force, v);
   if (st != LEGSIM_OK) return solver_fault(st, &req);
-  load_seq_ = {true, req.seq};
+  load_seq_[req.leg] = {true, req.seq};
 }
 
 // ---- stepping -------------------------------------------------------------------------
@@ -182,8 +185,9 @@ void Controller::trip(double elapsed_ms) {
   legsim_status st = session_.apply_safe_state(config_.safe_mode);
   Fault f;
   f.code = FaultCode::kCmdTimeout;
-  f.frame_id = kActCmdFrameId;
-  f.seq = act_seq_.last;
+  f.frame_id = last_act_id_ != 0 ? last_act_id_ : kActCmdFrameId;
+  f.seq = last_act_id_ == kActCmdFrameId || last_act_id_ == 0 ? act_seq_[0].last
+                                                              : act_seq_[1].last;
   f.detail = timeout_ms_;
   f.value = static_cast<float>(elapsed_ms);
   raise(f);
@@ -295,12 +299,19 @@ void Controller::publish() {
   info.last_fault = last_fault_;
   info.variant = session_.params().variant;
   info.integrator = session_.params().integrator;
-  info.act_seq = act_seq_.last;
+  for (int k = 0; k < kMaxLegs; ++k) info.act_seq[k] = act_seq_[k].last;
   info.ctrl_seq = ctrl_seq_.last;
   info.step_ns = session_.params().step_ns;
-  Frame frames[kSampleFrames];
-  encode_sample(s, info, frames);
-  for (const Frame &f : frames) sink_.send(f);
+  // contact state changes since the previous sample (none at step 0: a RESET's sample)
+  const bool fresh = s.steps == 0;
+  for (int k = 0; k < kMaxContacts && s.legs > 1; ++k) {
+    info.contact_events[k] =
+        fresh ? 0 : contact_events(contact_state_[k], s.contact[k].state);
+    contact_state_[k] = s.contact[k].state;
+  }
+  Frame frames[kMaxSampleFrames];
+  const int n = encode_sample(s, info, frames);
+  for (int i = 0; i < n; ++i) sink_.send(frames[i]);
   session_.clear_events();
   fault_since_sample_ = false;
 }

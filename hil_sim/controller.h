@@ -16,6 +16,11 @@
 // one FAULT frame and nothing else changes. Every accepted CONTROL frame is answered with
 // one state sample; accepted ACT_CMD and LOAD_CMD frames are not answered.
 //
+// The robot (Session::legs() == 2): each leg has its own ACT_CMD and LOAD_CMD ids with their
+// own sequence counters; a sample is every leg's frames (protocol.h). One command timeout
+// for the whole robot, fed by an accepted ACT_CMD of either leg; the safe state is applied to
+// every actuator.
+//
 // Command timeout: armed by an accepted ACT_CMD when a timeout is set; it trips when no
 // further ACT_CMD is accepted within the timeout, measured in simulated time in lockstep
 // (before the first step that would pass the timeout: ceil(timeout / h) steps after the
@@ -105,7 +110,9 @@ class Controller {
   legsim_status legsim_ = LEGSIM_OK;
   FaultCode last_fault_ = FaultCode::kNone;
   bool fault_since_sample_ = false;
-  SeqTrack ctrl_seq_, act_seq_, load_seq_;
+  SeqTrack ctrl_seq_, act_seq_[kMaxLegs], load_seq_[kMaxLegs];  // per leg: its own frame ids
+  uint32_t last_act_id_ = 0;   // the id of the last accepted ACT_CMD (of any leg), for CMD_TIMEOUT
+  int contact_state_[kMaxContacts] = {0, 0};  // at the previous sample: Ct_Events
 
   // command timeout
   uint32_t timeout_ms_ = 0;

@@ -20,13 +20,16 @@
 #include "run_loop.h"
 #include "session.h"
 #include "model_toml.hpp"
+#ifdef HIL_SIM_HAS_ROBOT
+#include "legsim/robot_models.h"
+#endif
 
 namespace {
 
 const char kUsage[] =
     "usage: hil_sim [options]\n"
     "\n"
-    "Runs the legsim leg (compiled-in models/leg.toml) as a CAN FD node on a SocketCAN\n"
+    "Runs the legsim leg (compiled-in models/leg.toml), or the two-leg robot, as a CAN FD node on a SocketCAN\n"
     "interface, driven by the bench over can/legsim.dbc (see can/README.md). Lockstep mode\n"
     "advances exactly N fixed steps per STEP frame and answers with a state sample; real-time\n"
     "mode ticks at 1 / (steps per tick * step size) (1 kHz at h = 1 ms) with clock_nanosleep.\n"
@@ -38,7 +41,11 @@ const char kUsage[] =
     "  --safe-state MODE     on a command timeout: zero-force (default) or hold-length\n"
     "  --model FILE.toml     run this model file (loaded at start by the host loader) instead of\n"
     "                        the compiled-in leg; it needs the DBC's leg: 6 bodies, 8 joints,\n"
-    "                        2 actuators, and both variants Ctrl_Variant names (revolute, slot)\n"
+    "                        2 actuators, and both variants Ctrl_Variant names (revolute, slot);\n"
+    "                        or a robot file (models/robot.toml: a box on two such legs)\n"
+    "  --robot               run the compiled-in two-leg robot (models/robot.toml): each leg\n"
+    "                        answers with its own frames (leg 1 at the ids + 0x20), plus the\n"
+    "                        feet's contacts (ST_CONTACT) and the box (ST_BOX)\n"
     "  --decimation N        real time: one state sample every N ticks (default 10)\n"
     "  --heartbeat-ms N      HEARTBEAT period, 0 = none (default 100)\n"
     "  --rt-priority N       SCHED_FIFO priority 1-99 and locked memory for real time\n"
@@ -57,6 +64,7 @@ struct Options {
   hil::LoopConfig loop;
   int rt_priority = 0;
   std::string model_file;  // "" = the compiled-in leg
+  bool robot = false;       // --robot: the compiled-in robot
 };
 
 bool parse_uint(const char *text, unsigned long max, unsigned long *out) {
@@ -115,6 +123,8 @@ int parse_options(int argc, char **argv, Options *o) {
       const char *v = need("--model");
       if (v == nullptr) return 2;
       o->model_file = v;
+    } else if (arg == "--robot") {
+      o->robot = true;
     } else if (arg == "--safe-state") {
       const char *v = need("--safe-state");
       if (v == nullptr) return 2;
@@ -174,9 +184,36 @@ int main(int argc, char **argv) {
   // --model: both variants of the file, checked by the loader (and by session.init below
   // against the DBC's leg); they live to the end of main, past every session.
   legsim_model_desc file_models[2];
-  if (!opt.model_file.empty()) {
+  if (opt.robot && !opt.model_file.empty()) {
+    std::fprintf(stderr, "hil_sim: --robot and --model exclude each other (see --help)\n");
+    return 2;
+  }
+  if (opt.robot) {
+#ifdef HIL_SIM_HAS_ROBOT
+    hil::Session::use_robot(&legsim_model_robot_revolute);
+    std::fprintf(stderr, "hil_sim: the compiled-in robot '%s' (2 legs)\n",
+                 legsim_model_robot_revolute.name);
+#else
+    std::fprintf(stderr, "hil_sim: --robot: this build's capacities do not hold the robot "
+                         "(13 bodies, 16 joints, 4 actuators, 2 contacts); use --model "
+                         "models/robot.toml in a build that does\n");
+    return 2;
+#endif
+  } else if (!opt.model_file.empty()) {
+    char msg[512] = "";
+    if (legsim_model_load_toml(opt.model_file.c_str(), "revolute", &file_models[0], msg,
+                               sizeof msg) != LEGSIM_OK) {
+      std::fprintf(stderr, "hil_sim: --model: %s\n", msg);
+      return 2;
+    }
+  }
+  if (!opt.model_file.empty() && file_models[0].n_contacts > 0) {
+    // a robot file: one variant (its legs name theirs)
+    hil::Session::use_robot(&file_models[0]);
+    std::fprintf(stderr, "hil_sim: robot model %s (2 legs)\n", opt.model_file.c_str());
+  } else if (!opt.model_file.empty()) {
     const char *variants[2] = {"revolute", "slot"};
-    for (int v = 0; v < 2; ++v) {
+    for (int v = 1; v < 2; ++v) {
       char msg[512] = "";
       if (legsim_model_load_toml(opt.model_file.c_str(), variants[v], &file_models[v], msg,
                                  sizeof msg) != LEGSIM_OK) {

@@ -37,6 +37,13 @@ uint32_t status_from_events(uint32_t events) {
   return s;
 }
 
+uint8_t contact_events(int before, int after) {
+  if (before == after) return 0;
+  if (after == LEGSIM_CONTACT_FREE) return kContactLiftoff;
+  if (before == LEGSIM_CONTACT_FREE) return kContactTouchdown;
+  return after == LEGSIM_CONTACT_SLIDING ? kContactStickToSlip : kContactSlipToStick;
+}
+
 namespace {
 
 // Collects the first problem of a request as a fault.
@@ -115,16 +122,26 @@ void validate_control(const Request &req, Checker &c) {
       c.range(legsim_can_control_ctrl_use_lengths_is_in_range(r.use_lengths),
               LEGSIM_CAN_CONTROL_CTRL_USE_LENGTHS_START_BIT, r.use_lengths);
       if (!c.ok()) return;
-      const legsim_model_desc *m = Session::variant_model(p.variant);
+      const legsim_model_desc *m = Session::variant_model(p.variant);  // the robot has one
+      c.model(m != nullptr, LEGSIM_CAN_CONTROL_CTRL_VARIANT_START_BIT, p.variant);
+      if (!c.ok()) return;
       c.model(p.pose < m->n_poses, LEGSIM_CAN_CONTROL_CTRL_POSE_START_BIT, p.pose);
       if (p.use_lengths) {
-        const float l[kActuators] = {static_cast<float>(p.lengths[0]),
-                                     static_cast<float>(p.lengths[1])};
-        const unsigned bit[kActuators] = {LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_START_BIT,
-                                          LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_START_BIT};
-        c.real(l[0], legsim_can_control_ctrl_length_upper_is_in_range(l[0]), bit[0]);
-        c.real(l[1], legsim_can_control_ctrl_length_lower_is_in_range(l[1]), bit[1]);
-        for (int a = 0; a < kActuators; ++a) c.model(stroke_ok(m, a, l[a]), bit[a], l[a]);
+        // leg 0's lengths, then (robot) leg 1's
+        float l[kMaxActuators];
+        for (int a = 0; a < kMaxActuators; ++a) l[a] = static_cast<float>(p.lengths[a]);
+        const unsigned bit[kMaxActuators] = {LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_START_BIT,
+                                             LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_START_BIT,
+                                             LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_L1_START_BIT,
+                                             LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_L1_START_BIT};
+        const bool in_range[kMaxActuators] = {
+            legsim_can_control_ctrl_length_upper_is_in_range(l[0]),
+            legsim_can_control_ctrl_length_lower_is_in_range(l[1]),
+            legsim_can_control_ctrl_length_upper_l1_is_in_range(l[2]),
+            legsim_can_control_ctrl_length_lower_l1_is_in_range(l[3])};
+        const int na = m->n_actuators;
+        for (int a = 0; a < na; ++a) c.real(l[a], in_range[a], bit[a]);
+        for (int a = 0; a < na; ++a) c.model(stroke_ok(m, a, l[a]), bit[a], l[a]);
       }
       break;
     }
@@ -143,49 +160,96 @@ void validate_control(const Request &req, Checker &c) {
   }
 }
 
+// The DBC's checks of one leg's ACT_CMD (leg 1: ACT_CMD_L1, the same layout).
+struct ActChecks {
+  bool (*mode_in_range[kActuators])(uint8_t);
+  bool (*setpoint_in_range[kActuators])(float);
+  unsigned mode_bit[kActuators], setpoint_bit[kActuators];
+};
+const ActChecks kActChecks[kMaxLegs] = {
+    {{legsim_can_act_cmd_act_mode_upper_is_in_range, legsim_can_act_cmd_act_mode_lower_is_in_range},
+     {legsim_can_act_cmd_act_setpoint_upper_is_in_range,
+      legsim_can_act_cmd_act_setpoint_lower_is_in_range},
+     {LEGSIM_CAN_ACT_CMD_ACT_MODE_UPPER_START_BIT, LEGSIM_CAN_ACT_CMD_ACT_MODE_LOWER_START_BIT},
+     {LEGSIM_CAN_ACT_CMD_ACT_SETPOINT_UPPER_START_BIT,
+      LEGSIM_CAN_ACT_CMD_ACT_SETPOINT_LOWER_START_BIT}},
+    {{legsim_can_act_cmd_l1_act_mode_upper_is_in_range,
+      legsim_can_act_cmd_l1_act_mode_lower_is_in_range},
+     {legsim_can_act_cmd_l1_act_setpoint_upper_is_in_range,
+      legsim_can_act_cmd_l1_act_setpoint_lower_is_in_range},
+     {LEGSIM_CAN_ACT_CMD_L1_ACT_MODE_UPPER_START_BIT, LEGSIM_CAN_ACT_CMD_L1_ACT_MODE_LOWER_START_BIT},
+     {LEGSIM_CAN_ACT_CMD_L1_ACT_SETPOINT_UPPER_START_BIT,
+      LEGSIM_CAN_ACT_CMD_L1_ACT_SETPOINT_LOWER_START_BIT}}};
+
 void validate_act(const Request &req, const legsim_model_desc *m, Checker &c) {
   const ActRequest &r = req.act;
-  const unsigned mode_bit[kActuators] = {LEGSIM_CAN_ACT_CMD_ACT_MODE_UPPER_START_BIT,
-                                         LEGSIM_CAN_ACT_CMD_ACT_MODE_LOWER_START_BIT};
-  const unsigned sp_bit[kActuators] = {LEGSIM_CAN_ACT_CMD_ACT_SETPOINT_UPPER_START_BIT,
-                                       LEGSIM_CAN_ACT_CMD_ACT_SETPOINT_LOWER_START_BIT};
-  const bool mode_in_range[kActuators] = {
-      legsim_can_act_cmd_act_mode_upper_is_in_range(static_cast<uint8_t>(r.mode[0])),
-      legsim_can_act_cmd_act_mode_lower_is_in_range(static_cast<uint8_t>(r.mode[1]))};
-  const bool sp_in_range[kActuators] = {
-      legsim_can_act_cmd_act_setpoint_upper_is_in_range(r.setpoint[0]),
-      legsim_can_act_cmd_act_setpoint_lower_is_in_range(r.setpoint[1])};
+  const ActChecks &k = kActChecks[req.leg];
   for (int a = 0; a < kActuators; ++a)
-    c.range(mode_in_range[a], mode_bit[a], static_cast<double>(r.mode[a]));
+    c.range(k.mode_in_range[a](static_cast<uint8_t>(r.mode[a])), k.mode_bit[a],
+            static_cast<double>(r.mode[a]));
   for (int a = 0; a < kActuators; ++a) {
     if (r.mode[a] == ActMode::kKeep) continue;  // setpoint ignored
-    c.real(r.setpoint[a], sp_in_range[a], sp_bit[a]);
+    c.real(r.setpoint[a], k.setpoint_in_range[a](r.setpoint[a]), k.setpoint_bit[a]);
     if (m == nullptr || !c.ok()) continue;
     const float v = r.setpoint[a];
+    const int ma = req.leg * kActuators + a;  // the model's actuator
     if (r.mode[a] == ActMode::kForce)
-      c.model(std::fabs(v) <= static_cast<float>(m->actuator[a].max_force_n), sp_bit[a], v);
+      c.model(std::fabs(v) <= static_cast<float>(m->actuator[ma].max_force_n), k.setpoint_bit[a], v);
     else
-      c.model(stroke_ok(m, a, v), sp_bit[a], v);
+      c.model(stroke_ok(m, ma, v), k.setpoint_bit[a], v);
   }
 }
 
+struct LoadChecks {
+  bool (*index_in_range)(uint8_t);
+  bool (*value1_in_range)(float);
+  bool (*value2_in_range)(float);
+  unsigned index_bit, value1_bit, value2_bit;
+};
+const LoadChecks kLoadChecks[kMaxLegs] = {
+    {legsim_can_load_cmd_load_index_is_in_range, legsim_can_load_cmd_load_value1_is_in_range,
+     legsim_can_load_cmd_load_value2_is_in_range, LEGSIM_CAN_LOAD_CMD_LOAD_INDEX_START_BIT,
+     LEGSIM_CAN_LOAD_CMD_LOAD_VALUE1_START_BIT, LEGSIM_CAN_LOAD_CMD_LOAD_VALUE2_START_BIT},
+    {legsim_can_load_cmd_l1_load_index_is_in_range, legsim_can_load_cmd_l1_load_value1_is_in_range,
+     legsim_can_load_cmd_l1_load_value2_is_in_range, LEGSIM_CAN_LOAD_CMD_L1_LOAD_INDEX_START_BIT,
+     LEGSIM_CAN_LOAD_CMD_L1_LOAD_VALUE1_START_BIT, LEGSIM_CAN_LOAD_CMD_L1_LOAD_VALUE2_START_BIT}};
+
 void validate_load(const Request &req, const legsim_model_desc *m, Checker &c) {
   const LoadRequest &r = req.load;
-  c.range(legsim_can_load_cmd_load_index_is_in_range(static_cast<uint8_t>(r.index)),
-          LEGSIM_CAN_LOAD_CMD_LOAD_INDEX_START_BIT, r.index);
-  if (m != nullptr)
-    c.model(r.index < m->n_forces, LEGSIM_CAN_LOAD_CMD_LOAD_INDEX_START_BIT, r.index);
-  c.real(r.value[0], legsim_can_load_cmd_load_value1_is_in_range(r.value[0]),
-         LEGSIM_CAN_LOAD_CMD_LOAD_VALUE1_START_BIT);
-  c.real(r.value[1], legsim_can_load_cmd_load_value2_is_in_range(r.value[1]),
-         LEGSIM_CAN_LOAD_CMD_LOAD_VALUE2_START_BIT);
+  const LoadChecks &k = kLoadChecks[req.leg];
+  c.range(k.index_in_range(static_cast<uint8_t>(r.index)), k.index_bit, r.index);
+  // the leg's own force elements (the robot: n_forces / 2 each)
+  if (m != nullptr) c.model(r.index < Session::forces_per_leg(m), k.index_bit, r.index);
+  c.real(r.value[0], k.value1_in_range(r.value[0]), k.value1_bit);
+  c.real(r.value[1], k.value2_in_range(r.value[1]), k.value2_bit);
 }
 
 float f32(double v) { return static_cast<float>(v); }
 
 }  // namespace
 
-bool decode_frame(const Frame &frame, Request *out, Fault *fault) {
+namespace {
+
+template <typename Msg>
+void act_from(const Msg &m, Request *out) {
+  out->seq = m.act_seq;
+  out->act.mode[0] = static_cast<ActMode>(m.act_mode_upper);
+  out->act.mode[1] = static_cast<ActMode>(m.act_mode_lower);
+  out->act.setpoint[0] = m.act_setpoint_upper;
+  out->act.setpoint[1] = m.act_setpoint_lower;
+}
+
+template <typename Msg>
+void load_from(const Msg &m, Request *out) {
+  out->seq = m.load_seq;
+  out->load.index = m.load_index;
+  out->load.value[0] = m.load_value1;
+  out->load.value[1] = m.load_value2;
+}
+
+}  // namespace
+
+bool decode_frame(const Frame &frame, Request *out, Fault *fault, int legs) {
   *out = Request{};
   out->id = frame.id;
   if (frame.extended || frame.rtr) {
@@ -196,6 +260,25 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault) {
     case LEGSIM_CAN_CONTROL_FRAME_ID: out->kind = Request::Kind::kControl; break;
     case LEGSIM_CAN_ACT_CMD_FRAME_ID: out->kind = Request::Kind::kAct; break;
     case LEGSIM_CAN_LOAD_CMD_FRAME_ID: out->kind = Request::Kind::kLoad; break;
+    case LEGSIM_CAN_ACT_CMD_L1_FRAME_ID:
+    case LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID:
+      if (legs < 2) {  // leg 1's commands exist only on the robot's bus
+        reject_frame(frame, FaultCode::kUnknownId, 0, fault);
+        return false;
+      }
+      out->kind = frame.id == LEGSIM_CAN_ACT_CMD_L1_FRAME_ID ? Request::Kind::kAct
+                                                             : Request::Kind::kLoad;
+      out->leg = 1;
+      break;
+    case LEGSIM_CAN_ST_POS_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_VEL_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_ACT_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_REACT_A_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_REACT_B_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_STATUS_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_CONTACT_FRAME_ID:
+    case LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID:
+    case LEGSIM_CAN_ST_BOX_FRAME_ID:
     case LEGSIM_CAN_FAULT_FRAME_ID:
     case LEGSIM_CAN_ST_POS_FRAME_ID:
     case LEGSIM_CAN_ST_VEL_FRAME_ID:
@@ -231,6 +314,8 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault) {
       r.reset.use_lengths = m.ctrl_use_lengths != 0;
       r.reset.lengths[0] = m.ctrl_length_upper;
       r.reset.lengths[1] = m.ctrl_length_lower;
+      r.reset.lengths[2] = m.ctrl_length_upper_l1;
+      r.reset.lengths[3] = m.ctrl_length_lower_l1;
       r.cmd_timeout_ms = m.ctrl_cmd_timeout;
       r.n_steps = m.ctrl_n_steps;
       r.decimation = m.ctrl_rt_decimation;
@@ -239,25 +324,28 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault) {
       r.use_lengths = m.ctrl_use_lengths;
       break;
     }
-    case Request::Kind::kAct: {
-      legsim_can_act_cmd_t m;
-      legsim_can_act_cmd_unpack(&m, frame.data, frame.len);
-      out->seq = m.act_seq;
-      out->act.mode[0] = static_cast<ActMode>(m.act_mode_upper);
-      out->act.mode[1] = static_cast<ActMode>(m.act_mode_lower);
-      out->act.setpoint[0] = m.act_setpoint_upper;
-      out->act.setpoint[1] = m.act_setpoint_lower;
+    case Request::Kind::kAct:
+      if (out->leg == 0) {
+        legsim_can_act_cmd_t m;
+        legsim_can_act_cmd_unpack(&m, frame.data, frame.len);
+        act_from(m, out);
+      } else {
+        legsim_can_act_cmd_l1_t m;
+        legsim_can_act_cmd_l1_unpack(&m, frame.data, frame.len);
+        act_from(m, out);
+      }
       break;
-    }
-    case Request::Kind::kLoad: {
-      legsim_can_load_cmd_t m;
-      legsim_can_load_cmd_unpack(&m, frame.data, frame.len);
-      out->seq = m.load_seq;
-      out->load.index = m.load_index;
-      out->load.value[0] = m.load_value1;
-      out->load.value[1] = m.load_value2;
+    case Request::Kind::kLoad:
+      if (out->leg == 0) {
+        legsim_can_load_cmd_t m;
+        legsim_can_load_cmd_unpack(&m, frame.data, frame.len);
+        load_from(m, out);
+      } else {
+        legsim_can_load_cmd_l1_t m;
+        legsim_can_load_cmd_l1_unpack(&m, frame.data, frame.len);
+        load_from(m, out);
+      }
       break;
-    }
     case Request::Kind::kForeign:
       break;
   }
@@ -275,110 +363,188 @@ bool validate_request(const Request &req, const legsim_model_desc *model, Fault 
   return c.ok();
 }
 
-#define HIL_POS(msg, pre, b, q)      \
-  msg.pre##_b##b##_x = f32(q[3 * (b - 1)]); \
-  msg.pre##_b##b##_y = f32(q[3 * (b - 1) + 1]); \
-  msg.pre##_b##b##_phi = f32(q[3 * (b - 1) + 2])
-#define HIL_VEL(msg, pre, b, qd)      \
-  msg.pre##_b##b##_vx = f32(qd[3 * (b - 1)]); \
-  msg.pre##_b##b##_vy = f32(qd[3 * (b - 1) + 1]); \
-  msg.pre##_b##b##_omega = f32(qd[3 * (b - 1) + 2])
-#define HIL_REACT(msg, pre, name, j)             \
-  msg.pre##_##name##_fx = f32(s.reaction[j].force_n[0]); \
-  msg.pre##_##name##_fy = f32(s.reaction[j].force_n[1]); \
-  msg.pre##_##name##_m = f32(s.reaction[j].moment_nm)
+namespace {
 
-void encode_sample(const Sample &s, const StatusInfo &info, Frame out[kSampleFrames]) {
-  const uint32_t tick = static_cast<uint32_t>(s.steps);
-  for (int i = 0; i < kSampleFrames; ++i) {
-    out[i] = Frame{};
-    out[i].fd = true;
-    out[i].len = kFdPayload;
+// One leg's frames, for leg 0's and leg 1's generated structs alike (the same signal names).
+// b: the leg's body 1..6; o: 3 x the robot index of the leg's body 1 (0 for the one leg).
+#define HIL_POS(msg, pre, b)                      \
+  msg.pre##_b##b##_x = f32(s.q[o + 3 * (b - 1)]);     \
+  msg.pre##_b##b##_y = f32(s.q[o + 3 * (b - 1) + 1]); \
+  msg.pre##_b##b##_phi = f32(s.q[o + 3 * (b - 1) + 2])
+#define HIL_VEL(msg, pre, b)                        \
+  msg.pre##_b##b##_vx = f32(s.qd[o + 3 * (b - 1)]);     \
+  msg.pre##_b##b##_vy = f32(s.qd[o + 3 * (b - 1) + 1]); \
+  msg.pre##_b##b##_omega = f32(s.qd[o + 3 * (b - 1) + 2])
+#define HIL_REACT(msg, pre, name, j)                       \
+  msg.pre##_##name##_fx = f32(s.reaction[jo + j].force_n[0]); \
+  msg.pre##_##name##_fy = f32(s.reaction[jo + j].force_n[1]); \
+  msg.pre##_##name##_m = f32(s.reaction[jo + j].moment_nm)
+
+template <typename Pos, typename Vel, typename Act, typename ReactA, typename ReactB>
+struct LegFrames {
+  Pos pos;
+  Vel vel;
+  Act act;
+  ReactA ra;
+  ReactB rb;
+
+  void fill(const Sample &s, int leg, uint32_t tick) {
+    const int o = s.legs > 1 ? 3 * (1 + leg * kBodies) : 0;  // the robot's box is body 0
+    const int jo = leg * kJoints, ao = leg * kActuators;
+    std::memset(this, 0, sizeof *this);
+    pos.pos_tick = tick;
+    HIL_POS(pos, pos, 1);
+    HIL_POS(pos, pos, 2);
+    HIL_POS(pos, pos, 3);
+    HIL_POS(pos, pos, 4);
+    HIL_POS(pos, pos, 5);
+    vel.vel_tick = tick;
+    HIL_VEL(vel, vel, 1);
+    HIL_VEL(vel, vel, 2);
+    HIL_VEL(vel, vel, 3);
+    HIL_VEL(vel, vel, 4);
+    HIL_VEL(vel, vel, 5);
+    act.act_tick = tick;
+    HIL_POS(act, act, 6);
+    HIL_VEL(act, act, 6);
+    act.act_upper_length = f32(s.length[ao]);
+    act.act_upper_rate = f32(s.rate[ao]);
+    act.act_upper_force = f32(s.force[ao]);
+    act.act_lower_length = f32(s.length[ao + 1]);
+    act.act_lower_rate = f32(s.rate[ao + 1]);
+    act.act_lower_force = f32(s.force[ao + 1]);
+    ra.ra_tick = tick;
+    HIL_REACT(ra, ra, a, 0);
+    HIL_REACT(ra, ra, upper_actuator, 1);
+    HIL_REACT(ra, ra, b_thigh, 2);
+    HIL_REACT(ra, ra, b_lower, 3);
+    HIL_REACT(ra, ra, c_rod_thigh, 4);
+    rb.rb_tick = tick;
+    HIL_REACT(rb, rb, c_rod_shank, 5);
+    HIL_REACT(rb, rb, lower_actuator, 6);
+    HIL_REACT(rb, rb, d, 7);
   }
-
-  legsim_can_st_pos_t pos;
-  legsim_can_st_pos_init(&pos);
-  pos.pos_tick = tick;
-  HIL_POS(pos, pos, 1, s.q);
-  HIL_POS(pos, pos, 2, s.q);
-  HIL_POS(pos, pos, 3, s.q);
-  HIL_POS(pos, pos, 4, s.q);
-  HIL_POS(pos, pos, 5, s.q);
-  out[0].id = LEGSIM_CAN_ST_POS_FRAME_ID;
-  legsim_can_st_pos_pack(out[0].data, &pos, kFdPayload);
-
-  legsim_can_st_vel_t vel;
-  legsim_can_st_vel_init(&vel);
-  vel.vel_tick = tick;
-  HIL_VEL(vel, vel, 1, s.qd);
-  HIL_VEL(vel, vel, 2, s.qd);
-  HIL_VEL(vel, vel, 3, s.qd);
-  HIL_VEL(vel, vel, 4, s.qd);
-  HIL_VEL(vel, vel, 5, s.qd);
-  out[1].id = LEGSIM_CAN_ST_VEL_FRAME_ID;
-  legsim_can_st_vel_pack(out[1].data, &vel, kFdPayload);
-
-  legsim_can_st_act_t act;
-  legsim_can_st_act_init(&act);
-  act.act_tick = tick;
-  HIL_POS(act, act, 6, s.q);
-  HIL_VEL(act, act, 6, s.qd);
-  act.act_upper_length = f32(s.length[0]);
-  act.act_upper_rate = f32(s.rate[0]);
-  act.act_upper_force = f32(s.force[0]);
-  act.act_lower_length = f32(s.length[1]);
-  act.act_lower_rate = f32(s.rate[1]);
-  act.act_lower_force = f32(s.force[1]);
-  out[2].id = LEGSIM_CAN_ST_ACT_FRAME_ID;
-  legsim_can_st_act_pack(out[2].data, &act, kFdPayload);
-
-  legsim_can_st_react_a_t ra;
-  legsim_can_st_react_a_init(&ra);
-  ra.ra_tick = tick;
-  HIL_REACT(ra, ra, a, 0);
-  HIL_REACT(ra, ra, upper_actuator, 1);
-  HIL_REACT(ra, ra, b_thigh, 2);
-  HIL_REACT(ra, ra, b_lower, 3);
-  HIL_REACT(ra, ra, c_rod_thigh, 4);
-  out[3].id = LEGSIM_CAN_ST_REACT_A_FRAME_ID;
-  legsim_can_st_react_a_pack(out[3].data, &ra, kFdPayload);
-
-  legsim_can_st_react_b_t rb;
-  legsim_can_st_react_b_init(&rb);
-  rb.rb_tick = tick;
-  HIL_REACT(rb, rb, c_rod_shank, 5);
-  HIL_REACT(rb, rb, lower_actuator, 6);
-  HIL_REACT(rb, rb, d, 7);
-  out[4].id = LEGSIM_CAN_ST_REACT_B_FRAME_ID;
-  legsim_can_st_react_b_pack(out[4].data, &rb, kFdPayload);
-
-  legsim_can_st_status_t st;
-  legsim_can_st_status_init(&st);
-  st.st_tick = tick;
-  st.st_time = s.t;
-  st.st_step_count = s.steps;
-  st.st_residual = f32(s.residual);
-  st.st_condition = f32(s.report.condition);
-  st.st_status = static_cast<uint16_t>(info.status);
-  st.st_stroke_mask = static_cast<uint8_t>(s.stroke_mask & 0x3u);
-  st.st_state = static_cast<uint8_t>(info.state);
-  st.st_legsim_status = static_cast<uint8_t>(info.legsim);
-  st.st_last_fault = static_cast<uint8_t>(info.last_fault);
-  st.st_iterations = static_cast<uint8_t>(s.report.iterations < 0     ? 0
-                                          : s.report.iterations > 255 ? 255
-                                                                      : s.report.iterations);
-  st.st_variant = static_cast<uint8_t>(info.variant);
-  st.st_integrator = static_cast<uint8_t>(info.integrator);
-  st.st_act_seq = info.act_seq;
-  st.st_ctrl_seq = info.ctrl_seq;
-  st.st_step_size = info.step_ns;
-  out[5].id = LEGSIM_CAN_ST_STATUS_FRAME_ID;
-  legsim_can_st_status_pack(out[5].data, &st, kFdPayload);
-}
+};
 
 #undef HIL_POS
 #undef HIL_VEL
 #undef HIL_REACT
+
+template <typename Status>
+void fill_status(const Sample &s, const StatusInfo &info, int leg, Status *st) {
+  std::memset(st, 0, sizeof *st);
+  st->st_tick = static_cast<uint32_t>(s.steps);
+  st->st_time = s.t;
+  st->st_step_count = s.steps;
+  st->st_residual = f32(s.residual);
+  st->st_condition = f32(s.report.condition);
+  st->st_status = static_cast<uint16_t>(info.status);
+  st->st_stroke_mask = static_cast<uint8_t>((s.stroke_mask >> (leg * kActuators)) & 0x3u);
+  st->st_state = static_cast<uint8_t>(info.state);
+  st->st_legsim_status = static_cast<uint8_t>(info.legsim);
+  st->st_last_fault = static_cast<uint8_t>(info.last_fault);
+  st->st_iterations = static_cast<uint8_t>(s.report.iterations < 0     ? 0
+                                           : s.report.iterations > 255 ? 255
+                                                                       : s.report.iterations);
+  st->st_variant = static_cast<uint8_t>(info.variant);
+  st->st_integrator = static_cast<uint8_t>(info.integrator);
+  st->st_act_seq = info.act_seq[leg];
+  st->st_ctrl_seq = info.ctrl_seq;
+  st->st_step_size = info.step_ns;
+}
+
+template <typename Contact>
+void fill_contact(const Sample &s, const StatusInfo &info, int k, Contact *m) {
+  const ContactSample &c = s.contact[k];
+  std::memset(m, 0, sizeof *m);
+  m->ct_tick = static_cast<uint32_t>(s.steps);
+  m->ct_state = static_cast<uint8_t>(c.state);
+  m->ct_events = info.contact_events[k];
+  m->ct_normal = f32(c.normal);
+  m->ct_tangential = f32(c.tangential);
+  m->ct_friction_use = f32(c.friction_use);
+  m->ct_x = f32(c.position[0]);
+  m->ct_y = f32(c.position[1]);
+  m->ct_slip = f32(c.slip);
+  m->ct_impulse_n = f32(c.impulse[0]);
+  m->ct_impulse_t = f32(c.impulse[1]);
+}
+
+Frame *next_frame(Frame *out, int *n, uint32_t id) {
+  Frame *f = &out[(*n)++];
+  *f = Frame{};
+  f->id = id;
+  f->fd = true;
+  f->len = kFdPayload;
+  return f;
+}
+
+}  // namespace
+
+int encode_sample(const Sample &s, const StatusInfo &info, Frame out[kMaxSampleFrames]) {
+  const uint32_t tick = static_cast<uint32_t>(s.steps);
+  int n = 0;
+  if (s.legs > 1) {  // the robot: the box first
+    legsim_can_st_box_t box;
+    std::memset(&box, 0, sizeof box);
+    box.box_tick = tick;
+    box.box_x = f32(s.q[0]);
+    box.box_y = f32(s.q[1]);
+    box.box_phi = f32(s.q[2]);
+    box.box_vx = f32(s.qd[0]);
+    box.box_vy = f32(s.qd[1]);
+    box.box_omega = f32(s.qd[2]);
+    legsim_can_st_box_pack(next_frame(out, &n, LEGSIM_CAN_ST_BOX_FRAME_ID)->data, &box, kFdPayload);
+  }
+
+  LegFrames<legsim_can_st_pos_t, legsim_can_st_vel_t, legsim_can_st_act_t, legsim_can_st_react_a_t,
+            legsim_can_st_react_b_t>
+      leg0;
+  leg0.fill(s, 0, tick);
+  legsim_can_st_pos_pack(next_frame(out, &n, LEGSIM_CAN_ST_POS_FRAME_ID)->data, &leg0.pos, kFdPayload);
+  legsim_can_st_vel_pack(next_frame(out, &n, LEGSIM_CAN_ST_VEL_FRAME_ID)->data, &leg0.vel, kFdPayload);
+  legsim_can_st_act_pack(next_frame(out, &n, LEGSIM_CAN_ST_ACT_FRAME_ID)->data, &leg0.act, kFdPayload);
+  legsim_can_st_react_a_pack(next_frame(out, &n, LEGSIM_CAN_ST_REACT_A_FRAME_ID)->data, &leg0.ra,
+                             kFdPayload);
+  legsim_can_st_react_b_pack(next_frame(out, &n, LEGSIM_CAN_ST_REACT_B_FRAME_ID)->data, &leg0.rb,
+                             kFdPayload);
+  if (s.legs > 1) {
+    legsim_can_st_contact_t c0;
+    fill_contact(s, info, 0, &c0);
+    legsim_can_st_contact_pack(next_frame(out, &n, LEGSIM_CAN_ST_CONTACT_FRAME_ID)->data, &c0,
+                               kFdPayload);
+    LegFrames<legsim_can_st_pos_l1_t, legsim_can_st_vel_l1_t, legsim_can_st_act_l1_t,
+              legsim_can_st_react_a_l1_t, legsim_can_st_react_b_l1_t>
+        leg1;
+    leg1.fill(s, 1, tick);
+    legsim_can_st_pos_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_POS_L1_FRAME_ID)->data, &leg1.pos,
+                              kFdPayload);
+    legsim_can_st_vel_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_VEL_L1_FRAME_ID)->data, &leg1.vel,
+                              kFdPayload);
+    legsim_can_st_act_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_ACT_L1_FRAME_ID)->data, &leg1.act,
+                              kFdPayload);
+    legsim_can_st_react_a_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_REACT_A_L1_FRAME_ID)->data,
+                                  &leg1.ra, kFdPayload);
+    legsim_can_st_react_b_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_REACT_B_L1_FRAME_ID)->data,
+                                  &leg1.rb, kFdPayload);
+    legsim_can_st_contact_l1_t c1;
+    fill_contact(s, info, 1, &c1);
+    legsim_can_st_contact_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID)->data, &c1,
+                                  kFdPayload);
+  }
+  // every leg's ST_STATUS last: the sample is complete when the last one is sent
+  legsim_can_st_status_t st0;
+  fill_status(s, info, 0, &st0);
+  legsim_can_st_status_pack(next_frame(out, &n, LEGSIM_CAN_ST_STATUS_FRAME_ID)->data, &st0,
+                            kFdPayload);
+  if (s.legs > 1) {
+    legsim_can_st_status_l1_t st1;
+    fill_status(s, info, 1, &st1);
+    legsim_can_st_status_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_STATUS_L1_FRAME_ID)->data, &st1,
+                                 kFdPayload);
+  }
+  return n;
+}
 
 void encode_fault(const Fault &f, uint64_t step_count, uint32_t fault_count, Frame *out) {
   *out = Frame{};

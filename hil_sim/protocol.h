@@ -77,6 +77,7 @@ struct LoadRequest {
 struct Request {
   enum class Kind { kControl, kAct, kLoad, kForeign } kind = Kind::kForeign;
   uint32_t id = 0;
+  int leg = 0;  // ACT_CMD / LOAD_CMD: the leg whose frame it is (0, or 1 for the _L1 ids)
   uint32_t seq = 0;
   ControlRequest control;
   ActRequest act;
@@ -88,8 +89,9 @@ constexpr uint16_t kCmdTimeoutNone = 65535;
 
 // Stage 1, the frame: id, format and length, then unpacks. kForeign: one of hil_sim's own
 // ids sent by another node; ignored, never answered (two sims on a bus must not
-// answer each other's faults). False with *fault set when the frame is rejected.
-bool decode_frame(const Frame &frame, Request *out, Fault *fault);
+// answer each other's faults). False with *fault set when the frame is rejected. legs: the
+// legs on the bus (Session::legs()); a leg-1 command to a one-leg hil_sim is UNKNOWN_ID.
+bool decode_frame(const Frame &frame, Request *out, Fault *fault, int legs = 1);
 
 // Stage 2, the values: NaN/Inf, DBC ranges of the signals the request uses, then the
 // model's limits (pose, stroke, max_force, force element). model = the running session's
@@ -102,11 +104,27 @@ struct StatusInfo {
   legsim_status legsim = LEGSIM_OK;
   FaultCode last_fault = FaultCode::kNone;
   int variant = 0, integrator = 0;
-  uint32_t act_seq = 0, ctrl_seq = 0, step_ns = 0;
+  uint32_t act_seq[kMaxLegs] = {0, 0};  // per leg: its last accepted ACT_CMD counter
+  uint32_t ctrl_seq = 0, step_ns = 0;
+  uint8_t contact_events[kMaxContacts] = {0, 0};  // Ct_Events (robot)
 };
 
-constexpr int kSampleFrames = 6;  // ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS
-void encode_sample(const Sample &s, const StatusInfo &info, Frame out[kSampleFrames]);
+// Ct_Events bits: contact state changes seen between two samples.
+enum ContactEventBit : uint8_t {
+  kContactLiftoff = 1u << 0,
+  kContactTouchdown = 1u << 1,
+  kContactStickToSlip = 1u << 2,
+  kContactSlipToStick = 1u << 3,
+};
+uint8_t contact_events(int before, int after);  // legsim_contact_state values
+
+// One leg: ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS (6 frames). The robot:
+// ST_BOX, then per leg its ST_POS .. ST_REACT_B and ST_CONTACT, then every leg's ST_STATUS
+// (leg 0 first): 1 + 2 x 6 + 2 = 15 frames, the sample complete when the last ST_STATUS is.
+constexpr int kSampleFrames = 6;
+constexpr int kMaxSampleFrames = 1 + kMaxLegs * (kSampleFrames + 1);
+// Returns the number of frames written to out.
+int encode_sample(const Sample &s, const StatusInfo &info, Frame out[kMaxSampleFrames]);
 
 void encode_fault(const Fault &f, uint64_t step_count, uint32_t fault_count, Frame *out);
 

@@ -2,6 +2,7 @@
 #include "session.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <cstring>
 
@@ -18,6 +19,22 @@ legsim_real on_stroke(const legsim_model_desc *m, int a, double l) {
       std::clamp(l, m->actuator[a].stroke_min_m, m->actuator[a].stroke_max_m));
 }
 
+// Where the contacts' midpoint lies along the ground line, from the line's point (m).
+legsim_status feet_mid(const legsim_sim *sim, const legsim_model_desc *m, legsim_real *out) {
+  legsim_contact c[kMaxContacts];
+  legsim_status st = legsim_contacts(sim, c);
+  if (st != LEGSIM_OK) return st;
+  double mx = 0, my = 0;
+  for (int k = 0; k < m->n_contacts; ++k) {
+    mx += c[k].position[0] / m->n_contacts;
+    my += c[k].position[1] / m->n_contacts;
+  }
+  const double s = m->ground.slope_rad;
+  *out = static_cast<legsim_real>((mx - m->ground.point[0]) * std::cos(s) +
+                                  (my - m->ground.point[1]) * std::sin(s));
+  return LEGSIM_OK;
+}
+
 }  // namespace
 
 Session::~Session() {
@@ -27,16 +44,58 @@ Session::~Session() {
 
 namespace {
 const legsim_model_desc *g_variant_models[2] = {&legsim_model_leg_revolute, &legsim_model_leg_slot};
+const legsim_model_desc *g_robot = nullptr;  // set: the robot runs, as variant 0 only
 }  // namespace
 
 const legsim_model_desc *Session::variant_model(int variant) {
+  if (g_robot != nullptr) return variant == 0 ? g_robot : nullptr;
   return variant == 0 || variant == 1 ? g_variant_models[variant] : nullptr;
 }
 
 void Session::use_models(const legsim_model_desc *revolute, const legsim_model_desc *slot) {
   g_variant_models[0] = revolute;
   g_variant_models[1] = slot;
+  g_robot = nullptr;
 }
+
+namespace {
+// The robot must be laid out as the DBC's legs: the box, then per leg its 6 bodies, 8
+// joints, 2 actuators, and a contact each (design: robot-on-ground.md, section 1).
+bool check_robot(std::string *error) {
+  const legsim_model_desc *m = g_robot;
+  char msg[160] = "";
+  legsim_status st = legsim_model_check(m, msg, sizeof msg);
+  if (st != LEGSIM_OK) {
+    *error = std::string("robot model '") + m->name + "' rejected: " + legsim_status_str(st) +
+             (msg[0] ? std::string(": ") + msg : std::string());
+    return false;
+  }
+  if (m->n_bodies != kMaxBodies || m->n_joints != kMaxJoints || m->n_actuators != kMaxActuators ||
+      m->n_contacts != kMaxContacts || m->n_forces % kMaxLegs != 0 ||
+      m->n_forces / kMaxLegs > 4) {
+    *error = std::string("robot model '") + m->name + "' has " + std::to_string(m->n_bodies) +
+             " bodies, " + std::to_string(m->n_joints) + " joints, " +
+             std::to_string(m->n_actuators) + " actuators, " + std::to_string(m->n_contacts) +
+             " contacts, " + std::to_string(m->n_forces) +
+             " force elements; can/legsim.dbc carries a box and two legs: 13, 16, 4, 2 and up "
+             "to 4 per leg";
+    return false;
+  }
+  for (int k = 0; k < kMaxLegs; ++k) {
+    if (m->contact[k].body != kBodies * (k + 1)) {
+      *error = std::string("robot model '") + m->name + "': contact " + std::to_string(k) +
+               " is not on leg " + std::to_string(k) + "'s last body";
+      return false;
+    }
+  }
+  return true;
+}
+
+}  // namespace
+
+void Session::use_robot(const legsim_model_desc *robot) { g_robot = robot; }
+
+int Session::legs() { return g_robot != nullptr ? 2 : 1; }
 
 bool Session::init(std::string *error) {
   size_t align = LEGSIM_STORAGE_ALIGN;
@@ -48,6 +107,7 @@ bool Session::init(std::string *error) {
       return false;
     }
   }
+  if (g_robot != nullptr) return check_robot(error);
   // both variants must be the leg of can/legsim.dbc
   for (int v = 0; v < 2; ++v) {
     const legsim_model_desc *m = variant_model(v);
@@ -79,18 +139,27 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
   if (st != LEGSIM_OK) return st;
   st = legsim_assemble_pose(sim, p.pose);
   if (st != LEGSIM_OK) return st;
-  if (p.use_lengths) {
-    legsim_real len[kActuators];
-    for (int a = 0; a < kActuators; ++a) len[a] = on_stroke(variant_model(p.variant), a, p.lengths[a]);
-    st = legsim_assemble(sim, len);
+  const legsim_model_desc *m = variant_model(p.variant);
+  const int na = m->n_actuators;
+  legsim_real given[kMaxActuators];
+  for (int a = 0; a < na && p.use_lengths; ++a) given[a] = on_stroke(m, a, p.lengths[a]);
+  if (m->n_contacts > 0) {
+    // the robot: onto the ground, both feet stuck, their midpoint where the pose put it
+    // (the pose's guess has the feet on the line already); the box pose follows
+    legsim_real mid = 0;
+    st = feet_mid(sim, m, &mid);
+    if (st == LEGSIM_OK) st = legsim_assemble_on_ground(sim, p.use_lengths ? given : nullptr, mid);
+    if (st != LEGSIM_OK) return st;
+  } else if (p.use_lengths) {
+    st = legsim_assemble(sim, given);
     if (st != LEGSIM_OK) return st;
   }
-  legsim_real len[kActuators], rate[kActuators];
+  legsim_real len[kMaxActuators], rate[kMaxActuators];
   if (p.hold_length) {
     st = legsim_actuator_lengths(sim, len, rate);
     if (st != LEGSIM_OK) return st;
   }
-  for (int a = 0; a < kActuators && st == LEGSIM_OK; ++a)
+  for (int a = 0; a < na && st == LEGSIM_OK; ++a)
     st = p.hold_length ? legsim_command_length(sim, a, len[a])
                        : legsim_command_force(sim, a, 0);
   if (st != LEGSIM_OK) return st;
@@ -133,11 +202,11 @@ legsim_status Session::set_load(int force, const double value[2]) {
 }
 
 legsim_status Session::apply_safe_state(SafeMode mode) {
-  legsim_real len[kActuators], rate[kActuators];
+  legsim_real len[kMaxActuators], rate[kMaxActuators];
   legsim_status st = LEGSIM_OK;
   if (mode == SafeMode::kHoldLength) st = legsim_actuator_lengths(sim_, len, rate);
   const legsim_model_desc *m = model();
-  for (int a = 0; a < kActuators && st == LEGSIM_OK; ++a) {
+  for (int a = 0; a < m->n_actuators && st == LEGSIM_OK; ++a) {
     if (mode == SafeMode::kZeroForce) {
       st = legsim_command_force(sim_, a, 0);
     } else {
@@ -161,6 +230,24 @@ legsim_status Session::sample(Sample *out) const {
   // reactions exist only after a dynamics solve (and not with DISABLE_REACTIONS): else zero
   if (legsim_reactions(sim_, out->reaction) != LEGSIM_OK)
     std::memset(out->reaction, 0, sizeof out->reaction);
+  const legsim_model_desc *m = model();
+  out->legs = m->n_contacts > 0 ? kMaxLegs : 1;
+  if (st == LEGSIM_OK && m->n_contacts > 0) {
+    legsim_contact c[kMaxContacts];
+    st = legsim_contacts(sim_, c);
+    for (int k = 0; k < m->n_contacts && st == LEGSIM_OK; ++k) {
+      ContactSample &o = out->contact[k];
+      o.state = static_cast<int>(c[k].state);
+      o.normal = c[k].normal_n;
+      o.tangential = c[k].tangential_n;
+      o.friction_use = c[k].friction_use;
+      o.position[0] = c[k].position[0];
+      o.position[1] = c[k].position[1];
+      o.slip = c[k].slip_mps;
+      o.impulse[0] = c[k].impulse_ns[0];
+      o.impulse[1] = c[k].impulse_ns[1];
+    }
+  }
   out->t = legsim_time(sim_);
   out->steps = legsim_step_count(sim_);
   out->stroke_mask = legsim_stroke_event_mask(sim_);

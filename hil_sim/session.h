@@ -1,7 +1,8 @@
-// The leg on the solver: the only file that calls the legsim C API.
+// The leg (or the two-leg robot) on the solver: the only file that calls the legsim C API.
 //
-// A session is one RESET: a compiled model (revolute or slot D variant), its options and
-// state. RESET builds the new session in spare storage and swaps only on success, so a
+// A session is one RESET: a compiled model (revolute or slot D variant of the leg, or the
+// robot of models/robot.toml: a box and two legs, each leg laid out on the bus as the
+// one leg is), its options and state. RESET builds the new session in spare storage and swaps only on success, so a
 // failed RESET leaves the running session as it was. Storage is allocated once at start.
 #ifndef HIL_SIM_SESSION_H
 #define HIL_SIM_SESSION_H
@@ -13,11 +14,19 @@
 
 namespace hil {
 
-// The leg as can/legsim.dbc lays it out.
+// The leg as can/legsim.dbc lays it out (one leg's frames).
 constexpr int kBodies = 6;
 constexpr int kCoords = 3 * kBodies;
 constexpr int kJoints = 8;
 constexpr int kActuators = 2;
+// The robot: body 0 the box, then leg k's bodies 1 + 6k .. 6 + 6k, joints 8k .., actuators
+// 2k .., its force elements n_forces / 2 each, contact k its foot (docs/design/robot-on-ground.md).
+constexpr int kMaxLegs = 2;
+constexpr int kMaxBodies = 1 + kMaxLegs * kBodies;
+constexpr int kMaxCoords = 3 * kMaxBodies;
+constexpr int kMaxJoints = kMaxLegs * kJoints;
+constexpr int kMaxActuators = kMaxLegs * kActuators;
+constexpr int kMaxContacts = kMaxLegs;
 
 enum class SafeMode { kZeroForce, kHoldLength };
 enum class ActMode : uint8_t { kKeep = 0, kForce = 1, kLength = 2 };
@@ -30,14 +39,21 @@ struct ResetParams {
   uint32_t disable = 0;
   bool hold_length = false;  // else zero force
   bool use_lengths = false;
-  double lengths[kActuators] = {0, 0};
+  double lengths[kMaxActuators] = {0, 0, 0, 0};  // leg 0 upper, lower, then leg 1's
+};
+
+struct ContactSample {  // legsim_contact, as sent (plain data: Session::sample zeroes it)
+  int state;              // legsim_contact_state
+  legsim_real normal, tangential, friction_use, position[2], slip, impulse[2];
 };
 
 struct Sample {
-  legsim_real q[kCoords];
-  legsim_real qd[kCoords];
-  legsim_real length[kActuators], rate[kActuators], force[kActuators];
-  legsim_reaction reaction[kJoints];
+  int legs;          // 1: the leg (no box, no contacts); 2: the robot
+  legsim_real q[kMaxCoords];
+  legsim_real qd[kMaxCoords];
+  legsim_real length[kMaxActuators], rate[kMaxActuators], force[kMaxActuators];
+  legsim_reaction reaction[kMaxJoints];
+  ContactSample contact[kMaxContacts];
   double t;
   uint64_t steps;
   legsim_real residual;
@@ -52,7 +68,8 @@ class Session {
   Session &operator=(const Session &) = delete;
   ~Session();
 
-  // Allocates storage and checks that both compiled-in variants match the DBC's leg.
+  // Allocates storage and checks that both compiled-in variants match the DBC's leg (or,
+  // after use_robot(), that the robot is a box and two such legs with a contact each).
   bool init(std::string *error);
 
   // The model of a variant (0 revolute, 1 slot); nullptr if out of range. The compiled-in
@@ -60,6 +77,12 @@ class Session {
   static const legsim_model_desc *variant_model(int variant);
   // Before init(): the models RESET builds from; they must outlive every session.
   static void use_models(const legsim_model_desc *revolute, const legsim_model_desc *slot);
+  // Before init(): run the two-leg robot (its one variant, Ctrl_Variant 0) instead.
+  static void use_robot(const legsim_model_desc *robot);
+  // Legs on the bus: 1 (the leg), 2 (the robot).
+  static int legs();
+  // Force elements per leg (LOAD_CMD of leg k, index i -> force k * per_leg + i).
+  static int forces_per_leg(const legsim_model_desc *m) { return m->n_forces / legs(); }
 
   legsim_status reset(const ResetParams &params);
   bool active() const { return sim_ != nullptr; }
@@ -69,7 +92,7 @@ class Session {
   legsim_status step(int32_t n);
   // Mode kKeep is a no-op. Values were checked against the model by the protocol.
   legsim_status command(int actuator, ActMode mode, double value);
-  legsim_status set_load(int force, const double value[2]);
+  legsim_status set_load(int force, const double value[2]);  // the model's force index
   legsim_status apply_safe_state(SafeMode mode);
 
   legsim_status sample(Sample *out) const;

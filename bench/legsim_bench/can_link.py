@@ -29,6 +29,15 @@ A :class:`State` holds numpy arrays: ``q`` (18,) = (x, y, phi) of bodies 1-6 of
 models/leg.toml, ``qd`` (18,), ``lengths``/``rates``/``forces`` (2,) for the upper and lower
 actuator, ``reactions`` (8, 3) = (fx, fy, moment) of joints 1-8 in the model's order, as
 float32 values (the DBC's resolution: ~6e-8 relative); ``t`` and ``step_count`` are exact.
+
+The two-leg robot (``hil_sim --robot``): each leg is its own node, leg 1's frames at leg 0's
+ids + 0x20 (ACT_CMD_L1, ST_POS_L1 ...), plus per foot ST_CONTACT and the box's ST_BOX. The
+link tells a robot sample by its ST_BOX and completes it when every leg's ST_STATUS of the
+tick is in. Its State has the robot's arrays in the core's order: ``q``/``qd`` (39,) = the
+box, then leg 0's bodies 1-6, then leg 1's; ``lengths``/``rates``/``forces`` (4,);
+``reactions`` (16, 3); ``contacts`` (one :class:`Contact` per foot, leg order); ``legs`` 2.
+Actuator a of the robot is leg a // 2's slot a % 2: ``command_force(2, F)`` goes out in
+ACT_CMD_L1, ``set_load(0, fx, fy, leg=1)`` in LOAD_CMD_L1.
 """
 from __future__ import annotations
 
@@ -58,7 +67,19 @@ CONTROL, ACT_CMD, LOAD_CMD = 0x080, 0x100, 0x110
 FAULT, HEARTBEAT = 0x020, 0x700
 ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS = range(0x200, 0x206)
 STATE_IDS = (ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS)
-HIL_IDS = STATE_IDS + (FAULT, HEARTBEAT)
+# the robot: leg k's frames at leg 0's ids + LEG_OFFSET * k; per foot ST_CONTACT; the box
+LEG_OFFSET = 0x20
+ROBOT_LEGS = 2
+ACT_CMD_L1, LOAD_CMD_L1 = ACT_CMD + LEG_OFFSET, LOAD_CMD + LEG_OFFSET
+ST_CONTACT, ST_BOX = 0x206, 0x240
+ST_POS_L1, ST_VEL_L1, ST_ACT_L1, ST_REACT_A_L1, ST_REACT_B_L1, ST_STATUS_L1 = \
+    (i + LEG_OFFSET for i in STATE_IDS)
+ST_CONTACT_L1 = ST_CONTACT + LEG_OFFSET
+ROBOT_STATE_IDS = (ST_BOX,) + tuple(i + LEG_OFFSET * k for k in range(ROBOT_LEGS)
+                                    for i in STATE_IDS + (ST_CONTACT,))
+HIL_IDS = STATE_IDS + (FAULT, HEARTBEAT) + tuple(i for i in ROBOT_STATE_IDS if i not in STATE_IDS)
+_TICK_SIGNAL = {ST_POS: "Pos_Tick", ST_VEL: "Vel_Tick", ST_ACT: "Act_Tick", ST_REACT_A: "RA_Tick",
+                ST_REACT_B: "RB_Tick", ST_STATUS: "St_Tick", ST_CONTACT: "Ct_Tick"}
 
 
 class Command(enum.IntEnum):
@@ -89,6 +110,20 @@ class SimState(enum.IntEnum):
     LOCKSTEP = 1
     REALTIME = 2
     HALTED = 3
+
+
+class ContactState(enum.IntEnum):
+    FREE = 0
+    STUCK = 1
+    SLIDING = 2
+
+
+class ContactEvent(enum.IntFlag):
+    """Ct_Events: a foot's contact state changes seen since the previous sample."""
+    LIFTOFF = 1 << 0
+    TOUCHDOWN = 1 << 1
+    STICK_TO_SLIP = 1 << 2
+    SLIP_TO_STICK = 1 << 3
 
 
 class FaultCode(enum.IntEnum):
@@ -169,6 +204,22 @@ class HilFault(HilError):
         self.fault = fault
 
 
+@dataclass
+class Contact:
+    """One foot against the ground (ST_CONTACT): the ground force on it is N n + T t (n the
+    line's upward normal, t its tangent), float32 values."""
+    state: ContactState
+    events: ContactEvent
+    normal: float          # N
+    tangential: float      # N
+    friction_use: float    # |T| / N
+    x: float               # m, world
+    y: float
+    slip: float            # m/s along the tangent
+    impulse_n: float       # N s, last impact
+    impulse_t: float
+
+
 @dataclass(eq=False)   # compared by identity: arrays have no single truth value
 class State:
     q: np.ndarray              # (18,) x, y, phi of bodies 1-6 (m, rad)
@@ -194,6 +245,9 @@ class State:
     step_ns: int
     faults: list[Fault] = field(default_factory=list)   # faults received since the previous sample
     received: float = 0.0      # time.monotonic() when ST_STATUS arrived
+    legs: int = 1              # 2: the robot (box first in q, contacts, per-leg counters)
+    contacts: list[Contact] = field(default_factory=list)   # robot: one per foot, leg order
+    act_seqs: tuple[int, ...] = ()   # robot: each leg's St_ActSeq (act_seq is leg 0's)
 
     @property
     def status_names(self) -> list[str]:
@@ -201,8 +255,17 @@ class State:
 
     @property
     def body_q(self) -> np.ndarray:
-        """q as (6, 3)."""
-        return self.q.reshape(6, 3)
+        """q as (bodies, 3): (6, 3) for the leg, (13, 3) for the robot (the box first)."""
+        return self.q.reshape(-1, 3)
+
+    @property
+    def box_q(self) -> np.ndarray | None:
+        """The robot's box (x, y, phi), None for the one leg."""
+        return self.q[:3] if self.legs > 1 else None
+
+    @property
+    def box_qd(self) -> np.ndarray | None:
+        return self.qd[:3] if self.legs > 1 else None
 
 
 @dataclass
@@ -313,7 +376,7 @@ class HilLink:
         else:
             self.description = f"a given bus: {bus.channel_info}"
         self.bus = bus
-        self._seq = {CONTROL: 0, ACT_CMD: 0, LOAD_CMD: 0}
+        self._seq = {CONTROL: 0, ACT_CMD: 0, LOAD_CMD: 0, ACT_CMD_L1: 0, LOAD_CMD_L1: 0}
         self._partial: dict[int, dict[int, dict]] = {}   # tick -> frame id -> signals
         self._states: Deque[State] = collections.deque()
         self._faults: Deque[Fault] = collections.deque()
@@ -385,18 +448,19 @@ class HilLink:
             self.last_heartbeat = hb
             self._heartbeats.append(hb)
         else:
-            tick_name = {ST_POS: "Pos_Tick", ST_VEL: "Vel_Tick", ST_ACT: "Act_Tick",
-                         ST_REACT_A: "RA_Tick", ST_REACT_B: "RB_Tick", ST_STATUS: "St_Tick"}[fid]
-            tick = sig[tick_name]
+            tick = sig["Box_Tick" if fid == ST_BOX else _TICK_SIGNAL[fid % LEG_OFFSET + 0x200]]
             parts = self._partial.setdefault(tick, {})
             parts[fid] = sig
-            if fid == ST_STATUS:
+            robot = ST_BOX in parts   # a robot sample: ST_BOX comes first
+            last = ST_STATUS + LEG_OFFSET * (ROBOT_LEGS - 1) if robot else ST_STATUS
+            if fid == last:
                 del self._partial[tick]
                 # older incomplete samples will never complete
                 for old in [k for k in self._partial if k != tick]:
                     del self._partial[old]
-                if len(parts) == len(STATE_IDS):
-                    s = self._state_from(parts)
+                ids = ROBOT_STATE_IDS if robot else STATE_IDS
+                if all(i in parts for i in ids):
+                    s = self._robot_state_from(parts) if robot else self._state_from(parts)
                     self.last_state = s
                     self._states.append(s)
 
@@ -418,12 +482,14 @@ class HilLink:
             return None
         return next((s.name for s in msg.signals if s.start == start_bit), None)
 
-    def _state_from(self, parts: dict[int, dict]) -> State:
+    def _state_from(self, parts: dict[int, dict], take_faults: bool = True) -> State:
         allsig: dict = {}
         for fid in STATE_IDS:
             allsig.update(parts[fid])
         st = parts[ST_STATUS]
-        faults, self._pending_faults = self._pending_faults, []
+        faults = []
+        if take_faults:
+            faults, self._pending_faults = self._pending_faults, []
         return State(
             q=np.array([allsig[n] for n in Q_SIGNALS]),
             qd=np.array([allsig[n] for n in QD_SIGNALS]),
@@ -439,6 +505,35 @@ class HilLink:
             integrator=Integrator(st["St_Integrator"]), act_seq=st["St_ActSeq"],
             ctrl_seq=st["St_CtrlSeq"], step_ns=st["St_StepSize"], faults=faults,
             received=time.monotonic())
+
+    def _robot_state_from(self, parts: dict[int, dict]) -> State:
+        """The robot's sample: leg k's frames decoded as the one leg's, placed in the core's
+        order (box, leg 0, leg 1)."""
+        box = parts[ST_BOX]
+        legs = []
+        for k in range(ROBOT_LEGS):
+            one = {i: parts[i + LEG_OFFSET * k] for i in STATE_IDS}
+            leg = self._state_from(one, take_faults=False)
+            legs.append(leg)
+        s = legs[0]
+        s.q = np.concatenate([[box["Box_x"], box["Box_y"], box["Box_phi"]]] + [leg.q for leg in legs])
+        s.qd = np.concatenate([[box["Box_vx"], box["Box_vy"], box["Box_omega"]]] + [leg.qd for leg in legs])
+        for name in ("lengths", "rates", "forces"):
+            setattr(s, name, np.concatenate([getattr(leg, name) for leg in legs]))
+        s.reactions = np.concatenate([leg.reactions for leg in legs])
+        s.stroke_mask = sum(leg.stroke_mask << (2 * k) for k, leg in enumerate(legs))
+        s.act_seqs = tuple(leg.act_seq for leg in legs)
+        s.legs = ROBOT_LEGS
+        s.contacts = []
+        for k in range(ROBOT_LEGS):
+            c = parts[ST_CONTACT + LEG_OFFSET * k]
+            s.contacts.append(Contact(
+                state=ContactState(c["Ct_State"]), events=ContactEvent(c["Ct_Events"]),
+                normal=c["Ct_Normal"], tangential=c["Ct_Tangential"],
+                friction_use=c["Ct_FrictionUse"], x=c["Ct_X"], y=c["Ct_Y"], slip=c["Ct_Slip"],
+                impulse_n=c["Ct_ImpulseN"], impulse_t=c["Ct_ImpulseT"]))
+        s.faults, self._pending_faults = self._pending_faults, []
+        return s
 
     def poll(self, timeout: float = 0.0) -> bool:
         """Reads what the bus has within timeout; True if a frame was read."""
@@ -500,9 +595,12 @@ class HilLink:
         sig = {"Ctrl_Variant": _enum(Variant, variant), "Ctrl_Integrator": _enum(Integrator, integrator),
                "Ctrl_Pose": pose, "Ctrl_StepSize": step_ns, "Ctrl_Disable": disable,
                "Ctrl_ActInit": 1 if hold_length else 0, "Ctrl_CmdTimeout": timeout}
-        if lengths is not None:
+        if lengths is not None:   # 2 (the leg) or 4 (the robot: leg 0's, then leg 1's)
             sig.update(Ctrl_UseLengths=1, Ctrl_Length_upper=float(lengths[0]),
                        Ctrl_Length_lower=float(lengths[1]))
+            if len(lengths) > 2:
+                sig.update(Ctrl_Length_upper_L1=float(lengths[2]),
+                           Ctrl_Length_lower_L1=float(lengths[3]))
         self._states.clear()
         return self._control(Command.RESET, **sig)
 
@@ -524,15 +622,17 @@ class HilLink:
     stop = stop_realtime
 
     def command(self, upper: tuple[ActMode, float] | None = None,
-                lower: tuple[ActMode, float] | None = None) -> int:
-        """One ACT_CMD: (mode, setpoint) per actuator, None = keep. Returns its counter."""
-        seq = self.next_seq(ACT_CMD)
+                lower: tuple[ActMode, float] | None = None, leg: int = 0) -> int:
+        """One ACT_CMD (leg 1 of the robot: ACT_CMD_L1): (mode, setpoint) per actuator, None =
+        keep. Returns its counter."""
+        fid = ACT_CMD + LEG_OFFSET * leg
+        seq = self.next_seq(fid)
         sig = {"Act_Seq": seq}
         for name, cmd in (("upper", upper), ("lower", lower)):
             mode, value = cmd if cmd is not None else (ActMode.KEEP, 0.0)
             sig[f"Act_Mode_{name}"] = int(mode)
             sig[f"Act_Setpoint_{name}"] = float(value)
-        self.bus.send(self.encode("ACT_CMD", sig))
+        self.bus.send(self.encode("ACT_CMD" + ("_L1" if leg else ""), sig))
         return seq
 
     def command_force(self, actuator: int | str, newtons: float) -> int:
@@ -548,16 +648,20 @@ class HilLink:
         return self.command()
 
     def _command_one(self, actuator, mode, value) -> int:
+        """actuator: 'upper'/'lower' or an index (the robot: 0-3, leg a // 2)."""
         a = ACTUATORS.index(actuator) if isinstance(actuator, str) else int(actuator)
         cmds = [None, None]
-        cmds[a] = (mode, value)
-        return self.command(*cmds)
+        cmds[a % 2] = (mode, value)
+        return self.command(*cmds, leg=a // 2)
 
-    def set_load(self, index: int, fx: float, fy: float = 0.0) -> int:
-        """A force element's value (0 = foot_load: world force (fx, fy) N)."""
-        seq = self.next_seq(LOAD_CMD)
-        self.bus.send(self.encode("LOAD_CMD", {"Load_Seq": seq, "Load_Index": index,
-                                               "Load_Value1": float(fx), "Load_Value2": float(fy)}))
+    def set_load(self, index: int, fx: float, fy: float = 0.0, leg: int = 0) -> int:
+        """A force element's value (0 = foot_load: world force (fx, fy) N); of leg 1 of the
+        robot (its own force elements) in LOAD_CMD_L1."""
+        fid = LOAD_CMD + LEG_OFFSET * leg
+        seq = self.next_seq(fid)
+        self.bus.send(self.encode("LOAD_CMD" + ("_L1" if leg else ""),
+                                  {"Load_Seq": seq, "Load_Index": index,
+                                   "Load_Value1": float(fx), "Load_Value2": float(fy)}))
         return seq
 
     # ---- streams -----------------------------------------------------------------------
@@ -619,6 +723,7 @@ def _enum(kind: type[enum.IntEnum], value: str | int) -> int:
 
 __all__ = [
     "HilLink", "State", "Fault", "Heartbeat", "HilError", "HilFault", "bus_config",
+    "Contact", "ContactState", "ContactEvent", "LEG_OFFSET", "ROBOT_STATE_IDS",
     "Command", "Variant", "Integrator", "ActMode", "SimState", "FaultCode", "Status",
     "BODIES", "JOINTS", "ACTUATORS", "DBC_PATH", "CMD_TIMEOUT_NONE",
     "DISABLE_GRAVITY", "DISABLE_FORCE_ELEMENTS", "DISABLE_REACTIONS", "DISABLE_PROJECTION",

@@ -24,14 +24,25 @@ def db():
 
 def test_every_frame_is_64_byte_fd_with_an_11_bit_id(db):
     names = {m.name: m.frame_id for m in db.messages}
-    assert names == {"FAULT": cl.FAULT, "CONTROL": cl.CONTROL, "ACT_CMD": cl.ACT_CMD,
-                     "LOAD_CMD": cl.LOAD_CMD, "ST_POS": cl.ST_POS, "ST_VEL": cl.ST_VEL,
-                     "ST_ACT": cl.ST_ACT, "ST_REACT_A": cl.ST_REACT_A,
-                     "ST_REACT_B": cl.ST_REACT_B, "ST_STATUS": cl.ST_STATUS,
-                     "HEARTBEAT": cl.HEARTBEAT}
+    leg = {"FAULT": cl.FAULT, "CONTROL": cl.CONTROL, "ACT_CMD": cl.ACT_CMD,
+           "LOAD_CMD": cl.LOAD_CMD, "ST_POS": cl.ST_POS, "ST_VEL": cl.ST_VEL,
+           "ST_ACT": cl.ST_ACT, "ST_REACT_A": cl.ST_REACT_A,
+           "ST_REACT_B": cl.ST_REACT_B, "ST_STATUS": cl.ST_STATUS,
+           "HEARTBEAT": cl.HEARTBEAT}
+    # the robot: leg 1's copies of the per-leg frames at + 0x20, the feet and the box
+    per_leg = ("ACT_CMD", "LOAD_CMD", "ST_POS", "ST_VEL", "ST_ACT", "ST_REACT_A", "ST_REACT_B",
+               "ST_STATUS")
+    robot = {f"{n}_L1": leg[n] + 0x20 for n in per_leg}
+    robot.update(ST_CONTACT=cl.ST_CONTACT, ST_CONTACT_L1=cl.ST_CONTACT + 0x20, ST_BOX=cl.ST_BOX)
+    assert names == {**leg, **robot}
+    for n in per_leg:   # the same signals at the same places
+        a, b = db.get_message_by_name(n), db.get_message_by_name(n + "_L1")
+        assert [(s.name, s.start, s.length, s.is_float, s.minimum, s.maximum) for s in a.signals] == \
+            [(s.name, s.start, s.length, s.is_float, s.minimum, s.maximum) for s in b.signals]
+        assert b.senders == (["BENCH"] if n.endswith("_CMD") else ["HIL_L1"])
     for m in db.messages:
         assert m.is_fd and m.length == 64 and not m.is_extended_frame and m.frame_id < 0x800
-        assert m.senders in (["BENCH"], ["HIL"])
+        assert m.senders in (["BENCH"], ["HIL"], ["HIL_L1"])
         assert m.comment, m.name
         for s in m.signals:
             assert s.comment, f"{m.name}.{s.name} has no comment"

@@ -1,0 +1,505 @@
+// hil_sim running the two-leg robot (models/robot.toml, compiled in), frames in memory (no
+// CAN): every leg's frames at its ids, in order, with ST_CONTACT per leg and ST_BOX; a
+// lockstep STEP gives the state of the C API driven directly, bit for bit (every signal is
+// float32 of the solver's double, the time its double); leg 1's commands reach the robot's
+// actuators 2-3 and force element 1; bad leg-1 frames get a FAULT and change nothing; a
+// leg-1 command to the one-leg hil_sim is an UNKNOWN_ID.
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <limits>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "controller.h"
+#include "protocol.h"
+#include "session.h"
+#include "legsim/models.h"
+#include "legsim/robot_models.h"
+
+extern "C" {
+#include "legsim_can.h"
+#include "legsim_can_layout.h"
+}
+
+namespace {
+
+int g_failed = 0, g_passed = 0;
+#define CHECK(cond)                                                                  \
+  do {                                                                               \
+    if (cond) {                                                                      \
+      ++g_passed;                                                                    \
+    } else {                                                                         \
+      ++g_failed;                                                                    \
+      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
+    }                                                                                \
+  } while (0)
+
+class Recorder : public hil::FrameSink {
+ public:
+  bool send(const hil::Frame &f) override {
+    frames.push_back(f);
+    return true;
+  }
+  std::vector<hil::Frame> frames;
+  std::vector<hil::Frame> take() {
+    std::vector<hil::Frame> out;
+    out.swap(frames);
+    return out;
+  }
+};
+
+hil::Frame fd_frame(uint32_t id) {
+  hil::Frame f;
+  f.id = id;
+  f.fd = true;
+  f.len = 64;
+  return f;
+}
+
+legsim_can_control_t control(uint32_t seq, uint8_t command) {
+  legsim_can_control_t m;
+  legsim_can_control_init(&m);
+  m.ctrl_seq = seq;
+  m.ctrl_command = command;
+  m.ctrl_step_size = 1000000;
+  m.ctrl_n_steps = 1;
+  m.ctrl_rt_steps_per_tick = 1;
+  m.ctrl_cmd_timeout = 65535;  // none: the runs below are longer than 100 ms
+  return m;
+}
+hil::Frame pack(const legsim_can_control_t &m) {
+  hil::Frame f = fd_frame(LEGSIM_CAN_CONTROL_FRAME_ID);
+  legsim_can_control_pack(f.data, &m, 64);
+  return f;
+}
+hil::Frame reset(uint32_t seq, uint8_t act_init = 1, int variant = 0) {
+  legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_act_init = act_init;
+  m.ctrl_variant = static_cast<uint8_t>(variant);
+  return pack(m);
+}
+hil::Frame step(uint32_t seq, uint32_t n) {
+  legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE);
+  m.ctrl_n_steps = n;
+  return pack(m);
+}
+template <typename Msg>
+void fill_act(Msg *m, uint32_t seq, uint8_t mode_u, float sp_u, uint8_t mode_l, float sp_l) {
+  std::memset(m, 0, sizeof *m);
+  m->act_seq = seq;
+  m->act_mode_upper = mode_u;
+  m->act_setpoint_upper = sp_u;
+  m->act_mode_lower = mode_l;
+  m->act_setpoint_lower = sp_l;
+}
+// ACT_CMD of leg 0 or leg 1 (ACT_CMD_L1)
+hil::Frame act(int leg, uint32_t seq, uint8_t mode_u, float sp_u, uint8_t mode_l = 0,
+               float sp_l = 0) {
+  if (leg == 0) {
+    legsim_can_act_cmd_t m;
+    fill_act(&m, seq, mode_u, sp_u, mode_l, sp_l);
+    hil::Frame f = fd_frame(LEGSIM_CAN_ACT_CMD_FRAME_ID);
+    legsim_can_act_cmd_pack(f.data, &m, 64);
+    return f;
+  }
+  legsim_can_act_cmd_l1_t m;
+  fill_act(&m, seq, mode_u, sp_u, mode_l, sp_l);
+  hil::Frame f = fd_frame(LEGSIM_CAN_ACT_CMD_L1_FRAME_ID);
+  legsim_can_act_cmd_l1_pack(f.data, &m, 64);
+  return f;
+}
+hil::Frame load_l1(uint32_t seq, uint8_t index, float fx, float fy) {
+  legsim_can_load_cmd_l1_t m;
+  std::memset(&m, 0, sizeof m);
+  m.load_seq = seq;
+  m.load_index = index;
+  m.load_value1 = fx;
+  m.load_value2 = fy;
+  hil::Frame f = fd_frame(LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID);
+  legsim_can_load_cmd_l1_pack(f.data, &m, 64);
+  return f;
+}
+
+const hil::Frame *find(const std::vector<hil::Frame> &v, uint32_t id) {
+  for (const auto &f : v)
+    if (f.id == id) return &f;
+  return nullptr;
+}
+legsim_can_fault_t fault_of(const std::vector<hil::Frame> &v) {
+  legsim_can_fault_t m;
+  legsim_can_fault_init(&m);
+  if (const hil::Frame *f = find(v, LEGSIM_CAN_FAULT_FRAME_ID))
+    legsim_can_fault_unpack(&m, f->data, f->len);
+  return m;
+}
+
+struct Rig {
+  hil::Session session;
+  Recorder rec;
+  hil::Controller ctl;
+  Rig() : ctl(session, rec, hil::ControllerConfig{}) {
+    std::string err;
+    if (!session.init(&err)) {
+      std::fprintf(stderr, "session init: %s\n", err.c_str());
+      std::exit(1);
+    }
+  }
+  std::vector<hil::Frame> feed(const hil::Frame &f, uint64_t slice = 0) {
+    ctl.on_frame(f, 0);
+    if (slice > 0)
+      while (ctl.stepping()) ctl.work(slice);
+    ctl.finish_step();
+    return rec.take();
+  }
+};
+
+bool same_bits(float a, double b) {
+  const float fb = static_cast<float>(b);
+  return std::memcmp(&a, &fb, sizeof a) == 0;
+}
+
+// The robot driven straight through the C API, as hil_sim's RESET builds it: stand pose,
+// onto the ground with the feet's midpoint where the pose put them, servos holding.
+struct Direct {
+  std::vector<unsigned char> storage;
+  legsim_sim *sim = nullptr;
+  Direct() : storage(legsim_sim_size() + LEGSIM_STORAGE_ALIGN) {
+    void *p = storage.data();
+    size_t space = storage.size();
+    void *aligned = std::align(LEGSIM_STORAGE_ALIGN, legsim_sim_size(), p, space);
+    legsim_options opt = legsim_default_options();
+    opt.step_s = 0.001;
+    CHECK(legsim_init(aligned, space, &legsim_model_robot_revolute, &opt, &sim) == LEGSIM_OK);
+    CHECK(legsim_assemble_pose(sim, 0) == LEGSIM_OK);
+    legsim_contact c[2];
+    CHECK(legsim_contacts(sim, c) == LEGSIM_OK);
+    // the robot file's ground is level through the origin: the midpoint is x
+    const legsim_real mid = (c[0].position[0] + c[1].position[0]) / 2;
+    CHECK(std::fabs(mid) < 1e-9);
+    CHECK(legsim_assemble_on_ground(sim, nullptr, mid) == LEGSIM_OK);
+    legsim_real len[4], rate[4];
+    CHECK(legsim_actuator_lengths(sim, len, rate) == LEGSIM_OK);
+    for (int a = 0; a < 4; ++a) CHECK(legsim_command_length(sim, a, len[a]) == LEGSIM_OK);
+  }
+};
+
+// Every signal of a robot sample against the C API's state, bit for bit.
+template <typename Pos, typename Vel, typename Act, typename RA, typename RB>
+void check_leg(const std::vector<hil::Frame> &out, int leg, const legsim_real *q,
+               const legsim_real *qd, const legsim_real *len, const legsim_real *rate,
+               const legsim_real *force, const legsim_reaction *r, uint32_t id0,
+               int (*upos)(Pos *, const uint8_t *, size_t),
+               int (*uvel)(Vel *, const uint8_t *, size_t),
+               int (*uact)(Act *, const uint8_t *, size_t), int (*ura)(RA *, const uint8_t *, size_t),
+               int (*urb)(RB *, const uint8_t *, size_t)) {
+  const hil::Frame *fp = find(out, id0), *fv = find(out, id0 + 1), *fa = find(out, id0 + 2),
+                   *fra = find(out, id0 + 3), *frb = find(out, id0 + 4);
+  CHECK(fp && fv && fa && fra && frb);
+  if (!(fp && fv && fa && fra && frb)) return;
+  Pos p;
+  Vel v;
+  Act a;
+  RA ra;
+  RB rb;
+  upos(&p, fp->data, 64);
+  uvel(&v, fv->data, 64);
+  uact(&a, fa->data, 64);
+  ura(&ra, fra->data, 64);
+  urb(&rb, frb->data, 64);
+  const int o = 3 * (1 + 6 * leg);
+  const float got_q[18] = {p.pos_b1_x, p.pos_b1_y, p.pos_b1_phi, p.pos_b2_x, p.pos_b2_y, p.pos_b2_phi,
+                           p.pos_b3_x, p.pos_b3_y, p.pos_b3_phi, p.pos_b4_x, p.pos_b4_y, p.pos_b4_phi,
+                           p.pos_b5_x, p.pos_b5_y, p.pos_b5_phi, a.act_b6_x, a.act_b6_y, a.act_b6_phi};
+  const float got_qd[18] = {v.vel_b1_vx, v.vel_b1_vy, v.vel_b1_omega, v.vel_b2_vx, v.vel_b2_vy,
+                            v.vel_b2_omega, v.vel_b3_vx, v.vel_b3_vy, v.vel_b3_omega, v.vel_b4_vx,
+                            v.vel_b4_vy, v.vel_b4_omega, v.vel_b5_vx, v.vel_b5_vy, v.vel_b5_omega,
+                            a.act_b6_vx, a.act_b6_vy, a.act_b6_omega};
+  bool q_ok = true, qd_ok = true;
+  for (int i = 0; i < 18; ++i) {
+    q_ok = q_ok && same_bits(got_q[i], q[o + i]);
+    qd_ok = qd_ok && same_bits(got_qd[i], qd[o + i]);
+  }
+  CHECK(q_ok);
+  CHECK(qd_ok);
+  const int ao = 2 * leg;
+  CHECK(same_bits(a.act_upper_length, len[ao]) && same_bits(a.act_lower_length, len[ao + 1]));
+  CHECK(same_bits(a.act_upper_rate, rate[ao]) && same_bits(a.act_lower_rate, rate[ao + 1]));
+  CHECK(same_bits(a.act_upper_force, force[ao]) && same_bits(a.act_lower_force, force[ao + 1]));
+  const legsim_reaction *j = r + 8 * leg;
+  const float got_r[24] = {ra.ra_a_fx, ra.ra_a_fy, ra.ra_a_m,
+                           ra.ra_upper_actuator_fx, ra.ra_upper_actuator_fy, ra.ra_upper_actuator_m,
+                           ra.ra_b_thigh_fx, ra.ra_b_thigh_fy, ra.ra_b_thigh_m,
+                           ra.ra_b_lower_fx, ra.ra_b_lower_fy, ra.ra_b_lower_m,
+                           ra.ra_c_rod_thigh_fx, ra.ra_c_rod_thigh_fy, ra.ra_c_rod_thigh_m,
+                           rb.rb_c_rod_shank_fx, rb.rb_c_rod_shank_fy, rb.rb_c_rod_shank_m,
+                           rb.rb_lower_actuator_fx, rb.rb_lower_actuator_fy, rb.rb_lower_actuator_m,
+                           rb.rb_d_fx, rb.rb_d_fy, rb.rb_d_m};
+  bool r_ok = true;
+  for (int k = 0; k < 8; ++k) {
+    r_ok = r_ok && same_bits(got_r[3 * k], j[k].force_n[0]) &&
+           same_bits(got_r[3 * k + 1], j[k].force_n[1]) && same_bits(got_r[3 * k + 2], j[k].moment_nm);
+  }
+  CHECK(r_ok);
+}
+
+template <typename Ct>
+void check_contact(const hil::Frame *f, int (*unpack)(Ct *, const uint8_t *, size_t),
+                   const legsim_contact &c, uint32_t tick) {
+  CHECK(f != nullptr);
+  if (f == nullptr) return;
+  Ct m;
+  unpack(&m, f->data, 64);
+  CHECK(m.ct_tick == tick);
+  CHECK(m.ct_state == static_cast<uint8_t>(c.state));
+  CHECK(same_bits(m.ct_normal, c.normal_n) && same_bits(m.ct_tangential, c.tangential_n));
+  CHECK(same_bits(m.ct_friction_use, c.friction_use));
+  CHECK(same_bits(m.ct_x, c.position[0]) && same_bits(m.ct_y, c.position[1]));
+  CHECK(same_bits(m.ct_slip, c.slip_mps));
+  CHECK(same_bits(m.ct_impulse_n, c.impulse_ns[0]) && same_bits(m.ct_impulse_t, c.impulse_ns[1]));
+}
+
+void check_sample(const std::vector<hil::Frame> &out, const legsim_sim *sim) {
+  legsim_real q[39], qd[39], len[4], rate[4], force[4];
+  legsim_reaction r[16];
+  legsim_contact c[2];
+  CHECK(legsim_get_q(sim, q) == LEGSIM_OK && legsim_get_qd(sim, qd) == LEGSIM_OK);
+  CHECK(legsim_actuator_lengths(sim, len, rate) == LEGSIM_OK);
+  CHECK(legsim_actuator_forces(sim, force) == LEGSIM_OK);
+  if (legsim_reactions(sim, r) != LEGSIM_OK) std::memset(r, 0, sizeof r);
+  CHECK(legsim_contacts(sim, c) == LEGSIM_OK);
+  const uint32_t tick = static_cast<uint32_t>(legsim_step_count(sim));
+
+  const hil::Frame *fb = find(out, LEGSIM_CAN_ST_BOX_FRAME_ID);
+  CHECK(fb != nullptr);
+  if (fb != nullptr) {
+    legsim_can_st_box_t b;
+    legsim_can_st_box_unpack(&b, fb->data, 64);
+    CHECK(b.box_tick == tick);
+    CHECK(same_bits(b.box_x, q[0]) && same_bits(b.box_y, q[1]) && same_bits(b.box_phi, q[2]));
+    CHECK(same_bits(b.box_vx, qd[0]) && same_bits(b.box_vy, qd[1]) && same_bits(b.box_omega, qd[2]));
+  }
+  check_leg(out, 0, q, qd, len, rate, force, r, LEGSIM_CAN_ST_POS_FRAME_ID, legsim_can_st_pos_unpack,
+            legsim_can_st_vel_unpack, legsim_can_st_act_unpack, legsim_can_st_react_a_unpack,
+            legsim_can_st_react_b_unpack);
+  check_leg(out, 1, q, qd, len, rate, force, r, LEGSIM_CAN_ST_POS_L1_FRAME_ID,
+            legsim_can_st_pos_l1_unpack, legsim_can_st_vel_l1_unpack, legsim_can_st_act_l1_unpack,
+            legsim_can_st_react_a_l1_unpack, legsim_can_st_react_b_l1_unpack);
+  check_contact(find(out, LEGSIM_CAN_ST_CONTACT_FRAME_ID), legsim_can_st_contact_unpack, c[0], tick);
+  check_contact(find(out, LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID), legsim_can_st_contact_l1_unpack, c[1],
+                tick);
+  // both statuses: the same time (float64, exact) and step count
+  const hil::Frame *s0 = find(out, LEGSIM_CAN_ST_STATUS_FRAME_ID);
+  const hil::Frame *s1 = find(out, LEGSIM_CAN_ST_STATUS_L1_FRAME_ID);
+  CHECK(s0 && s1);
+  if (s0 && s1) {
+    legsim_can_st_status_t a;
+    legsim_can_st_status_l1_t b;
+    legsim_can_st_status_unpack(&a, s0->data, 64);
+    legsim_can_st_status_l1_unpack(&b, s1->data, 64);
+    CHECK(a.st_time == legsim_time(sim) && b.st_time == legsim_time(sim));
+    CHECK(a.st_step_count == legsim_step_count(sim) && b.st_step_count == a.st_step_count);
+    CHECK(a.st_tick == tick && b.st_tick == tick);
+  }
+}
+
+// The frames of one robot sample, in the order of protocol.h.
+const uint32_t kOrder[] = {
+    LEGSIM_CAN_ST_BOX_FRAME_ID,        LEGSIM_CAN_ST_POS_FRAME_ID,
+    LEGSIM_CAN_ST_VEL_FRAME_ID,        LEGSIM_CAN_ST_ACT_FRAME_ID,
+    LEGSIM_CAN_ST_REACT_A_FRAME_ID,    LEGSIM_CAN_ST_REACT_B_FRAME_ID,
+    LEGSIM_CAN_ST_CONTACT_FRAME_ID,    LEGSIM_CAN_ST_POS_L1_FRAME_ID,
+    LEGSIM_CAN_ST_VEL_L1_FRAME_ID,     LEGSIM_CAN_ST_ACT_L1_FRAME_ID,
+    LEGSIM_CAN_ST_REACT_A_L1_FRAME_ID, LEGSIM_CAN_ST_REACT_B_L1_FRAME_ID,
+    LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID, LEGSIM_CAN_ST_STATUS_FRAME_ID,
+    LEGSIM_CAN_ST_STATUS_L1_FRAME_ID};
+
+void test_frames_and_ids() {
+  CHECK(sizeof kOrder / sizeof kOrder[0] == hil::kMaxSampleFrames);
+  CHECK(LEGSIM_CAN_ST_POS_L1_FRAME_ID == LEGSIM_CAN_ST_POS_FRAME_ID + 0x20);
+  CHECK(LEGSIM_CAN_ST_STATUS_L1_FRAME_ID == LEGSIM_CAN_ST_STATUS_FRAME_ID + 0x20);
+  CHECK(LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID == LEGSIM_CAN_ST_CONTACT_FRAME_ID + 0x20);
+  CHECK(LEGSIM_CAN_ACT_CMD_L1_FRAME_ID == LEGSIM_CAN_ACT_CMD_FRAME_ID + 0x20);
+  CHECK(LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID == LEGSIM_CAN_LOAD_CMD_FRAME_ID + 0x20);
+  Rig r;
+  auto out = r.feed(reset(3));
+  CHECK(out.size() == hil::kMaxSampleFrames);
+  bool order = out.size() == hil::kMaxSampleFrames;
+  for (size_t i = 0; order && i < out.size(); ++i)
+    order = out[i].id == kOrder[i] && out[i].fd && out[i].len == 64;
+  CHECK(order);
+  Direct d;
+  check_sample(out, d.sim);
+  legsim_contact c[2];
+  CHECK(legsim_contacts(d.sim, c) == LEGSIM_OK);
+  CHECK(c[0].state == LEGSIM_CONTACT_STUCK && c[1].state == LEGSIM_CONTACT_STUCK);
+}
+
+// The Fig. 7 push (design section 7, Scene A's commands) with leg 1's commands and load in
+// its own frames: the same state as the C API given the same calls, bit for bit, however
+// the STEP is sliced.
+void test_lockstep_matches_the_c_api() {
+  Direct d;
+  legsim_real force[4];
+  CHECK(legsim_step(d.sim, 1) == LEGSIM_OK);  // the servos' hold forces, after one solve
+  CHECK(legsim_actuator_forces(d.sim, force) == LEGSIM_OK);
+  const float push = static_cast<float>(force[0] + 50.0);
+  const float left_upper = 0.70f;  // leg 1 upper servo moves (inside 0.4 .. 0.8 m)
+  const float load[2] = {3.0f, -20.0f};
+
+  for (uint64_t slice : {uint64_t{0}, uint64_t{7}, uint64_t{64}}) {
+    Rig r;
+    r.feed(reset(1));
+    auto out = r.feed(step(2, 1), slice);
+    check_sample(out, d.sim);  // after one step, as the direct sim
+    r.feed(act(0, 1, LEGSIM_CAN_ACT_CMD_ACT_MODE_UPPER_FORCE_CHOICE, push));
+    r.feed(act(1, 1, LEGSIM_CAN_ACT_CMD_L1_ACT_MODE_UPPER_LENGTH_CHOICE, left_upper));
+    r.feed(load_l1(1, 0, load[0], load[1]));
+    out = r.feed(step(3, 99), slice);
+    Direct e;  // the same calls, straight
+    CHECK(legsim_step(e.sim, 1) == LEGSIM_OK);
+    CHECK(legsim_command_force(e.sim, 0, push) == LEGSIM_OK);
+    CHECK(legsim_command_length(e.sim, 2, left_upper) == LEGSIM_OK);
+    const legsim_real lv[2] = {load[0], load[1]};
+    CHECK(legsim_set_force(e.sim, 1, lv) == LEGSIM_OK);
+    CHECK(legsim_step(e.sim, 99) == LEGSIM_OK);
+    check_sample(out, e.sim);
+    CHECK(out.size() == hil::kMaxSampleFrames);
+    // leg 1's status carries its own ACT_CMD counter, leg 0's its own
+    legsim_can_st_status_t s0;
+    legsim_can_st_status_l1_t s1;
+    legsim_can_st_status_unpack(&s0, find(out, LEGSIM_CAN_ST_STATUS_FRAME_ID)->data, 64);
+    legsim_can_st_status_l1_unpack(&s1, find(out, LEGSIM_CAN_ST_STATUS_L1_FRAME_ID)->data, 64);
+    CHECK(s0.st_act_seq == 1 && s1.st_act_seq == 1 && s0.st_ctrl_seq == 3);
+    // the commands moved the box (this is no run at rest)
+    legsim_real q[39], q0[39];
+    CHECK(legsim_get_q(e.sim, q) == LEGSIM_OK && legsim_get_q(d.sim, q0) == LEGSIM_OK);
+    CHECK(std::fabs(q[0] - q0[0]) + std::fabs(q[1] - q0[1]) > 1e-3);
+  }
+}
+
+// Bad leg-1 frames: a FAULT naming the frame (and the signal), and nothing changes.
+void test_bad_leg1_frames() {
+  Rig good, bad;
+  good.feed(reset(1));
+  bad.feed(reset(1));
+  const float nan = std::numeric_limits<float>::quiet_NaN();
+  hil::Frame classic = act(1, 1, 1, 10.0f);
+  classic.fd = false;
+  classic.len = 8;
+  struct Case {
+    const char *what;
+    hil::Frame frame;
+    uint8_t code;
+    uint32_t detail;
+  };
+  const Case cases[] = {
+      {"classic ACT_CMD_L1", classic, 2, 64},
+      {"NaN setpoint", act(1, 1, 1, nan), 3, LEGSIM_CAN_ACT_CMD_L1_ACT_SETPOINT_UPPER_START_BIT},
+      {"force above max_force", act(1, 1, 0, 0, 1, 2000.0f), 4,
+       LEGSIM_CAN_ACT_CMD_L1_ACT_SETPOINT_LOWER_START_BIT},
+      {"length out of stroke", act(1, 1, 2, 0.95f), 4,
+       LEGSIM_CAN_ACT_CMD_L1_ACT_SETPOINT_UPPER_START_BIT},
+      {"mode out of range", act(1, 1, 3, 0.6f), 4, LEGSIM_CAN_ACT_CMD_L1_ACT_MODE_UPPER_START_BIT},
+      {"load index beyond the leg's", load_l1(1, 1, 1.0f, 1.0f), 4,
+       LEGSIM_CAN_LOAD_CMD_L1_LOAD_INDEX_START_BIT},
+      {"NaN load", load_l1(1, 0, nan, 1.0f), 3, LEGSIM_CAN_LOAD_CMD_L1_LOAD_VALUE1_START_BIT},
+  };
+  for (const Case &c : cases) {
+    auto out = bad.feed(c.frame);
+    legsim_can_fault_t f = fault_of(out);
+    const bool ok = out.size() == 1 && f.fault_code == c.code && f.fault_frame_id == c.frame.id &&
+                    f.fault_detail == c.detail;
+    if (!ok)
+      std::fprintf(stderr, "%s: %zu frames, code %u id 0x%x detail %u\n", c.what, out.size(),
+                   f.fault_code, f.fault_frame_id, f.fault_detail);
+    CHECK(ok);
+  }
+  // a stale counter: accept seq 5 on leg 1, then 5 again is refused (leg 0's count apart)
+  bad.feed(act(1, 5, 0, 0));
+  good.feed(act(1, 5, 0, 0));
+  auto out = bad.feed(act(1, 5, 1, 10.0f));
+  CHECK(fault_of(out).fault_code == 5 && fault_of(out).fault_frame_id == LEGSIM_CAN_ACT_CMD_L1_FRAME_ID);
+  CHECK(bad.feed(act(0, 1, 0, 0)).empty() && good.feed(act(0, 1, 0, 0)).empty());
+  // nothing changed: the same STEP gives the same physics (the statuses differ in FAULT bits)
+  auto a = good.feed(step(2, 20));
+  auto b = bad.feed(step(2, 20));
+  CHECK(a.size() == b.size());
+  bool same = a.size() == b.size();
+  for (size_t i = 0; same && i < a.size(); ++i) {
+    if (a[i].id == LEGSIM_CAN_ST_STATUS_FRAME_ID || a[i].id == LEGSIM_CAN_ST_STATUS_L1_FRAME_ID)
+      continue;
+    same = a[i].id == b[i].id && std::memcmp(a[i].data, b[i].data, 64) == 0;
+  }
+  CHECK(same);
+  // the robot has one variant: the slot variant is out of range
+  out = bad.feed(reset(9, 1, 1));
+  CHECK(fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_VARIANT_START_BIT);
+}
+
+// RESET with the four lengths: the robot assembled on the ground at them.
+void test_reset_with_lengths() {
+  Rig r;
+  legsim_can_control_t m = control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_use_lengths = 1;
+  m.ctrl_length_upper = 0.62f;
+  m.ctrl_length_lower = 0.52f;
+  m.ctrl_length_upper_l1 = 0.63f;
+  m.ctrl_length_lower_l1 = 0.53f;
+  auto out = r.feed(pack(m));
+  CHECK(out.size() == hil::kMaxSampleFrames);
+  legsim_can_st_act_t a0;
+  legsim_can_st_act_l1_t a1;
+  legsim_can_st_act_unpack(&a0, find(out, LEGSIM_CAN_ST_ACT_FRAME_ID)->data, 64);
+  legsim_can_st_act_l1_unpack(&a1, find(out, LEGSIM_CAN_ST_ACT_L1_FRAME_ID)->data, 64);
+  CHECK(std::fabs(a0.act_upper_length - 0.62f) < 1e-6f && std::fabs(a0.act_lower_length - 0.52f) < 1e-6f);
+  CHECK(std::fabs(a1.act_upper_length - 0.63f) < 1e-6f && std::fabs(a1.act_lower_length - 0.53f) < 1e-6f);
+  legsim_can_st_contact_t c0;
+  legsim_can_st_contact_l1_t c1;
+  legsim_can_st_contact_unpack(&c0, find(out, LEGSIM_CAN_ST_CONTACT_FRAME_ID)->data, 64);
+  legsim_can_st_contact_l1_unpack(&c1, find(out, LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID)->data, 64);
+  CHECK(c0.ct_state == 1 && c1.ct_state == 1);                  // stuck
+  CHECK(std::fabs(c0.ct_y) < 1e-6f && std::fabs(c1.ct_y) < 1e-6f);  // on the ground line
+  CHECK(std::fabs(c0.ct_x + c1.ct_x) < 1e-6f);                     // midpoint kept at 0
+  // a leg-1 length out of its stroke is refused, naming it
+  m.ctrl_seq = 2;
+  m.ctrl_length_lower_l1 = 0.2f;
+  out = r.feed(pack(m));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_L1_START_BIT);
+}
+
+// The one-leg hil_sim: leg-1 commands are unknown ids; leg-1 state frames (another sim's)
+// are ignored; the one leg's sample stays six frames.
+void test_one_leg_refuses_leg1_frames() {
+  hil::Session::use_models(&legsim_model_leg_revolute, &legsim_model_leg_slot);
+  CHECK(hil::Session::legs() == 1);
+  Rig r;
+  auto out = r.feed(reset(1, 0));
+  CHECK(out.size() == hil::kSampleFrames);
+  out = r.feed(act(1, 1, 1, 10.0f));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 1 &&
+        fault_of(out).fault_frame_id == LEGSIM_CAN_ACT_CMD_L1_FRAME_ID);
+  out = r.feed(load_l1(1, 0, 1.0f, 1.0f));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 1);
+  CHECK(r.feed(fd_frame(LEGSIM_CAN_ST_BOX_FRAME_ID)).empty());
+  CHECK(r.feed(fd_frame(LEGSIM_CAN_ST_STATUS_L1_FRAME_ID)).empty());
+  CHECK(r.feed(fd_frame(LEGSIM_CAN_ST_CONTACT_FRAME_ID)).empty());
+  CHECK(r.feed(act(0, 1, 1, 10.0f)).empty());  // leg 0's still works
+}
+
+}  // namespace
+
+int main() {
+  hil::Session::use_robot(&legsim_model_robot_revolute);
+  test_frames_and_ids();
+  test_lockstep_matches_the_c_api();
+  test_bad_leg1_frames();
+  test_reset_with_lengths();
+  test_one_leg_refuses_leg1_frames();
+  std::printf("%d passed, %d failed\n", g_passed, g_failed);
+  return g_failed == 0 ? 0 : 1;
+}
