@@ -164,6 +164,26 @@ class RobotTrajectory:
                    tangential=result.tangential, ground_point=g.point, ground_slope=g.slope,
                    mu_static=g.mu_static, mu_kinetic=g.mu_kinetic, box=0, title=title)
 
+    @classmethod
+    def from_cli_json(cls, out: dict, box_size, title: str = "") -> "RobotTrajectory":
+        """From legsim_cli's JSON output of a robot scene (its "contacts", "ground" and
+        "body_lengths"; scenes/README.md). ``box_size`` (w, h) m: the robot file's [box] size
+        (the core keeps only the width). Samples whose ground forces are not solved (null:
+        a dynamics run's first) are left out, never filled in."""
+        S = [s for s in out["samples"] if s.get("contacts") and
+             all(v["normal"] is not None and v["tangential"] is not None for v in s["contacts"].values())]
+        if not S:
+            raise ValueError("legsim_cli output: no sample with solved ground forces (a robot scene?)")
+        bodies, feet, g = out["bodies"], out["contacts"], out["ground"]
+        per = lambda key: [[s["contacts"][f][key] for f in feet] for s in S]  # noqa: E731
+        return cls(t=[s["t"] for s in S], body_names=bodies,
+                   q=[[[s["q"][b][c] for c in ("x", "y", "phi")] for b in bodies] for s in S],
+                   body_lengths=out["body_lengths"], box_size=box_size, foot_names=feet,
+                   feet=np.stack([np.array(per("x"), float), np.array(per("y"), float)], axis=-1),
+                   contact=np.array(per("state")), normal=per("normal"), tangential=per("tangential"),
+                   ground_point=g["point"], ground_slope=g["slope"], mu_static=g["mu_static"],
+                   mu_kinetic=g["mu_kinetic"], box=0, title=title)
+
     # ------------------------------------------------------------- geometry
     @property
     def tangent(self) -> np.ndarray:

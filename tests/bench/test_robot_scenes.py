@@ -1,0 +1,165 @@
+"""The robot's scenes (scenes/robot_*.toml) through legsim_cli, against the bench's independent
+reference (legsim_bench.reference.robot.RobotModel): both scene readers resolve them alike, the
+Fig. 7 scene matches the reference, the constant-force stand drifts away at the linearized
+modes' rates, the servo stand stays put, and the CLI's output draws (robot_plots)."""
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+ROOT = Path(__file__).resolve().parents[2]
+try:
+    import legsim_bench.scene  # noqa: F401
+except ImportError:  # the bench is not installed: use the source tree
+    sys.path.insert(0, str(ROOT / "bench"))
+
+from legsim_bench.analyses import cli_path, robot_arrays, robot_growth, robot_reference  # noqa: E402
+from legsim_bench.scene import SceneError, load_scene, parse_scene  # noqa: E402
+
+ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7", "robot_both_upper"]
+
+
+def _cli():
+    p = cli_path(ROOT)
+    if not p.is_file():
+        pytest.skip(f"{p} not built (cmake --build --preset host --target legsim_cli, or LEGSIM_CLI)")
+    r = subprocess.run([str(p), str(ROOT / "scenes" / "robot_fig7.toml"), "--check"], capture_output=True,
+                       text=True, timeout=60)
+    if r.returncode != 0 and "capacity" in r.stderr.lower():
+        pytest.skip(f"{p}: this build's capacities do not hold the robot")
+    return p
+
+
+def _run(name):
+    r = subprocess.run([str(_cli()), str(ROOT / "scenes" / f"{name}.toml")], capture_output=True, text=True,
+                       timeout=600)
+    assert r.returncode == 0, r.stderr
+    return json.loads(r.stdout)
+
+
+@pytest.fixture(scope="module")
+def fig7():
+    sc = load_scene("robot_fig7", ROOT)
+    out = _run("robot_fig7")
+    d = robot_arrays(out)
+    model, ref = robot_reference(sc, d["t"], ROOT)
+    return sc, out, d, model, ref
+
+
+@pytest.mark.parametrize("name", ROBOT_SCENES)
+def test_both_readers_resolve_robot_scenes_alike(name):
+    path = ROOT / "scenes" / f"{name}.toml"
+    r = subprocess.run([str(_cli()), str(path), "--check"], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    cli = json.loads(r.stdout)
+    sc = load_scene(path, ROOT)
+    bench = sc.resolved()
+    for x in (cli, bench):
+        x["model_path"] = os.path.realpath(x["model_path"]) if x["model_path"] else ""
+    cli.pop("scene")
+    assert cli == bench
+    assert sc.robot and not sc.over_can
+    assert sc.actuator_names == ("right.upper", "right.lower", "left.upper", "left.lower")
+    assert set(bench["commands"]) <= set(sc.actuator_names)
+
+
+def test_robot_keys_are_refused_or_checked_by_both_readers():
+    base = 'model = "builtin:robot"\nduration = 0.01\n'
+    sc = parse_scene(base + '[[contact]]\nname = "left.foot"\nstate = "free"\n', name="t", root=ROOT)
+    assert sc.contacts == {"left.foot": "free"} and sc.model_info.contacts == ("right.foot", "left.foot")
+    for text, words in [("contact_law = \"paper\"\n", "'contact_law' is not in this core yet"),
+                        ("[[command]]\nactuator = \"upper\"\nmode = \"force\"\nvalue = 1.0\n",
+                         "command 'upper': the model has no actuator 'upper'"),
+                        ("[[contact]]\nname = \"right.foot\"\nstate = \"sliding\"\n",
+                         "'state' must be stuck or free (got 'sliding')")]:
+        with pytest.raises(SceneError, match=words.replace("(", r"\(").replace(")", r"\)")):
+            parse_scene(base + text, name="t", root=ROOT)
+    with pytest.raises(SceneError, match="statics of a model with contacts is not in this core yet"):
+        parse_scene('model = "builtin:robot"\nanalysis = "statics"\n', name="t", root=ROOT)
+
+
+def test_builtin_robot_and_the_robot_file_give_the_same_run(tmp_path):
+    """The compiled-in robot (builtin:robot) and models/robot.toml loaded at run time are one
+    model: the same scene gives the same samples, bit for bit."""
+    text = (ROOT / "scenes" / "robot_fig7.toml").read_text()
+    p = tmp_path / "fig7_builtin.toml"
+    p.write_text(text.replace('model = "../models/robot.toml"', 'model = "builtin:robot"'))
+    r = subprocess.run([str(_cli()), str(p)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    assert json.loads(r.stdout)["samples"] == _run("robot_fig7")["samples"]
+
+
+def test_fig7_through_legsim_cli_matches_robot_model(fig7):
+    """Design section 7, Scene A, RK4 at h = 1 ms against the reference's DOP853 (rtol 1e-11):
+    RK4's global error over 0.1 s of a 4 mm motion is ~1e-10 (m, rad); forces ~1e-6 N."""
+    sc, out, d, model, ref = fig7
+    dq = d["q"] - ref.q
+    assert np.max(np.abs(dq)) < 1e-9
+    solved = slice(1, None)   # the first sample's forces are not solved yet (null)
+    assert np.max(np.abs(d["normal"][solved] - ref.normal[solved])) < 1e-5
+    assert np.max(np.abs(d["tangential"][solved] - ref.tangential[solved])) < 1e-5
+    assert np.max(np.abs(d["forces"][solved] - ref.actuator_forces[solved])) < 1e-5
+    assert np.all(d["state"] == "stuck")
+    # Table II the paper's way: the right leg's phi3 (thigh) and phi6 (shank) at 0.1 s
+    assert out["bodies"][3] == "right.thigh" and out["bodies"][6] == "right.shank"
+    phi3, phi6 = d["q"][-1, 3 * 3 + 2], d["q"][-1, 3 * 6 + 2]
+    assert abs(phi3 - 1.07133) < 1e-5 and abs(phi6 + 0.01484) < 1e-5
+    assert math.degrees(phi3) == pytest.approx(61.383, abs=1e-3)
+    # the ground forces of design section 7: right (148.18, -20.95) N, left (163.65, +29.10) N
+    assert d["normal"][-1] == pytest.approx([148.18, 163.65], abs=0.01)
+    assert d["tangential"][-1] == pytest.approx([-20.95, 29.10], abs=0.01)
+    # the feet do not move while stuck
+    assert np.max(np.abs(d["feet"] - d["feet"][0])) < 1e-12
+
+
+def test_constant_force_stand_drifts_away_at_the_linearized_rates():
+    """The equal_friction statics forces hold the stand in an unstable equilibrium; 0.01 N more
+    on the right upper sets it drifting. Fitted from the CLI's box motion over 2 s: the sway
+    (box x) at RobotModel's 4.0998 /s within 0.1 % (measured 4.1002), the heave (box y, the
+    sway's square fitted with it) at 0.8243 /s within 1 % (measured 0.8287: the heave's own
+    second-order terms); and the run itself matches the reference's to 1e-8."""
+    sc = load_scene("robot_stand_constant_force", ROOT)
+    d = robot_arrays(_run("robot_stand_constant_force"))
+    model, ref = robot_reference(sc, d["t"], ROOT)
+    g = robot_growth(model, d)
+    (ps, ph), (ms, mh) = g["predicted"], g["measured"]
+    assert ps == pytest.approx(4.100, abs=1e-3) and ph == pytest.approx(0.824, abs=1e-3)
+    assert abs(ms - ps) / ps < 1e-3
+    assert abs(mh - ph) / ph < 1e-2
+    assert np.max(np.abs(d["q"] - ref.q)) < 1e-8
+    # it does drift: the box has moved 0.6 mm sideways at 2 s, about e^(4.1 x 2) times its start
+    assert abs(d["q"][-1, 0] - d["q"][0, 0]) > 5e-4
+
+
+def test_servo_stand_stays_put_and_both_uppers_raise_the_box():
+    d = robot_arrays(_run("robot_stand_servo"))
+    assert np.max(np.abs(d["q"] - d["q"][0])) < 1e-9           # generalized-alpha, 1 s at rest
+    assert d["normal"][-1] == pytest.approx([158.922, 158.922], abs=1e-3)   # half the weight each
+    b = robot_arrays(_run("robot_both_upper"))
+    rise = b["q"][:, 1] - b["q"][0, 1]
+    # the box rises while the set-points step (10 mm longer uppers) and the servos then hold it
+    # up, swinging about its new height in the servo stand's 7.5 rad/s mode (which decays at
+    # only 0.71 /s): 8.6 .. 16.0 mm after 0.15 s, level (symmetric push: no sway, no pitch)
+    late = b["t"] > 0.15
+    assert 0.008 < np.min(rise[late]) and np.max(rise[late]) < 0.017
+    assert np.max(np.abs(b["q"][:, 0] - b["q"][0, 0])) < 1e-9 and np.max(np.abs(b["q"][:, 2])) < 1e-9
+
+
+def test_a_robot_trajectory_from_the_cli_output_draws(fig7, tmp_path):
+    pytest.importorskip("matplotlib")
+    from legsim_bench.robot_plots import RobotTrajectory, plot_snapshots, write_robot_animation
+    sc, out, d, model, ref = fig7
+    traj = RobotTrajectory.from_cli_json(out, model.box_size, title="Fig. 7 (legsim_cli)")
+    assert len(traj.t) == len(d["t"]) - 1                     # the first sample has no forces yet
+    assert traj.foot_names == ["right.foot", "left.foot"] and np.all(traj.contact == 1)
+    assert np.allclose(traj.q[-1].reshape(-1), ref.q[-1], atol=1e-9)
+    png = plot_snapshots(traj, tmp_path / "snap.png", n=3)[0]
+    gif = write_robot_animation(traj, tmp_path / "fig7.gif", fps=10, speed=0.05)
+    assert Path(png).stat().st_size > 5000 and Path(gif).stat().st_size > 5000
+    with pytest.raises(ValueError, match="no sample with solved ground forces"):
+        RobotTrajectory.from_cli_json(dict(out, samples=out["samples"][:1]), model.box_size)
