@@ -600,8 +600,252 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
             poses.append({"name": pname, "drivers": drivers, "guess": guess})
 
     return {"name": name, "gravity": gravity, "bodies": ctx.bodies, "joints": joints,
+            "contacts": [], "ground": NO_GROUND,
             "actuators": actuators, "forces": forces, "poses": poses,
             "foot_body": foot_body, "foot_point": foot_point}
+
+
+# ---- a robot file: a box with leg files placed on it (docs/design/robot-on-ground.md) ----
+ROBOT_KEYS = ["name", "gravity", "box", "leg", "ground", "pose"]
+BOX_KEYS = ["name", "mass", "inertia", "size"]
+LEG_KEYS = ["name", "file", "variant", "prefix", "mirror", "attach"]
+GROUND_KEYS = ["point", "slope", "mu_static", "mu_kinetic"]
+ROBOT_POSE_KEYS = ["legs", "feet_mid", "contact"]
+MAX_FRICTION = 10.0    # LEGSIM_MAX_FRICTION
+MAX_SLOPE = 1.5        # rad, as legsim_model_check
+CONGRUENT_TOL = 1e-12  # m: attach points against the leg's frame
+NO_GROUND = {"point": [0.0, 0.0], "slope": 0.0, "mu_static": 0.0, "mu_kinetic": 0.0}
+
+
+def is_robot(doc: dict) -> bool:
+    """A robot file has a [box] and [[leg]]s; anything else is a leg (model) file."""
+    return "box" in doc and "leg" in doc
+
+
+def read_toml(path: str, label: str, shown: str) -> dict:
+    """A leg file of a robot: read, bounded and parsed (errors name the robot's item)."""
+    try:
+        with open(path, "rb") as f:
+            raw = f.read(TOML_MAX_BYTES + 1)
+    except OSError as e:
+        fail(label, f"file '{shown}': cannot read: {e.strerror}", ERR_BAD_INPUT)
+    why = toml_input_within_limits(raw)
+    if why is not None:
+        fail(label, f"file '{shown}': TOML input refused: {why}")
+    try:
+        return tomllib.loads(raw.decode("utf-8"))
+    except (tomllib.TOMLDecodeError, UnicodeDecodeError) as e:
+        fail(label, f"file '{shown}': TOML syntax error: {e}")
+
+
+def box_xy_to_body(xy: list[float]) -> list[float]:
+    """A box-frame point (x, y) in the box's body coordinates (xi, eta) = (-y, x)."""
+    return [-xy[1], xy[0]]
+
+
+def parse_robot(doc: dict, base_dir: str, variant: str, caps: dict) -> dict:
+    check_keys(doc, ROBOT_KEYS, "robot")
+    name = get_string(doc, "name", "robot")
+    check_name(name, "robot")
+    gravity = get_vec(doc, "gravity", 2, "robot") if "gravity" in doc else list(DEFAULT_GRAVITY)
+    ranged_vec(gravity, -MAX_GRAVITY, MAX_GRAVITY, "gravity", "robot")
+    if variant != DEFAULT_VARIANT:
+        fail("robot", f"unknown variant '{variant}' (available: {DEFAULT_VARIANT})", ERR_BAD_INPUT)
+
+    bt = doc["box"]
+    if not is_table(bt):
+        fail("robot", "'box' must be a table")
+    check_keys(bt, BOX_KEYS, "box")
+    bname = get_string(bt, "name", "box") if "name" in bt else "box"
+    check_name(bname, "box")
+    size = ranged_vec(get_vec(bt, "size", 2, "box"), MIN_LENGTH, MAX_COORD, "size", "box")
+    bodies = [{"name": bname, "length": size[0],
+               "mass": ranged(get_positive(bt, "mass", "box"), MIN_MASS, MAX_MASS, "mass", "box"),
+               "inertia": ranged(get_positive(bt, "inertia", "box"), MIN_INERTIA, MAX_INERTIA,
+                                 "inertia", "box")}]
+    joints, actuators, forces, contacts, legs = [], [], [], [], []
+
+    leg_tables = get_table_array(doc, "leg", "robot")
+    if not leg_tables:
+        fail("robot", "no [[leg]]")
+    for k, tl in enumerate(leg_tables, 1):
+        label = f"leg #{k}"
+        lname = get_string(tl, "name", label)
+        check_name(lname, label)
+        for k2, other in enumerate(legs, 1):
+            if other["name"] == lname:
+                fail(label, f"duplicate name '{lname}' (leg #{k2} has it too)")
+        label = f"leg '{lname}'"
+        check_keys(tl, LEG_KEYS, label)
+        lfile = get_string(tl, "file", label)
+        lvariant = get_string(tl, "variant", label) if "variant" in tl else DEFAULT_VARIANT
+        prefix = get_string(tl, "prefix", label) if "prefix" in tl else lname + "."
+        for other in legs:
+            if other["prefix"] == prefix:
+                fail(label, f"prefix '{prefix}' is taken by leg '{other['name']}'")
+        mirror = tl.get("mirror", False)
+        if not isinstance(mirror, bool):
+            fail(label, "'mirror' must be true or false")
+        attach = req(tl, "attach", label)
+        if not is_table(attach):
+            fail(label, "'attach' must be a table of POINT = [x, y]")
+        ldoc = read_toml(os.path.join(base_dir, lfile), label, lfile)
+        if is_robot(ldoc):
+            fail(label, f"file '{lfile}' is a robot file, not a leg")
+        try:
+            lm = parse_model(ldoc, lvariant, {})
+        except ModelError as e:
+            raise ModelError(e.status, f"{label}: {lfile}: {e.message}")
+        frame = ldoc.get("frame", {})
+        fnames = sorted(frame)
+        if not fnames:
+            fail(label, "the leg file has no [frame] points to attach")
+        if sorted(attach) != fnames:
+            fail(label, f"'attach' must name the leg file's frame points ({', '.join(fnames)})")
+        sign = -1.0 if mirror else 1.0
+        offs = []
+        for key in fnames:
+            a = ranged_vec(as_vec(attach[key], 2, key, label), -MAX_COORD, MAX_COORD, key, label)
+            fp = frame[key]
+            offs.append([a[0] - sign * fp[0], a[1] - fp[1]])
+        for o in offs:
+            if abs(o[0] - offs[0][0]) > CONGRUENT_TOL or abs(o[1] - offs[0][1]) > CONGRUENT_TOL:
+                fail(label, "the box points are not congruent with the leg's frame")
+        off = offs[0]
+        if lm["foot_body"] == FRAME:
+            fail(label, "the leg file has no [foot]")
+        b0, j0 = len(bodies), len(joints)
+
+        def mir(p):
+            return [p[0], sign * p[1]]
+
+        def on_box(p):  # a point of the leg's frame, in the box's body coordinates
+            return box_xy_to_body([off[0] + sign * p[0], off[1] + p[1]])
+
+        def named(what, n):
+            full = prefix + n
+            check_name(full, label, what)
+            return full
+        for b in lm["bodies"]:
+            bodies.append({"name": named("body name", b["name"]), "length": b["length"],
+                           "mass": b["mass"], "inertia": b["inertia"]})
+        for j in lm["joints"]:
+            nj = {"name": named("joint name", j["name"]), "kind": j["kind"],
+                  "body": [j["body"][0] + b0, j["body"][1] + b0],
+                  "point": [mir(j["point"][0]), mir(j["point"][1])]}
+            if j["kind"] == "revolute_to_frame":
+                nj["kind"] = "revolute"
+                nj["body"][1] = 0
+                nj["point"][1] = on_box(j["point"][1])
+            joints.append(nj)
+        for a in lm["actuators"]:
+            actuators.append(dict(a, name=named("actuator name", a["name"]), joint=a["joint"] + j0))
+        for f in lm["forces"]:
+            nf = dict(f, name=named("force name", f["name"]), body=list(f["body"]),
+                      point=[mir(f["point"][0]), mir(f["point"][1])], value=list(f["value"]))
+            for s_ in range(2):
+                if f["body"][s_] == FRAME:
+                    if f["kind"] == "spring_damper":
+                        nf["body"][s_] = 0
+                        nf["point"][s_] = on_box(f["point"][s_])
+                else:
+                    nf["body"][s_] = f["body"][s_] + b0
+            if f["kind"] == "point":
+                nf["value"] = [sign * f["value"][0], f["value"][1]]
+            elif f["kind"] == "torque":
+                nf["value"] = [sign * f["value"][0], 0.0]
+            forces.append(nf)
+        contacts.append({"name": named("contact name", "foot"), "body": lm["foot_body"] + b0,
+                         "point": mir(lm["foot_point"])})
+        legs.append({"name": lname, "prefix": prefix, "sign": sign, "off": off, "model": lm,
+                     "body0": b0})
+
+    gt = req(doc, "ground", "robot")
+    if not is_table(gt):
+        fail("robot", "'ground' must be a table")
+    check_keys(gt, GROUND_KEYS, "ground")
+    gpoint = ranged_vec(get_vec(gt, "point", 2, "ground"), -MAX_COORD, MAX_COORD, "point",
+                        "ground") if "point" in gt else [0.0, 0.0]
+    slope = ranged(get_real(gt, "slope", "ground"), -MAX_SLOPE, MAX_SLOPE, "slope",
+                   "ground") if "slope" in gt else 0.0
+    mu_s = ranged(get_nonnegative(gt, "mu_static", "ground"), 0.0, MAX_FRICTION, "mu_static",
+                  "ground")
+    mu_k = ranged(get_nonnegative(gt, "mu_kinetic", "ground"), 0.0, MAX_FRICTION, "mu_kinetic",
+                  "ground")
+    if mu_k > mu_s:
+        fail("ground", f"mu_kinetic {g(mu_k)} > mu_static {g(mu_s)}")
+    ground = {"point": gpoint, "slope": slope, "mu_static": mu_s, "mu_kinetic": mu_k}
+
+    poses = []
+    if "pose" in doc:
+        tp = doc["pose"]
+        if not is_table(tp):
+            fail("robot", "'pose' must be a table of [pose.NAME] tables")
+        capacity(len(tp), "poses", "LEGSIM_MAX_POSES", caps.get("poses"), "robot")
+        for pname, pt in tp.items():
+            label = f"pose '{pname}'"
+            check_name(pname, label)
+            if not is_table(pt):
+                fail(label, "must be a table")
+            check_keys(pt, ROBOT_POSE_KEYS, label)
+            legs_pose = get_string(pt, "legs", label) if "legs" in pt else "stand"
+            mid = ranged(get_real(pt, "feet_mid", label), -MAX_COORD, MAX_COORD, "feet_mid",
+                         label) if "feet_mid" in pt else 0.0
+            state = get_string(pt, "contact", label) if "contact" in pt else "stuck"
+            if state != "stuck":
+                fail(label, f"'contact' must be \"stuck\" (got '{state}')")
+            if len(legs) > 2:
+                fail(label, "a pose on the ground needs one or two legs")
+            poses.append({"name": pname, "drivers": [],
+                          "guess": robot_guess(legs, bodies, ground, legs_pose, mid, label)})
+
+    # the capacities last: every other check of the file comes first, in any build
+    capacity(len(bodies), "bodies", "LEGSIM_MAX_BODIES", caps.get("bodies"), "robot")
+    capacity(len(joints), "joints", "LEGSIM_MAX_JOINTS", caps.get("joints"), "robot")
+    capacity(len(actuators), "actuators", "LEGSIM_MAX_ACTUATORS", caps.get("actuators"), "robot")
+    capacity(len(forces), "force elements", "LEGSIM_MAX_FORCES", caps.get("forces"), "robot")
+    capacity(len(contacts), "contacts", "LEGSIM_MAX_CONTACTS", caps.get("contacts"), "robot")
+    return {"name": name, "gravity": gravity, "bodies": bodies, "joints": joints,
+            "actuators": actuators, "forces": forces, "poses": poses,
+            "foot_body": FRAME, "foot_point": [0.0, 0.0], "contacts": contacts, "ground": ground}
+
+
+def robot_guess(legs: list[dict], bodies: list[dict], ground: dict, legs_pose: str, mid: float,
+                label: str) -> list[list[float]]:
+    """The pose's guess: each leg's own pose guess placed on the box, and the box put
+    where both feet lie on the ground line, their midpoint at `mid` along it (a rigid
+    motion of the whole guess; the same operations in model_toml.cpp)."""
+    rows = [[0.0, 0.0, 0.0]]
+    feet = []
+    for leg in legs:
+        lm, sign, off = leg["model"], leg["sign"], leg["off"]
+        lp = [p for p in lm["poses"] if p["name"] == legs_pose]
+        if not lp:
+            fail(label, f"leg '{leg['name']}' has no pose '{legs_pose}'")
+        for r in lp[0]["guess"]:
+            rows.append([off[0] + sign * r[0], off[1] + r[1], sign * r[2]])
+        bx, by, bphi = rows[leg["body0"] + lm["foot_body"]]
+        xi, eta = lm["foot_point"][0], sign * lm["foot_point"][1]
+        feet.append([bx + xi * math.sin(bphi) + eta * math.cos(bphi),
+                     by - xi * math.cos(bphi) + eta * math.sin(bphi)])
+    if len(feet) > 1:
+        theta = math.atan2(feet[0][1] - feet[1][1], feet[0][0] - feet[1][0])
+        m0 = 0.5 * (feet[0][0] + feet[1][0])
+        m1 = 0.5 * (feet[0][1] + feet[1][1])
+    else:
+        theta = 0.0
+        m0, m1 = feet[0]
+    psi = ground["slope"] - theta
+    c, s = math.cos(psi), math.sin(psi)
+    ct, st = math.cos(ground["slope"]), math.sin(ground["slope"])
+    r0 = ground["point"][0] + mid * ct - (c * m0 - s * m1)
+    r1 = ground["point"][1] + mid * st - (s * m0 + c * m1)
+    out = []
+    for x, y, phi in rows:
+        if not all(abs(v) <= MAX_COORD for v in (r0 + c * x - s * y, r1 + s * x + c * y, phi + psi)):
+            fail(label, f"'guess' must be in [{g(-MAX_COORD)}, {g(MAX_COORD)}]")
+        out.append([r0 + c * x - s * y, r1 + s * x + c * y, phi + psi])
+    return out
 
 
 def variant_names(doc: dict) -> list[str]:
@@ -671,7 +915,17 @@ def c_model(m: dict, cname: str, src: str, variant: str) -> str:
     if not m["poses"]:
         o.append('    {"", 0, {{0, 0, 0.0}}, {{0.0, 0.0, 0.0}}},')
     o.append("  },")
-    o.append(f"  {m['foot_body']}, {c_vec(m['foot_point'])} /* foot body, point */")
+    o.append(f"  {m['foot_body']}, {c_vec(m['foot_point'])}, /* foot body, point */")
+    o.append(f"  {len(m['contacts'])}, /* contacts */")
+    o.append("  { /* contact: name, body, point */")
+    for c in m["contacts"]:
+        o.append(f"    {{{c_str(c['name'])}, {c['body']}, {c_vec(c['point'])}}},")
+    if not m["contacts"]:
+        o.append('    {"", 0, {0.0, 0.0}},')
+    o.append("  },")
+    gr = m["ground"]
+    o.append(f"  {{{c_vec(gr['point'])}, {c_real(gr['slope'])}, {c_real(gr['mu_static'])}, "
+             f"{c_real(gr['mu_kinetic'])}}} /* ground: point, slope, mu static, kinetic */")
     o.append("};")
     return "\n".join(o) + "\n"
 
@@ -683,11 +937,13 @@ def capacity_checks(models: list[tuple[str, dict]], symbol: str, src: str) -> st
         "LEGSIM_MAX_ACTUATORS": ("actuators", max(len(m["actuators"]) for _, m in models)),
         "LEGSIM_MAX_FORCES": ("force elements", max(len(m["forces"]) for _, m in models)),
         "LEGSIM_MAX_POSES": ("poses", max(len(m["poses"]) for _, m in models)),
+        "LEGSIM_MAX_CONTACTS": ("contacts", max(len(m["contacts"]) for _, m in models)),
         "LEGSIM_MAX_POSE_DRIVERS": ("pose drivers", max(
             [len(p["drivers"]) for _, m in models for p in m["poses"]] + [0])),
     }
     names = [m["name"] for _, m in models]
-    names += [x["name"] for _, m in models for key in ("bodies", "joints", "actuators", "forces", "poses")
+    names += [x["name"] for _, m in models for key in ("bodies", "joints", "actuators", "forces", "poses",
+                                                       "contacts")
               for x in m[key]]
     longest = max(len(s.encode("utf-8")) for s in names)
     o = []
@@ -778,6 +1034,8 @@ def toml_input_within_limits(raw: bytes) -> str | None:
         return f"larger than {TOML_MAX_BYTES} bytes"
     NORMAL, COMMENT, BASIC, LITERAL, MULTI_BASIC, MULTI_LITERAL = range(6)
     mode, line, depth, dots, i, size = NORMAL, 1, 0, 0, 0, len(raw)
+    prev = "\n"  # the last non-blank character outside strings and comments: a quote opens
+    # a string only where a token may start (after '=', '[', '{', ',', '.' or at a line start)
 
     def escapable(i: int) -> bool:
         return i + 1 < size and raw[i + 1] != 0x0A and raw[i + 1] < 0x80
@@ -797,13 +1055,15 @@ def toml_input_within_limits(raw: bytes) -> str | None:
             dots = 0
             if mode in (COMMENT, BASIC, LITERAL):
                 mode = NORMAL
+            if mode == NORMAL:
+                prev = "\n"
             i += 1
             continue
         ch = chr(c)
         if mode == NORMAL:
             if ch == "#":
                 mode = COMMENT
-            elif ch in "\"'":
+            elif ch in "\"'" and prev in "\n=[{,.":
                 multi = raw[i:i + 3] == (b'"""' if ch == '"' else b"'''")
                 if ch == '"':
                     mode = MULTI_BASIC if multi else BASIC
@@ -828,14 +1088,16 @@ def toml_input_within_limits(raw: bytes) -> str | None:
                 if dots >= TOML_MAX_KEY_PARTS:
                     return (f"a key or table header of more than {TOML_MAX_KEY_PARTS} dotted "
                             f"parts (line {line})")
+            if mode == NORMAL and ch not in " \t\r":
+                prev = ch
         elif mode == BASIC:
             if ch == "\\" and escapable(i):
                 i += 1
             elif ch == '"':
-                mode = NORMAL
+                mode, prev = NORMAL, ch
         elif mode == LITERAL:
             if ch == "'":
-                mode = NORMAL
+                mode, prev = NORMAL, ch
         elif mode in (MULTI_BASIC, MULTI_LITERAL):
             quote = '"' if mode == MULTI_BASIC else "'"
             if mode == MULTI_BASIC and ch == "\\" and escapable(i):
@@ -845,7 +1107,7 @@ def toml_input_within_limits(raw: bytes) -> str | None:
                 while run < 5 and i + run < size and raw[i + run] == c:
                     run += 1
                 i += run - 1
-                mode = NORMAL
+                mode, prev = NORMAL, quote
         i += 1
     return None
 
@@ -867,6 +1129,9 @@ def load_all(path: str, caps: dict) -> list[tuple[str, dict]]:
     out = []
     try:
         # The default variant validates the base model and the [variant] tables' structure.
+        if is_robot(doc):  # one model: its legs name their variants
+            out.append((DEFAULT_VARIANT, parse_robot(doc, os.path.dirname(path), DEFAULT_VARIANT, caps)))
+            return out
         out.append((DEFAULT_VARIANT, parse_model(doc, DEFAULT_VARIANT, caps)))
         for v in variant_names(doc)[1:]:
             out.append((v, parse_model(doc, v, caps)))
@@ -883,7 +1148,7 @@ def read_config(path: str) -> dict:
             for line in f:
                 m = re.match(r"\s*#\s*define\s+LEGSIM_MAX_([A-Z_]+)\s+([0-9]+)\s*(?:/[*/].*)?$", line)
                 if m and m.group(1).lower() in ("bodies", "joints", "actuators", "forces", "poses",
-                                                "pose_drivers"):
+                                                "pose_drivers", "contacts"):
                     caps[m.group(1).lower()] = int(m.group(2))
     except OSError as e:
         sys.exit(f"model_codegen: error: {path}: cannot read: {e.strerror}")
@@ -901,7 +1166,7 @@ def main(argv=None) -> int:
     ap.add_argument("--check", action="store_true", help="only validate (no output files)")
     ap.add_argument("--config", help="the build's generated legsim/config.h: check its "
                     "LEGSIM_MAX_* capacities here too (same messages as the run-time loader)")
-    for what in ("bodies", "joints", "actuators", "forces", "poses", "pose-drivers"):
+    for what in ("bodies", "joints", "actuators", "forces", "poses", "pose-drivers", "contacts"):
         ap.add_argument(f"--max-{what}", type=int, default=None,
                         help=f"capacity LEGSIM_MAX_{what.upper().replace('-', '_')} to check "
                              "(the generated source checks it with #error anyway)")
@@ -911,7 +1176,7 @@ def main(argv=None) -> int:
     if not a.check and not (a.out_c and a.out_h):
         ap.error("--out-c and --out-h are required (or --check)")
     caps = read_config(a.config) if a.config else {}
-    for key in ("bodies", "joints", "actuators", "forces", "poses", "pose_drivers"):
+    for key in ("bodies", "joints", "actuators", "forces", "poses", "pose_drivers", "contacts"):
         v = getattr(a, "max_" + key)
         if v is not None:
             caps[key] = v
