@@ -47,6 +47,13 @@ bool escapable(std::string_view text, std::size_t i) {
   return i + 1 < text.size() && text[i + 1] != '\n' && static_cast<unsigned char>(text[i + 1]) < 0x80;
 }
 
+// A quote opens a string only where a token may start (what toml++ does): at the start of
+// a line or after '=', '[', '{', ',' or '.', blanks aside. Elsewhere (e.g. `s = 0'`) it
+// is a character of a bare value, and what follows is checked as outside a string.
+bool opens_string(char prev) {
+  return prev == '\n' || prev == '=' || prev == '[' || prev == '{' || prev == ',' || prev == '.';
+}
+
 bool refuse(std::string &why, const std::string &what, long line) {
   why = what + " (line " + std::to_string(line) + ")";
   return false;
@@ -62,6 +69,7 @@ bool toml_input_within_limits(std::string_view text, std::string &why) {
   Mode mode = Mode::Normal;
   long line = 1;
   int depth = 0, dots = 0;
+  char prev = '\n';  // the last non-blank character outside strings and comments
   std::size_t i = 0;
   while (i < text.size()) {
     const char c = text[i];
@@ -77,6 +85,7 @@ bool toml_input_within_limits(std::string_view text, std::string &why) {
       ++line;
       dots = 0;  // a key never spans lines
       if (mode == Mode::Comment || mode == Mode::Basic || mode == Mode::Literal) mode = Mode::Normal;
+      if (mode == Mode::Normal) prev = '\n';
       ++i;
       continue;
     }
@@ -84,7 +93,7 @@ bool toml_input_within_limits(std::string_view text, std::string &why) {
       case Mode::Normal:
         if (c == '#') {
           mode = Mode::Comment;
-        } else if (c == '"' || c == '\'') {
+        } else if ((c == '"' || c == '\'') && opens_string(prev)) {
           const bool multi = starts(text, i, c == '"' ? "\"\"\"" : "'''");
           mode = c == '"' ? (multi ? Mode::MultiBasic : Mode::Basic)
                           : (multi ? Mode::MultiLiteral : Mode::Literal);
@@ -109,14 +118,15 @@ bool toml_input_within_limits(std::string_view text, std::string &why) {
                               " dotted parts",
                           line);
         }
+        if (mode == Mode::Normal && c != ' ' && c != '\t' && c != '\r') prev = c;
         break;
       case Mode::Comment: break;
       case Mode::Basic:
         if (c == '\\' && escapable(text, i)) ++i;  // the escaped character
-        else if (c == '"') mode = Mode::Normal;
+        else if (c == '"') mode = Mode::Normal, prev = c;
         break;
       case Mode::Literal:
-        if (c == '\'') mode = Mode::Normal;
+        if (c == '\'') mode = Mode::Normal, prev = c;
         break;
       case Mode::MultiBasic:
       case Mode::MultiLiteral: {
@@ -128,6 +138,7 @@ bool toml_input_within_limits(std::string_view text, std::string &why) {
           while (run < 5 && i + run < text.size() && text[i + run] == quote) ++run;
           i += run - 1;
           mode = Mode::Normal;
+          prev = quote;
         }
         break;
       }
