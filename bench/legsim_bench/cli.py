@@ -136,6 +136,14 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
                 path = save_recording(rec, out_base / sc.name / "recording.json")
                 out.append((sc, path, rec))
         return out
+    if not any(sc.over_can for sc in scenes):
+        # every scene runs in legsim_cli (analyses, the robot): no bus and no hil_sim needed
+        out = []
+        for sc in scenes:
+            print(f"recording {sc.name} (in legsim_cli, not over CAN): {sc.summary()}", flush=True)
+            rec = record(sc, None, progress=_progress_flag(args))
+            out.append((sc, save_recording(rec, out_base / sc.name / "recording.json"), rec))
+        return out
     if args.start_hil:
         if args.interface not in (None, "socketcan"):
             raise SetupError("--start-hil needs the socketcan interface")
@@ -212,9 +220,27 @@ def _check_one(rec: dict, out_dir: Path, args, root: Path):
     if not args.no_plots:
         from .plots import write_plots
         files.update(write_plots(ev, out_dir))
+        out = rec.get("cli_output") or {}
+        if out.get("contacts") and rec.get("complete"):  # the robot: stick figures and the animation
+            files.update(_robot_plots(out, ev.scene, out_dir))
     print(format_table(ev, details=not args.brief))
     print(f"  files: {out_dir}/ ({', '.join(sorted(p.name for p in files.values()))})")
     return ev, files
+
+
+def _robot_plots(out: dict, scene, out_dir: Path) -> dict[str, Path]:
+    import tomllib
+
+    from .robot_plots import RobotTrajectory, plot_snapshots, plot_time_series, write_robot_animation
+
+    box = tomllib.loads(Path(scene.model_path).read_text())["box"]
+    traj = RobotTrajectory.from_cli_json(out, tuple(box["size"]), title=scene.name)
+    span = float(traj.t[-1] - traj.t[0])
+    return {"snapshots": plot_snapshots(traj, out_dir / "robot_snapshots.png")[0],
+            "time_series": plot_time_series(traj, out_dir / "robot_time_series.png"),
+            # about 2 s of animation whatever the scene's length
+            "animation": write_robot_animation(traj, out_dir / "robot.gif", fps=20,
+                                               speed=max(span / 2.0, 1e-3))}
 
 
 def _recording_paths(specs: list[str]) -> list[Path]:
@@ -328,9 +354,17 @@ def cmd_demo(args) -> int:
     args.recordings = [str(p) for p in paths]
     args.out = None
     rc = cmd_check(args)
+    if not args.all and not args.scenes:
+        # the robot on the ground: its scenes run in legsim_cli (not over CAN yet), on this host
+        robot = _load_scenes(["robot_fig7"], root)
+        print(f"\nrecording {robot[0].name} in legsim_cli (the two-leg robot; not over CAN yet)", flush=True)
+        recs = _record_all(args, root, robot, out_base)
+        names += [sc.name for sc, _, _ in recs]
+        args.recordings = [str(p) for _, p, _ in recs]
+        rc = max(rc, cmd_check(args))
     print("\nplots and data:")
     for n in names:
-        pngs = sorted((out_base / n).glob("*.png"))
+        pngs = sorted([*(out_base / n).glob("*.png"), *(out_base / n).glob("*.gif")])
         print(f"  {out_base / n}/  " + (" ".join(p.name for p in pngs) if pngs else "(no plots)"))
     return rc
 
