@@ -136,6 +136,9 @@ legsim_status options_check(const legsim_options *o) {
   if (o->max_newton_iter < 1 || o->max_newton_iter > LEGSIM_MAX_NEWTON_ITER) return LEGSIM_ERR_BAD_INPUT;
   if (!within(o->newton_tol, LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL)) return LEGSIM_ERR_BAD_INPUT;
   if (o->disable & ~kAllDisableFlags) return LEGSIM_ERR_BAD_INPUT;
+  const long long rule = raw_enum(o->statics_rule);
+  if (rule != LEGSIM_STATICS_EQUAL_FRICTION && rule != LEGSIM_STATICS_MIN_TANGENTIAL)
+    return LEGSIM_ERR_BAD_INPUT;
   const bool compiled = integ == LEGSIM_INTEGRATOR_RK4 ? LEGSIM_WITH_RK4 : LEGSIM_WITH_GENERALIZED_ALPHA;
   return compiled ? LEGSIM_OK : LEGSIM_ERR_DISABLED;
 }
@@ -143,7 +146,7 @@ legsim_status options_check(const legsim_options *o) {
 bool same_options(const legsim_options &a, const legsim_options &b) {
   return a.integrator == b.integrator && a.step_s == b.step_s && a.disable == b.disable &&
          a.rho_inf == b.rho_inf && a.max_newton_iter == b.max_newton_iter &&
-         a.newton_tol == b.newton_tol;
+         a.newton_tol == b.newton_tol && a.statics_rule == b.statics_rule;
 }
 
 // Finite and |x| <= bound (false for NaN).
@@ -245,6 +248,7 @@ legsim_options legsim_default_options(void) {
   o.rho_inf = 0.8;
   o.max_newton_iter = 25;
   o.newton_tol = LEGSIM_USE_FLOAT ? 1e-6 : 1e-10;
+  o.statics_rule = LEGSIM_STATICS_EQUAL_FRICTION;
   return o;
 }
 
@@ -606,6 +610,7 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
   legsim_worst_case wc;
   const legsim_status st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
+    if (r == LEGSIM_OK) r = contacts_release(s);
     if (r == LEGSIM_OK) r = statics_sweep(s, n_grid, &wc);  // leaves the last pose solved
     s.data.derivative_valid = s.data.history_valid = false;
     return r;
@@ -731,7 +736,10 @@ legsim_status legsim_contacts(const legsim_sim *sim, legsim_contact *out) {
     o.position[0] = p.x();
     o.position[1] = p.y();
     o.slip_mps = v.dot(m.ground_t);
-    o.impulse_ns[0] = o.impulse_ns[1] = 0;
+    o.impulse_ns[0] = c.impulse[0];
+    o.impulse_ns[1] = c.impulse[1];
+    o.holds = c.state != LEGSIM_CONTACT_FREE && c.normal >= 0 &&
+              std::abs(c.tangential) <= m.mu_s * c.normal;
   }
   return LEGSIM_OK;
 }

@@ -41,7 +41,17 @@ void contact_forces_update(Sim &sim) {
 
 void contacts_free(Sim &sim) {
   Data &d = sim.data;
-  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0};
+  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}};
+}
+
+void contact_forces_of_layout(const Model &model, const Layout &layout, const VecR &lambda,
+                              real *normal, real *tangential) {
+  for (int k = 0; k < model.nc; ++k) normal[k] = tangential[k] = 0;
+  for (int i = model.m; i < layout.m; ++i) {
+    const RowSource &r = layout.src[i];
+    if (r.kind == RowKind::ContactNormal) normal[r.index] = -lambda[i];
+    if (r.kind == RowKind::ContactTangent) tangential[r.index] = -lambda[i];
+  }
 }
 
 }  // namespace legsim

@@ -157,7 +157,9 @@ struct ActuatorState {
 
 struct ContactData {
   uint8_t state;     // legsim_contact_state
+  int8_t slip_dir;   // SLIDING: the sign of the sliding velocity along the tangent (+1, -1)
   real normal, tangential;  // N, T of the last solve (0 when free)
+  real impulse[2];   // the last impact's (normal, tangential) impulse on the foot, N s
 };
 
 struct Data {
@@ -304,6 +306,9 @@ void contact_rows_of_states(const Model &model, const Data &d, uint8_t *rows);
 void contact_forces_update(Sim &sim);
 // Every contact free (a state set or assembled from outside).
 void contacts_free(Sim &sim);
+// N and T of each contact with rows in layout, from the multipliers lambda (0 for the others).
+void contact_forces_of_layout(const Model &model, const Layout &layout, const VecR &lambda,
+                              real *normal, real *tangential);
 
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.

@@ -26,16 +26,24 @@ void lock_all_actuators(Sim &sim) {
   }
   d.drivers.ncoord = 0;
 }
-}  // namespace
 
-legsim_status statics_solve(Sim &sim, real *actuator_force) {
+
+// One solve of the locked system with the given contact rows: the multipliers in
+// d.lambda, the rows in d.rows. The residual acceleration must vanish.
+legsim_status locked_solve(Sim &sim, const uint8_t *contacts) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  lock_all_actuators(sim);
-  legsim_status s = work_layout(sim, (1u << m.na) - 1);
-  if (s != LEGSIM_OK) return s;
-  d.qd.setZero();
-  s = dynamics_solve(sim, d.work, d.q, d.qd, d.qdd);
+  const uint32_t all = (1u << m.na) - 1;
+  legsim_status s;
+  if (m.nc > 0) {  // with contact rows: built for this call only
+    d.work_mask = -1;
+    for (int k = 0; k < m.nc; ++k) d.drivers.stick[k] = d.stop_drivers.stick[k];
+    s = layout_build(m, all, 0, d.work, contacts);
+    if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
+  } else {
+    s = work_layout(sim, all);
+  }
+  if (s == LEGSIM_OK) s = dynamics_solve(sim, d.work, d.q, d.qd, d.qdd);
   if (s != LEGSIM_OK) return s;
   // scale: the acceleration the loads alone would cause
   real scale = 1, worst = 0;
@@ -44,7 +52,65 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
     scale = free_acc > scale ? free_acc : scale;
     worst = std::abs(d.qdd[k]) > worst ? std::abs(d.qdd[k]) : worst;
   }
-  if (!(worst <= kBalanceTol * scale)) return LEGSIM_ERR_NO_EQUILIBRIUM;
+  return worst <= kBalanceTol * scale ? LEGSIM_OK : LEGSIM_ERR_NO_EQUILIBRIUM;
+}
+}  // namespace
+
+// A contact that is not free holds its foot. Two held feet make the stance statically
+// indeterminate by one self-stress (a tangential pair along the line): solve A with
+// the tangential row of the first only, B with that of the second only; every
+// solution is (1 - s) A + s B, and statics_rule picks s (design section 3).
+legsim_status statics_solve(Sim &sim, real *actuator_force) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  lock_all_actuators(sim);
+  d.qd.setZero();
+  uint8_t rows[kMaxContacts];
+  int held[2] = {0, 0}, nheld = 0;
+  for (int k = 0; k < m.nc; ++k) {
+    const bool on = d.contact[k].state != LEGSIM_CONTACT_FREE;
+    rows[k] = on ? kContactStuck : kContactNone;
+    if (!on) continue;
+    if (nheld == 2) return LEGSIM_ERR_CONTACT;
+    held[nheld++] = k;
+  }
+  real normal[kMaxContacts], tangential[kMaxContacts];
+  legsim_status s;
+  if (nheld < 2) {
+    s = locked_solve(sim, rows);
+    if (s != LEGSIM_OK) return s;
+    contact_forces_of_layout(m, d.work, d.lambda, normal, tangential);
+  } else {
+    const int k0 = held[0], k1 = held[1];
+    rows[k1] = kContactNormal;
+    s = locked_solve(sim, rows);
+    if (s != LEGSIM_OK) return s;
+    const VecR lambda_a = d.lambda;
+    real na[kMaxContacts], ta[kMaxContacts];
+    contact_forces_of_layout(m, d.work, d.lambda, na, ta);
+    rows[k1] = kContactStuck;
+    rows[k0] = kContactNormal;
+    s = locked_solve(sim, rows);
+    if (s != LEGSIM_OK) return s;
+    real nb[kMaxContacts], tb[kMaxContacts];
+    contact_forces_of_layout(m, d.work, d.lambda, nb, tb);
+    real frac = real(0.5);  // MIN_TANGENTIAL: T_0 = (1 - s) T, T_1 = s T least at s = 1/2
+    if (sim.opt.statics_rule == LEGSIM_STATICS_EQUAL_FRICTION) {
+      const real sum = na[k0] + na[k1];  // the normal forces do not depend on s
+      if (!(sum > 0)) return LEGSIM_ERR_NO_EQUILIBRIUM;
+      frac = na[k1] / sum;  // (1 - s) T / N_0 = s T / N_1
+    }
+    // the joint and driver rows lead both layouts in the same order
+    for (int i = 0; i < m.m + m.na; ++i) d.lambda[i] = (1 - frac) * lambda_a[i] + frac * d.lambda[i];
+    for (int k = 0; k < m.nc; ++k) {
+      normal[k] = (1 - frac) * na[k] + frac * nb[k];
+      tangential[k] = (1 - frac) * ta[k] + frac * tb[k];
+    }
+    for (int i = m.m + m.na; i < d.work.m; ++i) {  // B's contact rows, as the combination
+      const RowSource &r = d.work.src[i];
+      d.lambda[i] = r.kind == RowKind::ContactNormal ? -normal[r.index] : -tangential[r.index];
+    }
+  }
   d.qdd.setZero();
   reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   bool finite_result = true;
@@ -55,6 +121,11 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
     d.act[a].force = -d.lambda[m.m + a];  // F = -lambda_driver: the driver pulls back on the rod
     finite_result = finite_result && finite(d.act[a].force);
     if (actuator_force) actuator_force[a] = d.act[a].force;
+  }
+  for (int k = 0; k < m.nc; ++k) {
+    d.contact[k].normal = normal[k];
+    d.contact[k].tangential = tangential[k];
+    finite_result = finite_result && finite(normal[k]) && finite(tangential[k]);
   }
   // loads a float cannot balance: refused, not reported as infinite reactions
   return finite_result ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;

@@ -240,11 +240,12 @@ class Library:
         class Contact(C.Structure):
             _fields_ = [("state", C.c_int), ("normal_n", real), ("tangential_n", real),
                         ("friction_use", real), ("position", real * 2), ("slip_mps", real),
-                        ("impulse_ns", real * 2)]
+                        ("impulse_ns", real * 2), ("holds", i32)]
 
         class Options(C.Structure):
             _fields_ = [("integrator", C.c_int), ("step_s", d), ("disable", C.c_uint32),
-                        ("rho_inf", d), ("max_newton_iter", i32), ("newton_tol", d)]
+                        ("rho_inf", d), ("max_newton_iter", i32), ("newton_tol", d),
+                        ("statics_rule", C.c_int)]
 
         class Report(C.Structure):
             _fields_ = [("iterations", i32), ("residual", real), ("condition", real),

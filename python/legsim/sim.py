@@ -46,14 +46,19 @@ EVENTS = {
 }
 """Event bits of legsim.h (``enum legsim_event``) by name."""
 
+STATICS_RULES = {"equal_friction": 0, "min_tangential": 1}
+"""``legsim_statics_rule`` of legsim.h by name: the rule that fixes the statics of a
+stance on two stuck feet (equal friction use T/N on both; or least T_0^2 + T_1^2)."""
+
 CONTACT_STATES = {"free": 0, "stuck": 1, "sliding": 2}
 """``legsim_contact_state`` of legsim.h by name."""
 
 CONTACT_DTYPE = np.dtype([("state", "U8"), ("normal", "f8"), ("tangential", "f8"),
                           ("friction_use", "f8"), ("position", "f8", (2,)), ("slip", "f8"),
-                          ("impulse", "f8", (2,))])
+                          ("impulse", "f8", (2,)), ("holds", "?")])
 """Fields of :meth:`Sim.contacts`: state name, N and T (N), |T|/N, foot position (m),
-slip velocity along the ground (m/s), last impact impulse (normal, tangential; N s)."""
+slip velocity along the ground (m/s), last impact impulse (normal, tangential; N s),
+whether the static friction cone holds the force (N >= 0, |T| <= mu_static N)."""
 
 COND_WARN = 1e3       # condition estimate above which "near_singular" is raised
 COND_SINGULAR = 1e5   # an assembly landing above this is refused (SingularError)
@@ -148,7 +153,8 @@ class Sim:
     def __init__(self, model: ModelLike = None, *, variant: str | None = None,
                  precision: str | None = None, lib_path=None, integrator: str = "rk4",
                  step: float = 1e-3, disable=0, rho_inf: float | None = None,
-                 max_newton_iter: int | None = None, newton_tol: float | None = None):
+                 max_newton_iter: int | None = None, newton_tol: float | None = None,
+                 statics_rule: str | None = None):
         if isinstance(model, Model):
             if variant is not None and variant != model.variant:
                 raise ValueError("variant is given by the Model; load the other variant instead")
@@ -173,7 +179,7 @@ class Sim:
         self._addr = base + (-base) % STORAGE_ALIGN
         self._options = lib.default_options()
         self._apply_options(self._options, integrator, step, disable, rho_inf, max_newton_iter,
-                            newton_tol)
+                            newton_tol, statics_rule)
         out = C.c_void_p()
         self._check(lib.cdll.legsim_init(C.c_void_p(self._addr), lib.sim_size,
                                          C.byref(model.desc), C.byref(self._options),
@@ -206,7 +212,7 @@ class Sim:
 
     @staticmethod
     def _apply_options(o, integrator=None, step=None, disable=None, rho_inf=None,
-                       max_newton_iter=None, newton_tol=None):
+                       max_newton_iter=None, newton_tol=None, statics_rule=None):
         if integrator is not None:
             if integrator not in INTEGRATORS:
                 raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, "
@@ -222,6 +228,11 @@ class Sim:
             o.max_newton_iter = int(max_newton_iter)
         if newton_tol is not None:
             o.newton_tol = float(newton_tol)
+        if statics_rule is not None:
+            if statics_rule not in STATICS_RULES:
+                raise ValueError(f"statics_rule must be one of {sorted(STATICS_RULES)}, "
+                                 f"not {statics_rule!r}")
+            o.statics_rule = STATICS_RULES[statics_rule]
 
     def _arr(self, values, n: int, what: str):
         v = np.asarray(values, dtype=float).reshape(-1)
@@ -260,17 +271,19 @@ class Sim:
     @property
     def options(self) -> dict:
         """The current options: integrator, step, disable (mask), rho_inf,
-        max_newton_iter, newton_tol."""
+        max_newton_iter, newton_tol, statics_rule."""
         o = self._options
         return {"integrator": self.integrator, "step": float(o.step_s),
                 "disable": int(o.disable), "rho_inf": float(o.rho_inf),
-                "max_newton_iter": int(o.max_newton_iter), "newton_tol": float(o.newton_tol)}
+                "max_newton_iter": int(o.max_newton_iter), "newton_tol": float(o.newton_tol),
+                "statics_rule": {v: k for k, v in STATICS_RULES.items()}[int(o.statics_rule)]}
 
     def set_options(self, **options) -> None:
         """Changes options (integrator=, step=, disable=, rho_inf=, max_newton_iter=,
-        newton_tol=); a refused set (BadInputError, DisabledError) changes nothing."""
+        newton_tol=, statics_rule=); a refused set (BadInputError, DisabledError) changes
+        nothing."""
         unknown = set(options) - {"integrator", "step", "disable", "rho_inf",
-                                  "max_newton_iter", "newton_tol"}
+                                  "max_newton_iter", "newton_tol", "statics_rule"}
         if unknown:
             raise TypeError(f"unknown option(s) {sorted(unknown)}")
         new = type(self._options).from_buffer_copy(self._options)
@@ -448,7 +461,9 @@ class Sim:
 
     def statics(self) -> np.ndarray:
         """Equilibrium actuator forces (N, n_actuators) in the current q under gravity and
-        the force elements; :meth:`reactions` then holds the joints' reactions."""
+        the force elements; :meth:`reactions` then holds the joints' reactions and
+        :meth:`contacts` the ground forces of the feet that are not free (held as stuck;
+        two of them by the option ``statics_rule``), with ``holds``."""
         self._check(self.library.cdll.legsim_statics(self.handle, self._abuf), "legsim_statics")
         return self._np(self._abuf, self.n_actuators)
 
@@ -500,7 +515,8 @@ class Sim:
         out = np.zeros(self.n_contacts, dtype=CONTACT_DTYPE)
         for k, c in enumerate(self._ctbuf[:self.n_contacts]):
             out[k] = (names.get(int(c.state), str(c.state)), c.normal_n, c.tangential_n,
-                      c.friction_use, tuple(c.position), c.slip_mps, tuple(c.impulse_ns))
+                      c.friction_use, tuple(c.position), c.slip_mps, tuple(c.impulse_ns),
+                      bool(c.holds))
         return out
 
     def set_contact(self, contact: Union[int, str], state: str) -> None:

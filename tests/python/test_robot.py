@@ -126,3 +126,93 @@ def test_fig7_scene_a_matches_the_reference(ref):
     assert np.max(np.abs(c["tangential"] - r.tangential[-1])) < 1e-6
     # the figures of design section 7
     assert abs(q[3 * 3 + 2] - 1.07133) < 1e-5 and abs(q[3 * 6 + 2] + 0.01484) < 1e-5
+
+
+# ---- statics of the stance on two stuck feet, with the stated rule (design section 3) ----
+def _robot_with_box_load(load) -> legsim.Sim:
+    """The robot with a load (Fx, Fy N, M N m) on the box centre: two force elements
+    (a point force and a torque on body 0) added to a copy of its description."""
+    base = _robot_sim().model
+    desc = type(base.desc).from_buffer_copy(base.desc)
+    nf = desc.n_forces
+    for k, (kind, value) in enumerate([(0, (load[0], load[1])), (1, (load[2], 0.0))]):
+        f = desc.force[nf + k]
+        f.name = b"box.load" if kind == 0 else b"box.moment"
+        f.kind = kind
+        f.body[0], f.body[1] = 0, -1
+        f.point[0][0] = f.point[0][1] = 0.0
+        f.value[0], f.value[1] = value
+    desc.n_forces = nf + 2
+    return legsim.Sim(legsim.Model(desc, base.library, base.variant, "robot + box load"))
+
+
+@pytest.mark.parametrize("rule", ["equal_friction", "min_tangential"])
+@pytest.mark.parametrize("load", [(0.0, 0.0, 0.0), (40.0, -150.0, 12.0), (-90.0, 30.0, -25.0)])
+def test_stance_statics_matches_the_reference(ref, rule, load):
+    s = _robot_with_box_load(load)
+    s.set_options(statics_rule=rule)
+    lengths = ref.stand_lengths()
+    s.assemble_on_ground(lengths)
+    F = s.statics()
+    r = ref.statics(lengths, box_load=load, rule=rule)
+    c = s.contacts()
+    scale = s.model.masses.sum() * 9.81
+    print(rule, load, "F", F, "N", c["normal"], "T", c["tangential"],
+          "errors F", np.abs(F - r.actuator_forces).max(), "N, T",
+          np.abs(c["normal"] - r.normal).max(), np.abs(c["tangential"] - r.tangential).max(),
+          "reactions", np.abs(s.reactions() - r.reactions).max())
+    assert np.max(np.abs(F - r.actuator_forces)) < 1e-9 * scale
+    assert np.max(np.abs(c["normal"] - r.normal)) < 1e-10 * scale
+    assert np.max(np.abs(c["tangential"] - r.tangential)) < 1e-10 * scale
+    assert np.max(np.abs(s.reactions() - r.reactions)) < 1e-9 * scale
+    assert list(c["holds"]) == list(r.holds)
+    assert list(c["state"]) == ["stuck", "stuck"]           # statics changes no state
+    if rule == "equal_friction":                             # the rule itself
+        assert abs(c["tangential"][0] * c["normal"][1] - c["tangential"][1] * c["normal"][0]) \
+            < 1e-10 * scale ** 2
+    else:
+        assert abs(c["tangential"][0] - c["tangential"][1]) < 1e-10 * scale
+    # the ground forces and the load balance the weight (statics: no momentum rate)
+    total = np.array([c["tangential"].sum() + load[0], c["normal"].sum() + load[1]])
+    assert np.max(np.abs(total - np.array([0.0, scale]))) < 1e-10 * scale
+
+
+def test_stand_statics_figures_of_the_design(ref):
+    """Design section 4: 326.539 N upper, 1.387 N lower per leg, N = 158.922 N per foot
+    (equal_friction; with no tangential load the rule gives T = 0 on both feet)."""
+    s = _robot_sim()
+    s.assemble_on_ground(ref.stand_lengths())
+    F = s.statics()
+    c = s.contacts()
+    assert np.allclose(F, [326.539, 1.387, 326.539, 1.387], atol=5e-4)
+    assert np.allclose(c["normal"], [158.922, 158.922], atol=5e-4)
+    assert np.max(np.abs(c["tangential"])) < 1e-9 and all(c["holds"])
+
+
+def test_stance_statics_says_which_feet_friction_holds(ref):
+    """A sideways load beyond mu_s times the weight: both feet out of the cone under
+    equal_friction (they reach it together), named per foot, and nothing refused; below
+    it both hold (equal use on both: |T_0|/N_0 = |T_1|/N_1 = Fx / (N_0 + N_1); the moment
+    cancels the load's about the ground, the box centre being 1 m up). A load that tips the robot: the ground
+    would have to pull on the far foot, which cannot hold."""
+    for fx, holds in [(200.0, False), (150.0, True)]:
+        s = _robot_with_box_load((fx, 0.0, fx * 1.0))
+        s.assemble_on_ground(ref.stand_lengths())
+        s.statics()
+        c = s.contacts()
+        assert list(c["holds"]) == [holds, holds]
+        assert np.allclose(c["friction_use"], fx / c["normal"].sum(), rtol=1e-9)
+    s = _robot_with_box_load((250.0, 0.0, 0.0))
+    s.assemble_on_ground(ref.stand_lengths())
+    s.statics()
+    c = s.contacts()
+    assert c["normal"][1] < 0 and not c["holds"][1]
+
+
+def test_stance_statics_rule_option_is_checked():
+    s = _robot_sim()
+    with pytest.raises(ValueError):
+        s.set_options(statics_rule="paper")
+    assert s.options["statics_rule"] == "equal_friction"
+    s.set_options(statics_rule="min_tangential")
+    assert s.options["statics_rule"] == "min_tangential"

@@ -215,6 +215,16 @@ enum legsim_disable {
   LEGSIM_DISABLE_STROKE_LIMITS = 1u << 5   /* do not stop actuators at their stroke ends */
 };
 
+/* The rule that fixes the statically indeterminate stance on two stuck contacts (its
+ * solutions differ by a self-equilibrated pair of tangential ground forces along the
+ * line): EQUAL_FRICTION, both feet use the same fraction of their normal force,
+ * T_0/N_0 = T_1/N_1 (needs N_0 + N_1 > 0); MIN_TANGENTIAL, T_0^2 + T_1^2 least.
+ * docs/design/robot-on-ground.md section 3. */
+typedef enum legsim_statics_rule {
+  LEGSIM_STATICS_EQUAL_FRICTION = 0,
+  LEGSIM_STATICS_MIN_TANGENTIAL = 1
+} legsim_statics_rule;
+
 typedef struct legsim_options {
   legsim_integrator integrator;
   double step_s;            /* fixed step h in [LEGSIM_MIN_STEP_S, LEGSIM_MAX_STEP_S] */
@@ -223,9 +233,12 @@ typedef struct legsim_options {
   int32_t max_newton_iter;  /* assembly, projection and implicit steps: 1 .. LEGSIM_MAX_NEWTON_ITER */
   double newton_tol;        /* on the constraint residual (m, rad) and on corrections:
                                [LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL] */
+  legsim_statics_rule statics_rule; /* legsim_statics and legsim_inverse_dynamics on two
+                                       stuck contacts; one of the enum, else BAD_INPUT */
 } legsim_options;
 
-/* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-6 float). */
+/* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-6 float),
+ * statics_rule EQUAL_FRICTION. */
 legsim_options legsim_default_options(void);
 
 /* ---- simulation lifetime ---------------------------------------------- */
@@ -338,7 +351,12 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
 
 /* ---- 4. statics ------------------------------------------------------------ */
 /* Equilibrium actuator forces and joint reactions in the current q (qd = 0)
- * under the active loads (gravity and force elements). */
+ * under the active loads (gravity and force elements). Contacts that are not FREE
+ * hold their feet (as STUCK) and their ground forces are reported by legsim_contacts,
+ * with whether the friction can hold them (legsim_contact.holds). Two such contacts
+ * make the stance statically indeterminate: options.statics_rule picks the solution
+ * (two square solves, each with one foot's tangential row, combined; with EQUAL_FRICTION
+ * and N_0 + N_1 <= 0: LEGSIM_ERR_NO_EQUILIBRIUM). More than two: LEGSIM_ERR_CONTACT. */
 legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n);
 
 typedef struct legsim_worst_case {
@@ -351,7 +369,8 @@ typedef struct legsim_worst_case {
 } legsim_worst_case;
 
 /* Worst-case statics over an n x n grid (n in [2, LEGSIM_MAX_GRID]) of the first two
- * actuators' strokes (the paper's Section V). On LEGSIM_OK leaves the sim at the last
+ * actuators' strokes (the paper's Section V); the leg moves, so every contact is let go
+ * (FREE) first. On LEGSIM_OK leaves the sim at the last
  * pose solved; on an error (no grid point solved: LEGSIM_ERR_UNREACHABLE) changes nothing.
  * A grid point that fails changes nothing either (it is counted in n_failed). */
 legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst_case *out);
@@ -412,6 +431,8 @@ typedef struct legsim_contact {
   legsim_real position[2];   /* foot point, world (m) */
   legsim_real slip_mps;      /* foot velocity along the tangent (m/s) */
   legsim_real impulse_ns[2]; /* last impact impulse (normal, tangential; N s): 0 so far */
+  int32_t holds;             /* 1: the ground force is inside the static cone, N >= 0 and
+                                |T| <= mu_static N (a stuck foot the friction can hold); 0 else */
 } legsim_contact;
 
 /* n_contacts entries: the state of the last solve (step, statics, assembly). */
