@@ -22,8 +22,9 @@ legsim_build host || exit 1
 py="$root/.venv/bin/python"
 export LEGSIM_ROOT="$root" LEGSIM_NO_SKIP=1 PYTHONUNBUFFERED=1
 logs=$legsim_logs
-# The tests that need vcan0; everything else runs on the host.
-socketcan_tests=(tests/hil/test_hil_sim.py tests/hil_scenes)
+# The SocketCAN tests (tests/hil, tests/hil_scenes: hil_sim and the bench on vcan0, and
+# the bench's CAN decoding on python-can's virtual bus) run where vcan0 is; the rest on the host.
+socketcan_tests=(tests/hil tests/hil_scenes)
 pytest_args=(-v -p no:cacheprovider -rfEs --color=no --continue-on-collection-errors)
 
 status=0 summary=()
