@@ -43,6 +43,7 @@ legsim_status stops_layout(Sim &sim) {
   legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn, contacts);
   if (s == LEGSIM_OK) s = layout_finish(d.dyn, d.stop_drivers);
   d.dyn.stops = true;
+  contact_slides_mark(sim.model, d, d.dyn);
   return s;
 }
 

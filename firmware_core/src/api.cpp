@@ -644,6 +644,9 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
         else if (!rk4)           // RK4 leaves its end derivative and reactions itself
           r = generalized_alpha_reactions(s);
       }
+      bool contacts_changed = false;
+      if (r == LEGSIM_OK && s.model.nc) r = contact_transitions(s, contacts_changed);
+      if (r == LEGSIM_OK && contacts_changed) r = state_refresh(s);
       if (r == LEGSIM_OK && stops) r = stroke_stops_release(s, released);
       if (r == LEGSIM_OK && released) r = state_refresh(s);
       if (r != LEGSIM_OK) return r;
@@ -751,20 +754,27 @@ legsim_status legsim_set_contact_state(legsim_sim *sim, int32_t k, legsim_contac
   const Model &m = s.model;
   Data &d = s.data;
   const long long st = raw_enum(state);
-  if (k < 0 || k >= m.nc || (st != LEGSIM_CONTACT_FREE && st != LEGSIM_CONTACT_STUCK))
+  if (k < 0 || k >= m.nc ||
+      (st != LEGSIM_CONTACT_FREE && st != LEGSIM_CONTACT_STUCK && st != LEGSIM_CONTACT_SLIDING))
     return LEGSIM_ERR_BAD_INPUT;
   if (!d.assembled) return LEGSIM_ERR_STATE;
   Vec2 p, v;
   contact_point(m, k, d.q, d.qd, p, v);
   const real gap = m.ground_n.dot(p - m.ground_point);
-  if (st == LEGSIM_CONTACT_STUCK && !(std::abs(gap) <= real(s.opt.newton_tol))) return LEGSIM_ERR_STATE;
-  if (d.contact[k].state == st) return LEGSIM_OK;  // sent again: changes nothing
+  const real vt = m.ground_t.dot(v);
+  if (st != LEGSIM_CONTACT_FREE && !(std::abs(gap) <= real(s.opt.newton_tol))) return LEGSIM_ERR_STATE;
+  if (st == LEGSIM_CONTACT_SLIDING && !(std::abs(vt) > real(s.opt.newton_tol))) return LEGSIM_ERR_STATE;
+  const int8_t dir = vt > 0 ? 1 : -1;
+  if (d.contact[k].state == st && (st != LEGSIM_CONTACT_SLIDING || d.contact[k].slip_dir == dir))
+    return LEGSIM_OK;  // sent again: changes nothing
   return all_or_nothing(s, [&] {
     d.contact[k].state = uint8_t(st);
+    d.contact[k].slip_dir = dir;
     d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
     legsim_status r = stops_layout(s);
-    if (r == LEGSIM_OK && st == LEGSIM_CONTACT_STUCK) {
-      // the foot stops where it is: its velocity onto the new rows (an inelastic impact)
+    if (r == LEGSIM_OK && st != LEGSIM_CONTACT_FREE) {
+      // the foot stops where it is (stuck) or on the line (sliding): its velocity onto the
+      // new rows (an inelastic impact; frictionless: a state set from outside)
       VecQ qd = d.qd;
       r = velocity_solve(s, d.dyn, qd);
       if (r == LEGSIM_OK) d.qd = qd;

@@ -172,6 +172,7 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
   out.m = m;
   out.npairs = 0;
   out.stops = false;
+  out.nslide = 0;
   return LEGSIM_OK;
 }
 

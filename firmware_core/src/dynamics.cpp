@@ -1,6 +1,8 @@
 // Accelerations and multipliers: M qdd + Phi_q^T lambda = Q, Phi_q qdd = gamma,
 // by the Schur complement (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - gamma
 // (M is diagonal, so this is the whole cost).
+#include <utility>
+
 #include "sim.hpp"
 
 namespace legsim {
@@ -23,10 +25,89 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   for (int k = 0; k < m.nq; ++k) tmp[k] = m.minv[k] * d.force_q[k];
   j_times(layout, d.rows, tmp, d.lambda);
   for (int i = 0; i < layout.m; ++i) d.lambda[i] -= d.rows.gamma[i];
-  factor_solve(d.factor, d.lambda);
+  if (layout.nslide) {
+    const legsim_status s = coupled_solve(sim, layout, q, d.lambda);
+    if (s != LEGSIM_OK) return s;
+  } else {
+    factor_solve(d.factor, d.lambda);
+  }
   jt_times(m, layout, d.rows, d.lambda, tmp);
+  if (layout.nslide) friction_add(sim, layout, q, d.lambda, -1, tmp);
   for (int k = 0; k < m.nq; ++k) qdd[k] = m.minv[k] * (d.force_q[k] - tmp[k]);
   return all_finite(qdd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+
+namespace {
+// f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
+// unit normal multiplier (the force on the foot is mu_k dir lambda_n t = -dir mu_k N t).
+void friction_column(const Sim &sim, int k, const VecQ &q, real (&f)[3]) {
+  const Model &m = sim.model;
+  const Contact &c = m.contact[k];
+  const real phi = q[3 * c.body + 2];
+  const Vec2 sp = c.point.x() * axis_u(phi) + c.point.y() * normal_n(phi);
+  const real g = real(sim.data.contact[k].slip_dir) * m.mu_k;
+  f[0] = g * m.ground_t.x();
+  f[1] = g * m.ground_t.y();
+  f[2] = g * m.ground_t.dot(perp(sp));
+}
+}  // namespace
+
+void friction_add(const Sim &sim, const Layout &layout, const VecQ &q, const VecR &lambda, real sign,
+                  VecQ &y) {
+  for (int i = 0; i < layout.nslide; ++i) {
+    const int k = layout.slide_contact[i], b = sim.model.contact[k].body;
+    real f[3];
+    friction_column(sim, k, q, f);
+    const real l = sign * lambda[layout.slide_row[i]];
+    for (int c = 0; c < 3; ++c) y[3 * b + c] += f[c] * l;
+  }
+}
+
+// M qdd = Q - J^T lambda + F E^T lambda, J qdd = gamma: (A - J M^-1 F E^T) lambda = rhs with
+// A = J M^-1 J^T. With U = -J M^-1 F: lambda = x - Z (I + E^T Z)^-1 E^T x, x = A^-1 rhs,
+// Z = A^-1 U (Woodbury). At most kMaxContacts columns: a small dense elimination.
+legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR &x) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  const int ns = layout.nslide;
+  factor_solve(d.factor, x);
+  VecR z[kMaxContacts];
+  for (int j = 0; j < ns; ++j) {
+    const int k = layout.slide_contact[j], b = m.contact[k].body;
+    real f[3];
+    friction_column(sim, k, q, f);
+    VecQ mf = VecQ::Zero();
+    for (int c = 0; c < 3; ++c) mf[3 * b + c] = -m.minv[3 * b + c] * f[c];
+    j_times(layout, d.rows, mf, z[j]);
+    factor_solve(d.factor, z[j]);
+  }
+  // C y = E^T x, C = I + E^T Z, by Gaussian elimination with partial pivoting
+  real c[kMaxContacts][kMaxContacts + 1];
+  for (int i = 0; i < ns; ++i) {
+    for (int j = 0; j < ns; ++j) c[i][j] = (i == j ? real(1) : real(0)) + z[j][layout.slide_row[i]];
+    c[i][ns] = x[layout.slide_row[i]];
+  }
+  for (int col = 0; col < ns; ++col) {
+    int piv = col;
+    for (int i = col + 1; i < ns; ++i)
+      if (std::abs(c[i][col]) > std::abs(c[piv][col])) piv = i;
+    // a vanishing pivot: friction that cancels the normal stiffness (Painleve)
+    if (!(std::abs(c[piv][col]) > real(1e-9))) return LEGSIM_ERR_CONTACT;
+    for (int j = 0; j <= ns; ++j) std::swap(c[col][j], c[piv][j]);
+    for (int i = col + 1; i < ns; ++i) {
+      const real r = c[i][col] / c[col][col];
+      for (int j = col; j <= ns; ++j) c[i][j] -= r * c[col][j];
+    }
+  }
+  real y[kMaxContacts];
+  for (int i = ns - 1; i >= 0; --i) {
+    real s = c[i][ns];
+    for (int j = i + 1; j < ns; ++j) s -= c[i][j] * y[j];
+    y[i] = s / c[i][i];
+  }
+  for (int j = 0; j < ns; ++j)
+    for (int i = 0; i < layout.m; ++i) x[i] -= z[j][i] * y[j];
+  return LEGSIM_OK;
 }
 
 void stop_forces_update(Sim &sim) {

@@ -43,14 +43,21 @@ legsim_status generalized_alpha_step(Sim &sim) {
     if (s != LEGSIM_OK) return s;
     // r = M qdd + J^T lambda - Q
     jt_times(m, lay, d.rows, lambda, res);
+    if (lay.nslide) friction_add(sim, lay, q1, lambda, -1, res);  // sliding feet's friction
     for (int k = 0; k < n; ++k) res[k] += m.mass[k] * qdd1[k] - d.force_q[k];
     // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
     VecQ tmp;
     for (int k = 0; k < n; ++k) tmp[k] = m.minv[k] * res[k];
     j_times(lay, d.rows, tmp, d.rhs);
     for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
-    factor_solve(d.factor, d.rhs);
+    if (lay.nslide) {
+      s = coupled_solve(sim, lay, q1, d.rhs);  // the friction's coupling, exactly
+      if (s != LEGSIM_OK) return s;
+    } else {
+      factor_solve(d.factor, d.rhs);
+    }
     jt_times(m, lay, d.rows, d.rhs, tmp);
+    if (lay.nslide) friction_add(sim, lay, q1, d.rhs, -1, tmp);
     real dq_max = 0;
     for (int k = 0; k < n; ++k) {
       const real dq = -m.minv[k] * (res[k] + tmp[k]) / bprime;

@@ -42,7 +42,8 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   real max_diag = 0;
   for (int i = 0; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
   if (!(max_diag > 0) || !std::isfinite(max_diag)) {
-    f.condition = real(INFINITY);
+    // no rows (a free body, e.g. a block off the ground): nothing to factor, well conditioned
+    f.condition = m == 0 ? real(1) : real(INFINITY);
     return m == 0 ? LEGSIM_OK : LEGSIM_ERR_SINGULAR;
   }
   real pmin = max_diag, pmax = 0;

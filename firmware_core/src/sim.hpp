@@ -121,6 +121,10 @@ struct Layout {
   // Its actuator rows are stroke stops (Data::stop_drivers; the actuators still
   // push) rather than drivers that replace the actuators (Data::drivers).
   bool stops;
+  // Sliding contacts (Data::dyn only): their normal row also carries the friction
+  // force mu_k lambda_n along the tangent, which makes the system non-symmetric.
+  uint8_t nslide;
+  uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
@@ -302,8 +306,13 @@ legsim_status stops_layout(Sim &sim);
 void contact_point(const Model &model, int k, const VecQ &q, const VecQ &qd, Vec2 &pos, Vec2 &vel);
 // The rows of each contact in the dynamics (stuck: 2, free: 0), for layout_build.
 void contact_rows_of_states(const Model &model, const Data &d, uint8_t *rows);
+// Lists the sliding contacts' normal rows in layout (Layout::nslide).
+void contact_slides_mark(const Model &model, const Data &d, Layout &layout);
 // N and T of the stuck contacts from the multipliers of Data::dyn (rows after the stops).
 void contact_forces_update(Sim &sim);
+// After a step: touchdown, lift-off, stick to slip, slip to stick (docs/design/robot-on-ground.md
+// section 2), each raised as an event; changed: the contact modes or the state changed.
+legsim_status contact_transitions(Sim &sim, bool &changed);
 // Every contact free (a state set or assembled from outside).
 void contacts_free(Sim &sim);
 // N and T of each contact with rows in layout, from the multipliers lambda (0 for the others).
@@ -316,6 +325,14 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
+// The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
+// generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).
+void friction_add(const Sim &sim, const Layout &layout, const VecQ &q, const VecR &lambda, real sign,
+                  VecQ &y);
+// Solves (J M^-1 J^T - J M^-1 F E^T) x = rhs in place with the factor of J M^-1 J^T (F: the
+// sliding contacts' friction columns, E: their normal rows) by the Woodbury identity: one
+// extra solve per sliding contact. LEGSIM_ERR_CONTACT when the coupled matrix is singular.
+legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR &x);
 void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
 // factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within

@@ -43,6 +43,12 @@ EVENTS = {
     "stroke_max": 1 << 1,
     "force_saturated": 1 << 2,
     "near_singular": 1 << 3,
+    "liftoff": 1 << 4,                # a foot's normal force would pull: free
+    "touchdown": 1 << 5,              # a free foot reached the ground: impulse
+    "stick_to_slip": 1 << 6,          # a stuck foot left the static friction cone
+    "slip_to_stick": 1 << 7,          # a sliding foot's velocity changed sign
+    "contact_inconsistent": 1 << 8,   # no consistent contact mode: the last one kept
+    "contact_ambiguous": 1 << 9,      # reserved: several consistent modes
 }
 """Event bits of legsim.h (``enum legsim_event``) by name."""
 
@@ -521,9 +527,10 @@ class Sim:
 
     def set_contact(self, contact: Union[int, str], state: str) -> None:
         """Sets a contact (index or name, e.g. "right.foot") "stuck" at its foot's current
-        point (on the ground line, else StateError) or "free"."""
-        if state not in ("free", "stuck"):
-            raise ValueError(f"state must be 'free' or 'stuck', not {state!r}")
+        point (on the ground line, else StateError), "sliding" (on the line and moving along
+        it: the sign of its velocity is the sliding direction) or "free"."""
+        if state not in CONTACT_STATES:
+            raise ValueError(f"state must be one of {sorted(CONTACT_STATES)}, not {state!r}")
         self._check(self.library.cdll.legsim_set_contact_state(
             self.handle, self._contact(contact), CONTACT_STATES[state]), "legsim_set_contact_state")
 

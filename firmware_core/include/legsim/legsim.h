@@ -281,9 +281,18 @@ enum legsim_event {
   LEGSIM_EVENT_STROKE_MIN = 1u << 0,      /* an actuator reached its shortest length and stopped */
   LEGSIM_EVENT_STROKE_MAX = 1u << 1,      /* an actuator reached its longest length and stopped */
   LEGSIM_EVENT_FORCE_SATURATED = 1u << 2, /* a servo asked for more than max_force */
-  LEGSIM_EVENT_NEAR_SINGULAR = 1u << 3    /* condition estimate above LEGSIM_COND_WARN, or a
+  LEGSIM_EVENT_NEAR_SINGULAR = 1u << 3,   /* condition estimate above LEGSIM_COND_WARN, or a
                                              stroke end at a dead centre, where no stop can
                                              be projected (the state is left as integrated) */
+  /* foot contacts (section 8), checked after every step: */
+  LEGSIM_EVENT_LIFTOFF = 1u << 4,         /* a stuck or sliding foot's normal force would pull: FREE */
+  LEGSIM_EVENT_TOUCHDOWN = 1u << 5,       /* a free foot reached the line: put on it, inelastic
+                                             impulse (legsim_contact.impulse_ns) */
+  LEGSIM_EVENT_STICK_TO_SLIP = 1u << 6,   /* a stuck foot's |T| left the static cone: SLIDING */
+  LEGSIM_EVENT_SLIP_TO_STICK = 1u << 7,   /* a sliding foot's velocity changed sign: STUCK */
+  LEGSIM_EVENT_CONTACT_INCONSISTENT = 1u << 8, /* no contact mode held its inequalities within
+                                             the passes of one check: the last one is kept */
+  LEGSIM_EVENT_CONTACT_AMBIGUOUS = 1u << 9 /* reserved: several consistent modes (not raised yet) */
 };
 /* Condition estimates: above WARN an event is raised; an assembly that lands
  * above SINGULAR is refused as a dead centre (LEGSIM_ERR_SINGULAR). */
@@ -412,11 +421,15 @@ legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real
 /* ---- 8. foot contact with the ground ---------------------------------------
  * A model with contacts (n_contacts > 0; a robot file) has per contact a state.
  * STUCK: two rows hold the foot point at its stick point on the ground line
- * (normal and tangential), solved with the joints in every analysis and both
- * integrators; FREE: no rows. (SLIDING is reserved for the transitions, not yet
- * made: docs/design/robot-on-ground.md.) The ground force on a foot is
- * F = N n + T t (n the line's upward normal, t its tangent). Builds with
- * LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
+ * (normal and tangential), solved with the joints in both integrators; SLIDING: the
+ * normal row, and the kinetic friction T = -mu_kinetic N sign(v_t) at the foot (the
+ * non-symmetric coupling solved exactly); FREE: no rows. The ground force on a foot is
+ * F = N n + T t (n the line's upward normal, t its tangent). After every step the
+ * modes change by the rules of docs/design/robot-on-ground.md section 2, each raised as
+ * a legsim_event (LIFTOFF, TOUCHDOWN, STICK_TO_SLIP, SLIP_TO_STICK; located to within
+ * the step) with the same all-or-nothing rule as the stroke stops; a contact problem
+ * with no usable solution fails the step with LEGSIM_ERR_CONTACT (the last good state
+ * kept). Builds with LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
 typedef enum legsim_contact_state {
   LEGSIM_CONTACT_FREE = 0,
   LEGSIM_CONTACT_STUCK = 1,
@@ -430,7 +443,8 @@ typedef struct legsim_contact {
   legsim_real friction_use;  /* |T| / N (0 when N <= 0 or free) */
   legsim_real position[2];   /* foot point, world (m) */
   legsim_real slip_mps;      /* foot velocity along the tangent (m/s) */
-  legsim_real impulse_ns[2]; /* last impact impulse (normal, tangential; N s): 0 so far */
+  legsim_real impulse_ns[2]; /* the last impulse of the ground on the foot (normal, tangential;
+                                N s): a touchdown's, or a slip to stick's */
   int32_t holds;             /* 1: the ground force is inside the static cone, N >= 0 and
                                 |T| <= mu_static N (a stuck foot the friction can hold); 0 else */
 } legsim_contact;
@@ -438,9 +452,12 @@ typedef struct legsim_contact {
 /* n_contacts entries: the state of the last solve (step, statics, assembly). */
 legsim_status legsim_contacts(const legsim_sim *sim, legsim_contact *out);
 /* Sets contact k (0 .. n_contacts - 1) STUCK at its foot's current point (which must be
- * on the ground line within the Newton tolerance, else LEGSIM_ERR_STATE) or FREE
- * (SLIDING: LEGSIM_ERR_BAD_INPUT). Solves the dynamics at the current state anew
- * (all or nothing: a set that makes the system singular changes nothing). */
+ * on the ground line within the Newton tolerance, else LEGSIM_ERR_STATE), SLIDING (on
+ * the line, and its velocity along the line |v_t| > newton_tol, whose sign is the
+ * sliding direction, else LEGSIM_ERR_STATE) or FREE; other values LEGSIM_ERR_BAD_INPUT.
+ * The foot's velocity is put onto its new rows (frictionless). Solves the dynamics at the
+ * current state anew (all or nothing: a set that makes the system singular changes
+ * nothing). */
 legsim_status legsim_set_contact_state(legsim_sim *sim, int32_t k, legsim_contact_state state);
 /* The stance: Newton from the current q (e.g. legsim_assemble_pose of a robot's
  * "stand", whose guess has the feet on the ground already) onto the joints, the
