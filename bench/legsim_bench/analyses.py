@@ -27,7 +27,14 @@ import numpy as np
 from .scene import ACTUATORS, Scene, find_root
 
 __all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
-           "robot_arrays", "robot_growth"]
+           "robot_arrays", "robot_growth", "robot_statics_reference", "EVENT_NAMES", "CONTACT_EVENTS"]
+
+# legsim.h's event bits as legsim_cli names them in a sample's "events" (JSON) and the CSV's
+# ';'-separated `events` column ("none" if none; scene_toml.cpp: kEventNames), in bit order.
+EVENT_NAMES = ("stroke_min", "stroke_max", "force_saturated", "near_singular", "liftoff", "touchdown",
+               "stick_to_slip", "slip_to_stick", "contact_inconsistent", "contact_ambiguous")
+# the contact transitions of a robot (docs/design/robot-on-ground.md section 8)
+CONTACT_EVENTS = EVENT_NAMES[4:]
 
 
 def cli_path(root: Path | None = None) -> Path:
@@ -279,7 +286,8 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
 
 def robot_arrays(out: dict) -> dict:
     """The CLI's robot samples as arrays: t, q (N, 3 nb), forces, lengths (N, na), reactions
-    (N, nj, 3), normal, tangential (N, nc), state (N, nc) names, feet (N, nc, 2), residual."""
+    (N, nj, 3), normal, tangential (N, nc), state (N, nc) names, feet (N, nc, 2), residual,
+    events (N tuples of EVENT_NAMES)."""
     d = _arrays(out)
     S, names = out["samples"], out.get("contacts", [])
 
@@ -294,6 +302,7 @@ def robot_arrays(out: dict) -> dict:
     d["state"] = np.array([[s["contacts"][c]["state"] if s.get("contacts") else "" for c in names]
                            for s in S])
     d["residual"] = np.array([num(s["residual"]) for s in S], float)
+    d["events"] = [tuple(s.get("events", ())) for s in S]
     return d
 
 
@@ -332,6 +341,50 @@ def robot_growth(model, d: dict) -> dict:
                      maxfev=20000)
     return {"predicted": (float(rates[0]), float(rates[1])),
             "measured": (float(p[1]), _cosh_rate(t, y, rates[1], extra=x ** 2))}
+
+
+def robot_statics_reference(scene: Scene):
+    """(RobotModel, RobotStatics) of a robot statics scene: the stance at its `lengths` (the
+    stand's by default), both feet stuck, the scene's statics_rule. The reference has no leg
+    force elements: a scene that sets one is refused (ValueError)."""
+    from .reference.robot import RobotModel
+    if any(any(x != 0 for x in v) for v in scene.forces.values()):
+        raise ValueError("RobotModel's statics has no leg force elements; this scene sets "
+                         + ", ".join(scene.forces))
+    model = RobotModel.from_toml(scene.model_path)
+    st = model.statics(None if scene.lengths is None else np.asarray(scene.lengths, float),
+                       gravity="gravity" not in scene.disable, rule=scene.statics_rule)
+    return model, st
+
+
+def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_checks):
+    """A robot statics scene's one sample against RobotModel.statics: the pose, the actuator
+    forces, the joint reactions, per foot N and T, and whether each foot's cone holds."""
+    from .checks import CheckResult
+    results = ev.results
+    try:
+        _, st = robot_statics_reference(scene)
+    except Exception as e:  # noqa: BLE001 - the reference's own refusal, reported as a check
+        results.append(CheckResult("reference: RobotModel.statics", False, None, None, "", "", str(e)))
+        return ev
+    acts, joints, feet = out["actuators"], out["joints"], out.get("contacts", [])
+    pose_checks(st.assembly.q[None], f"rule {scene.statics_rule}")
+    tol_check("actuator forces vs RobotModel.statics", "statics_force_n", d["forces"] - st.actuator_forces[None],
+              "N", lambda r, c: acts[c],
+              ", ".join(f"{a} {f:.3f} N" for a, f in zip(acts, d["forces"][0])))
+    dr = (d["reactions"] - st.reactions[None])[..., 0:2].reshape(1, -1)
+    tol_check("joint reaction forces vs RobotModel.statics", "statics_reaction_n", dr, "N",
+              lambda r, c: f"{joints[c // 2]}.f{'xy'[c % 2]}")
+    ground = np.concatenate([d["normal"] - st.normal[None], d["tangential"] - st.tangential[None]], axis=1)
+    tol_check("ground forces N, T per foot vs RobotModel.statics", "ground_force_n", ground, "N",
+              lambda r, c: f"{feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
+              f"N {', '.join(f'{x:.3f}' for x in d['normal'][0])}, "
+              f"T {', '.join(f'{x:+.3f}' for x in d['tangential'][0])} N")
+    holds = [s_["holds"] for s_ in (out["samples"][0]["contacts"][f] for f in feet)]
+    results.append(CheckResult("each foot's static cone holds as RobotModel's (holds)",
+                               holds == [bool(h) for h in st.holds], None, None, "", "",
+                               f"legsim {holds}, RobotModel {[bool(h) for h in st.holds]}"))
+    return ev
 
 
 def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
@@ -378,6 +431,8 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
         a = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
         pose_checks(a.q[None], f"box ({a.q[0]:.6f}, {a.q[1]:.6f}, {a.q[2]:.6f})")
         return ev
+    if scene.analysis == "statics":
+        return _robot_statics_checks(ev, scene, d, out, tol_check, pose_checks)
     try:
         model, r = robot_reference(scene, t, root)
     except ValueError as e:

@@ -334,6 +334,7 @@ class Scene:
     max_newton_iter: int = DEFAULT_OPTIONS["max_newton_iter"]
     newton_tol: float = DEFAULT_OPTIONS["newton_tol"]
     contacts: dict = field(default_factory=dict)  # [[contact]]: contact name -> "stuck" | "free"
+    statics_rule: str = "equal_friction"          # a robot's statics: legsim_statics_rule
 
     @property
     def robot(self) -> bool:
@@ -452,7 +453,7 @@ class Scene:
                 "grid": self.grid, "init": self.init, "cmd_timeout_ms": self.cmd_timeout_ms,
                 "safe_state": self.safe_state, "disable": self.disable_bits, "rho_inf": self.rho_inf,
                 "max_newton_iter": self.max_newton_iter, "newton_tol": self.newton_tol,
-                "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
+                "statics_rule": self.statics_rule, "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
                 "contacts": dict(self.contacts)}
 
     def _where(self) -> str:
@@ -464,17 +465,17 @@ class Scene:
 _TOP_KEYS = {"description", "name", "demo", "model", "variant", "analysis", "integrator",
              "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
              "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
-             "forces", "command", "contact", "inject", "checks"}
+             "forces", "command", "contact", "inject", "checks", "statics_rule"}
 # Keys of the robot's design (docs/design/robot-on-ground.md section 6) the core does not have
 # yet: refused by name with legsim_cli's words, never ignored.
 NOT_YET_KEYS = {
     "contact_law": "'contact_law' is not in this core yet (only the stuck/free contact of "
                    "docs/design/robot-on-ground.md section 8): leave it out",
-    "statics_rule": "'statics_rule' is not in this core yet (the statics of a stance on the ground is "
-                    "not made): leave it out",
     "box_load": "'box_load' is not in this core yet (the robot has no force element on the box): leave it out",
 }
 CONTACT_STATES = ("stuck", "free")
+# legsim_statics_rule: what fixes the statics of a stance on two stuck feet (legsim.h)
+STATICS_RULES = ("equal_friction", "min_tangential")
 # The keys and values of the two former schemas and what they are now (legsim_cli says the
 # same words: firmware_core/host/scene_toml.cpp).
 RENAMED_KEYS = {
@@ -493,11 +494,15 @@ ROBOT_CHECKS_FOR = {
     "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
                  "stays_put_m", "growth_rel"},
     "assembly": {"position_m", "angle_rad", "residual"},
+    "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
+                "ground_force_n"},
 }
 ROBOT_DEFAULT_CHECKS = {
     "dynamics": {"position_m": 1e-6, "angle_rad": 1e-6, "actuator_force_n": 1e-3, "ground_force_n": 1e-3,
                  "residual": 1e-8},
     "assembly": {"position_m": 1e-10, "angle_rad": 1e-10, "residual": 1e-10},
+    "statics": {"position_m": 1e-10, "angle_rad": 1e-10, "residual": 1e-10, "statics_force_n": 1e-6,
+                "statics_reaction_n": 1e-6, "ground_force_n": 1e-6},
 }
 CHECKS_FOR = {
     "dynamics": _DYN_CHECKS,
@@ -545,6 +550,13 @@ def _choice(where, key, v, options) -> str:
     if not isinstance(v, str) or v.lower() not in options:
         raise SceneError(f"{where}: {key} must be one of {', '.join(options)}, not {v!r}")
     return v.lower()
+
+
+def _rule_choice(where, v) -> str:
+    """'statics_rule' with legsim_cli's words (scene_toml.cpp: choice)."""
+    if v not in STATICS_RULES:
+        raise SceneError(f"{where}: 'statics_rule' must be {' or '.join(STATICS_RULES)} (got {v!r})")
+    return v
 
 
 def _unknown(where, d: dict, allowed) -> None:
@@ -641,9 +653,9 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
     (legsim_bench.analyses). Actuators by their prefixed names; [[contact]] initial states.
     The refusals are legsim_cli's words (scene_toml.cpp: parse_scene, bind_scene)."""
     analysis = kw["analysis"]
-    if analysis not in ("dynamics", "assembly"):
-        raise SceneError(f"{where}: {analysis} of a model with contacts is not in this core yet (its driven "
-                         "analyses do not see the feet's rows): run dynamics or assembly")
+    if analysis not in ("dynamics", "assembly", "statics"):
+        raise SceneError(f"{where}: {analysis} of a model with contacts is not in this core yet (the scenes "
+                         "drive its statics on the stance only): run dynamics, statics or assembly")
     if "inject" in d:
         raise SceneError(f"{where}: [[inject]]: a robot scene runs in legsim_cli, which has no bus")
     names = tuple(a[0] for a in info.actuators)
@@ -723,7 +735,8 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
                  disable=kw["disable"], foot_load=None, commands=tuple(cmds), injections=(), checks=checks,
                  demo=bool(d.get("demo", False)), analysis=analysis, model=kw["model_spec"], model_info=info,
                  pose_name=kw["pose_name"], forces=kw["forces"], rho_inf=kw["rho_inf"],
-                 max_newton_iter=kw["max_iter"], newton_tol=kw["newton_tol"], contacts=contacts)
+                 max_newton_iter=kw["max_iter"], newton_tol=kw["newton_tol"], contacts=contacts,
+                 statics_rule=kw["statics_rule"])
 
 
 
@@ -829,6 +842,10 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                 raise SceneError(f"{where}: lengths[{a}] = {_fmt(lengths[a])} m is outside the stroke of "
                                  f"actuator '{an}' [{_fmt(smin)}, {_fmt(smax)}]")
     only("grid", analysis == "statics_sweep", "statics_sweep")
+    only("statics_rule", analysis == "statics", "statics")
+    statics_rule = _rule_choice(where, d.get("statics_rule", "equal_friction"))
+    if "statics_rule" in d and not info.robot:
+        raise SceneError(f"{where}: 'statics_rule' applies to a model with contacts only (a stance on two feet)")
     grid = _int(where, "grid", d.get("grid", 11), 2, 1000)
     only("init", dynamics, "dynamics")
     init = _choice(where, "init", d.get("init", "zero_force"), ACTUATOR_MODES)
@@ -866,7 +883,8 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                             model_spec=model_spec, variant=variant, integrator=integrator,
                             step_ns=step_ns, n_steps=n_steps, rec=rec, pose=pose, pose_name=pose_name,
                             lengths=lengths, init=init, disable=disable, forces=forces,
-                            rho_inf=rho_inf, max_iter=max_iter, newton_tol=newton_tol)
+                            rho_inf=rho_inf, max_iter=max_iter, newton_tol=newton_tol,
+                            statics_rule=statics_rule)
     # The bench knows the leg: the DBC carries two actuators, upper and lower, and its
     # reference model the one force element foot_load.
     if act_names != ACTUATORS:

@@ -5,6 +5,7 @@ modes' rates, the servo stand stays put, and the CLI's output draws (robot_plots
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -21,7 +22,8 @@ except ImportError:  # the bench is not installed: use the source tree
 from legsim_bench.analyses import cli_path, robot_arrays, robot_growth, robot_reference  # noqa: E402
 from legsim_bench.scene import SceneError, load_scene, parse_scene  # noqa: E402
 
-ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7", "robot_both_upper"]
+ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7", "robot_both_upper",
+                "robot_stand_statics"]
 
 
 def _cli():
@@ -79,8 +81,21 @@ def test_robot_keys_are_refused_or_checked_by_both_readers():
                          "'state' must be stuck or free (got 'sliding')")]:
         with pytest.raises(SceneError, match=words.replace("(", r"\(").replace(")", r"\)")):
             parse_scene(base + text, name="t", root=ROOT)
-    with pytest.raises(SceneError, match="statics of a model with contacts is not in this core yet"):
-        parse_scene('model = "builtin:robot"\nanalysis = "statics"\n', name="t", root=ROOT)
+    for an in ("statics_sweep", "inverse_dynamics"):
+        with pytest.raises(SceneError, match=f"{an} of a model with contacts is not in this core yet"):
+            parse_scene(f'model = "builtin:robot"\nanalysis = "{an}"\nduration = 0.01\n'
+                        .replace("duration = 0.01\n", "duration = 0.01\n" if an != "statics_sweep" else ""),
+                        name="t", root=ROOT)
+    sc = parse_scene('model = "builtin:robot"\nanalysis = "statics"\nstatics_rule = "min_tangential"\n',
+                     name="t", root=ROOT)
+    assert sc.statics_rule == "min_tangential" and sc.resolved()["statics_rule"] == "min_tangential"
+    for text, words in [('analysis = "statics"\nstatics_rule = "paper"\n',
+                         "'statics_rule' must be equal_friction or min_tangential (got 'paper')"),
+                        ('duration = 0.01\nstatics_rule = "min_tangential"\n', "'statics_rule' applies to statics only")]:
+        with pytest.raises(SceneError, match=re.escape(words)):
+            parse_scene('model = "builtin:robot"\n' + text, name="t", root=ROOT)
+    with pytest.raises(SceneError, match=re.escape("'statics_rule' applies to a model with contacts only")):
+        parse_scene('analysis = "statics"\nstatics_rule = "equal_friction"\n', name="t", root=ROOT)
 
 
 def test_builtin_robot_and_the_robot_file_give_the_same_run(tmp_path):
@@ -163,3 +178,82 @@ def test_a_robot_trajectory_from_the_cli_output_draws(fig7, tmp_path):
     assert Path(png).stat().st_size > 5000 and Path(gif).stat().st_size > 5000
     with pytest.raises(ValueError, match="no sample with solved ground forces"):
         RobotTrajectory.from_cli_json(dict(out, samples=out["samples"][:1]), model.box_size)
+
+
+def test_the_bench_and_the_core_name_the_same_events():
+    """legsim_bench.analyses.EVENT_NAMES is legsim.h's bit order, as the Python binding names
+    the bits (python/legsim/sim.py EVENTS, bit k is 1 << k) and legsim_cli writes them."""
+    from legsim_bench.analyses import CONTACT_EVENTS, EVENT_NAMES
+    text = (ROOT / "python" / "legsim" / "sim.py").read_text()
+    block = text[text.index("EVENTS = {"):]
+    block = block[:block.index("}")]
+    bits = {m.group(1): int(m.group(2)) for m in re.finditer(r'"(\w+)": 1 << (\d+)', block)}
+    assert bits == {n: k for k, n in enumerate(EVENT_NAMES)}
+    assert set(CONTACT_EVENTS) == {"liftoff", "touchdown", "stick_to_slip", "slip_to_stick",
+                                   "contact_inconsistent", "contact_ambiguous"}
+    cpp = (ROOT / "firmware_core" / "host" / "scene_toml.cpp").read_text()
+    for n in EVENT_NAMES:
+        assert f'"{n}"}}' in cpp, n
+
+
+@pytest.mark.parametrize("rule", ["equal_friction", "min_tangential"])
+def test_stand_statics_through_legsim_cli_matches_robot_model(rule, tmp_path):
+    """The stand's statics on both stuck feet (legsim_statics with the scene's statics_rule)
+    against RobotModel.statics: the bench's checks pass, and the numbers are the stand's:
+    326.539 N upper, 1.387 N lower per leg, N = 158.922 N per foot (half the weight), T = 0 by
+    symmetry under either rule, both feet held by their cones."""
+    from legsim_bench.checks import evaluate
+    from legsim_bench.runner import record
+    _cli()
+    text = (ROOT / "scenes" / "robot_stand_statics.toml").read_text()
+    p = tmp_path / f"stand_{rule}.toml"
+    p.write_text(text.replace('model = "../models/robot.toml"', f'model = "{ROOT / "models" / "robot.toml"}"')
+                 .replace('statics_rule = "equal_friction"', f'statics_rule = "{rule}"'))
+    sc = load_scene(p, ROOT)
+    assert sc.robot and sc.analysis == "statics" and sc.statics_rule == rule
+    rec = record(sc, link=None)
+    assert rec["complete"] and rec["runner"] == "legsim_cli", rec["errors"]
+    ev = evaluate(rec, ROOT)
+    assert ev.passed, [(r.name, r.value, r.detail) for r in ev.results if not r.passed]
+    names = {r.name for r in ev.results}
+    assert {"actuator forces vs RobotModel.statics", "ground forces N, T per foot vs RobotModel.statics",
+            "joint reaction forces vs RobotModel.statics"} <= names
+    out = rec["cli_output"]
+    d = robot_arrays(out)
+    assert d["forces"][0] == pytest.approx([326.539, 1.387, 326.539, 1.387], abs=1e-3)
+    assert d["normal"][0] == pytest.approx([158.922, 158.922], abs=1e-3)
+    assert np.max(np.abs(d["tangential"][0])) < 1e-9
+    assert [out["samples"][0]["contacts"][f]["holds"] for f in out["contacts"]] == [True, True]
+    assert list(d["state"][0]) == ["stuck", "stuck"]
+
+
+def test_the_two_rules_differ_on_a_slope(tmp_path):
+    """On flat ground under gravity alone the feet carry no net tangential load and both rules
+    give T = 0; on a slope (scenes/models/robot_slope_stand.toml, 0.15 rad) the weight's
+    component along the line, W sin(slope), is shared by the indeterminate pair: equal_friction
+    gives T_R/N_R = T_L/N_L, min_tangential T_R = T_L. legsim_cli matches RobotModel under each,
+    the two differ, and N does not depend on the rule."""
+    from legsim_bench.analyses import robot_statics_reference
+    _cli()
+    model = ROOT / "scenes" / "models" / "robot_slope_stand.toml"
+    got = {}
+    for rule in ("equal_friction", "min_tangential"):
+        p = tmp_path / f"{rule}.toml"
+        p.write_text(f'model = "{model}"\nanalysis = "statics"\nstatics_rule = "{rule}"\n')
+        r = subprocess.run([str(_cli()), str(p)], capture_output=True, text=True, timeout=60)
+        assert r.returncode == 0, r.stderr
+        d = robot_arrays(json.loads(r.stdout))
+        _, st = robot_statics_reference(load_scene(p, ROOT))
+        assert d["normal"][0] == pytest.approx(st.normal, abs=1e-6)
+        assert d["tangential"][0] == pytest.approx(st.tangential, abs=1e-6)
+        assert d["forces"][0] == pytest.approx(st.actuator_forces, abs=1e-6)
+        got[rule] = d
+    ef, mt = got["equal_friction"], got["min_tangential"]
+    W = 2 * 158.922   # the robot's weight (N)
+    for d in (ef, mt):   # the line's balance: the feet carry the weight's components
+        assert np.sum(d["normal"][0]) == pytest.approx(W * math.cos(0.15), rel=1e-9)
+        assert abs(np.sum(d["tangential"][0])) == pytest.approx(W * math.sin(0.15), rel=1e-9)
+    assert ef["tangential"][0, 0] / ef["normal"][0, 0] == pytest.approx(ef["tangential"][0, 1] / ef["normal"][0, 1])
+    assert mt["tangential"][0, 0] == pytest.approx(mt["tangential"][0, 1])
+    assert abs(ef["tangential"][0, 0] - mt["tangential"][0, 0]) > 1e-2
+    assert ef["normal"][0] == pytest.approx(mt["normal"][0], abs=1e-9)

@@ -106,7 +106,8 @@ def check_good(cli, scene, outdir):
             if robot:
                 check(s["foot"] is None and set(s["contacts"]) == set(contacts), f"{name}: contacts by name")
                 for c, v in s["contacts"].items():
-                    check(set(v) == {"state", *CONTACT_NUMBERS}, f"{name}: contact {c} keys")
+                    check(set(v) == {"state", *CONTACT_NUMBERS, "holds"}, f"{name}: contact {c} keys")
+                    check(v["holds"] in (None, True, False), f"{name}: contact {c} holds")
                     check(v["state"] in ("free", "stuck", "sliding"), f"{name}: contact {c} state")
                     check(all(v[k] is None or math.isfinite(v[k]) for k in CONTACT_NUMBERS),
                           f"{name}: contact {c} numbers")
@@ -131,11 +132,13 @@ def check_good(cli, scene, outdir):
     want = ["t"] + [f"{b}.{c}" for b in bodies for c in ("x", "y", "phi")] + \
         [f"{a}.{k}" for a in acts for k in ("length", "rate", "force")] + \
         [f"{j}.{k}" for j in joints for k in ("fx", "fy", "moment")] + \
-        ([f"{c}.{k}" for c in contacts for k in ("state", *CONTACT_NUMBERS)] if robot else ["foot.x", "foot.y"]) + \
-        ["residual", "status"]
+        ([f"{c}.{k}" for c in contacts for k in ("state", *CONTACT_NUMBERS, "holds")] if robot else ["foot.x", "foot.y"]) + \
+        ["residual", "events", "status"]
     check(header == want, f"{name}: CSV header {header}")
     for row, s in zip(rows, samples):
         check(row["status"] == "ok", f"{name}: CSV status {row['status']}")
+        check((row["events"].split(";") if row["events"] != "none" else []) == s["events"],
+              f"{name}: CSV events {row['events']!r} vs JSON {s['events']}")
         check(float(row["t"]) == s["t"], f"{name}: CSV t")
         b0 = bodies[0]
         check(float(row[f"{b0}.phi"]) == s["q"][b0]["phi"], f"{name}: CSV and JSON disagree")
