@@ -27,7 +27,8 @@ import numpy as np
 from .scene import ACTUATORS, Scene, find_root
 
 __all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
-           "robot_arrays", "robot_growth", "robot_statics_reference", "EVENT_NAMES", "CONTACT_EVENTS"]
+           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_slip_starts", "EVENT_NAMES",
+           "CONTACT_EVENTS"]
 
 # legsim.h's event bits as legsim_cli names them in a sample's "events" (JSON) and the CSV's
 # ';'-separated `events` column ("none" if none; scene_toml.cpp: kEventNames), in bit order.
@@ -387,6 +388,32 @@ def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_
     return ev
 
 
+def robot_slip_starts(d: dict, k: int) -> list[float]:
+    """The times of the samples at which contact k went from stuck to sliding with the
+    core's stick_to_slip event among the sample's events (robot_arrays' d)."""
+    st = d["state"][:, k]
+    return [float(d["t"][i]) for i in range(1, len(st))
+            if st[i - 1] == "stuck" and st[i] == "sliding" and "stick_to_slip" in d["events"][i]]
+
+
+def _robot_slip_checks(ev, slips, d: dict, feet):
+    """[checks] slips: each listed foot goes from stuck to sliding with STICK_TO_SLIP; the
+    others stay stuck throughout."""
+    from .checks import CheckResult
+    for k, f in enumerate(feet):
+        if f in slips:
+            starts = robot_slip_starts(d, k)
+            ev.results.append(CheckResult(f"{f} slips: stuck to sliding with stick_to_slip", bool(starts),
+                                          float(len(starts)), None, "times", "",
+                                          f"at t = {', '.join(f'{x:g}' for x in starts) or 'never'} s; "
+                                          f"state at the end {d['state'][-1, k]}"))
+        else:
+            stuck = bool(np.all(d["state"][:, k] == "stuck"))
+            ev.results.append(CheckResult(f"{f} stays stuck throughout", stuck, None, None, "", "",
+                                          f"states: {', '.join(sorted(set(d['state'][:, k])))}"))
+    return ev
+
+
 def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     """The checks of a robot scene run in legsim_cli against RobotModel (an Evaluation)."""
     from .checks import CheckResult, Evaluation
@@ -433,6 +460,10 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
         return ev
     if scene.analysis == "statics":
         return _robot_statics_checks(ev, scene, d, out, tol_check, pose_checks)
+    if ch.slips is not None:
+        tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
+                  lambda r, c: where_t(r))
+        return _robot_slip_checks(ev, ch.slips, d, feet)
     try:
         model, r = robot_reference(scene, t, root)
     except ValueError as e:

@@ -242,6 +242,7 @@ class Checks:
     growth_rel: float | None = None
     compare: str = "all"               # "all" | "until_stroke": reference window
     stroke: StrokeCheck | None = None
+    slips: tuple[str, ...] | None = None   # a robot: the feet that must go from stuck to sliding
     resolution_ratio: float = 0.1      # float32 quantum of a signal <= ratio * its tolerance
 
     def tolerances(self) -> dict[str, float]:
@@ -492,7 +493,7 @@ _DYN_CHECKS = (set(CHECK_KEYS) - set(ROBOT_CHECK_KEYS)) | {"compare", "stroke", 
 # a robot scene (legsim_cli against RobotModel, legsim_bench.analyses)
 ROBOT_CHECKS_FOR = {
     "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
-                 "stays_put_m", "growth_rel"},
+                 "stays_put_m", "growth_rel", "slips"},
     "assembly": {"position_m", "angle_rad", "residual"},
     "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
                 "ground_force_n"},
@@ -724,7 +725,21 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
     if not isinstance(ch, dict):
         raise SceneError(f"{where}: [checks] must be a table")
     _unknown(f"{where} [checks] (robot {analysis})", ch, ROBOT_CHECKS_FOR[analysis])
-    checks = Checks(**{k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch})
+    slips = None
+    if "slips" in ch:
+        # the feet that must slip (stick_to_slip): RobotModel's stance on stuck feet is then
+        # no reference, and the checks against it do not apply
+        slips = ch["slips"]
+        if not isinstance(slips, list) or not all(isinstance(x, str) and x in info.contacts for x in slips):
+            raise SceneError(f"{where} [checks]: 'slips' must be a list of the model's contacts "
+                             f"({', '.join(info.contacts)})")
+        against = sorted(k for k in ch if k not in ("slips", "residual"))
+        if against:
+            raise SceneError(f"{where} [checks]: {', '.join(against)} compare with RobotModel's stance on "
+                             "stuck feet, which 'slips' leaves: leave them out")
+        slips = tuple(slips)
+    checks = Checks(**{k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch},
+                    slips=slips)
     if not checks.tolerances():
         raise SceneError(f"{where}: [checks] names nothing to check")
     return Scene(name=kw["sname"], description=str(d.get("description", "")), path=path, source=text,

@@ -23,7 +23,7 @@ from legsim_bench.analyses import cli_path, robot_arrays, robot_growth, robot_re
 from legsim_bench.scene import SceneError, load_scene, parse_scene  # noqa: E402
 
 ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7", "robot_both_upper",
-                "robot_stand_statics"]
+                "robot_stand_statics", "robot_slope_stand", "robot_slope_slide"]
 
 
 def _cli():
@@ -257,3 +257,59 @@ def test_the_two_rules_differ_on_a_slope(tmp_path):
     assert mt["tangential"][0, 0] == pytest.approx(mt["tangential"][0, 1])
     assert abs(ef["tangential"][0, 0] - mt["tangential"][0, 0]) > 1e-2
     assert ef["normal"][0] == pytest.approx(mt["normal"][0], abs=1e-9)
+
+
+def _bench(name):
+    from legsim_bench.checks import evaluate
+    from legsim_bench.runner import record
+    _cli()
+    sc = load_scene(name, ROOT)
+    rec = record(sc, link=None)
+    assert rec["complete"], rec["errors"]
+    return sc, rec["cli_output"], evaluate(rec, ROOT)
+
+
+def test_on_a_slope_the_feet_hold_where_mu_static_exceeds_its_tangent():
+    """0.15 rad, mu_static 0.6 > tan 0.15: both feet stay stuck for 0.5 s, no contact event,
+    while the box leans 41 mm downhill; the run matches RobotModel on the same slope (1e-9)."""
+    sc, out, ev = _bench("robot_slope_stand")
+    assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]
+    assert out["ground"]["slope"] == 0.15 and out["ground"]["mu_static"] == 0.6
+    d = robot_arrays(out)
+    assert np.all(d["state"] == "stuck") and not any(d["events"])
+    assert np.max(np.abs(d["feet"] - d["feet"][0])) < 1e-12
+    use = np.abs(d["tangential"][1:]) / d["normal"][1:]
+    assert 0.151 < np.max(use) < 0.6                      # more than the slope's tangent, held
+    assert d["q"][-1, 0] - d["q"][0, 0] < -0.03
+
+
+def test_on_a_slope_the_feet_slide_where_mu_static_is_below_its_tangent():
+    """0.15 rad, mu_static 0.12 < tan 0.15: both feet go from stuck to sliding with the core's
+    stick_to_slip (the bench's 'slips' check); while sliding |T| = mu_kinetic N against the
+    slip; a scene whose feet are listed in 'slips' but stay stuck fails the check."""
+    sc, out, ev = _bench("robot_slope_slide")
+    assert sc.checks.slips == ("right.foot", "left.foot")
+    assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]
+    d = robot_arrays(out)
+    from legsim_bench.analyses import robot_slip_starts
+    assert robot_slip_starts(d, 0) and robot_slip_starts(d, 1)
+    assert any("stick_to_slip" in e for e in d["events"])
+    sliding = d["state"] == "sliding"
+    slip = np.array([[s["contacts"][c]["slip"] for c in out["contacts"]] for s in out["samples"]])
+    T, N = d["tangential"][sliding], d["normal"][sliding]
+    assert T == pytest.approx(-0.10 * N * np.sign(slip[sliding]), rel=1e-9)
+    # the same checks on the stand's run (feet stuck) fail: the check sees the states
+    from legsim_bench.analyses import _robot_slip_checks
+    from legsim_bench.checks import Evaluation
+    stand = robot_arrays(_bench("robot_slope_stand")[1])
+    ev2 = _robot_slip_checks(Evaluation(sc, {}, []), sc.checks.slips, stand, out["contacts"])
+    assert not any(r.passed for r in ev2.results)
+
+
+def test_slips_leaves_the_stuck_reference_and_is_checked_by_the_reader():
+    base = ('model = "builtin:robot"\nduration = 0.01\n[checks]\nresidual = 1e-8\n')
+    assert parse_scene(base + 'slips = ["left.foot"]\n', name="t", root=ROOT).checks.slips == ("left.foot",)
+    with pytest.raises(SceneError, match="'slips' must be a list of the model's contacts"):
+        parse_scene(base + 'slips = ["middle.foot"]\n', name="t", root=ROOT)
+    with pytest.raises(SceneError, match="position_m compare with RobotModel's stance"):
+        parse_scene(base + 'slips = ["left.foot"]\nposition_m = 1e-6\n', name="t", root=ROOT)
