@@ -6,7 +6,7 @@
 // signalfd, sent by a POSIX timer at a chosen moment (whatever the loop is doing then) or
 // by the bus when the test's last answer goes out.
 //
-// Tolerance: a heartbeat gap may exceed the 100 ms period by kSlackMs = 50 ms, not counting
+// Tolerance: a heartbeat gap may exceed the 100 ms period by kSlackMs = 200 ms, not counting
 // the time the loop's thread spent runnable but waiting for a CPU (its run_delay in
 // /proc/thread-self/schedstat): that time is the machine's, not the loop's. On a shared
 // machine (2 cores, several builds and tests at once, CPU pressure ~90 %) a runnable
@@ -14,7 +14,10 @@
 // slice (~1 ms) and one frame's work. The work asked for is sized in CPU time (0.6 s for
 // the long STEP, 100 x 6 ms for the queue), so a loop that kept silent during it would show
 // a gap of at least 600 ms (resp. ~6 ms per frame times the frames per wake-up) of its own
-// time however loaded the machine is. The figures printed give both.
+// time however loaded the machine is, and a queue worked without heartbeats would show
+// 64 frames x 6 ms = 384 ms: both stay beyond period + slack (300 ms), while the slack
+// absorbs what the run_delay accounting misses on a loaded machine (a 155 ms wall gap was
+// seen once with 50 ms of slack). The figures printed give both.
 #include <algorithm>
 #include <cerrno>
 #include <chrono>
@@ -55,7 +58,7 @@ int g_failed = 0, g_passed = 0;
   } while (0)
 
 constexpr int64_t kPeriodMs = 100;  // hil_sim's default heartbeat
-constexpr int64_t kSlackMs = 50;    // see the top of the file
+constexpr int64_t kSlackMs = 200;   // see the top of the file
 
 int64_t mono_ns() {
   struct timespec ts;
