@@ -39,6 +39,7 @@
 #include "protocol.h"
 #include "run_loop.h"
 #include "session.h"
+#include "test_support.hpp"
 
 extern "C" {
 #include "legsim_can.h"
@@ -46,16 +47,7 @@ extern "C" {
 
 namespace {
 
-int g_failed = 0, g_passed = 0;
-#define CHECK(cond)                                                                  \
-  do {                                                                               \
-    if (cond) {                                                                      \
-      ++g_passed;                                                                    \
-    } else {                                                                         \
-      ++g_failed;                                                                    \
-      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-    }                                                                                \
-  } while (0)
+using namespace hil_test;
 
 constexpr int64_t kPeriodMs = 100;  // hil_sim's default heartbeat
 constexpr int64_t kSlackMs = 200;   // see the top of the file
@@ -118,34 +110,11 @@ class MemoryBus : public hil::Bus {
 
 // ---- frames --------------------------------------------------------------------------
 
-hil::Frame control_frame(const legsim_can_control_t &m) {
-  hil::Frame f;
-  f.id = LEGSIM_CAN_CONTROL_FRAME_ID;
-  f.fd = true;
-  f.len = 64;
-  legsim_can_control_pack(f.data, &m, 64);
-  return f;
-}
-legsim_can_control_t control(uint32_t seq, uint8_t command) {
-  legsim_can_control_t m;
-  legsim_can_control_init(&m);
-  m.ctrl_seq = seq;
-  m.ctrl_command = command;
-  m.ctrl_step_size = 1000000;
-  m.ctrl_n_steps = 1;
-  m.ctrl_rt_steps_per_tick = 1;
-  return m;
-}
 // RESET with zero force and no command timeout: the leg falls freely.
 hil::Frame reset(uint32_t seq) {
   legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
   m.ctrl_cmd_timeout = 65535;
-  return control_frame(m);
-}
-hil::Frame step(uint32_t seq, uint32_t n) {
-  legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE);
-  m.ctrl_n_steps = n;
-  return control_frame(m);
+  return pack(m);
 }
 
 bool is_status(const hil::Frame &f, uint32_t ctrl_seq) {
@@ -177,26 +146,13 @@ bool same_frames(const std::vector<hil::Frame> &a, const std::vector<hil::Frame>
 
 // ---- rigs ----------------------------------------------------------------------------
 
-class Recorder : public hil::FrameSink {
- public:
-  bool send(const hil::Frame &f) override {
-    frames.push_back(f);
-    return true;
-  }
-  std::vector<hil::Frame> frames;
-};
-
 // The controller alone, every STEP in one go: the reference for the loop's answers.
 struct Reference {
   hil::Session session;
   Recorder rec;
   hil::Controller ctl{session, rec, hil::ControllerConfig{}};
   Reference() {
-    std::string err;
-    if (!session.init(&err)) {
-      std::fprintf(stderr, "session init: %s\n", err.c_str());
-      std::exit(1);
-    }
+    init_or_exit(session);
   }
   void feed(const hil::Frame &f) {
     ctl.on_frame(f, 0);
@@ -213,11 +169,7 @@ struct LoopRig {
   int sfd = -1;
   int64_t kill_ns = 0;
   LoopRig() {
-    std::string err;
-    if (!session.init(&err)) {
-      std::fprintf(stderr, "session init: %s\n", err.c_str());
-      std::exit(1);
-    }
+    init_or_exit(session);
     sigset_t mask;
     sigemptyset(&mask);
     sigaddset(&mask, SIGTERM);
@@ -494,11 +446,11 @@ void test_realtime_long_tick() {
   m.ctrl_cmd_timeout = 65535;
   m.ctrl_step_size = 10000000;  // 10 ms
   m.ctrl_disable = 3;           // no gravity, no force elements: the leg rests
-  rig.bus.push(control_frame(m));
+  rig.bus.push(pack(m));
   m = control(2, LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_RT_CHOICE);
   m.ctrl_rt_steps_per_tick = 100;  // one tick per second
   m.ctrl_rt_decimation = 1;
-  rig.bus.push(control_frame(m));
+  rig.bus.push(pack(m));
   int64_t rt_begin = 0;
   rig.bus.on_send = [&](const Sent &s) {
     if (is_status(s.frame, 2) && rt_begin == 0) {
@@ -535,6 +487,5 @@ int main() {
   test_step_queue(sps);
   test_sigterm_mid_step();
   test_realtime_long_tick();
-  std::printf("%d passed, %d failed\n", g_passed, g_failed);
-  return g_failed == 0 ? 0 : 1;
+  return report();
 }

@@ -12,6 +12,7 @@
 #include "controller.h"
 #include "protocol.h"
 #include "session.h"
+#include "test_support.hpp"
 
 extern "C" {
 #include "legsim_can.h"
@@ -20,63 +21,12 @@ extern "C" {
 
 namespace {
 
-int g_failed = 0, g_passed = 0;
-#define CHECK(cond)                                                          \
-  do {                                                                       \
-    if (cond) {                                                              \
-      ++g_passed;                                                            \
-    } else {                                                                 \
-      ++g_failed;                                                            \
-      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-    }                                                                        \
-  } while (0)
+using namespace hil_test;
 
-class Recorder : public hil::FrameSink {
- public:
-  bool send(const hil::Frame &f) override {
-    frames.push_back(f);
-    return true;
-  }
-  std::vector<hil::Frame> frames;
-  std::vector<hil::Frame> take() {
-    std::vector<hil::Frame> out;
-    out.swap(frames);
-    return out;
-  }
-};
-
-hil::Frame fd_frame(uint32_t id) {
-  hil::Frame f;
-  f.id = id;
-  f.fd = true;
-  f.len = 64;
-  return f;
-}
-
-legsim_can_control_t control(uint32_t seq, uint8_t command) {
-  legsim_can_control_t m;
-  legsim_can_control_init(&m);
-  m.ctrl_seq = seq;
-  m.ctrl_command = command;
-  m.ctrl_step_size = 1000000;
-  m.ctrl_n_steps = 1;
-  m.ctrl_rt_steps_per_tick = 1;
-  return m;
-}
-hil::Frame pack(const legsim_can_control_t &m) {
-  hil::Frame f = fd_frame(LEGSIM_CAN_CONTROL_FRAME_ID);
-  legsim_can_control_pack(f.data, &m, 64);
-  return f;
-}
 hil::Frame reset(uint32_t seq, int variant = 0, uint8_t act_init = 0) {
   legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
   m.ctrl_variant = static_cast<uint8_t>(variant);
   m.ctrl_act_init = act_init;
-  return pack(m);
-}
-hil::Frame step(uint32_t seq, uint32_t n) {
-  legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE);
-  m.ctrl_n_steps = n;
   return pack(m);
 }
 hil::Frame act(uint32_t seq, uint8_t mode_u, float sp_u, uint8_t mode_l = 0, float sp_l = 0) {
@@ -92,22 +42,10 @@ hil::Frame act(uint32_t seq, uint8_t mode_u, float sp_u, uint8_t mode_l = 0, flo
   return f;
 }
 
-const hil::Frame *find(const std::vector<hil::Frame> &v, uint32_t id) {
-  for (const auto &f : v)
-    if (f.id == id) return &f;
-  return nullptr;
-}
 int count(const std::vector<hil::Frame> &v, uint32_t id) {
   int n = 0;
   for (const auto &f : v) n += f.id == id;
   return n;
-}
-legsim_can_fault_t fault_of(const std::vector<hil::Frame> &v) {
-  legsim_can_fault_t m;
-  legsim_can_fault_init(&m);
-  if (const hil::Frame *f = find(v, LEGSIM_CAN_FAULT_FRAME_ID))
-    legsim_can_fault_unpack(&m, f->data, f->len);
-  return m;
 }
 legsim_can_st_status_t status_of(const std::vector<hil::Frame> &v) {
   legsim_can_st_status_t m;
@@ -130,11 +68,7 @@ struct Rig {
   Recorder rec;
   hil::Controller ctl;
   explicit Rig(hil::ControllerConfig cfg = {}) : ctl(session, rec, cfg) {
-    std::string err;
-    if (!session.init(&err)) {
-      std::fprintf(stderr, "session init: %s\n", err.c_str());
-      std::exit(1);
-    }
+    init_or_exit(session);
   }
   // The frame, and the STEP it starts worked to its end in one go.
   std::vector<hil::Frame> feed(const hil::Frame &f, int64_t now_ns = 0) {
@@ -567,6 +501,5 @@ int main() {
   test_slicing_changes_nothing();
   test_shutdown_mid_step();
   test_fuzz();
-  std::printf("%d passed, %d failed\n", g_passed, g_failed);
-  return g_failed == 0 ? 0 : 1;
+  return report();
 }

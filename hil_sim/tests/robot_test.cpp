@@ -16,6 +16,7 @@
 #include "controller.h"
 #include "protocol.h"
 #include "session.h"
+#include "test_support.hpp"
 #include "legsim/models.h"
 #include "legsim/robot_models.h"
 
@@ -26,64 +27,17 @@ extern "C" {
 
 namespace {
 
-int g_failed = 0, g_passed = 0;
-#define CHECK(cond)                                                                  \
-  do {                                                                               \
-    if (cond) {                                                                      \
-      ++g_passed;                                                                    \
-    } else {                                                                         \
-      ++g_failed;                                                                    \
-      std::fprintf(stderr, "%s:%d: CHECK failed: %s\n", __FILE__, __LINE__, #cond); \
-    }                                                                                \
-  } while (0)
+using namespace hil_test;
 
-class Recorder : public hil::FrameSink {
- public:
-  bool send(const hil::Frame &f) override {
-    frames.push_back(f);
-    return true;
-  }
-  std::vector<hil::Frame> frames;
-  std::vector<hil::Frame> take() {
-    std::vector<hil::Frame> out;
-    out.swap(frames);
-    return out;
-  }
-};
-
-hil::Frame fd_frame(uint32_t id) {
-  hil::Frame f;
-  f.id = id;
-  f.fd = true;
-  f.len = 64;
-  return f;
-}
-
-legsim_can_control_t control(uint32_t seq, uint8_t command) {
-  legsim_can_control_t m;
-  legsim_can_control_init(&m);
-  m.ctrl_seq = seq;
-  m.ctrl_command = command;
-  m.ctrl_step_size = 1000000;
-  m.ctrl_n_steps = 1;
-  m.ctrl_rt_steps_per_tick = 1;
-  m.ctrl_cmd_timeout = 65535;  // none: the runs below are longer than 100 ms
+// No command timeout: the runs below are longer than 100 ms (read at RESET only).
+legsim_can_control_t untimed(legsim_can_control_t m) {
+  m.ctrl_cmd_timeout = 65535;
   return m;
 }
-hil::Frame pack(const legsim_can_control_t &m) {
-  hil::Frame f = fd_frame(LEGSIM_CAN_CONTROL_FRAME_ID);
-  legsim_can_control_pack(f.data, &m, 64);
-  return f;
-}
 hil::Frame reset(uint32_t seq, uint8_t act_init = 1, int variant = 0) {
-  legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  legsim_can_control_t m = untimed(control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE));
   m.ctrl_act_init = act_init;
   m.ctrl_variant = static_cast<uint8_t>(variant);
-  return pack(m);
-}
-hil::Frame step(uint32_t seq, uint32_t n) {
-  legsim_can_control_t m = control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE);
-  m.ctrl_n_steps = n;
   return pack(m);
 }
 template <typename Msg>
@@ -123,29 +77,13 @@ hil::Frame load_l1(uint32_t seq, uint8_t index, float fx, float fy) {
   return f;
 }
 
-const hil::Frame *find(const std::vector<hil::Frame> &v, uint32_t id) {
-  for (const auto &f : v)
-    if (f.id == id) return &f;
-  return nullptr;
-}
-legsim_can_fault_t fault_of(const std::vector<hil::Frame> &v) {
-  legsim_can_fault_t m;
-  legsim_can_fault_init(&m);
-  if (const hil::Frame *f = find(v, LEGSIM_CAN_FAULT_FRAME_ID))
-    legsim_can_fault_unpack(&m, f->data, f->len);
-  return m;
-}
 
 struct Rig {
   hil::Session session;
   Recorder rec;
   hil::Controller ctl;
   Rig() : ctl(session, rec, hil::ControllerConfig{}) {
-    std::string err;
-    if (!session.init(&err)) {
-      std::fprintf(stderr, "session init: %s\n", err.c_str());
-      std::exit(1);
-    }
+    init_or_exit(session);
   }
   std::vector<hil::Frame> feed(const hil::Frame &f, uint64_t slice = 0) {
     ctl.on_frame(f, 0);
@@ -443,7 +381,7 @@ void test_bad_leg1_frames() {
 // RESET with the four lengths: the robot assembled on the ground at them.
 void test_reset_with_lengths() {
   Rig r;
-  legsim_can_control_t m = control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  legsim_can_control_t m = untimed(control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE));
   m.ctrl_use_lengths = 1;
   m.ctrl_length_upper = 0.62f;
   m.ctrl_length_lower = 0.52f;
@@ -500,6 +438,5 @@ int main() {
   test_bad_leg1_frames();
   test_reset_with_lengths();
   test_one_leg_refuses_leg1_frames();
-  std::printf("%d passed, %d failed\n", g_passed, g_failed);
-  return g_failed == 0 ? 0 : 1;
+  return report();
 }
