@@ -8,19 +8,12 @@ it is not built.
 """
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-if importlib.util.find_spec("legsim_bench") is None:
-    sys.path.insert(0, str(ROOT / "bench"))
-
-import legsim  # noqa: E402
-from legsim_bench import core as lc  # noqa: E402
+import legsim
+from legsim_bench import core as lc
+from model_files import LEG_TOML
 
 if not legsim.library_available("double"):
     pytest.skip("liblegsim.so is not built (cmake --build build/host, or set LEGSIM_LIB_DIR)",
@@ -37,7 +30,7 @@ def stand(**kw) -> legsim.Sim:
 
 def test_reactions_against_the_reference_model():
     from legsim_bench.reference import ForceCommand, LegModel
-    m = LegModel.from_toml(str(ROOT / "models" / "leg.toml"))
+    m = LegModel.from_toml(str(LEG_TOML))
     r = m.simulate(0.1, t_eval=[0.0, 0.1], actuators=[ForceCommand(50.0), ForceCommand(0.0)],
                    rtol=1e-12, atol=1e-12)
     s = stand(integrator="rk4", step=1e-3, newton_tol=1e-13)

@@ -7,44 +7,26 @@ lengths and joint ends; arrows against (T, N) rotated by the slope; the GIF's
 frames and size through Pillow.
 """
 import math
-import sys
-import tomllib
 from dataclasses import replace
-from pathlib import Path
 
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-try:
-    import legsim_bench  # noqa: F401
-except ImportError:  # the bench is not installed: use the source tree
-    sys.path.insert(0, str(ROOT / "bench"))
-
-from legsim_bench import robot_plots as rp  # noqa: E402
-from legsim_bench.reference import LengthCommand, n, u  # noqa: E402
-from legsim_bench.reference.robot import RobotModel  # noqa: E402
-
-ROBOT = ROOT / "models" / "robot.toml"
-DATA = tomllib.loads(ROBOT.read_text())
-LEG = tomllib.loads((ROOT / "models" / "leg.toml").read_text())
+from legsim_bench import robot_plots as rp
+from legsim_bench.reference import LengthCommand, n, u
+from model_files import DATA, LEG
 
 
 @pytest.fixture(scope="module")
-def model():
-    return RobotModel.from_toml(ROBOT)
-
-
-@pytest.fixture(scope="module")
-def run(model):
+def run(robot):
     """A short servo-held run from the stand (it sags a little: the stand is not the servo equilibrium)."""
-    servo = [LengthCommand(float(x)) for x in model.stand_lengths()]
-    return model.simulate(0.02, t_eval=np.linspace(0.0, 0.02, 26), actuators=servo)
+    servo = [LengthCommand(float(x)) for x in robot.stand_lengths()]
+    return robot.simulate(0.02, t_eval=np.linspace(0.0, 0.02, 26), actuators=servo)
 
 
 @pytest.fixture(scope="module")
-def traj(model, run):
-    return rp.RobotTrajectory.from_reference(model, run, title="test")
+def traj(robot, run):
+    return rp.RobotTrajectory.from_reference(robot, run, title="test")
 
 
 @pytest.fixture()
@@ -67,9 +49,9 @@ def tilted(traj, box_phi=0.7, slope=0.3):
 
 
 # ------------------------------------------------------------ the trajectory
-def test_from_reference_round_trips_shapes_and_names(model, run, traj):
+def test_from_reference_round_trips_shapes_and_names(robot, run, traj):
     N = len(run.t)
-    assert traj.body_names == model.body_names and len(traj.body_names) == 13
+    assert traj.body_names == robot.body_names and len(traj.body_names) == 13
     assert traj.body_names[traj.box] == DATA["box"]["name"]
     assert traj.foot_names == ["right.foot", "left.foot"]
     assert traj.q.shape == (N, 13, 3) and np.array_equal(traj.q.reshape(N, -1), run.q)

@@ -10,32 +10,15 @@ integration and the matrix formulas.
 """
 import copy
 import math
-import sys
-import tomllib
-from pathlib import Path
 
 import numpy as np
 import pytest
 from scipy.integrate import solve_ivp
 
-ROOT = Path(__file__).resolve().parents[2]
-try:
-    import legsim_bench.reference  # noqa: F401
-except ImportError:  # the bench is not installed: use the source tree
-    sys.path.insert(0, str(ROOT / "bench"))
-
-from legsim_bench.reference import ForceCommand, LengthCommand, n, u  # noqa: E402
-from legsim_bench.reference import contact_analytic as ca  # noqa: E402
-from legsim_bench.reference.robot import RobotModel  # noqa: E402
-
-ROBOT = ROOT / "models" / "robot.toml"
-DATA = tomllib.loads(ROBOT.read_text())
-LEG = tomllib.loads((ROOT / "models" / "leg.toml").read_text())
-
-
-@pytest.fixture(scope="module")
-def robot():
-    return RobotModel.from_toml(ROBOT)
+from legsim_bench.reference import ForceCommand, LengthCommand, n, u
+from legsim_bench.reference import contact_analytic as ca
+from legsim_bench.reference.robot import RobotModel
+from model_files import DATA, LEG, ROBOT
 
 
 def robot_with(**ground):

@@ -17,19 +17,11 @@ that reason, only if they are not built.
 """
 from __future__ import annotations
 
-import importlib.util
-import sys
-from pathlib import Path
-
 import numpy as np
 import pytest
 
-ROOT = Path(__file__).resolve().parents[2]
-if importlib.util.find_spec("legsim_bench") is None:
-    sys.path.insert(0, str(ROOT / "bench"))
-
-import legsim  # noqa: E402
-from legsim_bench import core as lc  # noqa: E402
+import legsim
+from legsim_bench import core as lc
 
 if not legsim.library_available("double"):
     pytest.skip("liblegsim.so is not built (cmake --build build/host, or set LEGSIM_LIB_DIR)",

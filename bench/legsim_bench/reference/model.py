@@ -93,6 +93,157 @@ def _wrap(a: float) -> float:
 
 
 # --------------------------------------------------------------------------
+# Newton-Euler columns of the joint reactions (shared by the leg and the robot)
+# --------------------------------------------------------------------------
+def world_point(q, bi, pt) -> np.ndarray:
+    """World position (m) of the body-fixed point pt = (xi, eta) of body bi; q (nb, 3)."""
+    x, y, ph = q[bi]
+    return np.array([x, y]) + pt[0] * u(ph) + pt[1] * n(ph)
+
+
+def add_force(A, q, bi, col, F, p) -> None:
+    """Add to column col of the free-body equations A (3 rows a body) a unit-scaled
+    force F (per unknown) on body bi at world point p: force rows and the moment
+    about the body's centre of mass."""
+    A[3 * bi, col] += F[0]
+    A[3 * bi + 1, col] += F[1]
+    A[3 * bi + 2, col] += _cross(p - q[bi, :2], F)
+
+
+def reaction_offsets(joints) -> np.ndarray:
+    """Column offsets of each joint's reaction unknowns (len(joints) + 1): two per
+    joint (a force, or for a prismatic joint a normal force and a couple), one
+    per slot (the normal force); the last entry is the number of columns."""
+    ncol = [1 if j.kind == "slot" else 2 for j in joints]
+    return np.concatenate([[0], np.cumsum(ncol)]).astype(int)
+
+
+def add_reaction_columns(A, q, joints, off) -> None:
+    """Fill the joint-reaction columns of the free-body equations A (3 nb rows).
+
+    Unknowns per joint (the action on its first-listed body bi; bj gets the
+    opposite): revolute (to frame): (Fx, Fy) at the joint point; prismatic:
+    f (force f n on bi) and M (couple on bi); slot: f (force f n(bj) at the
+    point of bi).  q: absolute poses (nb, 3).
+    """
+    ex, ey = np.array([1.0, 0.0]), np.array([0.0, 1.0])
+    for k, j in enumerate(joints):
+        c = off[k]
+        bi = j.bodies[0]
+        if j.kind in ("revolute_to_frame", "revolute"):
+            p = world_point(q, bi, j.points[0])
+            add_force(A, q, bi, c, ex, p)
+            add_force(A, q, bi, c + 1, ey, p)
+            if j.kind == "revolute":
+                bj = j.bodies[1]
+                add_force(A, q, bj, c, -ex, p)
+                add_force(A, q, bj, c + 1, -ey, p)
+        elif j.kind == "prismatic":
+            bj = j.bodies[1]
+            uu, nn = u(q[bi, 2]), n(q[bi, 2])
+            A[3 * bi:3 * bi + 2, c] += nn
+            A[3 * bi + 2, c + 1] += 1.0
+            A[3 * bj:3 * bj + 2, c] -= nn
+            A[3 * bj + 2, c] += float(uu @ (q[bj, :2] - q[bi, :2]))
+            A[3 * bj + 2, c + 1] -= 1.0
+        elif j.kind == "slot":
+            bj = j.bodies[1]
+            p = world_point(q, bi, j.points[0])
+            nn = n(q[bj, 2])
+            add_force(A, q, bi, c, nn, p)
+            add_force(A, q, bj, c, -nn, p)
+        else:
+            raise ValueError(f"joint {j.name!r}: unknown kind {j.kind!r}")
+
+
+def command_breakpoints(cmds) -> set:
+    """The times (s) where a command's schedule has a step or a kink."""
+    bps = set()
+    for c in cmds:
+        if isinstance(c, ForceCommand):
+            bps.update(_cmd.breakpoints(c.force))
+        elif isinstance(c, LengthCommand):
+            bps.update(_cmd.breakpoints(c.length))
+    return bps
+
+
+def command_forces(cmds, t, l, ld, kp, kd, fmax):
+    """Actuator forces (N) of the commands at time t (s) and which servos saturate.
+
+    Per actuator: None -> 0; ForceCommand -> its force; LengthCommand -> the servo
+    kp (l_cmd - l) - kd ld clipped to +-fmax (l, ld: the lengths (m) and rates
+    (m/s) now).  Returns (F, saturated) arrays.
+    """
+    F = np.zeros(len(cmds))
+    sat = np.zeros(len(cmds), dtype=bool)
+    for i, c in enumerate(cmds):
+        if c is None:
+            continue
+        if isinstance(c, ForceCommand):
+            F[i] = _cmd.evaluate(c.force, t)
+        elif isinstance(c, LengthCommand):
+            raw = kp[i] * (_cmd.evaluate(c.length, t) - l[i]) - kd[i] * ld[i]
+            sat[i] = abs(raw) > fmax[i]
+            F[i] = min(max(raw, -fmax[i]), fmax[i])
+        else:
+            raise TypeError("actuator commands are ForceCommand, LengthCommand or None")
+    return F, sat
+
+
+def integrate_piecewise(make_rhs, edges, y0, t_eval=None, **options):
+    """Integrate y' = f(t, y) with scipy's solve_ivp one piece [ta, tb] of ``edges``
+    (s, increasing) at a time, f = make_rhs(ta, tb), so that no step crosses a
+    command's discontinuity.  Returns (T, Y): every step point (``t_eval`` None),
+    else the times of ``t_eval`` (the last piece includes its end), taken from the
+    dense output except where a step ends on one (more accurate than the
+    interpolant).  ``options`` go to solve_ivp (method, rtol, atol, max_step).
+    """
+    y = np.asarray(y0, float)
+    te = None if t_eval is None else np.asarray(t_eval, float)
+    T, Y = [], []
+    for k in range(len(edges) - 1):
+        ta, tb = edges[k], edges[k + 1]
+        last = k == len(edges) - 2
+        pts = None if te is None else te[(te >= ta) & ((te < tb) | (last & (te <= tb)))]
+        sol = solve_ivp(make_rhs(ta, tb), (ta, tb), y,
+                        dense_output=pts is not None and len(pts) > 0, **options)
+        if sol.status != 0:
+            raise ReferenceError(f"integration failed: {sol.message}")
+        if pts is None:
+            ts = sol.t if k == 0 else sol.t[1:]
+            T.extend(ts)
+            Y.extend(sol.y.T[-len(ts):])
+        elif len(pts):
+            ys = sol.sol(pts).T
+            for i, tp in enumerate(pts):
+                hit = np.nonzero(sol.t == tp)[0]
+                if hit.size:
+                    ys[i] = sol.y[:, hit[0]]
+            T.extend(pts)
+            Y.extend(ys)
+        y = sol.y[:, -1]
+    return np.array(T), np.array(Y)
+
+
+def reactions_from_unknowns(q, joints, x, off) -> np.ndarray:
+    """Joint reactions (n_joints, 3) = (Fx (N), Fy (N), M (N m)) on each joint's
+    first-listed body, moment about its centre of mass, from the solved unknowns
+    x laid out as :func:`add_reaction_columns`."""
+    R = np.zeros((len(joints), 3))
+    for k, j in enumerate(joints):
+        c = off[k]
+        bi = j.bodies[0]
+        if j.kind == "prismatic":
+            F = x[c] * n(q[bi, 2])
+            R[k] = (F[0], F[1], x[c + 1])
+            continue
+        F = x[c:c + 2] if j.kind != "slot" else x[c] * n(q[j.bodies[1], 2])
+        p = world_point(q, bi, j.points[0])
+        R[k] = (F[0], F[1], _cross(p - q[bi, :2], F))
+    return R
+
+
+# --------------------------------------------------------------------------
 # model description
 # --------------------------------------------------------------------------
 @dataclass(frozen=True)
@@ -570,22 +721,9 @@ class LegModel:
         return M, Q - h
 
     def _forces(self, cmds, t, K, clip_t=None):
-        F = np.zeros(self.na)
-        sat = np.zeros(self.na, dtype=bool)
-        te = t if clip_t is None else clip_t(t)
-        for i, c in enumerate(cmds):
-            if c is None:
-                continue
-            if isinstance(c, ForceCommand):
-                F[i] = _cmd.evaluate(c.force, te)
-            elif isinstance(c, LengthCommand):
-                a = self.actuators[i]
-                raw = a.kp * (_cmd.evaluate(c.length, te) - K.l[i]) - a.kd * K.ld[i]
-                sat[i] = abs(raw) > a.max_force
-                F[i] = min(max(raw, -a.max_force), a.max_force)
-            else:
-                raise TypeError("actuator commands are ForceCommand, LengthCommand or None")
-        return F, sat
+        a = self.actuators
+        return command_forces(cmds, t if clip_t is None else clip_t(t), K.l, K.ld,
+                              [x.kp for x in a], [x.kd for x in a], [x.max_force for x in a])
 
     def _load(self, foot_load, t):
         if foot_load is None:
@@ -628,8 +766,7 @@ class LegModel:
         qdd = np.asarray(qdd, float).reshape(self.nb, 3)
         g = self._gravity(gravity)
         load = np.asarray(foot_load, float)
-        ncol = [2 if j.kind != "slot" else 1 for j in self.joints]
-        off = np.concatenate([[0], np.cumsum(ncol)])
+        off = reaction_offsets(self.joints)
         unknown_F = actuator_forces is None
         nx = off[-1] + (self.na if unknown_F else 0)
         A = np.zeros((3 * self.nb, nx))
@@ -637,50 +774,10 @@ class LegModel:
         for i in range(self.nb):
             rhs[3 * i:3 * i + 2] -= self._m[i] * g
 
-        def world(bi, pt):
-            x, y, ph = q[bi]
-            return np.array([x, y]) + pt[0] * u(ph) + pt[1] * n(ph)
-
-        def add_force(bi, col, F, p):
-            """A unit-scaled force F (per unknown) applied at world point p."""
-            r = p - q[bi, :2]
-            A[3 * bi, col] += F[0]
-            A[3 * bi + 1, col] += F[1]
-            A[3 * bi + 2, col] += _cross(r, F)
-
-        ex, ey = np.array([1.0, 0.0]), np.array([0.0, 1.0])
-        for k, j in enumerate(self.joints):
-            c = off[k]
-            if j.kind == "revolute_to_frame":
-                bi = j.bodies[0]
-                p = world(bi, j.points[0])
-                add_force(bi, c, ex, p)
-                add_force(bi, c + 1, ey, p)
-            elif j.kind == "revolute":
-                bi, bj = j.bodies
-                p = world(bi, j.points[0])
-                add_force(bi, c, ex, p)
-                add_force(bi, c + 1, ey, p)
-                add_force(bj, c, -ex, p)
-                add_force(bj, c + 1, -ey, p)
-            elif j.kind == "prismatic":
-                bi, bj = j.bodies
-                uu, nn = u(q[bi, 2]), n(q[bi, 2])
-                # unknowns: f (force f n on bi), Mi (moment on bi about its CoM)
-                A[3 * bi:3 * bi + 2, c] += nn
-                A[3 * bi + 2, c + 1] += 1.0
-                A[3 * bj:3 * bj + 2, c] -= nn
-                A[3 * bj + 2, c] += float(uu @ (q[bj, :2] - q[bi, :2]))
-                A[3 * bj + 2, c + 1] -= 1.0
-            elif j.kind == "slot":
-                bi, bj = j.bodies
-                p = world(bi, j.points[0])
-                nn = n(q[bj, 2])
-                add_force(bi, c, nn, p)
-                add_force(bj, c, -nn, p)
+        add_reaction_columns(A, q, self.joints, off)
         # foot load (external, known)
         sh = self._shank
-        pl = world(sh, self._load_pt)
+        pl = world_point(q, sh, self._load_pt)
         rhs[3 * sh:3 * sh + 2] -= load
         rhs[3 * sh + 2] -= _cross(pl - q[sh, :2], load)
         # actuator axial forces: -F u on the cylinder, +F u on the rod
@@ -700,21 +797,7 @@ class LegModel:
             x = np.linalg.lstsq(A, rhs, rcond=None)[0]
         res = float(np.max(np.abs(A @ x - rhs)))
 
-        R = np.zeros((self.nj, 3))
-        for k, j in enumerate(self.joints):
-            c = off[k]
-            bi = j.bodies[0]
-            if j.kind in ("revolute_to_frame", "revolute"):
-                F = x[c:c + 2]
-                p = world(bi, j.points[0])
-                R[k] = (F[0], F[1], _cross(p - q[bi, :2], F))
-            elif j.kind == "prismatic":
-                F = x[c] * n(q[bi, 2])
-                R[k] = (F[0], F[1], x[c + 1])
-            else:
-                F = x[c] * n(q[j.bodies[1], 2])
-                p = world(bi, j.points[0])
-                R[k] = (F[0], F[1], _cross(p - q[bi, :2], F))
+        R = reactions_from_unknowns(q, self.joints, x, off)
         Fa = x[off[-1]:] if unknown_F else np.asarray(actuator_forces, float).copy()
         return Fa, R, res
 
@@ -842,12 +925,7 @@ class LegModel:
         thd0 = np.zeros(self.ndof) if thetad0 is None else np.asarray(thetad0, float)
         nd = self.ndof
 
-        bps = set()
-        for c in cmds:
-            if isinstance(c, ForceCommand):
-                bps.update(_cmd.breakpoints(c.force))
-            elif isinstance(c, LengthCommand):
-                bps.update(_cmd.breakpoints(c.length))
+        bps = command_breakpoints(cmds)
         if foot_load is not None:
             for f in foot_load:
                 bps.update(_cmd.breakpoints(f))
@@ -871,36 +949,9 @@ class LegModel:
                 return np.concatenate([thd, np.linalg.solve(M, r)])
             return rhs
 
-        y = np.concatenate([th0, thd0])
-        T, Y = [], []
-        te_all = None if t_eval is None else np.asarray(t_eval, float)
-        for k in range(len(edges) - 1):
-            ta, tb = edges[k], edges[k + 1]
-            last = k == len(edges) - 2
-            if te_all is None:
-                pts = None
-            else:
-                pts = te_all[(te_all >= ta) & ((te_all < tb) | (last & (te_all <= tb)))]
-            sol = solve_ivp(make_rhs(ta, tb), (ta, tb), y, method=method, t_eval=None,
-                            dense_output=pts is not None and len(pts) > 0,
-                            rtol=rtol, atol=atol, max_step=max_step)
-            if sol.status != 0:
-                raise ReferenceError(f"integration failed: {sol.message}")
-            if pts is None:
-                ts = sol.t if k == 0 else sol.t[1:]
-                T.extend(ts)
-                Y.extend(sol.y.T[-len(ts):])
-            elif len(pts):
-                ys = sol.sol(pts).T
-                # the step endpoints are more accurate than the interpolant
-                for i, tp in enumerate(pts):
-                    hit = np.nonzero(sol.t == tp)[0]
-                    if hit.size:
-                        ys[i] = sol.y[:, hit[0]]
-                T.extend(pts)
-                Y.extend(ys)
-            y = sol.y[:, -1]
-        return self._result(np.array(T), np.array(Y), cmds, foot_load, g, nfev[0])
+        T, Y = integrate_piecewise(make_rhs, edges, np.concatenate([th0, thd0]), t_eval,
+                                   method=method, rtol=rtol, atol=atol, max_step=max_step)
+        return self._result(T, Y, cmds, foot_load, g, nfev[0])
 
     def _result(self, T, Y, cmds, foot_load, g, nfev):
         nd, N = self.ndof, len(T)

@@ -57,11 +57,11 @@ from pathlib import Path
 from typing import Optional, Sequence
 
 import numpy as np
-from scipy.integrate import solve_ivp
 
-from . import commands as _cmd
-from .commands import ForceCommand, LengthCommand
-from .model import LegModel, NoEquilibriumError, ReferenceError, n, u
+from .commands import ForceCommand
+from .model import (LegModel, NoEquilibriumError, ReferenceError, add_force, add_reaction_columns,
+                    command_breakpoints, command_forces, integrate_piecewise, n, reaction_offsets,
+                    reactions_from_unknowns, u, world_point)
 
 __all__ = ["RobotModel", "Ground", "Assembly", "RobotStatics", "RobotResult", "Modes"]
 
@@ -77,10 +77,6 @@ def _rot(psi: float) -> np.ndarray:
 def _perp(v: np.ndarray) -> np.ndarray:
     """Rotation by +90 degrees (works on (2,) and (2, k))."""
     return np.array([-v[1], v[0]])
-
-
-def _cross(a, b) -> float:
-    return float(a[0] * b[1] - a[1] * b[0])
 
 
 @dataclass(frozen=True)
@@ -430,18 +426,7 @@ class RobotModel:
         return Q.reshape(-1)
 
     def _forces(self, cmds, t, K):
-        F = np.zeros(self.na)
-        for a, c in enumerate(cmds):
-            if c is None:
-                continue
-            if isinstance(c, ForceCommand):
-                F[a] = _cmd.evaluate(c.force, t)
-            elif isinstance(c, LengthCommand):
-                raw = self._kp[a] * (_cmd.evaluate(c.length, t) - K.l[a]) - self._kd[a] * K.ld[a]
-                F[a] = min(max(raw, -self._fmax[a]), self._fmax[a])
-            else:
-                raise TypeError("actuator commands are ForceCommand, LengthCommand or None")
-        return F
+        return command_forces(cmds, t, K.l, K.ld, self._kp, self._kd, self._fmax)[0]
 
     # ----------------------------------------------------------- dynamics
     def _state(self, i, id_, feet, cmds, t, g, box_load):
@@ -496,12 +481,7 @@ class RobotModel:
         i0 = start.z[_IND].copy() if i0 is None else np.asarray(i0, float)
         id0 = np.zeros(3) if id0 is None else np.asarray(id0, float)
         self._thL_guess = start.z[5:7].copy()
-        bps = set()
-        for c in cmds:
-            if isinstance(c, ForceCommand):
-                bps.update(_cmd.breakpoints(c.force))
-            elif isinstance(c, LengthCommand):
-                bps.update(_cmd.breakpoints(c.length))
+        bps = command_breakpoints(cmds)
         edges = [0.0] + sorted(b for b in bps if 0.0 < b < t_end) + [float(t_end)]
         nfev = [0]
 
@@ -515,31 +495,9 @@ class RobotModel:
                 return np.concatenate([y[3:], idd])
             return rhs
 
-        y = np.concatenate([i0, id0])
-        te = None if t_eval is None else np.asarray(t_eval, float)
-        T_, Y_ = [], []
-        for k in range(len(edges) - 1):
-            ta, tb = edges[k], edges[k + 1]
-            last = k == len(edges) - 2
-            pts = None if te is None else te[(te >= ta) & ((te < tb) | (last & (te <= tb)))]
-            sol = solve_ivp(make_rhs(ta, tb), (ta, tb), y, method="DOP853", rtol=rtol, atol=atol,
-                            dense_output=pts is not None and len(pts) > 0)
-            if sol.status != 0:
-                raise ReferenceError(f"integration failed: {sol.message}")
-            if pts is None:
-                ts = sol.t if k == 0 else sol.t[1:]
-                T_.extend(ts)
-                Y_.extend(sol.y.T[-len(ts):])
-            elif len(pts):
-                ys = sol.sol(pts).T
-                for j, tp in enumerate(pts):
-                    hit = np.nonzero(sol.t == tp)[0]
-                    if hit.size:
-                        ys[j] = sol.y[:, hit[0]]
-                T_.extend(pts)
-                Y_.extend(ys)
-            y = sol.y[:, -1]
-        return self._result(np.array(T_), np.array(Y_), feet, cmds, g, box_load, nfev[0])
+        T, Y = integrate_piecewise(make_rhs, edges, np.concatenate([i0, id0]), t_eval,
+                                   method="DOP853", rtol=rtol, atol=atol)
+        return self._result(T, Y, feet, cmds, g, box_load, nfev[0])
 
     def _result(self, T, Y, feet, cmds, g, box_load, nfev) -> "RobotResult":
         N = len(T)
@@ -584,8 +542,7 @@ class RobotModel:
     def _ne_system(self, q, qdd, actuator_forces, box_load, g):
         q = np.asarray(q, float).reshape(self.nb, 3)
         qdd = np.asarray(qdd, float).reshape(self.nb, 3)
-        ncol = [1 if j.kind == "slot" else 2 for j in self.joints]
-        off = np.concatenate([[0], np.cumsum(ncol)])
+        off = reaction_offsets(self.joints)
         gcol = int(off[-1])
         unknown_F = actuator_forces is None
         nx = gcol + 4 + (self.na if unknown_F else 0)
@@ -595,45 +552,13 @@ class RobotModel:
             rhs[3 * i:3 * i + 2] -= self._m[i] * g
         rhs[0:3] -= np.asarray(box_load, float)
 
-        def world(bi, pt):
-            x, y, ph = q[bi]
-            return np.array([x, y]) + pt[0] * u(ph) + pt[1] * n(ph)
-
-        def add_force(bi, col, F, p):
-            A[3 * bi, col] += F[0]
-            A[3 * bi + 1, col] += F[1]
-            A[3 * bi + 2, col] += _cross(p - q[bi, :2], F)
-
+        add_reaction_columns(A, q, self.joints, off)
         ex, ey = np.array([1.0, 0.0]), np.array([0.0, 1.0])
-        for k, j in enumerate(self.joints):
-            c = off[k]
-            if j.kind == "revolute":
-                bi, bj = j.bodies
-                p = world(bi, j.points[0])
-                add_force(bi, c, ex, p)
-                add_force(bi, c + 1, ey, p)
-                add_force(bj, c, -ex, p)
-                add_force(bj, c + 1, -ey, p)
-            elif j.kind == "prismatic":
-                bi, bj = j.bodies
-                uu, nn = u(q[bi, 2]), n(q[bi, 2])
-                # unknowns: f (force f n on the cylinder bi) and its couple M on bi
-                A[3 * bi:3 * bi + 2, c] += nn
-                A[3 * bi + 2, c + 1] += 1.0
-                A[3 * bj:3 * bj + 2, c] -= nn
-                A[3 * bj + 2, c] += float(uu @ (q[bj, :2] - q[bi, :2]))
-                A[3 * bj + 2, c + 1] -= 1.0
-            elif j.kind == "slot":
-                bi, bj = j.bodies
-                p = world(bi, j.points[0])
-                nn = n(q[bj, 2])
-                add_force(bi, c, nn, p)
-                add_force(bj, c, -nn, p)
         for k in range(2):
             bi = self._foot_body[k]
-            p = world(bi, self._foot_pt[k])
-            add_force(bi, gcol + 2 * k, ex, p)
-            add_force(bi, gcol + 2 * k + 1, ey, p)
+            p = world_point(q, bi, self._foot_pt[k])
+            add_force(A, q, bi, gcol + 2 * k, ex, p)
+            add_force(A, q, bi, gcol + 2 * k + 1, ey, p)
         for a, (cyl, rod) in enumerate(self._actuator_bodies()):
             uu = u(q[cyl, 2])
             if unknown_F:
@@ -654,22 +579,7 @@ class RobotModel:
         return out
 
     def _unpack(self, q, x, off, gcol):
-        R = np.zeros((self.nj, 3))
-        for k, j in enumerate(self.joints):
-            c = off[k]
-            bi = j.bodies[0]
-            x0, y0, ph = q[bi]
-            if j.kind == "revolute":
-                F = x[c:c + 2]
-                p = np.array([x0, y0]) + j.points[0][0] * u(ph) + j.points[0][1] * n(ph)
-                R[k] = (F[0], F[1], _cross(p - q[bi, :2], F))
-            elif j.kind == "prismatic":
-                F = x[c] * n(ph)
-                R[k] = (F[0], F[1], x[c + 1])
-            else:
-                F = x[c] * n(q[j.bodies[1], 2])
-                p = np.array([x0, y0]) + j.points[0][0] * u(ph) + j.points[0][1] * n(ph)
-                R[k] = (F[0], F[1], _cross(p - q[bi, :2], F))
+        R = reactions_from_unknowns(q, self.joints, x, off)
         G = x[gcol:gcol + 4].reshape(2, 2).copy()
         return R, G
 
