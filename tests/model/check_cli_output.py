@@ -111,8 +111,11 @@ def check_good(cli, scene, outdir):
                     check(v["state"] in ("free", "stuck", "sliding"), f"{name}: contact {c} state")
                     check(all(v[k] is None or math.isfinite(v[k]) for k in CONTACT_NUMBERS),
                           f"{name}: contact {c} numbers")
-                    # a stuck foot is on the ground line (robot.toml's: y = 0)
-                    check(v["state"] != "stuck" or abs(v["y"]) < 1e-9, f"{name}: stuck {c} off the ground")
+                    # a stuck foot is on the ground line (the model's: a point and a slope)
+                    g = d["ground"]
+                    gap = (-math.sin(g["slope"]) * (v["x"] - g["point"][0])
+                           + math.cos(g["slope"]) * (v["y"] - g["point"][1])) if v["state"] == "stuck" else 0.0
+                    check(abs(gap) < 1e-9, f"{name}: stuck {c} off the ground by {gap:.3g} m")
             else:
                 check(s["foot"] is not None, f"{name}: foot")
         if analysis in ("statics",):
