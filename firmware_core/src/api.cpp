@@ -164,6 +164,27 @@ legsim_status lengths_check(const Model &m, const legsim_real *len) {
   return LEGSIM_OK;
 }
 
+// The driven lengths of an assembly: the given ones, or the actuators' current ones for
+// NULL; checked, then held still (rate and acceleration 0) as drivers with no coordinate.
+legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *length_m) {
+  const Model &m = s.model;
+  Data &d = s.data;
+  real len[kMaxActuators];
+  if (length_m) {
+    for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
+  } else {
+    legsim_actuator_lengths(sim, len, nullptr);
+  }
+  const legsim_status st = lengths_check(m, len);
+  if (st != LEGSIM_OK) return st;
+  for (int a = 0; a < m.na; ++a) {
+    d.drivers.length[a] = len[a];
+    d.drivers.rate[a] = d.drivers.accel[a] = 0;
+  }
+  d.drivers.ncoord = 0;
+  return LEGSIM_OK;
+}
+
 // After the state changed outside a step: accelerations, multipliers and
 // reactions of the free dynamics at the new state, and a fresh start of the
 // generalized-alpha history.
@@ -472,22 +493,9 @@ legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
   const Model &m = s.model;
   Data &d = s.data;
   if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
-  real len[kMaxActuators];
-  if (length_m) {
-    const legsim_status st = lengths_check(m, length_m);
-    if (st != LEGSIM_OK) return st;
-    for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
-  } else {
-    legsim_actuator_lengths(sim, len, nullptr);
-    const legsim_status st = lengths_check(m, len);
-    if (st != LEGSIM_OK) return st;
-  }
-  for (int a = 0; a < m.na; ++a) {
-    d.drivers.length[a] = len[a];
-    d.drivers.rate[a] = d.drivers.accel[a] = 0;
-  }
-  d.drivers.ncoord = 0;
-  const legsim_status st = drivers_layout(s, all_actuators(m), 0);
+  legsim_status st = drive_to_lengths(sim, s, length_m);
+  if (st != LEGSIM_OK) return st;
+  st = drivers_layout(s, all_actuators(m), 0);
   return st == LEGSIM_OK ? all_or_nothing(s, [&] { return assemble_commit(s); }) : st;
 }
 
@@ -792,19 +800,8 @@ legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *leng
   Data &d = s.data;
   if (m.nc < 1 || m.nc > 2 || !(std::abs(feet_mid_m) <= real(LEGSIM_MAX_COORD))) return LEGSIM_ERR_BAD_INPUT;
   if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
-  real len[kMaxActuators];
-  if (length_m) {
-    for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
-  } else {
-    legsim_actuator_lengths(sim, len, nullptr);
-  }
-  const legsim_status lc = lengths_check(m, len);
+  const legsim_status lc = drive_to_lengths(sim, s, length_m);
   if (lc != LEGSIM_OK) return lc;
-  for (int a = 0; a < m.na; ++a) {
-    d.drivers.length[a] = len[a];
-    d.drivers.rate[a] = d.drivers.accel[a] = 0;
-  }
-  d.drivers.ncoord = 0;
   d.drivers.feet_mid = feet_mid_m;
   // joints, lengths, each foot's normal gap and the feet's midpoint along the line
   uint8_t normal_only[kMaxContacts];
