@@ -93,6 +93,19 @@ def record_analysis(scene: Scene, fmt: str, *, root: Path | None = None, log=Non
 
 # ---- checks -------------------------------------------------------------------------------
 
+def _run_check(rec: dict, results: list, name: str):
+    """Appends the check that legsim_cli ran to the end; its JSON output, or None if it did not."""
+    from .checks import CheckResult
+
+    out = rec.get("cli_output")
+    ok = bool(rec.get("complete")) and out is not None
+    n = len(out.get("samples", [])) if out else 0
+    results.append(CheckResult(name, ok, float(n), None, "samples", "",
+                               "; ".join(e["error"] for e in rec["errors"]) or
+                               f"status {out.get('status_code')} ({rec.get('cli')})"))
+    return out if ok else None
+
+
 def _wrap(d):
     return (d + np.pi) % (2 * np.pi) - np.pi
 
@@ -136,13 +149,8 @@ def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
     leg = Leg.from_toml(model_path, scene.variant)
     results: list = []
     ev = Evaluation(scene, rec, results, leg=leg)
-    out = rec.get("cli_output")
-    ok = rec.get("complete") and out is not None
-    n = len(out.get("samples", [])) if out else 0
-    results.append(CheckResult(f"run: legsim_cli {scene.analysis}", bool(ok), float(n), None, "samples",
-                               "", "; ".join(e["error"] for e in rec["errors"]) or
-                               f"status {out.get('status_code')} ({rec.get('cli')})"))
-    if not ok:
+    out = _run_check(rec, results, f"run: legsim_cli {scene.analysis}")
+    if out is None:
         return ev
 
     gravity = "gravity" not in scene.disable
@@ -421,13 +429,8 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     ch = scene.checks
     results: list = []
     ev = Evaluation(scene, rec, results)
-    out = rec.get("cli_output")
-    ok = rec.get("complete") and out is not None
-    n = len(out.get("samples", [])) if out else 0
-    results.append(CheckResult(f"run: legsim_cli robot {scene.analysis}", bool(ok), float(n), None, "samples",
-                               "", "; ".join(e["error"] for e in rec["errors"]) or
-                               f"status {out.get('status_code')} ({rec.get('cli')})"))
-    if not ok:
+    out = _run_check(rec, results, f"run: legsim_cli robot {scene.analysis}")
+    if out is None:
         return ev
     d = robot_arrays(out)
     t = d["t"]
