@@ -125,6 +125,20 @@ void check_name(const std::string &name, const std::string &label, const std::st
       fail(label, what + " " + q(name) + " may hold only letters, digits, '_', '-' and '.'");
 }
 
+// A name not taken by an earlier item of its kind (the message names which one has it);
+// name_of reads an item's name.
+template <class Items, class NameOf>
+void check_unique(const std::string &name, const Items &earlier, NameOf name_of, const char *kind,
+                  const std::string &label) {
+  for (size_t k = 0; k < earlier.size(); ++k)
+    if (name_of(earlier[k]) == name)
+      fail(label, "duplicate name " + q(name) + " (" + kind + " #" + std::to_string(k + 1) + " has it too)");
+}
+void check_unique(const std::string &name, const std::vector<std::string> &earlier, const char *kind,
+                  const std::string &label) {
+  check_unique(name, earlier, [](const std::string &n) -> const std::string & { return n; }, kind, label);
+}
+
 bool is_ident(const std::string &s) {
   if (s.empty()) return false;
   for (size_t i = 0; i < s.size(); ++i) {
@@ -523,9 +537,7 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
     std::string label = "body #" + std::to_string(k);
     const std::string bname = get_string(tb, "name", label);
     check_name(bname, label);
-    for (size_t k2 = 1; k2 <= parsed.size(); ++k2)
-      if (parsed[k2 - 1].name == bname)
-        fail(label, "duplicate name " + q(bname) + " (body #" + std::to_string(k2) + " has it too)");
+    check_unique(bname, parsed, [](const Body &b) -> const std::string & { return b.name; }, "body", label);
     label = "body " + q(bname);
     check_keys(tb, {"id", "name", "length", "mass", "inertia"}, label);
     Body b;
@@ -561,10 +573,7 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
     const std::string label = "joint #" + std::to_string(k);
     const std::string jname = get_string(joint_tables[k - 1], "name", label);
     check_name(jname, label);
-    auto it = std::find(joint_names.begin(), joint_names.end(), jname);
-    if (it != joint_names.end())
-      fail(label, "duplicate name " + q(jname) + " (joint #" +
-                      std::to_string(it - joint_names.begin() + 1) + " has it too)");
+    check_unique(jname, joint_names, "joint", label);
     joint_names.push_back(jname);
   }
 
@@ -599,10 +608,7 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
     std::string label = "actuator #" + std::to_string(k);
     const std::string aname = get_string(ta, "name", label);
     check_name(aname, label);
-    for (size_t k2 = 1; k2 <= act_names.size(); ++k2)
-      if (act_names[k2 - 1] == aname)
-        fail(label, "duplicate name " + q(aname) + " (actuator #" + std::to_string(k2) +
-                        " has it too)");
+    check_unique(aname, act_names, "actuator", label);
     label = "actuator " + q(aname);
     check_keys(ta, {"name", "joint", "stroke", "max_force", "servo_kp", "servo_kd"}, label);
     const std::string jname = get_string(ta, "joint", label);
@@ -645,9 +651,7 @@ void parse_model(Table doc, const std::string &variant, legsim_model_desc &m) {
     const std::string label = "force #" + std::to_string(k);
     const std::string fname = get_string(tf, "name", label);
     check_name(fname, label);
-    for (size_t k2 = 1; k2 <= force_names.size(); ++k2)
-      if (force_names[k2 - 1] == fname)
-        fail(label, "duplicate name " + q(fname) + " (force #" + std::to_string(k2) + " has it too)");
+    check_unique(fname, force_names, "force", label);
     forces.push_back(parse_force(ctx, fname, tf));
     force_names.push_back(fname);
   }
@@ -971,9 +975,7 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
     std::string label = "leg #" + std::to_string(k);
     const std::string lname = get_string(tl, "name", label);
     check_name(lname, label);
-    for (size_t k2 = 1; k2 <= legs.size(); ++k2)
-      if (legs[k2 - 1].name == lname)
-        fail(label, "duplicate name " + q(lname) + " (leg #" + std::to_string(k2) + " has it too)");
+    check_unique(lname, legs, [](const auto &l) -> const std::string & { return l.name; }, "leg", label);
     label = "leg " + q(lname);
     check_keys(tl, {"name", "file", "variant", "prefix", "mirror", "attach"}, label);
     const std::string lfile = get_string(tl, "file", label);

@@ -170,6 +170,12 @@ def get_string(tbl: dict, key: str, label: str) -> str:
     return v
 
 
+def check_unique(name: str, earlier: list[str], kind: str, label: str) -> None:
+    """A name not taken by an earlier item of its kind (the message names which one has it)."""
+    if name in earlier:
+        fail(label, f"duplicate name '{name}' ({kind} #{earlier.index(name) + 1} has it too)")
+
+
 def check_name(name: str, label: str, what: str = "name"):
     n = len(name.encode("utf-8"))
     if n < 1 or n > NAME_LEN - 1:
@@ -451,9 +457,7 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
         label = f"body #{k}"
         bname = get_string(tb, "name", label)
         check_name(bname, label)
-        for k2, other in enumerate(parsed, 1):
-            if other["name"] == bname:
-                fail(label, f"duplicate name '{bname}' (body #{k2} has it too)")
+        check_unique(bname, [other["name"] for other in parsed], "body", label)
         label = f"body '{bname}'"
         check_keys(tb, BODY_KEYS, label)
         bid = get_int(tb, "id", label)
@@ -484,8 +488,7 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
         label = f"joint #{k}"
         jname = get_string(tj, "name", label)
         check_name(jname, label)
-        if jname in joint_names:
-            fail(label, f"duplicate name '{jname}' (joint #{joint_names.index(jname) + 1} has it too)")
+        check_unique(jname, joint_names, "joint", label)
         joint_names.append(jname)
 
     variants = variant_tables(doc, joint_names)
@@ -510,9 +513,7 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
         label = f"actuator #{k}"
         aname = get_string(ta, "name", label)
         check_name(aname, label)
-        for k2, other in enumerate(actuators, 1):
-            if other["name"] == aname:
-                fail(label, f"duplicate name '{aname}' (actuator #{k2} has it too)")
+        check_unique(aname, [other["name"] for other in actuators], "actuator", label)
         label = f"actuator '{aname}'"
         check_keys(ta, ACTUATOR_KEYS, label)
         jname = get_string(ta, "joint", label)
@@ -547,9 +548,7 @@ def parse_model(doc: dict, variant: str, caps: dict) -> dict:
         label = f"force #{k}"
         fname = get_string(tf, "name", label)
         check_name(fname, label)
-        for k2, other in enumerate(forces, 1):
-            if other["name"] == fname:
-                fail(label, f"duplicate name '{fname}' (force #{k2} has it too)")
+        check_unique(fname, [other["name"] for other in forces], "force", label)
         forces.append(parse_force(ctx, fname, tf))
 
     # foot
@@ -672,9 +671,7 @@ def parse_robot(doc: dict, base_dir: str, variant: str, caps: dict) -> dict:
         label = f"leg #{k}"
         lname = get_string(tl, "name", label)
         check_name(lname, label)
-        for k2, other in enumerate(legs, 1):
-            if other["name"] == lname:
-                fail(label, f"duplicate name '{lname}' (leg #{k2} has it too)")
+        check_unique(lname, [other["name"] for other in legs], "leg", label)
         label = f"leg '{lname}'"
         check_keys(tl, LEG_KEYS, label)
         lfile = get_string(tl, "file", label)
