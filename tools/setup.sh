@@ -19,7 +19,7 @@ legsim_logs=${LEGSIM_LOG_DIR:-$legsim_root/out/logs}
 # images under QEMU, the vcan VM). libgl1: exudyn's wheel (a peer engine of the
 # bench) links libGL.so.1. pkgconf: the installed package's pkg-config file is tested.
 # python3-siconos, python3-scipy: the two-leg robot's Siconos peer runs in the system
-# Python (Siconos is not on PyPI; bench/legsim_bench/peers/siconos_robot.py).
+# Python (Siconos is not on PyPI; bench/legsim_bench/benchmarks/peers/siconos_robot.py).
 legsim_debs=(build-essential cmake ninja-build pkgconf python3 python3-venv
              libeigen3-dev libtomlplusplus-dev libgl1 python3-siconos python3-scipy
              gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib

@@ -35,11 +35,11 @@ EXIT_OK, EXIT_FAIL, EXIT_SETUP = 0, 1, 2
 
 # lazily registered benchmark commands: name -> (module, help)
 BENCHMARKS = {
-    "workprecision": ("legsim_bench.workprecision", "work-precision diagrams of the integrators"),
-    "options": ("legsim_bench.options_cost", "cost of the solver options"),
-    "stress": ("legsim_bench.stress", "stress runs"),
-    "mcu": ("legsim_bench.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
-    "robot-peers": ("legsim_bench.peers.robot_results",
+    "workprecision": ("legsim_bench.benchmarks.workprecision", "work-precision diagrams of the integrators"),
+    "options": ("legsim_bench.benchmarks.options_cost", "cost of the solver options"),
+    "stress": ("legsim_bench.benchmarks.stress", "stress runs"),
+    "mcu": ("legsim_bench.benchmarks.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
+    "robot-peers": ("legsim_bench.benchmarks.peers.robot_results",
                     "the two-leg robot in MuJoCo and Siconos against the bench's reference"),
 }
 

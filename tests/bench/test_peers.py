@@ -21,9 +21,9 @@ ROOT = Path(__file__).resolve().parents[2]
 if importlib.util.find_spec("legsim_bench") is None:
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.peers import exudyn_leg, leg_model as lm, mujoco_leg, selfref  # noqa: E402
-from legsim_bench.peers.convergence import energy_balance, errors  # noqa: E402
-from legsim_bench.peers.reference import bench_reference_available, reference  # noqa: E402
+from legsim_bench.benchmarks.peers import exudyn_leg, leg_model as lm, mujoco_leg, selfref  # noqa: E402
+from legsim_bench.benchmarks.peers.convergence import energy_balance, errors  # noqa: E402
+from legsim_bench.benchmarks.peers.reference import bench_reference_available, reference  # noqa: E402
 
 T_END = 0.1
 SCENES = tuple(lm.SCENES)

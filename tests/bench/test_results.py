@@ -127,7 +127,7 @@ def test_each_benchmark_result_carries_the_machine_section(capsys, tmp_path, arg
 
 def test_mcu_report_carries_the_machine_section():
     # the QEMU run needs arm-none-eabi and qemu-system-arm: the report is checked on a row
-    from legsim_bench import mcu_cost
+    from legsim_bench.benchmarks import mcu_cost
     row = dict(preset="cortex-m4f", board="mps2-an386", image="leg_m4f.elf", exit=0, text=30000,
                data=2928, bss=8592, sim="7512", stack="2112 of 3072", insns={"rk4": 60221},
                worst=7.6e-7, worst_key="step rk4 q 2", compared=78, tol=1e-4, ok=True)

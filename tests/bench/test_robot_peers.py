@@ -21,9 +21,9 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.peers import mujoco_robot as mr  # noqa: E402
-from legsim_bench.peers import robot_scenes as rs  # noqa: E402
-from legsim_bench.peers import siconos_robot as sr  # noqa: E402
+from legsim_bench.benchmarks.peers import mujoco_robot as mr  # noqa: E402
+from legsim_bench.benchmarks.peers import robot_scenes as rs  # noqa: E402
+from legsim_bench.benchmarks.peers import siconos_robot as sr  # noqa: E402
 
 
 @pytest.fixture(scope="module")

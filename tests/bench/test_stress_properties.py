@@ -1,5 +1,5 @@
 """Property tests (Hypothesis) of the core under random command sequences: the
-fast part of the stress campaign (bench/legsim_bench/stress.py).
+fast part of the stress campaign (bench/legsim_bench/benchmarks/stress.py).
 
 Properties, for both integrators (and the float build when it is there):
 * every call returns LEGSIM_OK or a status legsim.h documents for it;
@@ -30,7 +30,7 @@ if not legsim.library_available("double"):
 from hypothesis import HealthCheck, given, settings  # noqa: E402
 from hypothesis import strategies as st  # noqa: E402
 
-from legsim_bench.stress import ALLOWED, STROKES, run_sequence  # noqa: E402
+from legsim_bench.benchmarks.stress import ALLOWED, STROKES, run_sequence  # noqa: E402
 
 PRECISIONS = ["double"] + (["float"] if legsim.library_available("float") else [])
 FMAX = 1500.0

@@ -1,7 +1,7 @@
 """The robot peers' figures: error against the reference and cost per step.
 
-    python -m legsim_bench.peers.robot_results -o DIR        # from bench/
-    python -m legsim_bench.peers.robot_results --update-results
+    python -m legsim_bench.benchmarks.peers.robot_results -o DIR        # from bench/
+    python -m legsim_bench.benchmarks.peers.robot_results --update-results
 
 writes ``robot_peers.md`` (default out/bench-results/): the machine section
 (results.machine_section), then per engine, scene and step h: err_z (the
@@ -23,7 +23,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import results
+from ... import results
 from . import mujoco_robot as mr
 from . import robot_scenes as rs
 from . import siconos_robot as sr
@@ -66,7 +66,7 @@ def markdown(rows: list[dict], before: dict, after: dict | None = None) -> str:
               "closures, solref (2h, 1), RK4, cost = mujoco.rollout wall time / steps (best "
               "of repeats). Siconos: Moreau-Jean theta 0.5, FrictionContact(2) Lemke, cost "
               "includes the peer's Python callbacks. Scenes: docs/design/robot-on-ground.md "
-              "sections 4 and 7, bench/legsim_bench/peers/robot_scenes.py.", "",
+              "sections 4 and 7, bench/legsim_bench/benchmarks/peers/robot_scenes.py.", "",
               "| engine | method | scene | h (s) | err_z | err_NT (N) | cost per step (us) |",
               "|---|---|---|---|---|---|---|"]
     for r in rows:
@@ -91,7 +91,7 @@ def write(out: Path, **kw) -> Path:
 
 
 def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
-    """The options of `legsim-bench robot-peers` (and of python -m legsim_bench.peers.robot_results)."""
+    """The options of `legsim-bench robot-peers` (and of python -m legsim_bench.benchmarks.peers.robot_results)."""
     results.add_output_options(p)
     p.add_argument("--repeats", type=int, default=3, help="MuJoCo timing repeats (best of)")
     p.add_argument("--scenes", nargs="+", choices=SCENES, default=list(SCENES))

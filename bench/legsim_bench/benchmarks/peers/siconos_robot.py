@@ -4,7 +4,7 @@ Siconos comes from Debian (``python3-siconos`` 4.4.0, with ``python3-scipy``
 for the bench's reference), so it lives in the SYSTEM Python (/usr/bin/python3),
 not in the bench's venv. The bench side (:func:`run`, :func:`available`) runs
 this module there as a separate process (``/usr/bin/python3 -m
-legsim_bench.peers.siconos_robot --scene ... --h ...`` with the bench's source
+legsim_bench.benchmarks.peers.siconos_robot --scene ... --h ...`` with the bench's source
 on PYTHONPATH), which prints one JSON object.
 
 The model (the choice, stated): a Siconos ``LagrangianDS`` in the reference's
@@ -58,7 +58,7 @@ import numpy as np
 from . import robot_scenes as rs
 
 SYSTEM_PYTHON = os.environ.get("LEGSIM_SICONOS_PYTHON", "/usr/bin/python3")
-BENCH_DIR = Path(__file__).resolve().parents[2]
+BENCH_DIR = Path(__file__).resolve().parents[3]
 SOLVERS = ("lemke", "nsgs")
 
 
@@ -96,7 +96,7 @@ def run(scene: str, h: float, *, theta: float = 0.5, solver: str = "lemke", ever
     ok, why = probe()
     if not ok:
         raise RuntimeError(why)
-    cmd = [SYSTEM_PYTHON, "-m", "legsim_bench.peers.siconos_robot", "--scene", scene, "--h", repr(float(h)),
+    cmd = [SYSTEM_PYTHON, "-m", "legsim_bench.benchmarks.peers.siconos_robot", "--scene", scene, "--h", repr(float(h)),
            "--theta", repr(float(theta)), "--solver", solver, "--every", str(int(every))]
     if t_end is not None:
         cmd += ["--t-end", repr(float(t_end))]

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-REPO_ROOT = Path(__file__).resolve().parents[3]
+REPO_ROOT = Path(__file__).resolve().parents[4]
 DEFAULT_MODEL = REPO_ROOT / "models" / "leg.toml"
 
 #: The scenes every peer knows. ``upper_force`` / ``lower_force`` are the axial

@@ -43,10 +43,10 @@ from typing import Optional
 
 import numpy as np
 
-from ..reference import ForceCommand, LengthCommand
-from ..reference.robot import RobotModel
+from ...reference import ForceCommand, LengthCommand
+from ...reference.robot import RobotModel
 
-REPO_ROOT = Path(__file__).resolve().parents[3]
+REPO_ROOT = Path(__file__).resolve().parents[4]
 DEFAULT_ROBOT = REPO_ROOT / "models" / "robot.toml"
 
 SCENES = ("servo_stand", "fig7_a", "fig7_b", "slope_stand", "slope_slide")

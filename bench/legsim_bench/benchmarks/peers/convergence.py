@@ -1,7 +1,7 @@
 """Work-precision of the peer engines on the leg: error at t_end vs h, timing.
 
-    python -m legsim_bench.peers.convergence            # from bench/, markdown table
-    python -m legsim_bench.peers.convergence --json out.json --h 1e-3 1e-4 1e-5
+    python -m legsim_bench.benchmarks.peers.convergence            # from bench/, markdown table
+    python -m legsim_bench.benchmarks.peers.convergence --json out.json --h 1e-3 1e-4 1e-5
 
 For each peer (Exudyn, MuJoCo), method, variant and scene, every step h is
 run from the stand pose to t_end (0.1 s) and compared with the reference
