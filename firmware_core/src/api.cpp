@@ -584,7 +584,9 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
   real force[kMaxActuators];
   st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, force);
+    if (r == LEGSIM_OK)
+      r = held ? inverse_dynamics_ground_solve(s, 0, len, rate, acc, force)
+               : inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, force);
     s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
     return r;
   });
@@ -592,6 +594,14 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
     for (int a = 0; a < s.model.na; ++a) actuator_force_n[a] = force[a];
   return st;
 }
+  bool held = false;  // feet on the ground: their rows too (section 8)
+  for (int k = 0; k < s.model.nc; ++k) held = held || s.data.contact[k].state != LEGSIM_CONTACT_FREE;
+  real len[kMaxActuators], rate[kMaxActuators], acc[kMaxActuators];
+  for (int a = 0; a < s.model.na; ++a) {
+    len[a] = length_m[a];
+    rate[a] = rate_mps[a];
+    acc[a] = accel_mps2[a];
+  }
 
 legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
   CHECK_SIM(sim);
@@ -603,6 +613,43 @@ legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
     if (r == LEGSIM_OK) r = statics_solve(s, force);
     s.data.derivative_valid = s.data.history_valid = false;
     return r;
+legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow_mask, legsim_real *length_m,
+                                                legsim_real *rate_mps, legsim_real *accel_mps2,
+                                                legsim_real *actuator_force_n) {
+  CHECK_SIM(sim);
+  if (!length_m || !rate_mps || !accel_mps2) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  if (!s.data.assembled) return LEGSIM_ERR_STATE;
+  if (follow_mask & ~all_actuators(m)) return LEGSIM_ERR_BAD_INPUT;
+  real len[kMaxActuators], rate[kMaxActuators], acc[kMaxActuators];
+  for (int a = 0; a < m.na; ++a) {
+    const bool driven = !(follow_mask & (1u << a));
+    len[a] = driven ? length_m[a] : (m.act[a].lmin + m.act[a].lmax) / 2;  // followers: not read
+    rate[a] = driven ? rate_mps[a] : 0;
+    acc[a] = driven ? accel_mps2[a] : 0;
+  }
+  legsim_status st = lengths_check(m, len);
+  if (st != LEGSIM_OK) return st;
+  if (!bounded_array(rate, m.na, LEGSIM_MAX_RATE_MPS) || !bounded_array(acc, m.na, LEGSIM_MAX_ACCEL_MPS2))
+    return LEGSIM_ERR_BAD_INPUT;
+  real force[kMaxActuators];
+  st = all_or_nothing(s, [&] {
+    legsim_status r = stops_clear(s);
+    if (r == LEGSIM_OK) r = inverse_dynamics_ground_solve(s, follow_mask, len, rate, acc, force);
+    s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
+    return r;
+  });
+  if (st != LEGSIM_OK) return st;
+  for (int a = 0; a < m.na; ++a) {
+    length_m[a] = len[a];
+    rate_mps[a] = rate[a];
+    accel_mps2[a] = acc[a];
+    if (actuator_force_n) actuator_force_n[a] = force[a];
+  }
+  return LEGSIM_OK;
+}
+
   });
   if (st == LEGSIM_OK && actuator_force_n)
     for (int a = 0; a < s.model.na; ++a) actuator_force_n[a] = force[a];

@@ -371,4 +371,14 @@ inline bool finite(real x) { return std::isfinite(x); }
 bool all_finite(const VecQ &v, int n);
 void raise_event(Data &d, uint32_t ev);
 
+// With feet on the ground (held contacts) or followers: the actuators in follow are not
+// driven, their length, rate and acceleration follow and are written back (section 8).
+legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *length, real *rate,
+                                            real *accel, real *actuator_force);
+// Every actuator driven at d.drivers, the contacts that are not free held (two: combined by
+// options.statics_rule), at (d.q, d.qd) whose accelerations must be target: d.lambda, d.rows,
+// each contact's N and T (statics.cpp, shared with the inverse dynamics).
+legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, real *tangential);
+// Reactions, actuator forces (F = -lambda_driver) and contact forces from that solve.
+legsim_status driven_outputs(Sim &sim, const real *normal, const real *tangential, real *actuator_force);
 }  // namespace legsim

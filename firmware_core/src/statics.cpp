@@ -7,7 +7,7 @@
 
 namespace legsim {
 
-#if LEGSIM_WITH_STATICS
+#if LEGSIM_WITH_STATICS || LEGSIM_WITH_INVERSE_DYNAMICS
 namespace {
 #if LEGSIM_USE_FLOAT
 constexpr real kBalanceTol = real(1e-3);
@@ -15,22 +15,11 @@ constexpr real kBalanceTol = real(1e-3);
 constexpr real kBalanceTol = real(1e-8);
 #endif
 
-void lock_all_actuators(Sim &sim) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
-  const VecQ zero = VecQ::Zero();
-  for (int a = 0; a < m.na; ++a) {
-    real rate;
-    actuator_length(m, a, d.q, zero, d.drivers.length[a], rate);
-    d.drivers.rate[a] = d.drivers.accel[a] = 0;
-  }
-  d.drivers.ncoord = 0;
-}
-
-
-// One solve of the locked system with the given contact rows: the multipliers in
-// d.lambda, the rows in d.rows. The residual acceleration must vanish.
-legsim_status locked_solve(Sim &sim, const uint8_t *contacts) {
+// One solve of the driven system (every actuator driven at d.drivers) with the given
+// contact rows at (d.q, d.qd): the multipliers in d.lambda, the rows in d.rows. Its
+// accelerations must be target (statics: zero; inverse dynamics: the driven motion's),
+// else the system is still a mechanism there, or the motion is not the one these rows allow.
+legsim_status driven_solve(Sim &sim, const uint8_t *contacts, const VecQ &target) {
   const Model &m = sim.model;
   Data &d = sim.data;
   const uint32_t all = (1u << m.na) - 1;
@@ -43,14 +32,17 @@ legsim_status locked_solve(Sim &sim, const uint8_t *contacts) {
   } else {
     s = work_layout(sim, all);
   }
-  if (s == LEGSIM_OK) s = dynamics_solve(sim, d.work, d.q, d.qd, d.qdd);
+  VecQ qdd;
+  if (s == LEGSIM_OK) s = dynamics_solve(sim, d.work, d.q, d.qd, qdd);
   if (s != LEGSIM_OK) return s;
-  // scale: the acceleration the loads alone would cause
+  // scale: the acceleration the loads alone would cause, or the motion's
   real scale = 1, worst = 0;
   for (int k = 0; k < m.nq; ++k) {
     const real free_acc = std::abs(m.minv[k] * d.force_q[k]);
     scale = free_acc > scale ? free_acc : scale;
-    worst = std::abs(d.qdd[k]) > worst ? std::abs(d.qdd[k]) : worst;
+    scale = std::abs(target[k]) > scale ? std::abs(target[k]) : scale;
+    const real e = std::abs(qdd[k] - target[k]);
+    worst = e > worst ? e : worst;
   }
   return worst <= kBalanceTol * scale ? LEGSIM_OK : LEGSIM_ERR_NO_EQUILIBRIUM;
 }
@@ -60,11 +52,9 @@ legsim_status locked_solve(Sim &sim, const uint8_t *contacts) {
 // indeterminate by one self-stress (a tangential pair along the line): solve A with
 // the tangential row of the first only, B with that of the second only; every
 // solution is (1 - s) A + s B, and statics_rule picks s (design section 3).
-legsim_status statics_solve(Sim &sim, real *actuator_force) {
+legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, real *tangential) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  lock_all_actuators(sim);
-  d.qd.setZero();
   uint8_t rows[kMaxContacts];
   int held[2] = {0, 0}, nheld = 0;
   for (int k = 0; k < m.nc; ++k) {
@@ -74,51 +64,58 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
     if (nheld == 2) return LEGSIM_ERR_CONTACT;
     held[nheld++] = k;
   }
-  real normal[kMaxContacts], tangential[kMaxContacts];
   legsim_status s;
   if (nheld < 2) {
-    s = locked_solve(sim, rows);
+    s = driven_solve(sim, rows, target);
     if (s != LEGSIM_OK) return s;
     contact_forces_of_layout(m, d.work, d.lambda, normal, tangential);
-  } else {
-    const int k0 = held[0], k1 = held[1];
-    rows[k1] = kContactNormal;
-    s = locked_solve(sim, rows);
-    if (s != LEGSIM_OK) return s;
-    const VecR lambda_a = d.lambda;
-    real na[kMaxContacts], ta[kMaxContacts];
-    contact_forces_of_layout(m, d.work, d.lambda, na, ta);
-    rows[k1] = kContactStuck;
-    rows[k0] = kContactNormal;
-    s = locked_solve(sim, rows);
-    if (s != LEGSIM_OK) return s;
-    real nb[kMaxContacts], tb[kMaxContacts];
-    contact_forces_of_layout(m, d.work, d.lambda, nb, tb);
-    real frac = real(0.5);  // MIN_TANGENTIAL: T_0 = (1 - s) T, T_1 = s T least at s = 1/2
-    if (sim.opt.statics_rule == LEGSIM_STATICS_EQUAL_FRICTION) {
-      const real sum = na[k0] + na[k1];  // the normal forces do not depend on s
-      if (!(sum > 0)) return LEGSIM_ERR_NO_EQUILIBRIUM;
-      frac = na[k1] / sum;  // (1 - s) T / N_0 = s T / N_1
-    }
-    // the joint and driver rows lead both layouts in the same order
-    for (int i = 0; i < m.m + m.na; ++i) d.lambda[i] = (1 - frac) * lambda_a[i] + frac * d.lambda[i];
-    for (int k = 0; k < m.nc; ++k) {
-      normal[k] = (1 - frac) * na[k] + frac * nb[k];
-      tangential[k] = (1 - frac) * ta[k] + frac * tb[k];
-    }
-    for (int i = m.m + m.na; i < d.work.m; ++i) {  // B's contact rows, as the combination
-      const RowSource &r = d.work.src[i];
-      d.lambda[i] = r.kind == RowKind::ContactNormal ? -normal[r.index] : -tangential[r.index];
-    }
+    return LEGSIM_OK;
   }
-  d.qdd.setZero();
+  const int k0 = held[0], k1 = held[1];
+  rows[k1] = kContactNormal;
+  s = driven_solve(sim, rows, target);
+  if (s != LEGSIM_OK) return s;
+  const VecR lambda_a = d.lambda;
+  real na[kMaxContacts], ta[kMaxContacts];
+  contact_forces_of_layout(m, d.work, d.lambda, na, ta);
+  rows[k1] = kContactStuck;
+  rows[k0] = kContactNormal;
+  s = driven_solve(sim, rows, target);
+  if (s != LEGSIM_OK) return s;
+  real nb[kMaxContacts], tb[kMaxContacts];
+  contact_forces_of_layout(m, d.work, d.lambda, nb, tb);
+  real frac = real(0.5);  // MIN_TANGENTIAL: T_0 = (1 - s) T, T_1 = s T least at s = 1/2
+  if (sim.opt.statics_rule == LEGSIM_STATICS_EQUAL_FRICTION) {
+    const real sum = na[k0] + na[k1];  // the normal forces do not depend on s
+    if (!(sum > 0)) return LEGSIM_ERR_NO_EQUILIBRIUM;
+    frac = na[k1] / sum;  // (1 - s) T / N_0 = s T / N_1
+  }
+  // the joint and driver rows lead both layouts in the same order
+  for (int i = 0; i < m.m + m.na; ++i) d.lambda[i] = (1 - frac) * lambda_a[i] + frac * d.lambda[i];
+  for (int k = 0; k < m.nc; ++k) {
+    normal[k] = (1 - frac) * na[k] + frac * nb[k];
+    tangential[k] = (1 - frac) * ta[k] + frac * tb[k];
+  }
+  for (int i = m.m + m.na; i < d.work.m; ++i) {  // B's contact rows, as the combination
+    const RowSource &r = d.work.src[i];
+    d.lambda[i] = r.kind == RowKind::ContactNormal ? -normal[r.index] : -tangential[r.index];
+  }
+  return LEGSIM_OK;
+}
+
+// The results of a driven solve: joint reactions, actuator forces F = -lambda_driver (the
+// driver pulls back on the rod) and the contacts' N and T. A float that cannot balance the
+// loads is refused, not reported as infinite reactions.
+legsim_status driven_outputs(Sim &sim, const real *normal, const real *tangential, real *actuator_force) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
   reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   bool finite_result = true;
   for (int j = 0; j < m.nj; ++j)
     finite_result = finite_result && finite(d.reaction[j].force_n[0]) &&
                     finite(d.reaction[j].force_n[1]) && finite(d.reaction[j].moment_nm);
   for (int a = 0; a < m.na; ++a) {
-    d.act[a].force = -d.lambda[m.m + a];  // F = -lambda_driver: the driver pulls back on the rod
+    d.act[a].force = -d.lambda[m.m + a];
     finite_result = finite_result && finite(d.act[a].force);
     if (actuator_force) actuator_force[a] = d.act[a].force;
   }
@@ -127,8 +124,34 @@ legsim_status statics_solve(Sim &sim, real *actuator_force) {
     d.contact[k].tangential = tangential[k];
     finite_result = finite_result && finite(normal[k]) && finite(tangential[k]);
   }
-  // loads a float cannot balance: refused, not reported as infinite reactions
   return finite_result ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+#endif
+
+#if LEGSIM_WITH_STATICS
+namespace {
+void lock_all_actuators(Sim &sim) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  const VecQ zero = VecQ::Zero();
+  for (int a = 0; a < m.na; ++a) {
+    real rate;
+    actuator_length(m, a, d.q, zero, d.drivers.length[a], rate);
+    d.drivers.rate[a] = d.drivers.accel[a] = 0;
+  }
+  d.drivers.ncoord = 0;
+}
+}  // namespace
+
+legsim_status statics_solve(Sim &sim, real *actuator_force) {
+  Data &d = sim.data;
+  lock_all_actuators(sim);
+  d.qd.setZero();
+  real normal[kMaxContacts], tangential[kMaxContacts];
+  const legsim_status s = held_contacts_solve(sim, VecQ::Zero(), normal, tangential);
+  if (s != LEGSIM_OK) return s;
+  d.qdd.setZero();
+  return driven_outputs(sim, normal, tangential, actuator_force);
 }
 
 legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {

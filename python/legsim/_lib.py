@@ -318,6 +318,7 @@ class Library:
             "legsim_velocity_analysis": (st, [P, RP]),
             "legsim_acceleration_analysis": (st, [P, RP]),
             "legsim_inverse_dynamics": (st, [P, RP, RP, RP, RP]),
+            "legsim_inverse_dynamics_on_ground": (st, [P, C.c_uint32, RP, RP, RP, RP]),
             "legsim_statics": (st, [P, RP]),
             "legsim_statics_sweep": (st, [P, C.c_int32, C.POINTER(self.WorstCase)]),
             "legsim_step": (st, [P, C.c_int32]),

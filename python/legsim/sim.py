@@ -478,6 +478,24 @@ class Sim:
         strokes; leaves the sim at the last assembled pose."""
         w = self.library.WorstCase()
         self._check(self.library.cdll.legsim_statics_sweep(self.handle, int(n_grid), C.byref(w)),
+    def inverse_dynamics_on_ground(self, lengths, rates, accels, follow=()):
+        """Inverse dynamics with the stuck feet holding (docs/design/robot-on-ground.md
+        section 8): ``follow`` names (or indexes) the actuators that are not driven (on both
+        feet of the robot, one of the four); their lengths, rates and accelerations follow
+        from the others and the feet (the values given for them are not read). The forces of
+        every actuator and each foot's N and T (:meth:`contacts`) are fixed by the
+        statics_rule on two stuck feet. Returns (forces, lengths, rates, accels), each
+        (n_actuators,)."""
+        na = self.n_actuators
+        mask = 0
+        for a in follow:
+            mask |= 1 << self._actuator(a)
+        bufs = [self._arr(v, na, w) for v, w in ((lengths, "lengths"), (rates, "rates"),
+                                                 (accels, "accels"))]
+        self._check(self.library.cdll.legsim_inverse_dynamics_on_ground(
+            self.handle, mask, *bufs, self._abuf), "legsim_inverse_dynamics_on_ground")
+        return (self._np(self._abuf, na),) + tuple(self._np(b, na) for b in bufs)
+
                     "legsim_statics_sweep")
         nj, na = self.n_joints, self.n_actuators
         return WorstCase(

@@ -63,7 +63,7 @@ from .model import (LegModel, NoEquilibriumError, ReferenceError, add_force, add
                     command_breakpoints, command_forces, integrate_piecewise, n, reaction_offsets,
                     reactions_from_unknowns, u, world_point)
 
-__all__ = ["RobotModel", "Ground", "Assembly", "RobotStatics", "RobotResult", "Modes"]
+__all__ = ["RobotModel", "Ground", "Assembly", "RobotStatics", "RobotInverse", "RobotResult", "Modes"]
 
 _IND = np.array([2, 3, 4])      # independent: psi, right phi3, right phi6
 _DEP = np.array([0, 1, 5, 6])   # dependent: x, y, left phi3, left phi6
@@ -144,6 +144,32 @@ class RobotStatics:
     rule: str
     self_stress: np.ndarray       # (40,) the null vector of the equilibrium equations
     residual: float               # max-abs residual of the 39 equations
+
+
+@dataclass
+class RobotInverse:
+    """Inverse dynamics at one instant with both feet stuck (see
+    RobotModel.inverse_dynamics): independent coordinates, world q, qd, qdd,
+    all four lengths, rates and accelerations, and the forces as RobotStatics."""
+    i: np.ndarray
+    id: np.ndarray
+    idd: np.ndarray
+    z: np.ndarray
+    q: np.ndarray
+    qd: np.ndarray
+    qdd: np.ndarray
+    lengths: np.ndarray
+    rates: np.ndarray
+    accels: np.ndarray
+    actuator_forces: np.ndarray
+    reactions: np.ndarray
+    ground: np.ndarray
+    normal: np.ndarray
+    tangential: np.ndarray
+    friction_use: np.ndarray
+    holds: np.ndarray
+    rule: str
+    residual: float
 
 
 @dataclass
@@ -597,7 +623,15 @@ class RobotModel:
         "min_tangential" (T_R^2 + T_L^2 least).
         """
         asm = self.assemble(lengths, feet_mid) if assembly is None else assembly
-        A, rhs, off, gcol = self.newton_euler(asm.q, np.zeros(3 * self.nb), None, box_load, gravity)
+        F, R, G, N, Tt, use, holds, null, res = self._forces_by_rule(
+            asm.q, np.zeros(3 * self.nb), box_load, gravity, rule, tol)
+        return RobotStatics(asm, F, R, G, N, Tt, use, holds, rule, null, res)
+
+    def _forces_by_rule(self, q, qdd, box_load, gravity, rule, tol):
+        """The 39 Newton-Euler equations at (q, qdd) with the 4 actuator forces
+        unknown (40 unknowns): the particular solution plus s times the
+        self-stress, s by ``rule``."""
+        A, rhs, off, gcol = self.newton_euler(q, qdd, None, box_load, gravity)
         Uu, s, Vt = np.linalg.svd(A)
         if s[-1] < 1e-9 * s[0]:
             raise NoEquilibriumError("the stance is singular: its equilibrium equations lose rank")
@@ -622,14 +656,55 @@ class RobotModel:
             raise ValueError(f"unknown rule {rule!r}")
         x = x0 + s_ * null
         res = float(np.max(np.abs(A @ x - rhs)))
-        qb = asm.q.reshape(self.nb, 3)
+        qb = np.asarray(q, float).reshape(self.nb, 3)
         R, G = self._unpack(qb, x, off, gcol)
         F = x[gcol + 4:].copy()
         N, Tt = G @ nm, G @ tg
         with np.errstate(divide="ignore", invalid="ignore"):
             use = np.where(N > 0, np.abs(Tt) / N, np.inf)
         holds = (N > 0) & (np.abs(Tt) <= self.ground.mu_static * N)
-        return RobotStatics(asm, F, R, G, N, Tt, use, holds, rule, null, res)
+        return F, R, G, N, Tt, use, holds, null, res
+
+    # -------------------------------------------------- inverse dynamics
+    def inverse_dynamics(self, lengths, rates, accels, follow: int = 3,
+                         start: Optional[Assembly] = None, box_load=(0.0, 0.0, 0.0), gravity=True,
+                         rule="equal_friction", guess=None, tol: float = 1e-8) -> "RobotInverse":
+        """Inverse dynamics along driven lengths with both feet stuck at
+        ``start``'s feet (default: the stand assembly).  The three actuators
+        other than ``follow`` drive the three independent coordinates
+        i = (psi, thetaR): i by Newton on their lengths, i_d and i_dd from
+        dl/di (exact jets, no differences); the follower's length, rate and
+        acceleration follow.  The 4 actuator forces, the reactions and the
+        ground forces from the 39 Newton-Euler equations, the self-stress
+        fixed by ``rule`` as in :meth:`statics`."""
+        start = self.assemble() if start is None else start
+        feet, g = start.feet, self._gravity(gravity)
+        D = [a for a in range(self.na) if a != int(follow)]
+        L, Ld, Ldd = (np.asarray(v, float)[D] for v in (lengths, rates, accels))
+        i = np.array(start.z[_IND] if guess is None else guess, float)
+        self._thL_guess = start.z[5:7].copy()
+        for _ in range(50):
+            z = self._solve_dependent(i, feet)
+            K = self.kinematics(z, np.zeros(7))
+            T, _ = self._partition(K)
+            Gl = K.lz[D] @ T
+            res = K.l[D] - L
+            if np.max(np.abs(res)) < 1e-14:
+                break
+            i = i - np.linalg.solve(Gl, res)
+        else:
+            raise NoEquilibriumError("the driven lengths cannot be reached with both feet stuck")
+        id_ = np.linalg.solve(Gl, Ld)
+        zd = T @ id_
+        K = self.kinematics(z, zd)
+        _, c = self._partition(K)
+        idd = np.linalg.solve(Gl, Ldd - K.lz[D] @ c - K.lb[D])
+        zdd = T @ idd + c
+        Jq = K.J.reshape(-1, 7)
+        q, qd, qdd = K.P.reshape(-1), Jq @ zd, Jq @ zdd + K.b.reshape(-1)
+        F, R, G, N, Tt, use, holds, null, r = self._forces_by_rule(q, qdd, box_load, g, rule, tol)
+        return RobotInverse(i, id_, idd, z, q, qd, qdd, K.l.copy(), K.ld.copy(), K.lz @ zdd + K.lb,
+                            F, R, G, N, Tt, use, holds, rule, r)
 
     # ------------------------------------------------------ equilibria, modes
     def equilibrium(self, actuators, start: Optional[Assembly] = None, box_load=(0.0, 0.0, 0.0),
