@@ -5,6 +5,11 @@
   symbols  the libraries reference no heap function and the image defines none
   qemu     run the image on QEMU: exit 0, stand pose = known values = host twin
 
+--manifest picks the image: legsim_mcu_manifest.txt (the leg's, default) or
+legsim_mcu_robot_manifest.txt (the two-leg robot's, preset cortex-m7-robot);
+qemu --facts leg|robot: the known values checked (the leg's stand pose, or the
+robot's feet stuck on the ground line).
+
 Exit 0: pass, 1: fail, 77: skipped (arm toolchain or QEMU not installed).
 """
 import argparse
@@ -59,8 +64,8 @@ def tool(name, hint_dir=None):
     return shutil.which(name)
 
 
-def read_manifest(build_dir):
-    path = os.path.join(build_dir, "legsim_mcu_manifest.txt")
+def read_manifest(build_dir, name="legsim_mcu_manifest.txt"):
+    path = os.path.join(build_dir, name)
     if not os.path.exists(path):
         log(f"FAIL: {path} missing: the cross build made no firmware image. Is "
             "firmware_core/mcu added by the top-level CMakeLists.txt when "
@@ -100,7 +105,7 @@ def cmd_build(args):
         if r.returncode != 0:
             log(f"FAIL: exit status {r.returncode}")
             return 1
-    m = read_manifest(args.build_dir)
+    m = read_manifest(args.build_dir, args.manifest)
     if not os.path.exists(m["image"]):
         log(f"FAIL: {m['image']} was not built")
         return 1
@@ -123,7 +128,7 @@ def cmd_symbols(args):
         log("SKIP: arm-none-eabi-gcc / arm-none-eabi-nm not found (apt-get install "
             "gcc-arm-none-eabi binutils-arm-none-eabi)")
         return SKIP
-    m = read_manifest(args.build_dir)
+    m = read_manifest(args.build_dir, args.manifest)
     nm = m.get("nm") or ""
     if not (nm and os.access(nm, os.X_OK)):
         nm = tool("arm-none-eabi-nm")
@@ -179,6 +184,8 @@ def parse_report(text):
         try:
             if f[0] == "legsim-mcu":
                 rep["real"] = f[f.index("real") + 1]
+            elif f[0] == "model":
+                rep["model"] = f[1]
             elif f[0] == "sim_size":
                 rep["sim_size"], rep["storage"] = int(f[1]), int(f[3])
             elif f[0] == "stand" and f[1] == "status":
@@ -190,6 +197,8 @@ def parse_report(text):
                     rep[prefix + ("q", int(rest[1]))] = tuple(float(x) for x in rest[2:5])
                 elif rest[0] == "foot":
                     rep[prefix + ("foot",)] = (float(rest[1]), float(rest[2]))
+                elif rest[0] == "contact":  # name: state N T x y
+                    rep[prefix + ("contact", rest[1])] = tuple(float(x) for x in rest[2:7])
                 elif rest[0] == "joint":
                     rep[prefix + ("joint", rest[1])] = (float(rest[2]), float(rest[3]))
                 elif rest[0] == "status":
@@ -219,7 +228,7 @@ def cmd_qemu(args):
     if not tool("arm-none-eabi-gcc"):
         log("SKIP: arm-none-eabi-gcc not found, so no image was built")
         return SKIP
-    m = read_manifest(args.build_dir)
+    m = read_manifest(args.build_dir, args.manifest)
     cmd = [qemu, "-M", m["board"], "-nographic", "-monitor", "none", "-serial", "none",
            "-semihosting-config", "enable=on,target=native", "-icount", "shift=0",
            "-kernel", m["image"]]
@@ -267,8 +276,25 @@ def cmd_qemu(args):
         if not close(got, want, tol):
             failures.append(f"{what}: image {got}, expected {want} (tol {tol:g})")
 
+    if args.facts == "robot":
+        # both feet stuck (state 1) on the ground line y = 0 (models/robot.toml: level,
+        # through the origin), at the stand and after the steps
+        feet = [(k, v) for k, v in mcu.items() if isinstance(k, tuple) and k[-2] == "contact"]
+        if len(feet) != 6:
+            failures.append(f"{len(feet)} contact lines, 6 expected (2 feet x stand, rk4, "
+                            "generalized_alpha)")
+        for key, v in feet:
+            if v[0] != 1:
+                failures.append(f"{' '.join(key)}: state {v[0]:g}, 1 (stuck) expected")
+            check(" ".join(key) + " on the ground (y)", v[4], 0.0, tol_fact)
+        # the stand: each foot under its hip (+-0.20 m, models/robot.toml) at the leg's
+        # stand foot x (STAND_FACTS) on its side
+        for name, sign in (("right.foot", 1.0), ("left.foot", -1.0)):
+            v = mcu.get(("stand", "contact", name))
+            check(f"stand {name} x", v[3] if v else None,
+                  sign * (0.20 + STAND_FACTS[("foot",)][0]), tol_fact)
     # the known stand pose
-    for key, want in STAND_FACTS.items():
+    for key, want in (STAND_FACTS.items() if args.facts == "leg" else ()):
         if key[0] == "phi":
             q = mcu.get(("stand", "q", key[1]))
             check(f"stand phi of body {key[1]}", q[2] if q else None, want, tol_fact)
@@ -313,11 +339,15 @@ def main():
     b.add_argument("--source", required=True)
     b.add_argument("--build-dir", required=True)
     b.add_argument("--cmake", default="cmake")
+    b.add_argument("--manifest", default="legsim_mcu_manifest.txt")
     s = sub.add_parser("symbols")
     s.add_argument("--build-dir", required=True)
+    s.add_argument("--manifest", default="legsim_mcu_manifest.txt")
     q = sub.add_parser("qemu")
     q.add_argument("--build-dir", required=True)
     q.add_argument("--host-report", required=True)
+    q.add_argument("--manifest", default="legsim_mcu_manifest.txt")
+    q.add_argument("--facts", choices=("leg", "robot"), default="leg")
     q.add_argument("--timeout", type=float, default=120.0)
     args = ap.parse_args()
     return {"build": cmd_build, "symbols": cmd_symbols, "qemu": cmd_qemu}[args.cmd](args)
