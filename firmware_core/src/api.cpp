@@ -363,11 +363,17 @@ legsim_status legsim_clear_events(legsim_sim *sim) {
   CHECK_SIM(sim);
   as_sim(sim)->data.report.events = 0;
   as_sim(sim)->data.stroke_mask = 0;
+  for (ContactData &c : as_sim(sim)->data.contact) c.events = 0;
   return LEGSIM_OK;
 }
 
 uint32_t legsim_stroke_event_mask(const legsim_sim *sim) {
   return sim_ok(sim) ? as_sim(sim)->data.stroke_mask : 0;
+}
+
+uint32_t legsim_contact_event_mask(const legsim_sim *sim, int32_t k) {
+  if (!sim_ok(sim) || k < 0 || k >= as_sim(sim)->model.nc) return 0;
+  return as_sim(sim)->data.contact[k].events;
 }
 
 double legsim_time(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.t : 0.0; }

@@ -62,7 +62,7 @@ void contact_forces_update(Sim &sim) {
 
 void contacts_free(Sim &sim) {
   Data &d = sim.data;
-  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}};
+  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}, 0};
 }
 
 void contact_forces_of_layout(const Model &model, const Layout &layout, const VecR &lambda,
@@ -133,9 +133,11 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   Data &d = sim.data;
   if (m.nc == 0) return LEGSIM_OK;
   uint32_t slipped = 0, stuck_again = 0;  // each once per check
+  uint32_t changing = 0;                  // the contacts the last pass changed
   const real tol = real(sim.opt.newton_tol);
   for (int pass = 0; pass < 3 * kMaxContacts + 2; ++pass) {
     uint32_t touch = 0, to_stick = 0;
+    changing = 0;
     bool any = false;
     for (int k = 0; k < m.nc; ++k) {
       ContactData &c = d.contact[k];
@@ -148,16 +150,19 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
         c.state = LEGSIM_CONTACT_STUCK;  // first as stuck: the impulse decides
         d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
         c.slip_dir = int8_t(sign_of(vt));
+        c.events |= LEGSIM_EVENT_TOUCHDOWN;
         raise_event(d, LEGSIM_EVENT_TOUCHDOWN);
       } else if (c.normal < 0) {
         c.state = LEGSIM_CONTACT_FREE;
         c.normal = c.tangential = 0;
+        c.events |= LEGSIM_EVENT_LIFTOFF;
         raise_event(d, LEGSIM_EVENT_LIFTOFF);
       } else if (c.state == LEGSIM_CONTACT_STUCK) {
         if (!(std::abs(c.tangential) > m.mu_s * c.normal) || ((slipped >> k) & 1u)) continue;
         c.state = LEGSIM_CONTACT_SLIDING;
         c.slip_dir = int8_t(-sign_of(c.tangential));  // it gives way against the force that held it
         slipped |= 1u << k;
+        c.events |= LEGSIM_EVENT_STICK_TO_SLIP;
         raise_event(d, LEGSIM_EVENT_STICK_TO_SLIP);
       } else {  // sliding
         if (!(vt * real(c.slip_dir) < 0) || (((stuck_again | slipped) >> k) & 1u)) continue;
@@ -165,9 +170,11 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
         d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
         to_stick |= 1u << k;
         stuck_again |= 1u << k;
+        c.events |= LEGSIM_EVENT_SLIP_TO_STICK;
         raise_event(d, LEGSIM_EVENT_SLIP_TO_STICK);
       }
       any = true;
+      changing |= 1u << k;
     }
     if (!any) return LEGSIM_OK;
     changed = true;
@@ -199,6 +206,8 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
     s = dynamics_state_update(sim);  // forces of the new modes
     if (s != LEGSIM_OK) return s;
   }
+  for (int k = 0; k < m.nc; ++k)  // the contacts still changing carry it
+    if ((changing >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
   raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
   return LEGSIM_OK;
 }

@@ -164,6 +164,7 @@ struct ContactData {
   int8_t slip_dir;   // SLIDING: the sign of the sliding velocity along the tangent (+1, -1)
   real normal, tangential;  // N, T of the last solve (0 when free)
   real impulse[2];   // the last impact's (normal, tangential) impulse on the foot, N s
+  uint32_t events;   // the contact legsim_event bits this contact raised since legsim_clear_events
 };
 
 struct Data {

@@ -310,6 +310,10 @@ legsim_status legsim_failure_report(const legsim_sim *sim, legsim_report *out);
 legsim_status legsim_clear_events(legsim_sim *sim);
 /* Which actuators raised a stroke event (bit a = actuator a). */
 uint32_t legsim_stroke_event_mask(const legsim_sim *sim);
+/* The contact events (LIFTOFF .. CONTACT_AMBIGUOUS bits) contact k raised since the last
+ * legsim_clear_events (CONTACT_INCONSISTENT: the contacts whose mode was still changing);
+ * 0 for a bad handle or k outside 0 .. n_contacts - 1. */
+uint32_t legsim_contact_event_mask(const legsim_sim *sim, int32_t k);
 
 double legsim_time(const legsim_sim *sim);
 uint64_t legsim_step_count(const legsim_sim *sim);
