@@ -40,7 +40,7 @@ BENCHMARKS = {
     "stress": ("legsim_bench.benchmarks.stress", "stress runs"),
     "mcu": ("legsim_bench.benchmarks.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
     "robot-peers": ("legsim_bench.benchmarks.peers.robot_results",
-                    "the two-leg robot in MuJoCo and Siconos against the bench's reference"),
+                    "the two-leg robot in legsim, MuJoCo and Siconos: errors against the bench's reference and cost"),
 }
 
 
