@@ -1,16 +1,9 @@
 // Constraint equations Phi(q) = 0: one small unit per joint kind with its rows,
 // Jacobian coefficients and acceleration right-hand side gamma (Phi_q qdd = gamma),
 // plus the driver rows (actuator lengths, coordinates) appended after them.
-#include "sim.hpp"
+#include "kernel.hpp"
 
 namespace legsim {
-namespace {
-
-struct BodyPose {
-  Vec2 r, rd;  // centre and its velocity
-  real phi, w; // angle and angular velocity
-  Vec2 u, n;
-};
 
 BodyPose pose_of(const VecQ &q, const VecQ &qd, int b) {  // one sin/cos pair per body
   BodyPose p;
@@ -23,6 +16,7 @@ BodyPose pose_of(const VecQ &q, const VecQ &qd, int b) {  // one sin/cos pair pe
   return p;
 }
 
+namespace {
 // Body-fixed (xi, eta) to a world-axes offset from the centre.
 Vec2 offset(const BodyPose &p, const Vec2 &xi_eta) { return xi_eta.x() * p.u + xi_eta.y() * p.n; }
 
@@ -31,6 +25,7 @@ void set_coef(real (&c)[3], const Vec2 &g, real gphi) {
   c[1] = g.y();
   c[2] = gphi;
 }
+}  // namespace
 
 // Revolute (eqs. (2)-(11)): point on a = point on b (or a frame point).
 // Phi = ra + sa - rb - sb; gamma = wa^2 sa - wb^2 sb.
@@ -88,6 +83,7 @@ void slot_rows(const Joint &j, const BodyPose *pose, int row, Rows &out) {
   out.nu[row] = 0;
 }
 
+namespace {
 // Actuator length driver: (r_rod - r_cyl) . u_cyl + offset - l(t) = 0.
 void actuator_row(const Actuator &ac, const DriverValues &dv, int index, const BodyPose *pose,
                   int row, Rows &out) {
@@ -170,11 +166,16 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
     ++m;
   }
   out.m = m;
+  out.kernel = model.kernel;
   out.npairs = 0;
   out.stops = false;
   out.nslide = 0;
   return LEGSIM_OK;
 }
+
+namespace {
+legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first);
+}  // namespace
 
 // The coordinate drivers' bodies are known once their values are: finish the
 // layout and list the entries of J W J^T that can be non-zero.
@@ -188,24 +189,36 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
         if (out.body[i][si] >= 0 && out.body[i][si] == out.body[j][sj]) return true;
     return false;
   };
-  // reverse Cuthill-McKee: breadth-first from a least-coupled row, neighbours by degree
+  const Kernel *k = out.kernel;
+  if (k) {
+    // the joint block in the kernel's order, the other rows after it as they come: their
+    // rows of the factor are the Schur complement's on the kernel's factor
+    for (int i = 0; i < m; ++i) out.perm[i] = i < k->mj ? k->perm[i] : uint8_t(i);
+    return layout_pairs(out, k->mj, k->first);
+  }
+  // The joint block in a reverse Cuthill-McKee order (breadth-first from a least-coupled
+  // row, neighbours by degree), which keeps its envelope small; the other rows after it
+  // as they come. tools/kernel_codegen.py orders a kernel's block by the same rule, so
+  // the two paths factor alike.
+  int mj = 0;
+  while (mj < m && out.src[mj].kind == RowKind::Joint) ++mj;
   int degree[kMaxRows], order[kMaxRows], n = 0;
   bool placed[kMaxRows];
-  for (int i = 0; i < m; ++i) {
+  for (int i = 0; i < mj; ++i) {
     degree[i] = 0;
     placed[i] = false;
-    for (int j = 0; j < m; ++j) degree[i] += (j != i && share_body(i, j));
+    for (int j = 0; j < mj; ++j) degree[i] += (j != i && share_body(i, j));
   }
-  while (n < m) {
+  while (n < mj) {
     int start = -1;
-    for (int i = 0; i < m; ++i)
+    for (int i = 0; i < mj; ++i)
       if (!placed[i] && (start < 0 || degree[i] < degree[start])) start = i;
     placed[start] = true;
     order[n++] = start;
     for (int head = n - 1; head < n; ++head) {
       for (;;) {  // the unplaced neighbours of order[head], lowest degree first
         int next = -1;
-        for (int j = 0; j < m; ++j)
+        for (int j = 0; j < mj; ++j)
           if (!placed[j] && share_body(order[head], j) && (next < 0 || degree[j] < degree[next]))
             next = j;
         if (next < 0) break;
@@ -214,15 +227,25 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
       }
     }
   }
-  for (int p = 0; p < m; ++p) out.perm[order[m - 1 - p]] = uint8_t(p);
+  for (int p = 0; p < mj; ++p) out.perm[order[mj - 1 - p]] = uint8_t(p);
+  for (int i = mj; i < m; ++i) out.perm[i] = uint8_t(i);
+  return layout_pairs(out, 0, nullptr);
+}
+
+namespace {
+// The entries of J W J^T at positions from p0 on (those before: the kernel's block, whose
+// envelope is first[]) and each position's envelope.
+legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
+  const int m = out.m;
   int np = 0;
-  for (int p = 0; p < m; ++p) out.first[p] = uint8_t(p);
+  for (int p = 0; p < m; ++p) out.first[p] = p < p0 ? first[p] : uint8_t(p);
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j)
       for (int si = 0; si < 2; ++si)
         for (int sj = 0; sj < 2; ++sj) {
           const int pi = out.perm[i], pj = out.perm[j];
           if (pj > pi || (i == j && sj < si)) continue;  // each lower entry (and diagonal pair) once
+          if (pi < p0) continue;                          // the kernel's own
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
           out.pair[np++] = {uint16_t(3 * (2 * i + si)), uint16_t(3 * (2 * j + sj)),
@@ -232,12 +255,31 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   out.npairs = np;
   return LEGSIM_OK;
 }
+}  // namespace
 
 void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv, const VecQ &q,
                const VecQ &qd, Rows &rows) {
+  int i = 0;
+  if (layout.kernel) {
+    layout.kernel->rows(model, q, qd, rows);
+    i = layout.kernel->mj;
+    if (i == layout.m) return;
+  }
   BodyPose pose[kMaxBodies];
-  for (int b = 0; b < model.nb; ++b) pose[b] = pose_of(q, qd, b);
-  for (int i = 0; i < layout.m;) {
+  if (i == 0) {
+    for (int b = 0; b < model.nb; ++b) pose[b] = pose_of(q, qd, b);
+  } else {  // only the bodies of the rows after the kernel's: one sin/cos pair each
+    bool have[kMaxBodies] = {};
+    for (int r = i; r < layout.m; ++r)
+      for (int sl = 0; sl < 2; ++sl) {
+        const int b = layout.body[r][sl];
+        if (b >= 0 && !have[b]) {
+          pose[b] = pose_of(q, qd, b);
+          have[b] = true;
+        }
+      }
+  }
+  while (i < layout.m) {
     const RowSource &s = layout.src[i];
     switch (s.kind) {
       case RowKind::Joint: {

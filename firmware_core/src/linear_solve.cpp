@@ -1,7 +1,7 @@
 // The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
 // the identity), assembled from the sparse rows, factored by Cholesky in
 // place. Hand-written so that no Eigen path can fall back to the heap.
-#include "sim.hpp"
+#include "kernel.hpp"
 
 namespace legsim {
 
@@ -15,15 +15,20 @@ constexpr real kPivotFloor = real(1e-13);
 
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
   const int m = layout.m;
+  const Kernel *kern = layout.kernel;
+  const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
   f.m = m;
+  f.kernel = kern;
   for (int i = 0; i < m; ++i) {
     f.perm[i] = layout.perm[i];
     f.first[i] = layout.first[i];
-    for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
   }
+  for (int i = mk; i < m; ++i)
+    for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
+  if (kern) kern->assemble(rows, w, f.a.data());
   // weight each row's coefficients once, then every non-zero entry is one dot product
   real wc[kMaxRows][2][3];
-  for (int i = 0; i < m; ++i)
+  for (int i = mk; i < m; ++i)
     for (int sl = 0; sl < 2; ++sl) {
       const int b = layout.body[i][sl];
       if (b < 0) continue;
@@ -47,7 +52,11 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     return m == 0 ? LEGSIM_OK : LEGSIM_ERR_SINGULAR;
   }
   real pmin = max_diag, pmax = 0;
-  for (int i = 0; i < m; ++i) {
+  if (kern && !kern->cholesky(f.a.data(), kPivotFloor * max_diag, pmin, pmax)) {
+    f.condition = real(INFINITY);
+    return LEGSIM_ERR_SINGULAR;
+  }
+  for (int i = mk; i < m; ++i) {
     const int fi = f.first[i];
     real *ai = &f.a(i, 0);
     for (int j = fi; j < i; ++j) {
@@ -75,19 +84,21 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
 namespace {
 // L L^T y = y in the factor's own (permuted) order.
 void solve_in_place(const Factor &f, real *y) {
-  const int m = f.m;
-  for (int i = 0; i < m; ++i) {
+  const int m = f.m, mk = f.kernel ? f.kernel->mj : 0;
+  if (mk) f.kernel->forward(f.a.data(), y);
+  for (int i = mk; i < m; ++i) {
     const real *ai = &f.a(i, 0);
     real s = y[i];
     for (int k = f.first[i]; k < i; ++k) s -= ai[k] * y[k];
     y[i] = s / ai[i];
   }
-  for (int i = m - 1; i >= 0; --i) {
+  for (int i = m - 1; i >= mk; --i) {
     const real *ai = &f.a(i, 0);
     y[i] /= ai[i];
     const real yi = y[i];
     for (int k = f.first[i]; k < i; ++k) y[k] -= ai[k] * yi;
   }
+  if (mk) f.kernel->backward(f.a.data(), y);
 }
 
 // y = L L^T x in the factor's order.
@@ -145,8 +156,14 @@ real factor_condition(const Factor &f) {
 }
 
 void jt_times(const Model &model, const Layout &layout, const Rows &rows, const VecR &x, VecQ &y) {
-  for (int k = 0; k < model.nq; ++k) y[k] = 0;
-  for (int i = 0; i < layout.m; ++i)
+  int i0 = 0;
+  if (layout.kernel) {
+    layout.kernel->jt_times(rows, x.data(), y.data());
+    i0 = layout.kernel->mj;
+  } else {
+    for (int k = 0; k < model.nq; ++k) y[k] = 0;
+  }
+  for (int i = i0; i < layout.m; ++i)
     for (int s = 0; s < 2; ++s) {
       const int b = layout.body[i][s];
       if (b < 0) continue;
@@ -158,7 +175,12 @@ void jt_times(const Model &model, const Layout &layout, const Rows &rows, const 
 }
 
 void j_times(const Layout &layout, const Rows &rows, const VecQ &x, VecR &y) {
-  for (int i = 0; i < layout.m; ++i) {
+  int i0 = 0;
+  if (layout.kernel) {
+    layout.kernel->j_times(rows, x.data(), y.data());
+    i0 = layout.kernel->mj;
+  }
+  for (int i = i0; i < layout.m; ++i) {
     real s = 0;
     for (int k = 0; k < 2; ++k) {
       const int b = layout.body[i][k];

@@ -3,7 +3,7 @@
 #include <cstring>
 #include <type_traits>
 
-#include "sim.hpp"
+#include "kernel.hpp"
 
 namespace legsim {
 namespace {
@@ -264,6 +264,7 @@ legsim_status model_compile(const legsim_model_desc *d, Model &m) {
   m.ground_n = perp(m.ground_t);
   m.mu_s = real(gd.mu_static);
   m.mu_k = real(gd.mu_kinetic);
+  m.kernel = kernel_find(m);  // generated joint-block kernels (kernel.hpp), by structure
   return LEGSIM_OK;
 }
 

@@ -39,6 +39,8 @@ inline Vec2 normal_n(real phi) { return Vec2(std::cos(phi), std::sin(phi)); }
 inline Vec2 perp(const Vec2 &s) { return Vec2(-s.y(), s.x()); }
 inline real cross2(const Vec2 &a, const Vec2 &b) { return a.x() * b.y() - a.y() * b.x(); }
 
+struct Kernel;  // generated joint-block kernels (kernel.hpp)
+
 // ---- compiled model (constant after legsim_init) ----
 struct Joint {
   legsim_joint_kind kind;
@@ -83,6 +85,7 @@ struct Model {
   Contact contact[kMaxContacts];
   Vec2 ground_point, ground_t, ground_n;  // the line, its tangent and upward normal
   real mu_s, mu_k;
+  const Kernel *kernel;  // the generated kernel of this structure, or nullptr (kernel_find)
 };
 
 // ---- rows of the constraint system: joint equations plus drivers ----
@@ -125,6 +128,7 @@ struct Layout {
   // force mu_k lambda_n along the tangent, which makes the system non-symmetric.
   uint8_t nslide;
   uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
+  const Kernel *kernel;  // the model's kernel serves rows 0 .. kernel->mj-1 (nullptr: none)
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
@@ -150,6 +154,7 @@ struct Factor {
   uint8_t perm[kMaxRows];   // row -> position, as in the layout
   uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
+  const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
 };
 
 struct ActuatorState {

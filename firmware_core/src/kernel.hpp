@@ -1,0 +1,66 @@
+// Generated fixed-sparsity kernels for the joint block of a model's constraint system.
+//
+// Every layout starts with the joint equations (rows 0 .. mj-1), and their sparsity is
+// fixed by the model's structure (which joint kind joins which bodies). For the models
+// compiled in (models/*.toml), firmware_core/tools/kernel_codegen.py generates at build
+// time straight-line code for that block: the rows (one sin/cos per body), the lower
+// triangle of J W J^T, its Cholesky factor in an elimination order and fill fixed at
+// generation time, the triangular solves, J x and J^T x. Rows that change at run time
+// (stroke stops, drivers, contacts) follow the joint block in the factor's order; the
+// general envelope code factors and solves them against the generated block (block
+// elimination: their rows of L are the Schur complement's), so one kernel serves every
+// row set. The factor keeps the general storage (Factor::a by position), so every other
+// use of it (condition estimate, projections) is unchanged.
+//
+// A kernel is chosen by structure (kernel_find): bodies, joint kinds and the bodies each
+// joint joins. The geometry (joint points) is read from the Model at run time, so a model
+// of the same structure, compiled in or loaded, gets the same kernel, and its results
+// agree with the general path's to round-off (tests/core/test_kernels.c).
+#pragma once
+
+#include "sim.hpp"
+
+namespace legsim {
+
+struct Kernel {
+  const char *name;  // the model and variant it was generated from
+  // the structure it serves
+  int nb, nj;
+  const int8_t (*joint)[3];  // per joint: kind, body a, body b (LEGSIM_FRAME: -1)
+  int mj;                    // joint rows
+  const uint8_t *perm;       // joint row -> position in the factor
+  const uint8_t *first;      // by position: first column of L's envelope (fill included)
+  // Rows 0 .. mj-1 of Phi, the Jacobian, nu and gamma at (q, qd).
+  void (*rows)(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows);
+  // Positions 0 .. mj-1 of J W J^T's lower envelope into a (zeros where it has none).
+  void (*assemble)(const Rows &rows, const real *w, real *a);
+  // Cholesky of that block in place; false on a pivot <= floor. pmin/pmax: pivot range.
+  bool (*cholesky)(real *a, real floor, real &pmin, real &pmax);
+  // L y = y and L^T y = y on positions 0 .. mj-1.
+  void (*forward)(const real *a, real *y);
+  void (*backward)(const real *a, real *y);
+  // y[i] = (J x)_i for the joint rows; y = J_joint^T x (all nq values written).
+  void (*j_times)(const Rows &rows, const real *x, real *y);
+  void (*jt_times)(const Rows &rows, const real *x, real *y);
+};
+
+// The generated kernel for this model's structure, or nullptr (the general path).
+const Kernel *kernel_find(const Model &model);
+
+// The row units of constraints.cpp, shared with the generated rows.
+struct BodyPose {
+  Vec2 r, rd;   // centre and its velocity
+  real phi, w;  // angle and angular velocity
+  Vec2 u, n;
+};
+BodyPose pose_of(const VecQ &q, const VecQ &qd, int b);  // one sin/cos pair
+void revolute_rows(const Joint &j, const BodyPose *pose, int row, Rows &out);
+void prismatic_rows(const Joint &j, const BodyPose *pose, int row, Rows &out);
+void slot_rows(const Joint &j, const BodyPose *pose, int row, Rows &out);
+
+}  // namespace legsim
+
+// For tests and benchmarks (not in legsim.h): on = 0 puts a sim on the general path,
+// on = 1 back on its model's kernel (if it has one). Returns 1 when the sim now uses a
+// kernel, 0 when not, -1 for a null or uninitialized sim.
+extern "C" int legsim_kernel_use(legsim_sim *sim, int on);

@@ -1,0 +1,289 @@
+#!/usr/bin/env python3
+"""Generate the fixed-sparsity joint-block kernels of the compiled-in models (kernel.hpp).
+
+    kernel_codegen.py --out legsim_kernels.cpp models/leg.toml models/robot.toml
+
+For each distinct structure among the files' variants (joint kinds and the bodies they
+join), writes straight-line C++ for the joint rows of the constraint system:
+  rows       Phi, the Jacobian, nu and gamma (the row units of constraints.cpp, one
+             sin/cos pair per body, no dispatch);
+  assemble   the lower envelope of J W J^T, products with the Jacobian's constant
+             entries (the revolute rows' 1 and 0, the prismatic angle row) folded away;
+  cholesky   L L^T in the general path's order (reverse Cuthill-McKee) with its fill
+             worked out here (symbolic factorization), in the storage the general code
+             uses (Factor::a by position);
+  forward, backward, j_times, jt_times over the non-zeros only.
+The geometry (joint points) is read from the Model at run time: the kernel depends on the
+structure only, and kernel_find (in the generated file) picks it by that structure.
+Each kernel is compiled only where the build's capacities hold its model. Python 3.11+,
+standard library only; model_codegen.py reads and checks the TOML files.
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+import model_codegen  # noqa: E402
+
+KIND = {"revolute_to_frame": 0, "revolute": 1, "prismatic": 2, "slot": 3}
+NROWS = {"revolute_to_frame": 2, "revolute": 2, "prismatic": 2, "slot": 1}
+ROW_UNIT = {"revolute_to_frame": "revolute_rows", "revolute": "revolute_rows",
+            "prismatic": "prismatic_rows", "slot": "slot_rows"}
+V = None  # a Jacobian entry known only at run time (rows.coef)
+
+
+def joint_rows(joints):
+    """Per joint row: its two bodies (-1: none) and per slot the 3 coefficients,
+    each a constant or V (as the row units of constraints.cpp write them)."""
+    rows = []
+    for j in joints:
+        a, b = j["body"]
+        kind = j["kind"]
+        if kind in ("revolute_to_frame", "revolute"):
+            other = b if kind == "revolute" else -1
+            rows.append(((a, other), ((1, 0, V), (-1, 0, V))))
+            rows.append(((a, other), ((0, 1, V), (0, -1, V))))
+        elif kind == "prismatic":
+            rows.append(((a, b), ((0, 0, -1), (0, 0, 1))))
+            rows.append(((a, b), ((V, V, V), (V, V, 0))))
+        else:  # slot
+            rows.append(((a, b), ((V, V, V), (V, V, V))))
+    return rows
+
+
+def rcm_order(m, share):
+    """Rows in elimination order: reverse Cuthill-McKee exactly as layout_finish
+    (constraints.cpp) orders the joint block, ties to the lowest index, so that the
+    kernel and the general path factor the same matrix in the same order."""
+    deg = [sum(1 for j in range(m) if j != i and share[i][j]) for i in range(m)]
+    placed, order = [False] * m, []
+    while len(order) < m:
+        start = min((i for i in range(m) if not placed[i]), key=lambda i: (deg[i], i))
+        placed[start] = True
+        order.append(start)
+        head = len(order) - 1
+        while head < len(order):  # breadth first, the unplaced neighbours lowest degree first
+            while True:
+                near = [j for j in range(m) if not placed[j] and share[order[head]][j]]
+                if not near:
+                    break
+                nxt = min(near, key=lambda j: (deg[j], j))
+                placed[nxt] = True
+                order.append(nxt)
+            head += 1
+    return order[::-1]
+
+
+def product(terms):
+    """C text of a signed sum of products [(constant, [factors])]; "0" when empty."""
+    out = []
+    for c, vs in terms:
+        if c == 0:
+            continue
+        parts = ([f"real({abs(c)})"] if abs(c) != 1 else []) + vs
+        out.append(("-" if c < 0 else "+", " * ".join(parts) or "1"))
+    if not out:
+        return "0"
+    return ("-" if out[0][0] == "-" else "") + out[0][1] + "".join(f" {sg} {b}" for sg, b in out[1:])
+
+
+def group(dots):
+    """Sum of per-slot dot products, each summed apart first (the general path's rounding)."""
+    dots = [d for d in dots if d != "0"]
+    if not dots:
+        return "0"
+    return " + ".join(d if len(dots) == 1 else f"({d})" for d in dots)
+
+
+class Kernel:
+    def __init__(self, name, model):
+        self.name = name
+        self.nb = len(model["bodies"])
+        self.joints = model["joints"]
+        self.rows = joint_rows(self.joints)
+        m = self.m = len(self.rows)
+        share = [[any(x >= 0 and x == y for x in self.rows[i][0] for y in self.rows[j][0])
+                  for j in range(m)] for i in range(m)]
+        order = rcm_order(m, share)
+        self.perm = [0] * m
+        for p, i in enumerate(order):
+            self.perm[i] = p
+        self.row_at = order  # position -> row
+        # A's lower pattern and L's (fill included), by position
+        self.a_nz = [[share[order[p]][order[q]] for q in range(m)] for p in range(m)]
+        lp = [set() for _ in range(m)]
+        for p in range(m):
+            for q in range(p):
+                if self.a_nz[p][q] or any(k in lp[q] for k in lp[p] if k < q):
+                    lp[p].add(q)
+        self.l_nz = [sorted(s) for s in lp]
+        self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
+
+    def coef(self, i, s, k):
+        c = self.rows[i][1][s][k]
+        return (1, [f"c[{i}][{s}][{k}]"]) if c is V else (c, [])
+
+    def signature(self):
+        return tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
+
+    def emit(self, sym):
+        m, R = self.m, "R"
+        o = []
+        a = lambda p, q: f"a[{p} * {R} + {q}]"  # noqa: E731
+        # rows
+        used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
+        o.append(f"void {sym}_rows(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows) {{")
+        o.append(f"  BodyPose pose[{self.nb}];")
+        o += [f"  pose[{b}] = pose_of(q, qd, {b});" for b in used]
+        r = 0
+        for n, j in enumerate(self.joints):
+            o.append(f"  {ROW_UNIT[j['kind']]}(model.joint[{n}], pose, {r}, rows);")
+            r += NROWS[j["kind"]]
+        o.append("}\n")
+        # J W J^T, lower envelope by position
+        o.append(f"void {sym}_assemble(const Rows &rows, const real *w, real *a) {{")
+        o.append(f"  constexpr int {R} = kMaxRows;")
+        o.append("  const real(*c)[2][3] = rows.coef;")
+        for p in range(m):
+            for q in range(self.first[p], p + 1):
+                i, j = self.row_at[p], self.row_at[q]
+                dots = []  # per pair of slots on one body, as linear_solve.cpp sums them
+                for si in range(2):
+                    for sj in range(2):
+                        b = self.rows[i][0][si]
+                        if b < 0 or b != self.rows[j][0][sj] or (i == j and sj < si):
+                            continue
+                        terms = []
+                        for k in range(3):
+                            c1, v1 = self.coef(i, si, k)
+                            c2, v2 = self.coef(j, sj, k)
+                            terms.append((c1 * c2, v1 + [f"w[{3 * b + k}]"] + v2))
+                        dots.append(product(terms))
+                o.append(f"  {a(p, q)} = {group(dots)};")
+        o.append("}\n")
+        # Cholesky, row by row, as linear_solve.cpp's envelope loop but over L's non-zeros
+        o.append(f"bool {sym}_cholesky(real *a, real floor, real &pmin, real &pmax) {{")
+        o.append(f"  constexpr int {R} = kMaxRows;")
+        o.append("  real d;")
+        for p in range(m):
+            lp = self.l_nz[p]
+            for q in lp:
+                sub = "".join(f" - {a(p, k)} * {a(q, k)}" for k in lp if k < q and k in self.l_nz[q])
+                o.append(f"  {a(p, q)} = ({a(p, q)}{sub}) / {a(q, q)};")
+            sub = "".join(f" - {a(p, k)} * {a(p, k)}" for k in lp)
+            o.append(f"  d = {a(p, p)}{sub};")
+            o.append("  if (!(d > floor)) return false;")
+            o.append("  pmin = d < pmin ? d : pmin;")
+            o.append("  pmax = d > pmax ? d : pmax;")
+            o.append(f"  {a(p, p)} = std::sqrt(d);")
+        o.append("  return true;")
+        o.append("}\n")
+        o.append(f"void {sym}_forward(const real *a, real *y) {{")
+        o.append(f"  constexpr int {R} = kMaxRows;")
+        for p in range(m):
+            sub = "".join(f" - {a(p, k)} * y[{k}]" for k in self.l_nz[p])
+            o.append(f"  y[{p}] = (y[{p}]{sub}) / {a(p, p)};")
+        o.append("}\n")
+        o.append(f"void {sym}_backward(const real *a, real *y) {{")
+        o.append(f"  constexpr int {R} = kMaxRows;")
+        for p in reversed(range(m)):
+            o.append(f"  y[{p}] /= {a(p, p)};")
+            o += [f"  y[{k}] -= {a(p, k)} * y[{p}];" for k in self.l_nz[p]]
+        o.append("}\n")
+        # J x and J^T x
+        o.append(f"void {sym}_j_times(const Rows &rows, const real *x, real *y) {{")
+        o.append("  const real(*c)[2][3] = rows.coef;")
+        for i in range(m):
+            dots = []
+            for s in range(2):
+                b = self.rows[i][0][s]
+                if b >= 0:
+                    dots.append(product([(self.coef(i, s, k)[0], self.coef(i, s, k)[1] + [f"x[{3 * b + k}]"])
+                                         for k in range(3)]))
+            o.append(f"  y[{i}] = {group(dots)};")
+        o.append("}\n")
+        o.append(f"void {sym}_jt_times(const Rows &rows, const real *x, real *y) {{")
+        o.append("  const real(*c)[2][3] = rows.coef;")
+        for n in range(3 * self.nb):
+            b, k = divmod(n, 3)
+            terms = []
+            for i in range(m):
+                for s in range(2):
+                    if self.rows[i][0][s] == b:
+                        cc, vs = self.coef(i, s, k)
+                        terms.append((cc, vs + [f"x[{i}]"]))
+            o.append(f"  y[{n}] = {product(terms)};")
+        o.append("}\n")
+        # tables
+        sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
+        o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
+        o.append(f"const uint8_t {sym}_perm[] = {{{', '.join(map(str, self.perm))}}};")
+        o.append(f"const uint8_t {sym}_first[] = {{{', '.join(map(str, self.first))}}};")
+        o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
+                 f"{m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_assemble, {sym}_cholesky, "
+                 f"{sym}_forward, {sym}_backward, {sym}_j_times, {sym}_jt_times}};")
+        return "\n".join(o) + "\n"
+
+
+def generate(paths):
+    kernels, seen = [], set()
+    for path in paths:
+        stem = os.path.splitext(os.path.basename(path))[0]
+        for variant, model in model_codegen.load_all(path, {}):
+            k = Kernel(f"{stem} {variant}", model)
+            if k.signature() not in seen:
+                seen.add(k.signature())
+                kernels.append((f"kernel_{stem}_{variant}", k))
+    o = ["// Generated by firmware_core/tools/kernel_codegen.py from "
+         + ", ".join(os.path.basename(p) for p in paths) + ". Do not edit.",
+         "#include <cmath>", "", "#include \"kernel.hpp\"", "", "namespace legsim {",
+         "namespace {", ""]
+    for sym, k in kernels:
+        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)}")
+        nl = sum(len(x) for x in k.l_nz)
+        na = sum(sum(r[:p]) for p, r in enumerate(k.a_nz))
+        o.append(f"// {k.name}: {k.m} joint rows, {na} off-diagonal non-zeros of J W J^T, "
+                 f"{nl} of its factor")
+        o.append(k.emit(sym))
+        o.append("#endif\n")
+    o.append("const Kernel *const kKernels[] = {")
+    for sym, k in kernels:
+        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)}")
+        o.append(f"    &{sym},")
+        o.append("#endif")
+    o.append("    nullptr};")
+    o.append("}  // namespace\n")
+    o.append("""const Kernel *kernel_find(const Model &model) {
+  for (const Kernel *const *k = kKernels; *k; ++k) {
+    const Kernel &kn = **k;
+    bool same = kn.nb == model.nb && kn.nj == model.nj && kn.mj == model.m;
+    for (int j = 0; same && j < model.nj; ++j)
+      same = kn.joint[j][0] == int(model.joint[j].kind) && kn.joint[j][1] == model.joint[j].a &&
+             kn.joint[j][2] == model.joint[j].b;
+    if (same) return &kn;
+  }
+  return nullptr;
+}
+""")
+    o.append("}  // namespace legsim")
+    return "\n".join(o) + "\n"
+
+
+def main(argv=None):
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("toml", nargs="+", help="model files (models/leg.toml, models/robot.toml)")
+    p.add_argument("--out", required=True, help="the C++ source to write")
+    args = p.parse_args(argv)
+    try:
+        text = generate(args.toml)
+    except model_codegen.ModelError as e:
+        print(e.message, file=sys.stderr)
+        return 1
+    model_codegen.write_file(args.out, text)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
