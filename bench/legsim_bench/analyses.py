@@ -27,7 +27,8 @@ import numpy as np
 from .scene import ACTUATORS, Scene, find_root
 
 __all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
-           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_slip_starts", "EVENT_NAMES",
+           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_slip_starts", "robot_slip_onset",
+           "EVENT_NAMES",
            "CONTACT_EVENTS"]
 
 # legsim.h's event bits as legsim_cli names them in a sample's "events" (JSON) and the CSV's
@@ -255,8 +256,11 @@ def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
 
 # ---- the robot (a model with contacts): legsim_cli against RobotModel ---------------------------
 
-def _robot_schedule(s, initial: float):
-    """A scene schedule as the reference's (legsim_bench.reference.commands)."""
+def _robot_schedule(s, initial: float, h: float, t_end: float):
+    """A scene schedule as the reference's (legsim_bench.reference.commands). A sinusoid as
+    legsim_cli applies it: evaluated before every step of h and held over the step (a
+    staircase on the step grid up to t_end)."""
+    from .checks import Staircase
     from .reference.commands import Step, Sinusoid
     if s.kind == "hold":
         return float(s.value)
@@ -264,7 +268,9 @@ def _robot_schedule(s, initial: float):
         return float(initial)
     if s.kind == "step":
         return Step(float(s.before), float(s.after), float(s.t0))
-    return Sinusoid(float(s.offset), float(s.amplitude), float(s.frequency), float(s.phase))
+    sin = Sinusoid(float(s.offset), float(s.amplitude), float(s.frequency), float(s.phase))
+    grid = np.arange(int(round(t_end / h)) + 1) * h
+    return Staircase(grid, [sin(x) for x in grid])
 
 
 def robot_reference(scene: Scene, times, root: Path | None = None):
@@ -285,9 +291,10 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
             cmds.append(LengthCommand(float(start.lengths[a])) if scene.init == "hold_length"
                         else ForceCommand(0.0))
             continue
-        sch = _robot_schedule(c.schedule, float(start.lengths[a]))
+        sch = _robot_schedule(c.schedule, float(start.lengths[a]), scene.step_s, float(times[-1]))
         cmds.append(ForceCommand(sch) if c.mode == "force" else LengthCommand(sch))
-    t = np.asarray(times, float)
+    # on the step grid k h, the staircases' own times (legsim_cli's sample times are sums of h)
+    t = np.round(np.asarray(times, float) / scene.step_s) * scene.step_s
     r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
                        gravity="gravity" not in scene.disable)
     return model, r
@@ -422,6 +429,108 @@ def _robot_slip_checks(ev, slips, d: dict, feet):
     return ev
 
 
+# a contact's state change and the event the core must raise with it (section 8)
+_CHANGE_EVENTS = {("stuck", "sliding"): "stick_to_slip", ("sliding", "stuck"): "slip_to_stick",
+                  ("stuck", "free"): "liftoff", ("sliding", "free"): "liftoff",
+                  ("free", "stuck"): "touchdown", ("free", "sliding"): "touchdown"}
+
+
+def _robot_sequence_check(ev, d: dict, feet):
+    """The contact-state sequence against the events: every change of a foot's state between
+    two samples comes with its event in the later sample's events."""
+    from .checks import CheckResult
+    bad, seq = [], []
+    for k, f in enumerate(feet):
+        st = d["state"][:, k]
+        for i in range(1, len(st)):
+            if st[i] == st[i - 1]:
+                continue
+            want = _CHANGE_EVENTS.get((str(st[i - 1]), str(st[i])))
+            seq.append(f"{f} {st[i - 1]}->{st[i]} at {d['t'][i]:g} s")
+            if want is None or want not in d["events"][i]:
+                bad.append(f"{f} {st[i - 1]}->{st[i]} at t = {d['t'][i]:g} s without {want}")
+    ev.results.append(CheckResult("contact-state sequence against the events", not bad, float(len(bad)), None,
+                                  "changes", "", "; ".join(bad or seq) or "no change"))
+
+
+def robot_slip_onset(scene: Scene, d: dict, root: Path | None = None) -> dict:
+    """The first stick_to_slip of a robot dynamics run (robot_arrays' d) against RobotModel's
+    stance on stuck feet along the scene's commands up to it: where |T|/N of a foot first
+    reaches mu_static (the crossing, interpolated between samples), and which foot the scene's
+    contact law must release there (lcp: the one that crossed; paper: the smaller |T|)."""
+    feet = range(d["state"].shape[1])
+    starts = [(x, k) for k in feet for x in robot_slip_starts(d, k)]
+    if not starts:
+        return {"event_t": None}
+    t_e, k_e = min(starts)
+    i_e = int(np.argmin(np.abs(d["t"] - t_e)))
+    released = [k for k in feet if d["state"][i_e, k] == "sliding" and d["state"][i_e - 1, k] == "stuck"]
+    model, r = robot_reference(scene, d["t"][:i_e + 1], root)
+    mu = model.ground.mu_static
+    use = np.abs(r.tangential) / r.normal
+    out = {"event_t": t_e, "released": released, "model": model, "ref": r, "i_event": i_e,
+           "use_at_event": use[-1], "T_at_event": r.tangential[-1], "N_at_event": r.normal[-1]}
+    over = np.nonzero(np.any(use > mu, axis=1))[0]
+    if over.size == 0 or over[0] == 0:
+        out["crossing_t"] = None
+        return out
+    j = int(over[0])
+    cross = []
+    for k in feet:  # linear interpolation of use - mu between samples j-1 and j
+        a, b = use[j - 1, k] - mu, use[j, k] - mu
+        if b > 0:
+            cross.append((r.t[j - 1] + (r.t[j] - r.t[j - 1]) * (-a) / (b - a) if a < 0 else r.t[j - 1], k))
+    t_c, k_c = min(cross)
+    out.update(crossing_t=float(t_c), crossing_foot=k_c, crossing_sample_t=float(r.t[j]),
+               smaller_T_foot=int(np.argmin(np.abs(r.tangential[j]))))
+    out["expected"] = out["smaller_T_foot"] if scene.contact_law == "paper" else k_c
+    return out
+
+
+def _robot_slip_onset_checks(ev, scene: Scene, d: dict, feet, root, tol_check):
+    """[checks] slip_onset_steps: legsim's first stick_to_slip within that many steps after
+    RobotModel's stuck-stuck |T|/N reaches mu_static, the released foot the contact law's, and
+    the stance before it (position_m, angle_rad, ground_force_n) against the reference."""
+    from .checks import CheckResult
+    o = robot_slip_onset(scene, d, root)
+    if o["event_t"] is None or o.get("crossing_t") is None:
+        ev.results.append(CheckResult("slip onset vs RobotModel's stance", False, None, None, "", "",
+                                      "no stick_to_slip in the run" if o["event_t"] is None else
+                                      f"RobotModel's |T|/N never reaches mu_static by t = {o['event_t']:g} s"))
+        return
+    h = scene.step_s
+    lag = (o["event_t"] - o["crossing_t"]) / h
+    ok = -1e-9 <= lag <= scene.checks.slip_onset_steps
+    ev.results.append(CheckResult(
+        "slip onset: stick_to_slip after RobotModel's |T|/N reaches mu_static", ok, lag,
+        scene.checks.slip_onset_steps, "steps", "",
+        f"legsim's event at t = {o['event_t']:.4f} s, the reference's crossing at {o['crossing_t']:.6f} s "
+        f"({feet[o['crossing_foot']]}); at the event |T|/N = "
+        f"{', '.join(f'{x:.4f}' for x in o['use_at_event'])}, |T| = "
+        f"{', '.join(f'{abs(x):.2f}' for x in o['T_at_event'])} N"))
+    rule = ("the smaller |T| (paper)" if scene.contact_law == "paper" else "the one leaving its cone (lcp)")
+    want = feet[o["expected"]]
+    got = [feet[k] for k in o["released"]]
+    ev.results.append(CheckResult(f"released foot: {rule}", got == [want], None, None, "", "",
+                                  f"legsim released {', '.join(got) or 'none'}, the reference says {want}",
+                                  got=", ".join(got), want=want))
+    # the stance holds up to the sample before the event's; forces are solved from sample 1 on
+    i_e, r = o["i_event"], o["ref"]
+    dq = d["q"][:i_e] - r.q[:i_e]
+    dq[:, 2::3] = _wrap(dq[:, 2::3])
+    xy = np.delete(dq, np.s_[2::3], axis=1)
+    tt = d["t"]
+    tol_check("positions x, y vs RobotModel before the slip", "position_m", xy, "m",
+              lambda r_, c: f"t={tt[r_]:.4f}s")
+    tol_check("angles vs RobotModel before the slip", "angle_rad", dq[:, 2::3], "rad",
+              lambda r_, c: f"t={tt[r_]:.4f}s")
+    g = np.concatenate([d["normal"][1:i_e] - r.normal[1:i_e], d["tangential"][1:i_e] - r.tangential[1:i_e]],
+                       axis=1)
+    tg = tt[1:i_e]
+    tol_check("ground forces N, T per foot vs RobotModel before the slip", "ground_force_n", g, "N",
+              lambda r_, c: f"t={tg[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}")
+
+
 def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     """The checks of a robot scene run in legsim_cli against RobotModel (an Evaluation)."""
     from .checks import CheckResult, Evaluation
@@ -466,6 +575,9 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     if ch.slips is not None:
         tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
                   lambda r, c: where_t(r))
+        _robot_sequence_check(ev, d, feet)
+        if ch.slip_onset_steps is not None:
+            _robot_slip_onset_checks(ev, scene, d, feet, root, tol_check)
         return _robot_slip_checks(ev, ch.slips, d, feet)
     try:
         model, r = robot_reference(scene, t, root)

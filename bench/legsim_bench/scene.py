@@ -208,6 +208,8 @@ class StrokeCheck:
 ROBOT_CHECK_KEYS = {
     "ground_force_n": "per foot the normal and tangential ground force vs RobotModel (N)",
     "growth_rel": "the measured growth rate of the drift vs RobotModel's linearized modes (relative)",
+    "slip_onset_steps": "the first stick_to_slip vs RobotModel's stuck-stuck |T|/N reaching mu_static "
+                        "(steps), and which foot the contact law releases",
 }
 CHECK_KEYS = {
     **ROBOT_CHECK_KEYS,
@@ -240,6 +242,7 @@ class Checks:
     statics_reaction_n: float | None = None
     ground_force_n: float | None = None
     growth_rel: float | None = None
+    slip_onset_steps: float | None = None
     compare: str = "all"               # "all" | "until_stroke": reference window
     stroke: StrokeCheck | None = None
     slips: tuple[str, ...] | None = None   # a robot: the feet that must go from stuck to sliding
@@ -336,6 +339,7 @@ class Scene:
     newton_tol: float = DEFAULT_OPTIONS["newton_tol"]
     contacts: dict = field(default_factory=dict)  # [[contact]]: contact name -> "stuck" | "free"
     statics_rule: str = "equal_friction"          # a robot's statics: legsim_statics_rule
+    contact_law: str = "lcp"                      # a robot's dynamics: legsim_contact_law
 
     @property
     def robot(self) -> bool:
@@ -454,7 +458,7 @@ class Scene:
                 "grid": self.grid, "init": self.init, "cmd_timeout_ms": self.cmd_timeout_ms,
                 "safe_state": self.safe_state, "disable": self.disable_bits, "rho_inf": self.rho_inf,
                 "max_newton_iter": self.max_newton_iter, "newton_tol": self.newton_tol,
-                "statics_rule": self.statics_rule, "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
+                "statics_rule": self.statics_rule, "contact_law": self.contact_law, "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
                 "contacts": dict(self.contacts)}
 
     def _where(self) -> str:
@@ -466,17 +470,18 @@ class Scene:
 _TOP_KEYS = {"description", "name", "demo", "model", "variant", "analysis", "integrator",
              "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
              "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
-             "forces", "command", "contact", "inject", "checks", "statics_rule"}
+             "forces", "command", "contact", "inject", "checks", "statics_rule", "contact_law"}
 # Keys of the robot's design (docs/design/robot-on-ground.md section 6) the core does not have
 # yet: refused by name with legsim_cli's words, never ignored.
 NOT_YET_KEYS = {
-    "contact_law": "'contact_law' is not in this core yet (only the stuck/free contact of "
-                   "docs/design/robot-on-ground.md section 8): leave it out",
     "box_load": "'box_load' is not in this core yet (the robot has no force element on the box): leave it out",
 }
 CONTACT_STATES = ("stuck", "free")
 # legsim_statics_rule: what fixes the statics of a stance on two stuck feet (legsim.h)
 STATICS_RULES = ("equal_friction", "min_tangential")
+# legsim_contact_law: the feet's transitions in a step (legsim.h): each foot by its own
+# Coulomb cone, or the paper's rule (the foot with the smaller |T| is released)
+CONTACT_LAWS = ("lcp", "paper")
 # The keys and values of the two former schemas and what they are now (legsim_cli says the
 # same words: firmware_core/host/scene_toml.cpp).
 RENAMED_KEYS = {
@@ -493,7 +498,7 @@ _DYN_CHECKS = (set(CHECK_KEYS) - set(ROBOT_CHECK_KEYS)) | {"compare", "stroke", 
 # a robot scene (legsim_cli against RobotModel, legsim_bench.analyses)
 ROBOT_CHECKS_FOR = {
     "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
-                 "stays_put_m", "growth_rel", "slips"},
+                 "stays_put_m", "growth_rel", "slips", "slip_onset_steps"},
     "assembly": {"position_m", "angle_rad", "residual"},
     "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
                 "ground_force_n"},
@@ -553,10 +558,10 @@ def _choice(where, key, v, options) -> str:
     return v.lower()
 
 
-def _rule_choice(where, v) -> str:
-    """'statics_rule' with legsim_cli's words (scene_toml.cpp: choice)."""
-    if v not in STATICS_RULES:
-        raise SceneError(f"{where}: 'statics_rule' must be {' or '.join(STATICS_RULES)} (got {v!r})")
+def _rule_choice(where, v, key="statics_rule", options=STATICS_RULES) -> str:
+    """'statics_rule' or 'contact_law' with legsim_cli's words (scene_toml.cpp: choice)."""
+    if v not in options:
+        raise SceneError(f"{where}: '{key}' must be {' or '.join(options)} (got {v!r})")
     return v
 
 
@@ -733,11 +738,15 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
         if not isinstance(slips, list) or not all(isinstance(x, str) and x in info.contacts for x in slips):
             raise SceneError(f"{where} [checks]: 'slips' must be a list of the model's contacts "
                              f"({', '.join(info.contacts)})")
-        against = sorted(k for k in ch if k not in ("slips", "residual"))
+        # with slip_onset_steps the stance is compared up to the first slip, where it still holds
+        before = ("position_m", "angle_rad", "ground_force_n") if "slip_onset_steps" in ch else ()
+        against = sorted(k for k in ch if k not in ("slips", "residual", "slip_onset_steps") + before)
         if against:
             raise SceneError(f"{where} [checks]: {', '.join(against)} compare with RobotModel's stance on "
                              "stuck feet, which 'slips' leaves: leave them out")
         slips = tuple(slips)
+    if "slip_onset_steps" in ch and not slips:
+        raise SceneError(f"{where} [checks]: 'slip_onset_steps' needs 'slips' (the foot that slips first)")
     checks = Checks(**{k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch},
                     slips=slips)
     if not checks.tolerances():
@@ -751,7 +760,7 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
                  demo=bool(d.get("demo", False)), analysis=analysis, model=kw["model_spec"], model_info=info,
                  pose_name=kw["pose_name"], forces=kw["forces"], rho_inf=kw["rho_inf"],
                  max_newton_iter=kw["max_iter"], newton_tol=kw["newton_tol"], contacts=contacts,
-                 statics_rule=kw["statics_rule"])
+                 statics_rule=kw["statics_rule"], contact_law=kw["contact_law"])
 
 
 
@@ -861,6 +870,10 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
     statics_rule = _rule_choice(where, d.get("statics_rule", "equal_friction"))
     if "statics_rule" in d and not info.robot:
         raise SceneError(f"{where}: 'statics_rule' applies to a model with contacts only (a stance on two feet)")
+    only("contact_law", dynamics, "dynamics")
+    contact_law = _rule_choice(where, d.get("contact_law", "lcp"), "contact_law", CONTACT_LAWS)
+    if "contact_law" in d and not info.robot:
+        raise SceneError(f"{where}: 'contact_law' applies to a model with contacts only (a robot's feet)")
     grid = _int(where, "grid", d.get("grid", 11), 2, 1000)
     only("init", dynamics, "dynamics")
     init = _choice(where, "init", d.get("init", "zero_force"), ACTUATOR_MODES)
@@ -899,7 +912,7 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                             step_ns=step_ns, n_steps=n_steps, rec=rec, pose=pose, pose_name=pose_name,
                             lengths=lengths, init=init, disable=disable, forces=forces,
                             rho_inf=rho_inf, max_iter=max_iter, newton_tol=newton_tol,
-                            statics_rule=statics_rule)
+                            statics_rule=statics_rule, contact_law=contact_law)
     # The bench knows the leg: the DBC carries two actuators, upper and lower, and its
     # reference model the one force element foot_load.
     if act_names != ACTUATORS:

@@ -233,9 +233,6 @@ struct NotYet {
   const char *message;
 };
 const NotYet kNotYetKeys[] = {
-    {"contact_law",
-     "'contact_law' is not in this core yet (only the stuck/free contact of "
-     "docs/design/robot-on-ground.md section 8): leave it out"},
     {"box_load",
      "'box_load' is not in this core yet (the robot has no force element on the box): leave it out"},
 };
@@ -248,7 +245,8 @@ void parse_scene(Table doc, Scene &s) {
   check_keys(doc, {"description", "name", "demo", "model", "variant", "analysis", "integrator",
                    "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
                    "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
-                   "forces", "command", "contact", "inject", "checks", "statics_rule"},
+                   "forces", "command", "contact", "inject", "checks", "statics_rule",
+                   "contact_law"},
              "");
   s.description = get_string(doc, "description", "", false);
   s.name = get_string(doc, "name", "", false, stem_of(s.path));
@@ -370,6 +368,12 @@ void parse_scene(Table doc, Scene &s) {
                                ? LEGSIM_STATICS_EQUAL_FRICTION
                                : LEGSIM_STATICS_MIN_TANGENTIAL;
   s.grid = static_cast<int32_t>(get_int(doc, "grid", "", 11, 2, 1000));
+  // The feet's transitions in a step (a model with contacts: bind_scene).
+  only("contact_law", dynamics, "dynamics");
+  s.contact_law_given = doc->get("contact_law") != nullptr;
+  static const char *const kLaws[] = {"lcp", "paper"};
+  s.options.contact_law =
+      choice(doc, "contact_law", kLaws, 2, "lcp") == "lcp" ? LEGSIM_CONTACT_LCP : LEGSIM_CONTACT_PAPER;
 
   only("init", dynamics, "dynamics");
   static const char *const kInits[] = {"zero_force", "hold_length"};
@@ -659,6 +663,8 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
            "stance only): run dynamics, statics or assembly");
     if (m.n_contacts == 0 && s.statics_rule_given)
       fail("'statics_rule' applies to a model with contacts only (a stance on two feet)");
+    if (m.n_contacts == 0 && s.contact_law_given)
+      fail("'contact_law' applies to a model with contacts only (a robot's feet)");
     for (size_t c = 0; c < s.contacts.size(); ++c) {
       ContactInit &ci = s.contacts[c];
       ci.index = -1;
@@ -1026,6 +1032,10 @@ const char *statics_rule_name(legsim_statics_rule r) {
   return r == LEGSIM_STATICS_MIN_TANGENTIAL ? "min_tangential" : "equal_friction";
 }
 
+const char *contact_law_name(legsim_contact_law l) {
+  return l == LEGSIM_CONTACT_PAPER ? "paper" : "lcp";
+}
+
 const char *contact_state_name(legsim_contact_state st) {
   switch (st) {
     case LEGSIM_CONTACT_FREE: return "free";
@@ -1089,7 +1099,8 @@ void write_resolved(std::ostream &o, const Scene &sc, const legsim_model_desc &m
     << ", \"disable\": " << sc.options.disable << ", \"rho_inf\": " << jnum(sc.options.rho_inf)
     << ", \"max_newton_iter\": " << sc.options.max_newton_iter
     << ", \"newton_tol\": " << jnum(sc.options.newton_tol) << ", \"statics_rule\": "
-    << jstr(statics_rule_name(sc.options.statics_rule)) << ", \"forces\": {";
+    << jstr(statics_rule_name(sc.options.statics_rule))
+    << ", \"contact_law\": " << jstr(contact_law_name(sc.options.contact_law)) << ", \"forces\": {";
   for (size_t i = 0; i < sc.forces.size(); ++i) {
     const ForceValue &f = sc.forces[i];
     o << (i ? ", " : "") << jstr(f.name) << ": [";

@@ -73,6 +73,7 @@ struct Scene {
   Analysis analysis = Analysis::kDynamics;
   legsim_options options{};  // integrator, step_s, disable, solver options
   bool statics_rule_given = false;  // 'statics_rule' written (options.statics_rule holds it)
+  bool contact_law_given = false;   // 'contact_law' written (options.contact_law holds it)
   int64_t step_ns = 1000000; // step_s in whole nanoseconds (the bench's and the DBC's unit)
   double duration_s = 0;
   int64_t n_steps = 0;      // duration / step_s, exactly (else the scene is refused)

@@ -139,6 +139,8 @@ legsim_status options_check(const legsim_options *o) {
   const long long rule = raw_enum(o->statics_rule);
   if (rule != LEGSIM_STATICS_EQUAL_FRICTION && rule != LEGSIM_STATICS_MIN_TANGENTIAL)
     return LEGSIM_ERR_BAD_INPUT;
+  const long long law = raw_enum(o->contact_law);
+  if (law != LEGSIM_CONTACT_LCP && law != LEGSIM_CONTACT_PAPER) return LEGSIM_ERR_BAD_INPUT;
   const bool compiled = integ == LEGSIM_INTEGRATOR_RK4 ? LEGSIM_WITH_RK4 : LEGSIM_WITH_GENERALIZED_ALPHA;
   return compiled ? LEGSIM_OK : LEGSIM_ERR_DISABLED;
 }
@@ -146,7 +148,8 @@ legsim_status options_check(const legsim_options *o) {
 bool same_options(const legsim_options &a, const legsim_options &b) {
   return a.integrator == b.integrator && a.step_s == b.step_s && a.disable == b.disable &&
          a.rho_inf == b.rho_inf && a.max_newton_iter == b.max_newton_iter &&
-         a.newton_tol == b.newton_tol && a.statics_rule == b.statics_rule;
+         a.newton_tol == b.newton_tol && a.statics_rule == b.statics_rule &&
+         a.contact_law == b.contact_law;
 }
 
 // Finite and |x| <= bound (false for NaN).
@@ -270,6 +273,7 @@ legsim_options legsim_default_options(void) {
   o.max_newton_iter = 25;
   o.newton_tol = LEGSIM_USE_FLOAT ? 1e-6 : 1e-10;
   o.statics_rule = LEGSIM_STATICS_EQUAL_FRICTION;
+  o.contact_law = LEGSIM_CONTACT_LCP;
   return o;
 }
 

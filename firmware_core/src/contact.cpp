@@ -114,6 +114,32 @@ legsim_status impact(Sim &sim, const uint32_t hit) {
 
 real sign_of(real x) { return x > 0 ? real(1) : real(-1); }
 
+// The paper's rule (contact_law PAPER, design section 2) while every contact is closed
+// (stuck or sliding) and there are at least two: with all of them stuck, the stuck-stuck
+// reactions of the last solve decide; when a foot's |T| exceeds mu_s N, the foot with the
+// SMALLEST |T| is released (it slides against its T, with mu_k N); while one slides the
+// others stay stuck whatever their T. Returns the contact to release, or -1.
+int paper_release(const Model &m, const Data &d) {
+  bool over = false;
+  for (int k = 0; k < m.nc; ++k) {
+    const ContactData &c = d.contact[k];
+    if (c.state != LEGSIM_CONTACT_STUCK) return -1;  // one slides already (or is free): no release
+    if (std::abs(c.tangential) > m.mu_s * c.normal) over = true;
+  }
+  if (!over) return -1;
+  int pick = 0;
+  for (int k = 1; k < m.nc; ++k)
+    if (std::abs(d.contact[k].tangential) < std::abs(d.contact[pick].tangential)) pick = k;
+  return pick;
+}
+
+bool all_closed(const Model &m, const Data &d) {
+  if (m.nc < 2) return false;
+  for (int k = 0; k < m.nc; ++k)
+    if (d.contact[k].state == LEGSIM_CONTACT_FREE) return false;
+  return true;
+}
+
 }  // namespace
 
 // Checked after every step, each a rule of the design (section 2):
@@ -124,6 +150,8 @@ real sign_of(real x) { return x > 0 ? real(1) : real(-1); }
 // - stick to slip: a stuck foot with |T| > mu_s N slides, against T;
 // - slip to stick: a sliding foot whose sliding velocity changed sign sticks where it is (its
 //   tangential velocity removed by an impulse, reported); the problem at rest then decides.
+// Under contact_law PAPER, while every foot is on the ground, stick to slip is the paper's
+// rule instead (paper_release): the foot with the smaller |T| is released, the other stays.
 // Each pass applies every change at once and solves the dynamics of the new modes; a mode
 // that keeps changing (no consistent mode, or several) raises CONTACT_INCONSISTENT and
 // keeps the last one.
@@ -139,6 +167,10 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
     uint32_t touch = 0, to_stick = 0;
     changing = 0;
     bool any = false;
+    // contact_law PAPER: while all feet are on the ground the stick-to-slip rule is the
+    // paper's (paper_release), lift-off, touchdown and slip to stick are the default's
+    const bool paper = sim.opt.contact_law == LEGSIM_CONTACT_PAPER && all_closed(m, d);
+    const int release = paper ? paper_release(m, d) : -1;
     for (int k = 0; k < m.nc; ++k) {
       ContactData &c = d.contact[k];
       Vec2 p, v;
@@ -158,7 +190,8 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
         c.events |= LEGSIM_EVENT_LIFTOFF;
         raise_event(d, LEGSIM_EVENT_LIFTOFF);
       } else if (c.state == LEGSIM_CONTACT_STUCK) {
-        if (!(std::abs(c.tangential) > m.mu_s * c.normal) || ((slipped >> k) & 1u)) continue;
+        const bool leaves = paper ? k == release : std::abs(c.tangential) > m.mu_s * c.normal;
+        if (!leaves || ((slipped >> k) & 1u)) continue;
         c.state = LEGSIM_CONTACT_SLIDING;
         c.slip_dir = int8_t(-sign_of(c.tangential));  // it gives way against the force that held it
         slipped |= 1u << k;

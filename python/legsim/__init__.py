@@ -25,7 +25,7 @@ from .errors import (BadInputError, CapacityError, ContactError, DisabledError, 
                      Status, StorageError, UnreachableError, error_for, status_name)
 from .model import Model, builtin_variants, model_variants
 from .sim import (COND_SINGULAR, COND_WARN, CONTACT_DTYPE, CONTACT_STATES, DISABLE, EVENTS,
-                  INTEGRATORS, STATICS_RULES, Report, Sim, WorstCase,
+                  INTEGRATORS, STATICS_RULES, CONTACT_LAWS, Report, Sim, WorstCase,
                   disable_mask)
 
 __version__ = "0.1.0"
@@ -39,5 +39,5 @@ __all__ = [
     "NoEquilibriumError", "DisabledError", "StateError", "DivergedError", "ContactError",
     "LibraryNotFound", "LayoutMismatch",
     "DISABLE", "EVENTS", "INTEGRATORS", "COND_WARN", "COND_SINGULAR", "LIB_NAMES",
-    "CONTACT_STATES", "CONTACT_DTYPE", "STATICS_RULES",
+    "CONTACT_STATES", "CONTACT_DTYPE", "STATICS_RULES", "CONTACT_LAWS",
 ]

@@ -245,7 +245,7 @@ class Library:
         class Options(C.Structure):
             _fields_ = [("integrator", C.c_int), ("step_s", d), ("disable", C.c_uint32),
                         ("rho_inf", d), ("max_newton_iter", i32), ("newton_tol", d),
-                        ("statics_rule", C.c_int)]
+                        ("statics_rule", C.c_int), ("contact_law", C.c_int)]
 
         class Report(C.Structure):
             _fields_ = [("iterations", i32), ("residual", real), ("condition", real),

@@ -56,6 +56,11 @@ STATICS_RULES = {"equal_friction": 0, "min_tangential": 1}
 """``legsim_statics_rule`` of legsim.h by name: the rule that fixes the statics of a
 stance on two stuck feet (equal friction use T/N on both; or least T_0^2 + T_1^2)."""
 
+CONTACT_LAWS = {"lcp": 0, "paper": 1}
+"""``legsim_contact_law`` of legsim.h by name: the feet's transitions in a step ("lcp":
+each foot by its own Coulomb cone; "paper": while both feet are on the ground the foot with
+the smaller |T| is released when a foot leaves its cone, the other stays stuck)."""
+
 CONTACT_STATES = {"free": 0, "stuck": 1, "sliding": 2}
 """``legsim_contact_state`` of legsim.h by name."""
 
@@ -160,7 +165,7 @@ class Sim:
                  precision: str | None = None, lib_path=None, integrator: str = "rk4",
                  step: float = 1e-3, disable=0, rho_inf: float | None = None,
                  max_newton_iter: int | None = None, newton_tol: float | None = None,
-                 statics_rule: str | None = None):
+                 statics_rule: str | None = None, contact_law: str | None = None):
         if isinstance(model, Model):
             if variant is not None and variant != model.variant:
                 raise ValueError("variant is given by the Model; load the other variant instead")
@@ -185,7 +190,7 @@ class Sim:
         self._addr = base + (-base) % STORAGE_ALIGN
         self._options = lib.default_options()
         self._apply_options(self._options, integrator, step, disable, rho_inf, max_newton_iter,
-                            newton_tol, statics_rule)
+                            newton_tol, statics_rule, contact_law)
         out = C.c_void_p()
         self._check(lib.cdll.legsim_init(C.c_void_p(self._addr), lib.sim_size,
                                          C.byref(model.desc), C.byref(self._options),
@@ -218,7 +223,8 @@ class Sim:
 
     @staticmethod
     def _apply_options(o, integrator=None, step=None, disable=None, rho_inf=None,
-                       max_newton_iter=None, newton_tol=None, statics_rule=None):
+                       max_newton_iter=None, newton_tol=None, statics_rule=None,
+                       contact_law=None):
         if integrator is not None:
             if integrator not in INTEGRATORS:
                 raise ValueError(f"integrator must be one of {sorted(INTEGRATORS)}, "
@@ -239,6 +245,11 @@ class Sim:
                 raise ValueError(f"statics_rule must be one of {sorted(STATICS_RULES)}, "
                                  f"not {statics_rule!r}")
             o.statics_rule = STATICS_RULES[statics_rule]
+        if contact_law is not None:
+            if contact_law not in CONTACT_LAWS:
+                raise ValueError(f"contact_law must be one of {sorted(CONTACT_LAWS)}, "
+                                 f"not {contact_law!r}")
+            o.contact_law = CONTACT_LAWS[contact_law]
 
     def _arr(self, values, n: int, what: str):
         v = np.asarray(values, dtype=float).reshape(-1)
@@ -277,19 +288,21 @@ class Sim:
     @property
     def options(self) -> dict:
         """The current options: integrator, step, disable (mask), rho_inf,
-        max_newton_iter, newton_tol, statics_rule."""
+        max_newton_iter, newton_tol, statics_rule, contact_law."""
         o = self._options
         return {"integrator": self.integrator, "step": float(o.step_s),
                 "disable": int(o.disable), "rho_inf": float(o.rho_inf),
                 "max_newton_iter": int(o.max_newton_iter), "newton_tol": float(o.newton_tol),
-                "statics_rule": {v: k for k, v in STATICS_RULES.items()}[int(o.statics_rule)]}
+                "statics_rule": {v: k for k, v in STATICS_RULES.items()}[int(o.statics_rule)],
+                "contact_law": {v: k for k, v in CONTACT_LAWS.items()}[int(o.contact_law)]}
 
     def set_options(self, **options) -> None:
         """Changes options (integrator=, step=, disable=, rho_inf=, max_newton_iter=,
-        newton_tol=, statics_rule=); a refused set (BadInputError, DisabledError) changes
+        newton_tol=, statics_rule=, contact_law=); a refused set (BadInputError, DisabledError) changes
         nothing."""
         unknown = set(options) - {"integrator", "step", "disable", "rho_inf",
-                                  "max_newton_iter", "newton_tol", "statics_rule"}
+                                  "max_newton_iter", "newton_tol", "statics_rule",
+                                  "contact_law"}
         if unknown:
             raise TypeError(f"unknown option(s) {sorted(unknown)}")
         new = type(self._options).from_buffer_copy(self._options)

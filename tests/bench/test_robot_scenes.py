@@ -74,7 +74,10 @@ def test_robot_keys_are_refused_or_checked_by_both_readers():
     base = 'model = "builtin:robot"\nduration = 0.01\n'
     sc = parse_scene(base + '[[contact]]\nname = "left.foot"\nstate = "free"\n', name="t", root=ROOT)
     assert sc.contacts == {"left.foot": "free"} and sc.model_info.contacts == ("right.foot", "left.foot")
-    for text, words in [("contact_law = \"paper\"\n", "'contact_law' is not in this core yet"),
+    sc = parse_scene(base + 'contact_law = "paper"\n', name="t", root=ROOT)
+    assert sc.contact_law == "paper" and sc.resolved()["contact_law"] == "paper"
+    assert parse_scene(base, name="t", root=ROOT).contact_law == "lcp"
+    for text, words in [("contact_law = \"coulomb\"\n", "'contact_law' must be lcp or paper (got 'coulomb')"),
                         ("[[command]]\nactuator = \"upper\"\nmode = \"force\"\nvalue = 1.0\n",
                          "command 'upper': the model has no actuator 'upper'"),
                         ("[[contact]]\nname = \"right.foot\"\nstate = \"sliding\"\n",

@@ -225,6 +225,17 @@ typedef enum legsim_statics_rule {
   LEGSIM_STATICS_MIN_TANGENTIAL = 1
 } legsim_statics_rule;
 
+/* The contact law of legsim_step (docs/design/robot-on-ground.md section 2): LCP, the
+ * Coulomb transitions of each foot by its own cone (the default); PAPER, the paper's rule
+ * while both feet are on the ground: the stuck-stuck reactions decide, and when a foot's
+ * |T| exceeds mu_static N the foot with the SMALLER |T| is released to slide
+ * (T = mu_kinetic N against its sliding), the other stays stuck. Lift-off and touchdown
+ * are the same in both. */
+typedef enum legsim_contact_law {
+  LEGSIM_CONTACT_LCP = 0,
+  LEGSIM_CONTACT_PAPER = 1
+} legsim_contact_law;
+
 typedef struct legsim_options {
   legsim_integrator integrator;
   double step_s;            /* fixed step h in [LEGSIM_MIN_STEP_S, LEGSIM_MAX_STEP_S] */
@@ -235,10 +246,12 @@ typedef struct legsim_options {
                                [LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL] */
   legsim_statics_rule statics_rule; /* legsim_statics and legsim_inverse_dynamics on two
                                        stuck contacts; one of the enum, else BAD_INPUT */
+  legsim_contact_law contact_law;   /* legsim_step's foot transitions; one of the enum,
+                                       else BAD_INPUT */
 } legsim_options;
 
 /* h = 1 ms, RK4, nothing disabled, rho_inf = 0.8, 25 iterations, tol 1e-10 (1e-6 float),
- * statics_rule EQUAL_FRICTION. */
+ * statics_rule EQUAL_FRICTION, contact_law LCP. */
 legsim_options legsim_default_options(void);
 
 /* ---- simulation lifetime ---------------------------------------------- */
