@@ -20,7 +20,8 @@ legsim_logs=${LEGSIM_LOG_DIR:-$legsim_root/out/logs}
 # bench) links libGL.so.1. pkgconf: the installed package's pkg-config file is tested.
 # python3-siconos, python3-scipy: the two-leg robot's Siconos peer runs in the system
 # Python (Siconos is not on PyPI; bench/legsim_bench/benchmarks/peers/siconos_robot.py).
-legsim_debs=(build-essential cmake ninja-build pkgconf python3 python3-venv
+# valgrind: instruction counts (callgrind) of the work-precision benchmark.
+legsim_debs=(build-essential cmake ninja-build pkgconf python3 python3-venv valgrind
              libeigen3-dev libtomlplusplus-dev libgl1 python3-siconos python3-scipy
              gcc-arm-none-eabi libnewlib-arm-none-eabi libstdc++-arm-none-eabi-newlib
              qemu-system-arm qemu-system-x86 qemu-system-data iproute2 kmod cpio xz-utils)

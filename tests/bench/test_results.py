@@ -114,8 +114,9 @@ def _run_or_skip(capsys, argv) -> str:
 @pytest.mark.parametrize("argv, produced", [
     (["stress", "--quick", "--n-steps", "500", "--seeds", "1", "--segments", "3"], "stress_quick.md"),
     (["options", "--quick", "--reps", "3"], "options_quick.md"),
-    (["workprecision", "--quick", "--no-peers", "--no-float", "--no-beyond", "--step-sizes", "1e-2",
-      "--target-s", "0.01", "--min-reps", "1", "--max-reps", "1"], "workprecision_quick.md"),
+    (["workprecision", "--quick", "--no-peers", "--no-callgrind", "--scenes", "upper_step_50N",
+      "--step-sizes", "1e-2", "--target-s", "0.01", "--min-reps", "1", "--max-reps", "1"],
+     "workprecision_quick.md"),
 ])
 def test_each_benchmark_result_carries_the_machine_section(capsys, tmp_path, argv, produced):
     out = _run_or_skip(capsys, [*argv, "-o", str(tmp_path)])

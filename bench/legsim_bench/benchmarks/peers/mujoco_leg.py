@@ -89,8 +89,10 @@ def _rel(q: np.ndarray, parent: int | None, child: int) -> tuple:
 
 def build_xml(model: lm.LegModel, h: float, method: str = "rk4", *,
               solref=None, solimp=(0.9999, 0.9999, 0.001, 0.5, 2.0),
-              tolerance: float = 1e-12, iterations: int = 100, refsafe: bool = True) -> str:
-    """MJCF of the leg at the stand pose. ``solref`` None: (2 h, 1)."""
+              tolerance: float = 1e-12, iterations: int = 100, refsafe: bool = True,
+              islands: bool = True) -> str:
+    """MJCF of the leg at the stand pose. ``solref`` None: (2 h, 1). ``islands`` False:
+    MuJoCo's constraint-island discovery off (the leg is one island: it only costs)."""
     if method not in _INTEGRATOR:
         raise ValueError(f"unknown method {method!r}; known: {METHODS}")
     if solref is None:
@@ -145,7 +147,8 @@ def build_xml(model: lm.LegModel, h: float, method: str = "rk4", *,
   <compiler angle="radian" autolimits="true"/>
   <option timestep="{h!r}" integrator="{_INTEGRATOR[method]}" gravity="{_f([*model.gravity, 0.0])}"
           solver="Newton" iterations="{iterations}" tolerance="{tolerance!r}" ls_iterations="50">
-    <flag contact="disable" autoreset="disable" refsafe="{'enable' if refsafe else 'disable'}"/>
+    <flag contact="disable" autoreset="disable" refsafe="{'enable' if refsafe else 'disable'}"
+          island="{'enable' if islands else 'disable'}"/>
   </option>
   <default>
     <equality solref="{_f(solref)}" solimp="{_f(solimp)}"/>
