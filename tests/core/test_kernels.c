@@ -1,0 +1,233 @@
+/* The generated joint-block kernels (firmware_core/src/kernel.hpp) against the general
+ * path: the same scenes run twice, once on the kernel and once with it switched off
+ * (legsim_kernel_use), must give the same trajectories (q, qd, qdd), multipliers,
+ * reactions, actuator and contact forces, events and statuses to round-off, over 1 s,
+ * with both integrators, for the leg (free, and resting on a stroke stop: a row after
+ * the kernel's block) and the robot (feet stuck; on slippery ground, where a foot slides
+ * and one lifts off). The general path factors the joint block in the kernel's order,
+ * so the two agree bit for bit here; the tolerance allows for round-off only. */
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "legsim/legsim.h"
+#include "legsim/models.h"
+#include "unity.h"
+#if __has_include("legsim/robot_models.h")
+#include "legsim/robot_models.h"
+#define HAVE_ROBOT 1
+#endif
+
+/* firmware_core/src/kernel.hpp: 1 when the sim now uses a kernel, 0 when not */
+int legsim_kernel_use(legsim_sim *sim, int on);
+
+#define MAXQ (3 * LEGSIM_MAX_BODIES)
+static _Alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[2][128 * 1024];
+static legsim_model_desc slippery; /* outlives the sims */
+
+void setUp(void) {}
+void tearDown(void) {}
+
+enum scene { LEG_PUSH, LEG_ON_STOP, ROBOT_STUCK, ROBOT_SLIDING };
+
+/* Everything a caller can read after a step, as one vector of numbers. */
+static int outputs(legsim_sim *sim, double *out) {
+  legsim_real v[MAXQ];
+  int n = 0;
+  const int nq = 3 * legsim_n_bodies(sim);
+  legsim_get_q(sim, v);
+  for (int k = 0; k < nq; ++k) out[n++] = v[k];
+  legsim_get_qd(sim, v);
+  for (int k = 0; k < nq; ++k) out[n++] = v[k];
+  legsim_get_qdd(sim, v);
+  for (int k = 0; k < nq; ++k) out[n++] = v[k];
+  legsim_real lambda[LEGSIM_MAX_ROWS];
+  legsim_multipliers(sim, lambda);
+  for (int i = 0; i < 2 * legsim_model(sim)->n_joints && i < LEGSIM_MAX_ROWS; ++i) out[n++] = lambda[i];
+  legsim_reaction r[LEGSIM_MAX_JOINTS];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_reactions(sim, r));
+  for (int j = 0; j < legsim_model(sim)->n_joints; ++j) {
+    out[n++] = r[j].force_n[0];
+    out[n++] = r[j].force_n[1];
+    out[n++] = r[j].moment_nm;
+  }
+  legsim_real f[LEGSIM_MAX_ACTUATORS];
+  legsim_actuator_forces(sim, f);
+  for (int a = 0; a < legsim_model(sim)->n_actuators; ++a) out[n++] = f[a];
+  legsim_contact c[LEGSIM_CONTACT_SLOTS];
+  const int nc = legsim_n_contacts(sim);
+  if (nc > 0) legsim_contacts(sim, c);
+  for (int k = 0; k < nc; ++k) {
+    out[n++] = c[k].state;
+    out[n++] = c[k].normal_n;
+    out[n++] = c[k].tangential_n;
+    out[n++] = c[k].impulse_ns[0];
+    out[n++] = c[k].impulse_ns[1];
+  }
+  legsim_report rep;
+  legsim_get_report(sim, &rep);
+  out[n++] = rep.events;
+  out[n++] = rep.iterations;
+  out[n++] = rep.condition;
+  return n;
+}
+
+static legsim_sim *set_up(int slot, enum scene sc, legsim_integrator integ, int kernel) {
+  const legsim_model_desc *model = &legsim_model_leg_revolute;
+#ifdef HAVE_ROBOT
+  if (sc == ROBOT_STUCK) model = &legsim_model_robot_revolute;
+  if (sc == ROBOT_SLIDING) {
+    slippery = legsim_model_robot_revolute;
+    slippery.ground.mu_static = slippery.ground.mu_kinetic = 0.1;
+    model = &slippery;
+  }
+#endif
+  legsim_options opt = legsim_default_options();
+  opt.integrator = integ;
+  legsim_sim *sim = NULL;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage[slot], sizeof storage[slot], model, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(kernel, legsim_kernel_use(sim, kernel));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  legsim_real len[LEGSIM_MAX_ACTUATORS];
+  if (sc == LEG_PUSH) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 50.0));
+  } else if (sc == LEG_ON_STOP) { /* the upper servo holds, the lower pulls into its end */
+    legsim_actuator_lengths(sim, len, NULL);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, 0, len[0]));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 1, -400.0));
+  } else { /* the robot on the ground, three servos holding, the Fig. 7 Scene A push */
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, NULL, 0.0));
+    legsim_actuator_lengths(sim, len, NULL);
+    for (int a = 1; a < 4; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 185.55));
+  }
+  return sim;
+}
+
+/* 1 s at h = 1 ms on both paths, every output compared after every step. */
+static void same_scene(enum scene sc, legsim_integrator integ, const char *name) {
+  legsim_sim *k = set_up(0, sc, integ, 1), *g = set_up(1, sc, integ, 0);
+  static double a[1024], b[1024];
+  double worst = 0;
+  uint32_t events = 0;
+  for (int step = 0; step < 1000; ++step) {
+    const legsim_status sk = legsim_step(k, 1), sg = legsim_step(g, 1);
+    TEST_ASSERT_EQUAL_INT(sg, sk);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, sk);
+    const int n = outputs(k, a);
+    TEST_ASSERT_EQUAL_INT(n, outputs(g, b));
+    for (int i = 0; i < n; ++i) {
+      const double d = fabs(a[i] - b[i]) / (1 + fabs(b[i]));
+      worst = d > worst ? d : worst;
+      if (!(d <= 1e-12)) {
+        printf("%s: step %d, output %d: kernel %.17g, general %.17g\n", name, step, i, a[i], b[i]);
+        TEST_FAIL();
+      }
+    }
+    events |= (uint32_t)a[n - 3];
+  }
+  printf("%s: 1000 steps, largest relative difference %.3g, events 0x%x\n", name, worst, events);
+  if (sc == LEG_ON_STOP) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_STROKE_MIN);
+  if (sc == ROBOT_SLIDING) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_STICK_TO_SLIP);
+}
+
+static void test_leg_push_rk4(void) { same_scene(LEG_PUSH, LEGSIM_INTEGRATOR_RK4, "leg 50 N rk4"); }
+static void test_leg_push_galpha(void) {
+  same_scene(LEG_PUSH, LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, "leg 50 N generalized-alpha");
+}
+static void test_leg_on_stop_rk4(void) { same_scene(LEG_ON_STOP, LEGSIM_INTEGRATOR_RK4, "leg on its stop rk4"); }
+static void test_leg_on_stop_galpha(void) {
+  same_scene(LEG_ON_STOP, LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, "leg on its stop generalized-alpha");
+}
+#ifdef HAVE_ROBOT
+static void test_robot_stuck_rk4(void) { same_scene(ROBOT_STUCK, LEGSIM_INTEGRATOR_RK4, "robot stuck rk4"); }
+static void test_robot_stuck_galpha(void) {
+  same_scene(ROBOT_STUCK, LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, "robot stuck generalized-alpha");
+}
+static void test_robot_sliding_rk4(void) {
+  same_scene(ROBOT_SLIDING, LEGSIM_INTEGRATOR_RK4, "robot sliding rk4");
+}
+static void test_robot_sliding_galpha(void) {
+  same_scene(ROBOT_SLIDING, LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, "robot sliding generalized-alpha");
+}
+#endif
+
+/* Failures: a step far beyond RK4's stability limit under the stiff servo (diverges), the
+ * same for generalized-alpha, a dead centre in assembly and a NaN state: the same status
+ * at the same step, and the same failure report. */
+static void test_same_statuses(void) {
+  for (int integ = 0; integ < 2; ++integ) {
+    legsim_status st[2];
+    int at[2];
+    legsim_report rep[2];
+    for (int kernel = 0; kernel < 2; ++kernel) {
+      legsim_sim *sim = set_up(kernel, LEG_PUSH, (legsim_integrator)integ, kernel);
+      legsim_options o = legsim_default_options();
+      o.integrator = (legsim_integrator)integ;
+      o.step_s = 0.05;
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_options(sim, &o));
+      legsim_command_length(sim, 0, 0.75);
+      legsim_command_force(sim, 1, 1500.0);
+      at[kernel] = 0;
+      while ((st[kernel] = legsim_step(sim, 1)) == LEGSIM_OK && at[kernel] < 200) ++at[kernel];
+      legsim_failure_report(sim, &rep[kernel]);
+    }
+    printf("integrator %d at h = 50 ms: %s at step %d on both\n", integ, legsim_status_str(st[0]), at[0]);
+    TEST_ASSERT_NOT_EQUAL_INT(LEGSIM_OK, st[0]);
+    TEST_ASSERT_EQUAL_INT(st[0], st[1]);
+    TEST_ASSERT_EQUAL_INT(at[0], at[1]);
+    TEST_ASSERT_EQUAL_INT(rep[0].iterations, rep[1].iterations);
+  }
+  legsim_status dead[2], nan_state[2];
+  for (int kernel = 0; kernel < 2; ++kernel) {
+    legsim_sim *sim = set_up(kernel, LEG_PUSH, LEGSIM_INTEGRATOR_RK4, kernel);
+    const legsim_real lengths[2] = {0.75, 0.6244998}; /* the thigh and the upper actuator in line */
+    dead[kernel] = legsim_assemble(sim, lengths);
+    legsim_real q[MAXQ], qd[MAXQ];
+    legsim_get_q(sim, q);
+    legsim_get_qd(sim, qd);
+    q[4] = NAN;
+    nan_state[kernel] = legsim_set_state(sim, q, qd, 0.0);
+  }
+  TEST_ASSERT_TRUE(dead[0] == LEGSIM_ERR_SINGULAR || dead[0] == LEGSIM_ERR_NOT_CONVERGED);
+  TEST_ASSERT_EQUAL_INT(dead[0], dead[1]);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, nan_state[0]);
+  TEST_ASSERT_EQUAL_INT(nan_state[0], nan_state[1]);
+}
+
+/* A model the kernels were not generated for (a structure of its own) stays on the
+ * general path; the compiled-in ones have theirs. */
+static void test_dispatch_by_structure(void) {
+  legsim_options opt = legsim_default_options();
+  legsim_sim *sim;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage[0], sizeof storage[0], &legsim_model_leg_revolute, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(1, legsim_kernel_use(sim, 1));
+  legsim_model_desc other = legsim_model_leg_revolute;
+  other.joint[7].body[0] = 5; /* the last revolute joint's bodies swapped: another structure */
+  other.joint[7].body[1] = 4;
+  const double p0[2] = {other.joint[7].point[0][0], other.joint[7].point[0][1]};
+  other.joint[7].point[0][0] = other.joint[7].point[1][0];
+  other.joint[7].point[0][1] = other.joint[7].point[1][1];
+  other.joint[7].point[1][0] = p0[0];
+  other.joint[7].point[1][1] = p0[1];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage[1], sizeof storage[1], &other, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(0, legsim_kernel_use(sim, 1));
+  TEST_ASSERT_EQUAL_INT(-1, legsim_kernel_use(NULL, 1));
+}
+
+int main(void) {
+  UNITY_BEGIN();
+  RUN_TEST(test_leg_push_rk4);
+  RUN_TEST(test_leg_push_galpha);
+  RUN_TEST(test_leg_on_stop_rk4);
+  RUN_TEST(test_leg_on_stop_galpha);
+#ifdef HAVE_ROBOT
+  RUN_TEST(test_robot_stuck_rk4);
+  RUN_TEST(test_robot_stuck_galpha);
+  RUN_TEST(test_robot_sliding_rk4);
+  RUN_TEST(test_robot_sliding_galpha);
+#endif
+  RUN_TEST(test_same_statuses);
+  RUN_TEST(test_dispatch_by_structure);
+  return UNITY_END();
+}
