@@ -23,7 +23,8 @@ from legsim_bench.analyses import cli_path, robot_arrays, robot_growth, robot_re
 from legsim_bench.scene import SceneError, load_scene, parse_scene  # noqa: E402
 
 ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7", "robot_both_upper",
-                "robot_stand_statics", "robot_slope_stand", "robot_slope_slide"]
+                "robot_stand_statics", "robot_slope_stand", "robot_slope_slide", "robot_sliding",
+                "robot_sliding_paper"]
 
 
 def _cli():
@@ -316,3 +317,30 @@ def test_slips_leaves_the_stuck_reference_and_is_checked_by_the_reader():
         parse_scene(base + 'slips = ["middle.foot"]\n', name="t", root=ROOT)
     with pytest.raises(SceneError, match="position_m compare with RobotModel's stance"):
         parse_scene(base + 'slips = ["left.foot"]\nposition_m = 1e-6\n', name="t", root=ROOT)
+
+
+@pytest.mark.parametrize("name, law, foot", [("robot_sliding", "lcp", "left.foot"),
+                                             ("robot_sliding_paper", "paper", "right.foot")])
+def test_sliding_configuration_slides_the_law_s_foot(name, law, foot):
+    """Uppers held (the right one 20 mm longer), both lowers ramped out together: under the
+    Coulomb law the left foot, whose |T|/N reaches mu_static first, slides; under the paper's
+    rule the right one, which has the smaller |T|; both at t = 0.344 s, within one step after
+    RobotModel's stuck-stuck |T|/N reaches mu_static (0.34338 s), the run before it on the
+    reference to 1e-8 m; the states change with their events."""
+    from legsim_bench.analyses import robot_slip_onset
+    sc, out, ev = _bench(name)
+    assert sc.contact_law == law and sc.checks.slips == (foot,) and sc.checks.slip_onset_steps == 1
+    assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]
+    by = {r.name: r for r in ev.results}
+    assert by["positions x, y vs RobotModel before the slip"].error < 1e-8
+    assert by["ground forces N, T per foot vs RobotModel before the slip"].error < 1e-5
+    d = robot_arrays(out)
+    o = robot_slip_onset(sc, d, ROOT)
+    assert o["event_t"] == pytest.approx(0.344, abs=1e-9)
+    assert o["crossing_t"] == pytest.approx(0.34338, abs=1e-5) and o["crossing_foot"] == 1
+    assert o["smaller_T_foot"] == 0
+    assert [out["contacts"][k] for k in o["released"]] == [foot]
+    # a run whose released foot is not the law's fails the check: the other law's output
+    other = load_scene("robot_sliding_paper" if law == "lcp" else "robot_sliding", ROOT)
+    o2 = robot_slip_onset(other, d, ROOT)
+    assert o2["expected"] not in o["released"]
