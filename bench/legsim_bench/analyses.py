@@ -27,7 +27,7 @@ import numpy as np
 from .scene import ACTUATORS, Scene, find_root
 
 __all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
-           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_slip_starts", "robot_slip_onset",
+           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_inverse_reference", "robot_slip_starts", "robot_slip_onset",
            "EVENT_NAMES",
            "CONTACT_EVENTS"]
 
@@ -296,7 +296,7 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
     # on the step grid k h, the staircases' own times (legsim_cli's sample times are sums of h)
     t = np.round(np.asarray(times, float) / scene.step_s) * scene.step_s
     r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
-                       gravity="gravity" not in scene.disable)
+                       gravity="gravity" not in scene.disable, box_load=scene.box_load or (0.0, 0.0, 0.0))
     return model, r
 
 
@@ -369,8 +369,79 @@ def robot_statics_reference(scene: Scene):
                          + ", ".join(scene.forces))
     model = RobotModel.from_toml(scene.model_path)
     st = model.statics(None if scene.lengths is None else np.asarray(scene.lengths, float),
-                       gravity="gravity" not in scene.disable, rule=scene.statics_rule)
+                       gravity="gravity" not in scene.disable, rule=scene.statics_rule,
+                       box_load=scene.box_load or (0.0, 0.0, 0.0))
     return model, st
+
+
+def robot_inverse_reference(scene: Scene, times) -> list:
+    """RobotModel.inverse_dynamics of a robot inverse_dynamics scene at the given times: the
+    stance at its `lengths`, both feet stuck, the three commanded lengths driving (their
+    sinusoids' rates and accelerations exact), the fourth actuator following, the scene's
+    statics_rule and box_load. ValueError unless exactly one actuator is uncommanded."""
+    from .reference.robot import RobotModel
+    if any(any(x != 0 for x in v) for v in scene.forces.values()):
+        raise ValueError("RobotModel has no leg force elements; this scene sets " + ", ".join(scene.forces))
+    model = RobotModel.from_toml(scene.model_path)
+    start = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
+    follow = [a for a in range(model.na) if scene.commands[a] is None]
+    if len(follow) != 1:
+        raise ValueError("on both stuck feet three lengths drive the robot: command three actuators")
+    out, guess = [], None
+    for t in np.asarray(times, float):
+        L, Ld, Ldd = np.zeros(model.na), np.zeros(model.na), np.zeros(model.na)
+        for a, c in enumerate(scene.commands):
+            if c is None:
+                continue
+            s = c.schedule
+            L[a] = s(t, float(start.lengths[a]))
+            if s.kind == "sinusoid":
+                w = 2 * math.pi * s.frequency
+                Ld[a] = s.amplitude * w * math.cos(w * t + s.phase)
+                Ldd[a] = -s.amplitude * w * w * math.sin(w * t + s.phase)
+        r = model.inverse_dynamics(L, Ld, Ldd, follow=follow[0], start=start,
+                                   box_load=scene.box_load or (0.0, 0.0, 0.0),
+                                   gravity="gravity" not in scene.disable, rule=scene.statics_rule, guess=guess)
+        guess = r.i
+        out.append(r)
+    return out
+
+
+def _robot_inverse_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_checks):
+    """A robot inverse_dynamics scene against RobotModel.inverse_dynamics at every sample: the
+    pose, the actuator forces (the follower's too), the joint reactions, per foot N and T."""
+    from .checks import CheckResult
+    results = ev.results
+    try:
+        refs = robot_inverse_reference(scene, d["t"])
+    except Exception as e:  # noqa: BLE001 - the reference's own refusal, reported as a check
+        results.append(CheckResult("reference: RobotModel.inverse_dynamics", False, None, None, "", "", str(e)))
+        return ev
+    t, acts, joints, feet = d["t"], out["actuators"], out["joints"], out.get("contacts", [])
+    pose_checks(np.array([r.q for r in refs]), f"rule {scene.statics_rule}")
+    F = np.array([r.actuator_forces for r in refs])
+    tol_check("actuator forces vs RobotModel.inverse_dynamics", "actuator_force_n", d["forces"] - F, "N",
+              lambda r, c: f"t={t[r]:.4f}s {acts[c]}",
+              "at the end " + ", ".join(f"{a} {f:.3f} N" for a, f in zip(acts, d["forces"][-1])))
+    R = np.array([r.reactions for r in refs])
+    tol_check("joint reaction forces vs RobotModel.inverse_dynamics", "reaction_n",
+              (d["reactions"] - R)[..., 0:2].reshape(len(t), -1), "N",
+              lambda r, c: f"t={t[r]:.4f}s {joints[c // 2]}.f{'xy'[c % 2]}")
+    ground = np.concatenate([d["normal"] - np.array([r.normal for r in refs]),
+                             d["tangential"] - np.array([r.tangential for r in refs])], axis=1)
+    tol_check("ground forces N, T per foot vs RobotModel.inverse_dynamics", "ground_force_n", ground, "N",
+              lambda r, c: f"t={t[r]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
+              f"at the end N {', '.join(f'{x:.3f}' for x in d['normal'][-1])}, "
+              f"T {', '.join(f'{x:+.3f}' for x in d['tangential'][-1])} N")
+    holds = [[s_["contacts"][f]["holds"] for f in feet] for s_ in out["samples"]]
+    ref_holds = [[bool(h) for h in r.holds] for r in refs]
+    results.append(CheckResult("each foot's static cone holds as RobotModel's (holds), every sample",
+                               holds == ref_holds, None, None, "", "",
+                               f"legsim at the end {holds[-1]}, RobotModel {ref_holds[-1]}"))
+    stuck = bool(np.all(d["state"] == "stuck"))
+    results.append(CheckResult("contact states: both feet stuck throughout", stuck, None, None, "", "",
+                               f"states at the end: {', '.join(d['state'][-1])}"))
+    return ev
 
 
 def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_checks):
@@ -572,6 +643,8 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
         return ev
     if scene.analysis == "statics":
         return _robot_statics_checks(ev, scene, d, out, tol_check, pose_checks)
+    if scene.analysis == "inverse_dynamics":
+        return _robot_inverse_checks(ev, scene, d, out, tol_check, pose_checks)
     if ch.slips is not None:
         tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
                   lambda r, c: where_t(r))

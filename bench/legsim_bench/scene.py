@@ -340,6 +340,7 @@ class Scene:
     contacts: dict = field(default_factory=dict)  # [[contact]]: contact name -> "stuck" | "free"
     statics_rule: str = "equal_friction"          # a robot's statics: legsim_statics_rule
     contact_law: str = "lcp"                      # a robot's dynamics: legsim_contact_law
+    box_load: tuple | None = None                 # a robot's box: (Fx, Fy N, M N m)
 
     @property
     def robot(self) -> bool:
@@ -459,7 +460,8 @@ class Scene:
                 "safe_state": self.safe_state, "disable": self.disable_bits, "rho_inf": self.rho_inf,
                 "max_newton_iter": self.max_newton_iter, "newton_tol": self.newton_tol,
                 "statics_rule": self.statics_rule, "contact_law": self.contact_law, "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
-                "contacts": dict(self.contacts)}
+                "contacts": dict(self.contacts),
+                "box_load": list(self.box_load) if self.box_load is not None else None}
 
     def _where(self) -> str:
         return str(self.path) if self.path else self.name
@@ -470,12 +472,8 @@ class Scene:
 _TOP_KEYS = {"description", "name", "demo", "model", "variant", "analysis", "integrator",
              "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
              "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
+             "box_load",
              "forces", "command", "contact", "inject", "checks", "statics_rule", "contact_law"}
-# Keys of the robot's design (docs/design/robot-on-ground.md section 6) the core does not have
-# yet: refused by name with legsim_cli's words, never ignored.
-NOT_YET_KEYS = {
-    "box_load": "'box_load' is not in this core yet (the robot has no force element on the box): leave it out",
-}
 CONTACT_STATES = ("stuck", "free")
 # legsim_statics_rule: what fixes the statics of a stance on two stuck feet (legsim.h)
 STATICS_RULES = ("equal_friction", "min_tangential")
@@ -500,6 +498,8 @@ ROBOT_CHECKS_FOR = {
     "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
                  "stays_put_m", "growth_rel", "slips", "slip_onset_steps"},
     "assembly": {"position_m", "angle_rad", "residual"},
+    "inverse_dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n",
+                         "ground_force_n"},
     "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
                 "ground_force_n"},
 }
@@ -507,6 +507,8 @@ ROBOT_DEFAULT_CHECKS = {
     "dynamics": {"position_m": 1e-6, "angle_rad": 1e-6, "actuator_force_n": 1e-3, "ground_force_n": 1e-3,
                  "residual": 1e-8},
     "assembly": {"position_m": 1e-10, "angle_rad": 1e-10, "residual": 1e-10},
+    "inverse_dynamics": {"position_m": 1e-8, "angle_rad": 1e-8, "residual": 1e-8, "actuator_force_n": 1e-6,
+                         "reaction_n": 1e-6, "ground_force_n": 1e-6},
     "statics": {"position_m": 1e-10, "angle_rad": 1e-10, "residual": 1e-10, "statics_force_n": 1e-6,
                 "statics_reaction_n": 1e-6, "ground_force_n": 1e-6},
 }
@@ -659,9 +661,10 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
     (legsim_bench.analyses). Actuators by their prefixed names; [[contact]] initial states.
     The refusals are legsim_cli's words (scene_toml.cpp: parse_scene, bind_scene)."""
     analysis = kw["analysis"]
-    if analysis not in ("dynamics", "assembly", "statics"):
-        raise SceneError(f"{where}: {analysis} of a model with contacts is not in this core yet (the scenes "
-                         "drive its statics on the stance only): run dynamics, statics or assembly")
+    if analysis == "statics_sweep":
+        raise SceneError(f"{where}: statics_sweep of a model with contacts is not in this core yet (the legs "
+                         "move, the feet cannot stay on the ground): run dynamics, statics, inverse_dynamics or "
+                         "assembly")
     if "inject" in d:
         raise SceneError(f"{where}: [[inject]]: a robot scene runs in legsim_cli, which has no bus")
     names = tuple(a[0] for a in info.actuators)
@@ -688,6 +691,8 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
         if mode not in ("force", "length"):
             raise SceneError(f"{cw}: 'mode' must be force or length (got {mode!r})")
         sch = _schedule(cw, c)
+        if analysis == "inverse_dynamics" and mode != "length":
+            raise SceneError(f"{cw}: inverse_dynamics prescribes lengths: use mode = \"length\"")
         if sch.kind == "initial" and mode != "length":
             raise SceneError(f"{cw}: value = \"initial\" is for mode = \"length\" (hold the assembled length)")
         if sch.kind == "step":
@@ -760,7 +765,7 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
                  demo=bool(d.get("demo", False)), analysis=analysis, model=kw["model_spec"], model_info=info,
                  pose_name=kw["pose_name"], forces=kw["forces"], rho_inf=kw["rho_inf"],
                  max_newton_iter=kw["max_iter"], newton_tol=kw["newton_tol"], contacts=contacts,
-                 statics_rule=kw["statics_rule"], contact_law=kw["contact_law"])
+                 statics_rule=kw["statics_rule"], contact_law=kw["contact_law"], box_load=kw["box_load"])
 
 
 
@@ -780,9 +785,6 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
         raise SceneError(f"{where}: TOML input refused: nested too deeply") from None
     for old, msg in RENAMED_KEYS.items():
         if old in d:
-            raise SceneError(f"{where}: {msg}")
-    for key, msg in NOT_YET_KEYS.items():
-        if key in d:
             raise SceneError(f"{where}: {msg}")
     _unknown(where, d, _TOP_KEYS)
     sname = d.get("name") or name or (path.stem if path else "scene")
@@ -866,7 +868,7 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                 raise SceneError(f"{where}: lengths[{a}] = {_fmt(lengths[a])} m is outside the stroke of "
                                  f"actuator '{an}' [{_fmt(smin)}, {_fmt(smax)}]")
     only("grid", analysis == "statics_sweep", "statics_sweep")
-    only("statics_rule", analysis == "statics", "statics")
+    only("statics_rule", analysis in ("statics", "inverse_dynamics"), "statics and inverse_dynamics")
     statics_rule = _rule_choice(where, d.get("statics_rule", "equal_friction"))
     if "statics_rule" in d and not info.robot:
         raise SceneError(f"{where}: 'statics_rule' applies to a model with contacts only (a stance on two feet)")
@@ -874,6 +876,21 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
     contact_law = _rule_choice(where, d.get("contact_law", "lcp"), "contact_law", CONTACT_LAWS)
     if "contact_law" in d and not info.robot:
         raise SceneError(f"{where}: 'contact_law' applies to a model with contacts only (a robot's feet)")
+    # a load on a robot's box: [Fx, Fy] N at its centre and M N m (legsim_cli: box_load_add)
+    only("box_load", analysis in ("dynamics", "statics", "inverse_dynamics"), "statics, dynamics and inverse_dynamics")
+    box_load = None
+    if "box_load" in d:
+        v = d["box_load"]
+        if not isinstance(v, list) or len(v) != 3:
+            raise SceneError(f"{where}: 'box_load' must be [Fx, Fy, M] (N, N, N m: a load on the box)")
+        box_load = tuple(_num(where, "'box_load'", x) for x in v)
+        if any(abs(x) > MAX_FORCE_N for x in box_load):
+            raise SceneError(f"{where}: 'box_load' must be within +-{MAX_FORCE_N:g} (N, N, N m)")
+        if not info.robot:
+            raise SceneError(f"{where}: 'box_load' applies to a model with contacts only (the robot's box)")
+        for fname, _ in info.forces:
+            if fname in ("box.load", "box.moment"):
+                raise SceneError(f"{where}: 'box_load': the model has a force element named '{fname}' already")
     grid = _int(where, "grid", d.get("grid", 11), 2, 1000)
     only("init", dynamics, "dynamics")
     init = _choice(where, "init", d.get("init", "zero_force"), ACTUATOR_MODES)
@@ -912,7 +929,7 @@ def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path 
                             step_ns=step_ns, n_steps=n_steps, rec=rec, pose=pose, pose_name=pose_name,
                             lengths=lengths, init=init, disable=disable, forces=forces,
                             rho_inf=rho_inf, max_iter=max_iter, newton_tol=newton_tol,
-                            statics_rule=statics_rule, contact_law=contact_law)
+                            statics_rule=statics_rule, contact_law=contact_law, box_load=box_load)
     # The bench knows the leg: the DBC carries two actuators, upper and lower, and its
     # reference model the one force element foot_load.
     if act_names != ACTUATORS:

@@ -226,25 +226,13 @@ bool is_name(const std::string &s) {
   return true;
 }
 
-// Keys of the robot's design (docs/design/robot-on-ground.md section 6) that this core does
-// not have yet: refused by name, so a scene never runs without what it asked for.
-struct NotYet {
-  const char *key;
-  const char *message;
-};
-const NotYet kNotYetKeys[] = {
-    {"box_load",
-     "'box_load' is not in this core yet (the robot has no force element on the box): leave it out"},
-};
-
 void parse_scene(Table doc, Scene &s) {
   for (const auto &r : kRenamedKeys)
     if (doc->get(r.old_key)) fail(r.message);
-  for (const auto &r : kNotYetKeys)
-    if (doc->get(r.key)) fail(r.message);
   check_keys(doc, {"description", "name", "demo", "model", "variant", "analysis", "integrator",
                    "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
                    "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
+                   "box_load",
                    "forces", "command", "contact", "inject", "checks", "statics_rule",
                    "contact_law"},
              "");
@@ -361,7 +349,8 @@ void parse_scene(Table doc, Scene &s) {
   }
   only("grid", s.analysis == Analysis::kStaticsSweep, "statics_sweep");
   // The rule that fixes a two-foot stance's statics (a model with contacts: bind_scene).
-  only("statics_rule", s.analysis == Analysis::kStatics, "statics");
+  only("statics_rule", s.analysis == Analysis::kStatics || s.analysis == Analysis::kInverseDynamics,
+       "statics and inverse_dynamics");
   s.statics_rule_given = doc->get("statics_rule") != nullptr;
   static const char *const kRules[] = {"equal_friction", "min_tangential"};
   s.options.statics_rule = choice(doc, "statics_rule", kRules, 2, "equal_friction") == "equal_friction"
@@ -374,6 +363,21 @@ void parse_scene(Table doc, Scene &s) {
   static const char *const kLaws[] = {"lcp", "paper"};
   s.options.contact_law =
       choice(doc, "contact_law", kLaws, 2, "lcp") == "lcp" ? LEGSIM_CONTACT_LCP : LEGSIM_CONTACT_PAPER;
+
+  // A load on a robot's box (a model with contacts: bind_scene): [Fx, Fy] N at its centre and
+  // M N m, two force elements added to the model (box_load_add).
+  only("box_load", dynamics || s.analysis == Analysis::kStatics || s.analysis == Analysis::kInverseDynamics,
+       "statics, dynamics and inverse_dynamics");
+  if (Node bv = doc->get("box_load")) {
+    const toml::array *a = bv->as_array();
+    if (!a || a->size() != 3) fail("'box_load' must be [Fx, Fy, M] (N, N, N m: a load on the box)");
+    for (int i = 0; i < 3; ++i) {
+      s.box_load[i] = real_of(a->get(i), "'box_load'");
+      if (std::fabs(s.box_load[i]) > LEGSIM_MAX_FORCE_N)
+        fail("'box_load' must be within +-" + num(LEGSIM_MAX_FORCE_N) + " (N, N, N m)");
+    }
+    s.has_box_load = true;
+  }
 
   only("init", dynamics, "dynamics");
   static const char *const kInits[] = {"zero_force", "hold_length"};
@@ -607,6 +611,36 @@ bool load_scene(const std::string &path, Scene &scene, std::string &err) {
   return false;
 }
 
+bool box_load_add(legsim_model_desc &d, const double load[3], std::string &why) {
+  if (d.n_contacts < 1) {
+    why = "the model has no box (no contacts)";
+    return false;
+  }
+  if (d.n_forces + 2 > LEGSIM_MAX_FORCES) {
+    why = "needs 2 force elements beyond the model's " + std::to_string(d.n_forces) + " (this build holds " +
+          std::to_string(LEGSIM_MAX_FORCES) + ")";
+    return false;
+  }
+  for (int32_t i = 0; i < d.n_forces; ++i)
+    for (const char *n : {kBoxLoadName, kBoxMomentName})
+      if (strncmp(d.force[i].name, n, LEGSIM_NAME_LEN) == 0) {
+        why = std::string("the model has a force element named ") + q(n) + " already";
+        return false;
+      }
+  for (int k = 0; k < 2; ++k) {
+    legsim_force_desc &f = d.force[d.n_forces + k];
+    f = legsim_force_desc{};
+    std::snprintf(f.name, LEGSIM_NAME_LEN, "%s", k == 0 ? kBoxLoadName : kBoxMomentName);
+    f.kind = k == 0 ? LEGSIM_FORCE_POINT : LEGSIM_FORCE_TORQUE;
+    f.body[0] = 0;  // the box is body 0 of a robot file
+    f.body[1] = LEGSIM_FRAME;
+    f.value[0] = k == 0 ? load[0] : load[2];
+    f.value[1] = k == 0 ? load[1] : 0;
+  }
+  d.n_forces += 2;
+  return true;
+}
+
 bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
   try {
     auto name_of = [](const char (&n)[LEGSIM_NAME_LEN]) { return std::string(n, strnlen(n, LEGSIM_NAME_LEN)); };
@@ -656,11 +690,17 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
       if (k == LEGSIM_FORCE_TORQUE && f.n != 1)
         fail("forces." + f.name + ": a torque takes one value (N m)");
     }
-    // contacts: a robot's feet (stuck or free in assembly and dynamics; stuck in statics)
-    if (m.n_contacts > 0 && (s.analysis == Analysis::kStaticsSweep || s.analysis == Analysis::kInverseDynamics))
-      fail(std::string(analysis_name(s.analysis)) +
-           " of a model with contacts is not in this core yet (the scenes drive its statics on the "
-           "stance only): run dynamics, statics or assembly");
+    // contacts: a robot's feet (stuck or free in assembly and dynamics; stuck in statics and
+    // inverse dynamics)
+    if (m.n_contacts > 0 && s.analysis == Analysis::kStaticsSweep)
+      fail("statics_sweep of a model with contacts is not in this core yet (the legs move, the feet "
+           "cannot stay on the ground): run dynamics, statics, inverse_dynamics or assembly");
+    if (s.has_box_load) {
+      if (m.n_contacts == 0) fail("'box_load' applies to a model with contacts only (the robot's box)");
+      std::string why;
+      const auto probe = std::make_unique<legsim_model_desc>(m);
+      if (!box_load_add(*probe, s.box_load, why)) fail("'box_load': " + why);
+    }
     if (m.n_contacts == 0 && s.statics_rule_given)
       fail("'statics_rule' applies to a model with contacts only (a stance on two feet)");
     if (m.n_contacts == 0 && s.contact_law_given)
@@ -786,7 +826,18 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
     return LEGSIM_ERR_STORAGE;
   }
   legsim_sim *sim = nullptr;
-  legsim_status st = legsim_init(storage.p, legsim_sim_size(), &m, &sc.options, &sim);
+  // box_load: the description with the box's two force elements (it must outlive the sim)
+  std::unique_ptr<legsim_model_desc> loaded;
+  if (sc.has_box_load) {
+    loaded.reset(new legsim_model_desc(m));
+    std::string why;
+    if (!box_load_add(*loaded, sc.box_load, why)) {
+      res.error = "box_load: " + why;
+      return LEGSIM_ERR_CAPACITY;
+    }
+  }
+  legsim_status st =
+      legsim_init(storage.p, legsim_sim_size(), loaded ? loaded.get() : &m, &sc.options, &sim);
   if (st != LEGSIM_OK) {
     res.error = call_failed("legsim_init", st);
     return st;
@@ -883,7 +934,13 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
       return LEGSIM_OK;
 
     case Analysis::kInverseDynamics: {
-      // Uncommanded actuators hold their assembled length.
+      // Uncommanded actuators hold their assembled length; a robot's (feet stuck) follow: their
+      // motion comes from the commanded lengths and the feet (legsim_inverse_dynamics_on_ground).
+      uint32_t follow = 0;
+      if (nk > 0) {
+        follow = (1u << na) - 1;
+        for (const auto &c : commands) follow &= ~(1u << c.index);
+      }
       std::vector<legsim_real> len(std::max(na, 1)), rate(std::max(na, 1)), acc(std::max(na, 1));
       for (int64_t k = 0; k <= sc.n_steps; ++k) {
         const double t = static_cast<double>(k * sc.step_ns) / 1e9;
@@ -896,7 +953,9 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
           rate[c.index] = static_cast<legsim_real>(c.signal.rate(t));
           acc[c.index] = static_cast<legsim_real>(c.signal.accel(t));
         }
-        st = legsim_inverse_dynamics(sim, len.data(), rate.data(), acc.data(), forces.data());
+        st = nk > 0 ? legsim_inverse_dynamics_on_ground(sim, follow, len.data(), rate.data(), acc.data(),
+                                                        forces.data())
+                    : legsim_inverse_dynamics(sim, len.data(), rate.data(), acc.data(), forces.data());
         if (st != LEGSIM_OK) {
           res.failed_at_s = t;
           res.error = call_failed("inverse dynamics at t = " + num(t) + " s", st);
@@ -1131,7 +1190,12 @@ void write_resolved(std::ostream &o, const Scene &sc, const legsim_model_desc &m
   for (size_t i = 0; i < sc.contacts.size(); ++i)
     o << (i ? ", " : "") << jstr(sc.contacts[i].name) << ": "
       << jstr(sc.contacts[i].state == LEGSIM_CONTACT_FREE ? "free" : "stuck");
-  o << "}}\n";
+  o << "}, \"box_load\": ";
+  if (sc.has_box_load)
+    o << "[" << jnum(sc.box_load[0]) << ", " << jnum(sc.box_load[1]) << ", " << jnum(sc.box_load[2]) << "]";
+  else
+    o << "null";
+  o << "}\n";
 }
 
 void JsonWriter::begin() {

@@ -89,7 +89,16 @@ struct Scene {
   std::vector<ForceValue> forces;
   std::vector<Command> commands;
   std::vector<ContactInit> contacts;     // [[contact]] (models with contacts only)
+  bool has_box_load = false;             // 'box_load' given (models with contacts only)
+  double box_load[3] = {0, 0, 0};        // Fx, Fy N at the box's centre, M N m
 };
+
+// box_load: a robot's box (body 0) gets two force elements, kBoxLoadName (a point force at its
+// centre, [Fx, Fy]) and kBoxMomentName (a torque, M), appended to the description. False
+// with why when the model has no contacts, no room for them, or names them already.
+constexpr const char *kBoxLoadName = "box.load";
+constexpr const char *kBoxMomentName = "box.moment";
+bool box_load_add(legsim_model_desc &desc, const double load[3], std::string &why);
 
 // Reads and checks a scene file (everything that does not need the model).
 // On error returns false with "PATH: problem" in err. Never throws.

@@ -85,17 +85,17 @@ def test_robot_keys_are_refused_or_checked_by_both_readers():
                          "'state' must be stuck or free (got 'sliding')")]:
         with pytest.raises(SceneError, match=words.replace("(", r"\(").replace(")", r"\)")):
             parse_scene(base + text, name="t", root=ROOT)
-    for an in ("statics_sweep", "inverse_dynamics"):
-        with pytest.raises(SceneError, match=f"{an} of a model with contacts is not in this core yet"):
-            parse_scene(f'model = "builtin:robot"\nanalysis = "{an}"\nduration = 0.01\n'
-                        .replace("duration = 0.01\n", "duration = 0.01\n" if an != "statics_sweep" else ""),
-                        name="t", root=ROOT)
+    with pytest.raises(SceneError, match="statics_sweep of a model with contacts is not in this core yet"):
+        parse_scene('model = "builtin:robot"\nanalysis = "statics_sweep"\n', name="t", root=ROOT)
+    sc = parse_scene('model = "builtin:robot"\nanalysis = "inverse_dynamics"\nduration = 0.01\n'
+                     'box_load = [1.0, -2.0, 3.0]\n', name="t", root=ROOT)
+    assert sc.box_load == (1.0, -2.0, 3.0) and sc.resolved()["box_load"] == [1.0, -2.0, 3.0]
     sc = parse_scene('model = "builtin:robot"\nanalysis = "statics"\nstatics_rule = "min_tangential"\n',
                      name="t", root=ROOT)
     assert sc.statics_rule == "min_tangential" and sc.resolved()["statics_rule"] == "min_tangential"
     for text, words in [('analysis = "statics"\nstatics_rule = "paper"\n',
                          "'statics_rule' must be equal_friction or min_tangential (got 'paper')"),
-                        ('duration = 0.01\nstatics_rule = "min_tangential"\n', "'statics_rule' applies to statics only")]:
+                        ('duration = 0.01\nstatics_rule = "min_tangential"\n', "'statics_rule' applies to statics and inverse_dynamics only")]:
         with pytest.raises(SceneError, match=re.escape(words)):
             parse_scene('model = "builtin:robot"\n' + text, name="t", root=ROOT)
     with pytest.raises(SceneError, match=re.escape("'statics_rule' applies to a model with contacts only")):
