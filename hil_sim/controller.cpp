@@ -302,13 +302,7 @@ void Controller::publish() {
   for (int k = 0; k < kMaxLegs; ++k) info.act_seq[k] = act_seq_[k].last;
   info.ctrl_seq = ctrl_seq_.last;
   info.step_ns = session_.params().step_ns;
-  // contact state changes since the previous sample (none at step 0: a RESET's sample)
-  const bool fresh = s.steps == 0;
-  for (int k = 0; k < kMaxContacts && s.legs > 1; ++k) {
-    info.contact_events[k] =
-        fresh ? 0 : contact_events(contact_state_[k], s.contact[k].state);
-    contact_state_[k] = s.contact[k].state;
-  }
+  // the feet's events (Ct_Events) are the core's since the last clear, below: none is lost
   Frame frames[kMaxSampleFrames];
   const int n = encode_sample(s, info, frames);
   for (int i = 0; i < n; ++i) sink_.send(frames[i]);

@@ -112,7 +112,6 @@ class Controller {
   bool fault_since_sample_ = false;
   SeqTrack ctrl_seq_, act_seq_[kMaxLegs], load_seq_[kMaxLegs];  // per leg: its own frame ids
   uint32_t last_act_id_ = 0;   // the id of the last accepted ACT_CMD (of any leg), for CMD_TIMEOUT
-  int contact_state_[kMaxContacts] = {0, 0};  // at the previous sample: Ct_Events
 
   // command timeout
   uint32_t timeout_ms_ = 0;

@@ -37,11 +37,13 @@ uint32_t status_from_events(uint32_t events) {
   return s;
 }
 
-uint8_t contact_events(int before, int after) {
-  if (before == after) return 0;
-  if (after == LEGSIM_CONTACT_FREE) return kContactLiftoff;
-  if (before == LEGSIM_CONTACT_FREE) return kContactTouchdown;
-  return after == LEGSIM_CONTACT_SLIDING ? kContactStickToSlip : kContactSlipToStick;
+uint8_t contact_event_bits(uint32_t legsim_events) {
+  constexpr uint32_t kContactEvents = LEGSIM_EVENT_LIFTOFF | LEGSIM_EVENT_TOUCHDOWN |
+                                      LEGSIM_EVENT_STICK_TO_SLIP | LEGSIM_EVENT_SLIP_TO_STICK |
+                                      LEGSIM_EVENT_CONTACT_INCONSISTENT |
+                                      LEGSIM_EVENT_CONTACT_AMBIGUOUS;
+  static_assert(kContactEvents == 0x3Fu << 4, "the contact events are legsim_event bits 4-9");
+  return static_cast<uint8_t>((legsim_events & kContactEvents) >> 4);
 }
 
 namespace {
@@ -121,11 +123,20 @@ void validate_control(const Request &req, Checker &c) {
               LEGSIM_CAN_CONTROL_CTRL_ACT_INIT_START_BIT, r.act_init);
       c.range(legsim_can_control_ctrl_use_lengths_is_in_range(r.use_lengths),
               LEGSIM_CAN_CONTROL_CTRL_USE_LENGTHS_START_BIT, r.use_lengths);
+      c.range(legsim_can_control_ctrl_contact_law_is_in_range(r.contact_law),
+              LEGSIM_CAN_CONTROL_CTRL_CONTACT_LAW_START_BIT, r.contact_law);
+      c.range(legsim_can_control_ctrl_free_contacts_is_in_range(r.free_contacts),
+              LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT, r.free_contacts);
       if (!c.ok()) return;
       const legsim_model_desc *m = Session::variant_model(p.variant);  // the robot has one
       c.model(m != nullptr, LEGSIM_CAN_CONTROL_CTRL_VARIANT_START_BIT, p.variant);
       if (!c.ok()) return;
       c.model(p.pose < m->n_poses, LEGSIM_CAN_CONTROL_CTRL_POSE_START_BIT, p.pose);
+      // the feet's options need feet: a contact law, and only the model's contacts freed
+      c.model(r.contact_law == 0 || m->n_contacts > 0, LEGSIM_CAN_CONTROL_CTRL_CONTACT_LAW_START_BIT,
+              r.contact_law);
+      c.model((r.free_contacts >> m->n_contacts) == 0, LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT,
+              r.free_contacts);
       if (p.use_lengths) {
         // leg 0's lengths, then (robot) leg 1's
         float l[kMaxActuators];
@@ -322,6 +333,10 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault, int legs) {
       r.steps_per_tick = m.ctrl_rt_steps_per_tick;
       r.act_init = m.ctrl_act_init;
       r.use_lengths = m.ctrl_use_lengths;
+      r.contact_law = m.ctrl_contact_law;
+      r.free_contacts = m.ctrl_free_contacts;
+      r.reset.contact_law = m.ctrl_contact_law;
+      r.reset.free_contacts = m.ctrl_free_contacts;
       break;
     }
     case Request::Kind::kAct:
@@ -454,12 +469,12 @@ void fill_status(const Sample &s, const StatusInfo &info, int leg, Status *st) {
 }
 
 template <typename Contact>
-void fill_contact(const Sample &s, const StatusInfo &info, int k, Contact *m) {
+void fill_contact(const Sample &s, int k, Contact *m) {
   const ContactSample &c = s.contact[k];
   std::memset(m, 0, sizeof *m);
   m->ct_tick = static_cast<uint32_t>(s.steps);
   m->ct_state = static_cast<uint8_t>(c.state);
-  m->ct_events = info.contact_events[k];
+  m->ct_events = contact_event_bits(c.events);
   m->ct_normal = f32(c.normal);
   m->ct_tangential = f32(c.tangential);
   m->ct_friction_use = f32(c.friction_use);
@@ -510,7 +525,7 @@ int encode_sample(const Sample &s, const StatusInfo &info, Frame out[kMaxSampleF
                              kFdPayload);
   if (s.legs > 1) {
     legsim_can_st_contact_t c0;
-    fill_contact(s, info, 0, &c0);
+    fill_contact(s, 0, &c0);
     legsim_can_st_contact_pack(next_frame(out, &n, LEGSIM_CAN_ST_CONTACT_FRAME_ID)->data, &c0,
                                kFdPayload);
     LegFrames<legsim_can_st_pos_l1_t, legsim_can_st_vel_l1_t, legsim_can_st_act_l1_t,
@@ -528,7 +543,7 @@ int encode_sample(const Sample &s, const StatusInfo &info, Frame out[kMaxSampleF
     legsim_can_st_react_b_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_REACT_B_L1_FRAME_ID)->data,
                                   &leg1.rb, kFdPayload);
     legsim_can_st_contact_l1_t c1;
-    fill_contact(s, info, 1, &c1);
+    fill_contact(s, 1, &c1);
     legsim_can_st_contact_l1_pack(next_frame(out, &n, LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID)->data, &c1,
                                   kFdPayload);
   }

@@ -60,6 +60,7 @@ struct ControlRequest {
   Command command = Command::kReset;
   ResetParams reset;
   uint8_t act_init = 0, use_lengths = 0;  // raw Ctrl_ActInit, Ctrl_UseLengths (range-checked)
+  uint8_t contact_law = 0, free_contacts = 0;  // raw Ctrl_ContactLaw, Ctrl_FreeContacts
   uint16_t cmd_timeout_ms = 0;  // 0 default, 65535 none
   uint32_t n_steps = 0;
   uint16_t decimation = 0;      // 0 default
@@ -106,17 +107,11 @@ struct StatusInfo {
   int variant = 0, integrator = 0;
   uint32_t act_seq[kMaxLegs] = {0, 0};  // per leg: its last accepted ACT_CMD counter
   uint32_t ctrl_seq = 0, step_ns = 0;
-  uint8_t contact_events[kMaxContacts] = {0, 0};  // Ct_Events (robot)
 };
 
-// Ct_Events bits: contact state changes seen between two samples.
-enum ContactEventBit : uint8_t {
-  kContactLiftoff = 1u << 0,
-  kContactTouchdown = 1u << 1,
-  kContactStickToSlip = 1u << 2,
-  kContactSlipToStick = 1u << 3,
-};
-uint8_t contact_events(int before, int after);  // legsim_contact_state values
+// Ct_Events: a foot's contact events (legsim_contact_event_mask, LIFTOFF .. CONTACT_AMBIGUOUS,
+// legsim_event bits 4-9) as the DBC's bits 0-5.
+uint8_t contact_event_bits(uint32_t legsim_events);
 
 // One leg: ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS (6 frames). The robot:
 // ST_BOX, then per leg its ST_POS .. ST_REACT_B and ST_CONTACT, then every leg's ST_STATUS

@@ -134,6 +134,7 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
   opt.integrator = static_cast<legsim_integrator>(p.integrator);
   opt.step_s = static_cast<double>(p.step_ns) / 1e9;  // correctly rounded: 1000000 -> 0.001
   opt.disable = p.disable;
+  opt.contact_law = static_cast<legsim_contact_law>(p.contact_law);
   legsim_sim *sim = nullptr;
   legsim_status st = legsim_init(storage, storage_bytes_, variant_model(p.variant), &opt, &sim);
   if (st != LEGSIM_OK) return st;
@@ -149,6 +150,9 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
     legsim_real mid = 0;
     st = feet_mid(sim, m, &mid);
     if (st == LEGSIM_OK) st = legsim_assemble_on_ground(sim, p.use_lengths ? given : nullptr, mid);
+    // the scene's [[contact]] state = free: that foot's rows lifted at t = 0 (as legsim_cli)
+    for (int k = 0; k < m->n_contacts && st == LEGSIM_OK; ++k)
+      if ((p.free_contacts >> k) & 1u) st = legsim_set_contact_state(sim, k, LEGSIM_CONTACT_FREE);
     if (st != LEGSIM_OK) return st;
   } else if (p.use_lengths) {
     st = legsim_assemble(sim, given);
@@ -246,6 +250,7 @@ legsim_status Session::sample(Sample *out) const {
       o.slip = c[k].slip_mps;
       o.impulse[0] = c[k].impulse_ns[0];
       o.impulse[1] = c[k].impulse_ns[1];
+      o.events = legsim_contact_event_mask(sim_, k);  // since the last sample's clear
     }
   }
   out->t = legsim_time(sim_);

@@ -40,11 +40,14 @@ struct ResetParams {
   bool hold_length = false;  // else zero force
   bool use_lengths = false;
   double lengths[kMaxActuators] = {0, 0, 0, 0};  // leg 0 upper, lower, then leg 1's
+  int contact_law = 0;        // legsim_contact_law (the robot's feet)
+  uint32_t free_contacts = 0; // bit k: contact k FREE after the assembly on the ground
 };
 
 struct ContactSample {  // legsim_contact, as sent (plain data: Session::sample zeroes it)
   int state;              // legsim_contact_state
   legsim_real normal, tangential, friction_use, position[2], slip, impulse[2];
+  uint32_t events;        // legsim_contact_event_mask: its contact events since the last clear
 };
 
 struct Sample {

@@ -119,11 +119,15 @@ class ContactState(enum.IntEnum):
 
 
 class ContactEvent(enum.IntFlag):
-    """Ct_Events: a foot's contact state changes seen since the previous sample."""
+    """Ct_Events: the contact events the core raised for this foot since the previous sample
+    (legsim_contact_event_mask over every step between the two: none is lost), legsim_event's
+    bits 4-9 shifted down by 4."""
     LIFTOFF = 1 << 0
     TOUCHDOWN = 1 << 1
     STICK_TO_SLIP = 1 << 2
     SLIP_TO_STICK = 1 << 3
+    CONTACT_INCONSISTENT = 1 << 4
+    CONTACT_AMBIGUOUS = 1 << 5
 
 
 class FaultCode(enum.IntEnum):

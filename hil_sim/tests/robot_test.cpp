@@ -100,16 +100,19 @@ bool same_bits(float a, double b) {
 }
 
 // The robot driven straight through the C API, as hil_sim's RESET builds it: stand pose,
-// onto the ground with the feet's midpoint where the pose put them, servos holding.
+// onto the ground with the feet's midpoint where the pose put them (then the feet in
+// free_mask lifted), servos holding.
 struct Direct {
   std::vector<unsigned char> storage;
   legsim_sim *sim = nullptr;
-  Direct() : storage(legsim_sim_size() + LEGSIM_STORAGE_ALIGN) {
+  explicit Direct(legsim_contact_law law = LEGSIM_CONTACT_LCP, uint32_t free_mask = 0)
+      : storage(legsim_sim_size() + LEGSIM_STORAGE_ALIGN) {
     void *p = storage.data();
     size_t space = storage.size();
     void *aligned = std::align(LEGSIM_STORAGE_ALIGN, legsim_sim_size(), p, space);
     legsim_options opt = legsim_default_options();
     opt.step_s = 0.001;
+    opt.contact_law = law;
     CHECK(legsim_init(aligned, space, &legsim_model_robot_revolute, &opt, &sim) == LEGSIM_OK);
     CHECK(legsim_assemble_pose(sim, 0) == LEGSIM_OK);
     legsim_contact c[2];
@@ -118,6 +121,8 @@ struct Direct {
     const legsim_real mid = (c[0].position[0] + c[1].position[0]) / 2;
     CHECK(std::fabs(mid) < 1e-9);
     CHECK(legsim_assemble_on_ground(sim, nullptr, mid) == LEGSIM_OK);
+    for (int k = 0; k < 2; ++k)
+      if ((free_mask >> k) & 1u) CHECK(legsim_set_contact_state(sim, k, LEGSIM_CONTACT_FREE) == LEGSIM_OK);
     legsim_real len[4], rate[4];
     CHECK(legsim_actuator_lengths(sim, len, rate) == LEGSIM_OK);
     for (int a = 0; a < 4; ++a) CHECK(legsim_command_length(sim, a, len[a]) == LEGSIM_OK);
@@ -181,6 +186,15 @@ void check_leg(const std::vector<hil::Frame> &out, int leg, const legsim_real *q
            same_bits(got_r[3 * k + 1], j[k].force_n[1]) && same_bits(got_r[3 * k + 2], j[k].moment_nm);
   }
   CHECK(r_ok);
+}
+
+// Ct_Events of a sample's ST_CONTACT (leg 0 or leg 1).
+uint8_t ct_events(const std::vector<hil::Frame> &out, int leg) {
+  const hil::Frame *f = find(out, leg == 0 ? LEGSIM_CAN_ST_CONTACT_FRAME_ID : LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID);
+  if (f == nullptr) return 0xFF;
+  legsim_can_st_contact_t m;  // both legs' frames have the same layout
+  legsim_can_st_contact_unpack(&m, f->data, 64);
+  return m.ct_events;
 }
 
 template <typename Ct>
@@ -410,6 +424,65 @@ void test_reset_with_lengths() {
         fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_L1_START_BIT);
 }
 
+// RESET with Ctrl_ContactLaw and Ctrl_FreeContacts (the left foot free at t = 0): the same sim
+// as the C API given options.contact_law and legsim_set_contact_state FREE. Ct_Events are the
+// core's events of that foot over every step since the previous sample
+// (legsim_contact_event_mask): one STEP of n steps carries the union of the per-step events
+// of n STEPs of one, each on its own foot.
+legsim_can_control_t reset_feet(uint32_t seq, uint8_t law, uint8_t free_mask) {
+  legsim_can_control_t m = untimed(control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE));
+  m.ctrl_act_init = 1;
+  m.ctrl_contact_law = law;
+  m.ctrl_free_contacts = free_mask;
+  return m;
+}
+
+void test_contact_events_and_reset_options() {
+  constexpr int kSteps = 60;
+  Direct d(LEGSIM_CONTACT_PAPER, 2u);
+  Rig one, each;
+  auto out = one.feed(pack(reset_feet(1, 1, 2)));
+  check_sample(out, d.sim);
+  CHECK(ct_events(out, 0) == 0 && ct_events(out, 1) == 0);  // a RESET's sample: none
+  legsim_contact c[2];
+  CHECK(legsim_contacts(d.sim, c) == LEGSIM_OK);
+  CHECK(c[0].state == LEGSIM_CONTACT_STUCK && c[1].state == LEGSIM_CONTACT_FREE);
+  each.feed(pack(reset_feet(1, 1, 2)));
+  // the C API step by step: each foot's events, per step and over the run
+  uint32_t direct[2] = {0, 0};
+  uint8_t sampled[2] = {0, 0};
+  bool per_step_same = true;
+  for (int i = 0; i < kSteps; ++i) {
+    CHECK(legsim_clear_events(d.sim) == LEGSIM_OK);
+    CHECK(legsim_step(d.sim, 1) == LEGSIM_OK);
+    auto o = each.feed(step(2 + i, 1));
+    for (int k = 0; k < 2; ++k) {
+      const uint32_t ev = legsim_contact_event_mask(d.sim, k);
+      direct[k] |= ev;
+      sampled[k] |= ct_events(o, k);
+      per_step_same = per_step_same && ct_events(o, k) == ((ev >> 4) & 0x3Fu);
+    }
+  }
+  CHECK(per_step_same);
+  out = one.feed(step(2, kSteps), 7);
+  check_sample(out, d.sim);
+  CHECK(ct_events(out, 0) == ((direct[0] >> 4) & 0x3Fu) && ct_events(out, 1) == ((direct[1] >> 4) & 0x3Fu));
+  CHECK(ct_events(out, 0) == sampled[0] && ct_events(out, 1) == sampled[1]);
+  // the free left foot came down on the ground (TOUCHDOWN, bit 1); the right one had none
+  CHECK((ct_events(out, 1) & 0x2u) != 0 && ct_events(out, 0) == 0);
+  std::fprintf(stderr, "contact events over %d steps: right 0x%x, left 0x%x\n", kSteps, ct_events(out, 0),
+               ct_events(out, 1));
+  // out of range: a third contact law, a foot the robot does not have
+  legsim_can_control_t m = reset_feet(9, 2, 0);
+  out = one.feed(pack(m));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_CONTACT_LAW_START_BIT);
+  m = reset_feet(10, 0, 4);
+  out = one.feed(pack(m));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT);
+}
+
 // The one-leg hil_sim: leg-1 commands are unknown ids; leg-1 state frames (another sim's)
 // are ignored; the one leg's sample stays six frames.
 void test_one_leg_refuses_leg1_frames() {
@@ -427,6 +500,13 @@ void test_one_leg_refuses_leg1_frames() {
   CHECK(r.feed(fd_frame(LEGSIM_CAN_ST_STATUS_L1_FRAME_ID)).empty());
   CHECK(r.feed(fd_frame(LEGSIM_CAN_ST_CONTACT_FRAME_ID)).empty());
   CHECK(r.feed(act(0, 1, 1, 10.0f)).empty());  // leg 0's still works
+  // the feet's RESET options need feet: refused by the model, naming the signal
+  out = r.feed(pack(reset_feet(2, 1, 0)));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_CONTACT_LAW_START_BIT);
+  out = r.feed(pack(reset_feet(3, 0, 1)));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT);
 }
 
 }  // namespace
@@ -437,6 +517,7 @@ int main() {
   test_lockstep_matches_the_c_api();
   test_bad_leg1_frames();
   test_reset_with_lengths();
+  test_contact_events_and_reset_options();
   test_one_leg_refuses_leg1_frames();
   return report();
 }
