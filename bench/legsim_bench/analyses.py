@@ -602,6 +602,52 @@ def _robot_slip_onset_checks(ev, scene: Scene, d: dict, feet, root, tol_check):
               lambda r_, c: f"t={tg[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}")
 
 
+def _robot_lift_checks(ev, scene: Scene, d: dict, out: dict, root, tol_check):
+    """A swing ([checks] lifts): each foot of lifts goes stuck -> free (liftoff) -> stuck
+    (touchdown, its reported impulse inside the static cone), once; the other feet stay stuck;
+    every state change comes with its event; until the first lift-off the run is RobotModel's
+    stance on both stuck feet (positions and angles)."""
+    from .checks import CheckResult
+    results, lifts, t = ev.results, scene.checks.lifts, d["t"]
+    feet, bodies = out.get("contacts", []), out["bodies"]
+    mu_s = float(out["ground"]["mu_static"])
+    _robot_sequence_check(ev, d, feet)
+    first = len(t)
+    for k, f in enumerate(feet):
+        st = [str(x) for x in d["state"][:, k]]
+        changes = [(i, st[i - 1], st[i]) for i in range(1, len(st)) if st[i] != st[i - 1]]
+        detail = ", ".join(f"{a}->{b} at {t[i]:g} s" for i, a, b in changes) or "no change"
+        if f not in lifts:
+            results.append(CheckResult(f"{f}: stays stuck", not changes, None, None, "", "", detail))
+            continue
+        ok = [(a, b) for _, a, b in changes] == [("stuck", "free"), ("free", "stuck")]
+        results.append(CheckResult(f"{f}: lifts off, then touches down stuck", ok, None, None, "", "", detail))
+        if changes:
+            first = min(first, changes[0][0])
+        if ok:
+            i = changes[1][0]
+            c = out["samples"][i]["contacts"][f]
+            pn, pt = float(c["impulse_n"]), float(c["impulse_t"])
+            results.append(CheckResult(f"{f}: touchdown impulse inside the static cone", pn > 0 and abs(pt) <= mu_s * pn,
+                                       None, None, "", f"t={t[i]:.4f}s",
+                                       f"P_n {pn:.4f} N s, P_t {pt:+.4f} N s (|P_t|/P_n {abs(pt) / pn:.3f}, "
+                                       f"mu_static {mu_s:g})" if pn > 0 else f"P_n {pn:.4g} N s"))
+    tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad", lambda r, c: f"t={t[r]:.4f}s")
+    if first > 1 and (scene.checks.position_m is not None or scene.checks.angle_rad is not None):
+        try:
+            _, r = robot_reference(scene, t[:first], root)
+        except ValueError as e:
+            results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
+            return ev
+        dq = d["q"][:first] - r.q
+        dq[:, 2::3] = _wrap(dq[:, 2::3])
+        tol_check("positions x, y vs RobotModel until the lift-off", "position_m", np.delete(dq, np.s_[2::3], axis=1),
+                  "m", lambda r_, c: f"t={t[r_]:.4f}s {bodies[c // 2]}.{'xy'[c % 2]}")
+        tol_check("angles vs RobotModel until the lift-off", "angle_rad", dq[:, 2::3], "rad",
+                  lambda r_, c: f"t={t[r_]:.4f}s {bodies[c]}.phi", f"{first} samples, up to t = {t[first - 1]:g} s")
+    return ev
+
+
 def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     """The checks of a robot scene run in legsim_cli against RobotModel (an Evaluation)."""
     from .checks import CheckResult, Evaluation
@@ -645,6 +691,8 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
         return _robot_statics_checks(ev, scene, d, out, tol_check, pose_checks)
     if scene.analysis == "inverse_dynamics":
         return _robot_inverse_checks(ev, scene, d, out, tol_check, pose_checks)
+    if ch.lifts is not None:
+        return _robot_lift_checks(ev, scene, d, out, root, tol_check)
     if ch.slips is not None:
         tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
                   lambda r, c: where_t(r))

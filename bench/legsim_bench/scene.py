@@ -246,6 +246,7 @@ class Checks:
     compare: str = "all"               # "all" | "until_stroke": reference window
     stroke: StrokeCheck | None = None
     slips: tuple[str, ...] | None = None   # a robot: the feet that must go from stuck to sliding
+    lifts: tuple[str, ...] | None = None   # a robot: the feet that must lift off and touch down stuck
     resolution_ratio: float = 0.1      # float32 quantum of a signal <= ratio * its tolerance
 
     def tolerances(self) -> dict[str, float]:
@@ -496,7 +497,7 @@ _DYN_CHECKS = (set(CHECK_KEYS) - set(ROBOT_CHECK_KEYS)) | {"compare", "stroke", 
 # a robot scene (legsim_cli against RobotModel, legsim_bench.analyses)
 ROBOT_CHECKS_FOR = {
     "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
-                 "stays_put_m", "growth_rel", "slips", "slip_onset_steps"},
+                 "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps"},
     "assembly": {"position_m", "angle_rad", "residual"},
     "inverse_dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n",
                          "ground_force_n"},
@@ -752,8 +753,21 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
         slips = tuple(slips)
     if "slip_onset_steps" in ch and not slips:
         raise SceneError(f"{where} [checks]: 'slip_onset_steps' needs 'slips' (the foot that slips first)")
+    lifts = None
+    if "lifts" in ch:
+        # the feet that must lift off and touch down again (stuck): RobotModel's stance on
+        # both stuck feet is the reference until the first lift-off only
+        lifts = ch["lifts"]
+        if not isinstance(lifts, list) or not all(isinstance(x, str) and x in info.contacts for x in lifts):
+            raise SceneError(f"{where} [checks]: 'lifts' must be a list of the model's contacts "
+                             f"({', '.join(info.contacts)})")
+        against = sorted(k for k in ch if k not in ("lifts", "residual", "position_m", "angle_rad"))
+        if against or slips:
+            raise SceneError(f"{where} [checks]: {', '.join(against or ['slips'])} compare with RobotModel's "
+                             "stance on stuck feet, which 'lifts' leaves: leave them out")
+        lifts = tuple(lifts)
     checks = Checks(**{k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch},
-                    slips=slips)
+                    slips=slips, lifts=lifts)
     if not checks.tolerances():
         raise SceneError(f"{where}: [checks] names nothing to check")
     return Scene(name=kw["sname"], description=str(d.get("description", "")), path=path, source=text,
