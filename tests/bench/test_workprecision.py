@@ -185,3 +185,38 @@ def test_callgrind_total_reads_the_summary_line():
     assert compiled.callgrind_total("totals: 77\n") == 77
     with pytest.raises(compiled.DriverError):
         compiled.callgrind_total("events: Ir\n")
+
+
+def test_the_command_end_to_end_writes_costs_and_the_ratio(drivers, tmp_path, capsys):
+    """A tiny run with the peers and callgrind: every point has an error, a wall time and an
+    instruction count, and the ratio in the Markdown is the one the CSV's curves give."""
+    import csv
+
+    from legsim_bench import cli
+    out, eng = drivers
+    if eng.mujoco_exe is None or shutil.which("valgrind") is None:
+        pytest.skip("needs the MuJoCo driver and valgrind")
+    rc = cli.main(["workprecision", "--quick", "--scenes", "upper_step_50N", "--step-sizes", "1e-2",
+                   "2e-3", "--count-steps", "20", "--target-s", "0.01", "--min-reps", "1",
+                   "--max-reps", "1", "-o", str(tmp_path)])
+    assert rc == 0, capsys.readouterr().err
+    rows = list(csv.DictReader(open(tmp_path / "workprecision_quick.csv")))
+    assert len(rows) == 2 * len(eng.methods())
+    for r in rows:
+        assert r["ok"] == "1", r
+        assert 0 < float(r["max_error"]) < 10 and float(r["wall_min_s"]) > 0
+        assert 1_000 < float(r["instructions_per_step"]) < 1_000_000 and r["steps_counted"] == "20"
+
+    def best(engine):
+        got = []
+        for key in {r["method"] for r in rows if r["method"].startswith(engine)}:
+            c, kind = wp.cost_at_error([(float(r["max_error"]), float(r["instructions_per_sim_s"]))
+                                        for r in rows if r["method"] == key], 1e-4)
+            if kind != "unreached":
+                got.append(c)
+        return min(got)
+
+    ratio = best("legsim/") / best("mujoco/")
+    md = (tmp_path / "workprecision_quick.md").read_text()
+    line = next(x for x in md.splitlines() if x.startswith("| 1e-04 |"))
+    assert float(line.split("|")[2]) == pytest.approx(ratio, rel=2e-3)
