@@ -15,7 +15,7 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
     }
     const Actuator &ac = model.act[a];
     real len, rate;
-    actuator_length(model, a, q, qd, len, rate);
+    actuator_length(model, a, q, qd, len, rate, &d.trig);
     real f = ac.kp * (st.setpoint - len) - ac.kd * rate;
     // A real cylinder cannot push harder: saturate, and report it.
     if (f > ac.fmax || f < -ac.fmax) {
@@ -62,7 +62,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
     for (int a = 0; a < m.na; ++a) {
       if (d.stop_mask & (1u << a)) continue;
       real len, rate;
-      actuator_length(m, a, d.q, d.qd, len, rate);
+      actuator_length(m, a, d.q, d.qd, len, rate, &d.trig);
       const Actuator &ac = m.act[a];
       if (len >= ac.lmin && len <= ac.lmax) continue;
       const bool low = len < ac.lmin;

@@ -313,6 +313,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
   d.stop_mask = 0;
   d.work_mask = -1;
+  trig_clear(d.trig);
   contacts_free(*sim);
   for (int f = 0; f < m.nf; ++f) {
     d.force_value[f][0] = real(model->force[f].value[0]);

@@ -5,14 +5,20 @@
 
 namespace legsim {
 
-BodyPose pose_of(const VecQ &q, const VecQ &qd, int b) {  // one sin/cos pair per body
+void trig_clear(TrigCache &t) {
+  for (int b = 0; b < kMaxBodies; ++b) t.phi[b] = t.s[b] = t.c[b] = real(NAN);
+}
+
+BodyPose pose_of(const VecQ &q, const VecQ &qd, int b, TrigCache *trig) {  // one sin/cos pair per body
   BodyPose p;
   p.r = Vec2(q[3 * b], q[3 * b + 1]);
   p.rd = Vec2(qd[3 * b], qd[3 * b + 1]);
   p.phi = q[3 * b + 2];
   p.w = qd[3 * b + 2];
-  p.u = axis_u(p.phi);
-  p.n = normal_n(p.phi);
+  real s, c;
+  body_trig(trig, b, p.phi, s, c);
+  p.u = Vec2(s, -c);  // axis_u
+  p.n = Vec2(c, s);   // normal_n
   return p;
 }
 
@@ -258,23 +264,23 @@ legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
 }  // namespace
 
 void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv, const VecQ &q,
-               const VecQ &qd, Rows &rows) {
+               const VecQ &qd, Rows &rows, TrigCache *trig) {
   int i = 0;
   if (layout.kernel) {
-    layout.kernel->rows(model, q, qd, rows);
+    layout.kernel->rows(model, q, qd, rows, trig);
     i = layout.kernel->mj;
     if (i == layout.m) return;
   }
   BodyPose pose[kMaxBodies];
   if (i == 0) {
-    for (int b = 0; b < model.nb; ++b) pose[b] = pose_of(q, qd, b);
+    for (int b = 0; b < model.nb; ++b) pose[b] = pose_of(q, qd, b, trig);
   } else {  // only the bodies of the rows after the kernel's: one sin/cos pair each
     bool have[kMaxBodies] = {};
     for (int r = i; r < layout.m; ++r)
       for (int sl = 0; sl < 2; ++sl) {
         const int b = layout.body[r][sl];
         if (b >= 0 && !have[b]) {
-          pose[b] = pose_of(q, qd, b);
+          pose[b] = pose_of(q, qd, b, trig);
           have[b] = true;
         }
       }
@@ -330,9 +336,9 @@ real rows_max_residual(const Layout &layout, const Rows &rows) {
 }
 
 void actuator_length(const Model &model, int a, const VecQ &q, const VecQ &qd, real &length,
-                     real &rate) {
+                     real &rate, TrigCache *trig) {
   const Actuator &ac = model.act[a];
-  const BodyPose c = pose_of(q, qd, ac.cyl), r = pose_of(q, qd, ac.rod);
+  const BodyPose c = pose_of(q, qd, ac.cyl, trig), r = pose_of(q, qd, ac.rod, trig);
   const Vec2 d = r.r - c.r, dd = r.rd - c.rd;
   length = d.dot(c.u) + ac.offset_m;
   rate = dd.dot(c.u) + c.w * d.dot(c.n);

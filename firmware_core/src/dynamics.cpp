@@ -16,7 +16,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   if (layout.m > m.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
   applied_forces(m, opt, d, q, qd, d.force_q);
   if (!rows_ready) {
-    rows_eval(m, layout, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.rows);
+    rows_eval(m, layout, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.rows, &d.trig);
     const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
     d.report.condition = d.factor.condition;
     if (s != LEGSIM_OK) return s;
@@ -123,7 +123,7 @@ legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(
 
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
-  if (factor_ready) rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows);
+  if (factor_ready) rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
   const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd, factor_ready);
   if (s != LEGSIM_OK) return s;
   stop_forces_update(sim);

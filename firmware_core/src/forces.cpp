@@ -77,8 +77,9 @@ void applied_forces(const Model &model, const legsim_options &opt, Data &d, cons
   for (int a = 0; a < model.na; ++a) {
     const Actuator &ac = model.act[a];
     const real f = d.act[a].force;
-    const real phi = q[3 * ac.cyl + 2];
-    const Vec2 u = axis_u(phi), n = normal_n(phi);
+    real s, c;
+    body_trig(&d.trig, ac.cyl, q[3 * ac.cyl + 2], s, c);  // the rows' pair at this q
+    const Vec2 u(s, -c), n(c, s);                          // axis_u, normal_n
     const Vec2 dvec(q[3 * ac.rod] - q[3 * ac.cyl], q[3 * ac.rod + 1] - q[3 * ac.cyl + 1]);
     force_q[3 * ac.cyl] -= f * u.x();
     force_q[3 * ac.cyl + 1] -= f * u.y();

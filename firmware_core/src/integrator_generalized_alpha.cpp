@@ -37,7 +37,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   bool converged = false;
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
     applied_forces(m, sim.opt, d, q1, v1, d.force_q);
-    rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows);
+    rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
     legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
     d.report.condition = d.factor.condition;
     if (s != LEGSIM_OK) return s;

@@ -48,14 +48,14 @@ legsim_status rk4_step(Sim &sim) {
   const Layout &lay = d.dyn;
   const DriverValues &dv = d.stop_drivers;
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
-  rows_eval(m, lay, dv, q1, v1, d.rows);
+  rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);
   const real tol = real(sim.opt.newton_tol);
   d.report.iterations = 0;
   d.report.residual = rows_max_residual(lay, d.rows);
   if (projection && d.report.residual > tol) {
     const legsim_status s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project);  // M-weighted Newton
     if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
-    rows_eval(m, lay, dv, q1, v1, d.rows);
+    rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);
   }
   legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
   d.report.condition = d.factor.condition;
@@ -66,7 +66,7 @@ legsim_status rk4_step(Sim &sim) {
     for (int i = 0; i < lay.m; ++i) drift = std::abs(d.rhs[i]) > drift ? std::abs(d.rhs[i]) : drift;
     if (drift > tol) {
       project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
-      rows_eval(m, lay, dv, q1, v1, d.rows);  // gamma at the projected velocities
+      rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);  // gamma at the projected velocities
     }
   }
   s = dynamics_solve(sim, lay, q1, v1, d.qdd, true);

@@ -41,6 +41,28 @@ inline real cross2(const Vec2 &a, const Vec2 &b) { return a.x() * b.y() - a.y() 
 
 struct Kernel;  // generated joint-block kernels (kernel.hpp)
 
+// sin and cos of each body's angle where they were last evaluated: a stage evaluates the
+// applied forces, the rows and the stroke checks at the same q, so each angle's pair is
+// computed once (keyed by the angle's value: a pure function remembered, never stale).
+struct TrigCache {
+  real phi[kMaxBodies], s[kMaxBodies], c[kMaxBodies];
+};
+void trig_clear(TrigCache &t);  // nothing remembered (NaN keys)
+inline void body_trig(TrigCache *t, int b, real phi, real &s, real &c) {
+  if (t && t->phi[b] == phi) {
+    s = t->s[b];
+    c = t->c[b];
+    return;
+  }
+  s = std::sin(phi);
+  c = std::cos(phi);
+  if (t) {
+    t->phi[b] = phi;
+    t->s[b] = s;
+    t->c[b] = c;
+  }
+}
+
 // ---- compiled model (constant after legsim_init) ----
 struct Joint {
   legsim_joint_kind kind;
@@ -197,6 +219,7 @@ struct Data {
   Layout work;    // joints plus drivers, for assembly and driven analyses
   int32_t work_mask;  // the actuator set Layout work was built for; -1: none or with coordinates
   Rows rows;
+  TrigCache trig;
   Factor factor;
   DriverValues drivers;
   VecQ force_q;  // generalized applied forces Q
@@ -267,11 +290,12 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
 legsim_status layout_finish(Layout &out, const DriverValues &drivers);
 // Evaluates Phi, the Jacobian and the velocity/acceleration right-hand sides.
+// trig (optional): the sim's TrigCache.
 void rows_eval(const Model &model, const Layout &layout, const DriverValues &drivers, const VecQ &q,
-               const VecQ &qd, Rows &rows);
+               const VecQ &qd, Rows &rows, TrigCache *trig = nullptr);
 real rows_max_residual(const Layout &layout, const Rows &rows);
 void actuator_length(const Model &model, int a, const VecQ &q, const VecQ &qd, real &length,
-                     real &rate);
+                     real &rate, TrigCache *trig = nullptr);
 
 // ---- linear_solve.cpp ----
 // Factors J W J^T (W diagonal, n values). LEGSIM_ERR_SINGULAR on a vanishing pivot.

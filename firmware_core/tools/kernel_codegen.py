@@ -128,18 +128,84 @@ class Kernel:
     def signature(self):
         return tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
 
+    @staticmethod
+    def emit_joint_rows(n, j, r):
+        """One joint's rows, as revolute_rows / prismatic_rows / slot_rows compute them."""
+        kind, (a, b) = j["kind"], j["body"]
+        o = [f"  {{  // joint {n}: {kind}, rows {r}.."]
+        def off(body, pt):  # offset(): xi u + eta n, u = (s, -c), n = (c, s)
+            return (f"J.{pt}.x() * s{body} + J.{pt}.y() * c{body}",
+                    f"J.{pt}.x() * (-c{body}) + J.{pt}.y() * s{body}")
+        if kind != "prismatic":  # its rows have no joint points
+            o.append(f"    const Joint &J = model.joint[{n}];")
+        if kind in ("revolute", "revolute_to_frame"):
+            ox, oy = off(a, "pa")
+            o.append(f"    const real sax = {ox}, say = {oy};")
+            o.append(f"    real px = x{a} + sax, py = y{a} + say;")
+            o.append(f"    real gx = w{a} * w{a} * sax, gy = w{a} * w{a} * say;")
+            if kind == "revolute_to_frame":
+                o.append("    px -= J.pb.x();")
+                o.append("    py -= J.pb.y();")
+            else:
+                ox, oy = off(b, "pb")
+                o.append(f"    const real sbx = {ox}, sby = {oy};")
+                o.append(f"    px -= x{b} + sbx;")
+                o.append(f"    py -= y{b} + sby;")
+                o.append(f"    gx -= w{b} * w{b} * sbx;")
+                o.append(f"    gy -= w{b} * w{b} * sby;")
+                o.append(f"    c[{r}][1][0] = -1, c[{r}][1][1] = 0, c[{r}][1][2] = -(-sby);")
+                o.append(f"    c[{r + 1}][1][0] = 0, c[{r + 1}][1][1] = -1, c[{r + 1}][1][2] = -sbx;")
+            o.append(f"    c[{r}][0][0] = 1, c[{r}][0][1] = 0, c[{r}][0][2] = -say;")
+            o.append(f"    c[{r + 1}][0][0] = 0, c[{r + 1}][0][1] = 1, c[{r + 1}][0][2] = sax;")
+            o.append(f"    rows.phi[{r}] = px, rows.phi[{r + 1}] = py;")
+            o.append(f"    rows.gamma[{r}] = gx, rows.gamma[{r + 1}] = gy;")
+            o.append(f"    rows.nu[{r}] = rows.nu[{r + 1}] = 0;")
+        elif kind == "prismatic":
+            o.append(f"    const real dx = x{b} - x{a}, dy = y{b} - y{a}, ddx = vx{b} - vx{a}, ddy = vy{b} - vy{a};")
+            o.append(f"    rows.phi[{r}] = q[{3 * b + 2}] - q[{3 * a + 2}];")
+            o.append(f"    c[{r}][0][0] = 0, c[{r}][0][1] = 0, c[{r}][0][2] = -1;")
+            o.append(f"    c[{r}][1][0] = 0, c[{r}][1][1] = 0, c[{r}][1][2] = 1;")
+            o.append(f"    rows.gamma[{r}] = 0;")
+            o.append(f"    const real dn = dx * c{a} + dy * s{a};")
+            o.append(f"    rows.phi[{r + 1}] = dn;")
+            o.append(f"    c[{r + 1}][0][0] = -c{a}, c[{r + 1}][0][1] = -s{a}, "
+                     f"c[{r + 1}][0][2] = -(dx * s{a} + dy * (-c{a}));")
+            o.append(f"    c[{r + 1}][1][0] = c{a}, c[{r + 1}][1][1] = s{a}, c[{r + 1}][1][2] = 0;")
+            o.append(f"    rows.gamma[{r + 1}] = 2 * w{a} * (ddx * s{a} + ddy * (-c{a})) + w{a} * w{a} * dn;")
+            o.append(f"    rows.nu[{r}] = rows.nu[{r + 1}] = 0;")
+        else:  # slot: point on a on the axis of b
+            ox, oy = off(a, "pa")
+            o.append(f"    const real sax = {ox}, say = {oy};")
+            o.append(f"    const real dx = x{a} + sax - x{b}, dy = y{a} + say - y{b};")
+            o.append(f"    const real ddx = vx{a} + w{a} * (-say) - vx{b}, ddy = vy{a} + w{a} * sax - vy{b};")
+            o.append(f"    const real dn = dx * c{b} + dy * s{b};")
+            o.append(f"    rows.phi[{r}] = dn;")
+            o.append(f"    c[{r}][0][0] = c{b}, c[{r}][0][1] = s{b}, c[{r}][0][2] = -say * c{b} + sax * s{b};")
+            o.append(f"    c[{r}][1][0] = -c{b}, c[{r}][1][1] = -s{b}, c[{r}][1][2] = -(dx * s{b} + dy * (-c{b}));")
+            o.append(f"    rows.gamma[{r}] = w{a} * w{a} * (sax * c{b} + say * s{b}) + "
+                     f"2 * w{b} * (ddx * s{b} + ddy * (-c{b})) + w{b} * w{b} * dn;")
+            o.append(f"    rows.nu[{r}] = 0;")
+        o.append("  }")
+        return o
+
     def emit(self, sym):
         m, R = self.m, "R"
         o = []
         a = lambda p, q: f"a[{p} * {R} + {q}]"  # noqa: E731
-        # rows
+        # rows: the row units of constraints.cpp written out per joint, the same arithmetic in
+        # the same order (so the same values to the last bit), one sin/cos pair per body
+        o.append(f"void {sym}_rows(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows, "
+                 "TrigCache *trig) {")
+        o.append("  real(*c)[2][3] = rows.coef;")
         used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
-        o.append(f"void {sym}_rows(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows) {{")
-        o.append(f"  BodyPose pose[{self.nb}];")
-        o += [f"  pose[{b}] = pose_of(q, qd, {b});" for b in used]
+        for b in used:
+            o.append(f"  real s{b}, c{b};")
+            o.append(f"  body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+            o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}], vx{b} = qd[{3 * b}], "
+                     f"vy{b} = qd[{3 * b + 1}], w{b} = qd[{3 * b + 2}];")
         r = 0
         for n, j in enumerate(self.joints):
-            o.append(f"  {ROW_UNIT[j['kind']]}(model.joint[{n}], pose, {r}, rows);")
+            o += self.emit_joint_rows(n, j, r)
             r += NROWS[j["kind"]]
         o.append("}\n")
         # J W J^T, lower envelope by position
