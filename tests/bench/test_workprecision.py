@@ -108,7 +108,7 @@ def test_ratio_takes_each_sides_cheapest_method_and_only_converged_peers():
 
 @pytest.fixture(scope="module")
 def drivers(tmp_path_factory):
-    if shutil.which(compiled._cc()) is None:
+    if shutil.which(compiled.cc()) is None:
         pytest.skip("no C compiler")
     out = tmp_path_factory.mktemp("wp_drivers")
     try:

@@ -32,13 +32,14 @@ class DriverError(RuntimeError):
     pass
 
 
-def _cc() -> str:
+def cc() -> str:
+    """The C compiler the drivers are built with."""
     return os.environ.get("CC", "cc")
 
 
 def _compile(src: Path, exe: Path, includes, libs, rpaths) -> Path:
     exe.parent.mkdir(parents=True, exist_ok=True)
-    cmd = [_cc(), *CFLAGS, *(f"-I{i}" for i in includes), str(src), *map(str, libs),
+    cmd = [cc(), *CFLAGS, *(f"-I{i}" for i in includes), str(src), *map(str, libs),
            *(f"-Wl,-rpath,{r}" for r in rpaths), "-lm", "-o", str(exe)]
     r = subprocess.run(cmd, capture_output=True, text=True)
     if r.returncode != 0:

@@ -40,9 +40,10 @@ import argparse
 import csv
 import math
 import platform
+import shutil
 import sys
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
@@ -112,6 +113,7 @@ class Engines:
         self.legsim_exe = compiled.build_legsim(build_dir, REPO_ROOT, self.legsim_lib)
         self.mujoco_exe = None
         self.mujoco_why = "not asked for (--no-peers)"
+        self.mujoco_version = None
         if with_peers:
             try:
                 from .peers import leg_model, mujoco_leg
@@ -119,6 +121,7 @@ class Engines:
                     raise compiled.DriverError("mujoco is not importable")
                 self.mujoco_exe = compiled.build_mujoco(build_dir)
                 self._ml, self._leg = mujoco_leg, leg_model.load(MODEL_TOML)
+                self.mujoco_version = mujoco_leg.VERSION
                 # forward kinematics only: the scene and h of this instance do not matter
                 self._kin = mujoco_leg.MujocoLeg("free_fall", 1e-3, islands=False)
                 self.mujoco_why = ""
@@ -400,10 +403,10 @@ def write_md(path: Path, *, pts, meths, scenes, steps, conv, ratios, info, info_
     L.extend(results.machine_section(info, info_end)[:-1])
     a(f"- legsim: {library_info(engines.legsim_lib)}")
     if engines.mujoco_exe:
-        a(f"- MuJoCo {engines._ml.VERSION}: the wheel's {compiled.mujoco_library()}")
+        a(f"- MuJoCo {engines.mujoco_version}: the wheel's {compiled.mujoco_library()}")
     else:
         a(f"- MuJoCo: not run ({engines.mujoco_why})")
-    a(f"- drivers: {engines.dir}/ (`{compiled._cc()} {' '.join(compiled.CFLAGS)}`); valgrind "
+    a(f"- drivers: {engines.dir}/ (`{compiled.cc()} {' '.join(compiled.CFLAGS)}`); valgrind "
       "callgrind for the instruction counts")
     a("")
     a("## Method")
@@ -550,7 +553,7 @@ def run(args) -> int:
         log(f"# MuJoCo not run: {engines.mujoco_why}")
     meths = engines.methods()
     callgrind = not args.no_callgrind
-    if callgrind and compiled.shutil.which("valgrind") is None:
+    if callgrind and shutil.which("valgrind") is None:
         print("valgrind is not installed (tools/setup.sh installs it); or --no-callgrind",
               file=sys.stderr)
         return 2
