@@ -3,6 +3,8 @@
 // whose multiplier also carries the friction mu_k N against the sliding), the
 // ground forces from their multipliers, and the transitions between the modes
 // after each step. docs/design/robot-on-ground.md section 2.
+#include <limits>
+
 #include "sim.hpp"
 
 namespace legsim {
@@ -133,6 +135,235 @@ int paper_release(const Model &m, const Data &d) {
   return pick;
 }
 
+// The modes of one closed contact in the enumeration (design section 2, step 5).
+enum Mode : uint8_t { kStick, kSlipPlus, kSlipMinus, kSlide, kFree };
+
+// Solves the small contact problem a = W f + b of the closed contacts (n <= kMaxContacts,
+// per contact (normal, tangential), f = (N, T)) in the given modes, as
+// legsim_bench.reference.contact_analytic.contact_modes does, and says whether the solution
+// keeps every inequality of its modes: a free contact does not sink (a_n >= 0), a closed one
+// does not pull (N >= 0), a stuck one holds (|T| <= mu_s N, a_t = 0), one starting to slip
+// does so on the static cone (T = -s mu_s N) in its direction (s a_t > 0), a sliding one
+// keeps T = -dir mu_k N. tol_f, tol_a: round-off allowances (N, m/s^2).
+bool mode_consistent(const Model &m, int n, const real (&W)[2 * kMaxContacts][2 * kMaxContacts],
+                     const real *b, const uint8_t *mode, const int8_t *dir, real tol_f, real tol_a) {
+  const int nr = 2 * n;
+  real A[2 * kMaxContacts][2 * kMaxContacts + 1] = {};
+  for (int i = 0; i < n; ++i) {
+    const int rn = 2 * i, rt = 2 * i + 1;
+    if (mode[i] == kFree) {
+      A[rn][rn] = A[rt][rt] = 1;
+      continue;
+    }
+    for (int j = 0; j < nr; ++j) A[rn][j] = W[rn][j];  // a_n = 0
+    A[rn][nr] = -b[rn];
+    if (mode[i] == kStick) {
+      for (int j = 0; j < nr; ++j) A[rt][j] = W[rt][j];  // a_t = 0
+      A[rt][nr] = -b[rt];
+    } else {
+      const real sgn = mode[i] == kSlipPlus ? real(1) : mode[i] == kSlipMinus ? real(-1) : real(dir[i]);
+      A[rt][rt] = 1;
+      A[rt][rn] = sgn * (mode[i] == kSlide ? m.mu_k : m.mu_s);  // T + s mu N = 0
+    }
+  }
+  for (int col = 0; col < nr; ++col) {  // Gaussian elimination, partial pivoting
+    int piv = col;
+    for (int i = col + 1; i < nr; ++i)
+      if (std::abs(A[i][col]) > std::abs(A[piv][col])) piv = i;
+    if (!(std::abs(A[piv][col]) > real(1e-12))) return false;  // a singular mode: not a solution
+    for (int j = 0; j <= nr; ++j) std::swap(A[col][j], A[piv][j]);
+    for (int i = col + 1; i < nr; ++i) {
+      const real r = A[i][col] / A[col][col];
+      for (int j = col; j <= nr; ++j) A[i][j] -= r * A[col][j];
+    }
+  }
+  real f[2 * kMaxContacts];
+  for (int i = nr - 1; i >= 0; --i) {
+    real acc = A[i][nr];
+    for (int j = i + 1; j < nr; ++j) acc -= A[i][j] * f[j];
+    f[i] = acc / A[i][i];
+  }
+  for (int i = 0; i < n; ++i) {
+    const int rn = 2 * i, rt = 2 * i + 1;
+    real an = b[rn], at = b[rt];
+    for (int j = 0; j < nr; ++j) {
+      an += W[rn][j] * f[j];
+      at += W[rt][j] * f[j];
+    }
+    if (!std::isfinite(f[rn]) || !std::isfinite(f[rt])) return false;
+    if (mode[i] == kFree) {
+      if (an < -tol_a) return false;
+      continue;
+    }
+    if (f[rn] < -tol_f) return false;
+    if (mode[i] == kStick && std::abs(f[rt]) > m.mu_s * f[rn] + tol_f) return false;
+    if (mode[i] == kSlipPlus && !(at > tol_a)) return false;
+    if (mode[i] == kSlipMinus && !(at < -tol_a)) return false;
+  }
+  return true;
+}
+
+// Section 2, step 5: the current modes of the closed contacts failed their inequalities.
+// Every closed contact is held stuck where it is for one solve (a stuck one keeps its stick
+// point); its Delassus matrix W comes from the factor of that solve, W^-1 = (S^-1)_cc with
+// S = J M^-1 J^T (one solve per contact row), and b = W lambda_c (a = W f + b, f = -lambda:
+// the accelerations of the gap and of the tangential offset). Then each combination of modes
+// (at tangential rest: stick, slip+, slip-, free; sliding: slide, free; at most 4^2 = 16) is
+// one small dense solve, and the first consistent combination in the priority order wins:
+// the current mode first, then stick before slip, then contact before lift-off (the least sum
+// of the ranks current 0, stick 1, slip 2, free 3; ties by enumeration order). Several
+// consistent: CONTACT_AMBIGUOUS. The chosen modes are set (events raised, d.contact[k].events
+// too), d.dyn rebuilt and solved. found = false (none consistent, or a singular W): the modes
+// and the solve are put back as they were, for the caller's fallback.
+legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uint32_t &slipped) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  found = false;
+  changes = 0;
+  int idx[kMaxContacts], n = 0;
+  ContactData saved[kMaxContacts];
+  real saved_stick[kMaxContacts];
+  for (int k = 0; k < m.nc; ++k) {
+    saved[k] = d.contact[k];
+    saved_stick[k] = d.stop_drivers.stick[k];
+    if (d.contact[k].state != LEGSIM_CONTACT_FREE) idx[n++] = k;
+  }
+  if (n == 0) return LEGSIM_OK;
+  auto restore = [&]() -> legsim_status {
+    for (int k = 0; k < m.nc; ++k) {
+      d.contact[k] = saved[k];
+      d.stop_drivers.stick[k] = saved_stick[k];
+    }
+    legsim_status s = stops_layout(sim);
+    return s == LEGSIM_OK ? dynamics_state_update(sim) : s;
+  };
+  for (int i = 0; i < n; ++i) {  // every closed contact stuck where it is, for W and b
+    ContactData &c = d.contact[idx[i]];
+    if (c.state == LEGSIM_CONTACT_STUCK) continue;
+    Vec2 p, v;
+    contact_point(m, idx[i], d.q, d.qd, p, v);
+    c.state = LEGSIM_CONTACT_STUCK;
+    d.stop_drivers.stick[idx[i]] = m.ground_t.dot(p - m.ground_point);
+  }
+  legsim_status s = stops_layout(sim);
+  if (s == LEGSIM_OK) s = dynamics_state_update(sim);
+  if (s != LEGSIM_OK) return s;
+  const Layout &lay = d.dyn;
+  int row[2 * kMaxContacts];  // the rows of d.dyn of contact i: normal 2i, tangential 2i+1
+  for (int i = 0; i < 2 * n; ++i) row[i] = -1;
+  for (int r = m.m; r < lay.m; ++r) {
+    const RowSource &src = lay.src[r];
+    for (int i = 0; i < n; ++i)
+      if (src.index == idx[i]) {
+        if (src.kind == RowKind::ContactNormal) row[2 * i] = r;
+        if (src.kind == RowKind::ContactTangent) row[2 * i + 1] = r;
+      }
+  }
+  const int nr = 2 * n;
+  for (int i = 0; i < nr; ++i)
+    if (row[i] < 0) return restore();
+  // W^-1 = (S^-1)_cc, then W by Gauss-Jordan
+  real G[2 * kMaxContacts][4 * kMaxContacts] = {};
+  for (int j = 0; j < nr; ++j) {
+    VecR e = VecR::Zero();
+    e[row[j]] = 1;
+    factor_solve(d.factor, e);
+    for (int i = 0; i < nr; ++i) G[i][j] = e[row[i]];
+    G[j][nr + j] = 1;
+  }
+  for (int col = 0; col < nr; ++col) {
+    int piv = col;
+    for (int i = col + 1; i < nr; ++i)
+      if (std::abs(G[i][col]) > std::abs(G[piv][col])) piv = i;
+    if (!(std::abs(G[piv][col]) > real(0))) return restore();
+    for (int j = 0; j < 2 * nr; ++j) std::swap(G[col][j], G[piv][j]);
+    const real dv = G[col][col];
+    for (int j = 0; j < 2 * nr; ++j) G[col][j] /= dv;
+    for (int i = 0; i < nr; ++i) {
+      if (i == col) continue;
+      const real r = G[i][col];
+      for (int j = 0; j < 2 * nr; ++j) G[i][j] -= r * G[col][j];
+    }
+  }
+  real W[2 * kMaxContacts][2 * kMaxContacts], b[2 * kMaxContacts];
+  real fmax = 0, bmax = 0;
+  for (int i = 0; i < nr; ++i) {
+    b[i] = 0;
+    for (int j = 0; j < nr; ++j) {
+      W[i][j] = G[i][nr + j];
+      b[i] += W[i][j] * d.lambda[row[j]];
+    }
+    fmax = std::max(fmax, std::abs(d.lambda[row[i]]));
+  }
+  for (int i = 0; i < nr; ++i) bmax = std::max(bmax, std::abs(b[i]));
+  for (int i = 0; i < nr; ++i)
+    if (!std::isfinite(b[i])) return restore();
+  // round-off allowances: 2.2e-12 relative in double (the slope tests put mu_s 1e-9 from
+  // tan(slope)), 1.2e-3 in float
+  const real eps = real(1e4) * std::numeric_limits<real>::epsilon();
+  const real tol_f = eps * (1 + fmax), tol_a = eps * (1 + bmax);
+
+  uint8_t choice[kMaxContacts][4], nch[kMaxContacts], cur[kMaxContacts];
+  int8_t dir[kMaxContacts];
+  int total = 1;
+  for (int i = 0; i < n; ++i) {
+    const ContactData &c0 = saved[idx[i]];
+    dir[i] = c0.slip_dir;
+    if (c0.state == LEGSIM_CONTACT_SLIDING) {
+      choice[i][0] = kSlide, choice[i][1] = kFree, nch[i] = 2, cur[i] = kSlide;
+    } else {
+      choice[i][0] = kStick, choice[i][1] = kSlipPlus, choice[i][2] = kSlipMinus, choice[i][3] = kFree;
+      nch[i] = 4, cur[i] = kStick;
+    }
+    total *= nch[i];
+  }
+  auto rank = [](uint8_t md, uint8_t current) {
+    return md == current ? 0 : md == kStick ? 1 : md == kFree ? 3 : 2;
+  };
+  int consistent = 0, best_score = 1 << 30;
+  uint8_t best[kMaxContacts] = {};
+  for (int code = 0; code < total; ++code) {
+    uint8_t mode[kMaxContacts];
+    int rest = code, score = 0;
+    for (int i = 0; i < n; ++i) {
+      mode[i] = choice[i][rest % nch[i]];
+      rest /= nch[i];
+      score += rank(mode[i], cur[i]);
+    }
+    if (!mode_consistent(m, n, W, b, mode, dir, tol_f, tol_a)) continue;
+    ++consistent;
+    if (score < best_score) {
+      best_score = score;
+      for (int i = 0; i < n; ++i) best[i] = mode[i];
+    }
+  }
+  s = restore();  // the modes as they were, then the chosen ones
+  if (s != LEGSIM_OK || consistent == 0) return s;
+  found = true;
+  if (consistent > 1) raise_event(d, LEGSIM_EVENT_CONTACT_AMBIGUOUS);
+  for (int i = 0; i < n; ++i) {
+    if (best[i] == cur[i]) continue;
+    ContactData &c = d.contact[idx[i]];
+    changes |= 1u << idx[i];
+    if (consistent > 1) c.events |= LEGSIM_EVENT_CONTACT_AMBIGUOUS;
+    if (best[i] == kFree) {
+      c.state = LEGSIM_CONTACT_FREE;
+      c.normal = c.tangential = 0;
+      c.events |= LEGSIM_EVENT_LIFTOFF;
+      raise_event(d, LEGSIM_EVENT_LIFTOFF);
+    } else {  // slip+ or slip- from tangential rest: it slides that way (with mu_k)
+      c.state = LEGSIM_CONTACT_SLIDING;
+      c.slip_dir = int8_t(best[i] == kSlipPlus ? 1 : -1);
+      slipped |= 1u << idx[i];
+      c.events |= LEGSIM_EVENT_STICK_TO_SLIP;
+      raise_event(d, LEGSIM_EVENT_STICK_TO_SLIP);
+    }
+  }
+  if (!changes) return LEGSIM_OK;
+  s = stops_layout(sim);
+  return s == LEGSIM_OK ? dynamics_state_update(sim) : s;
+}
+
 bool all_closed(const Model &m, const Data &d) {
   if (m.nc < 2) return false;
   for (int k = 0; k < m.nc; ++k)
@@ -152,9 +383,14 @@ bool all_closed(const Model &m, const Data &d) {
 //   tangential velocity removed by an impulse, reported); the problem at rest then decides.
 // Under contact_law PAPER, while every foot is on the ground, stick to slip is the paper's
 // rule instead (paper_release): the foot with the smaller |T| is released, the other stays.
+// Under the default law, lift-off and stick to slip are not decided one contact at a time:
+// once the impulses of a pass are done, a closed contact whose mode fails its inequalities
+// sends every closed contact through the enumeration of section 2, step 5
+// (contact_modes_choose: the exact planar contact problem, CONTACT_AMBIGUOUS when several
+// modes are consistent); when none is, CONTACT_INCONSISTENT is raised and the one-by-one
+// rules above decide.
 // Each pass applies every change at once and solves the dynamics of the new modes; a mode
-// that keeps changing (no consistent mode, or several) raises CONTACT_INCONSISTENT and
-// keeps the last one.
+// that keeps changing raises CONTACT_INCONSISTENT and keeps the last one.
 legsim_status contact_transitions(Sim &sim, bool &changed) {
   changed = false;
   const Model &m = sim.model;
@@ -163,14 +399,18 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   uint32_t slipped = 0, stuck_again = 0;  // each once per check
   uint32_t changing = 0;                  // the contacts the last pass changed
   const real tol = real(sim.opt.newton_tol);
+  bool enumerated = false;  // the modes enumerated once per check; after that, one by one
   for (int pass = 0; pass < 3 * kMaxContacts + 2; ++pass) {
-    uint32_t touch = 0, to_stick = 0;
+    uint32_t touch = 0, to_stick = 0, fails = 0;
     changing = 0;
     bool any = false;
     // contact_law PAPER: while all feet are on the ground the stick-to-slip rule is the
     // paper's (paper_release), lift-off, touchdown and slip to stick are the default's
     const bool paper = sim.opt.contact_law == LEGSIM_CONTACT_PAPER && all_closed(m, d);
     const int release = paper ? paper_release(m, d) : -1;
+    // the default law: a closed contact whose mode fails (lift-off, stick to slip) is decided
+    // with the others by the enumeration (contact_modes_choose) once the impulses are done
+    const bool enumerate = !paper && !enumerated;
     for (int k = 0; k < m.nc; ++k) {
       ContactData &c = d.contact[k];
       Vec2 p, v;
@@ -185,6 +425,10 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
         c.events |= LEGSIM_EVENT_TOUCHDOWN;
         raise_event(d, LEGSIM_EVENT_TOUCHDOWN);
       } else if (c.normal < 0) {
+        if (enumerate) {
+          fails |= 1u << k;
+          continue;
+        }
         c.state = LEGSIM_CONTACT_FREE;
         c.normal = c.tangential = 0;
         c.events |= LEGSIM_EVENT_LIFTOFF;
@@ -192,6 +436,10 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       } else if (c.state == LEGSIM_CONTACT_STUCK) {
         const bool leaves = paper ? k == release : std::abs(c.tangential) > m.mu_s * c.normal;
         if (!leaves || ((slipped >> k) & 1u)) continue;
+        if (enumerate) {
+          fails |= 1u << k;
+          continue;
+        }
         c.state = LEGSIM_CONTACT_SLIDING;
         c.slip_dir = int8_t(-sign_of(c.tangential));  // it gives way against the force that held it
         slipped |= 1u << k;
@@ -208,6 +456,22 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       }
       any = true;
       changing |= 1u << k;
+    }
+    if (!any && fails) {  // no impulse this pass: the enumeration decides the closed contacts
+      enumerated = true;
+      bool found = false;
+      uint32_t chosen = 0;
+      legsim_status s = contact_modes_choose(sim, found, chosen, slipped);
+      if (s != LEGSIM_OK) return s;
+      if (found && !chosen) return LEGSIM_OK;  // the current modes hold after all (round-off)
+      if (!found) {  // no consistent mode: reported, then the one-by-one rules of this pass
+        for (int k = 0; k < m.nc; ++k)
+          if ((fails >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
+        raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
+      }
+      changed = changed || found;
+      changing = chosen;
+      continue;
     }
     if (!any) return LEGSIM_OK;
     changed = true;

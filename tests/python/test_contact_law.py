@@ -152,3 +152,52 @@ def test_the_paper_law_changes_nothing_without_a_slip():
         runs.append((np.array(out), seen))
     assert {"touchdown", "liftoff"} <= runs[0][1] and runs[0][1] == runs[1][1]
     assert np.array_equal(runs[0][0], runs[1][0])
+
+
+def _rod(mu: float, omega: float, **kw) -> legsim.Sim:
+    """legsim_bench's Painleve rod (test_robot_reference.py): 1 kg, 1 m, at 60 deg above the
+    ground, its lower end on the line sliding to -x at 1 m/s, spinning at omega; mu_s = mu_k."""
+    lib = legsim.load_library("double")
+    if lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 1:
+        pytest.skip(f"{lib.path} is built without contacts")
+    d = lib.ModelDesc()
+    d.name = b"rod"
+    d.gravity_mps2[1] = -9.81
+    d.n_bodies = 1
+    d.body[0].name = b"rod"
+    d.body[0].length_m = 1.0
+    d.body[0].mass_kg = 1.0
+    d.body[0].inertia_kgm2 = 1.0 / 12.0
+    d.foot_body = -1
+    d.n_contacts = 1
+    d.contact[0].name = b"end"
+    d.contact[0].body = 0
+    d.contact[0].point[0], d.contact[0].point[1] = 0.5, 0.0  # 0.5 m along u(phi) = (sin, -cos)
+    d.ground.mu_static = mu
+    d.ground.mu_kinetic = mu
+    s = legsim.Sim(legsim.Model(d, lib, "revolute", "rod"), **kw)
+    th = math.radians(60)
+    e = -0.5 * np.array([math.cos(th), math.sin(th)])          # end - centre
+    vc = np.array([-1.0, 0.0]) - omega * np.array([-e[1], e[0]])  # the end moves at (-1, 0)
+    s.set_state([-e[0], -e[1], th - math.pi / 2], [vc[0], vc[1], omega])
+    s.set_contact("end", "sliding")
+    return s
+
+
+@pytest.mark.parametrize("mu, omega, inconsistent", [(0.5, 0.0, False), (2.0, 0.0, True), (2.0, 12.0, False)])
+def test_painleve_rod_is_reported_never_nan(mu, omega, inconsistent):
+    """Beyond the critical friction (1.347 at 60 deg) a rod sliding on its end has no
+    consistent mode when not spinning (the reference's contact_modes finds none): the step
+    raises contact_inconsistent (its end let go, as the one-by-one rule does) and goes on
+    finite; spinning fast, sliding on is consistent (one of its two solutions): no event;
+    below the critical friction, sliding holds."""
+    s = _rod(mu, omega)
+    s.clear_events()
+    s.step(1)
+    ev = s.events()
+    assert ("contact_inconsistent" in ev) == inconsistent, ev
+    assert np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.qd))
+    if inconsistent:
+        assert s.contacts()["state"][0] == "free"
+    else:
+        assert s.contacts()["state"][0] == "sliding" and s.contacts()["normal"][0] > 0
