@@ -79,6 +79,7 @@ TARGET_RATIO = 0.1
 REF_TOL = 1e-13
 COUNT_STEPS = 1000  # callgrind: the first steps of each run (all of a shorter run)
 LEGSIM_DISABLE = compiled.DISABLE_REACTIONS | compiled.DISABLE_STROKE_LIMITS
+LEGSIM_DISABLE_REACTIONS_ON = compiled.DISABLE_STROKE_LIMITS
 MUJOCO_SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
 
 
@@ -90,12 +91,15 @@ class Method:
     integrator: str   # legsim: rk4 / galpha; mujoco: rk4 / euler
     tol: float        # legsim newton_tol; MuJoCo solver tolerance
     label: str
+    reactions: bool = False  # legsim: reactions computed every step (not in the main ratio)
 
 
 LEGSIM_METHODS = (
     Method("legsim/rk4", "legsim", "rk4", 1e-10, "legsim RK4 + projection (newton_tol 1e-10)"),
     Method("legsim/rk4-tol1e-13", "legsim", "rk4", 1e-13, "legsim RK4 + projection, newton_tol 1e-13"),
     Method("legsim/galpha", "legsim", "galpha", 1e-10, "legsim generalized-alpha (rho_inf 0.8)"),
+    Method("legsim/rk4-reactions", "legsim", "rk4", 1e-10, "legsim RK4 + projection, reactions on",
+           reactions=True),
 )
 MUJOCO_METHODS = (
     Method("mujoco/rk4", "mujoco", "rk4", 1e-12, "MuJoCo RK4, Newton tolerance 1e-12"),
@@ -140,7 +144,8 @@ class Engines:
         if m.engine == "legsim":
             return compiled.Run(self.legsim_exe, (m.integrator, repr(h), repr(sc.t_end),
                                                   repr(sc.upper_n), repr(sc.lower_n),
-                                                  LEGSIM_DISABLE, repr(m.tol)))
+                                                  LEGSIM_DISABLE_REACTIONS_ON if m.reactions
+                                                  else LEGSIM_DISABLE, repr(m.tol)))
         xml = self.dir / "mjcf" / f"{m.key.replace('/', '_')}_h{h:g}.xml"
         xml.parent.mkdir(parents=True, exist_ok=True)
         xml.write_text(self.mjcf(m, h))
@@ -296,8 +301,10 @@ def curve(pts, m: Method, scene: str, kind: str) -> list:
     return [(p.err, p.cost(kind)) for p in pts if p.method == m and p.scene == scene and p.ok]
 
 
-def ratio_table(pts, meths, scene: str, conv: dict, kind: str) -> list[dict]:
-    legs = [m for m in meths if m.engine == "legsim"]
+def ratio_table(pts, meths, scene: str, conv: dict, kind: str, reactions: bool = False) -> list[dict]:
+    """Per error level: the cheapest legsim method (reactions off, or on with ``reactions``)
+    and the cheapest converged peer, their costs and kinds, and the ratio."""
+    legs = [m for m in meths if m.engine == "legsim" and m.reactions == reactions]
     peers = [m for m in meths if m.engine != "legsim" and conv.get((m.key, scene), (False,))[0]]
     rows = []
     for E in ERROR_LEVELS:
@@ -354,7 +361,8 @@ def write_csv(path: Path, pts) -> None:
                         f"{p.cost('instr'):.6e}", f"{p.cost('wall'):.6e}"])
 
 
-STYLES = {"legsim/rk4": ("tab:blue", "o"), "legsim/rk4-tol1e-13": ("tab:cyan", "P"),
+STYLES = {"legsim/rk4": ("tab:blue", "o"), "legsim/rk4-reactions": ("tab:olive", "v"),
+          "legsim/rk4-tol1e-13": ("tab:cyan", "P"),
           "legsim/galpha": ("tab:green", "s"), "mujoco/rk4": ("tab:purple", "D"),
           "mujoco/rk4-tol1e-8": ("tab:red", "^"), "mujoco/euler": ("tab:brown", "x")}
 
@@ -391,7 +399,7 @@ def plot(path: Path, pts, meths, scenes, kinds) -> bool:
     return True
 
 
-def write_md(path: Path, *, pts, meths, scenes, steps, conv, ratios, info, info_end, engines,
+def write_md(path: Path, *, pts, meths, scenes, steps, conv, ratios, ratios_on, info, info_end, engines,
              ref_spread, quick, elapsed, png_name, kinds, count_steps) -> None:
     L = []
     a = L.append
@@ -428,7 +436,8 @@ def write_md(path: Path, *, pts, meths, scenes, steps, conv, ratios, info, info_
       f"`--toggle-collect=run_steps` over the first {count_steps:,} steps (all of a shorter run), "
       "per step, times 1/h; they do not move with the machine's load.")
     a("- The same work: legsim with reactions off (`LEGSIM_DISABLE_REACTIONS`; MuJoCo's step "
-      "computes its constraint forces anyway) and stroke stops off "
+      "computes its constraint forces anyway; `legsim/rk4-reactions` has them on and its own "
+      "ratio column) and stroke stops off "
       "(`LEGSIM_DISABLE_STROKE_LIMITS`: the reference and the MJCF have none); default "
       "options otherwise (rho_inf 0.8, 25 iterations).")
     a("- MuJoCo: islands off (`island=\"disable\"`, `mjDSBL_ISLAND`), contacts off, Newton "
@@ -455,16 +464,17 @@ def write_md(path: Path, *, pts, meths, scenes, steps, conv, ratios, info, info_
     for scene in scenes:
         a(f"### {scene}")
         a("")
-        a("| error | " + " | ".join(f"ratio ({k})" for k in kinds) + " | legsim method | "
+        a("| error | " + " | ".join(f"ratio ({k})" for k in kinds)
+          + f" | ratio ({kinds[0]}), legsim reactions on | legsim method | "
           + " | ".join(f"legsim {names[k]}" for k in kinds) + " | peer method | "
           + " | ".join(f"peer {names[k]}" for k in kinds) + " |")
-        a("|---" * (3 + 3 * len(kinds)) + "|")
+        a("|---" * (4 + 3 * len(kinds)) + "|")
         r0 = ratios[(scene, kinds[0])]
         for i, E in enumerate(ERROR_LEVELS):
             rs = [ratios[(scene, k)][i] for k in kinds]
             star = lambda r, s: "*" if r[f"k_{s}"] == "range" else ""  # noqa: E731
             a(f"| {E:.0e} | " + " | ".join(fmt(r["ratio"], ".3g") for r in rs)
-              + f" | {r0[i]['legsim'] or '—'} | "
+              + f" | {fmt(ratios_on[scene][i]['ratio'], '.3g')} | {r0[i]['legsim'] or '—'} | "
               + " | ".join(star(r, "legsim") + fmt(r["c_legsim"], ".3g") for r in rs)
               + f" | {r0[i]['peer'] or '—'} | "
               + " | ".join(star(r, "peer") + fmt(r["c_peer"], ".3g") for r in rs) + " |")
@@ -576,11 +586,13 @@ def run(args) -> int:
     conv = {(m.key, s): convergence_check(pts, m, s) for m in meths if m.engine != "legsim"
             for s in scenes}
     ratios = {(s, k): ratio_table(pts, meths, s, conv, k) for s in scenes for k in kinds}
+    ratios_on = {s: ratio_table(pts, meths, s, conv, kinds[0], reactions=True) for s in scenes}
     info_end = results.snapshot()
     csv_path, md_path, png_path = out / f"{stem}.csv", out / f"{stem}.md", out / f"{stem}.png"
     write_csv(csv_path, pts)
     have_png = plot(png_path, pts, meths, scenes, kinds)
     write_md(md_path, pts=pts, meths=meths, scenes=scenes, steps=steps, conv=conv, ratios=ratios,
+             ratios_on=ratios_on,
              info=info, info_end=info_end, engines=engines, ref_spread=ref_spread, quick=quick,
              elapsed=time.time() - t_start,
              png_name=png_path.name if have_png else "(matplotlib absent)", kinds=kinds,
@@ -590,6 +602,8 @@ def run(args) -> int:
         log(f"## {s}: ratio legsim / best peer at " + ", ".join(f"{E:.0e}" for E in ERROR_LEVELS))
         for k in kinds:
             log(f"  {k:5s} " + " ".join(fmt(r["ratio"], ".3g") for r in ratios[(s, k)]))
+        log(f"  {kinds[0]:5s} " + " ".join(fmt(r["ratio"], ".3g") for r in ratios_on[s])
+            + " (legsim reactions on)")
     return 0
 
 
