@@ -535,6 +535,10 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
   const Model &m = s.model;
   Data &d = s.data;
   if (!d.assembled) return LEGSIM_ERR_STATE;
+  // feet on the ground: their rows and the lengths over-determine the motion; the driven
+  // motion with stuck feet is legsim_inverse_dynamics_on_ground's (it sets q, qd and qdd)
+  for (int k = 0; k < m.nc; ++k)
+    if (d.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
   if (!bounded_array(rate_mps, m.na, LEGSIM_MAX_RATE_MPS)) return LEGSIM_ERR_BAD_INPUT;
   legsim_actuator_lengths(sim, d.drivers.length, nullptr);
   for (int a = 0; a < m.na; ++a) {
@@ -563,6 +567,10 @@ legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *a
   const Model &m = s.model;
   Data &d = s.data;
   if (!d.assembled) return LEGSIM_ERR_STATE;
+  // feet on the ground: their rows and the lengths over-determine the motion; the driven
+  // motion with stuck feet is legsim_inverse_dynamics_on_ground's (it sets q, qd and qdd)
+  for (int k = 0; k < m.nc; ++k)
+    if (d.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
   if (!bounded_array(accel_mps2, m.na, LEGSIM_MAX_ACCEL_MPS2)) return LEGSIM_ERR_BAD_INPUT;
   legsim_actuator_lengths(sim, d.drivers.length, d.drivers.rate);
   for (int a = 0; a < m.na; ++a) d.drivers.accel[a] = accel_mps2[a];

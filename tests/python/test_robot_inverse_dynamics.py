@@ -191,3 +191,24 @@ def test_driven_lengths_must_fix_the_motion(ref):
     # no follower on the hanging leg: the ordinary inverse dynamics
     F = leg.inverse_dynamics_on_ground(L, [0.01, 0], [0, 0])[0]
     np.testing.assert_allclose(F, leg.inverse_dynamics(L, [0.01, 0], [0, 0]), rtol=0, atol=1e-9)
+
+
+def test_velocity_and_acceleration_analyses_refuse_a_stance(ref):
+    """On stuck feet the four rates over-determine the motion: the plain analyses are refused
+    (ContactError, nothing changes); the on-ground inverse dynamics gives the stance's qd and
+    qdd (three rates drive, the follower's written back), and with the feet free they run."""
+    s = _robot_sim()
+    s.assemble_on_ground(ref.stand_lengths())
+    q = s.q.copy()
+    with pytest.raises(legsim.ContactError):
+        s.velocity_analysis([0.01, 0.0, 0.0, 0.0])
+    with pytest.raises(legsim.ContactError):
+        s.acceleration_analysis([0.01, 0.0, 0.0, 0.0])
+    np.testing.assert_array_equal(s.q, q)
+    _, L, Ld, _ = s.inverse_dynamics_on_ground(ref.stand_lengths(), [0.01, 0.0, 0.0, 0.0], np.zeros(4),
+                                               follow=[FOLLOW])
+    assert abs(Ld[3]) > 1e-4 and np.max(np.abs(s.contacts()["slip"])) < 1e-12
+    s.set_contact(0, "free")
+    s.set_contact(1, "free")
+    qd = s.velocity_analysis([0.01, 0.0, 0.0, 0.0])
+    assert np.max(np.abs(qd)) > 1e-3
