@@ -48,7 +48,7 @@ EVENTS = {
     "stick_to_slip": 1 << 6,          # a stuck foot left the static friction cone
     "slip_to_stick": 1 << 7,          # a sliding foot's velocity changed sign
     "contact_inconsistent": 1 << 8,   # no consistent contact mode: the last one kept
-    "contact_ambiguous": 1 << 9,      # reserved: several consistent modes
+    "contact_ambiguous": 1 << 9,      # several consistent modes: the priority picked one
 }
 """Event bits of legsim.h (``enum legsim_event``) by name."""
 

@@ -303,9 +303,12 @@ enum legsim_event {
                                              impulse (legsim_contact.impulse_ns) */
   LEGSIM_EVENT_STICK_TO_SLIP = 1u << 6,   /* a stuck foot's |T| left the static cone: SLIDING */
   LEGSIM_EVENT_SLIP_TO_STICK = 1u << 7,   /* a sliding foot's velocity changed sign: STUCK */
-  LEGSIM_EVENT_CONTACT_INCONSISTENT = 1u << 8, /* no contact mode held its inequalities within
-                                             the passes of one check: the last one is kept */
-  LEGSIM_EVENT_CONTACT_AMBIGUOUS = 1u << 9 /* reserved: several consistent modes (not raised yet) */
+  LEGSIM_EVENT_CONTACT_INCONSISTENT = 1u << 8, /* no consistent contact mode (the enumeration
+                                             found none, or the modes still changed after the
+                                             passes of one check): decided one by one, or the
+                                             last one is kept */
+  LEGSIM_EVENT_CONTACT_AMBIGUOUS = 1u << 9 /* several consistent modes: the priority rule picked
+                                             one (docs/design/robot-on-ground.md section 8) */
 };
 /* Condition estimates: above WARN an event is raised; an assembly that lands
  * above SINGULAR is refused as a dead centre (LEGSIM_ERR_SINGULAR). */
@@ -362,8 +365,7 @@ legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose);
 /* For driven actuator length rates (|rate| <= LEGSIM_MAX_RATE_MPS) and accelerations
  * (|accel| <= LEGSIM_MAX_ACCEL_MPS2), in the current q: solves Phi_q qd = -Phi_t and
  * Phi_q qdd = gamma. Sets qd (and qdd). A resulting qd a state may not hold (near a
- * dead centre) is refused with LEGSIM_ERR_DIVERGED. A contact that is not FREE (feet on the
- * ground) is refused with LEGSIM_ERR_CONTACT: legsim_inverse_dynamics_on_ground drives a stance. */
+ * dead centre) is refused with LEGSIM_ERR_DIVERGED. */
 legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps);
 legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2);
 
