@@ -365,7 +365,8 @@ legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose);
 /* For driven actuator length rates (|rate| <= LEGSIM_MAX_RATE_MPS) and accelerations
  * (|accel| <= LEGSIM_MAX_ACCEL_MPS2), in the current q: solves Phi_q qd = -Phi_t and
  * Phi_q qdd = gamma. Sets qd (and qdd). A resulting qd a state may not hold (near a
- * dead centre) is refused with LEGSIM_ERR_DIVERGED. */
+ * dead centre) is refused with LEGSIM_ERR_DIVERGED. A contact that is not FREE (feet on the
+ * ground) is refused with LEGSIM_ERR_CONTACT: legsim_inverse_dynamics_on_ground drives a stance. */
 legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps);
 legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *accel_mps2);
 
