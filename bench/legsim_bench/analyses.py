@@ -303,7 +303,7 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
 def robot_arrays(out: dict) -> dict:
     """The CLI's robot samples as arrays: t, q (N, 3 nb), forces, lengths (N, na), reactions
     (N, nj, 3), normal, tangential (N, nc), state (N, nc) names, feet (N, nc, 2), residual,
-    events (N tuples of EVENT_NAMES)."""
+    events (N tuples of EVENT_NAMES), impulse (N, nc, 2) the last impact's (normal, tangential)."""
     d = _arrays(out)
     S, names = out["samples"], out.get("contacts", [])
 
@@ -319,6 +319,7 @@ def robot_arrays(out: dict) -> dict:
                            for s in S])
     d["residual"] = np.array([num(s["residual"]) for s in S], float)
     d["events"] = [tuple(s.get("events", ())) for s in S]
+    d["impulse"] = np.stack([per("impulse_n"), per("impulse_t")], axis=-1)
     return d
 
 
@@ -602,15 +603,17 @@ def _robot_slip_onset_checks(ev, scene: Scene, d: dict, feet, root, tol_check):
               lambda r_, c: f"t={tg[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}")
 
 
-def _robot_lift_checks(ev, scene: Scene, d: dict, out: dict, root, tol_check):
+def _robot_lift_checks(ev, scene: Scene, d: dict, feet, bodies, mu_s: float, root, tol_check,
+                       reference=None):
     """A swing ([checks] lifts): each foot of lifts goes stuck -> free (liftoff) -> stuck
     (touchdown, its reported impulse inside the static cone), once; the other feet stay stuck;
     every state change comes with its event; until the first lift-off the run is RobotModel's
-    stance on both stuck feet (positions and angles)."""
+    stance on both stuck feet (positions and angles). d: robot_arrays' layout (impulse
+    optional); reference(scene, times, root) -> (model, result), robot_reference by default
+    (a run over CAN passes its own)."""
     from .checks import CheckResult
     results, lifts, t = ev.results, scene.checks.lifts, d["t"]
-    feet, bodies = out.get("contacts", []), out["bodies"]
-    mu_s = float(out["ground"]["mu_static"])
+    reference = reference or robot_reference
     _robot_sequence_check(ev, d, feet)
     first = len(t)
     for k, f in enumerate(feet):
@@ -624,10 +627,9 @@ def _robot_lift_checks(ev, scene: Scene, d: dict, out: dict, root, tol_check):
         results.append(CheckResult(f"{f}: lifts off, then touches down stuck", ok, None, None, "", "", detail))
         if changes:
             first = min(first, changes[0][0])
-        if ok:
+        if ok and "impulse" in d:
             i = changes[1][0]
-            c = out["samples"][i]["contacts"][f]
-            pn, pt = float(c["impulse_n"]), float(c["impulse_t"])
+            pn, pt = float(d["impulse"][i, k, 0]), float(d["impulse"][i, k, 1])
             results.append(CheckResult(f"{f}: touchdown impulse inside the static cone", pn > 0 and abs(pt) <= mu_s * pn,
                                        None, None, "", f"t={t[i]:.4f}s",
                                        f"P_n {pn:.4f} N s, P_t {pt:+.4f} N s (|P_t|/P_n {abs(pt) / pn:.3f}, "
@@ -635,7 +637,7 @@ def _robot_lift_checks(ev, scene: Scene, d: dict, out: dict, root, tol_check):
     tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad", lambda r, c: f"t={t[r]:.4f}s")
     if first > 1 and (scene.checks.position_m is not None or scene.checks.angle_rad is not None):
         try:
-            _, r = robot_reference(scene, t[:first], root)
+            _, r = reference(scene, t[:first], root)
         except ValueError as e:
             results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
             return ev
@@ -692,7 +694,8 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     if scene.analysis == "inverse_dynamics":
         return _robot_inverse_checks(ev, scene, d, out, tol_check, pose_checks)
     if ch.lifts is not None:
-        return _robot_lift_checks(ev, scene, d, out, root, tol_check)
+        return _robot_lift_checks(ev, scene, d, feet, bodies, float(out["ground"]["mu_static"]), root,
+                                  tol_check)
     if ch.slips is not None:
         tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
                   lambda r, c: where_t(r))
