@@ -1,6 +1,8 @@
 // The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
 // the identity), assembled from the sparse rows, factored by Cholesky in
 // place. Hand-written so that no Eigen path can fall back to the heap.
+#include <cstring>
+
 #include "kernel.hpp"
 
 namespace legsim {
@@ -19,10 +21,8 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
   f.m = m;
   f.kernel = kern;
-  for (int i = 0; i < m; ++i) {
-    f.perm[i] = layout.perm[i];
-    f.first[i] = layout.first[i];
-  }
+  std::memcpy(f.perm, layout.perm, size_t(m));
+  std::memcpy(f.first, layout.first, size_t(m));
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
   if (kern) kern->assemble(rows, w, f.a.data());
@@ -59,7 +59,15 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   for (int i = mk; i < m; ++i) {
     const int fi = f.first[i];
     real *ai = &f.a(i, 0);
-    for (int j = fi; j < i; ++j) {
+    int j0 = fi;
+    if (fi < mk) {
+      // its columns in the kernel's block: L11 l = a by the kernel's sparse forward solve
+      // (the same products in the same order as the loop below, less the zero ones)
+      for (int j = 0; j < fi; ++j) ai[j] = 0;
+      kern->forward(f.a.data(), ai);
+      j0 = mk;
+    }
+    for (int j = j0; j < i; ++j) {
       const real *aj = &f.a(j, 0);
       const int k0 = fi > f.first[j] ? fi : f.first[j];
       real s = ai[j];
@@ -203,9 +211,11 @@ void project(const Model &model, const Layout &layout, const Rows &rows, const F
 }
 
 bool all_finite(const VecQ &v, int n) {
-  for (int k = 0; k < n; ++k)
-    if (!std::isfinite(v[k])) return false;
-  return true;
+  // x * 0 is 0 for every finite x and NaN for an infinite or NaN one: one sum tells, with
+  // no branch per value
+  real z = 0;
+  for (int k = 0; k < n; ++k) z += v[k] * real(0);
+  return z == z;
 }
 
 void raise_event(Data &d, uint32_t ev) { d.report.events |= ev; }
