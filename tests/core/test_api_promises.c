@@ -227,6 +227,10 @@ static void test_options_are_range_checked(void) {
     TEST_ASSERT_EQUAL_size_t(sizeof(int32_t), sizeof o.integrator);
     memcpy(&o.integrator, &raw[i], sizeof raw[i]);
     TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_set_options(b, &o));
+    o = legsim_default_options();
+    TEST_ASSERT_EQUAL_size_t(sizeof(int32_t), sizeof o.contact_law);
+    memcpy(&o.contact_law, &raw[i], sizeof raw[i]);
+    TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_ERR_BAD_INPUT, legsim_set_options(b, &o), "contact_law");
   }
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(a, 5));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(b, 5));
@@ -238,6 +242,7 @@ static void test_options_are_range_checked(void) {
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_options(b, &o));
   o.step_s = LEGSIM_MIN_STEP_S;
   o.newton_tol = LEGSIM_MIN_NEWTON_TOL;
+  o.contact_law = LEGSIM_CONTACT_PAPER;
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_options(b, &o));
   o = legsim_default_options();
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_options(b, &o));

@@ -28,6 +28,7 @@ try:
 except ImportError:  # the bench is not installed: its source tree
     sys.path.insert(0, str(ROOT / "bench"))
 from legsim_bench.analyses import robot_reference  # noqa: E402
+from legsim_bench.reference import contact_analytic as ca  # noqa: E402
 from legsim_bench.scene import load_scene  # noqa: E402
 
 ROBOT = ROOT / "models" / "robot.toml"
@@ -191,6 +192,15 @@ def test_painleve_rod_is_reported_never_nan(mu, omega, inconsistent):
     raises contact_inconsistent (its end let go, as the one-by-one rule does) and goes on
     finite; spinning fast, sliding on is consistent (one of its two solutions): no event;
     below the critical friction, sliding holds."""
+    # the bench's enumeration on the same rod (test_robot_reference.py's W and b)
+    m_, l, th = 1.0, 0.5, math.radians(60)
+    M = np.diag([m_, m_, m_ * l * l / 3.0])
+    e = -l * np.array([math.cos(th), math.sin(th)])
+    Gm = np.array([[0.0, 1.0, e[0]], [1.0, 0.0, -e[1]]])
+    W = Gm @ np.linalg.solve(M, Gm.T)
+    b = np.array([-9.81 + omega ** 2 * l * math.sin(th), omega ** 2 * l * math.cos(th)])
+    sols = ca.contact_modes(W, b, mu, mu, [-1])
+    assert (len(sols) == 0) == inconsistent
     s = _rod(mu, omega)
     s.clear_events()
     s.step(1)
