@@ -525,7 +525,7 @@ def _robot_sequence_check(ev, d: dict, feet):
                                   "changes", "", "; ".join(bad or seq) or "no change"))
 
 
-def robot_slip_onset(scene: Scene, d: dict, root: Path | None = None) -> dict:
+def robot_slip_onset(scene: Scene, d: dict, root: Path | None = None, reference=None) -> dict:
     """The first stick_to_slip of a robot dynamics run (robot_arrays' d) against RobotModel's
     stance on stuck feet along the scene's commands up to it: where |T|/N of a foot first
     reaches mu_static (the crossing, interpolated between samples), and which foot the scene's
@@ -537,7 +537,8 @@ def robot_slip_onset(scene: Scene, d: dict, root: Path | None = None) -> dict:
     t_e, k_e = min(starts)
     i_e = int(np.argmin(np.abs(d["t"] - t_e)))
     released = [k for k in feet if d["state"][i_e, k] == "sliding" and d["state"][i_e - 1, k] == "stuck"]
-    model, r = robot_reference(scene, d["t"][:i_e + 1], root)
+    # reference(scene, times, root): robot_reference, or over CAN the one of what was sent
+    model, r = (reference or robot_reference)(scene, d["t"][:i_e + 1], root)
     mu = model.ground.mu_static
     use = np.abs(r.tangential) / r.normal
     out = {"event_t": t_e, "released": released, "model": model, "ref": r, "i_event": i_e,
@@ -559,12 +560,12 @@ def robot_slip_onset(scene: Scene, d: dict, root: Path | None = None) -> dict:
     return out
 
 
-def _robot_slip_onset_checks(ev, scene: Scene, d: dict, feet, root, tol_check):
+def _robot_slip_onset_checks(ev, scene: Scene, d: dict, feet, root, tol_check, reference=None):
     """[checks] slip_onset_steps: legsim's first stick_to_slip within that many steps after
     RobotModel's stuck-stuck |T|/N reaches mu_static, the released foot the contact law's, and
     the stance before it (position_m, angle_rad, ground_force_n) against the reference."""
     from .checks import CheckResult
-    o = robot_slip_onset(scene, d, root)
+    o = robot_slip_onset(scene, d, root, reference)
     if o["event_t"] is None or o.get("crossing_t") is None:
         ev.results.append(CheckResult("slip onset vs RobotModel's stance", False, None, None, "", "",
                                       "no stick_to_slip in the run" if o["event_t"] is None else

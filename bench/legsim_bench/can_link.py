@@ -112,6 +112,12 @@ class SimState(enum.IntEnum):
     HALTED = 3
 
 
+class ContactLaw(enum.IntEnum):
+    """Ctrl_ContactLaw: legsim_contact_law."""
+    LCP = 0
+    PAPER = 1
+
+
 class ContactState(enum.IntEnum):
     FREE = 0
     STUCK = 1
@@ -588,17 +594,20 @@ class HilLink:
 
     def reset(self, variant: str | int = "revolute", integrator: str | int = "rk4",
               step_s: float = 1e-3, pose: int = 0, *, lengths=None, hold_length: bool = False,
-              disable: int = 0, cmd_timeout_ms: int | None = None) -> State:
+              disable: int = 0, cmd_timeout_ms: int | None = None, contact_law: str | int = 0,
+              free_contacts: int = 0) -> State:
         """New session: builds the sim, assembles the pose (then the actuator lengths, if
         given) and sets every actuator to zero force (or, hold_length, to hold its assembled
         length); lockstep mode. cmd_timeout_ms: None = hil_sim's default, 0 = no timeout.
-        Returns the assembled state (step 0)."""
+        The robot: contact_law ("lcp" 0, "paper" 1) and free_contacts (bit k: foot k free
+        after the assembly on the ground). Returns the assembled state (step 0)."""
         step_ns = round(step_s * 1e9)
         timeout = CMD_TIMEOUT_DEFAULT if cmd_timeout_ms is None else \
             (CMD_TIMEOUT_NONE if cmd_timeout_ms == 0 else int(cmd_timeout_ms))
         sig = {"Ctrl_Variant": _enum(Variant, variant), "Ctrl_Integrator": _enum(Integrator, integrator),
                "Ctrl_Pose": pose, "Ctrl_StepSize": step_ns, "Ctrl_Disable": disable,
-               "Ctrl_ActInit": 1 if hold_length else 0, "Ctrl_CmdTimeout": timeout}
+               "Ctrl_ActInit": 1 if hold_length else 0, "Ctrl_CmdTimeout": timeout,
+               "Ctrl_ContactLaw": _enum(ContactLaw, contact_law), "Ctrl_FreeContacts": int(free_contacts)}
         if lengths is not None:   # 2 (the leg) or 4 (the robot: leg 0's, then leg 1's)
             sig.update(Ctrl_UseLengths=1, Ctrl_Length_upper=float(lengths[0]),
                        Ctrl_Length_lower=float(lengths[1]))
@@ -727,7 +736,7 @@ def _enum(kind: type[enum.IntEnum], value: str | int) -> int:
 
 __all__ = [
     "HilLink", "State", "Fault", "Heartbeat", "HilError", "HilFault", "bus_config",
-    "Contact", "ContactState", "ContactEvent", "LEG_OFFSET", "ROBOT_STATE_IDS",
+    "Contact", "ContactState", "ContactEvent", "ContactLaw", "LEG_OFFSET", "ROBOT_STATE_IDS",
     "Command", "Variant", "Integrator", "ActMode", "SimState", "FaultCode", "Status",
     "BODIES", "JOINTS", "ACTUATORS", "DBC_PATH", "CMD_TIMEOUT_NONE",
     "DISABLE_GRAVITY", "DISABLE_FORCE_ELEMENTS", "DISABLE_REACTIONS", "DISABLE_PROJECTION",

@@ -484,9 +484,12 @@ def evaluate(rec: dict, root: Path | None = None, *, scene: Scene | None = None,
 
     root = root or find_root()
     scene = scene or scene_of(rec, root)
-    if not scene.over_can:   # statics, sweep, inverse dynamics, assembly: run in legsim_cli
+    if not scene.over_can or rec.get("runner") == "legsim_cli":   # statics, sweep, ...: legsim_cli
         from .analyses import evaluate_analysis
         return evaluate_analysis(rec, scene, root)
+    if scene.robot:          # the two-leg robot over CAN, against RobotModel
+        from .robot_can import evaluate_robot_can
+        return evaluate_robot_can(rec, scene, root)
     ch = scene.checks
     model_path = scene.model_path or root / "models" / "leg.toml"   # the scene's model file
     leg = Leg.from_toml(model_path, scene.variant)

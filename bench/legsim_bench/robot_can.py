@@ -1,172 +1,271 @@
-"""The two-leg robot driven over CAN (``hil_sim --robot``), checked against the bench's own
-robot model (:class:`legsim_bench.reference.robot.RobotModel`).
+"""The two-leg robot's dynamics scenes over CAN (``hil_sim --robot``, or ``--model ROBOT.toml``),
+checked against the bench's own robot model (:class:`legsim_bench.reference.robot.RobotModel`).
 
-    from legsim_bench.can_link import HilLink
-    from legsim_bench.robot_can import run_scene_a
+``legsim-bench run robot_fig7`` records the scene on hil_sim (legsim_bench.runner.record: each
+leg's ACT_CMD, LOAD_CMD, the RESET's lengths, contact law and free feet) and
+:func:`evaluate_robot_can` checks the recording with the checks the scene's ``[checks]`` names,
+as legsim_cli's run is checked (legsim_bench.analyses.evaluate_robot), with two differences
+that follow from the bus:
 
-    with HilLink() as hil:
-        res = run_scene_a(hil)
-        print(res.report())
-        assert res.ok, res.failures
+* The reference replays what was sent, not the scene's doubles: the RESET's lengths and every
+  setpoint as the float32 the DBC carries, each held from the exchange that sent it to the next
+  (a left-continuous staircase: a sample at an exchange reflects the step that ended there).
+  A sinusoid is therefore a staircase over CAN (on the exchange grid, record_every steps).
+* Every received number is float32: within 2^-24 |x| of the core's double (round to nearest).
+  The tolerance of a check is the scene's (the solver's agreement with the reference, as in
+  legsim_cli) plus 2^-24 times the largest |value| of its kind (positions, angles, forces); a
+  displacement or drift, the difference of two rounded values, gets twice that.
 
-Scene A is the paper's Fig. 7 as docs/design/robot-on-ground.md section 7 sets it: from the
-servo stand equilibrium at rest, the right upper actuator (leg 0's upper) switches to force
-mode at its hold force + 50 N for 0.1 s, the other three stay on their servos; RK4, h = 1 ms.
-It is built here in code (the robot's scene files come separately).
-
-How the run is made to start where the reference starts: the CAN frames carry float32, so
-every number the bench sends is rounded to float32 first and the reference gets the same
-rounded number. The servo stand equilibrium's actuator lengths (from
-``RobotModel.equilibrium``) are sent in the RESET (all four, Ctrl_UseLengths), so hil_sim
-assembles the robot on the ground at them, and the reference starts from its own assembly
-at the same lengths; the servos' set points are the stand lengths and the push is
-float32(hold + 50 N), in both.
-
-Tolerances follow from the signal types: a float32 signal is the solver's double rounded
-to nearest, within 2^-24 |x| of it; the time is float64, an exact copy. On top of that comes
-the core's own agreement with the reference for RK4 at h = 1 ms (measured in
-tests/python/test_robot.py: box 1e-10 m, angles 2e-11 rad, ground forces 1.5e-7 N), bounded
-here by SOLVER_POS and SOLVER_FORCE with a margin of about ten.
+Contact events come per foot (Ct_Events: the core's legsim_contact_event_mask of that foot over
+every step since the previous sample), so the contact-state sequence is checked foot by foot:
+every change of a foot's state between two samples comes with that foot's event, and a foot
+whose state is the same but that raised events must have gone there and back (stick to slip
+and slip to stick, lift-off and touchdown) or be inconsistent.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+import math
 from pathlib import Path
 
 import numpy as np
 
-from .can_link import ActMode, ContactState, HilLink, State
-
-ROBOT_TOML = Path(__file__).resolve().parents[2] / "models" / "robot.toml"
-
 F32_REL = 2.0 ** -24   # float32 round to nearest: |fl(x) - x| <= 2^-24 |x|
-SOLVER_POS = 1e-9      # m, rad: RK4 (h = 1 ms) against the reference's DOP853, with margin
-SOLVER_FORCE = 1e-6    # N: ground forces, the same
+
+__all__ = ["evaluate_robot_can", "robot_can_arrays", "can_reference", "float32_allowance", "F32_REL",
+           "CHANGE_EVENTS"]
+
+# a foot's state change and the event that must come with it (docs/design/robot-on-ground.md 8)
+CHANGE_EVENTS = {("stuck", "sliding"): "stick_to_slip", ("sliding", "stuck"): "slip_to_stick",
+                 ("stuck", "free"): "liftoff", ("sliding", "free"): "liftoff",
+                 ("free", "stuck"): "touchdown", ("free", "sliding"): "touchdown"}
+# events of a foot whose state is the same at both samples: it went there and back
+ROUND_TRIPS = ({"stick_to_slip", "slip_to_stick"}, {"liftoff", "touchdown"})
 
 
-def f32(x: float) -> float:
-    """x as the CAN frame carries it (float32), back in a double."""
-    return float(np.float32(x))
+def float32_allowance(values) -> float:
+    """What float32 rounding adds at most to an error in these values: 2^-24 max |x|."""
+    v = np.abs(np.asarray(values, float))
+    v = v[np.isfinite(v)]
+    return float(v.max()) * F32_REL if v.size else 0.0
 
 
-def tolerance(expected, solver: float) -> np.ndarray:
-    """|got - expected| allowed for a float32 signal: its rounding plus the solver's bound."""
-    return np.abs(np.asarray(expected, float)) * F32_REL + solver
+def robot_can_arrays(rec: dict) -> dict:
+    """The recording's robot samples as arrays in the core's order (robot_arrays' layout):
+    t, step, q (N, 39), forces, lengths (N, 4), reactions (N, 16, 3), normal, tangential (N, 2),
+    state (N, 2) names, feet (N, 2, 2), impulse (N, 2, 2) the last impact's (normal, tangential),
+    residual, foot_events (N, 2) sets of names, events
+    (N tuples: both feet's, as legsim_cli's one list per sample)."""
+    S = rec["samples"]
+    n = len(S)
+    C = [s.get("contacts") or [] for s in S]
+    nc = max((len(c) for c in C), default=0)
+    d = {"t": np.array([s["t"] for s in S], float), "step": np.array([s["step"] for s in S], int),
+         "q": np.array([s["q"] for s in S], float).reshape(n, -1),
+         "forces": np.array([s["forces"] for s in S], float).reshape(n, -1),
+         "lengths": np.array([s["lengths"] for s in S], float).reshape(n, -1),
+         "reactions": np.array([s["reactions"] for s in S], float).reshape(n, -1, 3),
+         "residual": np.array([s["residual"] for s in S], float)}
+    d["normal"] = np.array([[c[k]["normal"] for k in range(nc)] for c in C], float).reshape(n, nc)
+    d["tangential"] = np.array([[c[k]["tangential"] for k in range(nc)] for c in C], float).reshape(n, nc)
+    d["feet"] = np.array([[[c[k]["x"], c[k]["y"]] for k in range(nc)] for c in C], float).reshape(n, nc, 2)
+    d["impulse"] = np.array([[[c[k]["impulse_n"], c[k]["impulse_t"]] for k in range(nc)] for c in C],
+                            float).reshape(n, nc, 2)
+    d["state"] = np.array([[c[k]["state"] for k in range(nc)] for c in C]).reshape(n, nc)
+    d["foot_events"] = [[frozenset(c[k]["events"]) for k in range(nc)] for c in C]
+    d["events"] = [tuple(sorted(set().union(*fe))) if fe else () for fe in d["foot_events"]]
+    return d
 
 
-@dataclass
-class SceneAReference:
-    """What the run starts from and what it must reach (the reference's numbers)."""
-    lengths: np.ndarray       # (4,) float32-exact start lengths (the servo stand equilibrium)
-    servo: np.ndarray         # (4,) float32-exact servo set points (the stand lengths)
-    push: float               # N, float32-exact: leg 0's upper, hold force + 50 N
-    hold: float               # N, the hold force at the start
-    t: float                  # s
-    q: np.ndarray             # (39,) at t
-    normal: np.ndarray        # (2,) N at t
-    tangential: np.ndarray    # (2,) N at t
-    q0: np.ndarray            # (39,) at 0
-    feet: np.ndarray          # (2, 2) m, where the feet are stuck
-
-
-def scene_a_reference(duration: float = 0.1, model=None, rtol: float = 1e-9,
-                      atol: float = 1e-10) -> SceneAReference:
-    """The reference's Scene A, with every number the bench sends rounded as CAN carries it.
-    rtol/atol of the reference's DOP853: 1e-9/1e-10 is within 3e-13 m, rad and 5e-9 N of its
-    1e-11/1e-12 default here (measured), far below float32, at 60 % of the cost."""
+def can_reference(scene, rec: dict, times, root: Path | None = None):
+    """(RobotModel, RobotResult) of what hil_sim was sent, at `times`: the stand assembled at the
+    RESET's float32 lengths (the scene's, else the pose's), both feet stuck, each commanded
+    actuator on the staircase of its sent setpoints, the others as `init` says. RobotModel has
+    both feet stuck: a scene with a free foot is refused (ValueError)."""
+    from .checks import Staircase
     from .reference import ForceCommand, LengthCommand
     from .reference.robot import RobotModel
-
-    ref = model if model is not None else RobotModel.from_toml(ROBOT_TOML)
-    servo = np.array([f32(x) for x in ref.stand_lengths()])
-    servo_cmds = [LengthCommand(float(x)) for x in servo]
-    z_eq = ref.equilibrium(servo_cmds)
-    lengths = np.array([f32(x) for x in ref.lengths(z_eq)])
-    start = ref.assemble(lengths, feet_mid=0.0)   # where hil_sim's RESET puts the robot
-    at0 = ref.simulate(0.0, t_eval=[0.0], actuators=servo_cmds, start=start)
-    hold = float(at0.actuator_forces[0, 0])
-    push = f32(hold + 50.0)
-    r = ref.simulate(duration, t_eval=[0.0, duration],
-                     actuators=[ForceCommand(push)] + servo_cmds[1:], start=start, rtol=rtol,
-                     atol=atol)
-    return SceneAReference(lengths=lengths, servo=servo, push=push, hold=hold, t=float(r.t[-1]),
-                           q=r.q[-1].copy(), normal=r.normal[-1].copy(),
-                           tangential=r.tangential[-1].copy(), q0=r.q[0].copy(),
-                           feet=np.asarray(r.feet, float).copy())
-
-
-@dataclass
-class RobotCanResult:
-    reference: SceneAReference
-    start: State                       # the RESET's sample
-    end: State                         # after the push
-    errors: dict[str, float] = field(default_factory=dict)      # max |got - expected|
-    allowed: dict[str, float] = field(default_factory=dict)     # the matching max tolerance
-    failures: list[str] = field(default_factory=list)
-
-    @property
-    def ok(self) -> bool:
-        return not self.failures
-
-    def report(self) -> str:
-        e = self.end
-        lines = [f"Scene A over CAN: t = {e.t:.6f} s, {e.step_count} steps; box moved "
-                 f"({(e.q[0] - self.start.q[0]) * 1e3:+.3f} mm, {(e.q[1] - self.start.q[1]) * 1e3:+.3f} mm, "
-                 f"{e.q[2] - self.start.q[2]:+.5f} rad); right phi3 {e.q[3 * 3 + 2]:.5f} rad, "
-                 f"phi6 {e.q[3 * 6 + 2]:.5f} rad"]
-        for k, c in enumerate(e.contacts):
-            lines.append(f"  foot {k}: {c.state.name}, N = {c.normal:.4f} N, T = {c.tangential:+.4f} N")
-        for name, err in self.errors.items():
-            lines.append(f"  {name}: max error {err:.3g} (allowed {self.allowed[name]:.3g})")
-        lines += [f"  FAILED: {f}" for f in self.failures]
-        return "\n".join(lines)
+    if any(v != "stuck" for v in scene.contacts.values()):
+        raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
+    model = RobotModel.from_toml(scene.model_path)
+    lengths = None if scene.lengths is None else np.float32(np.asarray(scene.lengths, float)).astype(float)
+    start = model.assemble(lengths)
+    names = rec.get("actuators") or list(scene.actuator_names)
+    h = scene.step_s
+    cmds = []
+    for a, name in enumerate(names):
+        sent = [(c["step"] * h, c[name]) for c in rec["commands"] if name in c]
+        if not sent:
+            cmds.append(LengthCommand(float(start.lengths[a])) if scene.init == "hold_length"
+                        else ForceCommand(0.0))
+            continue
+        modes = {m for _, (m, _v) in sent}
+        if len(modes) != 1:
+            raise ValueError(f"{name}: both force and length commands; the reference holds one mode")
+        stair = Staircase([t for t, _ in sent], [v for _, (_m, v) in sent])
+        cmds.append(ForceCommand(stair) if modes == {"force"} else LengthCommand(stair))
+    t = np.round(np.asarray(times, float) / h) * h
+    r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
+                       gravity="gravity" not in scene.disable,
+                       **({"box_load": tuple(scene.box_load)} if scene.box_load is not None else {}))
+    return model, r
 
 
-def _compare(res: RobotCanResult, name: str, got, expected, solver: float) -> None:
-    got, expected = np.asarray(got, float), np.asarray(expected, float)
-    err = np.abs(got - expected)
-    tol = tolerance(expected, solver)
-    res.errors[name] = float(err.max())
-    res.allowed[name] = float(tol.max())
-    bad = np.nonzero(err > tol)[0]
-    if bad.size:
-        i = int(bad[0])
-        res.failures.append(f"{name}[{i}] = {got.flat[i]!r}, reference {expected.flat[i]!r} "
-                            f"(error {err.flat[i]:.3g} > {tol.flat[i]:.3g})")
+def _sequence_check(ev, d: dict, feet) -> list[str]:
+    """Each foot's state sequence against its own events over CAN (Ct_Events)."""
+    from .checks import CheckResult
+    bad, seq = [], []
+    for k, f in enumerate(feet):
+        st = d["state"][:, k]
+        for i in range(1, len(st)):
+            got = d["foot_events"][i][k] - {"contact_inconsistent", "contact_ambiguous"}
+            if st[i] != st[i - 1]:
+                want = CHANGE_EVENTS.get((str(st[i - 1]), str(st[i])))
+                seq.append(f"{f} {st[i - 1]}->{st[i]} at {d['t'][i]:g} s ({', '.join(sorted(got))})")
+                if want is None or want not in got:
+                    bad.append(f"{f} {st[i - 1]}->{st[i]} at t = {d['t'][i]:g} s without {want} "
+                               f"(its events: {', '.join(sorted(got)) or 'none'})")
+            elif got and not any(rt <= got for rt in ROUND_TRIPS) \
+                    and "contact_inconsistent" not in d["foot_events"][i][k]:
+                bad.append(f"{f} stays {st[i]} at t = {d['t'][i]:g} s but raised {', '.join(sorted(got))}")
+    ev.results.append(CheckResult("contact-state sequence against each foot's events over CAN (Ct_Events)",
+                                  not bad, float(len(bad)), None, "changes", "",
+                                  "; ".join(bad or seq) or "no change, no event"))
+    return seq
 
 
-def run_scene_a(link: HilLink, duration: float = 0.1, step_s: float = 1e-3,
-                reference: SceneAReference | None = None) -> RobotCanResult:
-    """Drives Scene A on the robot behind `link` (lockstep, RK4) and checks the box pose, the
-    whole q, the contact states and the ground forces against the reference."""
-    ref = reference if reference is not None else scene_a_reference(duration)
-    n = round(duration / step_s)
-    start = link.reset(integrator="rk4", step_s=step_s, lengths=ref.lengths, hold_length=False,
-                       cmd_timeout_ms=0)
-    if start.legs != 2:
-        raise ValueError("the hil_sim on this bus runs the one leg, not the robot (hil_sim --robot)")
-    # leg 0: upper pushes, lower on its servo; leg 1: both on their servos (all before a step)
-    link.command((ActMode.FORCE, ref.push), (ActMode.LENGTH, ref.servo[1]), leg=0)
-    link.command((ActMode.LENGTH, ref.servo[2]), (ActMode.LENGTH, ref.servo[3]), leg=1)
-    end = link.step(n)
-    res = RobotCanResult(reference=ref, start=start, end=end)
+def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
+    """The checks of a robot scene run on hil_sim over CAN (an Evaluation)."""
+    from . import analyses as an
+    from .checks import CheckResult, Evaluation
 
-    _compare(res, "start q (m, rad)", start.q, ref.q0, SOLVER_POS)
-    _compare(res, "box q (m, rad)", end.q[:3], ref.q[:3], SOLVER_POS)
-    _compare(res, "q (m, rad)", end.q, ref.q, SOLVER_POS)
-    _compare(res, "ground N (N)", [c.normal for c in end.contacts], ref.normal, SOLVER_FORCE)
-    _compare(res, "ground T (N)", [c.tangential for c in end.contacts], ref.tangential, SOLVER_FORCE)
-    # the feet stay where they were stuck
-    _compare(res, "feet (m)", [[c.x, c.y] for c in end.contacts], ref.feet, SOLVER_POS)
-    states = [c.state for c in end.contacts]
-    if states != [ContactState.STUCK, ContactState.STUCK]:
-        res.failures.append(f"contact states {[s.name for s in states]}, expected both STUCK")
-    if abs(end.t - ref.t) > 1e-12 or end.step_count != n:
-        res.failures.append(f"t = {end.t!r} after {end.step_count} steps, expected {ref.t!r}, {n}")
-    if end.faults:
-        res.failures.append("faults: " + "; ".join(str(f) for f in end.faults))
-    return res
+    ch = scene.checks
+    results: list = []
+    ev = Evaluation(scene, rec, results)
+    S = rec["samples"]
+    expected = len(scene.boundaries()) + 1
+    problems = [e["error"] for e in rec["errors"]]
+    if not rec.get("complete"):
+        problems.append("run not complete")
+    if len(S) != expected:
+        problems.append(f"{len(S)} samples, expected {expected}")
+    halted = [s for s in S if s["state"] == "HALTED" or s["legsim_status"] != 0]
+    if halted:
+        problems.append(f"HALTED / legsim_status {halted[0]['legsim_status']} at t={halted[0]['t']:.4f}")
+    faults = [f for s in S for f in s["faults"]] + rec.get("late_faults", [])
+    if faults:
+        problems.append(f"{len(faults)} FAULT(s): {faults[0]['code']}")
+    if S and any(s.get("legs") != 2 for s in S):
+        problems.append("a sample that is not the robot's (hil_sim --robot)")
+    results.append(CheckResult("run: hil_sim --robot over CAN, all exchanges answered", not problems,
+                               float(len(S)), float(expected), "samples",
+                               f"to t={S[-1]['t']:.4f}s" if S else "", "; ".join(problems) or
+                               f"steps 0..{S[-1]['step']}, {rec.get('wall_time_s', 0):.1f} s wall"))
+    if problems and (not S or halted or len(S) != expected):
+        return ev
+    d = robot_can_arrays(rec)
+    t = d["t"]
+    grid = float(np.max(np.abs(t - d["step"] * scene.step_s)))
+    if grid > 1e-9:
+        results.append(CheckResult("St_Time on the step grid", False, grid, 1e-9, "s"))
+    feet = list(scene.model_info.contacts)
+    bodies = ["box"] + [f"body{i}" for i in range(1, d["q"].shape[1] // 3)]
+    acts = list(scene.actuator_names)
+    xy = np.delete(d["q"], np.s_[2::3], axis=1)
+    allow = {"position_m": float32_allowance(xy), "angle_rad": float32_allowance(d["q"][:, 2::3]),
+             "actuator_force_n": float32_allowance(d["forces"]),
+             "ground_force_n": float32_allowance(np.concatenate([d["normal"], d["tangential"]], axis=1)),
+             "reaction_n": float32_allowance(d["reactions"][..., 0:2]),
+             "stays_put_m": 2 * float32_allowance(xy), "residual": float32_allowance(d["residual"])}
+    where_t = lambda r: f"t={t[r]:.4f}s"  # noqa: E731
 
+    def tol_check(name, key, err, unit, label, detail=""):
+        tol = getattr(ch, key)
+        if tol is None:
+            return
+        v, r, c = an._max(err)
+        tol_can = tol + allow.get(key, 0.0)
+        results.append(CheckResult(name + " (float32 over CAN)", v <= tol_can, v, tol_can, unit, label(r, c),
+                                   (detail + "; " if detail else "") +
+                                   f"scene's {tol:g} + float32 {allow.get(key, 0.0):.2g}"))
 
-__all__ = ["run_scene_a", "scene_a_reference", "SceneAReference", "RobotCanResult", "tolerance",
-           "F32_REL", "SOLVER_POS", "SOLVER_FORCE", "ROBOT_TOML"]
+    def pose_checks(q_ref, detail=""):
+        dq = d["q"] - q_ref
+        dq[:, 2::3] = an._wrap(dq[:, 2::3])
+        tol_check("positions x, y vs RobotModel", "position_m", np.delete(dq, np.s_[2::3], axis=1), "m",
+                  lambda r, c: f"{where_t(r)} {bodies[c // 2]}.{'xy'[c % 2]}")
+        tol_check("angles vs RobotModel", "angle_rad", dq[:, 2::3], "rad",
+                  lambda r, c: f"{where_t(r)} {bodies[c]}.phi", detail)
+
+    tol_check("constraint residual |Phi(q)| (legsim's, St_Residual)", "residual", d["residual"], "m|rad",
+              lambda r, c: where_t(r))
+    seq = _sequence_check(ev, d, feet)
+    reference = lambda sc, times, rt: can_reference(sc, rec, times, rt)  # noqa: E731
+    if getattr(ch, "lifts", None) is not None:   # a swing: lift-off, touchdown (analyses' checks)
+        from .reference.robot import RobotModel
+        mu_s = RobotModel.from_toml(scene.model_path).ground.mu_static
+        return an._robot_lift_checks(ev, scene, d, feet, bodies, float(mu_s), root, tol_check,
+                                     reference=reference)
+    if ch.slips is not None:
+        if ch.slip_onset_steps is not None:
+            an._robot_slip_onset_checks(ev, scene, d, feet, root, tol_check, reference=reference)
+        for k, f in enumerate(feet):   # each foot by its own events
+            st = d["state"][:, k]
+            starts = [float(t[i]) for i in range(1, len(st)) if st[i - 1] == "stuck" and st[i] == "sliding"
+                      and "stick_to_slip" in d["foot_events"][i][k]]
+            if f in ch.slips:
+                results.append(CheckResult(f"{f} slips: stuck to sliding with its stick_to_slip", bool(starts),
+                                           float(len(starts)), None, "times", "",
+                                           f"at t = {', '.join(f'{x:g}' for x in starts) or 'never'} s; "
+                                           f"state at the end {st[-1]}"))
+            else:
+                results.append(CheckResult(f"{f} stays stuck throughout", bool(np.all(st == "stuck")), None, None,
+                                           "", "", f"states: {', '.join(sorted(set(st)))}"))
+        return ev
+    try:
+        model, r = can_reference(scene, rec, t, root)
+    except ValueError as e:
+        results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
+        return ev
+    k3, k6 = 3 * 3 + 2, 3 * 6 + 2
+    table2 = (f"at t = {t[-1]:g} s right phi3 = {d['q'][-1, k3]:.5f} rad ({math.degrees(d['q'][-1, k3]):.3f} deg), "
+              f"phi6 = {d['q'][-1, k6]:.5f} rad ({math.degrees(d['q'][-1, k6]):.3f} deg); box "
+              f"({1e3 * (d['q'][-1, 0] - d['q'][0, 0]):+.2f}, {1e3 * (d['q'][-1, 1] - d['q'][0, 1]):+.2f}) mm, "
+              f"{d['q'][-1, 2] - d['q'][0, 2]:+.5f} rad")
+    pose_checks(r.q, table2)
+    box = np.abs(d["q"][:, :3] - r.q[:, :3])
+    results.append(CheckResult("box pose (ST_BOX) vs RobotModel (float32 over CAN)",
+                               ch.position_m is None or bool(np.all(box[:, :2] <= ch.position_m + allow["position_m"])
+                                                             and np.all(box[:, 2] <= (ch.angle_rad or math.inf)
+                                                                        + allow["angle_rad"])),
+                               float(box.max()), None, "m|rad", where_t(int(np.argmax(box.max(axis=1)))),
+                               f"max |dx|, |dy| {box[:, :2].max():.2g} m, |dphi| {box[:, 2].max():.2g} rad"))
+    solved = np.ones(len(t), bool)
+    solved[0] = False   # the RESET's sample: no forces solved yet
+    tol_check("actuator forces vs RobotModel", "actuator_force_n", (d["forces"] - r.actuator_forces)[solved], "N",
+              lambda r_, c: f"t={t[solved][r_]:.4f}s {acts[c]}")
+    tt = t[solved]
+    ground = np.concatenate([d["normal"] - r.normal, d["tangential"] - r.tangential], axis=1)[solved]
+    tol_check("ground forces N, T per foot (ST_CONTACT) vs RobotModel", "ground_force_n", ground, "N",
+              lambda r_, c: f"t={tt[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
+              f"at t = {t[-1]:g} s N {', '.join(f'{x:.2f}' for x in d['normal'][-1])}, "
+              f"T {', '.join(f'{x:+.2f}' for x in d['tangential'][-1])} N")
+    stuck = bool(np.all(d["state"] == "stuck"))
+    results.append(CheckResult("contact states (Ct_State): both feet stuck throughout (RobotModel's stance)",
+                               stuck and not seq, None, None, "", "",
+                               f"states at the end: {', '.join(d['state'][-1])}; changes: {len(seq)}"))
+    if ch.reaction_n is not None:
+        dr = (d["reactions"] - r.reactions)[solved]
+        tol_check("joint reaction forces vs RobotModel", "reaction_n", dr[..., 0:2].reshape(len(tt), -1), "N",
+                  lambda r_, c: f"t={tt[r_]:.4f}s joint {c // 2}.f{'xy'[c % 2]}")
+    if ch.stays_put_m is not None:
+        disp = d["q"] - d["q"][0]
+        tol_check("stays put: largest displacement from the first sample", "stays_put_m",
+                  np.delete(disp, np.s_[2::3], axis=1), "m", lambda r_, c: f"{where_t(r_)} {bodies[c // 2]}")
+    if ch.growth_rel is not None:
+        g = an.robot_growth(model, d)
+        rel = np.array([(m_ - p_) / p_ for m_, p_ in zip(g["measured"], g["predicted"])])
+        tol_check("growth rates of the drift vs RobotModel's linearized modes", "growth_rel", rel[None], "",
+                  lambda r_, c: ("sway", "heave")[c],
+                  f"sway {g['measured'][0]:.4f} /s (predicted {g['predicted'][0]:.4f}), heave "
+                  f"{g['measured'][1]:.4f} /s (predicted {g['predicted'][1]:.4f})")
+    return ev

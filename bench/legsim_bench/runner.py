@@ -50,8 +50,18 @@ def _fault_dict(f) -> dict:
             "step": int(f.step_count), "count": int(f.count), "signal": f.signal}
 
 
+def _contact_dict(c) -> dict:
+    return {"state": c.state.name.lower(), "events": [e.name.lower() for e in type(c.events) if e in c.events],
+            "normal": float(c.normal), "tangential": float(c.tangential),
+            "friction_use": float(c.friction_use), "x": float(c.x), "y": float(c.y),
+            "slip": float(c.slip), "impulse_n": float(c.impulse_n), "impulse_t": float(c.impulse_t)}
+
+
 def _state_dict(s, t_wall0: float) -> dict:
-    return {
+    robot = {} if getattr(s, "legs", 1) < 2 else {
+        "legs": int(s.legs), "act_seqs": [int(x) for x in s.act_seqs],
+        "contacts": [_contact_dict(c) for c in s.contacts]}
+    return {**robot,
         "t": float(s.t), "step": int(s.step_count),
         "q": [float(v) for v in s.q], "qd": [float(v) for v in s.qd],
         "lengths": [float(v) for v in s.lengths], "rates": [float(v) for v in s.rates],
@@ -86,14 +96,24 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
     recording["errors"] and the checks fail on them.
 
     Only dynamics has frames in the DBC: a scene of another analysis runs in legsim_cli (the
-    core on this host, legsim_bench.analyses) and `link` is not used. A scene with its own
-    model file needs a hil_sim started with --model FILE (HilProcess.for_scene)."""
+    core on this host, legsim_bench.analyses) and `link` is not used; so does a robot dynamics
+    scene given no link (link=None: its legsim_cli run, checked as the CLI's). A scene with its own
+    model file needs a hil_sim started with --model FILE (HilProcess.for_scene).
+
+    A robot scene (a model with contacts) runs on `hil_sim --robot` / `--model ROBOT.toml`:
+    its four actuators' commands go to each leg's ACT_CMD (ACT_CMD_L1 for leg 1), its leg
+    force elements to each leg's LOAD_CMD, contact_law and [[contact]] free in the RESET;
+    every sample records per foot its state, events (Ct_Events), N, T, position, slip."""
     log = log or (lambda msg: None)
-    if not scene.over_can:
+    if not scene.over_can or (link is None and scene.robot):
+        # no frames for it, or a robot scene with no bus given: legsim_cli (its CLI path)
         from .analyses import record_analysis
         return record_analysis(scene, FORMAT, log=log)
     from .can_link import ACT_CMD, CONTROL, LOAD_CMD, ActMode, HilError, HilFault, SimState
 
+    legs = 2 if scene.robot else 1
+    if scene.robot and hasattr(link, "use_model"):
+        raise RecordingError("the reference link plays the one leg only; a robot scene needs hil_sim --robot")
     if hasattr(link, "use_model"):       # the reference model playing hil_sim: same model file
         link.use_model(scene.model_path)
     elif not scene.builtin_model:
@@ -107,6 +127,7 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
         "bus": str(getattr(link.bus, "channel_info", "")),
         "heartbeat": None, "samples": [], "commands": [], "loads": [], "injections": [],
         "late_faults": [], "errors": [], "complete": False, "initial_lengths": None,
+        "legs": legs, "actuators": list(scene.actuator_names),
     }
     t_wall0 = time.monotonic()
     try:
@@ -121,11 +142,18 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
     last_ok = {"ACT_CMD": 0, "LOAD_CMD": 0, "CONTROL": 0}
     silent_until = -1
     bar = None
+    feet = {}
+    if scene.robot:   # the feet's RESET options (Ctrl_ContactLaw, Ctrl_FreeContacts)
+        free = sum(1 << scene.model_info.contacts.index(c) for c, v in scene.contacts.items() if v == "free")
+        feet = {"contact_law": scene.contact_law, "free_contacts": free}
     try:
         s0 = link.reset(variant=scene.variant, integrator=scene.integrator, step_s=scene.step_s,
                         pose=scene.pose, lengths=scene.lengths,
                         hold_length=scene.init == "hold_length", disable=scene.disable_bits,
-                        cmd_timeout_ms=scene.cmd_timeout_ms)
+                        cmd_timeout_ms=scene.cmd_timeout_ms, **feet)
+        if getattr(s0, "legs", 1) != legs:
+            raise RecordingError(f"the hil_sim on this bus runs {getattr(s0, 'legs', 1)} leg(s), the scene's "
+                                 f"model {legs} (a robot scene needs hil_sim --robot or --model ROBOT.toml)")
         if s0.step_ns != scene.step_ns:
             raise RecordingError(f"hil_sim runs h = {s0.step_ns} ns, the scene asked {scene.step_ns} ns")
         rec["samples"].append(_state_dict(s0, t_wall0))
@@ -137,6 +165,14 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
             seq = link.set_load(0, fx, fy)
             last_ok["LOAD_CMD"] = seq
             rec["loads"].append({"step": 0, "t": 0.0, "index": 0, "value": [fx, fy], "seq": seq})
+        if scene.robot:   # the legs' force elements: leg k's LOAD_CMD, its own index
+            per_leg = len(scene.model_info.forces) // legs
+            for name, v in scene.forces.items():
+                i = scene.model_info.forces.index(name)
+                fx, fy = f32(v[0]), f32(v[1] if len(v) > 1 else 0.0)
+                seq = link.set_load(i % per_leg, fx, fy, leg=i // per_leg)
+                rec["loads"].append({"step": 0, "t": 0.0, "index": i, "name": name, "value": [fx, fy],
+                                     "seq": seq})
 
         bounds = scene.boundaries()
         inj_at: dict[int, list] = {}
@@ -151,6 +187,7 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
             if k >= silent_until and any(c is not None for c in scene.commands):
                 sp = scene.setpoints(k, rec["initial_lengths"])
                 args, logged = [], {}
+                names = scene.actuator_names if scene.robot else ACTUATORS
                 for a, v in enumerate(sp):
                     if v is None:
                         args.append(None)
@@ -158,8 +195,14 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                     mode, value = v
                     value = f32(value)
                     args.append((mode_of[mode], value))
-                    logged[ACTUATORS[a]] = [mode, value]
-                seq = link.command(*args)
+                    logged[names[a]] = [mode, value]
+                if scene.robot:   # each leg's own ACT_CMD (leg 1: ACT_CMD_L1)
+                    seqs = [link.command(*args[2 * g:2 * g + 2], leg=g) for g in range(legs)
+                            if any(x is not None for x in args[2 * g:2 * g + 2])]
+                    seq = seqs[0]
+                    logged["seqs"] = seqs
+                else:
+                    seq = link.command(*args)
                 last_ok["ACT_CMD"] = seq
                 rec["commands"].append({"step": k, "t": scene.t(k), "seq": seq, **logged})
             for inj in inj_at.get(k, []):

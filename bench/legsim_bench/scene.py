@@ -364,12 +364,26 @@ class Scene:
 
     @property
     def over_can(self) -> bool:
-        """Dynamics runs on hil_sim over CAN; the other analyses have no frames in the DBC and
-        run in legsim_cli (the core on the host), checked against the same reference model."""
-        return self.analysis == "dynamics" and not self.robot
+        """Dynamics runs on hil_sim over CAN (the leg, and the robot as two CAN nodes); the
+        other analyses have no frames in the DBC and run in legsim_cli (the core on the host),
+        checked against the same reference model. A robot scene with a key that no frame
+        carries runs in legsim_cli too, saying why (can_refusal)."""
+        return self.analysis == "dynamics" and self.can_refusal is None
+
+    @property
+    def can_refusal(self) -> str | None:
+        """Why this dynamics scene cannot run over CAN (a key no frame of can/legsim.dbc
+        carries), or None."""
+        if self.robot and self.box_load is not None:
+            return ("'box_load' has no frame to hil_sim (the robot's box has no force element "
+                    "on the bus): run in legsim_cli")
+        return None
 
     def hil_args(self) -> list[str]:
-        """hil_sim's options for this scene: --model FILE unless it is the compiled-in leg."""
+        """hil_sim's options for this scene: --model FILE unless it is the compiled-in leg
+        (a robot file: hil_sim runs it as the robot's two nodes)."""
+        if self.robot and self.model == BUILTIN_ROBOT:
+            return ["--robot"]
         return [] if self.builtin_model else ["--model", str(self.model_path)]
 
     @property
@@ -423,7 +437,7 @@ class Scene:
 
     def summary(self) -> str:
         if not self.over_can:
-            how = f"{self.analysis} in legsim_cli (no CAN frames for it)"
+            how = f"{self.analysis} in legsim_cli ({self.can_refusal or 'no CAN frames for it'})"
             if self.analysis == "inverse_dynamics":
                 how += f", {self.duration:g} s ({self.n_steps} steps, a sample every {self.record_every})"
             return f"{self.variant}, {how}" + ("" if self.builtin_model else f", model {self.model}")
@@ -667,7 +681,8 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
                          "move, the feet cannot stay on the ground): run dynamics, statics, inverse_dynamics or "
                          "assembly")
     if "inject" in d:
-        raise SceneError(f"{where}: [[inject]]: a robot scene runs in legsim_cli, which has no bus")
+        raise SceneError(f"{where}: [[inject]] is not for a robot scene (the bench's injections are the one leg's "
+                         "frames; tests/hil/test_robot_can.py sends the robot bad frames)")
     names = tuple(a[0] for a in info.actuators)
     raw_cmds = d.get("command", [])
     if raw_cmds and analysis not in TIMED:

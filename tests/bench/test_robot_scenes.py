@@ -66,7 +66,7 @@ def test_both_readers_resolve_robot_scenes_alike(name):
         x["model_path"] = os.path.realpath(x["model_path"]) if x["model_path"] else ""
     cli.pop("scene")
     assert cli == bench
-    assert sc.robot and not sc.over_can
+    assert sc.robot and sc.over_can == (sc.analysis == "dynamics" and sc.can_refusal is None)
     assert sc.actuator_names == ("right.upper", "right.lower", "left.upper", "left.lower")
     assert set(bench["commands"]) <= set(sc.actuator_names)
 
