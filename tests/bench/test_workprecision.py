@@ -219,4 +219,4 @@ def test_the_command_end_to_end_writes_costs_and_the_ratio(drivers, tmp_path, ca
     ratio = best("legsim/") / best("mujoco/")
     md = (tmp_path / "workprecision_quick.md").read_text()
     line = next(x for x in md.splitlines() if x.startswith("| 1e-04 |"))
-    assert float(line.split("|")[2]) == pytest.approx(ratio, rel=2e-3)
+    assert float(line.split("|")[2]) == pytest.approx(ratio, rel=5e-3)  # printed to 3 digits
