@@ -1,8 +1,8 @@
-"""The two-leg robot over SocketCAN (needs vcan0: tools/with-vcan): hil_sim --robot answers
-with each leg's frames at its ids, the feet's ST_CONTACT and the box's ST_BOX; the bench
-drives the Fig. 7 Scene A (design section 7) and checks box pose, contact states and ground
-forces against its own RobotModel within the float32 signals' resolution; bad leg-1 frames
-get a FAULT and change nothing; a one-leg hil_sim refuses leg-1 commands.
+"""The two-leg robot over SocketCAN (needs vcan0: tools/with-vcan): what the robot's scenes
+(tests/hil_scenes, every scenes/robot_*.toml dynamics scene over CAN) do not cover: bad frames
+to either leg's node get a FAULT, change nothing and the heartbeat goes on; the feet's events
+(Ct_Events) arrive decoded, each on its own foot, none lost between samples; the RESET's feet
+options (Ctrl_FreeContacts); a one-leg hil_sim refuses leg-1 commands.
 """
 from __future__ import annotations
 
@@ -12,50 +12,42 @@ import numpy as np
 import pytest
 
 from legsim_bench import can_link as cl
-from legsim_bench.robot_can import run_scene_a, scene_a_reference
+
+CE = cl.ContactEvent
 
 
-@pytest.fixture(scope="module")
-def scene_a():
-    return scene_a_reference(0.1)   # the reference's run (~2 s), shared
-
-
-def test_scene_a_over_can_matches_the_reference(start_hil, scene_a):
-    hil = start_hil("--robot").link
-    res = run_scene_a(hil, reference=scene_a)
-    print(res.report())
-    assert res.ok, res.failures
-    e = res.end
-    assert e.legs == 2 and e.q.shape == (39,) and e.reactions.shape == (16, 3)
-    assert len(e.contacts) == 2 and e.act_seqs == (1, 1)
-    # the figures of design section 7 (box +0.58 mm, +4.05 mm, +0.01634 rad; right phi3)
-    moved = e.box_q - res.start.box_q
-    assert abs(moved[0] - 0.58e-3) < 0.01e-3 and abs(moved[1] - 4.05e-3) < 0.01e-3
-    assert abs(moved[2] - 0.01634) < 1e-5 and abs(e.q[3 * 3 + 2] - 1.07133) < 1e-5
-    # the feet carry the robot: N of both feet near its weight (20 kg box + 2 x 6.2 kg legs)
-    assert 300.0 < sum(c.normal for c in e.contacts) < 330.0
-    # the errors are at float32 level, not at the solver's (the solver agrees far better)
-    assert res.errors["box q (m, rad)"] < 1e-6 and res.errors["ground N (N)"] < 1e-4
-
-
-def test_bad_leg1_frames_fault_and_change_nothing(start_hil):
+def test_bad_frames_to_either_leg_fault_change_nothing_and_the_heartbeat_goes_on(start_hil):
     hil = start_hil("--robot").link
     hil.reset(integrator="rk4", hold_length=True, cmd_timeout_ms=0)
     before = hil.step(5)
-    # NaN setpoint in ACT_CMD_L1, a classic (8-byte) ACT_CMD_L1, a leg-1 force above max_force
-    nan = hil.encode("ACT_CMD_L1", {"Act_Seq": 1, "Act_Mode_upper": 1,
-                                    "Act_Setpoint_upper": math.nan}, strict=False)
-    hil.send_raw(nan)
-    f = hil.wait_fault(code=cl.FaultCode.NOT_FINITE)
-    assert f.frame_id == cl.ACT_CMD_L1 and f.signal == "Act_Setpoint_upper"
+    hb0 = hil.heartbeat()
+    bad = [  # (frame, what it must raise, its frame id, the signal named)
+        (hil.encode("ACT_CMD", {"Act_Seq": 1, "Act_Mode_lower": 1, "Act_Setpoint_lower": math.inf}, strict=False),
+         cl.FaultCode.NOT_FINITE, cl.ACT_CMD, "Act_Setpoint_lower"),
+        (hil.encode("ACT_CMD_L1", {"Act_Seq": 1, "Act_Mode_upper": 1, "Act_Setpoint_upper": math.nan},
+                    strict=False), cl.FaultCode.NOT_FINITE, cl.ACT_CMD_L1, "Act_Setpoint_upper"),
+        (hil.encode("LOAD_CMD", {"Load_Seq": 1, "Load_Index": 1, "Load_Value1": 1.0}),
+         cl.FaultCode.OUT_OF_RANGE, cl.LOAD_CMD, "Load_Index"),     # leg 0 has one force element
+        (hil.encode("LOAD_CMD_L1", {"Load_Seq": 1, "Load_Index": 0, "Load_Value2": math.nan}, strict=False),
+         cl.FaultCode.NOT_FINITE, cl.LOAD_CMD_L1, "Load_Value2"),
+        (hil.encode("ACT_CMD", {"Act_Seq": 2, "Act_Mode_upper": 2, "Act_Setpoint_upper": 0.95}),
+         cl.FaultCode.OUT_OF_RANGE, cl.ACT_CMD, "Act_Setpoint_upper"),  # out of the stroke
+    ]
     classic = hil.encode("ACT_CMD_L1", {"Act_Seq": 2, "Act_Mode_upper": 1, "Act_Setpoint_upper": 1.0})
-    classic.is_fd, classic.data = False, classic.data[:8]
-    classic.dlc = 8
+    classic.is_fd, classic.data, classic.dlc = False, classic.data[:8], 8
+    for msg, code, fid, signal in bad:
+        hil.send_raw(msg)
+        f = hil.wait_fault(code=code)
+        assert (f.frame_id, f.signal) == (fid, signal), str(f)
     hil.send_raw(classic)
     assert hil.wait_fault(code=cl.FaultCode.BAD_LENGTH).frame_id == cl.ACT_CMD_L1
-    hil.command((cl.ActMode.FORCE, 2000.0), None, leg=1)
+    hil.command((cl.ActMode.FORCE, 2000.0), None, leg=1)       # above max_force
     f = hil.wait_fault(code=cl.FaultCode.OUT_OF_RANGE)
     assert f.frame_id == cl.ACT_CMD_L1 and f.signal == "Act_Setpoint_upper"
+    # the heartbeat goes on, counting them, in lockstep
+    hb = hil.heartbeat()
+    assert hb.counter > hb0.counter and hb.state == cl.SimState.LOCKSTEP
+    assert hb.fault_count - hb0.fault_count == len(bad) + 2 and hb.rx_rejected >= len(bad) + 2
     after = hil.step(5)
     # nothing changed: a fresh run of the same 10 steps lands on the same state, bit for bit
     hil.reset(integrator="rk4", hold_length=True, cmd_timeout_ms=0)
@@ -64,13 +56,38 @@ def test_bad_leg1_frames_fault_and_change_nothing(start_hil):
     assert np.array_equal(after.q, clean.q) and np.array_equal(after.qd, clean.qd)
     assert [c.normal for c in after.contacts] == [c.normal for c in clean.contacts]
     assert after.act_seqs == (0, 0) and before.step_count == 5
-    assert cl.Status.FAULT in after.status
+    assert cl.Status.FAULT in after.status and cl.Status.FAULT not in clean.status
 
 
-def test_one_leg_hil_sim_refuses_leg1_commands(start_hil):
+def test_each_foot_has_its_own_events_and_none_is_lost_between_samples(start_hil):
+    """The left foot free at t = 0 (Ctrl_FreeContacts): the robot leans onto it and it touches
+    down. Sampled every step or once over the same 60 steps, the left foot's Ct_Events hold
+    TOUCHDOWN (the union of the per-step events: none lost), the right foot's none."""
+    hil = start_hil("--robot").link
+    s0 = hil.reset(integrator="rk4", hold_length=True, cmd_timeout_ms=0, free_contacts=0b10)
+    assert [c.state for c in s0.contacts] == [cl.ContactState.STUCK, cl.ContactState.FREE]
+    assert [c.events for c in s0.contacts] == [CE(0), CE(0)]
+    per_step = [CE(0), CE(0)]
+    states = []
+    for _ in range(60):
+        s = hil.step(1)
+        states.append(s.contacts[1].state)
+        for k in range(2):
+            per_step[k] |= s.contacts[k].events
+    hil.reset(integrator="rk4", hold_length=True, cmd_timeout_ms=0, free_contacts=0b10)
+    once = hil.step(60)
+    assert [c.events for c in once.contacts] == per_step
+    assert CE.TOUCHDOWN in once.contacts[1].events and once.contacts[0].events == CE(0)
+    assert states[-1] == cl.ContactState.STUCK   # it landed (at the first step) and stays
+
+
+def test_one_leg_hil_sim_refuses_leg1_commands_and_the_feet_options(start_hil):
     hil = start_hil().link
     s = hil.reset()
     assert s.legs == 1 and s.q.shape == (18,) and not s.contacts
     hil.command((cl.ActMode.FORCE, 10.0), None, leg=1)
     f = hil.wait_fault(code=cl.FaultCode.UNKNOWN_ID)
     assert f.frame_id == cl.ACT_CMD_L1
+    with pytest.raises(cl.HilFault) as e:
+        hil.reset(contact_law="paper")
+    assert e.value.fault.code == cl.FaultCode.OUT_OF_RANGE and e.value.fault.signal == "Ctrl_ContactLaw"
