@@ -9,6 +9,14 @@ void trig_clear(TrigCache &t) {
   for (int b = 0; b < kMaxBodies; ++b) t.phi[b] = t.s[b] = t.c[b] = real(NAN);
 }
 
+namespace {
+
+struct BodyPose {
+  Vec2 r, rd;   // centre and its velocity
+  real phi, w;  // angle and angular velocity
+  Vec2 u, n;
+};
+
 BodyPose pose_of(const VecQ &q, const VecQ &qd, int b, TrigCache *trig) {  // one sin/cos pair per body
   BodyPose p;
   p.r = Vec2(q[3 * b], q[3 * b + 1]);
@@ -22,7 +30,6 @@ BodyPose pose_of(const VecQ &q, const VecQ &qd, int b, TrigCache *trig) {  // on
   return p;
 }
 
-namespace {
 // Body-fixed (xi, eta) to a world-axes offset from the centre.
 Vec2 offset(const BodyPose &p, const Vec2 &xi_eta) { return xi_eta.x() * p.u + xi_eta.y() * p.n; }
 
@@ -31,7 +38,6 @@ void set_coef(real (&c)[3], const Vec2 &g, real gphi) {
   c[1] = g.y();
   c[2] = gphi;
 }
-}  // namespace
 
 // Revolute (eqs. (2)-(11)): point on a = point on b (or a frame point).
 // Phi = ra + sa - rb - sb; gamma = wa^2 sa - wb^2 sb.
@@ -89,7 +95,6 @@ void slot_rows(const Joint &j, const BodyPose *pose, int row, Rows &out) {
   out.nu[row] = 0;
 }
 
-namespace {
 // Actuator length driver: (r_rod - r_cyl) . u_cyl + offset - l(t) = 0.
 void actuator_row(const Actuator &ac, const DriverValues &dv, int index, const BodyPose *pose,
                   int row, Rows &out) {

@@ -30,7 +30,9 @@ struct Kernel {
   int mj;                    // joint rows
   const uint8_t *perm;       // joint row -> position in the factor
   const uint8_t *first;      // by position: first column of L's envelope (fill included)
-  // Rows 0 .. mj-1 of Phi, the Jacobian, nu and gamma at (q, qd); sin/cos through trig.
+  // Rows 0 .. mj-1 of Phi, the Jacobian, nu and gamma at (q, qd), with the arithmetic of
+  // the row units of constraints.cpp term by term (the same values to the last bit);
+  // sin/cos through trig.
   void (*rows)(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows, TrigCache *trig);
   // Positions 0 .. mj-1 of J W J^T's lower envelope into a (zeros where it has none).
   void (*assemble)(const Rows &rows, const real *w, real *a);
@@ -46,18 +48,6 @@ struct Kernel {
 
 // The generated kernel for this model's structure, or nullptr (the general path).
 const Kernel *kernel_find(const Model &model);
-
-// The row units of constraints.cpp; the generated rows repeat their arithmetic term by term
-// (the same values to the last bit, tests/core/test_kernels.c).
-struct BodyPose {
-  Vec2 r, rd;   // centre and its velocity
-  real phi, w;  // angle and angular velocity
-  Vec2 u, n;
-};
-BodyPose pose_of(const VecQ &q, const VecQ &qd, int b, TrigCache *trig = nullptr);  // one sin/cos pair
-void revolute_rows(const Joint &j, const BodyPose *pose, int row, Rows &out);
-void prismatic_rows(const Joint &j, const BodyPose *pose, int row, Rows &out);
-void slot_rows(const Joint &j, const BodyPose *pose, int row, Rows &out);
 
 }  // namespace legsim
 
