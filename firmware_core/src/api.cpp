@@ -602,6 +602,14 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
       !bounded_array(accel_mps2, s.model.na, LEGSIM_MAX_ACCEL_MPS2))
     return LEGSIM_ERR_BAD_INPUT;
   real force[kMaxActuators];
+  bool held = false;  // feet on the ground: their rows too (section 8)
+  for (int k = 0; k < s.model.nc; ++k) held = held || s.data.contact[k].state != LEGSIM_CONTACT_FREE;
+  real len[kMaxActuators], rate[kMaxActuators], acc[kMaxActuators];
+  for (int a = 0; a < s.model.na; ++a) {
+    len[a] = length_m[a];
+    rate[a] = rate_mps[a];
+    acc[a] = accel_mps2[a];
+  }
   st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
     if (r == LEGSIM_OK)
@@ -614,25 +622,7 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
     for (int a = 0; a < s.model.na; ++a) actuator_force_n[a] = force[a];
   return st;
 }
-  bool held = false;  // feet on the ground: their rows too (section 8)
-  for (int k = 0; k < s.model.nc; ++k) held = held || s.data.contact[k].state != LEGSIM_CONTACT_FREE;
-  real len[kMaxActuators], rate[kMaxActuators], acc[kMaxActuators];
-  for (int a = 0; a < s.model.na; ++a) {
-    len[a] = length_m[a];
-    rate[a] = rate_mps[a];
-    acc[a] = accel_mps2[a];
-  }
 
-legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
-  CHECK_SIM(sim);
-  Sim &s = *as_sim(sim);
-  if (!s.data.assembled) return LEGSIM_ERR_STATE;
-  real force[kMaxActuators];
-  const legsim_status st = all_or_nothing(s, [&] {
-    legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = statics_solve(s, force);
-    s.data.derivative_valid = s.data.history_valid = false;
-    return r;
 legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow_mask, legsim_real *length_m,
                                                 legsim_real *rate_mps, legsim_real *accel_mps2,
                                                 legsim_real *actuator_force_n) {
@@ -670,6 +660,16 @@ legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow
   return LEGSIM_OK;
 }
 
+legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
+  CHECK_SIM(sim);
+  Sim &s = *as_sim(sim);
+  if (!s.data.assembled) return LEGSIM_ERR_STATE;
+  real force[kMaxActuators];
+  const legsim_status st = all_or_nothing(s, [&] {
+    legsim_status r = stops_clear(s);
+    if (r == LEGSIM_OK) r = statics_solve(s, force);
+    s.data.derivative_valid = s.data.history_valid = false;
+    return r;
   });
   if (st == LEGSIM_OK && actuator_force_n)
     for (int a = 0; a < s.model.na; ++a) actuator_force_n[a] = force[a];

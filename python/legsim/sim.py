@@ -478,19 +478,6 @@ class Sim:
             self._arr(accels, na, "accels"), self._abuf), "legsim_inverse_dynamics")
         return self._np(self._abuf, na)
 
-    def statics(self) -> np.ndarray:
-        """Equilibrium actuator forces (N, n_actuators) in the current q under gravity and
-        the force elements; :meth:`reactions` then holds the joints' reactions and
-        :meth:`contacts` the ground forces of the feet that are not free (held as stuck;
-        two of them by the option ``statics_rule``), with ``holds``."""
-        self._check(self.library.cdll.legsim_statics(self.handle, self._abuf), "legsim_statics")
-        return self._np(self._abuf, self.n_actuators)
-
-    def statics_sweep(self, n_grid: int) -> WorstCase:
-        """Worst-case statics over an n_grid x n_grid grid of the first two actuators'
-        strokes; leaves the sim at the last assembled pose."""
-        w = self.library.WorstCase()
-        self._check(self.library.cdll.legsim_statics_sweep(self.handle, int(n_grid), C.byref(w)),
     def inverse_dynamics_on_ground(self, lengths, rates, accels, follow=()):
         """Inverse dynamics with the stuck feet holding (docs/design/robot-on-ground.md
         section 8): ``follow`` names (or indexes) the actuators that are not driven (on both
@@ -509,6 +496,19 @@ class Sim:
             self.handle, mask, *bufs, self._abuf), "legsim_inverse_dynamics_on_ground")
         return (self._np(self._abuf, na),) + tuple(self._np(b, na) for b in bufs)
 
+    def statics(self) -> np.ndarray:
+        """Equilibrium actuator forces (N, n_actuators) in the current q under gravity and
+        the force elements; :meth:`reactions` then holds the joints' reactions and
+        :meth:`contacts` the ground forces of the feet that are not free (held as stuck;
+        two of them by the option ``statics_rule``), with ``holds``."""
+        self._check(self.library.cdll.legsim_statics(self.handle, self._abuf), "legsim_statics")
+        return self._np(self._abuf, self.n_actuators)
+
+    def statics_sweep(self, n_grid: int) -> WorstCase:
+        """Worst-case statics over an n_grid x n_grid grid of the first two actuators'
+        strokes; leaves the sim at the last assembled pose."""
+        w = self.library.WorstCase()
+        self._check(self.library.cdll.legsim_statics_sweep(self.handle, int(n_grid), C.byref(w)),
                     "legsim_statics_sweep")
         nj, na = self.n_joints, self.n_actuators
         return WorstCase(

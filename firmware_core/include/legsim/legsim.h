@@ -378,6 +378,22 @@ legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *a
 legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length_m,
                                       const legsim_real *rate_mps, const legsim_real *accel_mps2,
                                       legsim_real *actuator_force_n);
+/* With feet on the ground (docs/design/robot-on-ground.md section 8): contacts that are STUCK
+ * hold their feet at their stick points (SLIDING: LEGSIM_ERR_CONTACT). The motion follows
+ * from the joints, the driven lengths and the held feet's normal and tangential rows, which
+ * must fix it (as many rows as coordinates, else LEGSIM_ERR_BAD_INPUT): on the robot on both
+ * feet (3 dof) three lengths drive it and the fourth actuator follows (follow_mask, bit a =
+ * actuator a); its length, rate and acceleration are written back into the arrays (those
+ * given for a follower are not read; out of stroke: LEGSIM_ERR_OUT_OF_STROKE). The forces of
+ * every actuator, the joint reactions and each foot's N and T (legsim_contacts, with holds)
+ * come from every driver row and the held feet; on two held feet they are fixed by
+ * options.statics_rule as in legsim_statics. legsim_inverse_dynamics on a sim with stuck
+ * contacts is this call with follow_mask 0: the lengths must keep both feet where they stick
+ * (drift over 1e-7 m or 1e-7 m/s per m/s of rate: LEGSIM_ERR_UNREACHABLE; accelerations that
+ * do not: LEGSIM_ERR_NO_EQUILIBRIUM). */
+legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow_mask,
+                                                legsim_real *length_m, legsim_real *rate_mps,
+                                                legsim_real *accel_mps2, legsim_real *actuator_force_n);
 
 /* ---- 4. statics ------------------------------------------------------------ */
 /* Equilibrium actuator forces and joint reactions in the current q (qd = 0)
@@ -395,22 +411,6 @@ typedef struct legsim_worst_case {
   legsim_real at_length_m[LEGSIM_MAX_JOINTS][LEGSIM_MAX_ACTUATORS]; /* lengths where each max occurs */
   legsim_real actuator_at_length_m[LEGSIM_MAX_ACTUATORS][LEGSIM_MAX_ACTUATORS];
   int32_t n_poses;     /* poses evaluated */
-/* With feet on the ground (docs/design/robot-on-ground.md section 8): contacts that are STUCK
- * hold their feet at their stick points (SLIDING: LEGSIM_ERR_CONTACT). The motion follows
- * from the joints, the driven lengths and the held feet's normal and tangential rows, which
- * must fix it (as many rows as coordinates, else LEGSIM_ERR_BAD_INPUT): on the robot on both
- * feet (3 dof) three lengths drive it and the fourth actuator follows (follow_mask, bit a =
- * actuator a); its length, rate and acceleration are written back into the arrays (those
- * given for a follower are not read; out of stroke: LEGSIM_ERR_OUT_OF_STROKE). The forces of
- * every actuator, the joint reactions and each foot's N and T (legsim_contacts, with holds)
- * come from every driver row and the held feet; on two held feet they are fixed by
- * options.statics_rule as in legsim_statics. legsim_inverse_dynamics on a sim with stuck
- * contacts is this call with follow_mask 0: the lengths must keep both feet where they stick
- * (drift over 1e-7 m or 1e-7 m/s per m/s of rate: LEGSIM_ERR_UNREACHABLE; accelerations that
- * do not: LEGSIM_ERR_NO_EQUILIBRIUM). */
-legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow_mask,
-                                                legsim_real *length_m, legsim_real *rate_mps,
-                                                legsim_real *accel_mps2, legsim_real *actuator_force_n);
   int32_t n_failed;    /* grid points that could not be assembled (skipped, counted) */
 } legsim_worst_case;
 
