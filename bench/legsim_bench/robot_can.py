@@ -101,7 +101,9 @@ def can_reference(scene, rec: dict, times, root: Path | None = None):
         modes = {m for _, (m, _v) in sent}
         if len(modes) != 1:
             raise ValueError(f"{name}: both force and length commands; the reference holds one mode")
-        stair = Staircase([t for t, _ in sent], [v for _, (_m, v) in sent])
+        # a setpoint sent again unchanged is no breakpoint (the integrator restarts at each)
+        kept = [x for i, x in enumerate(sent) if i == 0 or x[1][1] != sent[i - 1][1][1]]
+        stair = Staircase([t for t, _ in kept], [v for _, (_m, v) in kept])
         cmds.append(ForceCommand(stair) if modes == {"force"} else LengthCommand(stair))
     t = np.round(np.asarray(times, float) / h) * h
     r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
