@@ -49,7 +49,7 @@ def _robot_sample(link, sim, tick, rng, order=None):
         ra = {"RA_Tick": tick, **{n: r[i] for i, n in enumerate(cl.REACTION_SIGNALS[:15])}}
         rb = {"RB_Tick": tick, **{n: r[15 + i] for i, n in enumerate(cl.REACTION_SIGNALS[15:])}}
         ct = {"Ct_Tick": tick, "Ct_State": 1, "Ct_Normal": 150.0 + k, "Ct_Tangential": -20.0 + k,
-              "Ct_X": 0.633 * (1 - 2 * k), "Ct_Events": 0}
+              "Ct_X": 0.633 * (1 - 2 * k), "Ct_Events": 0b100010 * k}   # leg 1: TOUCHDOWN, AMBIGUOUS
         frames += [(f"ST_POS{sfx}", pos), (f"ST_VEL{sfx}", vel), (f"ST_ACT{sfx}", act),
                    (f"ST_REACT_A{sfx}", ra), (f"ST_REACT_B{sfx}", rb), (f"ST_CONTACT{sfx}", ct)]
         statuses.append((f"ST_STATUS{sfx}", {"St_Tick": tick, "St_StepCount": tick, "St_Time": tick * 1e-3,
@@ -74,6 +74,8 @@ def test_a_robot_sample_in_the_cores_order(pair):
     assert [c.state for c in s.contacts] == [cl.ContactState.STUCK] * 2
     assert [c.normal for c in s.contacts] == [150.0, 151.0]
     assert [c.tangential for c in s.contacts] == [-20.0, -19.0]
+    assert [c.events for c in s.contacts] == [cl.ContactEvent(0),
+                                               cl.ContactEvent.TOUCHDOWN | cl.ContactEvent.CONTACT_AMBIGUOUS]
 
 
 def test_a_robot_sample_waits_for_every_legs_status(pair):
