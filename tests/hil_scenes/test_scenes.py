@@ -1,6 +1,8 @@
 """Every scene of scenes/*.toml (and the heavy-shank scene of fixtures/, which names its own
-model file), end to end through the bench: dynamics against hil_sim over SocketCAN, the other
-analyses in legsim_cli (no CAN frames for them), all checked against the reference model.
+model file), end to end through the bench: dynamics against hil_sim over SocketCAN (the leg's,
+and the two-leg robot's on hil_sim --model ROBOT.toml as two CAN nodes, against RobotModel),
+the other analyses in legsim_cli (no CAN frames for them), all checked against the reference
+model.
 
 Needs vcan0 (CAN FD) and a built hil_sim, so it runs inside tools/with-vcan (tools/test.sh):
 
