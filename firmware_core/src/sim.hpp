@@ -6,6 +6,7 @@
 #include <Eigen/Core>
 #include <cstdint>
 
+#include "kernel_trig.hpp"
 #include "legsim/legsim.h"
 
 namespace legsim {
@@ -54,8 +55,7 @@ inline void body_trig(TrigCache *t, int b, real phi, real &s, real &c) {
     c = t->c[b];
     return;
   }
-  s = std::sin(phi);
-  c = std::cos(phi);
+  sincos_reduced(phi, s, c);  // kernel_trig.hpp
   if (t) {
     t->phi[b] = phi;
     t->s[b] = s;
