@@ -171,7 +171,11 @@ void Controller::handle_act(const Request &req, int64_t now_ns) {
 
 void Controller::handle_load(const Request &req) {
   const double v[2] = {req.load.value[0], req.load.value[1]};
-  const int force = req.leg * Session::forces_per_leg(session_.model()) + req.load.index;
+  const legsim_model_desc *m = session_.model();
+  const int box = Session::box_force(m);
+  const int force = req.leg == 0 && box >= 0 && req.load.index >= kBoxLoadIndex
+                        ? box + (req.load.index - kBoxLoadIndex)  // box.load, box.moment
+                        : req.leg * Session::forces_per_leg(m) + req.load.index;
   legsim_status st = session_.set_load(force, v);
   if (st != LEGSIM_OK) return solver_fault(st, &req);
   load_seq_[req.leg] = {true, req.seq};

@@ -20,6 +20,7 @@
 #include "run_loop.h"
 #include "session.h"
 #include "model_toml.hpp"
+#include "scene_toml.hpp"
 #ifdef HIL_SIM_HAS_ROBOT
 #include "legsim/robot_models.h"
 #endif
@@ -184,13 +185,24 @@ int main(int argc, char **argv) {
   // --model: both variants of the file, checked by the loader (and by session.init below
   // against the DBC's leg); they live to the end of main, past every session.
   legsim_model_desc file_models[2];
+  legsim_model_desc robot_desc;  // the robot, with the box's two force elements
+  // The robot's box load (a scene's box_load): legsim_host::box_load_add's two force elements
+  // (box.load, box.moment; zero until leg 0's LOAD_CMD index 2 and 3 set them).
+  auto with_box_load = [](legsim_model_desc &d) {
+    const double zero[3] = {0, 0, 0};
+    std::string why;
+    if (!legsim_host::box_load_add(d, zero, why))
+      std::fprintf(stderr, "hil_sim: warning: no box load over CAN (%s)\n", why.c_str());
+  };
   if (opt.robot && !opt.model_file.empty()) {
     std::fprintf(stderr, "hil_sim: --robot and --model exclude each other (see --help)\n");
     return 2;
   }
   if (opt.robot) {
 #ifdef HIL_SIM_HAS_ROBOT
-    hil::Session::use_robot(&legsim_model_robot_revolute);
+    robot_desc = legsim_model_robot_revolute;
+    with_box_load(robot_desc);
+    hil::Session::use_robot(&robot_desc);
     std::fprintf(stderr, "hil_sim: the compiled-in robot '%s' (2 legs)\n",
                  legsim_model_robot_revolute.name);
 #else
@@ -209,6 +221,7 @@ int main(int argc, char **argv) {
   }
   if (!opt.model_file.empty() && file_models[0].n_contacts > 0) {
     // a robot file: one variant (its legs name theirs)
+    with_box_load(file_models[0]);
     hil::Session::use_robot(&file_models[0]);
     std::fprintf(stderr, "hil_sim: robot model %s (2 legs)\n", opt.model_file.c_str());
   } else if (!opt.model_file.empty()) {

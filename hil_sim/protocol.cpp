@@ -229,8 +229,10 @@ void validate_load(const Request &req, const legsim_model_desc *m, Checker &c) {
   const LoadRequest &r = req.load;
   const LoadChecks &k = kLoadChecks[req.leg];
   c.range(k.index_in_range(static_cast<uint8_t>(r.index)), k.index_bit, r.index);
-  // the leg's own force elements (the robot: n_forces / 2 each)
-  if (m != nullptr) c.model(r.index < Session::forces_per_leg(m), k.index_bit, r.index);
+  // the leg's own force elements (the robot: per leg), or leg 0's box load (index 2, 3)
+  const bool box = m != nullptr && req.leg == 0 && Session::box_force(m) >= 0 &&
+                   (r.index == kBoxLoadIndex || r.index == kBoxLoadIndex + 1);
+  if (m != nullptr) c.model(box || r.index < Session::forces_per_leg(m), k.index_bit, r.index);
   c.real(r.value[0], k.value1_in_range(r.value[0]), k.value1_bit);
   c.real(r.value[1], k.value2_in_range(r.value[1]), k.value2_bit);
 }

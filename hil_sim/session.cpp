@@ -71,14 +71,15 @@ bool check_robot(std::string *error) {
     return false;
   }
   if (m->n_bodies != kMaxBodies || m->n_joints != kMaxJoints || m->n_actuators != kMaxActuators ||
-      m->n_contacts != kMaxContacts || m->n_forces % kMaxLegs != 0 ||
-      m->n_forces / kMaxLegs > 4) {
+      m->n_contacts != kMaxContacts ||
+      (m->n_forces - (Session::box_force(m) >= 0 ? 2 : 0)) % kMaxLegs != 0 ||
+      Session::forces_per_leg(m) > 2) {
     *error = std::string("robot model '") + m->name + "' has " + std::to_string(m->n_bodies) +
              " bodies, " + std::to_string(m->n_joints) + " joints, " +
              std::to_string(m->n_actuators) + " actuators, " + std::to_string(m->n_contacts) +
              " contacts, " + std::to_string(m->n_forces) +
              " force elements; can/legsim.dbc carries a box and two legs: 13, 16, 4, 2 and up "
-             "to 4 per leg";
+             "to 2 per leg (LOAD_CMD index 0-1; 2-3 of leg 0 are the box load)";
     return false;
   }
   for (int k = 0; k < kMaxLegs; ++k) {
@@ -94,6 +95,15 @@ bool check_robot(std::string *error) {
 }  // namespace
 
 void Session::use_robot(const legsim_model_desc *robot) { g_robot = robot; }
+
+int Session::box_force(const legsim_model_desc *m) {
+  const int b = m->n_forces - 2;
+  if (m->n_contacts == 0 || b < 0) return -1;
+  return std::strncmp(m->force[b].name, "box.load", LEGSIM_NAME_LEN) == 0 &&
+                 std::strncmp(m->force[b + 1].name, "box.moment", LEGSIM_NAME_LEN) == 0
+             ? b
+             : -1;
+}
 
 int Session::legs() { return g_robot != nullptr ? 2 : 1; }
 

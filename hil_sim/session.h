@@ -27,6 +27,7 @@ constexpr int kMaxCoords = 3 * kMaxBodies;
 constexpr int kMaxJoints = kMaxLegs * kJoints;
 constexpr int kMaxActuators = kMaxLegs * kActuators;
 constexpr int kMaxContacts = kMaxLegs;
+constexpr int kBoxLoadIndex = 2;  // leg 0's LOAD_CMD: 2 box.load (Fx, Fy), 3 box.moment (M)
 
 enum class SafeMode { kZeroForce, kHoldLength };
 enum class ActMode : uint8_t { kKeep = 0, kForce = 1, kLength = 2 };
@@ -84,8 +85,14 @@ class Session {
   static void use_robot(const legsim_model_desc *robot);
   // Legs on the bus: 1 (the leg), 2 (the robot).
   static int legs();
+  // The robot's box load: the model's force elements box.load (a point force) and
+  // box.moment (a torque), the last two, set by leg 0's LOAD_CMD index kBoxLoadIndex and
+  // kBoxLoadIndex + 1; -1 when the model has none.
+  static int box_force(const legsim_model_desc *m);
   // Force elements per leg (LOAD_CMD of leg k, index i -> force k * per_leg + i).
-  static int forces_per_leg(const legsim_model_desc *m) { return m->n_forces / legs(); }
+  static int forces_per_leg(const legsim_model_desc *m) {
+    return (m->n_forces - (box_force(m) >= 0 ? 2 : 0)) / legs();
+  }
 
   legsim_status reset(const ResetParams &params);
   bool active() const { return sim_ != nullptr; }

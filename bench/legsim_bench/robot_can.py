@@ -79,7 +79,8 @@ def robot_can_arrays(rec: dict) -> dict:
 def can_reference(scene, rec: dict, times, root: Path | None = None):
     """(RobotModel, RobotResult) of what hil_sim was sent, at `times`: the stand assembled at the
     RESET's float32 lengths (the scene's, else the pose's), both feet stuck, each commanded
-    actuator on the staircase of its sent setpoints, the others as `init` says. RobotModel has
+    actuator on the staircase of its sent setpoints, the others as `init` says, the box load
+    as sent (leg 0's LOAD_CMD 2 and 3). RobotModel has
     both feet stuck: a scene with a free foot is refused (ValueError)."""
     from .checks import Staircase
     from .reference import ForceCommand, LengthCommand
@@ -106,9 +107,10 @@ def can_reference(scene, rec: dict, times, root: Path | None = None):
         stair = Staircase([t for t, _ in kept], [v for _, (_m, v) in kept])
         cmds.append(ForceCommand(stair) if modes == {"force"} else LengthCommand(stair))
     t = np.round(np.asarray(times, float) / h) * h
+    box = {x["name"]: x["value"] for x in rec.get("loads", []) if x.get("box")}   # float32, as sent
+    box_load = (*box["box.load"], box["box.moment"][0]) if box else (0.0, 0.0, 0.0)
     r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
-                       gravity="gravity" not in scene.disable,
-                       **({"box_load": tuple(scene.box_load)} if scene.box_load is not None else {}))
+                       gravity="gravity" not in scene.disable, box_load=box_load)
     return model, r
 
 

@@ -173,6 +173,12 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                 seq = link.set_load(i % per_leg, fx, fy, leg=i // per_leg)
                 rec["loads"].append({"step": 0, "t": 0.0, "index": i, "name": name, "value": [fx, fy],
                                      "seq": seq})
+        if scene.robot and scene.box_load is not None:   # leg 0's LOAD_CMD 2: box.load, 3: box.moment
+            fx, fy, mz = (f32(v) for v in scene.box_load)
+            for index, name, value in ((2, "box.load", [fx, fy]), (3, "box.moment", [mz, 0.0])):
+                seq = link.set_load(index, *value, leg=0)
+                rec["loads"].append({"step": 0, "t": 0.0, "index": index, "name": name, "value": value,
+                                     "seq": seq, "box": True})
 
         bounds = scene.boundaries()
         inj_at: dict[int, list] = {}

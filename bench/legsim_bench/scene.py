@@ -373,10 +373,8 @@ class Scene:
     @property
     def can_refusal(self) -> str | None:
         """Why this dynamics scene cannot run over CAN (a key no frame of can/legsim.dbc
-        carries), or None."""
-        if self.robot and self.box_load is not None:
-            return ("'box_load' has no frame to hil_sim (the robot's box has no force element "
-                    "on the bus): run in legsim_cli")
+        carries), or None. None for every key today: a robot's contact_law and free feet go
+        in the RESET, box_load in leg 0's LOAD_CMD (index 2, 3)."""
         return None
 
     def hil_args(self) -> list[str]:

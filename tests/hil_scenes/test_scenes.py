@@ -152,3 +152,15 @@ def test_a_scene_with_its_own_model_file_runs_on_hil_sim_and_differs_from_the_st
     xy = np.delete(np.arange(18), np.s_[2::3])
     # then another motion: at the end 100x the position tolerance apart (legsim_cli: 2.0 mm in x)
     assert np.max(np.abs(qh[-1, xy] - qs[-1, xy])) > 100 * 1e-5
+
+
+def test_a_robot_scene_with_a_box_load_runs_over_can_against_robot_model(hil, out_dir):
+    """fixtures/robot_box_load.toml: box_load goes to hil_sim in leg 0's LOAD_CMD (index 2
+    box.load, 3 box.moment) and RobotModel replays the float32 load: the run passes its checks
+    (1e-9 m + float32) and the box moves as pushed (forward and down, far beyond them)."""
+    import numpy as np
+
+    rec = _run(FIXTURES / "robot_box_load.toml", hil, out_dir)
+    assert [x["name"] for x in rec["loads"] if x.get("box")] == ["box.load", "box.moment"]
+    q = np.array([s["q"] for s in rec["samples"]])
+    assert q[-1, 0] - q[0, 0] > 1e-4 and q[-1, 1] - q[0, 1] < -1e-5
