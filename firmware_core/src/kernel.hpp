@@ -38,8 +38,8 @@ struct Kernel {
   void (*assemble)(const Rows &rows, const real *w, real *a);
   // Cholesky of that block in place; false on a pivot <= floor. pmin/pmax: pivot range.
   bool (*cholesky)(real *a, real floor, real &pmin, real &pmax);
-  // L y = y and L^T y = y on positions 0 .. mj-1.
-  void (*forward)(const real *a, real *y);
+  // L y = y (from position `from` on, y zero before it) and L^T y = y on positions 0 .. mj-1.
+  void (*forward)(const real *a, real *y, int from);
   void (*backward)(const real *a, real *y);
   // y[i] = (J x)_i for the joint rows; y = J_joint^T x (all nq values written).
   void (*j_times)(const Rows &rows, const real *x, real *y);

@@ -64,7 +64,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
       // its columns in the kernel's block: L11 l = a by the kernel's sparse forward solve
       // (the same products in the same order as the loop below, less the zero ones)
       for (int j = 0; j < fi; ++j) ai[j] = 0;
-      kern->forward(f.a.data(), ai);
+      kern->forward(f.a.data(), ai, fi);
       j0 = mk;
     }
     for (int j = j0; j < i; ++j) {
@@ -93,7 +93,7 @@ namespace {
 // L L^T y = y in the factor's own (permuted) order.
 void solve_in_place(const Factor &f, real *y) {
   const int m = f.m, mk = f.kernel ? f.kernel->mj : 0;
-  if (mk) f.kernel->forward(f.a.data(), y);
+  if (mk) f.kernel->forward(f.a.data(), y, 0);
   for (int i = mk; i < m; ++i) {
     const real *ai = &f.a(i, 0);
     real s = y[i];
