@@ -5,8 +5,8 @@
 
 For each distinct structure among the files' variants (joint kinds and the bodies they
 join), writes straight-line C++ for the joint rows of the constraint system:
-  rows       Phi, the Jacobian, nu and gamma (the row units of constraints.cpp, one
-             sin/cos pair per body, no dispatch);
+  rows       Phi, the Jacobian, nu and gamma (the row units of constraints.cpp written
+             out term by term, one sin/cos pair per body, no dispatch);
   assemble   the lower envelope of J W J^T, products with the Jacobian's constant
              entries (the revolute rows' 1 and 0, the prismatic angle row) folded away;
   cholesky   L L^T in the general path's order (reverse Cuthill-McKee) with its fill
@@ -29,8 +29,6 @@ import model_codegen  # noqa: E402
 
 KIND = {"revolute_to_frame": 0, "revolute": 1, "prismatic": 2, "slot": 3}
 NROWS = {"revolute_to_frame": 2, "revolute": 2, "prismatic": 2, "slot": 1}
-ROW_UNIT = {"revolute_to_frame": "revolute_rows", "revolute": "revolute_rows",
-            "prismatic": "prismatic_rows", "slot": "slot_rows"}
 V = None  # a Jacobian entry known only at run time (rows.coef)
 
 
