@@ -395,12 +395,6 @@ legsim_status statics_solve(Sim &sim, real *actuator_force);
 legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out);
 legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *rate,
                                      const real *accel, real *actuator_force);
-
-// ---- helpers ----
-inline bool finite(real x) { return std::isfinite(x); }
-bool all_finite(const VecQ &v, int n);
-void raise_event(Data &d, uint32_t ev);
-
 // With feet on the ground (held contacts) or followers: the actuators in follow are not
 // driven, their length, rate and acceleration follow and are written back (section 8).
 legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *length, real *rate,
@@ -411,4 +405,10 @@ legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *len
 legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, real *tangential);
 // Reactions, actuator forces (F = -lambda_driver) and contact forces from that solve.
 legsim_status driven_outputs(Sim &sim, const real *normal, const real *tangential, real *actuator_force);
+
+// ---- helpers ----
+inline bool finite(real x) { return std::isfinite(x); }
+bool all_finite(const VecQ &v, int n);
+void raise_event(Data &d, uint32_t ev);
+
 }  // namespace legsim
