@@ -11,6 +11,30 @@
 namespace legsim {
 
 #if LEGSIM_WITH_GENERALIZED_ALPHA
+namespace {
+// The per-coordinate updates over distinct arrays: __restrict tells the compiler so, and
+// the loops vectorize (the same arithmetic per element, so the same values).
+#define R_ real *__restrict
+// r = M qdd + r - Q (r holds J^T lambda); t = M^-1 r
+void residual(int n, const R_ mass, const R_ minv, const R_ qdd1, const R_ force, R_ res, R_ tmp) {
+  for (int k = 0; k < n; ++k) {
+    res[k] += mass[k] * qdd1[k] - force[k];
+    tmp[k] = minv[k] * res[k];
+  }
+}
+// the Newton correction dq = -(M^-1 / beta') (r + J^T dlambda) applied to q1, v1, qdd1
+void correct(int n, real bprime, real gprime, const R_ minv, const R_ res, const R_ tmp, R_ q1, R_ v1,
+             R_ qdd1, R_ dq) {
+  for (int k = 0; k < n; ++k) {
+    dq[k] = -minv[k] * (res[k] + tmp[k]) / bprime;
+    q1[k] += dq[k];
+    v1[k] += gprime * dq[k];
+    qdd1[k] += bprime * dq[k];
+  }
+}
+#undef R_
+}  // namespace
+
 legsim_status generalized_alpha_step(Sim &sim) {
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -44,10 +68,9 @@ legsim_status generalized_alpha_step(Sim &sim) {
     // r = M qdd + J^T lambda - Q
     jt_times(m, lay, d.rows, lambda, res);
     if (lay.nslide) friction_add(sim, lay, q1, lambda, -1, res);  // sliding feet's friction
-    for (int k = 0; k < n; ++k) res[k] += m.mass[k] * qdd1[k] - d.force_q[k];
     // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
     VecQ tmp;
-    for (int k = 0; k < n; ++k) tmp[k] = m.minv[k] * res[k];
+    residual(n, m.mass, m.minv, qdd1.data(), d.force_q.data(), res.data(), tmp.data());
     j_times(lay, d.rows, tmp, d.rhs);
     for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
     if (lay.nslide) {
@@ -58,13 +81,12 @@ legsim_status generalized_alpha_step(Sim &sim) {
     }
     jt_times(m, lay, d.rows, d.rhs, tmp);
     if (lay.nslide) friction_add(sim, lay, q1, d.rhs, -1, tmp);
+    VecQ dq;
+    correct(n, bprime, gprime, m.minv, res.data(), tmp.data(), q1.data(), v1.data(), qdd1.data(),
+            dq.data());
     real dq_max = 0;
     for (int k = 0; k < n; ++k) {
-      const real dq = -m.minv[k] * (res[k] + tmp[k]) / bprime;
-      q1[k] += dq;
-      v1[k] += gprime * dq;
-      qdd1[k] += bprime * dq;
-      const real a = std::abs(dq);
+      const real a = std::abs(dq[k]);
       dq_max = a > dq_max ? a : dq_max;
     }
     for (int i = 0; i < lay.m; ++i) lambda[i] += d.rhs[i];
