@@ -2,9 +2,10 @@
 # The main job, from a fresh Debian machine: installs what is missing
 # (tools/setup.sh), builds the host preset, then the bench brings up vcan0 (here,
 # or in a throwaway VM when the kernel has no CAN), starts hil_sim, drives the
-# demo scene over SocketCAN, checks it against its own model and prints the
-# check table and where the plots are. Extra arguments go to `legsim-bench demo`
-# (e.g. --all for every shipped scene).
+# leg's demo scene and the robot's Fig. 7 over SocketCAN, checks them against the
+# bench's own models and prints the check tables and where the plots (and the
+# robot's GIF) are. Extra arguments go to `legsim-bench demo` (e.g. --all for every
+# shipped scene).
 # Logs of the set-up and the build: out/logs/ (a failing stage prints its tail).
 set -euo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)

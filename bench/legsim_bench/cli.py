@@ -221,20 +221,27 @@ def _check_one(rec: dict, out_dir: Path, args, root: Path):
         from .plots import write_plots
         files.update(write_plots(ev, out_dir))
         out = rec.get("cli_output") or {}
-        if out.get("contacts") and rec.get("complete"):  # the robot: stick figures and the animation
-            files.update(_robot_plots(out, ev.scene, out_dir))
+        if rec.get("complete") and (out.get("contacts") or rec.get("legs", 1) > 1):
+            files.update(_robot_plots(rec, ev.scene, out_dir))  # the robot: stick figures, animation
     print(format_table(ev, details=not args.brief))
     print(f"  files: {out_dir}/ ({', '.join(sorted(p.name for p in files.values()))})")
     return ev, files
 
 
-def _robot_plots(out: dict, scene, out_dir: Path) -> dict[str, Path]:
+def _robot_plots(rec: dict, scene, out_dir: Path) -> dict[str, Path]:
+    """A robot scene's stick figures and GIF, from legsim_cli's output or a CAN recording."""
     import tomllib
 
     from .robot_plots import RobotTrajectory, plot_snapshots, plot_time_series, write_robot_animation
 
-    box = tomllib.loads(Path(scene.model_path).read_text())["box"]
-    traj = RobotTrajectory.from_cli_json(out, tuple(box["size"]), title=scene.name)
+    box = tuple(tomllib.loads(Path(scene.model_path).read_text())["box"]["size"])
+    if rec.get("cli_output"):
+        traj = RobotTrajectory.from_cli_json(rec["cli_output"], box, title=scene.name)
+    else:
+        import legsim
+
+        traj = RobotTrajectory.from_recording(rec, legsim.Model.from_toml(scene.model_path), box,
+                                              title=scene.name)
     span = float(traj.t[-1] - traj.t[0])
     return {"snapshots": plot_snapshots(traj, out_dir / "robot_snapshots.png")[0],
             "time_series": plot_time_series(traj, out_dir / "robot_time_series.png"),
@@ -330,7 +337,8 @@ def cmd_demo(args) -> int:
     if not hil.is_file():
         raise SetupError(f"hil_sim not found at {hil}: run with --build (or build it: cmake --preset "
                          "host && cmake --build --preset host --target hil_sim)")
-    scenes = ["all"] if args.all else (args.scenes or ["demo"])
+    # the default: the leg's demo scene and the robot's Fig. 7, both over CAN in one VM run
+    scenes = ["all"] if args.all else (args.scenes or ["demo", "robot_fig7"])
     names = [s.name for s in _load_scenes(scenes, root)]
     out_base = _out_base(args, root)
     env = dict(os.environ)
@@ -354,14 +362,6 @@ def cmd_demo(args) -> int:
     args.recordings = [str(p) for p in paths]
     args.out = None
     rc = cmd_check(args)
-    if not args.all and not args.scenes:
-        # the robot on the ground: its scenes run in legsim_cli (not over CAN yet), on this host
-        robot = _load_scenes(["robot_fig7"], root)
-        print(f"\nrecording {robot[0].name} in legsim_cli (the two-leg robot; not over CAN yet)", flush=True)
-        recs = _record_all(args, root, robot, out_base)
-        names += [sc.name for sc, _, _ in recs]
-        args.recordings = [str(p) for _, p, _ in recs]
-        rc = max(rc, cmd_check(args))
     print("\nplots and data:")
     for n in names:
         pngs = sorted([*(out_base / n).glob("*.png"), *(out_base / n).glob("*.gif")])
@@ -453,7 +453,7 @@ def build_parser() -> argparse.ArgumentParser:
 
     s = sub.add_parser("demo", help="build, bring up vcan0 (here or in the VM), start hil_sim, run "
                        "the demo scene, check it, print the table and where the plots are")
-    s.add_argument("scenes", nargs="*", metavar="SCENE", help="scenes (default: the demo scene)")
+    s.add_argument("scenes", nargs="*", metavar="SCENE", help="scenes (default: the demo scene and robot_fig7)")
     s.add_argument("--all", action="store_true", help="every shipped scene (one VM boot)")
     s.add_argument("--build", action="store_true", help="configure and build first (cmake --preset, "
                    "cmake --build --preset)")

@@ -165,6 +165,26 @@ class RobotTrajectory:
                    mu_static=g.mu_static, mu_kinetic=g.mu_kinetic, box=0, title=title)
 
     @classmethod
+    def from_recording(cls, rec: dict, model, box_size, title: str = "") -> "RobotTrajectory":
+        """From a robot scene recorded over CAN (the bench's recording: per sample the flat
+        q of every body and per foot its ST_CONTACT state, N, T and x, y). ``model``: the
+        scene's ``legsim.Model`` (body names and lengths, feet, ground); ``box_size`` (w, h) m
+        as for from_cli_json."""
+        feet, g, nb = model.contact_names, model.ground, len(model.body_names)
+        S = [s for s in rec["samples"] if len(s.get("contacts") or []) == len(feet) and
+             all(c["normal"] is not None and c["tangential"] is not None for c in s["contacts"])]
+        if not S:
+            raise ValueError("recording: no sample with every foot's ST_CONTACT (a robot scene?)")
+        per = lambda key: [[c[key] for c in s["contacts"]] for s in S]  # noqa: E731
+        return cls(t=[s["t"] for s in S], body_names=model.body_names,
+                   q=np.array([s["q"] for s in S], float).reshape(len(S), nb, 3),
+                   body_lengths=model.lengths, box_size=box_size, foot_names=feet,
+                   feet=np.stack([np.array(per("x"), float), np.array(per("y"), float)], axis=-1),
+                   contact=np.array(per("state")), normal=per("normal"), tangential=per("tangential"),
+                   ground_point=g["point"], ground_slope=g["slope"], mu_static=g["mu_static"],
+                   mu_kinetic=g["mu_kinetic"], box=0, title=title)
+
+    @classmethod
     def from_cli_json(cls, out: dict, box_size, title: str = "") -> "RobotTrajectory":
         """From legsim_cli's JSON output of a robot scene (its "contacts", "ground" and
         "body_lengths"; scenes/README.md). ``box_size`` (w, h) m: the robot file's [box] size

@@ -49,6 +49,31 @@ def tilted(traj, box_phi=0.7, slope=0.3):
 
 
 # ------------------------------------------------------------ the trajectory
+def test_a_can_recording_draws_as_the_run_it_carries(robot, run, traj):
+    """from_recording (a robot scene over CAN: flat q, per-foot ST_CONTACT dicts) gives the
+    trajectory of the run it carries, with the names, lengths and ground of the model file
+    as the core loads it (legsim.Model), which here must equal the reference's."""
+    import legsim
+    from model_files import ROBOT
+
+    samples = [{"t": float(t), "q": list(map(float, q)),
+                "contacts": [{"state": "stuck", "normal": float(N), "tangential": float(T),
+                              "x": float(p[0]), "y": float(p[1])}
+                             for N, T, p in zip(nk, tk, run.feet)]}
+               for t, q, nk, tk in zip(run.t, run.q, run.normal, run.tangential)]
+    rec = {"legs": 2, "complete": True, "samples": samples}
+    got = rp.RobotTrajectory.from_recording(rec, legsim.Model.from_toml(ROBOT), robot.box_size, "can")
+    assert got.body_names == traj.body_names and got.foot_names == traj.foot_names
+    assert np.array_equal(got.q, traj.q) and np.array_equal(got.t, traj.t)
+    legs = [b for b in range(len(got.body_names)) if b != got.box]  # the box is drawn by its size
+    assert np.allclose(got.body_lengths[legs], traj.body_lengths[legs], rtol=0, atol=1e-15)
+    assert np.array_equal(got.feet, traj.feet) and np.array_equal(got.normal, traj.normal)
+    assert (got.contact == rp.STUCK).all() and got.ground_slope == traj.ground_slope
+    with pytest.raises(ValueError, match="ST_CONTACT"):
+        rp.RobotTrajectory.from_recording(dict(rec, samples=[dict(samples[0], contacts=[])]),
+                                          legsim.Model.from_toml(ROBOT), robot.box_size)
+
+
 def test_from_reference_round_trips_shapes_and_names(robot, run, traj):
     N = len(run.t)
     assert traj.body_names == robot.body_names and len(traj.body_names) == 13
