@@ -323,6 +323,10 @@ def _sh(cmd: list[str], cwd: Path, env=None) -> int:
     return subprocess.call(cmd, cwd=cwd, env=env)
 
 
+# The demo's default: the leg's demo scene and the robot's Fig. 7, both over CAN in one VM run.
+DEMO_SCENES = ("demo", "robot_fig7")
+
+
 def cmd_demo(args) -> int:
     from .runner import hil_sim_path
 
@@ -337,8 +341,7 @@ def cmd_demo(args) -> int:
     if not hil.is_file():
         raise SetupError(f"hil_sim not found at {hil}: run with --build (or build it: cmake --preset "
                          "host && cmake --build --preset host --target hil_sim)")
-    # the default: the leg's demo scene and the robot's Fig. 7, both over CAN in one VM run
-    scenes = ["all"] if args.all else (args.scenes or ["demo", "robot_fig7"])
+    scenes = ["all"] if args.all else (args.scenes or list(DEMO_SCENES))
     names = [s.name for s in _load_scenes(scenes, root)]
     out_base = _out_base(args, root)
     env = dict(os.environ)

@@ -176,3 +176,13 @@ def test_record_imports_no_scipy_nor_matplotlib():
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                        env={"PYTHONPATH": str(ROOT / "bench"), "PATH": "/usr/bin:/bin"})
     assert r.returncode == 0, r.stdout + r.stderr
+
+
+def test_the_demo_s_scenes_all_run_over_can():
+    """The demo records its scenes in one run on the bus (tools/with-vcan) and checks the
+    recordings: a scene it could only run in legsim_cli would have no recording."""
+    from legsim_bench import cli
+
+    scenes = cli._load_scenes(list(cli.DEMO_SCENES), ROOT)
+    assert [sc.name for sc in scenes] == ["upper_step_50N", "robot_fig7"]
+    assert all(sc.over_can for sc in scenes)
