@@ -1,7 +1,8 @@
-/* The robot report: what the Cortex-M7 two-leg image (robot_main.c, preset
- * cortex-m7-robot) and its host twin (tests/mcu/robot_report_host.c) run, through the
- * C API only: the compiled-in models/robot.toml in caller storage, its stand put on
- * the ground (legsim_assemble_pose "stand", then legsim_assemble_on_ground), printed,
+/* The robot report: what the Cortex-M7 two-leg image (main.c, preset
+ * cortex-m7-robot) and its host twin (tests/mcu/report_host.c) run, the shared report
+ * (report.h) with the robot's hooks, through the C API only: the compiled-in
+ * models/robot.toml in caller storage, its stand put on the ground (legsim_assemble_pose
+ * "stand", then legsim_assemble_on_ground), printed,
  * then ROBOT_REPORT_STEPS steps of each integrator from it with both feet stuck: the
  * Fig. 7 Scene A commands (right upper actuator at its hold force + 50 N = 185.55 N,
  * the other three held by their servos at the stand lengths), printing q, the feet's
@@ -19,13 +20,11 @@
  *   step <integrator> contact <name> <state> <N> <T> <x> <y>
  *   step <integrator> insns_per_step mean <n> min <n> max <n>
  *   done status <s>
- * "insns" as in leg_report.h (QEMU -icount shift=0; 0 without a timer). */
+ * "insns" as in report.h (QEMU -icount shift=0; 0 without a timer). */
 #ifndef LEGSIM_MCU_ROBOT_REPORT_H
 #define LEGSIM_MCU_ROBOT_REPORT_H
 
-#include <stddef.h>
-
-#include "leg_report.h" /* leg_report_platform */
+#include "report.h"
 
 #ifdef __cplusplus
 extern "C" {
@@ -33,9 +32,8 @@ extern "C" {
 
 #define ROBOT_REPORT_STEPS 50
 
-/* Returns 0 (all calls LEGSIM_OK), 1 (a legsim call failed) or 2 (storage too
- * small for legsim_sim_size()). */
-int robot_report_run(void *storage, size_t storage_bytes, const leg_report_platform *pf);
+/* report_run(storage, bytes, platform, &robot_report) */
+extern const report_model robot_report;
 
 #ifdef __cplusplus
 }
