@@ -27,7 +27,7 @@ import numpy as np
 from .scene import ACTUATORS, Scene, find_root
 
 __all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
-           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_inverse_reference", "robot_slip_starts", "robot_slip_onset",
+           "robot_arrays", "robot_growth", "robot_statics_reference", "robot_inverse_reference", "robot_slip_starts", "robot_table2", "robot_slip_onset",
            "EVENT_NAMES",
            "CONTACT_EVENTS"]
 
@@ -475,22 +475,25 @@ def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_
     return ev
 
 
-def robot_slip_starts(d: dict, k: int) -> list[float]:
+def robot_slip_starts(d: dict, k: int, per_foot: bool = False) -> list[float]:
     """The times of the samples at which contact k went from stuck to sliding with the
-    core's stick_to_slip event among the sample's events (robot_arrays' d)."""
+    core's stick_to_slip event among the sample's events (robot_arrays' d) or, per_foot,
+    among contact k's own events (robot_can_arrays' foot_events, Ct_Events over CAN)."""
     st = d["state"][:, k]
+    events = (lambda i: d["foot_events"][i][k]) if per_foot else (lambda i: d["events"][i])
     return [float(d["t"][i]) for i in range(1, len(st))
-            if st[i - 1] == "stuck" and st[i] == "sliding" and "stick_to_slip" in d["events"][i]]
+            if st[i - 1] == "stuck" and st[i] == "sliding" and "stick_to_slip" in events(i)]
 
 
-def _robot_slip_checks(ev, slips, d: dict, feet):
-    """[checks] slips: each listed foot goes from stuck to sliding with STICK_TO_SLIP; the
-    others stay stuck throughout."""
+def _robot_slip_checks(ev, slips, d: dict, feet, per_foot: bool = False):
+    """[checks] slips: each listed foot goes from stuck to sliding with STICK_TO_SLIP (per_foot:
+    its own, as in robot_slip_starts); the others stay stuck throughout."""
     from .checks import CheckResult
+    its = "its " if per_foot else ""
     for k, f in enumerate(feet):
         if f in slips:
-            starts = robot_slip_starts(d, k)
-            ev.results.append(CheckResult(f"{f} slips: stuck to sliding with stick_to_slip", bool(starts),
+            starts = robot_slip_starts(d, k, per_foot)
+            ev.results.append(CheckResult(f"{f} slips: stuck to sliding with {its}stick_to_slip", bool(starts),
                                           float(len(starts)), None, "times", "",
                                           f"at t = {', '.join(f'{x:g}' for x in starts) or 'never'} s; "
                                           f"state at the end {d['state'][-1, k]}"))
@@ -505,6 +508,17 @@ def _robot_slip_checks(ev, slips, d: dict, feet):
 _CHANGE_EVENTS = {("stuck", "sliding"): "stick_to_slip", ("sliding", "stuck"): "slip_to_stick",
                   ("stuck", "free"): "liftoff", ("sliding", "free"): "liftoff",
                   ("free", "stuck"): "touchdown", ("free", "sliding"): "touchdown"}
+
+
+def robot_table2(d: dict) -> str:
+    """Table II of the paper from a robot run's arrays (robot_arrays' or robot_can_arrays' d):
+    the right leg's phi3 (thigh) and phi6 (shank) at the end, and the box's travel."""
+    q, t = d["q"], d["t"]
+    k3, k6 = 3 * 3 + 2, 3 * 6 + 2
+    return (f"at t = {t[-1]:g} s right phi3 = {q[-1, k3]:.5f} rad ({math.degrees(q[-1, k3]):.3f} deg), "
+            f"phi6 = {q[-1, k6]:.5f} rad ({math.degrees(q[-1, k6]):.3f} deg); box "
+            f"({1e3 * (q[-1, 0] - q[0, 0]):+.2f}, {1e3 * (q[-1, 1] - q[0, 1]):+.2f}) mm, "
+            f"{q[-1, 2] - q[0, 2]:+.5f} rad")
 
 
 def _robot_sequence_check(ev, d: dict, feet):
@@ -709,13 +723,7 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     except ValueError as e:
         results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
         return ev
-    # Table II of the paper: the right leg's phi3 (thigh) and phi6 (shank) at the end
-    k3, k6 = 3 * 3 + 2, 3 * 6 + 2
-    table2 = (f"at t = {t[-1]:g} s right phi3 = {d['q'][-1, k3]:.5f} rad ({math.degrees(d['q'][-1, k3]):.3f} deg), "
-              f"phi6 = {d['q'][-1, k6]:.5f} rad ({math.degrees(d['q'][-1, k6]):.3f} deg); box "
-              f"({1e3 * (d['q'][-1, 0] - d['q'][0, 0]):+.2f}, {1e3 * (d['q'][-1, 1] - d['q'][0, 1]):+.2f}) mm, "
-              f"{d['q'][-1, 2] - d['q'][0, 2]:+.5f} rad")
-    pose_checks(r.q, table2)
+    pose_checks(r.q, robot_table2(d))
     # Forces where the core has solved them: not the first sample (the first step solves
     # them), nor a sample at a command's breakpoint (it holds the forces of the step that
     # ended there, under the command before; the reference's are the new command's).

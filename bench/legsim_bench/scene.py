@@ -586,6 +586,14 @@ def _unknown(where, d: dict, allowed) -> None:
         raise SceneError(f"{where}: unknown key(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})")
 
 
+def _contact_list(where: str, d: dict, key: str, info) -> list:
+    """d[key]: a list of the model's contacts (info.contacts), else a SceneError naming them."""
+    feet = d[key]
+    if not isinstance(feet, list) or not all(isinstance(x, str) and x in info.contacts for x in feet):
+        raise SceneError(f"{where}: '{key}' must be a list of the model's contacts ({', '.join(info.contacts)})")
+    return feet
+
+
 def _fmt(x: float) -> str:
     """Shortest round-trip form, as legsim_cli writes numbers (std::to_chars)."""
     r = repr(float(x))
@@ -753,10 +761,7 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
     if "slips" in ch:
         # the feet that must slip (stick_to_slip): RobotModel's stance on stuck feet is then
         # no reference, and the checks against it do not apply
-        slips = ch["slips"]
-        if not isinstance(slips, list) or not all(isinstance(x, str) and x in info.contacts for x in slips):
-            raise SceneError(f"{where} [checks]: 'slips' must be a list of the model's contacts "
-                             f"({', '.join(info.contacts)})")
+        slips = _contact_list(f"{where} [checks]", ch, "slips", info)
         # with slip_onset_steps the stance is compared up to the first slip, where it still holds
         before = ("position_m", "angle_rad", "ground_force_n") if "slip_onset_steps" in ch else ()
         against = sorted(k for k in ch if k not in ("slips", "residual", "slip_onset_steps") + before)
@@ -770,10 +775,7 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
     if "lifts" in ch:
         # the feet that must lift off and touch down again (stuck): RobotModel's stance on
         # both stuck feet is the reference until the first lift-off only
-        lifts = ch["lifts"]
-        if not isinstance(lifts, list) or not all(isinstance(x, str) and x in info.contacts for x in lifts):
-            raise SceneError(f"{where} [checks]: 'lifts' must be a list of the model's contacts "
-                             f"({', '.join(info.contacts)})")
+        lifts = _contact_list(f"{where} [checks]", ch, "lifts", info)
         against = sorted(k for k in ch if k not in ("lifts", "residual", "position_m", "angle_rad"))
         if against or slips:
             raise SceneError(f"{where} [checks]: {', '.join(against or ['slips'])} compare with RobotModel's "
