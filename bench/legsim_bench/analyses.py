@@ -665,6 +665,37 @@ def _robot_lift_checks(ev, scene: Scene, d: dict, feet, bodies, mu_s: float, roo
     return ev
 
 
+def _robot_stance_checks(ev, model, r, d: dict, solved, acts, feet, joints, bodies, tol_check,
+                         ground_tag: str = ""):
+    """A dynamics run on stuck feet against RobotModel's stance r (of model): actuator, ground
+    (name + ground_tag) and joint reaction forces at the samples where solved, then
+    [checks] stays_put_m and growth_rel; tol_check as evaluate_robot's or robot_can's."""
+    ch, t = ev.scene.checks, d["t"]
+    tt = t[solved]
+    tol_check("actuator forces vs RobotModel", "actuator_force_n", (d["forces"] - r.actuator_forces)[solved], "N",
+              lambda r_, c: f"t={tt[r_]:.4f}s {acts[c]}")
+    ground = np.concatenate([d["normal"] - r.normal, d["tangential"] - r.tangential], axis=1)[solved]
+    tol_check(f"ground forces N, T per foot{ground_tag} vs RobotModel", "ground_force_n", ground, "N",
+              lambda r_, c: f"t={tt[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
+              f"at t = {t[-1]:g} s N {', '.join(f'{x:.2f}' for x in d['normal'][-1])}, "
+              f"T {', '.join(f'{x:+.2f}' for x in d['tangential'][-1])} N")
+    if ch.reaction_n is not None:
+        dr = (d["reactions"] - r.reactions)[solved]
+        tol_check("joint reaction forces vs RobotModel", "reaction_n", dr[..., 0:2].reshape(len(tt), -1), "N",
+                  lambda r_, c: f"t={tt[r_]:.4f}s {joints[c // 2]}.f{'xy'[c % 2]}")
+    if ch.stays_put_m is not None:
+        disp = d["q"] - d["q"][0]
+        tol_check("stays put: largest displacement from the first sample", "stays_put_m",
+                  np.delete(disp, np.s_[2::3], axis=1), "m", lambda r_, c: f"t={t[r_]:.4f}s {bodies[c // 2]}")
+    if ch.growth_rel is not None:
+        g = robot_growth(model, d)
+        rel = np.array([(m_ - p_) / p_ for m_, p_ in zip(g["measured"], g["predicted"])])
+        tol_check("growth rates of the drift vs RobotModel's linearized modes", "growth_rel", rel[None], "",
+                  lambda r_, c: ("sway", "heave")[c],
+                  f"sway {g['measured'][0]:.4f} /s (predicted {g['predicted'][0]:.4f}), heave "
+                  f"{g['measured'][1]:.4f} /s (predicted {g['predicted'][1]:.4f})")
+
+
 def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     """The checks of a robot scene run in legsim_cli against RobotModel (an Evaluation)."""
     from .checks import CheckResult, Evaluation
@@ -730,30 +761,8 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     bps = {round(b * 1e9) for c in scene.commands if c is not None for b in c.schedule.breakpoints}
     solved = np.array([s["reactions"] is not None and round(s["t"] * 1e9) not in bps for s in out["samples"]])
     solved[0] = False
-    tol_check("actuator forces vs RobotModel", "actuator_force_n", (d["forces"] - r.actuator_forces)[solved], "N",
-              lambda r_, c: f"t={t[solved][r_]:.4f}s {acts[c]}")
-    ground = np.concatenate([d["normal"] - r.normal, d["tangential"] - r.tangential], axis=1)[solved]
-    tt = t[solved]
-    tol_check("ground forces N, T per foot vs RobotModel", "ground_force_n", ground, "N",
-              lambda r_, c: f"t={tt[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
-              f"at t = {t[-1]:g} s N {', '.join(f'{x:.2f}' for x in d['normal'][-1])}, "
-              f"T {', '.join(f'{x:+.2f}' for x in d['tangential'][-1])} N")
+    _robot_stance_checks(ev, model, r, d, solved, acts, feet, joints, bodies, tol_check)
     stuck = bool(np.all(d["state"] == "stuck"))
     results.append(CheckResult("contact states: both feet stuck throughout (RobotModel's stance)", stuck,
                                None, None, "", "", f"states at the end: {', '.join(d['state'][-1])}"))
-    if ch.reaction_n is not None:
-        dr = (d["reactions"] - r.reactions)[solved]
-        tol_check("joint reaction forces vs RobotModel", "reaction_n", dr[..., 0:2].reshape(len(tt), -1), "N",
-                  lambda r_, c: f"t={tt[r_]:.4f}s {joints[c // 2]}.f{'xy'[c % 2]}")
-    if ch.stays_put_m is not None:
-        disp = d["q"] - d["q"][0]
-        tol_check("stays put: largest displacement from the first sample", "stays_put_m",
-                  np.delete(disp, np.s_[2::3], axis=1), "m", lambda r_, c: f"{where_t(r_)} {bodies[c // 2]}")
-    if ch.growth_rel is not None:
-        g = robot_growth(model, d)
-        rel = np.array([(m_ - p_) / p_ for m_, p_ in zip(g["measured"], g["predicted"])])
-        tol_check("growth rates of the drift vs RobotModel's linearized modes", "growth_rel", rel[None], "",
-                  lambda r_, c: ("sway", "heave")[c],
-                  f"sway {g['measured'][0]:.4f} /s (predicted {g['predicted'][0]:.4f}), heave "
-                  f"{g['measured'][1]:.4f} /s (predicted {g['predicted'][1]:.4f})")
     return ev
