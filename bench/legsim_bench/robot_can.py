@@ -212,30 +212,13 @@ def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
     if ch.slips is not None:
         if ch.slip_onset_steps is not None:
             an._robot_slip_onset_checks(ev, scene, d, feet, root, tol_check, reference=reference)
-        for k, f in enumerate(feet):   # each foot by its own events
-            st = d["state"][:, k]
-            starts = [float(t[i]) for i in range(1, len(st)) if st[i - 1] == "stuck" and st[i] == "sliding"
-                      and "stick_to_slip" in d["foot_events"][i][k]]
-            if f in ch.slips:
-                results.append(CheckResult(f"{f} slips: stuck to sliding with its stick_to_slip", bool(starts),
-                                           float(len(starts)), None, "times", "",
-                                           f"at t = {', '.join(f'{x:g}' for x in starts) or 'never'} s; "
-                                           f"state at the end {st[-1]}"))
-            else:
-                results.append(CheckResult(f"{f} stays stuck throughout", bool(np.all(st == "stuck")), None, None,
-                                           "", "", f"states: {', '.join(sorted(set(st)))}"))
-        return ev
+        return an._robot_slip_checks(ev, ch.slips, d, feet, per_foot=True)   # each foot by its own events
     try:
         model, r = can_reference(scene, rec, t, root)
     except ValueError as e:
         results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
         return ev
-    k3, k6 = 3 * 3 + 2, 3 * 6 + 2
-    table2 = (f"at t = {t[-1]:g} s right phi3 = {d['q'][-1, k3]:.5f} rad ({math.degrees(d['q'][-1, k3]):.3f} deg), "
-              f"phi6 = {d['q'][-1, k6]:.5f} rad ({math.degrees(d['q'][-1, k6]):.3f} deg); box "
-              f"({1e3 * (d['q'][-1, 0] - d['q'][0, 0]):+.2f}, {1e3 * (d['q'][-1, 1] - d['q'][0, 1]):+.2f}) mm, "
-              f"{d['q'][-1, 2] - d['q'][0, 2]:+.5f} rad")
-    pose_checks(r.q, table2)
+    pose_checks(r.q, an.robot_table2(d))   # Table II of the paper
     box = np.abs(d["q"][:, :3] - r.q[:, :3])
     results.append(CheckResult("box pose (ST_BOX) vs RobotModel (float32 over CAN)",
                                ch.position_m is None or bool(np.all(box[:, :2] <= ch.position_m + allow["position_m"])
@@ -245,31 +228,10 @@ def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
                                f"max |dx|, |dy| {box[:, :2].max():.2g} m, |dphi| {box[:, 2].max():.2g} rad"))
     solved = np.ones(len(t), bool)
     solved[0] = False   # the RESET's sample: no forces solved yet
-    tol_check("actuator forces vs RobotModel", "actuator_force_n", (d["forces"] - r.actuator_forces)[solved], "N",
-              lambda r_, c: f"t={t[solved][r_]:.4f}s {acts[c]}")
-    tt = t[solved]
-    ground = np.concatenate([d["normal"] - r.normal, d["tangential"] - r.tangential], axis=1)[solved]
-    tol_check("ground forces N, T per foot (ST_CONTACT) vs RobotModel", "ground_force_n", ground, "N",
-              lambda r_, c: f"t={tt[r_]:.4f}s {feet[c % len(feet)]}.{'NT'[c // len(feet)]}",
-              f"at t = {t[-1]:g} s N {', '.join(f'{x:.2f}' for x in d['normal'][-1])}, "
-              f"T {', '.join(f'{x:+.2f}' for x in d['tangential'][-1])} N")
+    joints = [f"joint {j}" for j in range(d["reactions"].shape[1])]
+    an._robot_stance_checks(ev, model, r, d, solved, acts, feet, joints, bodies, tol_check, " (ST_CONTACT)")
     stuck = bool(np.all(d["state"] == "stuck"))
     results.append(CheckResult("contact states (Ct_State): both feet stuck throughout (RobotModel's stance)",
                                stuck and not seq, None, None, "", "",
                                f"states at the end: {', '.join(d['state'][-1])}; changes: {len(seq)}"))
-    if ch.reaction_n is not None:
-        dr = (d["reactions"] - r.reactions)[solved]
-        tol_check("joint reaction forces vs RobotModel", "reaction_n", dr[..., 0:2].reshape(len(tt), -1), "N",
-                  lambda r_, c: f"t={tt[r_]:.4f}s joint {c // 2}.f{'xy'[c % 2]}")
-    if ch.stays_put_m is not None:
-        disp = d["q"] - d["q"][0]
-        tol_check("stays put: largest displacement from the first sample", "stays_put_m",
-                  np.delete(disp, np.s_[2::3], axis=1), "m", lambda r_, c: f"{where_t(r_)} {bodies[c // 2]}")
-    if ch.growth_rel is not None:
-        g = an.robot_growth(model, d)
-        rel = np.array([(m_ - p_) / p_ for m_, p_ in zip(g["measured"], g["predicted"])])
-        tol_check("growth rates of the drift vs RobotModel's linearized modes", "growth_rel", rel[None], "",
-                  lambda r_, c: ("sway", "heave")[c],
-                  f"sway {g['measured'][0]:.4f} /s (predicted {g['predicted'][0]:.4f}), heave "
-                  f"{g['measured'][1]:.4f} /s (predicted {g['predicted'][1]:.4f})")
     return ev
