@@ -16,6 +16,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "wp_common.h"
+
 #include "legsim/legsim.h"
 
 extern const legsim_model_desc legsim_model_leg_revolute;
@@ -50,22 +52,6 @@ static void check(legsim_status st, double t) {
   }
 }
 
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-static int steps_of(double span, double h) {
-  const double n = span / h;
-  const int k = (int)(n + 0.5);
-  if (k < 1 || (n - k) > 1e-9 * n || (k - n) > 1e-9 * n) {
-    fprintf(stderr, "legsim_wp: %g s is not a whole number of steps of %g s\n", span, h);
-    exit(2);
-  }
-  return k;
-}
-
 int main(int argc, char **argv) {
   if (argc != 10) {
     fprintf(stderr, "usage: legsim_wp traj|time|count rk4|galpha H T FU FL DISABLE TOL X\n");
@@ -83,10 +69,10 @@ int main(int argc, char **argv) {
   s.opt.disable = (uint32_t)strtoul(argv[7], NULL, 0);
   s.opt.newton_tol = atof(argv[8]);
   const double h = s.opt.step_s;
-  const int n = steps_of(t_end, h);
+  const int n = steps_of("legsim_wp", t_end, h);
 
   if (strcmp(argv[1], "traj") == 0) {
-    const int every = steps_of(atof(argv[9]), h);
+    const int every = steps_of("legsim_wp", atof(argv[9]), h);
     legsim_sim *sim = start(&s);
     legsim_real q[18];
     for (int k = 0; k <= n; k += every) {

@@ -17,6 +17,8 @@
 #include <string.h>
 #include <time.h>
 
+#include "wp_common.h"
+
 #include <mujoco/mujoco.h>
 
 /* The timed and counted work: n steps. Not static, not inlined: callgrind finds it by name. */
@@ -37,22 +39,6 @@ static void check(const mjData *d) {
   }
 }
 
-static double now_s(void) {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return ts.tv_sec + 1e-9 * ts.tv_nsec;
-}
-
-static int steps_of(double span, double h) {
-  const double n = span / h;
-  const int k = (int)(n + 0.5);
-  if (k < 1 || (n - k) > 1e-9 * n || (k - n) > 1e-9 * n) {
-    fprintf(stderr, "mujoco_wp: %g s is not a whole number of steps of %g s\n", span, h);
-    exit(2);
-  }
-  return k;
-}
-
 int main(int argc, char **argv) {
   if (argc != 7) {
     fprintf(stderr, "usage: mujoco_wp traj|time|count MODEL.xml T FU FL X\n");
@@ -66,10 +52,10 @@ int main(int argc, char **argv) {
   }
   mjData *d = mj_makeData(m);
   const double h = m->opt.timestep, t_end = atof(argv[3]), fu = atof(argv[4]), fl = atof(argv[5]);
-  const int n = steps_of(t_end, h);
+  const int n = steps_of("mujoco_wp", t_end, h);
 
   if (strcmp(argv[1], "traj") == 0) {
-    const int every = steps_of(atof(argv[6]), h);
+    const int every = steps_of("mujoco_wp", atof(argv[6]), h);
     reset(m, d, fu, fl);
     for (int k = 0; k <= n; k += every) {
       if (k > 0) run_steps(m, d, every);
