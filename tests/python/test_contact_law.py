@@ -211,3 +211,118 @@ def test_painleve_rod_is_reported_never_nan(mu, omega, inconsistent):
         assert s.contacts()["state"][0] == "free"
     else:
         assert s.contacts()["state"][0] == "sliding" and s.contacts()["normal"][0] > 0
+
+
+def _compass_reference(q, qd, mu, g=9.81):
+    """The bench's enumeration (contact_analytic.contact_modes) for the compass of
+    _compass at (q, qd): W = G (M^-1 - M^-1 J^T (J M^-1 J^T)^-1 J M^-1) G^T over the hinge
+    J, b the feet's (normal, tangential) accelerations with no contact force; returns the
+    consistent solutions and the sign of foot A's sliding velocity (along +x)."""
+    def perp(r):
+        return np.array([-r[1], r[0]])
+
+    c = [q[3 * i:3 * i + 2] for i in (0, 1)]
+    w = [qd[3 * i + 2] for i in (0, 1)]
+    u = [np.array([math.sin(q[3 * i + 2]), -math.cos(q[3 * i + 2])]) for i in (0, 1)]
+    top = [-0.5 * u[i] for i in (0, 1)]   # hinge - centre, per rod
+    foot = [0.5 * u[i] for i in (0, 1)]   # foot - centre
+
+    def rows(r, i):  # a point's acceleration rows (x, y) on rod i
+        R = np.zeros((2, 6))
+        R[:, 3 * i:3 * i + 2] = np.eye(2)
+        R[:, 3 * i + 2] = perp(r)
+        return R
+
+    M = np.diag([1.0, 1.0, 1.0 / 12.0] * 2)
+    J = rows(top[0], 0) - rows(top[1], 1)
+    gam = -w[0] ** 2 * top[0] + w[1] ** 2 * top[1]
+    G = np.vstack([rows(foot[0], 0)[[1, 0]], rows(foot[1], 1)[[1, 0]]])
+    gG = np.concatenate([(-w[0] ** 2 * foot[0])[[1, 0]], (-w[1] ** 2 * foot[1])[[1, 0]]])
+    F = np.array([0.0, -g, 0.0, 0.0, -g, 0.0])
+    Mi = np.linalg.inv(M)
+    S = J @ Mi @ J.T
+    W = G @ (Mi - Mi @ J.T @ np.linalg.solve(S, J @ Mi)) @ G.T
+    b = G @ (Mi @ (F + J.T @ np.linalg.solve(S, -gam - J @ Mi @ F))) + gG
+    vA = (qd[0:2] + w[0] * perp(foot[0]))[0]
+    return ca.contact_modes(W, b, mu, mu, [int(np.sign(vA)), 0]), np.sign(vA)
+
+
+def _compass(mu, a, wB, **kw):
+    """Two 1 kg, 1 m rods hinged at their tops (xi = -0.5), feet (xi = 0.5) on the ground
+    line, each leaning a from the vertical (A to -x, B to +x); B's foot stuck, the compass
+    turning about it at wB, so A's foot slides along the line. mu_s = mu_k = mu."""
+    lib = legsim.load_library("double")
+    if lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
+        pytest.skip(f"{lib.path} is built without two contacts")
+    d = lib.ModelDesc()
+    d.name = b"compass"
+    d.gravity_mps2[1] = -9.81
+    d.n_bodies = 2
+    for i, nm in enumerate((b"A", b"B")):
+        d.body[i].name = nm
+        d.body[i].length_m = 1.0
+        d.body[i].mass_kg = 1.0
+        d.body[i].inertia_kgm2 = 1.0 / 12.0
+        d.contact[i].name = b"foot" + nm
+        d.contact[i].body = i
+        d.contact[i].point[0], d.contact[i].point[1] = 0.5, 0.0
+    d.n_joints = 1
+    d.joint[0].name = b"hinge"
+    d.joint[0].kind = 1  # LEGSIM_JOINT_REVOLUTE: point on body 0 = point on body 1
+    d.joint[0].body[0], d.joint[0].body[1] = 0, 1
+    d.joint[0].point[0][0] = d.joint[0].point[1][0] = -0.5
+    d.foot_body = -1
+    d.n_contacts = 2
+    d.ground.mu_static = mu
+    d.ground.mu_kinetic = mu
+
+    def perp(r):
+        return np.array([-r[1], r[0]])
+
+    uA = np.array([math.sin(-a), -math.cos(-a)])
+    uB = np.array([math.sin(a), -math.cos(a)])
+    hinge = np.array([0.0, math.cos(a)])
+    cA, cB = hinge + 0.5 * uA, hinge + 0.5 * uB
+    vh = wB * perp(hinge - (hinge + uB))                 # B turns about its foot
+    wA = -vh[1] / perp(uA)[1]                            # A's foot keeps on the line
+    vcA, vcB = vh + wA * perp(cA - hinge), wB * perp(cB - (hinge + uB))
+    s = legsim.Sim(legsim.Model(d, lib, "revolute", "compass"), **kw)
+    s.set_state([cA[0], cA[1], -a, cB[0], cB[1], a], [vcA[0], vcA[1], wA, vcB[0], vcB[1], wB])
+    s.set_contact("footA", "sliding")
+    s.set_contact("footB", "stuck")
+    return s
+
+
+@pytest.mark.parametrize("mu, expected", [(2.0, ("slide", "slip-")), (4.0, ("slide", "free"))])
+def test_several_consistent_modes_raise_contact_ambiguous(mu, expected):
+    """A compass (two rods hinged at the top) at 50 deg a side, turning at 6 rad/s about its
+    stuck foot B while foot A slides to -x: B's stuck mode fails, and the reference's
+    enumeration finds two consistent modes, both feet lifting off and `expected` (mu = 2:
+    A slides on, B starts to slip to -x; mu = 4: A slides on, B lifts off). The step raises
+    contact_ambiguous and takes the first in the documented priority (current, stick, slip,
+    lift-off), which is `expected`, and stays finite."""
+    a = math.radians(50)
+    s = _compass(mu, a, 6.0, step=1e-4)
+    # before the step, as the reference sees it: the current mode (slide, stick) fails
+    sols, dirA = _compass_reference(s.q, s.qd, mu)
+    assert dirA < 0 and sorted(x.modes for x in sols) == sorted([("free", "free"), expected])
+    s.clear_events()
+    s.step(1)
+    ev = s.events()
+    # the reference at the state where the core enumerated (the step's end; a slip onset or
+    # a lift-off changes no coordinate or velocity): still the same two
+    modes = [x.modes for x in _compass_reference(s.q, s.qd, mu)[0]]
+    assert sorted(modes) == sorted([("free", "free"), expected]), modes
+    rank = {"slide": 0, "stick": 0, "slip+": 2, "slip-": 2, "free": 3}  # current, stick, slip, free
+    assert min(modes, key=lambda md: sum(rank[x] for x in md)) == expected
+    assert "contact_ambiguous" in ev and "contact_inconsistent" not in ev, ev
+    assert ("stick_to_slip" in ev) == (expected[1] == "slip-"), ev
+    assert ("liftoff" in ev) == (expected[1] == "free"), ev
+    c = s.contacts()
+    assert tuple(c["state"]) == ("sliding", "sliding" if expected[1] == "slip-" else "free")
+    assert np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.qd))
+    assert c["normal"][0] > 0
+    # the sliding feet slide to -x: friction along +x, T = mu N
+    sl = c["state"] == "sliding"
+    assert c["tangential"][sl] == pytest.approx(mu * c["normal"][sl], rel=1e-12)
+    assert np.all(c["normal"][sl] > 0)
