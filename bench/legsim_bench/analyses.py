@@ -128,6 +128,21 @@ def _arrays(out: dict) -> dict:
             "lengths": L, "reactions": R.reshape(len(S), len(joints), 3)}
 
 
+def tol_checker(ch, results: list):
+    """tol_check(name, key, err, unit, label, detail): appends the check of the largest |err|
+    against the scene's [checks] key (none when the scene does not set it); label(row, col)
+    says where the largest one is."""
+    from .checks import CheckResult  # here: checks imports this module
+
+    def tol_check(name, key, err, unit, label, detail=""):
+        tol = getattr(ch, key)
+        if tol is None:
+            return
+        v, r, c = _max(err)
+        results.append(CheckResult(name, v <= tol, v, tol, unit, label(r, c), detail))
+    return tol_check
+
+
 def _max(err) -> tuple[float, int, int]:
     e = np.abs(np.asarray(err, float))
     e = e.reshape(len(e), -1) if e.ndim > 1 else e.reshape(-1, 1)
@@ -159,12 +174,7 @@ def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
     model = LegModel.from_toml(model_path, variant=scene.variant)
     where_t = lambda d, r: f"t={d['t'][r]:.4f}s"  # noqa: E731
 
-    def tol_check(name, key, err, unit, label, detail=""):
-        tol = getattr(ch, key)
-        if tol is None:
-            return
-        v, r, c = _max(err)
-        results.append(CheckResult(name, v <= tol, v, tol, unit, label(r, c), detail))
+    tol_check = tol_checker(ch, results)
 
     def body_label(r, c):
         return f"{where_t(d, r)} {leg.body_names[c // 3]}.{('x', 'y', 'phi')[c % 3]}"
@@ -711,12 +721,7 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     where_t = lambda r: f"t={t[r]:.4f}s"  # noqa: E731
     bodies, acts, joints, feet = out["bodies"], out["actuators"], out["joints"], out.get("contacts", [])
 
-    def tol_check(name, key, err, unit, label, detail=""):
-        tol = getattr(ch, key)
-        if tol is None:
-            return
-        v, r, c = _max(err)
-        results.append(CheckResult(name, v <= tol, v, tol, unit, label(r, c), detail))
+    tol_check = tol_checker(ch, results)
 
     def pose_checks(q_ref, detail=""):
         dq = d["q"] - q_ref
