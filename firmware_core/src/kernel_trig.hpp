@@ -8,13 +8,10 @@
 #pragma once
 
 #include <cmath>
+#include <cstdint>
+#include <cstring>
 
 namespace legsim {
-
-inline void sincos_reduced(float x, float &s, float &c) {
-  s = std::sin(x);
-  c = std::cos(x);
-}
 
 // Reduction by the nearest multiple k of pi/2 (pi/2 = p1 + p2 + p3, p1 and p2 of 33 bits,
 // so k p1 and k p2 are exact for |k| < 2^20), Taylor polynomials on |r| <= pi/4 (their
@@ -46,5 +43,142 @@ inline void sincos_reduced(double x, double &s, double &c) {
     default: s = -cr; c = sr; break;
   }
 }
+
+// ---- float (the Cortex-M4F build) ---------------------------------------------------------
+// The same scheme in float arithmetic, for every angle (no libm trigonometry in a float
+// image: newlib's sinf/cosf and their Payne-Hanek tables were 4.2 KB of the M4F's flash).
+// Within 0.6 ulp of the correctly rounded values (the kernels below: 0.5 ulp of the final
+// rounding and about 0.05 ulp of their own), checked over every float in |x| < 4096 and
+// samples above (tests/core/test_trig.c). Accuracy near the multiples of pi/2 is what
+// matters: a leg standing straight has angles at +-pi/2, where cos is -4.4e-8 and a
+// reduction that keeps 48 bits of pi/2 (three floats, the earlier try) got it wrong in the
+// second digit; here r = x - k pi/2 is kept as a pair rh + rl to 2^-60 absolute.
+namespace trig_detail {
+
+// sin(rh + rl) and cos(rh + rl) for |rh| <= pi/4 (+ a little), |rl| <= ulp(rh): Taylor
+// polynomials (their truncation below 0.03 ulp), the first-order terms of rl, and for cos
+// the rounding of rh^2 recovered exactly (rh split into two halves of 12 bits, by masking
+// so no contraction into fma can spoil the split) and 1 - rh^2/2 rounded once.
+inline void sincos_kernel(float rh, float rl, int quadrant, float &s, float &c) {
+  const float z = rh * rh;
+  unsigned u;
+  std::memcpy(&u, &rh, sizeof u);
+  u &= 0xfffff000u;
+  float hi;
+  std::memcpy(&hi, &u, sizeof hi);
+  const float lo = rh - hi;
+  const float zl = ((hi * hi - z) + 2 * hi * lo) + lo * lo;  // rh^2 = z + zl exactly (to 2^-48)
+  const float ps = -1.0f / 6 + z * (1.0f / 120 + z * (-1.0f / 5040 + z * (1.0f / 362880)));
+  const float pc = 1.0f / 24 + z * (-1.0f / 720 + z * (1.0f / 40320 + z * (-1.0f / 3628800)));
+  const float sr = rh + (rl * (1 - 0.5f * z) + rh * z * ps);  // sin(rh + rl)
+  const float hz = 0.5f * z;
+  const float w = 1 - hz;  // 1 - hz exactly = w + ((1 - w) - hz) (hz <= 0.31)
+  const float cr = w + ((((1 - w) - hz) - 0.5f * zl) + (z * z * pc - rh * rl));  // cos(rh + rl)
+  switch (quadrant & 3) {
+    case 0: s = sr; c = cr; break;
+    case 1: s = cr; c = -sr; break;
+    case 2: s = -sr; c = -cr; break;
+    default: s = -cr; c = sr; break;
+  }
+}
+
+// x - k pi/2 as rh + rl for |x| >= 4096 (x finite): Payne-Hanek. |x| = m 2^e with m < 2^24 an
+// integer; the bits b_i 2^-i of 2/pi with e - i >= 2 add multiples of 4 to x 2/pi, so 96
+// bits from i = e - 1 on give its fraction to 2^-70; the quadrant from its two integer bits.
+inline void reduce_large(float x, float &rh, float &rl, int &quadrant) {
+  // 2/pi in 32-bit words from bit 1 on, after a zero word (bits i <= 0): from mpmath
+  static const std::uint32_t two_over_pi[] = {
+      0x00000000u, 0xA2F9836Eu, 0x4E441529u, 0xFC2757D1u, 0xF534DDC0u, 0xDB629599u,
+      0x3C439041u, 0xFE5163ABu, 0xDEBBC561u, 0xB7246E3Au, 0x424DD2E0u};
+  std::uint32_t bits;
+  std::memcpy(&bits, &x, sizeof bits);
+  const int e = static_cast<int>((bits >> 23) & 0xffu) - 150;  // 4096 <= |x| -> e >= -11
+  const std::uint32_t m = (bits & 0x7fffffu) | 0x800000u;
+  const int first = e - 1 + 31;  // bit i = e - 1 (bit i = 1 is the first of word 1)
+  const int word = first >> 5, shift = first & 31;
+  auto window = [&](int n) {  // 32 bits of the table from bit `shift` of word n on
+    const std::uint64_t two = (static_cast<std::uint64_t>(two_over_pi[n]) << 32) | two_over_pi[n + 1];
+    return static_cast<std::uint32_t>((two << shift) >> 32);
+  };
+  // m * (w0 w1 w2) mod 2^96: x 2/pi mod 4 in units of 2^-94
+  const std::uint64_t p2 = static_cast<std::uint64_t>(m) * window(word + 2);
+  const std::uint64_t p1 = static_cast<std::uint64_t>(m) * window(word + 1) + (p2 >> 32);
+  const std::uint32_t top = static_cast<std::uint32_t>(p1 >> 32) + m * window(word);
+  // the fraction in [-1/2, 1/2) (units 2^-64) and the nearest quadrant
+  const std::int64_t f = static_cast<std::int64_t>(
+      ((static_cast<std::uint64_t>(top) << 32) | static_cast<std::uint32_t>(p1)) << 2);
+  quadrant = static_cast<int>(top >> 30) + (f < 0 ? 1 : 0);
+  std::uint64_t a = f < 0 ? 0 - static_cast<std::uint64_t>(f) : static_cast<std::uint64_t>(f);
+  int lz = 0;  // a != 0: no float lies within 2^-64 of a multiple of pi/2 (2^-30 is the closest)
+  while (lz < 63 && !(a >> 63)) {
+    a <<= 1;
+    ++lz;
+  }
+  // a 2^-(64 + lz) as a pair of floats (the top 24 bits exact, the next 32 rounded)
+  const std::uint32_t scale_bits = static_cast<std::uint32_t>(127 - 24 - lz) << 23;
+  float scale;  // 2^-(24 + lz)
+  std::memcpy(&scale, &scale_bits, sizeof scale);
+  const float fh = static_cast<float>(static_cast<std::uint32_t>(a >> 40)) * scale;
+  const float fl = static_cast<float>(static_cast<std::uint32_t>(a >> 8)) * 0x1p-32f * scale;
+  // times pi/2 = ph + pl, the rounding of fh ph recovered by splitting both into 12-bit halves
+  constexpr float ph = 1.57079637050628662109375f, pl = -4.37113900018624283e-8f;
+  const float prod = fh * ph;
+  std::uint32_t ub;
+  std::memcpy(&ub, &fh, sizeof ub);
+  ub &= 0xfffff000u;
+  float fh1;
+  std::memcpy(&fh1, &ub, sizeof fh1);
+  const float fh2 = fh - fh1;
+  constexpr float ph1 = 1.5703125f, ph2 = ph - 1.5703125f;  // 1.5703125 = 0x1.92p0, 8 bits
+  const float err = ((fh1 * ph1 - prod) + (fh1 * ph2 + fh2 * ph1)) + fh2 * ph2;
+  const float low = err + (fh * pl + fl * ph);
+  rh = prod + low;
+  rl = low - (rh - prod);
+  if ((f < 0) != ((bits >> 31) != 0)) {  // the fraction's sign, then x's
+    rh = -rh;
+    rl = -rl;
+  }
+  if (bits >> 31) quadrant = -quadrant;
+}
+
+}  // namespace trig_detail
+
+// Reduction by the nearest multiple k of pi/2 in float: pi/2 = p1 + p2 + p3 + p4 (p1 to p3
+// of at most 11 bits, so k p1, k p2, k p3 are exact for |k| < 2^13, and x - k p1 - k p2 is
+// exact below 4096), the rest summed with its rounding kept (Fast2Sum, then 2Sum).
+inline void sincos_reduced(float x, float &s, float &c) {
+  if (!(std::abs(x) < 4096.0f)) {
+    if (!(std::abs(x) <= 3.40282347e38f)) {  // NaN or infinite: NaN, as the library's
+      s = c = x - x;
+      return;
+    }
+    float rh, rl;
+    int quadrant;
+    trig_detail::reduce_large(x, rh, rl, quadrant);
+    trig_detail::sincos_kernel(rh, rl, quadrant, s, c);
+    return;
+  }
+  constexpr float shifter = 12582912.0f;  // 1.5 * 2^23: the nearest integer (|x 2/pi| < 2^22)
+  const float k = (x * 0.636619772f + shifter) - shifter;
+  constexpr float p1 = 1.5703125f, p2 = 4.837512969970703125e-4f, p3 = 7.54953362047672271729e-8f,
+                  p4 = 2.56334406825708960e-12f;
+  const float t = (x - k * p1) - k * p2;  // exact
+  const float q3 = k * p3;                // exact
+  const float r3 = t - q3;
+  const float e3 = (t - r3) - q3;  // the rounding of r3 (exact: |t| >= |q3| or r3 exact)
+  const float tail = e3 - k * p4;
+  const float rh = r3 + tail;  // 2Sum: r3 and tail may be of any sizes near k pi/2
+  const float bv = rh - r3;
+  const float rl = (r3 - (rh - bv)) + (tail - bv);
+  trig_detail::sincos_kernel(rh, rl, static_cast<int>(k), s, c);
+}
+
+// sin and cos of one angle outside the per-stage cache (axis_u and normal_n, the ground's
+// slope): the library's in double (the results as before), the reduction above in float.
+inline void sincos_any(double x, double &s, double &c) {
+  s = std::sin(x);
+  c = std::cos(x);
+}
+inline void sincos_any(float x, float &s, float &c) { sincos_reduced(x, s, c); }
 
 }  // namespace legsim
