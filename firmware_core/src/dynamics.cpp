@@ -1,20 +1,36 @@
 // Accelerations and multipliers: M qdd + Phi_q^T lambda = Q, Phi_q qdd = gamma,
 // by the Schur complement (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - gamma
 // (M is diagonal, so this is the whole cost).
+#include <cstring>
 #include <utility>
 
-#include "sim.hpp"
+#include "kernel.hpp"
 
 namespace legsim {
 
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                             bool rows_ready) {
+                             bool rows_ready, bool keep) {
   const Model &m = sim.model;
   Data &d = sim.data;
   legsim_options opt = sim.opt;
   // Driven analyses: the drivers supply the actuator forces. Stops act besides them.
   if (layout.m > m.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
   applied_forces(m, opt, d, q, qd, d.force_q);
+  const Kernel *kern = layout.kernel;
+  if (kern && !rows_ready && layout.m == kern->mj) {
+    // the joint rows alone: the generated solve, fused (the same values as below)
+    Factor &f = d.factor;
+    const legsim_status s = kern->dynamics(m, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
+                                           keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd);
+    if (keep) {
+      f.m = layout.m;
+      f.kernel = kern;
+      std::memcpy(f.perm, layout.perm, sizeof f.perm);
+      std::memcpy(f.first, layout.first, sizeof f.first);
+    }
+    d.report.condition = f.condition;
+    return s;
+  }
   if (!rows_ready) {
     rows_eval(m, layout, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.rows, &d.trig);
     const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);

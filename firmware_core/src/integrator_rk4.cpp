@@ -3,7 +3,7 @@
 // onto Phi_q qd = 0, both M-weighted. The derivative at the start of a step is
 // the one left by the previous step's end (first same as last), so a step
 // costs three stage solves and one end solve.
-#include "sim.hpp"
+#include "kernel.hpp"
 
 namespace legsim {
 
@@ -38,6 +38,19 @@ void stage_end(int n, real h6, const R_ q0, const R_ v0, const R_ sum_v, const R
 #undef R_
 }  // namespace
 
+namespace {
+// The step's end state committed, with its stop forces and reactions.
+legsim_status rk4_finish(Sim &sim, const VecQ &q1, const VecQ &v1) {
+  Data &d = sim.data;
+  d.q = q1;
+  d.qd = v1;
+  stop_forces_update(sim);
+  if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
+    reactions_from_multipliers(sim.model, d.rows, d.lambda, d.reaction);
+  return LEGSIM_OK;
+}
+}  // namespace
+
 legsim_status rk4_step(Sim &sim) {
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -50,7 +63,7 @@ legsim_status rk4_step(Sim &sim) {
   // stages 2 and 3 at the midpoint, 4 at the end
   static constexpr real kWeight[3] = {2, 2, 1};
   for (int stage = 0; stage < 3; ++stage) {
-    const legsim_status s = dynamics_solve(sim, d.dyn, qs, vs, a);
+    const legsim_status s = dynamics_solve(sim, d.dyn, qs, vs, a, false, false);  // a alone
     if (s != LEGSIM_OK) return s;
     const real w = kWeight[stage];
     const real hn = stage < 1 ? h2 : h;  // the next stage's distance from the start
@@ -65,9 +78,25 @@ legsim_status rk4_step(Sim &sim) {
   const Layout &lay = d.dyn;
   const DriverValues &dv = d.stop_drivers;
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
-  rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);
   const real tol = real(sim.opt.newton_tol);
   d.report.iterations = 0;
+  if (lay.kernel && lay.m == lay.kernel->mj) {
+    // The joint rows alone: the fused solve at (q1, v1) first. When neither the positions
+    // nor the velocities need projecting (the usual step), it is the end derivative; else
+    // the sequence below starts over (so the same values and statuses either way).
+    if (dynamics_solve(sim, lay, q1, v1, d.qdd) == LEGSIM_OK) {
+      d.report.residual = rows_max_residual(lay, d.rows);
+      bool done = !projection;
+      if (projection && d.report.residual <= tol) {
+        j_times(lay, d.rows, v1, d.rhs);
+        real drift = 0;
+        for (int i = 0; i < lay.m; ++i) drift = std::abs(d.rhs[i]) > drift ? std::abs(d.rhs[i]) : drift;
+        done = drift <= tol;
+      }
+      if (done) return rk4_finish(sim, q1, v1);
+    }
+  }
+  rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);
   d.report.residual = rows_max_residual(lay, d.rows);
   if (projection && d.report.residual > tol) {
     const legsim_status s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project);  // M-weighted Newton
@@ -88,13 +117,9 @@ legsim_status rk4_step(Sim &sim) {
   }
   s = dynamics_solve(sim, lay, q1, v1, d.qdd, true);
   if (s != LEGSIM_OK) return s;
-  d.q = q1;
-  d.qd = v1;
-  stop_forces_update(sim);
-  if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
-    reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
-  return LEGSIM_OK;
+  return rk4_finish(sim, q1, v1);
 }
+
 #else
 legsim_status rk4_step(Sim &) { return LEGSIM_ERR_DISABLED; }
 #endif

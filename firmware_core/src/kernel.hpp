@@ -34,16 +34,29 @@ struct Kernel {
   // the row units of constraints.cpp term by term (the same values to the last bit);
   // sin/cos through trig.
   void (*rows)(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows, TrigCache *trig);
-  // Positions 0 .. mj-1 of J W J^T's lower envelope into a (zeros where it has none).
-  void (*assemble)(const Rows &rows, const real *w, real *a);
-  // Cholesky of that block in place; false on a pivot <= floor. pmin/pmax: pivot range.
-  bool (*cholesky)(real *a, real floor, real &pmin, real &pmax);
+  // J W J^T's block (positions 0 .. mj-1 of its lower envelope, zeros included) assembled
+  // and factored in place. max_diag comes in as the largest diagonal entry of the rows
+  // after the block (0: none) and leaves as the largest of all; pmin, pmax: the pivots'
+  // range. false: a diagonal that is not positive and finite, or a pivot <= kPivotFloor
+  // times max_diag.
+  bool (*factor)(const Rows &rows, const real *w, real *a, real &max_diag, real &pmin, real &pmax);
   // L y = y (from position `from` on, y zero before it) and L^T y = y on positions 0 .. mj-1.
   void (*forward)(const real *a, real *y, int from);
   void (*backward)(const real *a, real *y);
+  // L L^T x = x in row order, for a system of the block alone (factor_solve's permutation
+  // folded in).
+  void (*solve)(const real *a, real *x);
   // y[i] = (J x)_i for the joint rows; y = J_joint^T x (all nq values written).
   void (*j_times)(const Rows &rows, const real *x, real *y);
   void (*jt_times)(const Rows &rows, const real *x, real *y);
+  // The whole forward-dynamics solve of a system of the joint rows alone (dynamics_solve:
+  // M qdd + J^T lambda = force, J qdd = gamma) fused, its values in locals: lambda and qdd,
+  // the factor's condition estimate; the rows and the factor (by position) kept only where
+  // asked (keep_rows, keep_a not null). LEGSIM_ERR_SINGULAR (condition infinite) or
+  // LEGSIM_ERR_DIVERGED (qdd not finite) as the general path.
+  legsim_status (*dynamics)(const Model &model, const VecQ &q, const VecQ &qd, const VecQ &force,
+                            TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, VecR &lambda,
+                            VecQ &qdd);
 };
 
 // The generated kernel for this model's structure, or nullptr (the general path).

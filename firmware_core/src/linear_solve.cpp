@@ -7,25 +7,16 @@
 
 namespace legsim {
 
-namespace {
-#if LEGSIM_USE_FLOAT
-constexpr real kPivotFloor = real(1e-6);  // relative pivot below which J is taken as rank deficient
-#else
-constexpr real kPivotFloor = real(1e-13);
-#endif
-}  // namespace
-
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
   const int m = layout.m;
   const Kernel *kern = layout.kernel;
   const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
   f.m = m;
   f.kernel = kern;
-  std::memcpy(f.perm, layout.perm, size_t(m));
-  std::memcpy(f.first, layout.first, size_t(m));
+  std::memcpy(f.perm, layout.perm, sizeof f.perm);
+  std::memcpy(f.first, layout.first, sizeof f.first);
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
-  if (kern) kern->assemble(rows, w, f.a.data());
   // weight each row's coefficients once, then every non-zero entry is one dot product
   real wc[kMaxRows][2][3];
   for (int i = mk; i < m; ++i)
@@ -45,16 +36,22 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     aflat[p.aij] += ci[0] * cj[0] + ci[1] * cj[1] + ci[2] * cj[2];
   }
   real max_diag = 0;
-  for (int i = 0; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
-  if (!(max_diag > 0) || !std::isfinite(max_diag)) {
-    // no rows (a free body, e.g. a block off the ground): nothing to factor, well conditioned
-    f.condition = m == 0 ? real(1) : real(INFINITY);
-    return m == 0 ? LEGSIM_OK : LEGSIM_ERR_SINGULAR;
-  }
-  real pmin = max_diag, pmax = 0;
-  if (kern && !kern->cholesky(f.a.data(), kPivotFloor * max_diag, pmin, pmax)) {
-    f.condition = real(INFINITY);
-    return LEGSIM_ERR_SINGULAR;
+  for (int i = mk; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
+  real pmin, pmax;
+  if (kern) {
+    // the block assembled and factored by the kernel, the largest diagonal of all found
+    if (!kern->factor(rows, w, f.a.data(), max_diag, pmin, pmax)) {
+      f.condition = real(INFINITY);
+      return LEGSIM_ERR_SINGULAR;
+    }
+  } else {
+    if (!(max_diag > 0) || !std::isfinite(max_diag)) {
+      // no rows (a free body, e.g. a block off the ground): nothing to factor, well conditioned
+      f.condition = m == 0 ? real(1) : real(INFINITY);
+      return m == 0 ? LEGSIM_OK : LEGSIM_ERR_SINGULAR;
+    }
+    pmin = max_diag;
+    pmax = 0;
   }
   for (int i = mk; i < m; ++i) {
     const int fi = f.first[i];
@@ -134,6 +131,10 @@ real normalize(real *x, int m) {
 
 void factor_solve(const Factor &f, VecR &x) {
   const int m = f.m;
+  if (f.kernel && m == f.kernel->mj) {  // the block alone: the kernel's own solve
+    f.kernel->solve(f.a.data(), x.data());
+    return;
+  }
   real y[kMaxRows];
   for (int i = 0; i < m; ++i) y[f.perm[i]] = x[i];
   solve_in_place(f, y);

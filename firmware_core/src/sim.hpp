@@ -169,6 +169,13 @@ struct DriverValues {
   real feet_mid;             // ContactMid target (m along the line)
 };
 
+// Relative pivot of J W J^T below which J is taken as rank deficient.
+#if LEGSIM_USE_FLOAT
+constexpr real kPivotFloor = real(1e-6);
+#else
+constexpr real kPivotFloor = real(1e-13);
+#endif
+
 // Cholesky factor of J W J^T (lower triangle in place) with its condition estimate.
 struct Factor {
   MatR a;
@@ -351,9 +358,11 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.
-// rows_ready: d.rows and d.factor already hold this (q, qd) on this layout.
+// rows_ready: d.rows and d.factor already hold this (q, qd) on this layout. keep = false:
+// the caller needs only qdd and lambda (RK4's stages), so d.rows and d.factor need not be
+// written (a layout of the joint rows alone with a generated kernel skips them).
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                             bool rows_ready = false);
+                             bool rows_ready = false, bool keep = true);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 // The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
 // generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).

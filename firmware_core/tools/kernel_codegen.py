@@ -119,72 +119,186 @@ class Kernel:
         self.l_nz = [sorted(s) for s in lp]
         self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
 
-    def coef(self, i, s, k):
+    def coef(self, i, s, k, local=False):
+        """(constant, [factor]) of a Jacobian entry: a constant, or the run-time value in
+        rows.coef (or in the fused functions' local c<row>_<slot>_<coordinate>)."""
         c = self.rows[i][1][s][k]
-        return (1, [f"c[{i}][{s}][{k}]"]) if c is V else (c, [])
+        if c is not V:
+            return (c, [])
+        return (1, [f"c{i}_{s}_{k}" if local else f"c[{i}][{s}][{k}]"])
 
     def signature(self):
         return tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
 
+    # ---- the pieces, as lines of C++ over named values ----
     @staticmethod
-    def emit_joint_rows(n, j, r):
-        """One joint's rows, as revolute_rows / prismatic_rows / slot_rows compute them."""
+    def joint_locals(n, j, r):
+        """One joint's rows as locals (phi<r>, gam<r>, c<r>_<slot>_<k>): the arithmetic of
+        revolute_rows / prismatic_rows / slot_rows (constraints.cpp) term by term."""
         kind, (a, b) = j["kind"], j["body"]
-        o = [f"  {{  // joint {n}: {kind}, rows {r}.."]
+        o = [f"  // joint {n}: {kind}, rows {r}.."]
         def off(body, pt):  # offset(): xi u + eta n, u = (s, -c), n = (c, s)
-            return (f"J.{pt}.x() * s{body} + J.{pt}.y() * c{body}",
-                    f"J.{pt}.x() * (-c{body}) + J.{pt}.y() * s{body}")
+            return (f"J{n}.{pt}.x() * s{body} + J{n}.{pt}.y() * c{body}",
+                    f"J{n}.{pt}.x() * (-c{body}) + J{n}.{pt}.y() * s{body}")
         if kind != "prismatic":  # its rows have no joint points
-            o.append(f"    const Joint &J = model.joint[{n}];")
+            o.append(f"  const Joint &J{n} = model.joint[{n}];")
         if kind in ("revolute", "revolute_to_frame"):
             ox, oy = off(a, "pa")
-            o.append(f"    const real sax = {ox}, say = {oy};")
-            o.append(f"    real px = x{a} + sax, py = y{a} + say;")
-            o.append(f"    real gx = w{a} * w{a} * sax, gy = w{a} * w{a} * say;")
+            o.append(f"  const real sax{n} = {ox}, say{n} = {oy};")
             if kind == "revolute_to_frame":
-                o.append("    px -= J.pb.x();")
-                o.append("    py -= J.pb.y();")
+                o.append(f"  const real phi{r} = (x{a} + sax{n}) - J{n}.pb.x(), phi{r + 1} = (y{a} + say{n}) - J{n}.pb.y();")
+                o.append(f"  const real gam{r} = w{a} * w{a} * sax{n}, gam{r + 1} = w{a} * w{a} * say{n};")
             else:
                 ox, oy = off(b, "pb")
-                o.append(f"    const real sbx = {ox}, sby = {oy};")
-                o.append(f"    px -= x{b} + sbx;")
-                o.append(f"    py -= y{b} + sby;")
-                o.append(f"    gx -= w{b} * w{b} * sbx;")
-                o.append(f"    gy -= w{b} * w{b} * sby;")
-                o.append(f"    c[{r}][1][0] = -1, c[{r}][1][1] = 0, c[{r}][1][2] = -(-sby);")
-                o.append(f"    c[{r + 1}][1][0] = 0, c[{r + 1}][1][1] = -1, c[{r + 1}][1][2] = -sbx;")
-            o.append(f"    c[{r}][0][0] = 1, c[{r}][0][1] = 0, c[{r}][0][2] = -say;")
-            o.append(f"    c[{r + 1}][0][0] = 0, c[{r + 1}][0][1] = 1, c[{r + 1}][0][2] = sax;")
-            o.append(f"    rows.phi[{r}] = px, rows.phi[{r + 1}] = py;")
-            o.append(f"    rows.gamma[{r}] = gx, rows.gamma[{r + 1}] = gy;")
-            o.append(f"    rows.nu[{r}] = rows.nu[{r + 1}] = 0;")
+                o.append(f"  const real sbx{n} = {ox}, sby{n} = {oy};")
+                o.append(f"  const real phi{r} = (x{a} + sax{n}) - (x{b} + sbx{n}), "
+                         f"phi{r + 1} = (y{a} + say{n}) - (y{b} + sby{n});")
+                o.append(f"  const real gam{r} = w{a} * w{a} * sax{n} - w{b} * w{b} * sbx{n}, "
+                         f"gam{r + 1} = w{a} * w{a} * say{n} - w{b} * w{b} * sby{n};")
+                o.append(f"  const real c{r}_1_2 = -(-sby{n}), c{r + 1}_1_2 = -sbx{n};")
+            o.append(f"  const real c{r}_0_2 = -say{n}, c{r + 1}_0_2 = sax{n};")
         elif kind == "prismatic":
-            o.append(f"    const real dx = x{b} - x{a}, dy = y{b} - y{a}, ddx = vx{b} - vx{a}, ddy = vy{b} - vy{a};")
-            o.append(f"    rows.phi[{r}] = q[{3 * b + 2}] - q[{3 * a + 2}];")
-            o.append(f"    c[{r}][0][0] = 0, c[{r}][0][1] = 0, c[{r}][0][2] = -1;")
-            o.append(f"    c[{r}][1][0] = 0, c[{r}][1][1] = 0, c[{r}][1][2] = 1;")
-            o.append(f"    rows.gamma[{r}] = 0;")
-            o.append(f"    const real dn = dx * c{a} + dy * s{a};")
-            o.append(f"    rows.phi[{r + 1}] = dn;")
-            o.append(f"    c[{r + 1}][0][0] = -c{a}, c[{r + 1}][0][1] = -s{a}, "
-                     f"c[{r + 1}][0][2] = -(dx * s{a} + dy * (-c{a}));")
-            o.append(f"    c[{r + 1}][1][0] = c{a}, c[{r + 1}][1][1] = s{a}, c[{r + 1}][1][2] = 0;")
-            o.append(f"    rows.gamma[{r + 1}] = 2 * w{a} * (ddx * s{a} + ddy * (-c{a})) + w{a} * w{a} * dn;")
-            o.append(f"    rows.nu[{r}] = rows.nu[{r + 1}] = 0;")
+            o.append(f"  const real dx{n} = x{b} - x{a}, dy{n} = y{b} - y{a}, ddx{n} = vx{b} - vx{a}, "
+                     f"ddy{n} = vy{b} - vy{a};")
+            o.append(f"  const real phi{r} = q[{3 * b + 2}] - q[{3 * a + 2}], gam{r} = 0;")
+            o.append(f"  const real dn{n} = dx{n} * c{a} + dy{n} * s{a};")
+            o.append(f"  const real phi{r + 1} = dn{n};")
+            o.append(f"  const real c{r + 1}_0_0 = -c{a}, c{r + 1}_0_1 = -s{a}, "
+                     f"c{r + 1}_0_2 = -(dx{n} * s{a} + dy{n} * (-c{a}));")
+            o.append(f"  const real c{r + 1}_1_0 = c{a}, c{r + 1}_1_1 = s{a};")
+            o.append(f"  const real gam{r + 1} = 2 * w{a} * (ddx{n} * s{a} + ddy{n} * (-c{a})) + w{a} * w{a} * dn{n};")
         else:  # slot: point on a on the axis of b
             ox, oy = off(a, "pa")
-            o.append(f"    const real sax = {ox}, say = {oy};")
-            o.append(f"    const real dx = x{a} + sax - x{b}, dy = y{a} + say - y{b};")
-            o.append(f"    const real ddx = vx{a} + w{a} * (-say) - vx{b}, ddy = vy{a} + w{a} * sax - vy{b};")
-            o.append(f"    const real dn = dx * c{b} + dy * s{b};")
-            o.append(f"    rows.phi[{r}] = dn;")
-            o.append(f"    c[{r}][0][0] = c{b}, c[{r}][0][1] = s{b}, c[{r}][0][2] = -say * c{b} + sax * s{b};")
-            o.append(f"    c[{r}][1][0] = -c{b}, c[{r}][1][1] = -s{b}, c[{r}][1][2] = -(dx * s{b} + dy * (-c{b}));")
-            o.append(f"    rows.gamma[{r}] = w{a} * w{a} * (sax * c{b} + say * s{b}) + "
-                     f"2 * w{b} * (ddx * s{b} + ddy * (-c{b})) + w{b} * w{b} * dn;")
-            o.append(f"    rows.nu[{r}] = 0;")
-        o.append("  }")
+            o.append(f"  const real sax{n} = {ox}, say{n} = {oy};")
+            o.append(f"  const real dx{n} = x{a} + sax{n} - x{b}, dy{n} = y{a} + say{n} - y{b};")
+            o.append(f"  const real ddx{n} = vx{a} + w{a} * (-say{n}) - vx{b}, ddy{n} = vy{a} + w{a} * sax{n} - vy{b};")
+            o.append(f"  const real dn{n} = dx{n} * c{b} + dy{n} * s{b};")
+            o.append(f"  const real phi{r} = dn{n};")
+            o.append(f"  const real c{r}_0_0 = c{b}, c{r}_0_1 = s{b}, c{r}_0_2 = -say{n} * c{b} + sax{n} * s{b};")
+            o.append(f"  const real c{r}_1_0 = -c{b}, c{r}_1_1 = -s{b}, c{r}_1_2 = -(dx{n} * s{b} + dy{n} * (-c{b}));")
+            o.append(f"  const real gam{r} = w{a} * w{a} * (sax{n} * c{b} + say{n} * s{b}) + "
+                     f"2 * w{b} * (ddx{n} * s{b} + ddy{n} * (-c{b})) + w{b} * w{b} * dn{n};")
         return o
+
+    def rows_locals(self):
+        """sin/cos once per body (through the TrigCache), then every joint's rows as locals."""
+        o = []
+        used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
+        for b in used:
+            o.append(f"  real s{b}, c{b};")
+            o.append(f"  body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+            o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}], vx{b} = qd[{3 * b}], "
+                     f"vy{b} = qd[{3 * b + 1}], w{b} = qd[{3 * b + 2}];")
+        r = 0
+        for n, j in enumerate(self.joints):
+            o += self.joint_locals(n, j, r)
+            r += NROWS[j["kind"]]
+        return o
+
+    def rows_store(self, rows="rows."):
+        """The locals into Rows (the constant entries too: the general code reads them)."""
+        o = [f"  real(*c)[2][3] = {rows}coef;"]
+        for i in range(self.m):
+            for s in range(2):
+                if self.rows[i][0][s] < 0:
+                    continue
+                vals = []
+                for k in range(3):
+                    cc, vs = self.coef(i, s, k, local=True)
+                    vals.append(vs[0] if vs else str(cc))
+                o.append(f"  c[{i}][{s}][0] = {vals[0]}, c[{i}][{s}][1] = {vals[1]}, c[{i}][{s}][2] = {vals[2]};")
+            o.append(f"  {rows}phi[{i}] = phi{i}, {rows}gamma[{i}] = gam{i}, {rows}nu[{i}] = 0;")
+        return o
+
+    def a_entry(self, p, q, local):
+        """J W J^T's entry at positions (p, q), as linear_solve.cpp sums it, or "0"."""
+        i, j = self.row_at[p], self.row_at[q]
+        dots = []  # per pair of slots on one body
+        for si in range(2):
+            for sj in range(2):
+                b = self.rows[i][0][si]
+                if b < 0 or b != self.rows[j][0][sj] or (i == j and sj < si):
+                    continue
+                terms = []
+                for k in range(3):
+                    c1, v1 = self.coef(i, si, k, local)
+                    c2, v2 = self.coef(j, sj, k, local)
+                    terms.append((c1 * c2, v1 + [f"w[{3 * b + k}]"] + v2))
+                dots.append(product(terms))
+        return group(dots)
+
+    def factor_locals(self, local, fail):
+        """J W J^T's envelope as locals A<p>_<q>, the largest diagonal entry into max_diag
+        (which comes in holding the rows after the block's), then L L^T into L<p>_<q>, the
+        pivots' range into pmin, pmax; `fail` on a bad diagonal or a pivot <= the floor."""
+        m = self.m
+        o = []
+        for p in range(m):
+            for q in range(self.first[p], p + 1):
+                v = self.a_entry(p, q, local)
+                if v != "0" or q in self.l_nz[p]:
+                    o.append(f"  const real A{p}_{q} = {v};")
+        for p in range(m):
+            o.append(f"  max_diag = A{p}_{p} > max_diag ? A{p}_{p} : max_diag;")
+        o.append(f"  if (!(max_diag > 0) || !std::isfinite(max_diag)) {fail}")
+        o.append("  const real floor = kPivotFloor * max_diag;")
+        o.append("  pmin = max_diag;")
+        o.append("  pmax = 0;")
+        o.append("  real d;")
+        for p in range(m):
+            lp = self.l_nz[p]
+            for q in lp:
+                sub = "".join(f" - L{p}_{k} * L{q}_{k}" for k in lp if k < q and k in self.l_nz[q])
+                o.append(f"  const real L{p}_{q} = (A{p}_{q}{sub}) / L{q}_{q};")
+            sub = "".join(f" - L{p}_{k} * L{p}_{k}" for k in lp)
+            o.append(f"  d = A{p}_{p}{sub};")
+            o.append(f"  if (!(d > floor)) {fail}")
+            o.append("  pmin = d < pmin ? d : pmin;")
+            o.append("  pmax = d > pmax ? d : pmax;")
+            o.append(f"  const real L{p}_{p} = std::sqrt(d);")
+        return o
+
+    def factor_store(self, a="a"):
+        """L's envelope by position into the general storage (zeros where L has none)."""
+        o = []
+        for p in range(self.m):
+            for q in range(self.first[p], p + 1):
+                v = f"L{p}_{q}" if q == p or q in self.l_nz[p] else "0"
+                o.append(f"  {a}[{p} * kMaxRows + {q}] = {v};")
+        return o
+
+    def solve_locals(self, src, dst, lval="L"):
+        """L L^T y = b with b_p = src(row at p), into dst(row at p): factor_solve's permutation
+        folded in, the same operations in the same order as forward then backward."""
+        L = (lambda p, k: f"L{p}_{k}") if lval == "L" else (lambda p, k: f"a[{p} * kMaxRows + {k}]")
+        o = []
+        for p in range(self.m):
+            sub = "".join(f" - {L(p, k)} * u{k}" for k in self.l_nz[p])
+            o.append(f"  real u{p} = ({src(self.row_at[p])}{sub}) / {L(p, p)};")
+        for p in reversed(range(self.m)):
+            o.append(f"  u{p} /= {L(p, p)};")
+            o += [f"  u{k} -= {L(p, k)} * u{p};" for k in self.l_nz[p]]
+        o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
+        return o
+
+    def j_expr(self, i, x, local):
+        dots = []
+        for s in range(2):
+            b = self.rows[i][0][s]
+            if b >= 0:
+                dots.append(product([(self.coef(i, s, k, local)[0], self.coef(i, s, k, local)[1] + [x(3 * b + k)])
+                                     for k in range(3)]))
+        return group(dots)
+
+    def jt_expr(self, n, x, local):
+        b, k = divmod(n, 3)
+        terms = []
+        for i in range(self.m):
+            for s in range(2):
+                if self.rows[i][0][s] == b:
+                    cc, vs = self.coef(i, s, k, local)
+                    terms.append((cc, vs + [x(i)]))
+        return product(terms)
 
     def emit(self, sym):
         m, R = self.m, "R"
@@ -194,54 +308,13 @@ class Kernel:
         # the same order (so the same values to the last bit), one sin/cos pair per body
         o.append(f"void {sym}_rows(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows, "
                  "TrigCache *trig) {")
-        o.append("  real(*c)[2][3] = rows.coef;")
-        used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
-        for b in used:
-            o.append(f"  real s{b}, c{b};")
-            o.append(f"  body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
-            o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}], vx{b} = qd[{3 * b}], "
-                     f"vy{b} = qd[{3 * b + 1}], w{b} = qd[{3 * b + 2}];")
-        r = 0
-        for n, j in enumerate(self.joints):
-            o += self.emit_joint_rows(n, j, r)
-            r += NROWS[j["kind"]]
+        o += self.rows_locals() + self.rows_store()
         o.append("}\n")
-        # J W J^T, lower envelope by position
-        o.append(f"void {sym}_assemble(const Rows &rows, const real *w, real *a) {{")
-        o.append(f"  constexpr int {R} = kMaxRows;")
+        # J W J^T's block assembled and factored (the rows after it come in through max_diag)
+        o.append(f"bool {sym}_factor(const Rows &rows, const real *w, real *a, real &max_diag, real &pmin, "
+                 "real &pmax) {")
         o.append("  const real(*c)[2][3] = rows.coef;")
-        for p in range(m):
-            for q in range(self.first[p], p + 1):
-                i, j = self.row_at[p], self.row_at[q]
-                dots = []  # per pair of slots on one body, as linear_solve.cpp sums them
-                for si in range(2):
-                    for sj in range(2):
-                        b = self.rows[i][0][si]
-                        if b < 0 or b != self.rows[j][0][sj] or (i == j and sj < si):
-                            continue
-                        terms = []
-                        for k in range(3):
-                            c1, v1 = self.coef(i, si, k)
-                            c2, v2 = self.coef(j, sj, k)
-                            terms.append((c1 * c2, v1 + [f"w[{3 * b + k}]"] + v2))
-                        dots.append(product(terms))
-                o.append(f"  {a(p, q)} = {group(dots)};")
-        o.append("}\n")
-        # Cholesky, row by row, as linear_solve.cpp's envelope loop but over L's non-zeros
-        o.append(f"bool {sym}_cholesky(real *a, real floor, real &pmin, real &pmax) {{")
-        o.append(f"  constexpr int {R} = kMaxRows;")
-        o.append("  real d;")
-        for p in range(m):
-            lp = self.l_nz[p]
-            for q in lp:
-                sub = "".join(f" - {a(p, k)} * {a(q, k)}" for k in lp if k < q and k in self.l_nz[q])
-                o.append(f"  {a(p, q)} = ({a(p, q)}{sub}) / {a(q, q)};")
-            sub = "".join(f" - {a(p, k)} * {a(p, k)}" for k in lp)
-            o.append(f"  d = {a(p, p)}{sub};")
-            o.append("  if (!(d > floor)) return false;")
-            o.append("  pmin = d < pmin ? d : pmin;")
-            o.append("  pmax = d > pmax ? d : pmax;")
-            o.append(f"  {a(p, p)} = std::sqrt(d);")
+        o += self.factor_locals(False, "return false;") + self.factor_store()
         o.append("  return true;")
         o.append("}\n")
         # entered at position `from` (y zero before it: a row after the block, fill from there)
@@ -260,29 +333,46 @@ class Kernel:
             o.append(f"  y[{p}] /= {a(p, p)};")
             o += [f"  y[{k}] -= {a(p, k)} * y[{p}];" for k in self.l_nz[p]]
         o.append("}\n")
+        # the whole solve on the block alone, in row order
+        o.append(f"void {sym}_solve(const real *a, real *x) {{")
+        o += self.solve_locals(lambda i: f"x[{i}]", lambda i: f"x[{i}]", lval="a")
+        o.append("}\n")
         # J x and J^T x
         o.append(f"void {sym}_j_times(const Rows &rows, const real *x, real *y) {{")
         o.append("  const real(*c)[2][3] = rows.coef;")
-        for i in range(m):
-            dots = []
-            for s in range(2):
-                b = self.rows[i][0][s]
-                if b >= 0:
-                    dots.append(product([(self.coef(i, s, k)[0], self.coef(i, s, k)[1] + [f"x[{3 * b + k}]"])
-                                         for k in range(3)]))
-            o.append(f"  y[{i}] = {group(dots)};")
+        o += [f"  y[{i}] = {self.j_expr(i, lambda n: f'x[{n}]', False)};" for i in range(m)]
         o.append("}\n")
         o.append(f"void {sym}_jt_times(const Rows &rows, const real *x, real *y) {{")
         o.append("  const real(*c)[2][3] = rows.coef;")
-        for n in range(3 * self.nb):
-            b, k = divmod(n, 3)
-            terms = []
-            for i in range(m):
-                for s in range(2):
-                    if self.rows[i][0][s] == b:
-                        cc, vs = self.coef(i, s, k)
-                        terms.append((cc, vs + [f"x[{i}]"]))
-            o.append(f"  y[{n}] = {product(terms)};")
+        o += [f"  y[{n}] = {self.jt_expr(n, lambda i: f'x[{i}]', False)};" for n in range(3 * self.nb)]
+        o.append("}\n")
+        # the whole forward-dynamics solve of the joint rows alone, fused (dynamics.cpp's
+        # steps with the same arithmetic in the same order, its values kept in locals)
+        o.append(f"legsim_status {sym}_dynamics(const Model &model, const VecQ &q, const VecQ &qd, "
+                 "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, "
+                 "VecR &lambda, VecQ &qdd) {")
+        o.append("  const real *w = model.minv;")
+        o += self.rows_locals()
+        o.append("  if (keep_rows) {")
+        o += ["  " + x for x in self.rows_store("keep_rows->")]
+        o.append("  }")
+        o.append("  real max_diag = 0, pmin, pmax;")
+        fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
+        o += self.factor_locals(True, fail)
+        o.append("  if (keep_a) {")
+        o += ["  " + x for x in self.factor_store("keep_a")]
+        o.append("  }")
+        o.append("  condition = std::sqrt(pmax / pmin);")
+        nq = 3 * self.nb
+        o += [f"  const real t{n} = w[{n}] * force[{n}];" for n in range(nq)]
+        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gam{i};" for i in range(m)]
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}")
+        o += [f"  lambda[{i}] = l{i};" for i in range(m)]
+        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
+        for n in range(nq):
+            o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
+            o.append(f"  z += qdd[{n}] * real(0);")
+        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
         # tables
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
@@ -290,8 +380,8 @@ class Kernel:
         o.append(f"const uint8_t {sym}_perm[] = {{{', '.join(map(str, self.perm))}}};")
         o.append(f"const uint8_t {sym}_first[] = {{{', '.join(map(str, self.first))}}};")
         o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
-                 f"{m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_assemble, {sym}_cholesky, "
-                 f"{sym}_forward, {sym}_backward, {sym}_j_times, {sym}_jt_times}};")
+                 f"{m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
+                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {sym}_dynamics}};")
         return "\n".join(o) + "\n"
 
 
