@@ -1,30 +1,8 @@
-// Actuators: force commands, the length servo (PD, saturated at max_force, and
-// saying so), and the hard stops at the stroke ends.
+// Actuators: the hard stops at the stroke ends and the layouts with length rows. Their
+// forces (commands, the length servo) are applied forces: forces.cpp.
 #include "sim.hpp"
 
 namespace legsim {
-
-void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
-                            const VecQ &qd) {
-  (void)opt;
-  for (int a = 0; a < model.na; ++a) {
-    ActuatorState &st = d.act[a];
-    if (st.mode == LEGSIM_ACTUATOR_FORCE) {
-      st.force = st.setpoint;
-      continue;
-    }
-    const Actuator &ac = model.act[a];
-    real len, rate;
-    actuator_length(model, a, q, qd, len, rate, &d.trig);
-    real f = ac.kp * (st.setpoint - len) - ac.kd * rate;
-    // A real cylinder cannot push harder: saturate, and report it.
-    if (f > ac.fmax || f < -ac.fmax) {
-      f = f > 0 ? ac.fmax : -ac.fmax;
-      raise_event(d, LEGSIM_EVENT_FORCE_SATURATED);
-    }
-    st.force = f;
-  }
-}
 
 legsim_status work_layout(Sim &sim, uint32_t mask) {
   Data &d = sim.data;

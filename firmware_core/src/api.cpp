@@ -13,6 +13,7 @@ using namespace legsim;
 static_assert(alignof(Sim) <= LEGSIM_STORAGE_ALIGN, "raise LEGSIM_STORAGE_ALIGN");
 static_assert(LEGSIM_MAX_ROWS <= 255, "row indices are stored in 8 bits");
 static_assert(LEGSIM_MAX_ACTUATORS <= 31, "actuator sets are 32-bit masks");
+static_assert(sizeof(legsim_reaction) == 3 * sizeof(legsim_real), "a reaction is 3 reals, no padding");
 
 namespace legsim {
 
@@ -66,6 +67,24 @@ void Snapshot::restore(Sim &sim) const {
   d.history_valid = history_valid;
 }
 
+namespace {
+// x * 0 is 0 for a finite x and NaN for any other: NaN unless all n values are finite. Four
+// partial sums, which the compiler keeps in vector registers (their order cannot change
+// whether the sum is NaN).
+real nan_unless_finite(const real *x, int n) {
+  real z0 = 0, z1 = 0, z2 = 0, z3 = 0;
+  int k = 0;
+  for (; k + 4 <= n; k += 4) {
+    z0 += x[k] * real(0);
+    z1 += x[k + 1] * real(0);
+    z2 += x[k + 2] * real(0);
+    z3 += x[k + 3] * real(0);
+  }
+  for (; k < n; ++k) z0 += x[k] * real(0);
+  return (z0 + z1) + (z2 + z3);
+}
+}  // namespace
+
 bool state_sane(const VecQ &q, const VecQ &qd, int n) {
   for (int k = 0; k < n; ++k)
     if (!(std::abs(q[k]) < real(LEGSIM_MAX_ABS_Q)) || !(std::abs(qd[k]) < real(LEGSIM_MAX_ABS_QD)))
@@ -73,19 +92,39 @@ bool state_sane(const VecQ &q, const VecQ &qd, int n) {
   return true;
 }
 
-// Once per call (per step): everything a caller can read is finite.
+// Once per call (per step): everything a caller can read is finite, the state sane.
 legsim_status outputs_check(const Sim &sim) {
   const Model &m = sim.model;
   const Data &d = sim.data;
-  if (!state_sane(d.q, d.qd, m.nq) || !all_finite(d.qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
-  // x * 0 is 0 for a finite x and NaN for any other: one sum over every output, no branch each
+  const int n = m.nq;
+  // One pass over the coordinates, in pairs (vector registers): |q| and |qd| summed, and
+  // qdd * 0. Every |x| is below its bound when their sum is (a NaN fails that test too):
+  // the common case; past it, state_sane looks at each value.
+  const real *q = d.q.data(), *qd = d.qd.data(), *qdd = d.qdd.data();
+  real aq0 = 0, aq1 = 0, av0 = 0, av1 = 0, z0 = 0, z1 = 0;
+  int k = 0;
+  for (; k + 2 <= n; k += 2) {
+    aq0 += std::abs(q[k]);
+    aq1 += std::abs(q[k + 1]);
+    av0 += std::abs(qd[k]);
+    av1 += std::abs(qd[k + 1]);
+    z0 += qdd[k] * real(0);
+    z1 += qdd[k + 1] * real(0);
+  }
+  if (k < n) {
+    aq0 += std::abs(q[k]);
+    av0 += std::abs(qd[k]);
+    z0 += qdd[k] * real(0);
+  }
+  if (!(aq0 + aq1 < real(LEGSIM_MAX_ABS_Q) && av0 + av1 < real(LEGSIM_MAX_ABS_QD)) &&
+      !state_sane(d.q, d.qd, n))
+    return LEGSIM_ERR_DIVERGED;
   const real o = 0;
-  real z = d.report.residual * o + d.report.condition * o;
-  for (int i = 0; i < kMaxRows; ++i) z += d.lambda[i] * o;
-  for (int j = 0; j < m.nj; ++j)
-    z += d.reaction[j].force_n[0] * o + d.reaction[j].force_n[1] * o + d.reaction[j].moment_nm * o;
+  real z = (z0 + z1) + nan_unless_finite(d.lambda.data(), kMaxRows) +
+           nan_unless_finite(&d.reaction[0].force_n[0], 3 * m.nj);  // 3 reals a reaction
+  z += d.report.residual * o + d.report.condition * o;
   for (int a = 0; a < m.na; ++a) z += d.act[a].force * o + d.act[a].stop_force * o;
-  for (int k = 0; k < m.nc; ++k) z += d.contact[k].normal * o + d.contact[k].tangential * o;
+  for (int c = 0; c < m.nc; ++c) z += d.contact[c].normal * o + d.contact[c].tangential * o;
   return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
@@ -699,8 +738,9 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
   if (n_steps < 0) return LEGSIM_ERR_BAD_INPUT;
   Sim &s = *as_sim(sim);
   Data &d = s.data;
-  if (!d.assembled || !all_finite(d.q, s.model.nq) || !all_finite(d.qd, s.model.nq))
-    return LEGSIM_ERR_STATE;
+  // The state was sane (finite) when the call that set it ended (all_or_nothing's
+  // outputs_check, after every call that changes it), so it needs no check here.
+  if (!d.assembled) return LEGSIM_ERR_STATE;
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   for (int32_t i = 0; i < n_steps; ++i) {
     // a failed step leaves the state of the last good one (all_or_nothing also

@@ -1,4 +1,5 @@
-// Generalized applied forces Q: gravity, force elements and actuator forces.
+// Generalized applied forces Q: gravity, force elements and actuator forces, with the
+// actuators' axial forces from their commands (force, or length through the servo).
 #include "sim.hpp"
 
 namespace legsim {
@@ -39,6 +40,7 @@ void add_force_elements(const Model &model, const Data &d, const VecQ &q, const 
     const real *v = d.force_value[i];
     switch (fe.kind) {
       case LEGSIM_FORCE_POINT:
+        if (v[0] == 0 && v[1] == 0) break;  // none applied (a scene's load left at 0)
         add_point_force(force_q, fe.a, body_offset(q, fe.a, fe.pa, trig), Vec2(v[0], v[1]));
         break;
       case LEGSIM_FORCE_TORQUE: force_q[3 * fe.a + 2] += v[0]; break;
@@ -60,34 +62,89 @@ void add_force_elements(const Model &model, const Data &d, const VecQ &q, const 
 }
 #endif
 
+// The axial force of actuator a from its command at the cylinder's axis u = (s, -c) and
+// normal n = (c, s): d = r_rod - r_cyl, dd its rate, w the cylinder's angular velocity;
+// arm = d . n, the length's derivative by the cylinder's angle. A force command is the
+// force; a length command goes through the servo (PD on length and rate, saturated at
+// max_force: a real cylinder cannot push harder, and the event says so). The arithmetic
+// is actuator_length's (constraints.cpp), term for term.
+real axial_force(const Actuator &ac, const ActuatorState &st, Data &d, real s, real c, real dx,
+                 real dy, real dvx, real dvy, real w, real arm) {
+  if (st.mode == LEGSIM_ACTUATOR_FORCE) return st.setpoint;
+  const real len = (dx * s + dy * -c) + ac.offset_m;
+  const real rate = (dvx * s + dvy * -c) + w * arm;
+  real f = ac.kp * (st.setpoint - len) - ac.kd * rate;
+  if (f > ac.fmax || f < -ac.fmax) {
+    f = f > 0 ? ac.fmax : -ac.fmax;
+    raise_event(d, LEGSIM_EVENT_FORCE_SATURATED);
+  }
+  return f;
+}
+
 }  // namespace
+
+void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
+                            const VecQ &qd) {
+  (void)opt;
+  for (int a = 0; a < model.na; ++a) {
+    const Actuator &ac = model.act[a];
+    ActuatorState &st = d.act[a];
+    if (st.mode == LEGSIM_ACTUATOR_FORCE) {
+      st.force = st.setpoint;
+      continue;
+    }
+    const int i = 3 * ac.cyl, j = 3 * ac.rod;
+    real s, c;
+    body_trig(&d.trig, ac.cyl, q[i + 2], s, c);
+    const real dx = q[j] - q[i], dy = q[j + 1] - q[i + 1];
+    st.force = axial_force(ac, st, d, s, c, dx, dy, qd[j] - qd[i], qd[j + 1] - qd[i + 1], qd[i + 2],
+                           dx * c + dy * s);
+  }
+}
 
 void applied_forces(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
                     const VecQ &qd, VecQ &force_q) {
-  for (int k = 0; k < model.nq; ++k) force_q[k] = 0;
-  if (!(opt.disable & LEGSIM_DISABLE_GRAVITY))
-    for (int b = 0; b < model.nb; ++b) {
-      force_q[3 * b] += model.mass[3 * b] * model.gravity.x();
-      force_q[3 * b + 1] += model.mass[3 * b] * model.gravity.y();
-    }
+  real *__restrict fq = force_q.data();  // Data's Q: apart from the model, q and qd
+  // Gravity, m g at each centre (no moment), written rather than added: it clears Q too,
+  // in one pass (m * 0 is the 0 it had before for the massive bodies every model has).
+  const bool gravity = !(opt.disable & LEGSIM_DISABLE_GRAVITY);
+  const Vec2 g = gravity ? model.gravity : Vec2::Zero();
+  for (int b = 0; b < model.nb; ++b) {  // (m, m) * (g_x, g_y): one vector product a body
+    Eigen::Map<Vec2>(fq + 3 * b) = Eigen::Map<const Vec2>(model.mass + 3 * b).cwiseProduct(g);
+    fq[3 * b + 2] = 0;
+  }
 #if LEGSIM_WITH_FORCE_ELEMENTS
-  if (!(opt.disable & LEGSIM_DISABLE_FORCE_ELEMENTS)) add_force_elements(model, d, q, qd, force_q, &d.trig);
+  if (model.nf && !(opt.disable & LEGSIM_DISABLE_FORCE_ELEMENTS))
+    add_force_elements(model, d, q, qd, force_q, &d.trig);
 #endif
   if (opt.disable & LEGSIM_DISABLE_ACTUATORS) return;
-  actuator_forces_update(model, opt, d, q, qd);
-  // F along the cylinder axis, by virtual work F dl: Q = F * (d length / d q).
+  // Each actuator's force from its command (as actuator_forces_update), then F along the
+  // cylinder axis by virtual work F dl: Q = F * (d length / d q), one sin/cos pair (the
+  // stage's, shared with the rows) for both.
   for (int a = 0; a < model.na; ++a) {
     const Actuator &ac = model.act[a];
-    const real f = d.act[a].force;
+    ActuatorState &st = d.act[a];
+    const int i = 3 * ac.cyl, j = 3 * ac.rod;
+    const real dx = q[j] - q[i], dy = q[j + 1] - q[i + 1];
     real s, c;
-    body_trig(&d.trig, ac.cyl, q[3 * ac.cyl + 2], s, c);  // the rows' pair at this q
-    const Vec2 u(s, -c), n(c, s);                          // axis_u, normal_n
-    const Vec2 dvec(q[3 * ac.rod] - q[3 * ac.cyl], q[3 * ac.rod + 1] - q[3 * ac.cyl + 1]);
-    force_q[3 * ac.cyl] -= f * u.x();
-    force_q[3 * ac.cyl + 1] -= f * u.y();
-    force_q[3 * ac.cyl + 2] += f * dvec.dot(n);
-    force_q[3 * ac.rod] += f * u.x();
-    force_q[3 * ac.rod + 1] += f * u.y();
+    real f;
+    if (st.mode == LEGSIM_ACTUATOR_FORCE) {
+      f = st.setpoint;
+      st.force = f;
+      if (f == 0) continue;  // a passive actuator: adds nothing
+      body_trig(&d.trig, ac.cyl, q[i + 2], s, c);
+    } else {
+      body_trig(&d.trig, ac.cyl, q[i + 2], s, c);
+      f = axial_force(ac, st, d, s, c, dx, dy, qd[j] - qd[i], qd[j + 1] - qd[i + 1], qd[i + 2],
+                      dx * c + dy * s);
+      st.force = f;
+    }
+    const real fs = f * s, fc = f * c;
+    fq[i] -= fs;
+    fq[i + 1] += fc;  // - F u_y
+    fq[i + 2] += f * (dx * c + dy * s);
+    fq[j] += fs;
+    fq[j + 1] -= fc;
   }
 }
 
