@@ -25,6 +25,18 @@ legsim_status stops_layout(Sim &sim) {
   return s;
 }
 
+namespace {
+// An actuator's length at q, (r_rod - r_cyl) . u_cyl + offset: actuator_length's without
+// the rate, from the cylinder's sin/cos alone (the stroke checks need no more).
+real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig) {
+  const Actuator &ac = m.act[a];
+  const int i = 3 * ac.cyl, j = 3 * ac.rod;
+  real s, c;
+  body_trig(trig, ac.cyl, q[i + 2], s, c);
+  return ((q[j] - q[i]) * s + (q[j + 1] - q[i + 1]) * -c) + ac.offset_m;
+}
+}  // namespace
+
 // After a step: an actuator past its stroke is put back on its end (a projection
 // onto Phi = 0 with that length held) and its velocity along the stroke removed:
 // an inelastic impact. From then on a length row holds it in the dynamics, and
@@ -39,8 +51,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
     uint32_t added = 0;
     for (int a = 0; a < m.na; ++a) {
       if (d.stop_mask & (1u << a)) continue;
-      real len, rate;
-      actuator_length(m, a, d.q, d.qd, len, rate, &d.trig);
+      const real len = stroke_length(m, a, d.q, &d.trig);
       const Actuator &ac = m.act[a];
       if (len >= ac.lmin && len <= ac.lmax) continue;
       const bool low = len < ac.lmin;
