@@ -395,7 +395,8 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   changed = false;
   const Model &m = sim.model;
   Data &d = sim.data;
-  if (m.nc == 0) return LEGSIM_OK;
+  // (LEGSIM_WITH_CONTACT 0: no model has contacts; the code below is not compiled in)
+  if (!LEGSIM_WITH_CONTACT || m.nc == 0) return LEGSIM_OK;
   uint32_t slipped = 0, stuck_again = 0;  // each once per check
   uint32_t changing = 0;                  // the contacts the last pass changed
   const real tol = real(sim.opt.newton_tol);

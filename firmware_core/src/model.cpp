@@ -260,7 +260,9 @@ legsim_status model_compile(const legsim_model_desc *d, Model &m) {
   const legsim_ground_desc &gd = d->ground;
   m.ground_point = Vec2(real(gd.point[0]), real(gd.point[1]));
   const real slope = real(gd.slope_rad);  // in the build's real: no double trigonometry on a float MCU
-  m.ground_t = Vec2(std::cos(slope), std::sin(slope));
+  real slope_s, slope_c;
+  sincos_any(slope, slope_s, slope_c);  // kernel_trig.hpp
+  m.ground_t = Vec2(slope_c, slope_s);
   m.ground_n = perp(m.ground_t);
   m.mu_s = real(gd.mu_static);
   m.mu_k = real(gd.mu_kinetic);

@@ -86,7 +86,10 @@ def test_statics_reactions_balance_the_whole_leg(stand, precision):
     m = s.model.masses
     weight = m[:, None] * G[None, :]
     bodies = [0, 2, 3]  # the first-listed body of A, B_thigh, B_lower
-    t = tol(precision, 1e-9, 2e-3)
+    # float: the balance is as good as the float statics, whose reactions move by up to
+    # 1e-5 of the largest one when the stand pose moves by one ulp (measured: the force
+    # residual 1.4e-3 N median, 4.6e-3 N worst of 60 such poses, largest reaction 536 N)
+    t = tol(precision, 1e-9, 1e-5 * np.max(np.abs(R)))
     force = R[FRAME_JOINTS, :2].sum(axis=0) + weight.sum(axis=0) + FOOT_LOAD
     np.testing.assert_allclose(force, 0.0, atol=t)
 
