@@ -25,7 +25,13 @@ set(CMAKE_ASM_COMPILER ${_arm_prefix}gcc)
 # arm-none-eabi-size is looked up where it is needed (firmware_core/mcu).
 
 # Code and data in their own sections so the linker can drop what is unused.
-set(_arm_common "${LEGSIM_ARM_CPU_FLAGS} -ffunction-sections -fdata-sections")
+# -fno-math-errno: sqrt is the FPU's vsqrt inline, not a call to newlib's sqrtf wrapper that
+# checks for a negative argument to set errno (nothing here reads errno; the result, NaN for
+# x < 0, is the same). -fconserve-stack: inline less where it would grow a frame (with the
+# link-time optimization of the cortex-m4f preset the image's stack went from 2.1 to 3.6 KB
+# without it, 2.0 KB with it).
+set(_arm_common
+    "${LEGSIM_ARM_CPU_FLAGS} -ffunction-sections -fdata-sections -fno-math-errno -fconserve-stack")
 set(CMAKE_C_FLAGS_INIT "${_arm_common}")
 set(CMAKE_ASM_FLAGS_INIT "${LEGSIM_ARM_CPU_FLAGS}")
 # No exceptions, no RTTI, no thread-safe static guards (no __cxa_guard_*), and no

@@ -5,19 +5,33 @@
 
 #include "legsim/models.h"
 #include "out.h"
+#if defined(LEGSIM_MCU_BOARD)
+#include "mcu_trig.h"
+#endif
 
 /* world position of a body-fixed point (xi, eta): r + xi*u + eta*n, with
  * u = (sin phi, -cos phi), n = (cos phi, sin phi) (models/leg.toml) */
 static void body_point(const legsim_real *q, int32_t body, const double *p, double *xy) {
-  const double x = (double)q[3 * body], y = (double)q[3 * body + 1];
-  /* in the build's precision (no double sin/cos on the M4F just for printing) */
+  /* in the build's precision (no double arithmetic or sin/cos on the M4F just for
+   * printing); an image takes the core's float sin and cos (mcu_trig.h: no libm
+   * trigonometry linked) */
 #if LEGSIM_USE_FLOAT
-  const double s = (double)sinf(q[3 * body + 2]), c = (double)cosf(q[3 * body + 2]);
+  const float x = q[3 * body], y = q[3 * body + 1], px = (float)p[0], py = (float)p[1];
+  float s, c;
+#if defined(LEGSIM_MCU_BOARD)
+  mcu_sincosf(q[3 * body + 2], &s, &c);
 #else
-  const double s = sin(q[3 * body + 2]), c = cos(q[3 * body + 2]);
+  s = sinf(q[3 * body + 2]);
+  c = cosf(q[3 * body + 2]);
 #endif
+  xy[0] = (double)(x + px * s + py * c);
+  xy[1] = (double)(y - px * c + py * s);
+#else
+  const double x = q[3 * body], y = q[3 * body + 1];
+  const double s = sin(q[3 * body + 2]), c = cos(q[3 * body + 2]);
   xy[0] = x + p[0] * s + p[1] * c;
   xy[1] = y - p[0] * c + p[1] * s;
+#endif
 }
 
 static void print_foot(const char *prefix, const legsim_sim *sim) {

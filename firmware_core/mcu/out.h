@@ -18,6 +18,8 @@ void out_char(char c);
 void out_int(int64_t v);
 void out_uint(uint64_t v);
 void out_hex(uint32_t v);
+/* n / d and n % d (into *rem if not NULL) without libgcc's 64-bit division */
+uint64_t out_udiv64(uint64_t n, uint32_t d, uint32_t *rem);
 /* Fixed point with `decimals` digits after the point (0..15); d.ddde+XX for
  * |v| >= 1e9 or for non-zero values that would print as zero; nan/inf spelled out. */
 void out_real(double v, int decimals);

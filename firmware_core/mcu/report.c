@@ -91,7 +91,7 @@ static int run_integrator(legsim_sim *sim, const report_model *m, legsim_integra
   if (done > 0) {
     out_str(prefix);
     out_str(" insns_per_step mean ");
-    out_uint(sum / (uint64_t)done);
+    out_uint(out_udiv64(sum, (uint32_t)done, 0));
     out_str(" min ");
     out_uint(lo);
     out_str(" max ");
