@@ -68,20 +68,44 @@ void Snapshot::restore(Sim &sim) const {
 }
 
 namespace {
-// x * 0 is 0 for a finite x and NaN for any other: NaN unless all n values are finite. Four
-// partial sums, which the compiler keeps in vector registers (their order cannot change
-// whether the sum is NaN).
-real nan_unless_finite(const real *x, int n) {
-  real z0 = 0, z1 = 0, z2 = 0, z3 = 0;
+// Fixed-size blocks of four: Eigen keeps them in vector registers (unaligned loads).
+using Block4 = Eigen::Array<real, 4, 1>;
+using ConstBlock4 = Eigen::Map<const Block4>;
+
+// The sum of n values, in blocks of eight (the tests below do not depend on the order).
+real block_sum(const real *x, int n) {
+  Block4 z0 = Block4::Zero(), z1 = Block4::Zero();
   int k = 0;
-  for (; k + 4 <= n; k += 4) {
-    z0 += x[k] * real(0);
-    z1 += x[k + 1] * real(0);
-    z2 += x[k + 2] * real(0);
-    z3 += x[k + 3] * real(0);
+  for (; k + 8 <= n; k += 8) {
+    z0 += ConstBlock4(x + k);
+    z1 += ConstBlock4(x + k + 4);
   }
-  for (; k < n; ++k) z0 += x[k] * real(0);
-  return (z0 + z1) + (z2 + z3);
+  real z = (z0 + z1).sum();
+  for (; k < n; ++k) z += x[k];
+  return z;
+}
+
+// 0 for finite values, NaN if any is not (x * 0 is NaN for an infinity or a NaN).
+real nan_unless_finite(const real *x, int n) {
+  real z = 0;
+  for (int k = 0; k < n; ++k) z += x[k] * real(0);
+  return z;
+}
+
+// The values a call's caller can read besides the state and qdd, summed: finite only if
+// each is (an infinity or a NaN anywhere makes it not). Exact: times 0, so that the rare
+// finite values whose sum overflows are told apart from a non-finite one.
+template <bool Exact>
+real outputs_sum(const Sim &sim) {
+  const Model &m = sim.model;
+  const Data &d = sim.data;
+  const auto sum = [](const real *x, int n) { return Exact ? nan_unless_finite(x, n) : block_sum(x, n); };
+  const real o = Exact ? real(0) : real(1);
+  real z = sum(d.lambda.data(), kMaxRows) + sum(&d.reaction[0].force_n[0], 3 * m.nj);  // 3 reals each
+  z += d.report.residual * o + d.report.condition * o;
+  for (int a = 0; a < m.na; ++a) z += d.act[a].force * o + d.act[a].stop_force * o;
+  for (int c = 0; c < m.nc; ++c) z += d.contact[c].normal * o + d.contact[c].tangential * o;
+  return z;
 }
 }  // namespace
 
@@ -94,38 +118,31 @@ bool state_sane(const VecQ &q, const VecQ &qd, int n) {
 
 // Once per call (per step): everything a caller can read is finite, the state sane.
 legsim_status outputs_check(const Sim &sim) {
-  const Model &m = sim.model;
   const Data &d = sim.data;
-  const int n = m.nq;
-  // One pass over the coordinates, in pairs (vector registers): |q| and |qd| summed, and
-  // qdd * 0. Every |x| is below its bound when their sum is (a NaN fails that test too):
-  // the common case; past it, state_sane looks at each value.
+  const int n = sim.model.nq;
+  // One pass over the coordinates, four at a time (partial sums in vector registers): |q|
+  // and |qd| summed, and qdd. Every |x| is below its bound when their sum is (a NaN fails
+  // that test too): the common case; past it, state_sane looks at each value.
   const real *q = d.q.data(), *qd = d.qd.data(), *qdd = d.qdd.data();
-  real aq0 = 0, aq1 = 0, av0 = 0, av1 = 0, z0 = 0, z1 = 0;
+  Block4 aq = Block4::Zero(), av = Block4::Zero(), za = Block4::Zero();
   int k = 0;
-  for (; k + 2 <= n; k += 2) {
-    aq0 += std::abs(q[k]);
-    aq1 += std::abs(q[k + 1]);
-    av0 += std::abs(qd[k]);
-    av1 += std::abs(qd[k + 1]);
-    z0 += qdd[k] * real(0);
-    z1 += qdd[k + 1] * real(0);
+  for (; k + 4 <= n; k += 4) {
+    aq += ConstBlock4(q + k).abs();
+    av += ConstBlock4(qd + k).abs();
+    za += ConstBlock4(qdd + k);
   }
-  if (k < n) {
-    aq0 += std::abs(q[k]);
-    av0 += std::abs(qd[k]);
-    z0 += qdd[k] * real(0);
+  real sq = aq.sum(), sv = av.sum(), sa = za.sum();
+  for (; k < n; ++k) {
+    sq += std::abs(q[k]);
+    sv += std::abs(qd[k]);
+    sa += qdd[k];
   }
-  if (!(aq0 + aq1 < real(LEGSIM_MAX_ABS_Q) && av0 + av1 < real(LEGSIM_MAX_ABS_QD)) &&
-      !state_sane(d.q, d.qd, n))
+  if (!(sq < real(LEGSIM_MAX_ABS_Q) && sv < real(LEGSIM_MAX_ABS_QD)) && !state_sane(d.q, d.qd, n))
     return LEGSIM_ERR_DIVERGED;
-  const real o = 0;
-  real z = (z0 + z1) + nan_unless_finite(d.lambda.data(), kMaxRows) +
-           nan_unless_finite(&d.reaction[0].force_n[0], 3 * m.nj);  // 3 reals a reaction
-  z += d.report.residual * o + d.report.condition * o;
-  for (int a = 0; a < m.na; ++a) z += d.act[a].force * o + d.act[a].stop_force * o;
-  for (int c = 0; c < m.nc; ++c) z += d.contact[c].normal * o + d.contact[c].tangential * o;
-  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+  const real z = sa + outputs_sum<false>(sim);
+  if (z - z == 0) return LEGSIM_OK;  // finite
+  const real exact = nan_unless_finite(qdd, n) + outputs_sum<true>(sim);
+  return exact == exact ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
 }  // namespace legsim
