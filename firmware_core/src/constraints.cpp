@@ -6,7 +6,10 @@
 namespace legsim {
 
 void trig_clear(TrigCache &t) {
-  for (int b = 0; b < kMaxBodies; ++b) t.phi[b] = t.s[b] = t.c[b] = real(NAN);
+  for (int b = 0; b < kMaxBodies; ++b) {
+    t.phi[b] = t.s[b] = t.c[b] = t.grid_s[b] = t.grid_c[b] = real(NAN);
+    t.grid[b] = INT32_MIN;
+  }
 }
 
 namespace {

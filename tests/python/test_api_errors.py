@@ -110,10 +110,15 @@ def test_wrong_sizes_and_names_are_python_errors(stand):
 
 
 def test_a_diverging_step_is_reported(stand):
-    """RK4 with a step far beyond its stability limit under the stiff servo (kp 20 kN/m)."""
+    """RK4 with a step far beyond its stability limit under the stiff servo (kp 20 kN/m): the
+    leg flails until a step fails. Which check trips first in the blow-up (the projection's
+    Newton, a dead centre passed on the way, a value out of range) is a matter of round-off,
+    so any of them; the call is refused and the state is the last good step's."""
     s = stand(integrator="rk4", step=0.05)
     s.command_length("upper", 0.75)
     s.command_force("lower", 1500.0)
-    e = _raises(legsim.DivergedError, "LEGSIM_ERR_DIVERGED", s.step, 200)
-    assert e.function == "legsim_step"
+    with pytest.raises((legsim.DivergedError, legsim.SingularError, legsim.NotConvergedError)) as e:
+        s.step(200)
+    assert e.value.function == "legsim_step"
+    assert e.value.status_name in ("LEGSIM_ERR_DIVERGED", "LEGSIM_ERR_SINGULAR", "LEGSIM_ERR_NOT_CONVERGED")
     assert 0 < s.step_count < 200 and np.all(np.isfinite(s.q))  # the last good step's state
