@@ -34,8 +34,17 @@ using VecR = Eigen::Matrix<real, kMaxRows, 1>;
 using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows, Eigen::RowMajor>;
 
 // Unit axis u(phi) = (sin, -cos) and normal n(phi) = (cos, sin) of eq. (1).
-inline Vec2 axis_u(real phi) { return Vec2(std::sin(phi), -std::cos(phi)); }
-inline Vec2 normal_n(real phi) { return Vec2(std::cos(phi), std::sin(phi)); }
+// (sincos_any: the library's in double, kernel_trig.hpp's reduction in float)
+inline Vec2 axis_u(real phi) {
+  real s, c;
+  sincos_any(phi, s, c);
+  return Vec2(s, -c);
+}
+inline Vec2 normal_n(real phi) {
+  real s, c;
+  sincos_any(phi, s, c);
+  return Vec2(c, s);
+}
 // Rotation by +90 degrees: d/dphi of a body-fixed vector s is perp(s).
 inline Vec2 perp(const Vec2 &s) { return Vec2(-s.y(), s.x()); }
 inline real cross2(const Vec2 &a, const Vec2 &b) { return a.x() * b.y() - a.y() * b.x(); }
