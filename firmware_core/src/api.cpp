@@ -107,6 +107,19 @@ real outputs_sum(const Sim &sim) {
   for (int c = 0; c < m.nc; ++c) z += d.contact[c].normal * o + d.contact[c].tangential * o;
   return z;
 }
+// q and qd finite: their sum is unless one is not (or the rare finite values overflow it,
+// told apart by nan_unless_finite). Every call leaves the state sane (outputs_check), so
+// this is the cheap common case: one pass in blocks.
+bool state_finite(const VecQ &q, const VecQ &qd, int n) {
+  Block4 z = Block4::Zero();
+  int k = 0;
+  for (; k + 4 <= n; k += 4) z += ConstBlock4(q.data() + k) + ConstBlock4(qd.data() + k);
+  real sum = z.sum();
+  for (; k < n; ++k) sum += q[k] + qd[k];
+  if (sum - sum == 0) return true;
+  const real exact = nan_unless_finite(q.data(), n) + nan_unless_finite(qd.data(), n);
+  return exact == exact;
+}
 }  // namespace
 
 bool state_sane(const VecQ &q, const VecQ &qd, int n) {
@@ -755,9 +768,7 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
   if (n_steps < 0) return LEGSIM_ERR_BAD_INPUT;
   Sim &s = *as_sim(sim);
   Data &d = s.data;
-  // The state was sane (finite) when the call that set it ended (all_or_nothing's
-  // outputs_check, after every call that changes it), so it needs no check here.
-  if (!d.assembled) return LEGSIM_ERR_STATE;
+  if (!d.assembled || !state_finite(d.q, d.qd, s.model.nq)) return LEGSIM_ERR_STATE;
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   for (int32_t i = 0; i < n_steps; ++i) {
     // a failed step leaves the state of the last good one (all_or_nothing also
