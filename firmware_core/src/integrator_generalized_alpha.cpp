@@ -6,7 +6,9 @@
 // solved by Newton with the iteration matrix [beta' M, Phi_q^T; Phi_q, 0]
 // (beta' = (1 - am) / (h^2 beta (1 - af))): M is diagonal, so each iteration
 // is one factorization of Phi_q M^-1 Phi_q^T, the kernel of every other solve.
-#include "sim.hpp"
+#include <cstring>
+
+#include "kernel.hpp"
 
 namespace legsim {
 
@@ -59,28 +61,43 @@ legsim_status generalized_alpha_step(Sim &sim) {
   }
   const Layout &lay = d.dyn;
   bool converged = false;
+  // the joint rows alone: each iteration's solve generated and fused (the same values)
+  const Kernel *kern = lay.kernel && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
+  if (kern) {
+    d.factor.m = lay.m;
+    d.factor.kernel = kern;
+    std::memcpy(d.factor.perm, lay.perm, sizeof d.factor.perm);
+    std::memcpy(d.factor.first, lay.first, sizeof d.factor.first);
+  }
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
     applied_forces(m, sim.opt, d, q1, v1, d.force_q);
-    rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
-    legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
-    d.report.condition = d.factor.condition;
-    if (s != LEGSIM_OK) return s;
-    // r = M qdd + J^T lambda - Q
-    jt_times(m, lay, d.rows, lambda, res);
-    if (lay.nslide) friction_add(sim, lay, q1, lambda, -1, res);  // sliding feet's friction
-    // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
     VecQ tmp;
-    residual(n, m.mass, m.minv, qdd1.data(), d.force_q.data(), res.data(), tmp.data());
-    j_times(lay, d.rows, tmp, d.rhs);
-    for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
-    if (lay.nslide) {
-      s = coupled_solve(sim, lay, q1, d.rhs);  // the friction's coupling, exactly
+    if (kern) {
+      const legsim_status s = kern->newton(m, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,
+                                           d.factor.a.data(), d.factor.condition, res.data(), d.rhs, tmp.data());
+      d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;
     } else {
-      factor_solve(d.factor, d.rhs);
+      rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
+      legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
+      d.report.condition = d.factor.condition;
+      if (s != LEGSIM_OK) return s;
+      // r = M qdd + J^T lambda - Q
+      jt_times(m, lay, d.rows, lambda, res);
+      if (lay.nslide) friction_add(sim, lay, q1, lambda, -1, res);  // sliding feet's friction
+      // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
+      residual(n, m.mass, m.minv, qdd1.data(), d.force_q.data(), res.data(), tmp.data());
+      j_times(lay, d.rows, tmp, d.rhs);
+      for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
+      if (lay.nslide) {
+        s = coupled_solve(sim, lay, q1, d.rhs);  // the friction's coupling, exactly
+        if (s != LEGSIM_OK) return s;
+      } else {
+        factor_solve(d.factor, d.rhs);
+      }
+      jt_times(m, lay, d.rows, d.rhs, tmp);
+      if (lay.nslide) friction_add(sim, lay, q1, d.rhs, -1, tmp);
     }
-    jt_times(m, lay, d.rows, d.rhs, tmp);
-    if (lay.nslide) friction_add(sim, lay, q1, d.rhs, -1, tmp);
     VecQ dq;
     correct(n, bprime, gprime, m.minv, res.data(), tmp.data(), q1.data(), v1.data(), qdd1.data(),
             dq.data());

@@ -57,6 +57,15 @@ struct Kernel {
   legsim_status (*dynamics)(const Model &model, const VecQ &q, const VecQ &qd, const VecQ &force,
                             TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, VecR &lambda,
                             VecQ &qdd);
+  // One Newton iteration of generalized-alpha on a system of the joint rows alone
+  // (integrator_generalized_alpha.cpp), fused: at (q, qd) with the applied forces force,
+  // the iterate's accelerations qdd1 and multipliers lambda, res = J^T lambda + M qdd1 -
+  // force, dlambda from (J M^-1 J^T) dlambda = beta' Phi - J M^-1 res, jt_dlambda = J^T
+  // dlambda; rows.phi and the factor (a, by position) kept. LEGSIM_ERR_SINGULAR (condition
+  // infinite) as factor_build.
+  legsim_status (*newton)(const Model &model, const VecQ &q, const VecQ &qd, const VecQ &force,
+                          TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, Rows &rows,
+                          real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda);
 };
 
 // The generated kernel for this model's structure, or nullptr (the general path).

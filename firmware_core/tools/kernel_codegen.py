@@ -374,6 +374,32 @@ class Kernel:
             o.append(f"  z += qdd[{n}] * real(0);")
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
+        # one Newton iteration of generalized-alpha (integrator_generalized_alpha.cpp's steps,
+        # the same arithmetic in the same order): r = J^T lambda + M qdd1 - Q, the correction
+        # dlambda of (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r and J^T dlambda; Phi and the
+        # factor kept (the residual report, the reactions' solve)
+        o.append(f"legsim_status {sym}_newton(const Model &model, const VecQ &q, const VecQ &qd, "
+                 "const VecQ &force, TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, "
+                 "Rows &rows, real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda) {")
+        o.append("  const real *w = model.minv, *mass = model.mass;")
+        o += self.rows_locals()
+        o.append("  " + " ".join(f"(void)gam{i};" for i in range(m)) + "  // the position level: no gamma")
+        o += [f"  rows.phi[{i}] = phi{i};" for i in range(m)]
+        o.append("  real max_diag = 0, pmin, pmax;")
+        o += self.factor_locals(True, fail)
+        o += self.factor_store("a")
+        o.append("  condition = std::sqrt(pmax / pmin);")
+        for n in range(nq):
+            o.append(f"  const real r{n} = ({self.jt_expr(n, lambda i: f'lambda[{i}]', True)}) + "
+                     f"(mass[{n}] * qdd1[{n}] - force[{n}]);")
+            o.append(f"  res[{n}] = r{n};")
+            o.append(f"  const real t{n} = w[{n}] * r{n};")
+        o += [f"  const real b{i} = bprime * phi{i} - ({self.j_expr(i, lambda n: f't{n}', True)});" for i in range(m)]
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}")
+        o += [f"  dlambda[{i}] = l{i};" for i in range(m)]
+        o += [f"  jt_dlambda[{n}] = {self.jt_expr(n, lambda i: f'l{i}', True)};" for n in range(nq)]
+        o.append("  return LEGSIM_OK;")
+        o.append("}\n")
         # tables
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -381,7 +407,7 @@ class Kernel:
         o.append(f"const uint8_t {sym}_first[] = {{{', '.join(map(str, self.first))}}};")
         o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
                  f"{m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
-                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {sym}_dynamics}};")
+                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {sym}_dynamics, {sym}_newton}};")
         return "\n".join(o) + "\n"
 
 
