@@ -58,7 +58,10 @@ def _root() -> Path:
 
 
 def _run(cmd, cwd, **kw):
-    return subprocess.run(cmd, cwd=cwd, check=True, text=True, capture_output=True, **kw)
+    r = subprocess.run(cmd, cwd=cwd, text=True, capture_output=True, **kw)
+    if r.returncode != 0:
+        sys.exit(f"mcu: {' '.join(map(str, cmd))} failed ({r.returncode}):\n{r.stdout[-2000:]}{r.stderr[-2000:]}")
+    return r
 
 
 def _values(text: str) -> dict[str, list[float]]:
@@ -105,7 +108,9 @@ def run(args) -> int:
             hdir = build_root / "host"
             exe = hdir / "tests" / "mcu" / twin
             print(f"mcu: building the host twin {twin}", flush=True)
-            _run(["cmake", "--preset", "host", "-B", str(hdir)], root)
+            # this Python (the bench's: cantools, pytest) for the build's generators and tests
+            _run(["cmake", "--preset", "host", "-B", str(hdir), f"-DPython3_EXECUTABLE={sys.executable}"],
+                 root)
             _run(["cmake", "--build", str(hdir), "--target", twin], root)
             twins[twin] = _values(_run([str(exe)], root).stdout)
         return twins[twin]
