@@ -181,6 +181,10 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
   }
   out.m = m;
   out.kernel = model.kernel;
+  // every contact stuck and nothing else after the joints: the stance kernel's rows
+  bool stance = model.stance_kernel && contacts && !mid && ncoord == 0 && actuator_mask == 0;
+  for (int k = 0; stance && k < model.nc; ++k) stance = contacts[k] == kContactStuck;
+  if (stance) out.kernel = model.stance_kernel;
   out.npairs = 0;
   out.stops = false;
   out.nslide = 0;
@@ -275,7 +279,7 @@ void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv,
                const VecQ &qd, Rows &rows, TrigCache *trig) {
   int i = 0;
   if (layout.kernel) {
-    layout.kernel->rows(model, q, qd, rows, trig);
+    layout.kernel->rows(model, dv, q, qd, rows, trig);
     i = layout.kernel->mj;
     if (i == layout.m) return;
   }

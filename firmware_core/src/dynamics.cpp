@@ -20,7 +20,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   if (kern && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
-    const legsim_status s = kern->dynamics(m, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
+    const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
                                            keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd);
     if (keep) {
       f.m = layout.m;

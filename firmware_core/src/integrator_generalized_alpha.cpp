@@ -73,7 +73,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
     applied_forces(m, sim.opt, d, q1, v1, d.force_q);
     VecQ tmp;
     if (kern) {
-      const legsim_status s = kern->newton(m, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,
+      const legsim_status s = kern->newton(m, d.stop_drivers, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,
                                            d.factor.a.data(), d.factor.condition, res.data(), d.rhs, tmp.data());
       d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;

@@ -14,6 +14,7 @@ extern "C" int legsim_kernel_use(legsim_sim *sim, int on) {
   Sim &s = *reinterpret_cast<Sim *>(sim);
   Data &d = s.data;
   s.model.kernel = on ? kernel_find(s.model) : nullptr;
+  s.model.stance_kernel = on ? kernel_find(s.model, true) : nullptr;
   // the layouts carry the factor's order: build them anew for the path chosen (the same
   // rows as before, so this cannot fail where it did not)
   layout_build(s.model, 0, 0, d.joints);

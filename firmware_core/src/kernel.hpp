@@ -27,13 +27,18 @@ struct Kernel {
   // the structure it serves
   int nb, nj;
   const int8_t (*joint)[3];  // per joint: kind, body a, body b (LEGSIM_FRAME: -1)
+  // A stance kernel (nc > 0) serves the joint rows and both rows of every contact, all
+  // stuck (normal, tangential), in the general layout's order: the robot standing.
+  int nc;
+  const int8_t *contact_body;  // per contact: its body
   int mj;                    // joint rows
   const uint8_t *perm;       // joint row -> position in the factor
   const uint8_t *first;      // by position: first column of L's envelope (fill included)
   // Rows 0 .. mj-1 of Phi, the Jacobian, nu and gamma at (q, qd), with the arithmetic of
   // the row units of constraints.cpp term by term (the same values to the last bit);
   // sin/cos through trig.
-  void (*rows)(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows, TrigCache *trig);
+  void (*rows)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, Rows &rows,
+               TrigCache *trig);
   // J W J^T's block (positions 0 .. mj-1 of its lower envelope, zeros included) assembled
   // and factored in place. max_diag comes in as the largest diagonal entry of the rows
   // after the block (0: none) and leaves as the largest of all; pmin, pmax: the pivots'
@@ -54,7 +59,7 @@ struct Kernel {
   // the factor's condition estimate; the rows and the factor (by position) kept only where
   // asked (keep_rows, keep_a not null). LEGSIM_ERR_SINGULAR (condition infinite) or
   // LEGSIM_ERR_DIVERGED (qdd not finite) as the general path.
-  legsim_status (*dynamics)(const Model &model, const VecQ &q, const VecQ &qd, const VecQ &force,
+  legsim_status (*dynamics)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force,
                             TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, VecR &lambda,
                             VecQ &qdd);
   // One Newton iteration of generalized-alpha on a system of the joint rows alone
@@ -63,13 +68,14 @@ struct Kernel {
   // force, dlambda from (J M^-1 J^T) dlambda = beta' Phi - J M^-1 res, jt_dlambda = J^T
   // dlambda; rows.phi and the factor (a, by position) kept. LEGSIM_ERR_SINGULAR (condition
   // infinite) as factor_build.
-  legsim_status (*newton)(const Model &model, const VecQ &q, const VecQ &qd, const VecQ &force,
+  legsim_status (*newton)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force,
                           TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, Rows &rows,
                           real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda);
 };
 
-// The generated kernel for this model's structure, or nullptr (the general path).
-const Kernel *kernel_find(const Model &model);
+// The generated kernel for this model's structure (stance: its stance kernel), or nullptr
+// (the general path).
+const Kernel *kernel_find(const Model &model, bool stance = false);
 
 }  // namespace legsim
 

@@ -267,6 +267,7 @@ legsim_status model_compile(const legsim_model_desc *d, Model &m) {
   m.mu_s = real(gd.mu_static);
   m.mu_k = real(gd.mu_kinetic);
   m.kernel = kernel_find(m);  // generated joint-block kernels (kernel.hpp), by structure
+  m.stance_kernel = kernel_find(m, true);
   return LEGSIM_OK;
 }
 

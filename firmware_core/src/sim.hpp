@@ -143,6 +143,7 @@ struct Model {
   Vec2 ground_point, ground_t, ground_n;  // the line, its tangent and upward normal
   real mu_s, mu_k;
   const Kernel *kernel;  // the generated kernel of this structure, or nullptr (kernel_find)
+  const Kernel *stance_kernel;  // its stance kernel: the joints and every contact stuck (or nullptr)
 };
 
 // ---- rows of the constraint system: joint equations plus drivers ----

@@ -96,15 +96,24 @@ def group(dots):
 
 
 class Kernel:
-    def __init__(self, name, model):
+    """The kernel of one structure: its joint rows (a joint kernel), or its joint rows and
+    both rows of every contact, all stuck (a stance kernel: the robot standing)."""
+
+    def __init__(self, name, model, stance=False):
         self.name = name
         self.nb = len(model["bodies"])
         self.joints = model["joints"]
+        self.contacts = model.get("contacts", []) if stance else []
         self.rows = joint_rows(self.joints)
+        mj = len(self.rows)
+        for c in self.contacts:  # normal then tangential row, on the foot's body alone
+            self.rows += [((c["body"], -1), ((V, V, V), (0, 0, 0)))] * 2
         m = self.m = len(self.rows)
         share = [[any(x >= 0 and x == y for x in self.rows[i][0] for y in self.rows[j][0])
                   for j in range(m)] for i in range(m)]
-        order = rcm_order(m, share)
+        # the joint rows in reverse Cuthill-McKee order, the contact rows after them as the
+        # general path places rows after a joint kernel's block (so both factor alike)
+        order = rcm_order(mj, share) + list(range(mj, m))
         self.perm = [0] * m
         for p, i in enumerate(order):
             self.perm[i] = p
@@ -128,7 +137,8 @@ class Kernel:
         return (1, [f"c{i}_{s}_{k}" if local else f"c[{i}][{s}][{k}]"])
 
     def signature(self):
-        return tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
+        return (tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
+                + tuple(c["body"] for c in self.contacts) + (len(self.contacts),))
 
     # ---- the pieces, as lines of C++ over named values ----
     @staticmethod
@@ -193,6 +203,26 @@ class Kernel:
         for n, j in enumerate(self.joints):
             o += self.joint_locals(n, j, r)
             r += NROWS[j["kind"]]
+        for k, c in enumerate(self.contacts):
+            o += self.contact_locals(k, c["body"], r)
+            r += 2
+        return o
+
+    @staticmethod
+    def contact_locals(k, b, r):
+        """A stuck contact's rows as contact_row (constraints.cpp) computes them: the gap
+        along the ground's normal and the offset along its tangent from the stick point."""
+        o = [f"  // contact {k}: stuck, rows {r}.."]
+        o.append(f"  const Contact &C{k} = model.contact[{k}];")
+        o.append(f"  const real fx{k} = C{k}.point.x() * s{b} + C{k}.point.y() * c{b}, "
+                 f"fy{k} = C{k}.point.x() * (-c{b}) + C{k}.point.y() * s{b};")
+        o.append(f"  const real gx{k} = (x{b} + fx{k}) - model.ground_point.x(), "
+                 f"gy{k} = (y{b} + fy{k}) - model.ground_point.y();")
+        for e, row, target in (("ground_n", r, "real(0)"), ("ground_t", r + 1, f"dv.stick[{k}]")):
+            ex, ey = f"model.{e}.x()", f"model.{e}.y()"
+            o.append(f"  const real phi{row} = real(0) + (({ex} * gx{k} + {ey} * gy{k}) - {target});")
+            o.append(f"  const real c{row}_0_0 = {ex}, c{row}_0_1 = {ey}, c{row}_0_2 = {ex} * (-fy{k}) + {ey} * fx{k};")
+            o.append(f"  const real gam{row} = real(0) + (w{b} * w{b} * ({ex} * fx{k} + {ey} * fy{k}));")
         return o
 
     def rows_store(self, rows="rows."):
@@ -306,8 +336,8 @@ class Kernel:
         a = lambda p, q: f"a[{p} * {R} + {q}]"  # noqa: E731
         # rows: the row units of constraints.cpp written out per joint, the same arithmetic in
         # the same order (so the same values to the last bit), one sin/cos pair per body
-        o.append(f"void {sym}_rows(const Model &model, const VecQ &q, const VecQ &qd, Rows &rows, "
-                 "TrigCache *trig) {")
+        o.append(f"void {sym}_rows(const Model &model, [[maybe_unused]] const DriverValues &dv, const VecQ &q, "
+                 "const VecQ &qd, Rows &rows, TrigCache *trig) {")
         o += self.rows_locals() + self.rows_store()
         o.append("}\n")
         # J W J^T's block assembled and factored (the rows after it come in through max_diag)
@@ -348,7 +378,8 @@ class Kernel:
         o.append("}\n")
         # the whole forward-dynamics solve of the joint rows alone, fused (dynamics.cpp's
         # steps with the same arithmetic in the same order, its values kept in locals)
-        o.append(f"legsim_status {sym}_dynamics(const Model &model, const VecQ &q, const VecQ &qd, "
+        o.append(f"legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+                 "const VecQ &q, const VecQ &qd, "
                  "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, "
                  "VecR &lambda, VecQ &qdd) {")
         o.append("  const real *w = model.minv;")
@@ -378,7 +409,8 @@ class Kernel:
         # the same arithmetic in the same order): r = J^T lambda + M qdd1 - Q, the correction
         # dlambda of (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r and J^T dlambda; Phi and the
         # factor kept (the residual report, the reactions' solve)
-        o.append(f"legsim_status {sym}_newton(const Model &model, const VecQ &q, const VecQ &qd, "
+        o.append(f"legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+                 "const VecQ &q, const VecQ &qd, "
                  "const VecQ &force, TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, "
                  "Rows &rows, real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda) {")
         o.append("  const real *w = model.minv, *mass = model.mass;")
@@ -405,7 +437,10 @@ class Kernel:
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
         o.append(f"const uint8_t {sym}_perm[] = {{{', '.join(map(str, self.perm))}}};")
         o.append(f"const uint8_t {sym}_first[] = {{{', '.join(map(str, self.first))}}};")
+        cb = ", ".join(str(c["body"]) for c in self.contacts) or "-1"
+        o.append(f"const int8_t {sym}_contact[] = {{{cb}}};")
         o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
+                 f"{len(self.contacts)}, {sym}_contact, "
                  f"{m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {sym}_dynamics, {sym}_newton}};")
         return "\n".join(o) + "\n"
@@ -417,37 +452,43 @@ def generate(paths, default_only=False):
         stem = os.path.splitext(os.path.basename(path))[0]
         variants = model_codegen.load_all(path, {})
         for variant, model in variants[:1] if default_only else variants:
-            k = Kernel(f"{stem} {variant}", model)
-            if k.signature() not in seen:
-                seen.add(k.signature())
-                kernels.append((f"kernel_{stem}_{variant}", k))
+            for stance in (False, True) if model.get("contacts") else (False,):
+                k = Kernel(f"{stem} {variant}" + (" stance" if stance else ""), model, stance)
+                if k.signature() not in seen:
+                    seen.add(k.signature())
+                    kernels.append((f"kernel_{stem}_{variant}" + ("_stance" if stance else ""), k))
     o = ["// Generated by firmware_core/tools/kernel_codegen.py from "
          + (", ".join(os.path.basename(p) for p in paths) or "no model (LEGSIM_KERNELS=OFF)")
          + ". Do not edit.",
          "#include <cmath>", "", "#include \"kernel.hpp\"", "", "namespace legsim {",
          "namespace {", ""]
     for sym, k in kernels:
-        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)}")
+        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)} && "
+                 f"LEGSIM_MAX_CONTACTS >= {len(k.contacts)}")
         nl = sum(len(x) for x in k.l_nz)
         na = sum(sum(r[:p]) for p, r in enumerate(k.a_nz))
-        o.append(f"// {k.name}: {k.m} joint rows, {na} off-diagonal non-zeros of J W J^T, "
+        o.append(f"// {k.name}: {k.m} rows, {na} off-diagonal non-zeros of J W J^T, "
                  f"{nl} of its factor")
         o.append(k.emit(sym))
         o.append("#endif\n")
     o.append("const Kernel *const kKernels[] = {")
     for sym, k in kernels:
-        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)}")
+        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)} && "
+                 f"LEGSIM_MAX_CONTACTS >= {len(k.contacts)}")
         o.append(f"    &{sym},")
         o.append("#endif")
     o.append("    nullptr};")
     o.append("}  // namespace\n")
-    o.append("""const Kernel *kernel_find(const Model &model) {
+    o.append("""const Kernel *kernel_find(const Model &model, bool stance) {
+  const int nc = stance ? model.nc : 0;
+  if (stance && nc == 0) return nullptr;
   for (const Kernel *const *k = kKernels; *k; ++k) {
     const Kernel &kn = **k;
-    bool same = kn.nb == model.nb && kn.nj == model.nj && kn.mj == model.m;
+    bool same = kn.nb == model.nb && kn.nj == model.nj && kn.nc == nc && kn.mj == model.m + 2 * nc;
     for (int j = 0; same && j < model.nj; ++j)
       same = kn.joint[j][0] == int(model.joint[j].kind) && kn.joint[j][1] == model.joint[j].a &&
              kn.joint[j][2] == model.joint[j].b;
+    for (int c = 0; same && c < nc; ++c) same = kn.contact_body[c] == model.contact[c].body;
     if (same) return &kn;
   }
   return nullptr;
