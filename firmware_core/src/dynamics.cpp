@@ -17,7 +17,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   if (layout.m > m.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
   applied_forces(m, opt, d, q, qd, d.force_q);
   const Kernel *kern = layout.kernel;
-  if (kern && !rows_ready && layout.m == kern->mj) {
+  if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
     const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,

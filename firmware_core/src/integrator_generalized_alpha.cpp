@@ -62,7 +62,8 @@ legsim_status generalized_alpha_step(Sim &sim) {
   const Layout &lay = d.dyn;
   bool converged = false;
   // the joint rows alone: each iteration's solve generated and fused (the same values)
-  const Kernel *kern = lay.kernel && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
+  const Kernel *kern =
+      lay.kernel && lay.kernel->newton && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
   if (kern) {
     d.factor.m = lay.m;
     d.factor.kernel = kern;

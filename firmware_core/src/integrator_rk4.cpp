@@ -80,7 +80,7 @@ legsim_status rk4_step(Sim &sim) {
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
   const real tol = real(sim.opt.newton_tol);
   d.report.iterations = 0;
-  if (lay.kernel && lay.m == lay.kernel->mj) {
+  if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj) {
     // The joint rows alone: the fused solve at (q1, v1) first. When neither the positions
     // nor the velocities need projecting (the usual step), it is the end derivative; else
     // the sequence below starts over (so the same values and statuses either way).

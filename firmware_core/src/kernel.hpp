@@ -54,6 +54,8 @@ struct Kernel {
   // y[i] = (J x)_i for the joint rows; y = J_joint^T x (all nq values written).
   void (*j_times)(const Rows &rows, const real *x, real *y);
   void (*jt_times)(const Rows &rows, const real *x, real *y);
+  // The fused solves below are generated for a model's main system only (nullptr else:
+  // the pieces above serve; kernel_codegen.py --fused-max-rows).
   // The whole forward-dynamics solve of a system of the joint rows alone (dynamics_solve:
   // M qdd + J^T lambda = force, J qdd = gamma) fused, its values in locals: lambda and qdd,
   // the factor's condition estimate; the rows and the factor (by position) kept only where

@@ -127,6 +127,7 @@ class Kernel:
                     lp[p].add(q)
         self.l_nz = [sorted(s) for s in lp]
         self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
+        self.fused = True  # generate() decides
 
     def coef(self, i, s, k, local=False):
         """(constant, [factor]) of a Jacobian entry: a constant, or the run-time value in
@@ -376,6 +377,8 @@ class Kernel:
         o.append("  const real(*c)[2][3] = rows.coef;")
         o += [f"  y[{n}] = {self.jt_expr(n, lambda i: f'x[{i}]', False)};" for n in range(3 * self.nb)]
         o.append("}\n")
+        if not self.fused:
+            return "\n".join(o) + "\n" + self.emit_tables(sym, "nullptr", "nullptr")
         # the whole forward-dynamics solve of the joint rows alone, fused (dynamics.cpp's
         # steps with the same arithmetic in the same order, its values kept in locals)
         o.append(f"legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
@@ -443,7 +446,10 @@ class Kernel:
         o += [f"  jt_dlambda[{n}] = {self.jt_expr(n, lambda i: f'l{i}', True)};" for n in range(nq)]
         o.append("  return LEGSIM_OK;")
         o.append("}\n")
-        # tables
+        return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton")
+
+    def emit_tables(self, sym, dynamics, newton):
+        o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
         o.append(f"const uint8_t {sym}_perm[] = {{{', '.join(map(str, self.perm))}}};")
@@ -452,19 +458,26 @@ class Kernel:
         o.append(f"const int8_t {sym}_contact[] = {{{cb}}};")
         o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
                  f"{len(self.contacts)}, {sym}_contact, "
-                 f"{m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
-                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {sym}_dynamics, {sym}_newton}};")
+                 f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
+                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, {newton}}};")
         return "\n".join(o) + "\n"
 
 
-def generate(paths, default_only=False):
+def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None):
+    """The generated file's text. Fused solves (dynamics, newton) go to each model's main
+    system only (its joint rows if it has no contacts, else its stance kernel) and, with
+    fused_max_rows, only to kernels of at most that many rows: each is straight-line code
+    whose size grows with the square of the factor's fill (the robot's stance kernel's
+    pair is about 120 KB on a Cortex-M7)."""
     kernels, seen = [], set()
     for path in paths:
         stem = os.path.splitext(os.path.basename(path))[0]
         variants = model_codegen.load_all(path, {})
         for variant, model in variants[:1] if default_only else variants:
-            for stance in (False, True) if model.get("contacts") else (False,):
+            for stance in (False, True) if model.get("contacts") and stance_kernels else (False,):
                 k = Kernel(f"{stem} {variant}" + (" stance" if stance else ""), model, stance)
+                k.fused = ((stance or not model.get("contacts"))
+                           and (fused_max_rows is None or k.m <= fused_max_rows))
                 if k.signature() not in seen:
                     seen.add(k.signature())
                     kernels.append((f"kernel_{stem}_{variant}" + ("_stance" if stance else ""), k))
@@ -515,10 +528,14 @@ def main(argv=None):
                    "none: an empty table (kernel_find finds nothing)")
     p.add_argument("--default-only", action="store_true",
                    help="each file's default variant only (cross builds: the one an image uses)")
+    p.add_argument("--no-stance", action="store_true",
+                   help="no stance kernels (the robot's joints and stuck feet): less flash")
+    p.add_argument("--fused-max-rows", type=int, default=None, metavar="N",
+                   help="fused solves only for kernels of at most N rows (default: no limit)")
     p.add_argument("--out", required=True, help="the C++ source to write")
     args = p.parse_args(argv)
     try:
-        text = generate(args.toml, args.default_only)
+        text = generate(args.toml, args.default_only, not args.no_stance, args.fused_max_rows)
     except model_codegen.ModelError as e:
         print(e.message, file=sys.stderr)
         return 1
