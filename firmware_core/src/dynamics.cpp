@@ -9,7 +9,7 @@
 namespace legsim {
 
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                             bool rows_ready, bool keep, real *check) {
+                             bool rows_ready, bool keep) {
   const Model &m = sim.model;
   Data &d = sim.data;
   legsim_options opt = sim.opt;
@@ -21,7 +21,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
     const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
-                                           keep ? f.a.data() : nullptr, check, f.condition, d.lambda, qdd);
+                                           keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd);
     if (keep) {
       f.m = layout.m;
       f.kernel = kern;

@@ -383,23 +383,12 @@ class Kernel:
         # steps with the same arithmetic in the same order, its values kept in locals)
         o.append(f"legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                  "const VecQ &q, const VecQ &qd, "
-                 "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real *check, "
-                 "real &condition, VecR &lambda, VecQ &qdd) {")
+                 "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, "
+                 "VecR &lambda, VecQ &qdd) {")
         o.append("  const real *w = model.minv;")
         o += self.rows_locals()
         o.append("  if (keep_rows) {")
         o += ["  " + x for x in self.rows_store("keep_rows->")]
-        o.append("  }")
-        # RK4's end-of-step checks: rows_max_residual and the largest |J qd| (NaN as they do)
-        o.append("  if (check) {")
-        o.append("    real r = 0, v = 0, x;")
-        for i in range(m):
-            o.append(f"    x = std::abs(phi{i});")
-            o.append("    if (!(x <= r)) r = x;")
-            o.append(f"    x = std::abs({self.j_expr(i, lambda n: f'qd[{n}]', True)});")
-            o.append("    v = x > v ? x : v;")
-        o.append("    check[0] = r;")
-        o.append("    check[1] = v;")
         o.append("  }")
         o.append("  real max_diag = 0, pmin, pmax;")
         fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
