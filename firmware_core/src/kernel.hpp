@@ -3,14 +3,17 @@
 // Every layout starts with the joint equations (rows 0 .. mj-1), and their sparsity is
 // fixed by the model's structure (which joint kind joins which bodies). For the models
 // compiled in (models/*.toml), firmware_core/tools/kernel_codegen.py generates at build
-// time straight-line code for that block: the rows (one sin/cos per body), the lower
-// triangle of J W J^T, its Cholesky factor in an elimination order and fill fixed at
-// generation time, the triangular solves, J x and J^T x. Rows that change at run time
-// (stroke stops, drivers, contacts) follow the joint block in the factor's order; the
-// general envelope code factors and solves them against the generated block (block
-// elimination: their rows of L are the Schur complement's), so one kernel serves every
-// row set. The factor keeps the general storage (Factor::a by position), so every other
-// use of it (condition estimate, projections) is unchanged.
+// time straight-line code for that block: the rows (one sin/cos per body), J W J^T and its
+// Cholesky factor in an elimination order and fill fixed at generation time, the
+// triangular solves, J x and J^T x, and for a model's main system the whole dynamics solve
+// and a generalized-alpha Newton iteration fused. Rows that change at run time (stroke
+// stops, drivers, contacts) follow the joint block in the factor's order; the general
+// envelope code factors and solves them against the generated block (block elimination:
+// their rows of L are the Schur complement's), so one kernel serves every row set. A model
+// with contacts also has a stance kernel: its joint rows and both rows of every stuck
+// contact, used when that is the whole system. The factor keeps the general storage
+// (Factor::a by position), so every other use of it (condition estimate, projections) is
+// unchanged.
 //
 // A kernel is chosen by structure (kernel_find): bodies, joint kinds and the bodies each
 // joint joins. The geometry (joint points) is read from the Model at run time, so a model

@@ -4,15 +4,21 @@
     kernel_codegen.py --out legsim_kernels.cpp models/leg.toml models/robot.toml
 
 For each distinct structure among the files' variants (joint kinds and the bodies they
-join), writes straight-line C++ for the joint rows of the constraint system:
+join; with --no-stance left out, also each model with contacts' stance: its joint rows and
+both rows of every contact, all stuck), writes straight-line C++ for those rows:
   rows       Phi, the Jacobian, nu and gamma (the row units of constraints.cpp written
              out term by term, one sin/cos pair per body, no dispatch);
-  assemble   the lower envelope of J W J^T, products with the Jacobian's constant
-             entries (the revolute rows' 1 and 0, the prismatic angle row) folded away;
-  cholesky   L L^T in the general path's order (reverse Cuthill-McKee) with its fill
-             worked out here (symbolic factorization), in the storage the general code
-             uses (Factor::a by position);
-  forward, backward, j_times, jt_times over the non-zeros only.
+  factor     the lower envelope of J W J^T (products with the Jacobian's constant
+             entries folded away) and its Cholesky factor L L^T in the general path's
+             order (reverse Cuthill-McKee, the contact rows after) with its fill worked out
+             here (symbolic factorization), stored as the general code stores it;
+  solve      L L^T x = b with the row permutation folded in;
+  forward, backward, j_times, jt_times over the non-zeros only (the rows after the block);
+  dynamics   the whole forward-dynamics solve fused, its values in locals, and
+  newton     one generalized-alpha Newton iteration fused: for each model's main system
+             only (its joints, or its stance), of at most --fused-max-rows rows.
+Every piece does the general path's arithmetic in the same order, so both give the same
+numbers bit for bit (tests/core/test_kernels.c).
 The geometry (joint points) is read from the Model at run time: the kernel depends on the
 structure only, and kernel_find (in the generated file) picks it by that structure.
 Each kernel is compiled only where the build's capacities hold its model. Python 3.11+,
