@@ -359,10 +359,11 @@ void project(const Model &model, const Layout &layout, const Rows &rows, const F
 void applied_forces(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
                     const VecQ &qd, VecQ &force_q);
 
-// ---- actuators.cpp ----
+// ---- forces.cpp (with applied_forces, which shares its servo law) ----
 // Axial force of each actuator from its command (servo law for length mode).
 void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
                             const VecQ &qd);
+// ---- actuators.cpp ----
 // Stroke stops after a step: an actuator past an end is put on it (inelastic
 // impact) and held there by a length row in the dynamics; one whose stop would
 // have to pull is let go. changed: the active set changed (derivative anew).
