@@ -1,7 +1,6 @@
 // Accelerations and multipliers: M qdd + Phi_q^T lambda = Q, Phi_q qdd = gamma,
 // by the Schur complement (Phi_q M^-1 Phi_q^T) lambda = Phi_q M^-1 Q - gamma
 // (M is diagonal, so this is the whole cost).
-#include <cstring>
 #include <utility>
 
 #include "kernel.hpp"
@@ -22,12 +21,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     Factor &f = d.factor;
     const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
                                            keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd);
-    if (keep) {
-      f.m = layout.m;
-      f.kernel = kern;
-      std::memcpy(f.perm, layout.perm, sizeof f.perm);
-      std::memcpy(f.first, layout.first, sizeof f.first);
-    }
+    if (keep) factor_order(layout, f);
     d.report.condition = f.condition;
     return s;
   }

@@ -6,8 +6,6 @@
 // solved by Newton with the iteration matrix [beta' M, Phi_q^T; Phi_q, 0]
 // (beta' = (1 - am) / (h^2 beta (1 - af))): M is diagonal, so each iteration
 // is one factorization of Phi_q M^-1 Phi_q^T, the kernel of every other solve.
-#include <cstring>
-
 #include "kernel.hpp"
 
 namespace legsim {
@@ -64,12 +62,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   // the joint rows alone: each iteration's solve generated and fused (the same values)
   const Kernel *kern =
       lay.kernel && lay.kernel->newton && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
-  if (kern) {
-    d.factor.m = lay.m;
-    d.factor.kernel = kern;
-    std::memcpy(d.factor.perm, lay.perm, sizeof d.factor.perm);
-    std::memcpy(d.factor.first, lay.first, sizeof d.factor.first);
-  }
+  if (kern) factor_order(lay, d.factor);  // the iterations write its entries
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
     applied_forces(m, sim.opt, d, q1, v1, d.force_q);
     VecQ tmp;

@@ -36,6 +36,14 @@ void stage_end(int n, real h6, const R_ q0, const R_ v0, const R_ sum_v, const R
   }
 }
 #undef R_
+
+// The largest |J v| of the rows (their rates nu are 0 here: joints, stops, stuck contacts).
+real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv) {
+  j_times(lay, rows, v, jv);
+  real drift = 0;
+  for (int i = 0; i < lay.m; ++i) drift = std::abs(jv[i]) > drift ? std::abs(jv[i]) : drift;
+  return drift;
+}
 }  // namespace
 
 namespace {
@@ -88,10 +96,7 @@ legsim_status rk4_step(Sim &sim) {
       d.report.residual = rows_max_residual(lay, d.rows);
       bool done = !projection;
       if (projection && d.report.residual <= tol) {
-        j_times(lay, d.rows, v1, d.rhs);
-        real drift = 0;
-        for (int i = 0; i < lay.m; ++i) drift = std::abs(d.rhs[i]) > drift ? std::abs(d.rhs[i]) : drift;
-        done = drift <= tol;
+        done = velocity_drift(lay, d.rows, v1, d.rhs) <= tol;
       }
       if (done) return rk4_finish(sim, q1, v1);
     }
@@ -107,10 +112,7 @@ legsim_status rk4_step(Sim &sim) {
   d.report.condition = d.factor.condition;
   if (s != LEGSIM_OK) return s;
   if (projection) {
-    j_times(lay, d.rows, v1, d.rhs);
-    real drift = 0;
-    for (int i = 0; i < lay.m; ++i) drift = std::abs(d.rhs[i]) > drift ? std::abs(d.rhs[i]) : drift;
-    if (drift > tol) {
+    if (velocity_drift(lay, d.rows, v1, d.rhs) > tol) {
       project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
       rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);  // gamma at the projected velocities
     }

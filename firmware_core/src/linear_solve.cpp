@@ -7,14 +7,18 @@
 
 namespace legsim {
 
+void factor_order(const Layout &layout, Factor &f) {
+  f.m = layout.m;
+  f.kernel = layout.kernel;
+  std::memcpy(f.perm, layout.perm, sizeof f.perm);
+  std::memcpy(f.first, layout.first, sizeof f.first);
+}
+
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
   const int m = layout.m;
   const Kernel *kern = layout.kernel;
   const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
-  f.m = m;
-  f.kernel = kern;
-  std::memcpy(f.perm, layout.perm, sizeof f.perm);
-  std::memcpy(f.first, layout.first, sizeof f.first);
+  factor_order(layout, f);
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
   // weight each row's coefficients once, then every non-zero entry is one dot product

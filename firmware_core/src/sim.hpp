@@ -343,6 +343,7 @@ void actuator_length(const Model &model, int a, const VecQ &q, const VecQ &qd, r
 // ---- linear_solve.cpp ----
 // Factors J W J^T (W diagonal, n values). LEGSIM_ERR_SINGULAR on a vanishing pivot.
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f);
+void factor_order(const Layout &layout, Factor &f);  // f's size, order and kernel from layout
 void factor_solve(const Factor &f, VecR &x);  // in place
 // cond(J W^1/2) by power iterations on the factor: for reports that decide (assembly);
 // Factor::condition is the cheap pivot-spread estimate of every factorization.
