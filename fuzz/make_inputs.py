@@ -22,6 +22,7 @@ SEL = {'CONTROL': 0, 'ACT_CMD': 1, 'LOAD_CMD': 2, 'FAULT': 6, 'ST_POS': 7, 'HEAR
        'UNKNOWN': 12}
 RESET, STEP, START_RT, STOP_RT = 1, 2, 3, 4
 KEEP, FORCE, LENGTH = 0, 1, 2
+FLT_MAX = struct.unpack('<f', struct.pack('<I', 0x7f7fffff))[0]  # the largest finite float32
 
 
 def write_if_changed(path, data):
@@ -126,6 +127,9 @@ def can_seeds(db):
         .frame('ST_POS', payload=b'\x01' * 64)
         .frame(None, raw_id=0x1234567, flags=1, payload=b'\0' * 64)
         .control(5, STEP, NSteps=3),
+        # every finite float32 is a value a FAULT may echo (CI's fuzz run, session 5)
+        'fault_value_flt_max': S().control(1, RESET).act(1, FORCE, FLT_MAX)
+        .act(2, KEEP, 0.0, LENGTH, -FLT_MAX).load(1, 0, FLT_MAX, -FLT_MAX).control(2, STEP, NSteps=2),
     }
 
 
