@@ -1,6 +1,9 @@
 // The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
 // the identity), assembled from the sparse rows, factored by Cholesky in
 // place. Hand-written so that no Eigen path can fall back to the heap.
+// The factor's diagonal holds 1 / L_ii: every use multiplies, and the only divisions
+// are the m reciprocals (a division's latency is 4-10 multiplies', and the triangular
+// solves are chains of them).
 #include <cstring>
 
 #include "kernel.hpp"
@@ -73,7 +76,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
       const int k0 = fi > f.first[j] ? fi : f.first[j];
       real s = ai[j];
       for (int k = k0; k < j; ++k) s -= ai[k] * aj[k];
-      ai[j] = s / aj[j];
+      ai[j] = s * aj[j];
     }
     real d = ai[i];
     for (int k = fi; k < i; ++k) d -= ai[k] * ai[k];
@@ -83,7 +86,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     }
     pmin = d < pmin ? d : pmin;
     pmax = d > pmax ? d : pmax;
-    ai[i] = std::sqrt(d);
+    ai[i] = 1 / std::sqrt(d);
   }
   // cond(J W^1/2) ~ sqrt of the pivot spread of J W J^T: an estimate, cheap and monotone.
   f.condition = std::sqrt(pmax / pmin);
@@ -99,11 +102,11 @@ void solve_in_place(const Factor &f, real *y) {
     const real *ai = &f.a(i, 0);
     real s = y[i];
     for (int k = f.first[i]; k < i; ++k) s -= ai[k] * y[k];
-    y[i] = s / ai[i];
+    y[i] = s * ai[i];
   }
   for (int i = m - 1; i >= mk; --i) {
     const real *ai = &f.a(i, 0);
-    y[i] /= ai[i];
+    y[i] *= ai[i];
     const real yi = y[i];
     for (int k = f.first[i]; k < i; ++k) y[k] -= ai[k] * yi;
   }
@@ -115,12 +118,14 @@ void multiply(const Factor &f, const real *x, real *y) {
   const int m = f.m;
   real t[kMaxRows];
   for (int k = 0; k < m; ++k) t[k] = 0;
-  for (int i = 0; i < m; ++i)  // t = L^T x
-    for (int k = f.first[i]; k <= i; ++k) t[k] += f.a(i, k) * x[i];
+  for (int i = 0; i < m; ++i) {  // t = L^T x
+    for (int k = f.first[i]; k < i; ++k) t[k] += f.a(i, k) * x[i];
+    t[i] += x[i] / f.a(i, i);
+  }
   for (int i = 0; i < m; ++i) {  // y = L t
     real s = 0;
-    for (int k = f.first[i]; k <= i; ++k) s += f.a(i, k) * t[k];
-    y[i] = s;
+    for (int k = f.first[i]; k < i; ++k) s += f.a(i, k) * t[k];
+    y[i] = s + t[i] / f.a(i, i);
   }
 }
 
