@@ -369,6 +369,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.assembled = false;
   d.derivative_valid = false;
   d.history_valid = false;
+  d.end_projected = false;
   d.q.setZero();
   d.qd.setZero();
   d.qdd.setZero();

@@ -6,7 +6,7 @@
 namespace legsim {
 
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, VecQ &q_io,
-                       const real *w, AssemblyMode mode) {
+                       const real *w, AssemblyMode mode, bool rows_ready) {
   const bool full = mode == AssemblyMode::Assemble;
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -16,7 +16,7 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
   real first = -1;
   d.report.iterations = 0;
   for (int it = 0;; ++it) {
-    rows_eval(m, layout, dv, q, zero, d.rows);
+    if (it > 0 || !rows_ready) rows_eval(m, layout, dv, q, zero, d.rows);
     const real r = rows_max_residual(layout, d.rows);
     d.report.residual = r;
     if (!std::isfinite(r)) return LEGSIM_ERR_UNREACHABLE;

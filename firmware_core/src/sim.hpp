@@ -264,6 +264,7 @@ struct Data {
   Rows rows;
   TrigCache trig;
   Factor factor;
+  bool end_projected;  // RK4: the last step's end needed projecting (a hint: same values either way)
   DriverValues drivers;
   VecQ force_q;  // generalized applied forces Q
   VecQ tq[4], tv[4];
@@ -420,9 +421,11 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready = 
 // Project: the per-step projection (stroke stops too): cheap, no polishing, no
 // condition estimate. Assemble: the analyses' assembly: at least one Newton
 // iteration, the 2-norm condition where it lands, dead centres refused.
+// rows_ready: data.rows already holds the layout's rows at q (at any velocities: Phi and
+// the Jacobian do not depend on them), so the first iteration does not evaluate them.
 enum class AssemblyMode { Project, Assemble };
 legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drivers, VecQ &q,
-                       const real *w, AssemblyMode mode);
+                       const real *w, AssemblyMode mode, bool rows_ready = false);
 
 // ---- kinematics.cpp ----
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
