@@ -88,37 +88,43 @@ legsim_status rk4_step(Sim &sim) {
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
   const real tol = real(sim.opt.newton_tol);
   d.report.iterations = 0;
+  bool factor_ready = false;  // the rows and the factor at q1 kept, the positions on Phi = 0
   if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
-    // The joint rows alone: the fused solve at (q1, v1) first. When neither the positions
-    // nor the velocities need projecting (the usual step), it is the end derivative; else
-    // the sequence below starts over (so the same values and statuses either way). Not
-    // tried after a step whose end needed projecting (large steps: every one does).
+    // The joint rows alone: the fused solve at (q1, v1) first, its rows and factor kept.
+    // When neither the positions nor the velocities need projecting (the usual step), it
+    // is the end derivative; when the velocities alone do, its factor serves their
+    // projection; else the sequence below starts over. The same values and statuses
+    // either way. Not tried after a step whose positions needed projecting (large steps:
+    // every one does).
     if (dynamics_solve(sim, lay, q1, v1, d.qdd) == LEGSIM_OK) {
       d.report.residual = rows_max_residual(lay, d.rows);
-      bool done = !projection;
-      if (projection && d.report.residual <= tol) {
-        done = velocity_drift(lay, d.rows, v1, d.rhs) <= tol;
+      if (!projection) return rk4_finish(sim, q1, v1);
+      if (d.report.residual <= tol) {
+        if (velocity_drift(lay, d.rows, v1, d.rhs) <= tol) return rk4_finish(sim, q1, v1);
+        factor_ready = true;
       }
-      if (done) return rk4_finish(sim, q1, v1);
     }
   }
   d.end_projected = false;
-  rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);
-  d.report.residual = rows_max_residual(lay, d.rows);
   bool gamma_ready = true;  // d.rows' gamma is the one at (q1, v1)
-  if (projection && d.report.residual > tol) {
-    d.end_projected = true;
-    // M-weighted Newton, from the rows just evaluated at q1; it leaves the rows at the
-    // projected q1 (Phi and the Jacobian serve below, its gamma is at zero velocity)
-    const legsim_status s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project, true);
-    if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
-    gamma_ready = false;
+  legsim_status s = LEGSIM_OK;
+  if (!factor_ready) {
+    rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);
+    d.report.residual = rows_max_residual(lay, d.rows);
+    if (projection && d.report.residual > tol) {
+      d.end_projected = true;
+      // M-weighted Newton, from the rows just evaluated at q1; it leaves the rows at the
+      // projected q1 (Phi and the Jacobian serve below, its gamma is at zero velocity)
+      s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project, true);
+      if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
+      gamma_ready = false;
+    }
+    s = factor_build(lay, d.rows, m.minv, d.factor);
+    d.report.condition = d.factor.condition;
+    if (s != LEGSIM_OK) return s;
   }
-  legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
-  d.report.condition = d.factor.condition;
-  if (s != LEGSIM_OK) return s;
-  if (projection && velocity_drift(lay, d.rows, v1, d.rhs) > tol) {
-    d.end_projected = true;
+  // (factor_ready: the drift was found above the tolerance already)
+  if (projection && (factor_ready || velocity_drift(lay, d.rows, v1, d.rhs) > tol)) {
     project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
     gamma_ready = false;
   }
