@@ -345,19 +345,19 @@ class Kernel:
         a = lambda p, q: f"a[{p} * {R} + {q}]"  # noqa: E731
         # rows: the row units of constraints.cpp written out per joint, the same arithmetic in
         # the same order (so the same values to the last bit), one sin/cos pair per body
-        o.append(f"void {sym}_rows(const Model &model, [[maybe_unused]] const DriverValues &dv, const VecQ &q, "
+        o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_rows(const Model &model, [[maybe_unused]] const DriverValues &dv, const VecQ &q, "
                  "const VecQ &qd, Rows &rows, TrigCache *trig) {")
         o += self.rows_locals() + self.rows_store()
         o.append("}\n")
         # J W J^T's block assembled and factored (the rows after it come in through max_diag)
-        o.append(f"bool {sym}_factor(const Rows &rows, const real *w, real *a, real &max_diag, real &pmin, "
+        o.append(f"LEGSIM_KERNEL_TARGETS bool {sym}_factor(const Rows &rows, const real *w, real *a, real &max_diag, real &pmin, "
                  "real &pmax) {")
         o.append("  const real(*c)[2][3] = rows.coef;")
         o += self.factor_locals(False, "return false;") + self.factor_store()
         o.append("  return true;")
         o.append("}\n")
         # entered at position `from` (y zero before it: a row after the block, fill from there)
-        o.append(f"void {sym}_forward(const real *a, real *y, int from) {{")
+        o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_forward(const real *a, real *y, int from) {{")
         o.append(f"  constexpr int {R} = kMaxRows;")
         o.append("  switch (from) {")
         for p in range(m):
@@ -366,22 +366,22 @@ class Kernel:
         o.append("    default: break;")
         o.append("  }")
         o.append("}\n")
-        o.append(f"void {sym}_backward(const real *a, real *y) {{")
+        o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_backward(const real *a, real *y) {{")
         o.append(f"  constexpr int {R} = kMaxRows;")
         for p in reversed(range(m)):
             o.append(f"  y[{p}] *= {a(p, p)};")
             o += [f"  y[{k}] -= {a(p, k)} * y[{p}];" for k in self.l_nz[p]]
         o.append("}\n")
         # the whole solve on the block alone, in row order
-        o.append(f"void {sym}_solve(const real *a, real *x) {{")
+        o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_solve(const real *a, real *x) {{")
         o += self.solve_locals(lambda i: f"x[{i}]", lambda i: f"x[{i}]", lval="a")
         o.append("}\n")
         # J x and J^T x
-        o.append(f"void {sym}_j_times(const Rows &rows, const real *x, real *y) {{")
+        o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_j_times(const Rows &rows, const real *x, real *y) {{")
         o.append("  const real(*c)[2][3] = rows.coef;")
         o += [f"  y[{i}] = {self.j_expr(i, lambda n: f'x[{n}]', False)};" for i in range(m)]
         o.append("}\n")
-        o.append(f"void {sym}_jt_times(const Rows &rows, const real *x, real *y) {{")
+        o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_jt_times(const Rows &rows, const real *x, real *y) {{")
         o.append("  const real(*c)[2][3] = rows.coef;")
         o += [f"  y[{n}] = {self.jt_expr(n, lambda i: f'x[{i}]', False)};" for n in range(3 * self.nb)]
         o.append("}\n")
@@ -389,7 +389,7 @@ class Kernel:
             return "\n".join(o) + "\n" + self.emit_tables(sym, "nullptr", "nullptr")
         # the whole forward-dynamics solve of the joint rows alone, fused (dynamics.cpp's
         # steps with the same arithmetic in the same order, its values kept in locals)
-        o.append(f"legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+        o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                  "const VecQ &q, const VecQ &qd, "
                  "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, "
                  "VecR &lambda, VecQ &qdd) {")
@@ -420,7 +420,7 @@ class Kernel:
         # the same arithmetic in the same order): r = J^T lambda + M qdd1 - Q, the correction
         # dlambda of (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r and J^T dlambda; Phi and the
         # factor kept (the residual report, the reactions' solve)
-        o.append(f"legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+        o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                  "const VecQ &q, const VecQ &qd, "
                  "const VecQ &force, TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, "
                  "Rows &rows, real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda) {")
@@ -460,6 +460,18 @@ class Kernel:
         return "\n".join(o) + "\n"
 
 
+# Every generated function is compiled twice on x86-64 with GCC on Linux (LEGSIM_KERNEL_AVX,
+# CMake's option of that name): for the baseline ISA and for AVX, the copy picked at load
+# time by the CPU (an ifunc). AVX's three-operand instructions drop most of the register
+# copies that this straight-line code needs in two-operand SSE2; neither copy has FMA, so
+# both give the same values bit for bit (tests/core/test_kernels.c checks the copy in use).
+CLONES = """#if LEGSIM_KERNEL_AVX && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__linux__)
+#define LEGSIM_KERNEL_TARGETS __attribute__((target_clones("avx", "default")))
+#else
+#define LEGSIM_KERNEL_TARGETS
+#endif"""
+
+
 def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None):
     """The generated file's text. Fused solves (dynamics, newton) go to each model's main
     system only (its joint rows if it has no contacts, else its stance kernel) and, with
@@ -481,7 +493,7 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
     o = ["// Generated by firmware_core/tools/kernel_codegen.py from "
          + (", ".join(os.path.basename(p) for p in paths) or "no model (LEGSIM_KERNELS=OFF)")
          + ". Do not edit.",
-         "#include <cmath>", "", "#include \"kernel.hpp\"", "", "namespace legsim {",
+         "#include <cmath>", "", "#include \"kernel.hpp\"", "", CLONES, "", "namespace legsim {",
          "namespace {", ""]
     for sym, k in kernels:
         o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)} && "
