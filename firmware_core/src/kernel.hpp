@@ -4,7 +4,7 @@
 // fixed by the model's structure (which joint kind joins which bodies). For the models
 // compiled in (models/*.toml), firmware_core/tools/kernel_codegen.py generates at build
 // time straight-line code for that block: the rows (one sin/cos per body), J W J^T and its
-// Cholesky factor in an elimination order and fill fixed at generation time, the
+// L D L^T factor in an elimination order and fill fixed at generation time, the
 // triangular solves, J x and J^T x, and for a model's main system the whole dynamics solve
 // and a generalized-alpha Newton iteration fused. Rows that change at run time (stroke
 // stops, drivers, contacts) follow the joint block in the factor's order; the general
@@ -43,15 +43,16 @@ struct Kernel {
   void (*rows)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, Rows &rows,
                TrigCache *trig);
   // J W J^T's block (positions 0 .. mj-1 of its lower envelope, zeros included) assembled
-  // and factored in place. max_diag comes in as the largest diagonal entry of the rows
+  // and factored in place (L D L^T, linear_solve.cpp's storage). max_diag comes in as the largest diagonal entry of the rows
   // after the block (0: none) and leaves as the largest of all; pmin, pmax: the pivots'
   // range. false: a diagonal that is not positive and finite, or a pivot <= kPivotFloor
   // times max_diag.
   bool (*factor)(const Rows &rows, const real *w, real *a, real &max_diag, real &pmin, real &pmax);
-  // L y = y (from position `from` on, y zero before it) and L^T y = y on positions 0 .. mj-1.
+  // L y = y (from position `from` on, y zero before it) and L^T y = y on positions 0 .. mj-1
+  // (L unit lower triangular: D is the caller's).
   void (*forward)(const real *a, real *y, int from);
   void (*backward)(const real *a, real *y);
-  // L L^T x = x in row order, for a system of the block alone (factor_solve's permutation
+  // L D L^T x = x in row order, for a system of the block alone (factor_solve's permutation
   // folded in).
   void (*solve)(const real *a, real *x);
   // y[i] = (J x)_i for the joint rows; y = J_joint^T x (all nq values written).

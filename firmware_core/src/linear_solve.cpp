@@ -1,9 +1,9 @@
 // The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
-// the identity), assembled from the sparse rows, factored by Cholesky in
-// place. Hand-written so that no Eigen path can fall back to the heap.
-// The factor's diagonal holds 1 / L_ii: every use multiplies, and the only divisions
-// are the m reciprocals (a division's latency is 4-10 multiplies', and the triangular
-// solves are chains of them).
+// the identity), assembled from the sparse rows, factored in place as L D L^T (L unit
+// lower triangular). Hand-written so that no Eigen path can fall back to the heap.
+// The factor's diagonal holds 1 / D_i: no square roots, and the only divisions are the m
+// reciprocals (a division's or a square root's latency is 4-10 multiplies', and the
+// factorization and its solves are chains of them).
 #include <cstring>
 
 #include "kernel.hpp"
@@ -65,28 +65,33 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     real *ai = &f.a(i, 0);
     int j0 = fi;
     if (fi < mk) {
-      // its columns in the kernel's block: L11 l = a by the kernel's sparse forward solve
+      // its columns in the kernel's block: L11 t = a by the kernel's sparse forward solve
       // (the same products in the same order as the loop below, less the zero ones)
       for (int j = 0; j < fi; ++j) ai[j] = 0;
       kern->forward(f.a.data(), ai, fi);
       j0 = mk;
     }
+    // row i as t_ij = L_ij D_j first (each from the ones before it), then L_ij = t_ij / D_j
     for (int j = j0; j < i; ++j) {
       const real *aj = &f.a(j, 0);
       const int k0 = fi > f.first[j] ? fi : f.first[j];
       real s = ai[j];
       for (int k = k0; k < j; ++k) s -= ai[k] * aj[k];
-      ai[j] = s * aj[j];
+      ai[j] = s;
     }
     real d = ai[i];
-    for (int k = fi; k < i; ++k) d -= ai[k] * ai[k];
+    for (int k = fi; k < i; ++k) {
+      const real t = ai[k];
+      ai[k] = t * f.a(k, k);
+      d -= t * ai[k];
+    }
     if (!(d > kPivotFloor * max_diag)) {
       f.condition = real(INFINITY);
       return LEGSIM_ERR_SINGULAR;
     }
     pmin = d < pmin ? d : pmin;
     pmax = d > pmax ? d : pmax;
-    ai[i] = 1 / std::sqrt(d);
+    ai[i] = 1 / d;
   }
   // cond(J W^1/2) ~ sqrt of the pivot spread of J W J^T: an estimate, cheap and monotone.
   f.condition = std::sqrt(pmax / pmin);
@@ -94,7 +99,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
 }
 
 namespace {
-// L L^T y = y in the factor's own (permuted) order.
+// L D L^T y = y in the factor's own (permuted) order.
 void solve_in_place(const Factor &f, real *y) {
   const int m = f.m, mk = f.kernel ? f.kernel->mj : 0;
   if (mk) f.kernel->forward(f.a.data(), y, 0);
@@ -102,30 +107,31 @@ void solve_in_place(const Factor &f, real *y) {
     const real *ai = &f.a(i, 0);
     real s = y[i];
     for (int k = f.first[i]; k < i; ++k) s -= ai[k] * y[k];
-    y[i] = s * ai[i];
+    y[i] = s;
   }
+  for (int i = 0; i < m; ++i) y[i] *= f.a(i, i);
   for (int i = m - 1; i >= mk; --i) {
     const real *ai = &f.a(i, 0);
-    y[i] *= ai[i];
     const real yi = y[i];
     for (int k = f.first[i]; k < i; ++k) y[k] -= ai[k] * yi;
   }
   if (mk) f.kernel->backward(f.a.data(), y);
 }
 
-// y = L L^T x in the factor's order.
+// y = L D L^T x in the factor's order.
 void multiply(const Factor &f, const real *x, real *y) {
   const int m = f.m;
   real t[kMaxRows];
   for (int k = 0; k < m; ++k) t[k] = 0;
   for (int i = 0; i < m; ++i) {  // t = L^T x
     for (int k = f.first[i]; k < i; ++k) t[k] += f.a(i, k) * x[i];
-    t[i] += x[i] / f.a(i, i);
+    t[i] += x[i];
   }
+  for (int k = 0; k < m; ++k) t[k] /= f.a(k, k);  // t = D t
   for (int i = 0; i < m; ++i) {  // y = L t
-    real s = 0;
+    real s = t[i];
     for (int k = f.first[i]; k < i; ++k) s += f.a(i, k) * t[k];
-    y[i] = s + t[i] / f.a(i, i);
+    y[i] = s;
   }
 }
 

@@ -30,7 +30,7 @@ constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows;
 
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
-// row-major: the Cholesky inner products run along rows
+// row-major: the factorization's inner products run along rows
 using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows, Eigen::RowMajor>;
 
 // Unit axis u(phi) = (sin, -cos) and normal n(phi) = (cos, sin) of eq. (1).
@@ -212,7 +212,8 @@ constexpr real kPivotFloor = real(1e-6);
 constexpr real kPivotFloor = real(1e-13);
 #endif
 
-// Cholesky factor of J W J^T (lower triangle in place) with its condition estimate.
+// L D L^T factor of J W J^T (L below the diagonal in place, 1 / D on it) with its condition
+// estimate.
 struct Factor {
   MatR a;
   int m;

@@ -266,8 +266,10 @@ class Kernel:
 
     def factor_locals(self, local, fail):
         """J W J^T's envelope as locals A<p>_<q>, the largest diagonal entry into max_diag
-        (which comes in holding the rows after the block's), then L L^T into L<p>_<q> (below
-        the diagonal) and iL<p>_<p> = 1 / L_pp (linear_solve.cpp's storage), the pivots' range into pmin, pmax; `fail` on a bad diagonal or a pivot <= the floor."""
+        (which comes in holding the rows after the block's), then L D L^T (linear_solve.cpp):
+        L's entries below the diagonal into L<p>_<q>, each through T<p>_<q> = L_pq D_q, and
+        iD<p> = 1 / D_p; the pivots' range into pmin, pmax; `fail` on a bad diagonal or a
+        pivot <= the floor."""
         m = self.m
         o = []
         for p in range(m):
@@ -285,37 +287,38 @@ class Kernel:
         for p in range(m):
             lp = self.l_nz[p]
             for q in lp:
-                sub = "".join(f" - L{p}_{k} * L{q}_{k}" for k in lp if k < q and k in self.l_nz[q])
-                o.append(f"  const real L{p}_{q} = (A{p}_{q}{sub}) * iL{q}_{q};")
-            sub = "".join(f" - L{p}_{k} * L{p}_{k}" for k in lp)
+                sub = "".join(f" - T{p}_{k} * L{q}_{k}" for k in lp if k < q and k in self.l_nz[q])
+                o.append(f"  const real T{p}_{q} = A{p}_{q}{sub}, L{p}_{q} = T{p}_{q} * iD{q};")
+            sub = "".join(f" - T{p}_{k} * L{p}_{k}" for k in lp)
             o.append(f"  d = A{p}_{p}{sub};")
             o.append(f"  if (!(d > floor)) {fail}")
             o.append("  pmin = d < pmin ? d : pmin;")
             o.append("  pmax = d > pmax ? d : pmax;")
-            o.append(f"  const real iL{p}_{p} = 1 / std::sqrt(d);")
+            o.append(f"  const real iD{p} = 1 / d;")
         return o
 
     def factor_store(self, a="a"):
         """L's envelope by position into the general storage (zeros where L has none), the
-        diagonal as 1 / L_pp (linear_solve.cpp)."""
+        diagonal holding 1 / D_p (linear_solve.cpp)."""
         o = []
         for p in range(self.m):
             for q in range(self.first[p], p + 1):
-                v = f"iL{p}_{p}" if q == p else f"L{p}_{q}" if q in self.l_nz[p] else "0"
+                v = f"iD{p}" if q == p else f"L{p}_{q}" if q in self.l_nz[p] else "0"
                 o.append(f"  {a}[{p} * kMaxRows + {q}] = {v};")
         return o
 
     def solve_locals(self, src, dst, lval="L"):
-        """L L^T y = b with b_p = src(row at p), into dst(row at p): factor_solve's permutation
-        folded in, the same operations in the same order as forward then backward."""
+        """L D L^T y = b with b_p = src(row at p), into dst(row at p): factor_solve's
+        permutation folded in, the same operations in the same order as its forward solve,
+        scaling and backward solve."""
         L = (lambda p, k: f"L{p}_{k}") if lval == "L" else (lambda p, k: f"a[{p} * kMaxRows + {k}]")
-        iL = (lambda p: f"iL{p}_{p}") if lval == "L" else (lambda p: L(p, p))  # a's diagonal: 1 / L_pp
+        iD = (lambda p: f"iD{p}") if lval == "L" else (lambda p: L(p, p))  # a's diagonal: 1 / D_p
         o = []
         for p in range(self.m):
             sub = "".join(f" - {L(p, k)} * u{k}" for k in self.l_nz[p])
-            o.append(f"  real u{p} = ({src(self.row_at[p])}{sub}) * {iL(p)};")
+            o.append(f"  real u{p} = {src(self.row_at[p])}{sub};")
+        o += [f"  u{p} *= {iD(p)};" for p in range(self.m)]
         for p in reversed(range(self.m)):
-            o.append(f"  u{p} *= {iL(p)};")
             o += [f"  u{k} -= {L(p, k)} * u{p};" for k in self.l_nz[p]]
         o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
         return o
@@ -362,14 +365,13 @@ class Kernel:
         o.append("  switch (from) {")
         for p in range(m):
             sub = "".join(f" - {a(p, k)} * y[{k}]" for k in self.l_nz[p])
-            o.append(f"    case {p}: y[{p}] = (y[{p}]{sub}) * {a(p, p)};" + (" [[fallthrough]];" if p < m - 1 else ""))
+            o.append(f"    case {p}: y[{p}] = y[{p}]{sub};" + (" [[fallthrough]];" if p < m - 1 else ""))
         o.append("    default: break;")
         o.append("  }")
         o.append("}\n")
         o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_backward(const real *a, real *y) {{")
         o.append(f"  constexpr int {R} = kMaxRows;")
         for p in reversed(range(m)):
-            o.append(f"  y[{p}] *= {a(p, p)};")
             o += [f"  y[{k}] -= {a(p, k)} * y[{p}];" for k in self.l_nz[p]]
         o.append("}\n")
         # the whole solve on the block alone, in row order
