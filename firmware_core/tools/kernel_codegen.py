@@ -9,10 +9,11 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
   rows       Phi, the Jacobian, nu and gamma (the row units of constraints.cpp written
              out term by term, one sin/cos pair per body, no dispatch);
   factor     the lower envelope of J W J^T (products with the Jacobian's constant
-             entries folded away) and its Cholesky factor L L^T in the general path's
-             order (reverse Cuthill-McKee, the contact rows after) with its fill worked out
-             here (symbolic factorization), stored as the general code stores it;
-  solve      L L^T x = b with the row permutation folded in;
+             entries folded away) and its factor L D L^T in the general path's order
+             (reverse Cuthill-McKee, the contact rows after) with its fill worked out here
+             (symbolic factorization), stored as the general code stores it (1 / D on the
+             diagonal);
+  solve      L D L^T x = b with the row permutation folded in;
   forward, backward, j_times, jt_times over the non-zeros only (the rows after the block);
   dynamics   the whole forward-dynamics solve fused, its values in locals, and
   newton     one generalized-alpha Newton iteration fused: for each model's main system
