@@ -155,6 +155,13 @@ class Reader {
   Reader(const uint8_t *d, size_t n) : d_(d), n_(n) {}
   bool more() const { return i_ < n_; }
   uint8_t byte() { return i_ < n_ ? d_[i_++] : 0; }
+  // n bytes into out, zeros past the end of the input (as n calls of byte())
+  void bytes(uint8_t *out, size_t n) {
+    const size_t k = n < n_ - i_ ? n : n_ - i_;
+    if (k) std::memcpy(out, d_ + i_, k);
+    std::memset(out + k, 0, n - k);
+    i_ += k;
+  }
 
  private:
   const uint8_t *d_;
@@ -177,7 +184,7 @@ hil::Frame read_frame(Reader &r) {
   f.fd = !(flags & 4);
   f.id &= f.extended ? 0x1fffffffu : 0x7ffu;  // what SocketCAN can deliver
   f.len = static_cast<uint8_t>(r.byte() % (hil::kFdPayload + 1));
-  for (int k = 0; k < f.len; ++k) f.data[k] = r.byte();
+  r.bytes(f.data, f.len);
   // A STEP within the DBC's range stays valid but short.
   if (f.id == LEGSIM_CAN_CONTROL_FRAME_ID && !f.extended && f.fd && f.len == hil::kFdPayload &&
       f.data[LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_BIT / 8] == LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE) {
