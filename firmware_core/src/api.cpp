@@ -18,7 +18,8 @@ static_assert(sizeof(legsim_reaction) == 3 * sizeof(legsim_real), "a reaction is
 namespace legsim {
 
 Snapshot::Snapshot(const Data &d)
-    : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), lambda(d.lambda), report(d.report),
+    : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), qdd_past{d.qdd_past[0], d.qdd_past[1]},
+      past_steps(d.past_steps), newton_eta(d.newton_eta), lambda(d.lambda), report(d.report),
       t(d.t), steps(d.steps), stroke_mask(d.stroke_mask), stop_mask(d.stop_mask),
       assembled(d.assembled), derivative_valid(d.derivative_valid),
       history_valid(d.history_valid) {
@@ -40,6 +41,10 @@ void Snapshot::restore(Sim &sim) const {
   d.qd = qd;
   d.qdd = qdd;
   d.acc_aux = acc_aux;
+  d.qdd_past[0] = qdd_past[0];
+  d.qdd_past[1] = qdd_past[1];
+  d.past_steps = past_steps;
+  d.newton_eta = newton_eta;
   d.lambda = lambda;
   d.report = report;
   for (int j = 0; j < kMaxJoints; ++j) d.reaction[j] = reaction[j];
@@ -267,6 +272,8 @@ legsim_status state_refresh(Sim &sim) {
   d.derivative_valid = s == LEGSIM_OK;
   d.history_valid = s == LEGSIM_OK;
   if (s == LEGSIM_OK) d.acc_aux = d.qdd;
+  d.past_steps = 0;  // the history starts here
+  d.newton_eta = 1;
   return s;
 }
 
@@ -374,6 +381,10 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.qd.setZero();
   d.qdd.setZero();
   d.acc_aux.setZero();
+  d.qdd_past[0].setZero();
+  d.qdd_past[1].setZero();
+  d.past_steps = 0;
+  d.newton_eta = 1;
   d.lambda.setZero();
   std::memset(d.reaction, 0, sizeof d.reaction);
   std::memset(&d.report, 0, sizeof d.report);

@@ -247,6 +247,13 @@ struct Data {
   bool history_valid;     // qdd and acc_aux are the generalized-alpha history of this state
   VecQ q, qd, qdd;
   VecQ acc_aux;  // generalized-alpha auxiliary acceleration
+  // Generalized-alpha's predictor and convergence test: the accelerations of the steps
+  // before this state's (qdd_past[0] the last), past_steps of them (0 .. 2) since the
+  // history started, and the Newton contraction's estimate newton_eta = theta / (1 - theta)
+  // in [kEtaMin, 1] (1: none).
+  VecQ qdd_past[2];
+  int past_steps;
+  real newton_eta;
   VecR lambda;   // multipliers of the last dynamics/statics solve
   legsim_reaction reaction[kMaxJoints];
   ActuatorState act[kMaxActuators];
@@ -269,7 +276,7 @@ struct Data {
   bool end_projected;  // RK4: the last step's end needed projecting (a hint: same values either way)
   DriverValues drivers;
   VecQ force_q;  // generalized applied forces Q
-  VecQ tq[4], tv[4];
+  VecQ tq[4], tv[3];
   VecR rhs;
 };
 
@@ -288,7 +295,9 @@ struct Sim {
 // step starts from, and the report): calls that can fail half-way work on the
 // live state and put this back.
 struct Snapshot {
-  VecQ q, qd, qdd, acc_aux;
+  VecQ q, qd, qdd, acc_aux, qdd_past[2];
+  int past_steps;
+  real newton_eta;
   VecR lambda;
   legsim_reaction reaction[kMaxJoints];
   real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
