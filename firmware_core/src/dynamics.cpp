@@ -7,14 +7,21 @@
 
 namespace legsim {
 
+namespace {
+// Q at (q, qd) for a solve on layout. Driven analyses: the drivers supply the actuator
+// forces. Stops act besides them.
+void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd) {
+  legsim_options opt = sim.opt;
+  if (layout.m > sim.model.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
+  applied_forces(sim.model, opt, sim.data, q, qd, sim.data.force_q);
+}
+}  // namespace
+
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready, bool keep) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  legsim_options opt = sim.opt;
-  // Driven analyses: the drivers supply the actuator forces. Stops act besides them.
-  if (layout.m > m.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
-  applied_forces(m, opt, d, q, qd, d.force_q);
+  layout_forces(sim, layout, q, qd);
   const Kernel *kern = layout.kernel;
   if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
@@ -133,6 +140,19 @@ legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(
 
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
+  const Layout &lay = d.dyn;
+  const Kernel *kern = lay.kernel;
+  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide) {
+    // the joint rows alone, their factor given: the generated solve, fused, with the
+    // reactions (the same values as below)
+    layout_forces(sim, lay, d.q, d.qd);
+    const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
+    const legsim_status s = kern->factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, d.force_q,
+                                           &d.trig, d.factor.a.data(), d.lambda, qdd, reactions ? d.reaction : nullptr);
+    if (s != LEGSIM_OK) return s;
+    stop_forces_update(sim);
+    return LEGSIM_OK;
+  }
   if (factor_ready) rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
   const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd, factor_ready);
   if (s != LEGSIM_OK) return s;

@@ -77,6 +77,14 @@ struct Kernel {
   legsim_status (*newton)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force,
                           TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, Rows &rows,
                           real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda);
+  // The forward-dynamics solve of a system of the joint rows alone with its factor given
+  // (a, by position: generalized-alpha's last iteration's), fused: dynamics_solve's
+  // rows_ready path at (q, qd), lambda and qdd, and with reaction not null the joints'
+  // reactions (reactions_from_multipliers). LEGSIM_ERR_DIVERGED (qdd not finite) as the
+  // general path.
+  legsim_status (*factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+                            const VecQ &force, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd,
+                            legsim_reaction *reaction);
 };
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr

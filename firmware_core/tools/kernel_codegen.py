@@ -15,9 +15,11 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
              diagonal);
   solve      L D L^T x = b with the row permutation folded in;
   forward, backward, j_times, jt_times over the non-zeros only (the rows after the block);
-  dynamics   the whole forward-dynamics solve fused, its values in locals, and
-  newton     one generalized-alpha Newton iteration fused: for each model's main system
-             only (its joints, or its stance), of at most --fused-max-rows rows.
+  dynamics   the whole forward-dynamics solve fused, its values in locals,
+  newton     one generalized-alpha Newton iteration fused, and
+  factored   the forward-dynamics solve with the factor given, the joints' reactions with
+             it: for each model's main system only (its joints, or its stance), of at most
+             --fused-max-rows rows.
 Every piece does the general path's arithmetic in the same order, so both give the same
 numbers bit for bit (tests/core/test_kernels.c).
 The geometry (joint points) is read from the Model at run time: the kernel depends on the
@@ -389,7 +391,7 @@ class Kernel:
         o += [f"  y[{n}] = {self.jt_expr(n, lambda i: f'x[{i}]', False)};" for n in range(3 * self.nb)]
         o.append("}\n")
         if not self.fused:
-            return "\n".join(o) + "\n" + self.emit_tables(sym, "nullptr", "nullptr")
+            return "\n".join(o) + "\n" + self.emit_tables(sym, "nullptr", "nullptr", "nullptr")
         # the whole forward-dynamics solve of the joint rows alone, fused (dynamics.cpp's
         # steps with the same arithmetic in the same order, its values kept in locals)
         o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
@@ -446,9 +448,38 @@ class Kernel:
         o += [f"  jt_dlambda[{n}] = {self.jt_expr(n, lambda i: f'l{i}', True)};" for n in range(nq)]
         o.append("  return LEGSIM_OK;")
         o.append("}\n")
-        return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton")
+        # the forward-dynamics solve with the factor given (dynamics.cpp's rows_ready path:
+        # the same arithmetic in the same order), and the joints' reactions from its locals
+        # (reactions.cpp's arithmetic, constant Jacobian entries folded)
+        o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_factored(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+                 "const VecQ &q, const VecQ &qd, const VecQ &force, TrigCache *trig, const real *a, VecR &lambda, "
+                 "VecQ &qdd, legsim_reaction *reaction) {")
+        o.append("  const real *w = model.minv;")
+        o += self.rows_locals()
+        o.append("  " + " ".join(f"(void)phi{i};" for i in range(m)) + "  // the acceleration level: no Phi")
+        o += [f"  const real t{n} = w[{n}] * force[{n}];" for n in range(nq)]
+        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gam{i};" for i in range(m)]
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}", lval="a")
+        o += [f"  lambda[{i}] = l{i};" for i in range(m)]
+        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
+        for n in range(nq):
+            o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
+            o.append(f"  z += qdd[{n}] * real(0);")
+        o.append("  if (reaction) {")
+        r = 0
+        for n, j in enumerate(self.joints):
+            nr = NROWS[j["kind"]]
+            for k, name in enumerate(("force_n[0]", "force_n[1]", "moment_nm")):
+                terms = [(-self.coef(i, 0, k, True)[0], self.coef(i, 0, k, True)[1] + [f"l{i}"])
+                         for i in range(r, r + nr)]
+                o.append(f"    reaction[{n}].{name} = {product(terms)};")
+            r += nr
+        o.append("  }")
+        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
+        o.append("}\n")
+        return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored")
 
-    def emit_tables(self, sym, dynamics, newton):
+    def emit_tables(self, sym, dynamics, newton, factored):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -459,7 +490,7 @@ class Kernel:
         o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
                  f"{len(self.contacts)}, {sym}_contact, "
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
-                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, {newton}}};")
+                 f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, {newton}, {factored}}};")
         return "\n".join(o) + "\n"
 
 
