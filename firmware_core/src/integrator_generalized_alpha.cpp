@@ -30,14 +30,14 @@ namespace {
 // the loops vectorize (the same arithmetic per element, so the same values).
 #define R_ real *__restrict
 // r = M qdd + r - Q (r holds J^T lambda); t = M^-1 r
-void residual(int n, const R_ mass, const R_ minv, const R_ qdd1, const R_ force, R_ res, R_ tmp) {
+LEGSIM_KERNEL_TARGETS void residual(int n, const R_ mass, const R_ minv, const R_ qdd1, const R_ force, R_ res, R_ tmp) {
   for (int k = 0; k < n; ++k) {
     res[k] += mass[k] * qdd1[k] - force[k];
     tmp[k] = minv[k] * res[k];
   }
 }
 // the Newton correction dq = -(M^-1 / beta') (r + J^T dlambda) applied to q1, v1, qdd1
-void correct(int n, real bprime, real gprime, const R_ minv, const R_ res, const R_ tmp, R_ q1, R_ v1,
+LEGSIM_KERNEL_TARGETS void correct(int n, real bprime, real gprime, const R_ minv, const R_ res, const R_ tmp, R_ q1, R_ v1,
              R_ qdd1, R_ dq) {
   for (int k = 0; k < n; ++k) {
     dq[k] = -minv[k] * (res[k] + tmp[k]) / bprime;
@@ -48,7 +48,7 @@ void correct(int n, real bprime, real gprime, const R_ minv, const R_ res, const
 }
 // qdd1's prediction from qdd (this state's) and the past steps' (past of them known): the
 // polynomial through them, one step on. Separate loops, so an unknown past is never read.
-void predict(int n, int past, const R_ qdd, const R_ qdd_p1, const R_ qdd_p2, R_ qdd1) {
+LEGSIM_KERNEL_TARGETS void predict(int n, int past, const R_ qdd, const R_ qdd_p1, const R_ qdd_p2, R_ qdd1) {
   if (past >= 2) {
     for (int k = 0; k < n; ++k) qdd1[k] = 3 * (qdd[k] - qdd_p1[k]) + qdd_p2[k];
   } else if (past == 1) {
@@ -56,6 +56,19 @@ void predict(int n, int past, const R_ qdd, const R_ qdd_p1, const R_ qdd_p2, R_
   } else {
     for (int k = 0; k < n; ++k) qdd1[k] = qdd[k];
   }
+}
+// q1 and v1 of the step from qdd1's prediction (a1: the auxiliary acceleration it gives)
+LEGSIM_KERNEL_TARGETS void start(int n, real h, real af, real am, real beta, real gam, const R_ q, const R_ qd,
+                                 const R_ qdd, const R_ acc_aux, const R_ qdd1, R_ q1, R_ v1) {
+  for (int k = 0; k < n; ++k) {
+    const real a1 = (af * qdd[k] + (1 - af) * qdd1[k] - am * acc_aux[k]) / (1 - am);
+    q1[k] = q[k] + h * qd[k] + h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1);
+    v1[k] = qd[k] + h * ((1 - gam) * acc_aux[k] + gam * a1);
+  }
+}
+// the auxiliary acceleration's update at the end of the step
+LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd, const R_ qdd1, R_ acc_aux) {
+  for (int k = 0; k < n; ++k) acc_aux[k] = (af * qdd[k] + (1 - af) * qdd1[k] - am * acc_aux[k]) / (1 - am);
 }
 #undef R_
 
@@ -81,11 +94,8 @@ legsim_status generalized_alpha_step(Sim &sim) {
   VecQ &q1 = d.tq[0], &v1 = d.tq[1], &qdd1 = d.tq[2], &res = d.tq[3];
   VecR lambda = d.lambda;
   predict(n, d.past_steps, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[1].data(), qdd1.data());
-  for (int k = 0; k < n; ++k) {
-    const real a1 = (af * d.qdd[k] + (1 - af) * qdd1[k] - am * d.acc_aux[k]) / (1 - am);
-    q1[k] = d.q[k] + h * d.qd[k] + h * h * ((real(0.5) - beta) * d.acc_aux[k] + beta * a1);
-    v1[k] = d.qd[k] + h * ((1 - gam) * d.acc_aux[k] + gam * a1);
-  }
+  start(n, h, af, am, beta, gam, d.q.data(), d.qd.data(), d.qdd.data(), d.acc_aux.data(), qdd1.data(), q1.data(),
+        v1.data());
   const Layout &lay = d.dyn;
   bool converged = false;
   // the last step's contraction estimate, raised to 3/4 (1 stays 1: none)
@@ -149,8 +159,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
     }
   }
   if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
-  for (int k = 0; k < n; ++k)
-    d.acc_aux[k] = (af * d.qdd[k] + (1 - af) * qdd1[k] - am * d.acc_aux[k]) / (1 - am);
+  acc_aux_update(n, af, am, d.qdd.data(), qdd1.data(), d.acc_aux.data());
   // the history for the next step's predictor and test
   d.qdd_past[1] = d.qdd_past[0];
   d.qdd_past[0] = d.qdd;

@@ -12,7 +12,7 @@ namespace {
 // The stage updates over distinct arrays: __restrict tells the compiler so, and the loops
 // vectorize (the same arithmetic per element, so the same values).
 #define R_ real *__restrict
-void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs, R_ sum_v, R_ sum_a) {
+LEGSIM_KERNEL_TARGETS void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs, R_ sum_v, R_ sum_a) {
   for (int k = 0; k < n; ++k) {
     sum_v[k] = v0[k];
     sum_a[k] = a0[k];
@@ -20,7 +20,7 @@ void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R
     vs[k] = v0[k] + h2 * a0[k];
   }
 }
-void stage_next(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a, R_ qs, R_ vs, R_ sum_v,
+LEGSIM_KERNEL_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a, R_ qs, R_ vs, R_ sum_v,
                 R_ sum_a) {
   for (int k = 0; k < n; ++k) {
     sum_v[k] += w * vs[k];
@@ -29,7 +29,7 @@ void stage_next(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a, R_
     vs[k] = v0[k] + hn * a[k];
   }
 }
-void stage_end(int n, real h6, const R_ q0, const R_ v0, const R_ sum_v, const R_ sum_a, R_ q1, R_ v1) {
+LEGSIM_KERNEL_TARGETS void stage_end(int n, real h6, const R_ q0, const R_ v0, const R_ sum_v, const R_ sum_a, R_ q1, R_ v1) {
   for (int k = 0; k < n; ++k) {
     q1[k] = q0[k] + h6 * sum_v[k];
     v1[k] = v0[k] + h6 * sum_a[k];

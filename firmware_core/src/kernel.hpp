@@ -23,6 +23,19 @@
 
 #include "sim.hpp"
 
+// The generated kernels and the integrators' per-coordinate loops are compiled twice on
+// x86-64 with GCC and glibc (LEGSIM_KERNEL_AVX, CMake's option of that name): for the
+// baseline ISA and for AVX, the copy picked at load time by the CPU (an ifunc). AVX's
+// three-operand instructions drop most of the register copies that straight-line code
+// needs in two-operand SSE2, and its loops take four doubles at a time; neither copy has
+// FMA, so both give the same values bit for bit (tests/core/test_kernels.c checks the
+// copy in use against the general path).
+#if LEGSIM_KERNEL_AVX && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
+#define LEGSIM_KERNEL_TARGETS __attribute__((target_clones("avx", "default")))
+#else
+#define LEGSIM_KERNEL_TARGETS
+#endif
+
 namespace legsim {
 
 struct Kernel {
