@@ -18,7 +18,7 @@ void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd
 }  // namespace
 
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                             bool rows_ready, bool keep) {
+                             bool rows_ready, bool keep, legsim_reaction *reaction) {
   const Model &m = sim.model;
   Data &d = sim.data;
   layout_forces(sim, layout, q, qd);
@@ -27,7 +27,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
     const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
-                                           keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd);
+                                           keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd, reaction);
     if (keep) factor_order(layout, f);
     d.report.condition = f.condition;
     return s;
@@ -51,7 +51,9 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   jt_times(m, layout, d.rows, d.lambda, tmp);
   if (layout.nslide) friction_add(sim, layout, q, d.lambda, -1, tmp);
   for (int k = 0; k < m.nq; ++k) qdd[k] = m.minv[k] * (d.force_q[k] - tmp[k]);
-  return all_finite(qdd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+  if (!all_finite(qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
+  if (reaction) reactions_from_multipliers(m, d.rows, d.lambda, reaction);
+  return LEGSIM_OK;
 }
 
 namespace {
@@ -154,11 +156,10 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     return LEGSIM_OK;
   }
   if (factor_ready) rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
-  const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd, factor_ready);
+  const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
+  const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd, factor_ready, true, reactions ? d.reaction : nullptr);
   if (s != LEGSIM_OK) return s;
   stop_forces_update(sim);
-  if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
-    reactions_from_multipliers(sim.model, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;
 }
 

@@ -47,14 +47,12 @@ real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv
 }  // namespace
 
 namespace {
-// The step's end state committed, with its stop forces and reactions.
+// The step's end state committed, with its stop forces (the reactions came with its solve).
 legsim_status rk4_finish(Sim &sim, const VecQ &q1, const VecQ &v1) {
   Data &d = sim.data;
   d.q = q1;
   d.qd = v1;
   stop_forces_update(sim);
-  if (!(sim.opt.disable & LEGSIM_DISABLE_REACTIONS))
-    reactions_from_multipliers(sim.model, d.rows, d.lambda, d.reaction);
   return LEGSIM_OK;
 }
 }  // namespace
@@ -87,6 +85,7 @@ legsim_status rk4_step(Sim &sim) {
   const DriverValues &dv = d.stop_drivers;
   const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
   const real tol = real(sim.opt.newton_tol);
+  legsim_reaction *const reaction = sim.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
   d.report.iterations = 0;
   bool factor_ready = false;  // the rows and the factor at q1 kept, the positions on Phi = 0
   if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
@@ -96,7 +95,7 @@ legsim_status rk4_step(Sim &sim) {
     // projection; else the sequence below starts over. The same values and statuses
     // either way. Not tried after a step whose positions needed projecting (large steps:
     // every one does).
-    if (dynamics_solve(sim, lay, q1, v1, d.qdd) == LEGSIM_OK) {
+    if (dynamics_solve(sim, lay, q1, v1, d.qdd, false, true, reaction) == LEGSIM_OK) {
       d.report.residual = rows_max_residual(lay, d.rows);
       if (!projection) return rk4_finish(sim, q1, v1);
       if (d.report.residual <= tol) {
@@ -129,7 +128,7 @@ legsim_status rk4_step(Sim &sim) {
     gamma_ready = false;
   }
   if (!gamma_ready) rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);  // gamma at the final (q1, v1)
-  s = dynamics_solve(sim, lay, q1, v1, d.qdd, true);
+  s = dynamics_solve(sim, lay, q1, v1, d.qdd, true, true, reaction);
   if (s != LEGSIM_OK) return s;
   return rk4_finish(sim, q1, v1);
 }

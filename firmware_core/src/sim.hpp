@@ -411,8 +411,10 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // rows_ready: d.rows and d.factor already hold this (q, qd) on this layout. keep = false:
 // the caller needs only qdd and lambda (RK4's stages), so d.rows and d.factor need not be
 // written (a layout of the joint rows alone with a generated kernel skips them).
+// reaction not null: the joints' reactions too (reactions_from_multipliers; the fused solve
+// computes them from its locals), for the caller's all-or-nothing to put back on failure.
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                             bool rows_ready = false, bool keep = true);
+                             bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 // The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
 // generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).

@@ -326,6 +326,21 @@ class Kernel:
         o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
         return o
 
+    def reactions_locals(self):
+        """Where reaction is not null, each joint's reaction on its first body from the
+        multipliers l<row> (reactions_from_multipliers, constant Jacobian entries folded)."""
+        o = ["  if (reaction) {"]
+        r = 0
+        for n, j in enumerate(self.joints):
+            nr = NROWS[j["kind"]]
+            for k, name in enumerate(("force_n[0]", "force_n[1]", "moment_nm")):
+                terms = [(-self.coef(i, 0, k, True)[0], self.coef(i, 0, k, True)[1] + [f"l{i}"])
+                         for i in range(r, r + nr)]
+                o.append(f"    reaction[{n}].{name} = {product(terms)};")
+            r += nr
+        o.append("  }")
+        return o
+
     def j_expr(self, i, x, local):
         dots = []
         for s in range(2):
@@ -397,7 +412,7 @@ class Kernel:
         o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                  "const VecQ &q, const VecQ &qd, "
                  "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, "
-                 "VecR &lambda, VecQ &qdd) {")
+                 "VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {")
         o.append("  const real *w = model.minv;")
         o += self.rows_locals()
         o.append("  if (keep_rows) {")
@@ -419,6 +434,7 @@ class Kernel:
         for n in range(nq):
             o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
             o.append(f"  z += qdd[{n}] * real(0);")
+        o += self.reactions_locals()
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
         # one Newton iteration of generalized-alpha (integrator_generalized_alpha.cpp's steps,
@@ -465,16 +481,7 @@ class Kernel:
         for n in range(nq):
             o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
             o.append(f"  z += qdd[{n}] * real(0);")
-        o.append("  if (reaction) {")
-        r = 0
-        for n, j in enumerate(self.joints):
-            nr = NROWS[j["kind"]]
-            for k, name in enumerate(("force_n[0]", "force_n[1]", "moment_nm")):
-                terms = [(-self.coef(i, 0, k, True)[0], self.coef(i, 0, k, True)[1] + [f"l{i}"])
-                         for i in range(r, r + nr)]
-                o.append(f"    reaction[{n}].{name} = {product(terms)};")
-            r += nr
-        o.append("  }")
+        o += self.reactions_locals()
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored")
