@@ -17,14 +17,31 @@ static_assert(sizeof(legsim_reaction) == 3 * sizeof(legsim_real), "a reaction is
 
 namespace legsim {
 
-Snapshot::Snapshot(const Data &d)
-    : q(d.q), qd(d.qd), qdd(d.qdd), acc_aux(d.acc_aux), qdd_past{d.qdd_past[0], d.qdd_past[1]},
-      past_steps(d.past_steps), newton_eta(d.newton_eta), lambda(d.lambda), report(d.report),
-      t(d.t), steps(d.steps), stroke_mask(d.stroke_mask), stop_mask(d.stop_mask),
-      assembled(d.assembled), derivative_valid(d.derivative_valid),
-      history_valid(d.history_valid) {
-  for (int j = 0; j < kMaxJoints; ++j) reaction[j] = d.reaction[j];
-  for (int a = 0; a < kMaxActuators; ++a) {
+namespace {
+// The first n values of a fixed-size vector (the rest is never read): a snapshot copies what
+// the model uses, not the capacity.
+template <typename V>
+void copy_head(V &dst, const V &src, int n) {
+  std::memcpy(dst.data(), src.data(), sizeof(real) * size_t(n));
+}
+}  // namespace
+
+Snapshot::Snapshot(const Sim &sim)
+    : past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
+      t(sim.data.t), steps(sim.data.steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
+      assembled(sim.data.assembled), derivative_valid(sim.data.derivative_valid),
+      history_valid(sim.data.history_valid) {
+  const Data &d = sim.data;
+  const Model &m = sim.model;
+  copy_head(q, d.q, m.nq);
+  copy_head(qd, d.qd, m.nq);
+  copy_head(qdd, d.qdd, m.nq);
+  copy_head(acc_aux, d.acc_aux, m.nq);
+  copy_head(qdd_past[0], d.qdd_past[0], m.nq);
+  copy_head(qdd_past[1], d.qdd_past[1], m.nq);
+  lambda = d.lambda;  // whole: the solves of every layout write it
+  std::memcpy(reaction, d.reaction, sizeof(legsim_reaction) * size_t(m.nj));
+  for (int a = 0; a < m.na; ++a) {
     act_force[a] = d.act[a].force;
     stop_force[a] = d.act[a].stop_force;
     stop_length[a] = d.stop_drivers.length[a];
@@ -37,18 +54,19 @@ Snapshot::Snapshot(const Data &d)
 
 void Snapshot::restore(Sim &sim) const {
   Data &d = sim.data;
-  d.q = q;
-  d.qd = qd;
-  d.qdd = qdd;
-  d.acc_aux = acc_aux;
-  d.qdd_past[0] = qdd_past[0];
-  d.qdd_past[1] = qdd_past[1];
+  const Model &m = sim.model;
+  copy_head(d.q, q, m.nq);
+  copy_head(d.qd, qd, m.nq);
+  copy_head(d.qdd, qdd, m.nq);
+  copy_head(d.acc_aux, acc_aux, m.nq);
+  copy_head(d.qdd_past[0], qdd_past[0], m.nq);
+  copy_head(d.qdd_past[1], qdd_past[1], m.nq);
   d.past_steps = past_steps;
   d.newton_eta = newton_eta;
   d.lambda = lambda;
   d.report = report;
-  for (int j = 0; j < kMaxJoints; ++j) d.reaction[j] = reaction[j];
-  for (int a = 0; a < kMaxActuators; ++a) {
+  std::memcpy(d.reaction, reaction, sizeof(legsim_reaction) * size_t(m.nj));
+  for (int a = 0; a < m.na; ++a) {
     d.act[a].force = act_force[a];
     d.act[a].stop_force = stop_force[a];
     d.stop_drivers.length[a] = stop_length[a];

@@ -309,7 +309,7 @@ struct Snapshot {
   uint32_t stroke_mask, stop_mask;
   bool assembled, derivative_valid, history_valid;
 
-  explicit Snapshot(const Data &d);
+  explicit Snapshot(const Sim &sim);  // the model's coordinates, joints and actuators
   void restore(Sim &sim) const;
 };
 
@@ -319,7 +319,7 @@ struct Snapshot {
 legsim_status outputs_check(const Sim &sim);
 template <typename F>
 legsim_status all_or_nothing(Sim &sim, F &&call) {
-  const Snapshot before(sim.data);
+  const Snapshot before(sim);
   legsim_status s = call();
   if (s == LEGSIM_OK) s = outputs_check(sim);
   if (s != LEGSIM_OK) {

@@ -177,7 +177,7 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
       }
       d.drivers.ncoord = 0;
       // a grid point that fails leaves nothing behind (state, report)
-      const Snapshot before(d);
+      const Snapshot before(sim);
       legsim_status s = work_layout(sim, (1u << m.na) - 1);
       VecQ q = d.q;
       if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
