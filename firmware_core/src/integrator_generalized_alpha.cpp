@@ -12,7 +12,10 @@
 // h^2 K / M (about 1e-5 for the leg at h = 1 ms). Two things keep it to about one
 // iteration a step:
 // - the predictor: qdd1 extrapolated from the last steps' accelerations (quadratic when
-//   two are known), which makes the first correction small;
+//   two are known), which makes the first correction small. In float the accelerations of
+//   the index-3 form carry the positions' round-off divided by h^2 (several m/s^2 from step
+//   to step at h = 1 ms), which an extrapolation amplifies (3x linear, 7x quadratic): there
+//   the last step's accelerations are the better guess (kPredictorOrder);
 // - the convergence test of Hairer & Wanner (Solving ODEs II, IV.8, as RADAU5): after a
 //   correction dq the iterate's error is about eta |dq|, eta = theta / (1 - theta). The
 //   step is converged when |dq| <= tol, or when eta |dq| <= tol with eta measured in this
@@ -46,7 +49,7 @@ LEGSIM_KERNEL_TARGETS void correct(int n, real bprime, real gprime, const R_ min
     qdd1[k] += bprime * dq[k];
   }
 }
-// qdd1's prediction from qdd (this state's) and the past steps' (past of them known): the
+// qdd1's prediction from qdd (this state's) and the past steps' (past of them used): the
 // polynomial through them, one step on. Separate loops, so an unknown past is never read.
 LEGSIM_KERNEL_TARGETS void predict(int n, int past, const R_ qdd, const R_ qdd_p1, const R_ qdd_p2, R_ qdd1) {
   if (past >= 2) {
@@ -72,8 +75,10 @@ LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd,
 }
 #undef R_
 
-// The smallest contraction estimate trusted (see the top of this file).
+// The smallest contraction estimate trusted, and the predictor's polynomial order (see the
+// top of this file).
 constexpr real kEtaMin = real(0.01);
+constexpr int kPredictorOrder = LEGSIM_USE_FLOAT ? 0 : 2;
 }  // namespace
 
 legsim_status generalized_alpha_step(Sim &sim) {
@@ -93,7 +98,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   // exactly: it enters linearly)
   VecQ &q1 = d.tq[0], &v1 = d.tq[1], &qdd1 = d.tq[2], &res = d.tq[3];
   VecR lambda = d.lambda;
-  predict(n, d.past_steps, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[1].data(), qdd1.data());
+  predict(n, d.past_steps < kPredictorOrder ? d.past_steps : kPredictorOrder, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[1].data(), qdd1.data());
   start(n, h, af, am, beta, gam, d.q.data(), d.qd.data(), d.qdd.data(), d.acc_aux.data(), qdd1.data(), q1.data(),
         v1.data());
   const Layout &lay = d.dyn;

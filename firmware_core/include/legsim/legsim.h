@@ -243,7 +243,11 @@ typedef struct legsim_options {
   double rho_inf;           /* generalized-alpha spectral radius at infinity, in [0, 1] */
   int32_t max_newton_iter;  /* assembly, projection and implicit steps: 1 .. LEGSIM_MAX_NEWTON_ITER */
   double newton_tol;        /* on the constraint residual (m, rad) and on corrections:
-                               [LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL] */
+                               [LEGSIM_MIN_NEWTON_TOL, LEGSIM_MAX_NEWTON_TOL]; a
+                               generalized-alpha step has converged when its last correction,
+                               or that correction times the iteration's measured contraction
+                               theta / (1 - theta) (its estimated remaining error, Hairer &
+                               Wanner), is at most newton_tol */
   legsim_statics_rule statics_rule; /* legsim_statics and legsim_inverse_dynamics on two
                                        stuck contacts; one of the enum, else BAD_INPUT */
   legsim_contact_law contact_law;   /* legsim_step's foot transitions; one of the enum,
