@@ -54,11 +54,11 @@ struct Kernel;  // generated joint-block kernels (kernel.hpp)
 // sin and cos of each body's angle where they were last evaluated: a stage evaluates the
 // applied forces, the rows and the stroke checks at the same q, so each angle's pair is
 // computed once (keyed by the angle's value: a pure function remembered, never stale).
-// In double, a new angle phi is reached from the pair at the nearest multiple k / 64 rad
-// (remembered too: a body turns through such a cell in many stages) by the angle-sum
-// formulas with d = phi - k / 64 (exact: |d| <= 1/128) and short Taylor polynomials of d:
-// about 30 instructions instead of 70, within 2.5 ulp (tests/core/test_body_trig.cpp), still
-// a pure function of phi.
+// A new angle phi is reached from the pair at the nearest multiple k / 64 rad (remembered
+// too: a body turns through such a cell in many stages) by the angle-sum formulas
+// (sincos_grid, kernel_trig.hpp): in double about 30 instructions instead of 70, within
+// 2.5 ulp (tests/core/test_body_trig.cpp); in float a fraction of its full reduction, within
+// 2 ulp (tests/core/test_trig.cpp); still a pure function of phi.
 struct TrigCache {
   real phi[kMaxBodies], s[kMaxBodies], c[kMaxBodies];
   real grid_s[kMaxBodies], grid_c[kMaxBodies];  // sin, cos of grid[b] / 64
@@ -71,27 +71,11 @@ inline void body_trig(TrigCache *t, int b, real phi, real &s, real &c) {
     c = t->c[b];
     return;
   }
-#if !LEGSIM_USE_FLOAT
-  if (t && std::abs(phi) < 1e5) {
-    constexpr double shifter = 6755399441055744.0;  // 1.5 * 2^52: the nearest integer
-    const double k = (phi * 64 + shifter) - shifter;
-    const int32_t ki = static_cast<int32_t>(k);
-    if (t->grid[b] != ki) {
-      sincos_reduced(k * (1.0 / 64), t->grid_s[b], t->grid_c[b]);  // kernel_trig.hpp
-      t->grid[b] = ki;
-    }
-    const double d = phi - k * (1.0 / 64), z = d * d;
-    const double sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120 - z * (1.0 / 5040)));  // sin d
-    const double cm = -z * (0.5 - z * (1.0 / 24 - z * (1.0 / 720)));                 // cos d - 1
-    const double gs = t->grid_s[b], gc = t->grid_c[b];
-    s = gs + (gs * cm + gc * sd);
-    c = gc + (gc * cm - gs * sd);
+  if (t && std::abs(phi) < real(kGridMaxAngle)) {
+    sincos_grid(phi, t->grid[b], t->grid_s[b], t->grid_c[b], s, c);  // kernel_trig.hpp
   } else {
     sincos_reduced(phi, s, c);
   }
-#else
-  sincos_reduced(phi, s, c);  // kernel_trig.hpp
-#endif
   if (t) {
     t->phi[b] = phi;
     t->s[b] = s;

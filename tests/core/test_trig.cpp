@@ -1,10 +1,13 @@
 // The float sin and cos of kernel_trig.hpp (every angle of a float build, the Cortex-M4F's)
 // against double sin and cos of the same float (glibc's, to well under a float ulp), in ulps
-// of the exact value; and sincos_any in double is the library's, bit for bit.
+// of the exact value: the full reduction and the per-stage grid path (sincos_grid, which
+// body_trig uses below kGridMaxAngle); and sincos_any in double is the library's, bit for bit.
 #include <cfloat>
+#include <climits>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <cstdio>
 
 #include "kernel_trig.hpp"
 #include "unity.h"
@@ -107,6 +110,49 @@ static void test_float_sincos_zero_and_non_finite(void) {
   }
 }
 
+// sincos_grid in float: within 2 ulp where |value| >= 1/16 and 2^-25 absolute below (near
+// the zeros, where the rows use these values as lengths' factors), over random angles,
+// angles near the cells' edges (k + 1/2) / 64 and near multiples of pi/2, up to
+// kGridMaxAngle; the same values whatever the grid remembered (a pure function of phi).
+static void test_float_sincos_grid(void) {
+  std::uint64_t state = 7;
+  const auto uniform = [&state](double lo, double hi) {  // a small LCG: no <random> in Unity tests
+    state = state * 6364136223846793005ull + 1442695040888963407ull;
+    return lo + (hi - lo) * static_cast<double>(state >> 11) * 0x1.0p-53;
+  };
+  double worst_ulps = 0, worst_abs = 0;
+  int32_t grid = INT32_MIN, grid2 = INT32_MIN;
+  float gs = 0, gc = 0, gs2 = 0, gc2 = 0;
+  for (int i = 0; i < 3000000; ++i) {
+    const double range = i % 10 == 0 ? legsim::kGridMaxAngle : 20.0;
+    double xd = uniform(-range, range);
+    if (i % 3 == 1) xd = std::nearbyint(xd / M_PI_2) * M_PI_2 + uniform(-1e-5, 1e-5);
+    if (i % 3 == 2) xd = (std::nearbyint(xd * 64) + 0.5) / 64 + uniform(-1e-6, 1e-6);
+    const float x = static_cast<float>(xd);
+    if (!(std::fabs(x) < static_cast<float>(legsim::kGridMaxAngle))) continue;
+    float s, c;
+    legsim::sincos_grid(x, grid, gs, gc, s, c);
+    const double ex[2] = {std::sin(static_cast<double>(x)), std::cos(static_cast<double>(x))};
+    const float got[2] = {s, c};
+    for (int j = 0; j < 2; ++j) {
+      if (std::fabs(ex[j]) >= 0.0625)
+        worst_ulps = std::fmax(worst_ulps, ulps(got[j], ex[j]));
+      else
+        worst_abs = std::fmax(worst_abs, std::fabs(static_cast<double>(got[j]) - ex[j]));
+    }
+    if (i % 7 == 0) {  // from a grid that remembered another cell: the same values
+      float s2, c2;
+      grid2 = INT32_MIN;
+      legsim::sincos_grid(x, grid2, gs2, gc2, s2, c2);
+      TEST_ASSERT_TRUE(s2 == s && c2 == c);
+    }
+  }
+  std::printf("sincos_grid (float): %.3f ulp at most where |value| >= 1/16, %.3g absolute below\n", worst_ulps,
+              worst_abs);
+  TEST_ASSERT_TRUE(worst_ulps <= 2.0);
+  TEST_ASSERT_TRUE(worst_abs <= std::ldexp(1.0, -25));
+}
+
 // sincos_any (axis_u, normal_n, the ground's slope) in double: std::sin and std::cos
 static void test_double_sincos_any_is_the_library(void) {
   const double xs[] = {0.0, 0.3, -1.2, 1.5707963267948966, 3.0, 100.5, 1e6, -7e22};
@@ -123,6 +169,7 @@ int main(void) {
   RUN_TEST(test_float_sincos_near_multiples_of_half_pi);
   RUN_TEST(test_float_sincos_large_arguments);
   RUN_TEST(test_float_sincos_zero_and_non_finite);
+  RUN_TEST(test_float_sincos_grid);
   RUN_TEST(test_double_sincos_any_is_the_library);
   return UNITY_END();
 }
