@@ -140,8 +140,11 @@ def build_firmware(switch_off: str | None, log, keep: bool = False, source=REPO_
     row = {"switch_off": switch_off or "(none: all on)", "how": "", "status": "ok"}
     try:
         if presets:
-            cfg = ["cmake", "--preset", "cortex-m4f", "-B", str(d)] + args
-            row["how"] = "cmake --preset cortex-m4f"
+            # without link-time optimization: an LTO archive's objects hold no machine code
+            # to size (the library's .text would read 0)
+            cfg = ["cmake", "--preset", "cortex-m4f", "-B", str(d),
+                   "-DCMAKE_INTERPROCEDURAL_OPTIMIZATION=OFF"] + args
+            row["how"] = "cmake --preset cortex-m4f -DCMAKE_INTERPROCEDURAL_OPTIMIZATION=OFF"
         else:
             tc = source / "cmake" / "toolchains" / "arm-none-eabi-cortex-m4f.cmake"
             cfg = ["cmake", "-S", str(source), "-B", str(d), "-G", "Ninja",
