@@ -98,7 +98,8 @@ legsim_status generalized_alpha_step(Sim &sim) {
   // exactly: it enters linearly)
   VecQ &q1 = d.tq[0], &v1 = d.tq[1], &qdd1 = d.tq[2], &res = d.tq[3];
   VecR lambda = d.lambda;
-  predict(n, d.past_steps < kPredictorOrder ? d.past_steps : kPredictorOrder, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[1].data(), qdd1.data());
+  const int past = d.past_steps < kPredictorOrder ? d.past_steps : kPredictorOrder;
+  predict(n, past, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[1].data(), qdd1.data());
   start(n, h, af, am, beta, gam, d.q.data(), d.qd.data(), d.qdd.data(), d.acc_aux.data(), qdd1.data(), q1.data(),
         v1.data());
   const Layout &lay = d.dyn;
