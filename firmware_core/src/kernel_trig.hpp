@@ -186,31 +186,26 @@ inline void sincos_reduced(float x, float &s, float &c) {
 // polynomials of d (truncation below 2e-19 in double, 3e-16 in float). A pure function of
 // phi. For |phi| < kGridMaxAngle only (the shifter's range).
 constexpr double kGridMaxAngle = 1e4;
-inline void sincos_grid(double phi, int32_t &grid, double &gs, double &gc, double &s, double &c) {
-  constexpr double shifter = 6755399441055744.0;  // 1.5 * 2^52: the nearest integer
-  const double k = (phi * 64 + shifter) - shifter;
+template <typename T>
+inline void sincos_grid(T phi, int32_t &grid, T &gs, T &gc, T &s, T &c) {
+  constexpr bool single = sizeof(T) == sizeof(float);
+  // 1.5 * 2^52 (1.5 * 2^23 in float): adding and subtracting it rounds to the nearest integer
+  constexpr T shifter = single ? T(12582912.0f) : T(6755399441055744.0);
+  const T k = (phi * 64 + shifter) - shifter;
   const int32_t ki = static_cast<int32_t>(k);
   if (grid != ki) {
-    sincos_reduced(k * (1.0 / 64), gs, gc);
+    sincos_reduced(k * (T(1) / 64), gs, gc);
     grid = ki;
   }
-  const double d = phi - k * (1.0 / 64), z = d * d;
-  const double sd = d + d * z * (-1.0 / 6 + z * (1.0 / 120 - z * (1.0 / 5040)));  // sin d
-  const double cm = -z * (0.5 - z * (1.0 / 24 - z * (1.0 / 720)));                 // cos d - 1
-  s = gs + (gs * cm + gc * sd);
-  c = gc + (gc * cm - gs * sd);
-}
-inline void sincos_grid(float phi, int32_t &grid, float &gs, float &gc, float &s, float &c) {
-  constexpr float shifter = 12582912.0f;  // 1.5 * 2^23: the nearest integer (|64 phi| < 2^22)
-  const float k = (phi * 64 + shifter) - shifter;
-  const int32_t ki = static_cast<int32_t>(k);
-  if (grid != ki) {
-    sincos_reduced(k * (1.0f / 64), gs, gc);
-    grid = ki;
+  const T d = phi - k * (T(1) / 64), z = d * d;
+  T sd, cm;  // sin d and cos d - 1: in float two terms each reach its precision
+  if constexpr (single) {
+    sd = d + d * z * (T(-1) / 6 + z * (T(1) / 120));
+    cm = -z * (T(0.5) - z * (T(1) / 24));
+  } else {
+    sd = d + d * z * (T(-1) / 6 + z * (T(1) / 120 - z * (T(1) / 5040)));
+    cm = -z * (T(0.5) - z * (T(1) / 24 - z * (T(1) / 720)));
   }
-  const float d = phi - k * (1.0f / 64), z = d * d;
-  const float sd = d + d * z * (-1.0f / 6 + z * (1.0f / 120));  // sin d
-  const float cm = -z * (0.5f - z * (1.0f / 24));                // cos d - 1
   s = gs + (gs * cm + gc * sd);
   c = gc + (gc * cm - gs * sd);
 }

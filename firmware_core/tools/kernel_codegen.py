@@ -326,6 +326,24 @@ class Kernel:
         o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
         return o
 
+    def accelerations_locals(self, lval):
+        """dynamics_solve's steps after the factor (with the rows' locals): b = J M^-1 Q - gamma,
+        lambda from the factor (lval: "L" its locals, "a" the array), qdd = M^-1 (Q - J^T
+        lambda), the joints' reactions where asked, and the status (qdd not finite:
+        LEGSIM_ERR_DIVERGED)."""
+        nq = 3 * self.nb
+        o = [f"  const real t{n} = w[{n}] * force[{n}];" for n in range(nq)]
+        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gam{i};" for i in range(self.m)]
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}", lval=lval)
+        o += [f"  lambda[{i}] = l{i};" for i in range(self.m)]
+        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
+        for n in range(nq):
+            o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
+            o.append(f"  z += qdd[{n}] * real(0);")
+        o += self.reactions_locals()
+        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
+        return o
+
     def reactions_locals(self):
         """Where reaction is not null, each joint's reaction on its first body from the
         multipliers l<row> (reactions_from_multipliers, constant Jacobian entries folded)."""
@@ -426,16 +444,7 @@ class Kernel:
         o.append("  }")
         o.append("  condition = std::sqrt(pmax / pmin);")
         nq = 3 * self.nb
-        o += [f"  const real t{n} = w[{n}] * force[{n}];" for n in range(nq)]
-        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gam{i};" for i in range(m)]
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}")
-        o += [f"  lambda[{i}] = l{i};" for i in range(m)]
-        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
-        for n in range(nq):
-            o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
-            o.append(f"  z += qdd[{n}] * real(0);")
-        o += self.reactions_locals()
-        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
+        o += self.accelerations_locals("L")
         o.append("}\n")
         # one Newton iteration of generalized-alpha (integrator_generalized_alpha.cpp's steps,
         # the same arithmetic in the same order): r = J^T lambda + M qdd1 - Q, the correction
@@ -473,16 +482,7 @@ class Kernel:
         o.append("  const real *w = model.minv;")
         o += self.rows_locals()
         o.append("  " + " ".join(f"(void)phi{i};" for i in range(m)) + "  // the acceleration level: no Phi")
-        o += [f"  const real t{n} = w[{n}] * force[{n}];" for n in range(nq)]
-        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gam{i};" for i in range(m)]
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}", lval="a")
-        o += [f"  lambda[{i}] = l{i};" for i in range(m)]
-        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
-        for n in range(nq):
-            o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
-            o.append(f"  z += qdd[{n}] * real(0);")
-        o += self.reactions_locals()
-        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
+        o += self.accelerations_locals("a")
         o.append("}\n")
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored")
 
