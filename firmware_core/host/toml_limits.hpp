@@ -2,14 +2,15 @@
 // that release overflows the stack on a key or table header of tens of
 // thousands of dotted parts, and reaches code it marks unreachable (undefined
 // behaviour) on a non-ASCII character outside a string or comment, e.g. the
-// two-line file `zz = 1` / `é`. A file that breaks a limit is refused with a
-// clean message; the parser never sees it.
+// two-line file `zz = 1` / `é`, and on some after a backslash in a string. A file
+// that breaks a limit is refused with a clean message; the parser never sees it.
 //
 // Limits (the same in firmware_core/tools/model_codegen.py, which gives the same
 // messages):
 //   - at most kTomlMaxBytes bytes;
 //   - valid UTF-8 (no overlong forms, surrogates or code points past U+10FFFF);
-//   - non-ASCII characters only inside strings and comments;
+//   - non-ASCII characters only inside strings and comments, and never right after a
+//     backslash in a basic string (no TOML escape is);
 //   - a key or table header of at most kTomlMaxKeyParts dotted parts;
 //   - arrays and inline tables nested at most kTomlMaxNesting deep
 //     (a [[table]] header counts as two).

@@ -51,7 +51,7 @@ Sane ranges (inclusive; legsim.h's LEGSIM_MAX_* / LEGSIM_MIN_*, which the core c
 
 The text is bounded before it is parsed (as the run-time loader does for toml++, see
 firmware_core/host/toml_limits.hpp): at most 1 MiB, valid UTF-8, non-ASCII only inside
-strings and comments, keys and table headers of at most 16 dotted parts, brackets nested
+strings and comments and never right after a backslash, keys and table headers of at most 16 dotted parts, brackets nested
 at most 16 deep. Else "FILE: TOML input refused: REASON (line N)".
 """
 from __future__ import annotations
@@ -1037,6 +1037,9 @@ def toml_input_within_limits(raw: bytes) -> str | None:
     def escapable(i: int) -> bool:
         return i + 1 < size and raw[i + 1] != 0x0A and raw[i + 1] < 0x80
 
+    def backslash_non_ascii(i: int) -> bool:  # no TOML escape; toml++ 3.3.0 misparses some
+        return i + 1 < size and raw[i + 1] >= 0x80
+
     while i < size:
         c = raw[i]
         if c >= 0x80:
@@ -1088,6 +1091,8 @@ def toml_input_within_limits(raw: bytes) -> str | None:
             if mode == NORMAL and ch not in " \t\r":
                 prev = ch
         elif mode == BASIC:
+            if ch == "\\" and backslash_non_ascii(i):
+                return f"a backslash before a non-ASCII character in a string (line {line})"
             if ch == "\\" and escapable(i):
                 i += 1
             elif ch == '"':
@@ -1097,6 +1102,8 @@ def toml_input_within_limits(raw: bytes) -> str | None:
                 mode, prev = NORMAL, ch
         elif mode in (MULTI_BASIC, MULTI_LITERAL):
             quote = '"' if mode == MULTI_BASIC else "'"
+            if mode == MULTI_BASIC and ch == "\\" and backslash_non_ascii(i):
+                return f"a backslash before a non-ASCII character in a string (line {line})"
             if mode == MULTI_BASIC and ch == "\\" and escapable(i):
                 i += 1
             elif ch == quote and raw[i:i + 3] == quote.encode() * 3:

@@ -477,6 +477,10 @@ static void test_hostile_text_is_refused_before_parsing(void) {
   expect_refused(leg + "\xc3\xa9 = 1\n",
                  "a non-ASCII character outside a string or comment (line " + std::to_string(last) + ")");
   expect_refused("a = \"\xed\xa0\x80\"\n", "invalid UTF-8 (line 1)");  // a surrogate
+  // a backslash before a non-ASCII character (U+01A5), in a string and a multi-line string
+  const std::string escape = "a backslash before a non-ASCII character in a string (line 1)";
+  expect_refused("a = \"x\\\xc6\xa5\"\n", escape);
+  expect_refused("bsp = \"\"\"0.00( t\\\xc6\xa5" "cprn\\x", escape);  // found by fuzz_model
   // larger than 1 MiB: refused from memory, and from a file without reading it whole
   std::string big = leg_text();
   big += "#" + std::string(kTomlMaxBytes - big.size(), 'x');
