@@ -100,8 +100,9 @@ legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR 
     j_times(layout, d.rows, mf, z[j]);
     factor_solve(d.factor, z[j]);
   }
-  // C y = E^T x, C = I + E^T Z, by Gaussian elimination with partial pivoting
-  real c[kMaxContacts][kMaxContacts + 1];
+  // C y = E^T x, C = I + E^T Z, by Gaussian elimination with partial pivoting (zeroed
+  // first: GCC cannot tell that only the first ns rows and columns are read)
+  real c[kMaxContacts][kMaxContacts + 1] = {};
   for (int i = 0; i < ns; ++i) {
     for (int j = 0; j < ns; ++j) c[i][j] = (i == j ? real(1) : real(0)) + z[j][layout.slide_row[i]];
     c[i][ns] = x[layout.slide_row[i]];
