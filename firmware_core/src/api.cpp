@@ -37,8 +37,7 @@ Snapshot::Snapshot(const Sim &sim)
   copy_head(qd, d.qd, m.nq);
   copy_head(qdd, d.qdd, m.nq);
   copy_head(acc_aux, d.acc_aux, m.nq);
-  copy_head(qdd_past[0], d.qdd_past[0], m.nq);
-  copy_head(qdd_past[1], d.qdd_past[1], m.nq);
+  for (int k = 0; k < kPredictorOrder; ++k) copy_head(qdd_past[k], d.qdd_past[k], m.nq);
   lambda = d.lambda;  // whole: the solves of every layout write it
   std::memcpy(reaction, d.reaction, sizeof(legsim_reaction) * size_t(m.nj));
   for (int a = 0; a < m.na; ++a) {
@@ -59,8 +58,7 @@ void Snapshot::restore(Sim &sim) const {
   copy_head(d.qd, qd, m.nq);
   copy_head(d.qdd, qdd, m.nq);
   copy_head(d.acc_aux, acc_aux, m.nq);
-  copy_head(d.qdd_past[0], qdd_past[0], m.nq);
-  copy_head(d.qdd_past[1], qdd_past[1], m.nq);
+  for (int k = 0; k < kPredictorOrder; ++k) copy_head(d.qdd_past[k], qdd_past[k], m.nq);
   d.past_steps = past_steps;
   d.newton_eta = newton_eta;
   d.lambda = lambda;
@@ -399,8 +397,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.qd.setZero();
   d.qdd.setZero();
   d.acc_aux.setZero();
-  d.qdd_past[0].setZero();
-  d.qdd_past[1].setZero();
+  for (VecQ &past : d.qdd_past) past.setZero();
   d.past_steps = 0;
   d.newton_eta = 1;
   d.lambda.setZero();

@@ -15,7 +15,7 @@
 //   two are known), which makes the first correction small. In float the accelerations of
 //   the index-3 form carry the positions' round-off divided by h^2 (several m/s^2 from step
 //   to step at h = 1 ms), which an extrapolation amplifies (3x linear, 7x quadratic): there
-//   the last step's accelerations are the better guess (kPredictorOrder);
+//   the last step's accelerations are the better guess (kPredictorOrder, sim.hpp);
 // - the convergence test of Hairer & Wanner (Solving ODEs II, IV.8, as RADAU5): after a
 //   correction dq the iterate's error is about eta |dq|, eta = theta / (1 - theta). The
 //   step is converged when |dq| <= tol, or when eta |dq| <= tol with eta measured in this
@@ -75,10 +75,8 @@ LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd,
 }
 #undef R_
 
-// The smallest contraction estimate trusted, and the predictor's polynomial order (see the
-// top of this file).
+// The smallest contraction estimate trusted (see the top of this file).
 constexpr real kEtaMin = real(0.01);
-constexpr int kPredictorOrder = LEGSIM_USE_FLOAT ? 0 : 2;
 }  // namespace
 
 legsim_status generalized_alpha_step(Sim &sim) {
@@ -99,7 +97,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   VecQ &q1 = d.tq[0], &v1 = d.tq[1], &qdd1 = d.tq[2], &res = d.tq[3];
   VecR lambda = d.lambda;
   const int past = d.past_steps < kPredictorOrder ? d.past_steps : kPredictorOrder;
-  predict(n, past, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[1].data(), qdd1.data());
+  predict(n, past, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[kPastSlots - 1].data(), qdd1.data());
   start(n, h, af, am, beta, gam, d.q.data(), d.qd.data(), d.qdd.data(), d.acc_aux.data(), qdd1.data(), q1.data(),
         v1.data());
   const Layout &lay = d.dyn;
@@ -166,10 +164,11 @@ legsim_status generalized_alpha_step(Sim &sim) {
   }
   if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
   acc_aux_update(n, af, am, d.qdd.data(), qdd1.data(), d.acc_aux.data());
-  // the history for the next step's predictor and test
-  d.qdd_past[1] = d.qdd_past[0];
-  d.qdd_past[0] = d.qdd;
-  d.past_steps = d.past_steps < 2 ? d.past_steps + 1 : 2;
+  // the history for the next step's predictor (its order's steps: whole fixed-size vectors,
+  // cheaper to copy than a run-time count of values) and test
+  for (int k = kPredictorOrder - 1; k > 0; --k) d.qdd_past[k] = d.qdd_past[k - 1];
+  if (kPredictorOrder > 0) d.qdd_past[0] = d.qdd;
+  d.past_steps = d.past_steps < kPredictorOrder ? d.past_steps + 1 : kPredictorOrder;
   d.newton_eta = eta;
   d.q = q1;
   d.qd = v1;

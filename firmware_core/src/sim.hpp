@@ -223,6 +223,12 @@ struct ContactData {
   uint32_t events;   // the contact legsim_event bits this contact raised since legsim_clear_events
 };
 
+// Generalized-alpha's predictor: the polynomial order of its extrapolation of the
+// accelerations, the past steps it keeps (integrator_generalized_alpha.cpp: none in float,
+// whose accelerations' round-off an extrapolation amplifies). An array has at least one slot.
+constexpr int kPredictorOrder = LEGSIM_USE_FLOAT ? 0 : 2;
+constexpr int kPastSlots = kPredictorOrder > 0 ? kPredictorOrder : 1;
+
 struct Data {
   double t;
   uint64_t steps;
@@ -232,10 +238,10 @@ struct Data {
   VecQ q, qd, qdd;
   VecQ acc_aux;  // generalized-alpha auxiliary acceleration
   // Generalized-alpha's predictor and convergence test: the accelerations of the steps
-  // before this state's (qdd_past[0] the last), past_steps of them (0 .. 2) since the
-  // history started, and the Newton contraction's estimate newton_eta = theta / (1 - theta)
-  // in [kEtaMin, 1] (1: none).
-  VecQ qdd_past[2];
+  // before this state's (qdd_past[0] the last), past_steps of them (0 .. kPredictorOrder)
+  // since the history started, and the Newton contraction's estimate newton_eta =
+  // theta / (1 - theta) in [kEtaMin, 1] (1: none).
+  VecQ qdd_past[kPastSlots];
   int past_steps;
   real newton_eta;
   VecR lambda;   // multipliers of the last dynamics/statics solve
@@ -279,7 +285,7 @@ struct Sim {
 // step starts from, and the report): calls that can fail half-way work on the
 // live state and put this back.
 struct Snapshot {
-  VecQ q, qd, qdd, acc_aux, qdd_past[2];
+  VecQ q, qd, qdd, acc_aux, qdd_past[kPastSlots];
   int past_steps;
   real newton_eta;
   VecR lambda;
