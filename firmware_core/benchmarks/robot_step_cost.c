@@ -2,13 +2,18 @@
  * foot (issue 9, section 8).
  *
  *   robot_step_cost CASE INTEGRATOR N [REPS]
- *     CASE        leg | robot | robot-slip
+ *     CASE        leg | leg-loop | robot | robot-slip
  *     INTEGRATOR  rk4 | galpha     (h = 1 ms)
  *     N           steps to run
  *     REPS        also time the N steps REPS times (set-up outside the clock) and print,
  *                 per kind of step, the min over the repetitions of the median us/step
  *
  * leg:        50 N on the upper actuator, the lower passive.
+ * leg-loop:   the leg under a controller in the loop: before every step a new force
+ *             command for the upper actuator, 50 N + 10 N sin(2 pi 2 t) (a command that
+ *             changes restarts the integrators from the accelerations under it: this is
+ *             the cost a controller that updates its setpoint every step meets). The
+ *             command is part of each step's count.
  * robot:      both feet stuck on level ground (the stand pose put on the ground with
  *             legsim_assemble_on_ground), three actuators held by their servos at the
  *             stand lengths, the right upper at 185.55 N (its hold force + 50 N, the
@@ -32,6 +37,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <math.h>
 #include <time.h>
 
 #include "legsim/legsim.h"
@@ -41,7 +47,7 @@
 #define HAVE_ROBOT 1
 #endif
 
-enum bench_case { CASE_LEG, CASE_ROBOT, CASE_ROBOT_SLIP };
+enum bench_case { CASE_LEG, CASE_LEG_LOOP, CASE_ROBOT, CASE_ROBOT_SLIP };
 enum step_kind { KIND_STUCK, KIND_SLIP1, KIND_SLIP2, KIND_CHANGE, N_KINDS };
 static const char *const kind_name[N_KINDS] = {"stuck", "slip1", "slip2", "change"};
 
@@ -54,14 +60,24 @@ static legsim_model_desc robot_slippery; /* must outlive the sim */
 #endif
 static unsigned char kinds[MAX_STEPS];
 static double step_us[MAX_STEPS], scratch[MAX_STEPS];
+static double loop_force_n[MAX_STEPS]; /* leg-loop: step i's command (computed before) */
+static int command_every_step;
 
+/* step i, after its command in leg-loop */
+static inline legsim_status step_once(legsim_sim *sim, long i) {
+  if (command_every_step) {
+    const legsim_status st = legsim_command_force(sim, 0, loop_force_n[i]);
+    if (st != LEGSIM_OK) return st;
+  }
+  return legsim_step(sim, 1);
+}
 /* one function per kind of step: callgrind's inclusive cost of each is that kind's */
-__attribute__((noinline)) legsim_status step_stuck(legsim_sim *sim) { return legsim_step(sim, 1); }
-__attribute__((noinline)) legsim_status step_slip1(legsim_sim *sim) { return legsim_step(sim, 1); }
-__attribute__((noinline)) legsim_status step_slip2(legsim_sim *sim) { return legsim_step(sim, 1); }
-__attribute__((noinline)) legsim_status step_change(legsim_sim *sim) { return legsim_step(sim, 1); }
-static legsim_status (*const step_of_kind[N_KINDS])(legsim_sim *) = {step_stuck, step_slip1, step_slip2,
-                                                                     step_change};
+__attribute__((noinline)) legsim_status step_stuck(legsim_sim *sim, long i) { return step_once(sim, i); }
+__attribute__((noinline)) legsim_status step_slip1(legsim_sim *sim, long i) { return step_once(sim, i); }
+__attribute__((noinline)) legsim_status step_slip2(legsim_sim *sim, long i) { return step_once(sim, i); }
+__attribute__((noinline)) legsim_status step_change(legsim_sim *sim, long i) { return step_once(sim, i); }
+static legsim_status (*const step_of_kind[N_KINDS])(legsim_sim *, long) = {step_stuck, step_slip1, step_slip2,
+                                                                           step_change};
 
 /* The case's starting state and commands, at t = 0. */
 static legsim_status set_up(enum bench_case c, legsim_integrator integrator, legsim_sim **out) {
@@ -80,7 +96,7 @@ static legsim_status set_up(enum bench_case c, legsim_integrator integrator, leg
   legsim_sim *sim = NULL;
   legsim_status st = legsim_init(storage, sizeof storage, model, &opt, &sim);
   if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
-  if (st == LEGSIM_OK && c != CASE_LEG) {
+  if (st == LEGSIM_OK && c != CASE_LEG && c != CASE_LEG_LOOP) {
     legsim_real len[4], rate[4];
     st = legsim_assemble_on_ground(sim, NULL, 0.0);
     if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, rate);
@@ -136,14 +152,15 @@ int main(int argc, char **argv) {
   }
   enum bench_case c;
   if (!strcmp(argv[1], "leg")) c = CASE_LEG;
+  else if (!strcmp(argv[1], "leg-loop")) c = CASE_LEG_LOOP;
   else if (!strcmp(argv[1], "robot")) c = CASE_ROBOT;
   else if (!strcmp(argv[1], "robot-slip")) c = CASE_ROBOT_SLIP;
   else {
-    fprintf(stderr, "robot_step_cost: CASE is leg, robot or robot-slip, not '%s'\n", argv[1]);
+    fprintf(stderr, "robot_step_cost: CASE is leg, leg-loop, robot or robot-slip, not '%s'\n", argv[1]);
     return 2;
   }
 #ifndef HAVE_ROBOT
-  if (c != CASE_LEG) {
+  if (c != CASE_LEG && c != CASE_LEG_LOOP) {
     fprintf(stderr, "robot_step_cost: this build's capacities do not hold the robot\n");
     return 2;
   }
@@ -156,6 +173,8 @@ int main(int argc, char **argv) {
     fprintf(stderr, "robot_step_cost: N must be in 1..%d, REPS in 1..1000\n", MAX_STEPS);
     return 2;
   }
+  command_every_step = c == CASE_LEG_LOOP;
+  for (long i = 0; i < n; ++i) loop_force_n[i] = 50.0 + 10.0 * sin(2 * 3.14159265358979 * 2.0 * (double)i * 1e-3);
 
   /* pass 1: the kind of each step */
   legsim_sim *sim;
@@ -164,7 +183,7 @@ int main(int argc, char **argv) {
   int ns, nf, before = st == LEGSIM_OK ? states_code(sim, &ns, &nf) : -1;
   for (long i = 0; i < n && st == LEGSIM_OK; ++i) {
     int ns1, nf1;
-    st = legsim_step(sim, 1);
+    st = step_once(sim, i);
     const int after = states_code(sim, &ns1, &nf1);
     enum step_kind kd = KIND_CHANGE;
     if (after == before && after >= 0 && nf == 0) kd = ns == 0 ? KIND_STUCK : ns == 1 ? KIND_SLIP1 : KIND_SLIP2;
@@ -184,7 +203,7 @@ int main(int argc, char **argv) {
     if ((st = set_up(c, integrator, &sim)) != LEGSIM_OK) break;
     for (long i = 0; i < n && st == LEGSIM_OK; ++i) {
       const double t0 = now_s();
-      st = step_of_kind[kinds[i]](sim);
+      st = step_of_kind[kinds[i]](sim, i);
       step_us[i] = 1e6 * (now_s() - t0);
     }
     for (int k = 0; k < N_KINDS; ++k) {

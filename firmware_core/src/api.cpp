@@ -30,7 +30,7 @@ Snapshot::Snapshot(const Sim &sim)
     : past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
       t(sim.data.t), steps(sim.data.steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
       assembled(sim.data.assembled), derivative_valid(sim.data.derivative_valid),
-      history_valid(sim.data.history_valid) {
+      history_valid(sim.data.history_valid), forcing_only(sim.data.forcing_only) {
   const Data &d = sim.data;
   const Model &m = sim.model;
   copy_head(q, d.q, m.nq);
@@ -86,6 +86,7 @@ void Snapshot::restore(Sim &sim) const {
   d.assembled = assembled;
   d.derivative_valid = derivative_valid;
   d.history_valid = history_valid;
+  d.forcing_only = forcing_only;
 }
 
 namespace {
@@ -287,9 +288,37 @@ legsim_status state_refresh(Sim &sim) {
   const legsim_status s = dynamics_state_update(sim);
   d.derivative_valid = s == LEGSIM_OK;
   d.history_valid = s == LEGSIM_OK;
+  d.forcing_only = false;
   if (s == LEGSIM_OK) d.acc_aux = d.qdd;
   d.past_steps = 0;  // the history starts here
   d.newton_eta = 1;
+  return s;
+}
+
+// After a changed command or load alone (the state, its rows and the options as they
+// were): the accelerations under the new forcing as state_refresh finds them, from the
+// state's factor when the last step left it (Factor::of_state: RK4's end solve; the same
+// values as a fresh factorization). Generalized-alpha restarts its auxiliary acceleration
+// there too, but keeps its Newton contraction estimate (the iteration matrix is the same)
+// and its predictor's past, shifted by the accelerations' jump (a step change of the
+// forcing moves the accelerations by about that much on either side of it): a controller
+// that changes its setpoint every step costs about one Newton iteration a step, not two.
+legsim_status forcing_refresh(Sim &sim) {
+  Data &d = sim.data;
+  const VecQ before = d.qdd;
+  const legsim_status s = dynamics_state_reactions(sim, d.qdd, d.factor.of_state);
+  d.derivative_valid = s == LEGSIM_OK;
+  d.history_valid = s == LEGSIM_OK;
+  d.forcing_only = false;
+  if (s != LEGSIM_OK) {
+    d.past_steps = 0;
+    d.newton_eta = 1;
+    return s;
+  }
+  d.acc_aux = d.qdd;
+  const int n = sim.model.nq;
+  for (int k = 0; k < d.past_steps && k < kPredictorOrder; ++k)
+    for (int i = 0; i < n; ++i) d.qdd_past[k][i] += d.qdd[i] - before[i];
   return s;
 }
 
@@ -298,8 +327,16 @@ legsim_status state_refresh(Sim &sim) {
 // history would otherwise carry the old ones and drop to first order). The same
 // value sent again changes nothing.
 void commands_changed(Data &d) {
+  d.forcing_only = d.forcing_only || d.derivative_valid || d.history_valid;
   d.derivative_valid = false;
   d.history_valid = false;
+}
+
+// The state, its rows or the options changed outside a step: a full restart.
+void state_changed(Data &d) {
+  d.derivative_valid = false;
+  d.history_valid = false;
+  d.forcing_only = false;
 }
 
 // A state set from outside rests on no stroke stop (the next step finds any).
@@ -390,9 +427,9 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.t = 0;
   d.steps = 0;
   d.assembled = false;
-  d.derivative_valid = false;
-  d.history_valid = false;
+  state_changed(d);
   d.end_projected = false;
+  d.factor.of_state = false;
   d.q.setZero();
   d.qd.setZero();
   d.qdd.setZero();
@@ -432,7 +469,7 @@ legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options)
   Sim &sm = *as_sim(sim);
   if (same_options(sm.opt, *options)) return LEGSIM_OK;  // sent again: changes nothing
   sm.opt = *options;
-  commands_changed(sm.data);
+  state_changed(sm.data);  // the step, the integrator, what is enabled: a full restart
   return LEGSIM_OK;
 }
 
@@ -679,8 +716,7 @@ legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *a
     const legsim_status r = acceleration_solve(s, d.work, qdd);
     if (r != LEGSIM_OK) return r;
     d.qdd = qdd;
-    d.derivative_valid = false;  // kinematic, not the dynamics' qdd
-    d.history_valid = false;
+    state_changed(d);  // qdd is kinematic, not the dynamics'
     return LEGSIM_OK;
   });
 }
@@ -711,7 +747,7 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
     if (r == LEGSIM_OK)
       r = held ? inverse_dynamics_ground_solve(s, 0, len, rate, acc, force)
                : inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, force);
-    s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
+    state_changed(s.data);  // qdd is the driven motion's
     return r;
   });
   if (st == LEGSIM_OK && actuator_force_n)
@@ -743,7 +779,7 @@ legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow
   st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
     if (r == LEGSIM_OK) r = inverse_dynamics_ground_solve(s, follow_mask, len, rate, acc, force);
-    s.data.derivative_valid = s.data.history_valid = false;  // qdd is the driven motion's
+    state_changed(s.data);  // qdd is the driven motion's
     return r;
   });
   if (st != LEGSIM_OK) return st;
@@ -764,7 +800,7 @@ legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
   const legsim_status st = all_or_nothing(s, [&] {
     legsim_status r = stops_clear(s);
     if (r == LEGSIM_OK) r = statics_solve(s, force);
-    s.data.derivative_valid = s.data.history_valid = false;
+    state_changed(s.data);
     return r;
   });
   if (st == LEGSIM_OK && actuator_force_n)
@@ -783,7 +819,7 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
     legsim_status r = stops_clear(s);
     if (r == LEGSIM_OK) r = contacts_release(s);
     if (r == LEGSIM_OK) r = statics_sweep(s, n_grid, &wc);  // leaves the last pose solved
-    s.data.derivative_valid = s.data.history_valid = false;
+    state_changed(s.data);
     return r;
   });
   if (st == LEGSIM_OK) *out = wc;
@@ -803,7 +839,7 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
     const legsim_status st = all_or_nothing(s, [&] {
       legsim_status r = LEGSIM_OK;
       // both start from the accelerations at the current state and commands
-      if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s);
+      if (rk4 ? !d.derivative_valid : !d.history_valid) r = d.forcing_only ? forcing_refresh(s) : state_refresh(s);
       if (r == LEGSIM_OK) r = rk4 ? rk4_step(s) : generalized_alpha_step(s);
       bool stopped = false, released = false;
       const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);

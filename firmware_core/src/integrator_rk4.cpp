@@ -47,11 +47,14 @@ real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv
 }  // namespace
 
 namespace {
-// The step's end state committed, with its stop forces (the reactions came with its solve).
+// The step's end state committed, with its stop forces (the reactions came with its solve);
+// its end solve's factor is the state's unless the positions were projected (assemble
+// leaves the rows of its last iterate, not of the projected positions).
 legsim_status rk4_finish(Sim &sim, const VecQ &q1, const VecQ &v1) {
   Data &d = sim.data;
   d.q = q1;
   d.qd = v1;
+  d.factor.of_state = !d.end_projected;
   stop_forces_update(sim);
   return LEGSIM_OK;
 }

@@ -11,6 +11,7 @@
 namespace legsim {
 
 void factor_order(const Layout &layout, Factor &f) {
+  f.of_state = false;  // about to be written
   f.m = layout.m;
   f.kernel = layout.kernel;
   std::memcpy(f.perm, layout.perm, sizeof f.perm);

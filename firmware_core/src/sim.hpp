@@ -206,6 +206,13 @@ struct Factor {
   uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
+  // This is the sim's state's factor exactly, as a fresh factorization would give it (RK4's
+  // end solve left it, the positions not projected after), and untouched since: factor_order
+  // and factor_build, which every write of a factor goes through, clear it. A restart after
+  // a changed command solves with it (forcing_refresh): the same values either way, so a
+  // refused call that wrote the factor (all-or-nothing restores the state, not the
+  // workspace) changes no later result.
+  bool of_state;
 };
 
 struct ActuatorState {
@@ -235,6 +242,9 @@ struct Data {
   bool assembled;
   bool derivative_valid;  // qdd and lambda belong to the current state and commands (RK4's start)
   bool history_valid;     // qdd and acc_aux are the generalized-alpha history of this state
+  // Since qdd was last valid, only the forcing changed (commands, loads: commands_changed),
+  // not the state, the rows or the options: the restart keeps what depends on the state alone.
+  bool forcing_only;
   VecQ q, qd, qdd;
   VecQ acc_aux;  // generalized-alpha auxiliary acceleration
   // Generalized-alpha's predictor and convergence test: the accelerations of the steps
@@ -297,7 +307,7 @@ struct Snapshot {
   double t;
   uint64_t steps;
   uint32_t stroke_mask, stop_mask;
-  bool assembled, derivative_valid, history_valid;
+  bool assembled, derivative_valid, history_valid, forcing_only;
 
   explicit Snapshot(const Sim &sim);  // the model's coordinates, joints and actuators
   void restore(Sim &sim) const;
