@@ -453,6 +453,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
     d.force_value[f][0] = real(model->force[f].value[0]);
     d.force_value[f][1] = real(model->force[f].value[1]);
   }
+  force_active_update(m, d);
   s = layout_build(m, 0, 0, d.joints);
   if (s == LEGSIM_OK) s = layout_finish(d.joints, d.drivers);
   if (s == LEGSIM_OK) s = stops_layout(*sim);
@@ -924,6 +925,7 @@ legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real
     if (s.data.force_value[force][i] != value[i]) commands_changed(s.data);
     s.data.force_value[force][i] = value[i];
   }
+  force_active_update(s.model, s.data);
   return LEGSIM_OK;
 }
 

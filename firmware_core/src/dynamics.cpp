@@ -11,9 +11,9 @@ namespace {
 // Q at (q, qd) for a solve on layout. Driven analyses: the drivers supply the actuator
 // forces. Stops act besides them.
 void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd) {
-  legsim_options opt = sim.opt;
-  if (layout.m > sim.model.m && !layout.stops) opt.disable |= LEGSIM_DISABLE_ACTUATORS;
-  applied_forces(sim.model, opt, sim.data, q, qd, sim.data.force_q);
+  uint32_t disable = sim.opt.disable;
+  if (layout.m > sim.model.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
+  applied_forces(sim.model, disable, sim.data, q, qd, sim.data.force_q);
 }
 }  // namespace
 

@@ -36,11 +36,11 @@ void point_state(const VecQ &q, const VecQ &qd, int b, const Vec2 &p, Vec2 &s, V
 void add_force_elements(const Model &model, const Data &d, const VecQ &q, const VecQ &qd,
                         VecQ &force_q, TrigCache *trig) {
   for (int i = 0; i < model.nf; ++i) {
+    if (!(d.force_active & (1u << i))) continue;  // none applied (a scene's load left at 0)
     const ForceElement &fe = model.force[i];
     const real *v = d.force_value[i];
     switch (fe.kind) {
       case LEGSIM_FORCE_POINT:
-        if (v[0] == 0 && v[1] == 0) break;  // none applied (a scene's load left at 0)
         add_point_force(force_q, fe.a, body_offset(q, fe.a, fe.pa, trig), Vec2(v[0], v[1]));
         break;
       case LEGSIM_FORCE_TORQUE: force_q[3 * fe.a + 2] += v[0]; break;
@@ -102,22 +102,31 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
   }
 }
 
-void applied_forces(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
-                    const VecQ &qd, VecQ &force_q) {
+static_assert(kMaxForces <= 32, "Data::force_active has a bit per force element");
+
+void force_active_update(const Model &model, Data &d) {
+  d.force_active = 0;
+  for (int f = 0; f < model.nf; ++f) {
+    const bool spring = model.force[f].kind == LEGSIM_FORCE_SPRING_DAMPER;
+    if (spring || d.force_value[f][0] != 0 || d.force_value[f][1] != 0) d.force_active |= 1u << f;
+  }
+}
+
+void applied_forces(const Model &model, uint32_t disable, Data &d, const VecQ &q, const VecQ &qd,
+                    VecQ &force_q) {
   real *__restrict fq = force_q.data();  // Data's Q: apart from the model, q and qd
-  // Gravity, m g at each centre (no moment), written rather than added: it clears Q too,
-  // in one pass (m * 0 is the 0 it had before for the massive bodies every model has).
-  const bool gravity = !(opt.disable & LEGSIM_DISABLE_GRAVITY);
-  const Vec2 g = gravity ? model.gravity : Vec2::Zero();
-  for (int b = 0; b < model.nb; ++b) {  // (m, m) * (g_x, g_y): one vector product a body
-    Eigen::Map<Vec2>(fq + 3 * b) = Eigen::Map<const Vec2>(model.mass + 3 * b).cwiseProduct(g);
-    fq[3 * b + 2] = 0;
+  // Gravity, m g at each centre (no moment), written rather than added: it clears Q too.
+  const real *__restrict weight = model.gravity_force;
+  if (disable & LEGSIM_DISABLE_GRAVITY) {
+    for (int k = 0; k < model.nq; ++k) fq[k] = 0;
+  } else {
+    for (int k = 0; k < model.nq; ++k) fq[k] = weight[k];
   }
 #if LEGSIM_WITH_FORCE_ELEMENTS
-  if (model.nf && !(opt.disable & LEGSIM_DISABLE_FORCE_ELEMENTS))
+  if (d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS))
     add_force_elements(model, d, q, qd, force_q, &d.trig);
 #endif
-  if (opt.disable & LEGSIM_DISABLE_ACTUATORS) return;
+  if (disable & LEGSIM_DISABLE_ACTUATORS) return;
   // Each actuator's force from its command (as actuator_forces_update), then F along the
   // cylinder axis by virtual work F dl: Q = F * (d length / d q), one sin/cos pair (the
   // stage's, shared with the rows) for both.

@@ -111,7 +111,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
       lay.kernel && lay.kernel->newton && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
   if (kern) factor_order(lay, d.factor);  // the iterations write its entries
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
-    applied_forces(m, sim.opt, d, q1, v1, d.force_q);
+    applied_forces(m, sim.opt.disable, d, q1, v1, d.force_q);
     VecQ tmp;
     if (kern) {
       const legsim_status s = kern->newton(m, d.stop_drivers, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,

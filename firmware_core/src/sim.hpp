@@ -118,6 +118,7 @@ struct Model {
   real minv[kMaxCoords];
   real length[kMaxBodies];
   Vec2 gravity;
+  real gravity_force[kMaxCoords];  // m g per coordinate (N; 0 for the angles): Q's first term
   Joint joint[kMaxJoints];
   Actuator act[kMaxActuators];
   ForceElement force[kMaxForces];
@@ -258,6 +259,7 @@ struct Data {
   legsim_reaction reaction[kMaxJoints];
   ActuatorState act[kMaxActuators];
   real force_value[kMaxForces][2];
+  uint32_t force_active;  // bit f: force element f may apply a force (a spring, or a load not 0)
   legsim_report report;
   legsim_report failure;  // the figures of the last call that failed (legsim_failure_report)
   uint32_t stroke_mask;
@@ -369,7 +371,9 @@ void project(const Model &model, const Layout &layout, const Rows &rows, const F
 
 // ---- forces.cpp ----
 // Q: gravity, force elements, actuator forces (by the current commands), per options.
-void applied_forces(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
+// Data::force_active from the model's force elements and their values (after a change).
+void force_active_update(const Model &model, Data &d);
+void applied_forces(const Model &model, uint32_t disable, Data &d, const VecQ &q,
                     const VecQ &qd, VecQ &force_q);
 
 // ---- forces.cpp (with applied_forces, which shares its servo law) ----
