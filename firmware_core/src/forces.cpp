@@ -1,5 +1,7 @@
 // Generalized applied forces Q: gravity, force elements and actuator forces, with the
 // actuators' axial forces from their commands (force, or length through the servo).
+#include <cstring>
+
 #include "sim.hpp"
 
 namespace legsim {
@@ -116,12 +118,11 @@ void applied_forces(const Model &model, uint32_t disable, Data &d, const VecQ &q
                     VecQ &force_q) {
   real *__restrict fq = force_q.data();  // Data's Q: apart from the model, q and qd
   // Gravity, m g at each centre (no moment), written rather than added: it clears Q too.
-  const real *__restrict weight = model.gravity_force;
-  if (disable & LEGSIM_DISABLE_GRAVITY) {
-    for (int k = 0; k < model.nq; ++k) fq[k] = 0;
-  } else {
-    for (int k = 0; k < model.nq; ++k) fq[k] = weight[k];
-  }
+  // (The library's copy: a loop of loads and stores costs Cortex-M4 four times as much.)
+  if (disable & LEGSIM_DISABLE_GRAVITY)
+    std::memset(fq, 0, sizeof(real) * size_t(model.nq));
+  else
+    std::memcpy(fq, model.gravity_force, sizeof(real) * size_t(model.nq));
 #if LEGSIM_WITH_FORCE_ELEMENTS
   if (d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS))
     add_force_elements(model, d, q, qd, force_q, &d.trig);

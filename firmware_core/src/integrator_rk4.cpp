@@ -29,11 +29,19 @@ LEGSIM_KERNEL_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const
     vs[k] = v0[k] + hn * a[k];
   }
 }
-LEGSIM_KERNEL_TARGETS void stage_end(int n, real h6, const R_ q0, const R_ v0, const R_ sum_v, const R_ sum_a, R_ q1, R_ v1) {
+// The last stage's weight (1) added, and the step's end q1 = q0 + h/6 sum_v, v1 = v0 + h/6
+// sum_a written over q0 and v0 (the sim's state: all_or_nothing puts a failed step back);
+// false when a value is not finite.
+LEGSIM_KERNEL_TARGETS bool stage_last(int n, real h6, R_ q, R_ v, const R_ vs, const R_ a, const R_ sum_v,
+                                      const R_ sum_a) {
+  int bad = 0;
   for (int k = 0; k < n; ++k) {
-    q1[k] = q0[k] + h6 * sum_v[k];
-    v1[k] = v0[k] + h6 * sum_a[k];
+    const real q1 = q[k] + h6 * (sum_v[k] + vs[k]), v1 = v[k] + h6 * (sum_a[k] + a[k]);
+    q[k] = q1;
+    v[k] = v1;
+    bad |= !(q1 - q1 == 0) | !(v1 - v1 == 0);  // x - x is 0 for a finite x only
   }
+  return !bad;
 }
 #undef R_
 
@@ -47,13 +55,11 @@ real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv
 }  // namespace
 
 namespace {
-// The step's end state committed, with its stop forces (the reactions came with its solve);
-// its end solve's factor is the state's unless the positions were projected (assemble
-// leaves the rows of its last iterate, not of the projected positions).
-legsim_status rk4_finish(Sim &sim, const VecQ &q1, const VecQ &v1) {
+// The step's end state (already in d.q, d.qd) committed, with its stop forces (the reactions
+// came with its solve); its end solve's factor is the state's unless the positions were
+// projected (assemble leaves the rows of its last iterate, not of the projected positions).
+legsim_status rk4_finish(Sim &sim) {
   Data &d = sim.data;
-  d.q = q1;
-  d.qd = v1;
   d.factor.of_state = !d.end_projected;
   stop_forces_update(sim);
   return LEGSIM_OK;
@@ -70,17 +76,19 @@ legsim_status rk4_step(Sim &sim) {
   // stage 1: (v0, a0) at the start
   stage_first(n, h2, d.q.data(), d.qd.data(), d.qdd.data(), qs.data(), vs.data(), sum_v.data(), sum_a.data());
   // stages 2 and 3 at the midpoint, 4 at the end
-  static constexpr real kWeight[3] = {2, 2, 1};
+  static constexpr real kWeight[2] = {2, 2};
   for (int stage = 0; stage < 3; ++stage) {
     const legsim_status s = dynamics_solve(sim, d.dyn, qs, vs, a, false, false);  // a alone
     if (s != LEGSIM_OK) return s;
-    const real w = kWeight[stage];
+    if (stage == 2) break;
     const real hn = stage < 1 ? h2 : h;  // the next stage's distance from the start
-    stage_next(n, w, hn, d.q.data(), d.qd.data(), a.data(), qs.data(), vs.data(), sum_v.data(), sum_a.data());
+    stage_next(n, kWeight[stage], hn, d.q.data(), d.qd.data(), a.data(), qs.data(), vs.data(), sum_v.data(),
+               sum_a.data());
   }
-  VecQ &q1 = d.tv[1], &v1 = d.tv[2];
-  stage_end(n, h6, d.q.data(), d.qd.data(), sum_v.data(), sum_a.data(), q1.data(), v1.data());
-  if (!all_finite(q1, n) || !all_finite(v1, n)) return LEGSIM_ERR_DIVERGED;
+  // the step's end (q1, v1), over the state
+  VecQ &q1 = d.q, &v1 = d.qd;
+  if (!stage_last(n, h6, q1.data(), v1.data(), vs.data(), a.data(), sum_v.data(), sum_a.data()))
+    return LEGSIM_ERR_DIVERGED;
   // The end of the step: one evaluation of the rows at (q1, v1) serves the
   // position check, the velocity projection and the end derivative, which is
   // also the next step's first stage.
@@ -100,9 +108,9 @@ legsim_status rk4_step(Sim &sim) {
     // every one does).
     if (dynamics_solve(sim, lay, q1, v1, d.qdd, false, true, reaction) == LEGSIM_OK) {
       d.report.residual = rows_max_residual(lay, d.rows);
-      if (!projection) return rk4_finish(sim, q1, v1);
+      if (!projection) return rk4_finish(sim);
       if (d.report.residual <= tol) {
-        if (velocity_drift(lay, d.rows, v1, d.rhs) <= tol) return rk4_finish(sim, q1, v1);
+        if (velocity_drift(lay, d.rows, v1, d.rhs) <= tol) return rk4_finish(sim);
         factor_ready = true;
       }
     }
@@ -133,7 +141,7 @@ legsim_status rk4_step(Sim &sim) {
   if (!gamma_ready) rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);  // gamma at the final (q1, v1)
   s = dynamics_solve(sim, lay, q1, v1, d.qdd, true, true, reaction);
   if (s != LEGSIM_OK) return s;
-  return rk4_finish(sim, q1, v1);
+  return rk4_finish(sim);
 }
 
 #else
