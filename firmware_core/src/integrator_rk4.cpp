@@ -12,12 +12,20 @@ namespace {
 // The stage updates over distinct arrays: __restrict tells the compiler so, and the loops
 // vectorize (the same arithmetic per element, so the same values).
 #define R_ real *__restrict
-LEGSIM_KERNEL_TARGETS void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs, R_ sum_v, R_ sum_a) {
+LEGSIM_KERNEL_TARGETS void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs) {
   for (int k = 0; k < n; ++k) {
-    sum_v[k] = v0[k];
-    sum_a[k] = a0[k];
     qs[k] = q0[k] + h2 * v0[k];
     vs[k] = v0[k] + h2 * a0[k];
+  }
+}
+// the sums start at the first stage's (v0, a0): the second stage starts them from those
+LEGSIM_KERNEL_TARGETS void stage_second(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a0, const R_ a,
+                                        R_ qs, R_ vs, R_ sum_v, R_ sum_a) {
+  for (int k = 0; k < n; ++k) {
+    sum_v[k] = v0[k] + w * vs[k];
+    sum_a[k] = a0[k] + w * a[k];
+    qs[k] = q0[k] + hn * vs[k];
+    vs[k] = v0[k] + hn * a[k];
   }
 }
 LEGSIM_KERNEL_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a, R_ qs, R_ vs, R_ sum_v,
@@ -74,16 +82,16 @@ legsim_status rk4_step(Sim &sim) {
   VecQ &qs = d.tq[0], &vs = d.tq[1], &sum_v = d.tq[2], &sum_a = d.tq[3];
   VecQ &a = d.tv[0];
   // stage 1: (v0, a0) at the start
-  stage_first(n, h2, d.q.data(), d.qd.data(), d.qdd.data(), qs.data(), vs.data(), sum_v.data(), sum_a.data());
-  // stages 2 and 3 at the midpoint, 4 at the end
-  static constexpr real kWeight[2] = {2, 2};
+  stage_first(n, h2, d.q.data(), d.qd.data(), d.qdd.data(), qs.data(), vs.data());
+  // stages 2 and 3 at the midpoint (weight 2), 4 at the end
   for (int stage = 0; stage < 3; ++stage) {
     const legsim_status s = dynamics_solve(sim, d.dyn, qs, vs, a, false, false);  // a alone
     if (s != LEGSIM_OK) return s;
-    if (stage == 2) break;
-    const real hn = stage < 1 ? h2 : h;  // the next stage's distance from the start
-    stage_next(n, kWeight[stage], hn, d.q.data(), d.qd.data(), a.data(), qs.data(), vs.data(), sum_v.data(),
-               sum_a.data());
+    if (stage == 0)
+      stage_second(n, 2, h2, d.q.data(), d.qd.data(), d.qdd.data(), a.data(), qs.data(), vs.data(), sum_v.data(),
+                   sum_a.data());
+    else if (stage == 1)
+      stage_next(n, 2, h, d.q.data(), d.qd.data(), a.data(), qs.data(), vs.data(), sum_v.data(), sum_a.data());
   }
   // the step's end (q1, v1), over the state
   VecQ &q1 = d.q, &v1 = d.qd;
