@@ -19,10 +19,14 @@ namespace legsim {
 
 namespace {
 // The first n values of a fixed-size vector (the rest is never read): a snapshot copies what
-// the model uses, not the capacity.
+// the model uses, not the capacity. A build sized to its model (a firmware image) copies the
+// whole vector: straight-line code, cheaper than the library's memcpy on a Cortex-M4.
 template <typename V>
 void copy_head(V &dst, const V &src, int n) {
-  std::memcpy(dst.data(), src.data(), sizeof(real) * size_t(n));
+  if (n == V::SizeAtCompileTime)
+    dst = src;
+  else
+    std::memcpy(dst.data(), src.data(), sizeof(real) * size_t(n));
 }
 }  // namespace
 

@@ -206,8 +206,9 @@ inline void sincos_grid(T phi, int32_t &grid, T &gs, T &gc, T &s, T &c) {
     sd = d + d * z * (T(-1) / 6 + z * (T(1) / 120 - z * (T(1) / 5040)));
     cm = -z * (T(0.5) - z * (T(1) / 24 - z * (T(1) / 720)));
   }
-  s = gs + (gs * cm + gc * sd);
-  c = gc + (gc * cm - gs * sd);
+  const T gsv = gs, gcv = gc;  // once: s and c may alias them for all the compiler knows
+  s = gsv + (gsv * cm + gcv * sd);
+  c = gcv + (gcv * cm - gsv * sd);
 }
 
 // sin and cos of one angle outside the per-stage cache (axis_u and normal_n, the ground's

@@ -211,6 +211,7 @@ legsim_status model_compile(const legsim_model_desc *d, Model &m) {
     }
   }
   m.gravity = Vec2(real(d->gravity_mps2[0]), real(d->gravity_mps2[1]));
+  m.gravity_force.setZero();
   for (int i = 0; i < m.nb; ++i) {
     m.gravity_force[3 * i] = m.mass[3 * i] * m.gravity.x();
     m.gravity_force[3 * i + 1] = m.mass[3 * i + 1] * m.gravity.y();

@@ -118,7 +118,7 @@ struct Model {
   real minv[kMaxCoords];
   real length[kMaxBodies];
   Vec2 gravity;
-  real gravity_force[kMaxCoords];  // m g per coordinate (N; 0 for the angles): Q's first term
+  VecQ gravity_force;  // m g per coordinate (N; 0 for the angles and past nq): Q's first term
   Joint joint[kMaxJoints];
   Actuator act[kMaxActuators];
   ForceElement force[kMaxForces];
