@@ -26,10 +26,16 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
+    // without keep, no condition estimate either (the factor is not kept, the step reports
+    // its end's): the report says infinite for a singular matrix still
     const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
-                                           keep ? f.a.data() : nullptr, f.condition, d.lambda, qdd, reaction);
-    if (keep) factor_order(layout, f);
-    d.report.condition = f.condition;
+                                           keep ? f.a.data() : nullptr, keep ? &f.condition : nullptr, d.lambda, qdd, reaction);
+    if (keep) {
+      factor_order(layout, f);
+      d.report.condition = f.condition;
+    } else if (s == LEGSIM_ERR_SINGULAR) {
+      d.report.condition = real(INFINITY);
+    }
     return s;
   }
   if (!rows_ready) {

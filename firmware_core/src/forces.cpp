@@ -135,17 +135,17 @@ void applied_forces(const Model &model, uint32_t disable, Data &d, const VecQ &q
   for (int a = 0; a < model.na; ++a) {
     const Actuator &ac = model.act[a];
     ActuatorState &st = d.act[a];
+    const bool commanded_force = st.mode == LEGSIM_ACTUATOR_FORCE;
+    real f = st.setpoint;
+    if (commanded_force) {
+      st.force = f;
+      if (f == 0) continue;  // a passive actuator: adds nothing (nor reads the state)
+    }
     const int i = 3 * ac.cyl, j = 3 * ac.rod;
     const real dx = q[j] - q[i], dy = q[j + 1] - q[i + 1];
     real s, c;
-    real f;
-    if (st.mode == LEGSIM_ACTUATOR_FORCE) {
-      f = st.setpoint;
-      st.force = f;
-      if (f == 0) continue;  // a passive actuator: adds nothing
-      body_trig(&d.trig, ac.cyl, q[i + 2], s, c);
-    } else {
-      body_trig(&d.trig, ac.cyl, q[i + 2], s, c);
+    body_trig(&d.trig, ac.cyl, q[i + 2], s, c);
+    if (!commanded_force) {
       f = axial_force(ac, st, d, s, c, dx, dy, qd[j] - qd[i], qd[j + 1] - qd[i + 1], qd[i + 2],
                       dx * c + dy * s);
       st.force = f;

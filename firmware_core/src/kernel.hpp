@@ -74,13 +74,14 @@ struct Kernel {
   // The fused solves below are generated for a model's main system only (nullptr else:
   // the pieces above serve; kernel_codegen.py --fused-max-rows).
   // The whole forward-dynamics solve of a system of the joint rows alone (dynamics_solve:
-  // M qdd + J^T lambda = force, J qdd = gamma) fused, its values in locals: lambda and qdd,
-  // the factor's condition estimate; the rows and the factor (by position) kept only where
-  // asked (keep_rows, keep_a not null), and the joints' reactions where reaction is not null
-  // (reactions_from_multipliers). LEGSIM_ERR_SINGULAR (condition infinite) or
-  // LEGSIM_ERR_DIVERGED (qdd not finite) as the general path.
+  // M qdd + J^T lambda = force, J qdd = gamma) fused, its values in locals: lambda and qdd;
+  // the factor's condition estimate, the rows and the factor (by position) only where asked
+  // (condition, keep_rows, keep_a not null: RK4's stages need none of them, and the pivots'
+  // range is a third of a Cortex-M4's factorization), and the joints' reactions where
+  // reaction is not null (reactions_from_multipliers). LEGSIM_ERR_SINGULAR (condition
+  // infinite) or LEGSIM_ERR_DIVERGED (qdd not finite) as the general path.
   legsim_status (*dynamics)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force,
-                            TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, VecR &lambda,
+                            TrigCache *trig, Rows *keep_rows, real *keep_a, real *condition, VecR &lambda,
                             VecQ &qdd, legsim_reaction *reaction);
   // One Newton iteration of generalized-alpha on a system of the joint rows alone
   // (integrator_generalized_alpha.cpp), fused: at (q, qd) with the applied forces force,

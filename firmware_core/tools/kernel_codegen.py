@@ -267,12 +267,12 @@ class Kernel:
                 dots.append(product(terms))
         return group(dots)
 
-    def factor_locals(self, local, fail):
+    def factor_locals(self, local, fail, range_if=None):
         """J W J^T's envelope as locals A<p>_<q>, the largest diagonal entry into max_diag
         (which comes in holding the rows after the block's), then L D L^T (linear_solve.cpp):
         L's entries below the diagonal into L<p>_<q>, each through T<p>_<q> = L_pq D_q, and
-        iD<p> = 1 / D_p; the pivots' range into pmin, pmax; `fail` on a bad diagonal or a
-        pivot <= the floor."""
+        iD<p> = 1 / D_p; the pivots' range into pmin, pmax (only where the C condition
+        range_if holds, when given); `fail` on a bad diagonal or a pivot <= the floor."""
         m = self.m
         o = []
         for p in range(m):
@@ -295,8 +295,11 @@ class Kernel:
             sub = "".join(f" - T{p}_{k} * L{p}_{k}" for k in lp)
             o.append(f"  d = A{p}_{p}{sub};")
             o.append(f"  if (!(d > floor)) {fail}")
-            o.append("  pmin = d < pmin ? d : pmin;")
-            o.append("  pmax = d > pmax ? d : pmax;")
+            if range_if:
+                o.append(f"  if ({range_if}) pmin = d < pmin ? d : pmin, pmax = d > pmax ? d : pmax;")
+            else:
+                o.append("  pmin = d < pmin ? d : pmin;")
+                o.append("  pmax = d > pmax ? d : pmax;")
             o.append(f"  const real iD{p} = 1 / d;")
         return o
 
@@ -429,7 +432,7 @@ class Kernel:
         # steps with the same arithmetic in the same order, its values kept in locals)
         o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_dynamics(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                  "const VecQ &q, const VecQ &qd, "
-                 "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real &condition, "
+                 "const VecQ &force, TrigCache *trig, Rows *keep_rows, real *keep_a, real *condition, "
                  "VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {")
         o.append("  const real *w = model.minv;")
         o += self.rows_locals()
@@ -437,12 +440,13 @@ class Kernel:
         o += ["  " + x for x in self.rows_store("keep_rows->")]
         o.append("  }")
         o.append("  real max_diag = 0, pmin, pmax;")
-        fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
-        o += self.factor_locals(True, fail)
+        o += self.factor_locals(True, "{ if (condition) *condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }",
+                                range_if="condition")
         o.append("  if (keep_a) {")
         o += ["  " + x for x in self.factor_store("keep_a")]
         o.append("  }")
-        o.append("  condition = std::sqrt(pmax / pmin);")
+        o.append("  if (condition) *condition = std::sqrt(pmax / pmin);")
+        fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
         nq = 3 * self.nb
         o += self.accelerations_locals("L")
         o.append("}\n")
