@@ -1,6 +1,7 @@
 #!/usr/bin/env python3
 """The robot's cost per step beside the one leg's, feet stuck and with a slipping foot
-(issue 9, section 8), as one command: instructions per step under valgrind's callgrind
+(issue 9, section 8), and the leg's under a controller that sends a new command every step
+(leg-loop), as one command: instructions per step under valgrind's callgrind
 and wall time (min over repetitions), for every case and integrator of robot_step_cost
 (firmware_core/benchmarks/robot_step_cost.c), printed as a Markdown table.
 
@@ -22,7 +23,7 @@ import subprocess
 import sys
 import tempfile
 
-CASES = ("leg", "robot", "robot-slip")
+CASES = ("leg", "leg-loop", "robot", "robot-slip")
 INTEGRATORS = ("rk4", "galpha")
 KINDS = ("stuck", "slip1", "slip2", "change")
 KIND_TEXT = {"stuck": "no foot sliding", "slip1": "one foot sliding, one stuck",
