@@ -451,7 +451,11 @@ typedef enum legsim_actuator_mode {
   LEGSIM_ACTUATOR_LENGTH = 1  /* the servo holds a commanded length */
 } legsim_actuator_mode;
 
-/* |force| <= max_force and finite, else LEGSIM_ERR_BAD_INPUT (nothing changes). */
+/* A changed command or load takes effect at the next step, which restarts both integrators
+ * from the accelerations under it (a discontinuity of the forcing); the same value sent
+ * again changes nothing. The restart keeps what depends on the state alone, so a controller
+ * may send a new command every step: about one Newton iteration a step still.
+ * |force| <= max_force and finite, else LEGSIM_ERR_BAD_INPUT (nothing changes). */
 legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n);
 /* Inside the stroke, else LEGSIM_ERR_OUT_OF_STROKE (nothing changes). */
 legsim_status legsim_command_length(legsim_sim *sim, int32_t actuator, legsim_real length_m);
