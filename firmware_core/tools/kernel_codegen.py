@@ -446,7 +446,6 @@ class Kernel:
         o += ["  " + x for x in self.factor_store("keep_a")]
         o.append("  }")
         o.append("  if (condition) *condition = std::sqrt(pmax / pmin);")
-        fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
         nq = 3 * self.nb
         o += self.accelerations_locals("L")
         o.append("}\n")
@@ -465,6 +464,7 @@ class Kernel:
         o.append("  " + " ".join(f"(void)gam{i};" for i in range(m)) + "  // the position level: no gamma")
         o += [f"  rows.phi[{i}] = phi{i};" for i in range(m)]
         o.append("  real max_diag = 0, pmin, pmax;")
+        fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
         o += self.factor_locals(True, fail)
         o += self.factor_store("a")
         o.append("  condition = std::sqrt(pmax / pmin);")
