@@ -91,6 +91,9 @@ void Snapshot::restore(Sim &sim) const {
   d.derivative_valid = derivative_valid;
   d.history_valid = history_valid;
   d.forcing_only = forcing_only;
+  // The workspace is not put back: a refused step may have run to its end, its factor that
+  // of a state now undone (the output check refuses after the solves).
+  d.factor.of_state = false;
 }
 
 namespace {

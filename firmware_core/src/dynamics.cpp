@@ -27,7 +27,8 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
     // without keep, no condition estimate either (the factor is not kept, the step reports
-    // its end's): the report says infinite for a singular matrix still
+    // its end's): the report says infinite for a singular matrix still, and a stage whose
+    // accelerations are not finite leaves the last estimate there
     const legsim_status s = kern->dynamics(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, &d.trig, keep ? &d.rows : nullptr,
                                            keep ? f.a.data() : nullptr, keep ? &f.condition : nullptr, d.lambda, qdd, reaction);
     if (keep) {

@@ -21,5 +21,6 @@ extern "C" int legsim_kernel_use(legsim_sim *sim, int on) {
   layout_finish(d.joints, d.drivers);
   stops_layout(s);
   d.work_mask = -1;
+  d.factor.of_state = false;  // in the other path's order
   return s.model.kernel ? 1 : 0;
 }

@@ -209,10 +209,10 @@ struct Factor {
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
   // This is the sim's state's factor exactly, as a fresh factorization would give it (RK4's
   // end solve left it, the positions not projected after), and untouched since: factor_order
-  // and factor_build, which every write of a factor goes through, clear it. A restart after
-  // a changed command solves with it (forcing_refresh): the same values either way, so a
-  // refused call that wrote the factor (all-or-nothing restores the state, not the
-  // workspace) changes no later result.
+  // and factor_build, which every write of a factor goes through, clear it, and so does a
+  // refused call (Snapshot::restore: all-or-nothing restores the state, not the workspace).
+  // A restart after a changed command solves with it (forcing_refresh): the same values
+  // either way, so a refused call changes no later result.
   bool of_state;
 };
 
