@@ -41,11 +41,10 @@ bool starts(std::string_view text, std::size_t i, const char *three) {
   return i + 3 <= text.size() && text.compare(i, 3, three) == 0;
 }
 
-// After a backslash: an ASCII character other than a newline, skipped as escaped
-// (a backslash before a newline continues a multi-line string; the line is counted).
-bool escapable(std::string_view text, std::size_t i) {
-  return i + 1 < text.size() && text[i + 1] != '\n' && static_cast<unsigned char>(text[i + 1]) < 0x80;
-}
+// After a backslash: a character other than a newline, skipped as escaped (a backslash
+// before a newline continues a multi-line string; the line is counted). A non-ASCII one
+// was refused before (backslash_non_ascii).
+bool escapable(std::string_view text, std::size_t i) { return i + 1 < text.size() && text[i + 1] != '\n'; }
 
 // A backslash before a non-ASCII character in a basic string: no TOML escape (escapes are
 // ASCII, a line-ending backslash is followed by blanks or a newline), and toml++ 3.3.0

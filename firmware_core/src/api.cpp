@@ -287,45 +287,31 @@ legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *lengt
   return LEGSIM_OK;
 }
 
-// After the state changed outside a step: accelerations, multipliers and
-// reactions of the free dynamics at the new state, and a fresh start of the
-// generalized-alpha history.
-legsim_status state_refresh(Sim &sim) {
+// After the state changed outside a step: accelerations, multipliers and reactions of the
+// free dynamics at the new state, and a fresh start of the generalized-alpha history.
+// forcing_only (a changed command or load alone: the state, its rows and the options as
+// they were): the same accelerations, from the state's factor when the last step left it
+// (Factor::of_state: RK4's end solve; the same values as a fresh factorization), and
+// generalized-alpha keeps its Newton contraction estimate (the iteration matrix is the
+// same) and its predictor's past, shifted by the accelerations' jump (a step change of the
+// forcing moves them by about that much on either side of it): a controller that changes
+// its setpoint every step costs about one Newton iteration a step, not two.
+legsim_status state_refresh(Sim &sim, bool forcing_only = false) {
   Data &d = sim.data;
-  const legsim_status s = dynamics_state_update(sim);
+  VecQ before;
+  if (forcing_only) before = d.qdd;
+  const legsim_status s = dynamics_state_reactions(sim, d.qdd, forcing_only && d.factor.of_state);
   d.derivative_valid = s == LEGSIM_OK;
   d.history_valid = s == LEGSIM_OK;
   d.forcing_only = false;
   if (s == LEGSIM_OK) d.acc_aux = d.qdd;
-  d.past_steps = 0;  // the history starts here
-  d.newton_eta = 1;
-  return s;
-}
-
-// After a changed command or load alone (the state, its rows and the options as they
-// were): the accelerations under the new forcing as state_refresh finds them, from the
-// state's factor when the last step left it (Factor::of_state: RK4's end solve; the same
-// values as a fresh factorization). Generalized-alpha restarts its auxiliary acceleration
-// there too, but keeps its Newton contraction estimate (the iteration matrix is the same)
-// and its predictor's past, shifted by the accelerations' jump (a step change of the
-// forcing moves the accelerations by about that much on either side of it): a controller
-// that changes its setpoint every step costs about one Newton iteration a step, not two.
-legsim_status forcing_refresh(Sim &sim) {
-  Data &d = sim.data;
-  const VecQ before = d.qdd;
-  const legsim_status s = dynamics_state_reactions(sim, d.qdd, d.factor.of_state);
-  d.derivative_valid = s == LEGSIM_OK;
-  d.history_valid = s == LEGSIM_OK;
-  d.forcing_only = false;
-  if (s != LEGSIM_OK) {
-    d.past_steps = 0;
+  if (s == LEGSIM_OK && forcing_only) {
+    for (int k = 0; k < d.past_steps && k < kPredictorOrder; ++k)
+      for (int i = 0; i < sim.model.nq; ++i) d.qdd_past[k][i] += d.qdd[i] - before[i];
+  } else {
+    d.past_steps = 0;  // the history starts here
     d.newton_eta = 1;
-    return s;
   }
-  d.acc_aux = d.qdd;
-  const int n = sim.model.nq;
-  for (int k = 0; k < d.past_steps && k < kPredictorOrder; ++k)
-    for (int i = 0; i < n; ++i) d.qdd_past[k][i] += d.qdd[i] - before[i];
   return s;
 }
 
@@ -847,7 +833,7 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
     const legsim_status st = all_or_nothing(s, [&] {
       legsim_status r = LEGSIM_OK;
       // both start from the accelerations at the current state and commands
-      if (rk4 ? !d.derivative_valid : !d.history_valid) r = d.forcing_only ? forcing_refresh(s) : state_refresh(s);
+      if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s, d.forcing_only);
       if (r == LEGSIM_OK) r = rk4 ? rk4_step(s) : generalized_alpha_step(s);
       bool stopped = false, released = false;
       const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);

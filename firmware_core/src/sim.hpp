@@ -211,7 +211,7 @@ struct Factor {
   // end solve left it, the positions not projected after), and untouched since: factor_order
   // and factor_build, which every write of a factor goes through, clear it, and so does a
   // refused call (Snapshot::restore: all-or-nothing restores the state, not the workspace).
-  // A restart after a changed command solves with it (forcing_refresh): the same values
+  // A restart after a changed command solves with it (state_refresh): the same values
   // either way, so a refused call changes no later result.
   bool of_state;
 };

@@ -51,8 +51,8 @@ Sane ranges (inclusive; legsim.h's LEGSIM_MAX_* / LEGSIM_MIN_*, which the core c
 
 The text is bounded before it is parsed (as the run-time loader does for toml++, see
 firmware_core/host/toml_limits.hpp): at most 1 MiB, valid UTF-8, non-ASCII only inside
-strings and comments and never right after a backslash, keys and table headers of at most 16 dotted parts, brackets nested
-at most 16 deep. Else "FILE: TOML input refused: REASON (line N)".
+strings and comments and never right after a backslash, keys and table headers of at most
+16 dotted parts, brackets nested at most 16 deep. Else "FILE: TOML input refused: REASON (line N)".
 """
 from __future__ import annotations
 
@@ -1034,8 +1034,8 @@ def toml_input_within_limits(raw: bytes) -> str | None:
     prev = "\n"  # the last non-blank character outside strings and comments: a quote opens
     # a string only where a token may start (after '=', '[', '{', ',', '.' or at a line start)
 
-    def escapable(i: int) -> bool:
-        return i + 1 < size and raw[i + 1] != 0x0A and raw[i + 1] < 0x80
+    def escapable(i: int) -> bool:  # a non-ASCII character after it was refused before
+        return i + 1 < size and raw[i + 1] != 0x0A
 
     def backslash_non_ascii(i: int) -> bool:  # no TOML escape; toml++ 3.3.0 misparses some
         return i + 1 < size and raw[i + 1] >= 0x80
