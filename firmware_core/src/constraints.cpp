@@ -197,6 +197,17 @@ legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first);
 
 // The coordinate drivers' bodies are known once their values are: finish the
 // layout and list the entries of J W J^T that can be non-zero.
+namespace {
+// Row i of the joint block (rows 0 .. mj-1) is a row of a pinned body's pin: a joint to the
+// frame (no second body) on a body that has no other.
+bool pin_row(const Layout &out, int mj, int i) {
+  if (out.body[i][1] >= 0) return false;
+  int rows = 0;  // the body's rows to the frame: 2 for one revolute joint
+  for (int j = 0; j < mj; ++j) rows += out.body[j][1] < 0 && out.body[j][0] == out.body[i][0];
+  return rows == 2;
+}
+}  // namespace
+
 legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   const int m = out.m;
   for (int i = 0; i < m; ++i)
@@ -245,7 +256,16 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
       }
     }
   }
-  for (int p = 0; p < mj; ++p) out.perm[order[mj - 1 - p]] = uint8_t(p);
+  // The rows of a body's pin (its one revolute joint to the frame) first, the others after
+  // them, each in that order: a pin's rows couple only rows on its body, which share it
+  // anyway (no fill), and the pivots after them are those of the system with the pinned
+  // bodies on their angles alone, which the kernels solve for RK4's stages
+  // (kernel_codegen.py's Reduced): the same pivots to round-off, so the same pivot floor
+  // decides alike there.
+  int p = 0;
+  for (int pass = 0; pass < 2; ++pass)
+    for (int k = mj - 1; k >= 0; --k)
+      if (pin_row(out, mj, order[k]) == (pass == 0)) out.perm[order[k]] = uint8_t(p++);
   for (int i = mj; i < m; ++i) out.perm[i] = uint8_t(i);
   return layout_pairs(out, 0, nullptr);
 }

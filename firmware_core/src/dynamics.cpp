@@ -23,6 +23,15 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   Data &d = sim.data;
   layout_forces(sim, layout, q, qd);
   const Kernel *kern = layout.kernel;
+  if (kern && kern->accelerations && !keep && !reaction && !rows_ready && layout.m == kern->mj) {
+    // RK4's stages: the accelerations alone, in the reduced system (neither multipliers nor
+    // a factor: the step's end solves the whole system); a singular matrix reports an
+    // infinite condition, as below
+    const legsim_status s = kern->accelerations(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q,
+                                                &d.trig, qdd);
+    if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
+    return s;
+  }
   if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;

@@ -39,17 +39,20 @@ LEGSIM_KERNEL_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const
 }
 // The last stage's weight (1) added, and the step's end q1 = q0 + h/6 sum_v, v1 = v0 + h/6
 // sum_a written over q0 and v0 (the sim's state: all_or_nothing puts a failed step back);
-// false when a value is not finite.
+// false when the end is not a state a sim may hold (state_sane: not finite, or past
+// LEGSIM_MAX_ABS_Q or _QD), before the end's solves and projections make another failure of
+// it. Every |x| is below its bound when their sum is (NaN fails that too), the usual case.
 LEGSIM_KERNEL_TARGETS bool stage_last(int n, real h6, R_ q, R_ v, const R_ vs, const R_ a, const R_ sum_v,
                                       const R_ sum_a) {
-  real z = 0;  // x * 0 is 0 for a finite x, NaN else: one sum tells
+  real sq = 0, sv = 0;
   for (int k = 0; k < n; ++k) {
     const real q1 = q[k] + h6 * (sum_v[k] + vs[k]), v1 = v[k] + h6 * (sum_a[k] + a[k]);
     q[k] = q1;
     v[k] = v1;
-    z += q1 * real(0) + v1 * real(0);
+    sq += std::abs(q1);
+    sv += std::abs(v1);
   }
-  return z == z;
+  return sq < real(LEGSIM_MAX_ABS_Q) && sv < real(LEGSIM_MAX_ABS_QD);
 }
 #undef R_
 
@@ -95,7 +98,8 @@ legsim_status rk4_step(Sim &sim) {
   }
   // the step's end (q1, v1), over the state
   VecQ &q1 = d.q, &v1 = d.qd;
-  if (!stage_last(n, h6, q1.data(), v1.data(), vs.data(), a.data(), sum_v.data(), sum_a.data()))
+  if (!stage_last(n, h6, q1.data(), v1.data(), vs.data(), a.data(), sum_v.data(), sum_a.data()) &&
+      !state_sane(q1, v1, n))
     return LEGSIM_ERR_DIVERGED;
   // The end of the step: one evaluation of the rows at (q1, v1) serves the
   // position check, the velocity projection and the end derivative, which is

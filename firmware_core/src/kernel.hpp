@@ -100,6 +100,15 @@ struct Kernel {
   legsim_status (*factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                             const VecQ &force, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd,
                             legsim_reaction *reaction);
+  // RK4's stage solve: the accelerations qdd alone of a system of the joint rows alone, in
+  // fewer rows: every body pinned to the frame by one revolute joint keeps its angle alone
+  // (its pin's rows and multipliers drop out; kernel_codegen.py's Reduced says how). The
+  // same accelerations as dynamics' to round-off, not bit for bit; no multipliers, rows,
+  // factor or condition estimate. LEGSIM_ERR_SINGULAR on a pivot <= kPivotFloor times the
+  // reduced matrix's largest diagonal entry, LEGSIM_ERR_DIVERGED (qdd not finite). nullptr
+  // for a structure without such a body (dynamics serves).
+  legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+                                 const VecQ &force, TrigCache *trig, VecQ &qdd);
 };
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr

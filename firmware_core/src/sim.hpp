@@ -413,8 +413,9 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.
 // rows_ready: d.rows and d.factor already hold this (q, qd) on this layout. keep = false:
-// the caller needs only qdd and lambda (RK4's stages), so d.rows and d.factor need not be
-// written (a layout of the joint rows alone with a generated kernel skips them).
+// the caller needs only qdd (RK4's stages), so d.rows, d.factor and d.lambda need not be
+// written (a layout of the joint rows alone with a generated kernel skips them, and where
+// the kernel has a reduced system, solves that: the same qdd to round-off).
 // reaction not null: the joints' reactions too (reactions_from_multipliers; the fused solve
 // computes them from its locals), for the caller's all-or-nothing to put back on failure.
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,

@@ -83,6 +83,20 @@ def rcm_order(m, share):
     return order[::-1]
 
 
+def pinned_bodies(joints):
+    """Bodies pinned to the frame by one revolute joint (and no other joint to the frame)."""
+    to_frame = [j["body"][0] for j in joints if j["kind"] == "revolute_to_frame"]
+    return {b for b in to_frame if to_frame.count(b) == 1}
+
+
+def pins_first(order, rows):
+    """The rows of a body's pin (its one joint to the frame: no second body) first, the
+    others after them, each as in order (layout_finish, constraints.cpp, does the same)."""
+    frame = [r[0][0] for r in rows if r[0][1] < 0]
+    pin = [rows[i][0][1] < 0 and frame.count(rows[i][0][0]) == 2 for i in range(len(rows))]
+    return [i for i in order if pin[i]] + [i for i in order if not pin[i]]
+
+
 def product(terms):
     """C text of a signed sum of products [(constant, [factors])]; "0" when empty."""
     out = []
@@ -117,12 +131,19 @@ class Kernel:
         mj = len(self.rows)
         for c in self.contacts:  # normal then tangential row, on the foot's body alone
             self.rows += [((c["body"], -1), ((V, V, V), (0, 0, 0)))] * 2
+        # the joint rows in reverse Cuthill-McKee order, the contact rows after them as the
+        # general path places rows after a joint kernel's block (so both factor alike)
+        self.structure(mj)
+        self.fused = True  # generate() decides
+
+    def structure(self, mj, order=None):
+        """The elimination order of the rows (rows mj.. kept last, in order; or the order
+        given) and the patterns of J W J^T and of its factor by position."""
         m = self.m = len(self.rows)
         share = [[any(x >= 0 and x == y for x in self.rows[i][0] for y in self.rows[j][0])
                   for j in range(m)] for i in range(m)]
-        # the joint rows in reverse Cuthill-McKee order, the contact rows after them as the
-        # general path places rows after a joint kernel's block (so both factor alike)
-        order = rcm_order(mj, share) + list(range(mj, m))
+        if order is None:
+            order = pins_first(rcm_order(mj, share), self.rows[:mj]) + list(range(mj, m))
         self.perm = [0] * m
         for p, i in enumerate(order):
             self.perm[i] = p
@@ -136,15 +157,20 @@ class Kernel:
                     lp[p].add(q)
         self.l_nz = [sorted(s) for s in lp]
         self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
-        self.fused = True  # generate() decides
 
     def coef(self, i, s, k, local=False):
         """(constant, [factor]) of a Jacobian entry: a constant, or the run-time value in
         rows.coef (or in the fused functions' local c<row>_<slot>_<coordinate>)."""
         c = self.rows[i][1][s][k]
+        if isinstance(c, str):  # a local of its own (the reduced system's)
+            return (1, [c])
         if c is not V:
             return (c, [])
         return (1, [f"c{i}_{s}_{k}" if local else f"c[{i}][{s}][{k}]"])
+
+    def w_name(self, b, k):
+        """M^-1's entry of body b's coordinate k."""
+        return f"w[{3 * b + k}]"
 
     def signature(self):
         return (tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
@@ -263,7 +289,7 @@ class Kernel:
                 for k in range(3):
                     c1, v1 = self.coef(i, si, k, local)
                     c2, v2 = self.coef(j, sj, k, local)
-                    terms.append((c1 * c2, v1 + [f"w[{3 * b + k}]"] + v2))
+                    terms.append((c1 * c2, v1 + [self.w_name(b, k)] + v2))
                 dots.append(product(terms))
         return group(dots)
 
@@ -272,7 +298,8 @@ class Kernel:
         (which comes in holding the rows after the block's), then L D L^T (linear_solve.cpp):
         L's entries below the diagonal into L<p>_<q>, each through T<p>_<q> = L_pq D_q, and
         iD<p> = 1 / D_p; the pivots' range into pmin, pmax (only where the C condition
-        range_if holds, when given); `fail` on a bad diagonal or a pivot <= the floor."""
+        range_if holds, when given; none with range_if False); `fail` on a bad diagonal or
+        a pivot <= the floor."""
         m = self.m
         o = []
         for p in range(m):
@@ -284,8 +311,9 @@ class Kernel:
             o.append(f"  max_diag = A{p}_{p} > max_diag ? A{p}_{p} : max_diag;")
         o.append(f"  if (!(max_diag > 0) || !std::isfinite(max_diag)) {fail}")
         o.append("  const real floor = kPivotFloor * max_diag;")
-        o.append("  pmin = max_diag;")
-        o.append("  pmax = 0;")
+        if range_if is not False:
+            o.append("  pmin = max_diag;")
+            o.append("  pmax = 0;")
         o.append("  real d;")
         for p in range(m):
             lp = self.l_nz[p]
@@ -295,7 +323,9 @@ class Kernel:
             sub = "".join(f" - T{p}_{k} * L{p}_{k}" for k in lp)
             o.append(f"  d = A{p}_{p}{sub};")
             o.append(f"  if (!(d > floor)) {fail}")
-            if range_if:
+            if range_if is False:
+                pass
+            elif range_if:
                 o.append(f"  if ({range_if}) pmin = d < pmin ? d : pmin, pmax = d > pmax ? d : pmax;")
             else:
                 o.append("  pmin = d < pmin ? d : pmin;")
@@ -491,9 +521,15 @@ class Kernel:
         o.append("  " + " ".join(f"(void)phi{i};" for i in range(m)) + "  // the acceleration level: no Phi")
         o += self.accelerations_locals("a")
         o.append("}\n")
-        return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored")
+        # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
+        reduced = Reduced(self)
+        if reduced.pinned:
+            o += reduced.emit_accelerations(sym)
+        accelerations = f"{sym}_accelerations" if reduced.pinned else "nullptr"
+        return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
+                                                    accelerations)
 
-    def emit_tables(self, sym, dynamics, newton, factored):
+    def emit_tables(self, sym, dynamics, newton, factored, accelerations="nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -505,8 +541,122 @@ class Kernel:
                  f"{len(self.contacts)}, {sym}_contact, "
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, "
-                 f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}}};")
+                 f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}, "
+                 f"{accelerations}}};")
         return "\n".join(o) + "\n"
+
+
+class Reduced(Kernel):
+    """RK4's stage solve (accelerations alone) in fewer rows. A body pinned to the frame by
+    one revolute joint moves with its angle alone: its accelerations are
+    qdd_b = G_b phidd_b + g_b, G_b = (say, -sax, 1) (the pin point's offset (sax, say)) and
+    g_b = (gamma_r, gamma_r+1, 0) (the pin rows' gamma), which is every qdd that satisfies
+    the pin's two rows. Put in M qdd + J^T lambda = Q and multiplied by G_b^T (G_b^T J_pin^T
+    = 0), the pin rows and their multipliers drop out: the body keeps one coordinate with
+    mass G_b^T M_b G_b = m say^2 + m sax^2 + J (the moment of inertia about the pin), force
+    G_b^T (Q_b - M_b g_b), and the other rows' columns J_b G_b, their gamma less J_b g_b.
+    The same accelerations as the whole system's (a Schur complement of it: its pivots are
+    the whole factor's after the pin rows) with fewer operations: the leg's 16 rows become
+    10. Not a factor the general path can use, nor multipliers of the pins: RK4's stages
+    need neither (the step's end solves the whole system)."""
+
+    def __init__(self, k):
+        self.name, self.nb, self.joints, self.contacts = k.name, k.nb, k.joints, k.contacts
+        self.full = k
+        first_row, r = [], 0
+        for j in k.joints:
+            first_row.append(r)
+            r += NROWS[j["kind"]]
+        pinned = pinned_bodies(k.joints)
+        # body -> (its pin joint, the pin's first row)
+        self.pinned = {j["body"][0]: (n, first_row[n]) for n, j in enumerate(k.joints)
+                       if j["kind"] == "revolute_to_frame" and j["body"][0] in pinned}
+        pin_rows = {r + e for _, r in self.pinned.values() for e in (0, 1)}
+        self.orig = [i for i in range(k.m) if i not in pin_rows]  # reduced row -> row
+        self.rows, self.defs = [], []
+        for i in self.orig:
+            bodies, slots = k.rows[i]
+            new, gamma = [], []
+            for s in range(2):
+                b = bodies[s]
+                if b < 0 or b not in self.pinned:  # run-time entries by the row's own names
+                    new.append(tuple(f"c{i}_{s}_{x}" if v is V else v for x, v in enumerate(slots[s]))
+                               if b >= 0 else slots[s])
+                    continue
+                n, r = self.pinned[b]
+                cx, cy, cp = (k.coef(i, s, x, True) for x in range(3))
+                if cx[0] == 0 and cy[0] == 0 and not cp[1]:
+                    new.append((0, 0, cp[0]))  # on the angle alone: a constant still
+                else:
+                    self.defs.append(f"  const real e{i}_{s} = "
+                                     f"{product([(cx[0], cx[1] + [f'say{n}']), (-cy[0], cy[1] + [f'sax{n}']), cp])};")
+                    new.append((0, 0, f"e{i}_{s}"))
+                gamma += [(cx[0], cx[1] + [f"gam{r}"]), (cy[0], cy[1] + [f"gam{r + 1}"])]
+            self.rows.append((bodies, tuple(new)))
+            if any(c != 0 for c, _ in gamma):
+                self.defs.append(f"  const real gr{i} = gam{i} - ({product(gamma)});")
+            else:
+                self.defs.append(f"  const real gr{i} = gam{i};")
+        # the whole system's order without the pin rows (which it eliminates first): the
+        # same pivots after them, to round-off
+        at = {i: r for r, i in enumerate(self.orig)}
+        self.structure(len(self.rows), [at[i] for i in k.row_at if i in at])
+
+    def w_name(self, b, k):
+        return f"wr{b}" if b in self.pinned else f"w[{3 * b + k}]"
+
+    def emit_accelerations(self, sym):
+        """{sym}_accelerations: the fused solve of the reduced system, qdd alone."""
+        k, nq = self.full, 3 * self.nb
+        o = [f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_accelerations(const Model &model, "
+             "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
+             "TrigCache *trig, VecQ &qdd) {"]
+        o.append("  const real *w = model.minv, *mass = model.mass;")
+        o += k.rows_locals()
+        unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
+                                                      for x in range(3) if k.rows[i][0][s] >= 0
+                                                      and k.rows[i][1][s][x] is V]
+        o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // the acceleration level: no Phi")
+        for b, (n, r) in sorted(self.pinned.items()):
+            o.append(f"  // body {b} on its pin (joint {n}): its angle alone")
+            o.append(f"  const real wr{b} = 1 / ((mass[{3 * b}] * say{n} * say{n} + mass[{3 * b + 1}] * sax{n} * sax{n}) "
+                     f"+ mass[{3 * b + 2}]);")
+            o.append(f"  const real fr{b} = (say{n} * (force[{3 * b}] - mass[{3 * b}] * gam{r}) - "
+                     f"sax{n} * (force[{3 * b + 1}] - mass[{3 * b + 1}] * gam{r + 1})) + force[{3 * b + 2}];")
+        o += self.defs
+        for n in range(nq):
+            b, x = divmod(n, 3)
+            if b not in self.pinned:
+                o.append(f"  const real t{n} = w[{n}] * force[{n}];")
+            elif x == 2:
+                o.append(f"  const real t{n} = wr{b} * fr{b};")
+        # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
+        # the same number as dynamics' floor; the reduced one's are no larger)
+        o.append("  real max_diag = 0;")
+        for p in range(k.m):
+            o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
+            o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
+        o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
+        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
+              for i in range(self.m)]
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}")
+        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
+        for n in range(nq):
+            b, x = divmod(n, 3)
+            jt = self.jt_expr(n, lambda i: f"l{i}", True)
+            if b not in self.pinned:
+                o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({jt}));")
+                o.append(f"  z += qdd[{n}] * real(0);")
+            elif x == 2:
+                pn, r = self.pinned[b]
+                o.append(f"  const real pdd{b} = wr{b} * (fr{b} - ({jt}));")
+                o.append(f"  qdd[{n - 2}] = gam{r} + say{pn} * pdd{b};")
+                o.append(f"  qdd[{n - 1}] = gam{r + 1} - sax{pn} * pdd{b};")
+                o.append(f"  qdd[{n}] = pdd{b};")
+                o.append(f"  z += pdd{b} * real(0) + qdd[{n - 2}] * real(0) + qdd[{n - 1}] * real(0);")
+        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
+        o.append("}\n")
+        return o
 
 
 # Every generated function carries LEGSIM_KERNEL_TARGETS (kernel.hpp): on x86-64 with GCC

@@ -5,7 +5,10 @@
  * with both integrators, for the leg (free, and resting on a stroke stop: a row after
  * the kernel's block) and the robot (feet stuck; on slippery ground, where a foot slides
  * and one lifts off). The general path factors the joint block in the kernel's order,
- * so the two agree bit for bit here; the tolerance allows for round-off only. */
+ * so the two agree bit for bit here, except RK4's stages on the leg: they solve the
+ * kernel's reduced system (the bodies pinned to the frame on their angles alone), whose
+ * accelerations agree to round-off (8e-12 relative over 1 s on the stop, where the
+ * multipliers of a stiff servo amplify it). The tolerances allow for round-off only. */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -110,6 +113,8 @@ static void same_scene(enum scene sc, legsim_integrator integ, const char *name)
   static double a[1024], b[1024];
   double worst = 0;
   uint32_t events = 0;
+  /* RK4's stages on a reduced system: round-off grows over 1,000 steps */
+  const double tol = integ == LEGSIM_INTEGRATOR_RK4 ? 1e-10 : 1e-12;
   for (int step = 0; step < 1000; ++step) {
     const legsim_status sk = legsim_step(k, 1), sg = legsim_step(g, 1);
     TEST_ASSERT_EQUAL_INT(sg, sk);
@@ -119,7 +124,7 @@ static void same_scene(enum scene sc, legsim_integrator integ, const char *name)
     for (int i = 0; i < n; ++i) {
       const double d = fabs(a[i] - b[i]) / (1 + fabs(b[i]));
       worst = d > worst ? d : worst;
-      if (!(d <= 1e-12)) {
+      if (!(d <= tol)) {
         printf("%s: step %d, output %d: kernel %.17g, general %.17g\n", name, step, i, a[i], b[i]);
         TEST_FAIL();
       }
