@@ -12,14 +12,14 @@ namespace {
 // The stage updates over distinct arrays: __restrict tells the compiler so, and the loops
 // vectorize (the same arithmetic per element, so the same values).
 #define R_ real *__restrict
-LEGSIM_KERNEL_TARGETS void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs) {
+LEGSIM_STAGE_TARGETS void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs) {
   for (int k = 0; k < n; ++k) {
     qs[k] = q0[k] + h2 * v0[k];
     vs[k] = v0[k] + h2 * a0[k];
   }
 }
 // the sums start at the first stage's (v0, a0): the second stage starts them from those
-LEGSIM_KERNEL_TARGETS void stage_second(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a0, const R_ a,
+LEGSIM_STAGE_TARGETS void stage_second(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a0, const R_ a,
                                         R_ qs, R_ vs, R_ sum_v, R_ sum_a) {
   for (int k = 0; k < n; ++k) {
     sum_v[k] = v0[k] + w * vs[k];
@@ -28,7 +28,7 @@ LEGSIM_KERNEL_TARGETS void stage_second(int n, real w, real hn, const R_ q0, con
     vs[k] = v0[k] + hn * a[k];
   }
 }
-LEGSIM_KERNEL_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a, R_ qs, R_ vs, R_ sum_v,
+LEGSIM_STAGE_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const R_ v0, const R_ a, R_ qs, R_ vs, R_ sum_v,
                 R_ sum_a) {
   for (int k = 0; k < n; ++k) {
     sum_v[k] += w * vs[k];
@@ -42,7 +42,7 @@ LEGSIM_KERNEL_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const
 // false when the end is not a state a sim may hold (state_sane: not finite, or past
 // LEGSIM_MAX_ABS_Q or _QD), before the end's solves and projections make another failure of
 // it. Every |x| is below its bound when their sum is (NaN fails that too), the usual case.
-LEGSIM_KERNEL_TARGETS bool stage_last(int n, real h6, R_ q, R_ v, const R_ vs, const R_ a, const R_ sum_v,
+LEGSIM_STAGE_TARGETS bool stage_last(int n, real h6, R_ q, R_ v, const R_ vs, const R_ a, const R_ sum_v,
                                       const R_ sum_a) {
   real sq = 0, sv = 0;
   for (int k = 0; k < n; ++k) {

@@ -608,7 +608,7 @@ class Reduced(Kernel):
     def emit_accelerations(self, sym):
         """{sym}_accelerations: the fused solve of the reduced system, qdd alone."""
         k, nq = self.full, 3 * self.nb
-        o = [f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_accelerations(const Model &model, "
+        o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
              "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
              "TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
