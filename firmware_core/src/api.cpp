@@ -441,6 +441,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.stop_mask = 0;
   d.work_mask = -1;
   trig_clear(d.trig);
+  trig_clear(*stage_trig(d));
   contacts_free(*sim);
   for (int f = 0; f < m.nf; ++f) {
     d.force_value[f][0] = real(model->force[f].value[0]);

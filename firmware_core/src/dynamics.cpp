@@ -28,7 +28,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     // a factor: the step's end solves the whole system); a singular matrix reports an
     // infinite condition, as below
     const legsim_status s = kern->accelerations(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q,
-                                                &d.trig, qdd);
+                                                stage_trig(d), qdd);
     if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
     return s;
   }

@@ -274,6 +274,12 @@ struct Data {
   int32_t work_mask;  // the actuator set Layout work was built for; -1: none or with coordinates
   Rows rows;
   TrigCache trig;
+#if defined(__x86_64__)
+  // RK4's reduced stage solves' own: on x86-64 their copy that fuses multiply-adds
+  // (kernel.hpp, LEGSIM_STAGE_TARGETS) computes sin/cos with other roundings, and a cache's
+  // values must not depend on which code filled it (stage_trig below)
+  TrigCache stage_trig_cache;
+#endif
   Factor factor;
   bool end_projected;  // RK4: the last step's end needed projecting (a hint: same values either way)
   DriverValues drivers;
@@ -281,6 +287,15 @@ struct Data {
   VecQ tq[4], tv[3];
   VecR rhs;
 };
+
+// The TrigCache of RK4's reduced stage solves (Kernel::accelerations).
+inline TrigCache *stage_trig(Data &d) {
+#if defined(__x86_64__)
+  return &d.stage_trig_cache;
+#else
+  return &d.trig;
+#endif
+}
 
 // legsim_init writes kSimMagic last, when the sim is complete; every entry point
 // checks it, so storage that never went through legsim_init is refused alike.
