@@ -256,16 +256,28 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
       }
     }
   }
-  // The rows of a body's pin (its one revolute joint to the frame) first, the others after
-  // them, each in that order: a pin's rows couple only rows on its body, which share it
-  // anyway (no fill), and the pivots after them are those of the system with the pinned
-  // bodies on their angles alone, which the kernels solve for RK4's stages
-  // (kernel_codegen.py's Reduced): the same pivots to round-off, so the same pivot floor
-  // decides alike there.
+  // The rows of a body's pin (its one revolute joint to the frame) moved to just before the
+  // first other row on that body: they couple only rows on their body, which share it
+  // anyway (no fill), and every pivot after them is then the one of the system with the
+  // pinned bodies on their angles alone, which the kernels solve for RK4's stages
+  // (kernel_codegen.py's Reduced, pins_first): the same pivots to round-off, so the same
+  // pivot floor decides alike there.
   int p = 0;
-  for (int pass = 0; pass < 2; ++pass)
-    for (int k = mj - 1; k >= 0; --k)
-      if (pin_row(out, mj, order[k]) == (pass == 0)) out.perm[order[k]] = uint8_t(p++);
+  bool is_pin[kMaxRows];
+  for (int i = 0; i < mj; ++i) is_pin[i] = pin_row(out, mj, i), placed[i] = false;
+  for (int k = mj - 1; k >= 0; --k) {
+    const int i = order[k];
+    if (is_pin[i]) continue;
+    for (int s = 0; s < 2; ++s)
+      for (int l = mj - 1; l >= 0; --l) {
+        const int j = order[l];
+        if (is_pin[j] && !placed[j] && out.body[i][s] >= 0 && out.body[j][0] == out.body[i][s])
+          out.perm[j] = uint8_t(p++), placed[j] = true;
+      }
+    out.perm[i] = uint8_t(p++);
+  }
+  for (int k = mj - 1; k >= 0; --k)
+    if (is_pin[order[k]] && !placed[order[k]]) out.perm[order[k]] = uint8_t(p++);
   for (int i = mj; i < m; ++i) out.perm[i] = uint8_t(i);
   return layout_pairs(out, 0, nullptr);
 }

@@ -90,11 +90,19 @@ def pinned_bodies(joints):
 
 
 def pins_first(order, rows):
-    """The rows of a body's pin (its one joint to the frame: no second body) first, the
-    others after them, each as in order (layout_finish, constraints.cpp, does the same)."""
+    """order with the rows of each body's pin (its one joint to the frame: no second body)
+    moved to just before the first other row on that body (layout_finish, constraints.cpp,
+    does the same): every row's pivot after them is then the reduced system's (Reduced)."""
     frame = [r[0][0] for r in rows if r[0][1] < 0]
     pin = [rows[i][0][1] < 0 and frame.count(rows[i][0][0]) == 2 for i in range(len(rows))]
-    return [i for i in order if pin[i]] + [i for i in order if not pin[i]]
+    out = []
+    for i in order:
+        if pin[i]:
+            continue
+        for b in rows[i][0]:
+            out += [k for k in order if pin[k] and rows[k][0][0] == b and k not in out]
+        out.append(i)
+    return out + [k for k in order if pin[k] and k not in out]
 
 
 def product(terms):
