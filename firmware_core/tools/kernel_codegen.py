@@ -143,6 +143,7 @@ class Kernel:
         # general path places rows after a joint kernel's block (so both factor alike)
         self.structure(mj)
         self.fused = True  # generate() decides
+        self.reduced = True  # and this (RK4's reduced stage solve)
 
     def structure(self, mj, order=None):
         """The elimination order of the rows (rows mj.. kept last, in order; or the order
@@ -530,10 +531,10 @@ class Kernel:
         o += self.accelerations_locals("a")
         o.append("}\n")
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
-        reduced = Reduced(self)
-        if reduced.pinned:
+        reduced = Reduced(self) if self.reduced else None
+        if reduced and reduced.pinned:
             o += reduced.emit_accelerations(sym)
-        accelerations = f"{sym}_accelerations" if reduced.pinned else "nullptr"
+        accelerations = f"{sym}_accelerations" if reduced and reduced.pinned else "nullptr"
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
                                                     accelerations)
 
@@ -671,7 +672,7 @@ class Reduced(Kernel):
 # and glibc, a baseline and an AVX copy, the same values bit for bit.
 
 
-def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None):
+def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None, reduced=True):
     """The generated file's text. Fused solves (dynamics, newton) go to each model's main
     system only (its joint rows if it has no contacts, else its stance kernel) and, with
     fused_max_rows, only to kernels of at most that many rows: each is straight-line code
@@ -686,6 +687,7 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
                 k = Kernel(f"{stem} {variant}" + (" stance" if stance else ""), model, stance)
                 k.fused = ((stance or not model.get("contacts"))
                            and (fused_max_rows is None or k.m <= fused_max_rows))
+                k.reduced = reduced
                 if k.signature() not in seen:
                     seen.add(k.signature())
                     kernels.append((f"kernel_{stem}_{variant}" + ("_stance" if stance else ""), k))
@@ -747,10 +749,12 @@ def main(argv=None):
                    help="no stance kernels (the robot's joints and stuck feet): less flash")
     p.add_argument("--fused-max-rows", type=int, default=None, metavar="N",
                    help="fused solves only for kernels of at most N rows (default: no limit)")
+    p.add_argument("--no-reduced", action="store_true",
+                   help="no reduced stage solves for RK4 (Kernel::accelerations): less flash")
     p.add_argument("--out", required=True, help="the C++ source to write")
     args = p.parse_args(argv)
     try:
-        text = generate(args.toml, args.default_only, not args.no_stance, args.fused_max_rows)
+        text = generate(args.toml, args.default_only, not args.no_stance, args.fused_max_rows, not args.no_reduced)
     except model_codegen.ModelError as e:
         print(e.message, file=sys.stderr)
         return 1
