@@ -34,7 +34,7 @@
 // with the general path to round-off only anyway, also come in an x86-64-v3 copy (AVX2
 // and FMA, any x86-64 CPU since about 2015; LEGSIM_KERNEL_FMA) that fuses a * b + c where
 // it can (-ffp-contract=fast on these files; only that copy has FMA instructions): one
-// rounding fewer per fused pair, 6 % fewer instructions per RK4 step of the leg. Not the
+// rounding fewer per fused pair, 5 % fewer instructions per RK4 step of the leg. Not the
 // rest: generalized-alpha's Newton iteration stops at its tolerance, and one rounding more
 // or less anywhere moves its results by that tolerance (2e-7 relative over 1 s), not by
 // round-off.
@@ -119,8 +119,9 @@ struct Kernel {
   // (its pin's rows and multipliers drop out; kernel_codegen.py's Reduced says how). The
   // same accelerations as dynamics' to round-off, not bit for bit; no multipliers, rows,
   // factor or condition estimate. LEGSIM_ERR_SINGULAR on a pivot <= kPivotFloor times the
-  // reduced matrix's largest diagonal entry, LEGSIM_ERR_DIVERGED (qdd not finite). nullptr
-  // for a structure without such a body (dynamics serves).
+  // whole J M^-1 J^T's largest diagonal entry (dynamics' floor: both paths order the pin
+  // rows so that the reduced pivots are the whole factor's later ones), LEGSIM_ERR_DIVERGED
+  // (qdd not finite). nullptr for a structure without such a body (dynamics serves).
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                                  const VecQ &force, TrigCache *trig, VecQ &qdd);
 };

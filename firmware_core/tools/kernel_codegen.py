@@ -89,12 +89,11 @@ def pinned_bodies(joints):
     return {b for b in to_frame if to_frame.count(b) == 1}
 
 
-def pins_first(order, rows):
-    """order with the rows of each body's pin (its one joint to the frame: no second body)
+def pins_first(order, rows, pinned):
+    """order with the rows of each pinned body's pin (its rows to the frame: no second body)
     moved to just before the first other row on that body (layout_finish, constraints.cpp,
     does the same): every row's pivot after them is then the reduced system's (Reduced)."""
-    frame = [r[0][0] for r in rows if r[0][1] < 0]
-    pin = [rows[i][0][1] < 0 and frame.count(rows[i][0][0]) == 2 for i in range(len(rows))]
+    pin = [r[0][1] < 0 and r[0][0] in pinned for r in rows]
     out = []
     for i in order:
         if pin[i]:
@@ -152,7 +151,7 @@ class Kernel:
         share = [[any(x >= 0 and x == y for x in self.rows[i][0] for y in self.rows[j][0])
                   for j in range(m)] for i in range(m)]
         if order is None:
-            order = pins_first(rcm_order(mj, share), self.rows[:mj]) + list(range(mj, m))
+            order = pins_first(rcm_order(mj, share), self.rows[:mj], pinned_bodies(self.joints)) + list(range(mj, m))
         self.perm = [0] * m
         for p, i in enumerate(order):
             self.perm[i] = p
