@@ -46,7 +46,7 @@ static int outputs(legsim_sim *sim, double *out) {
   for (int k = 0; k < nq; ++k) out[n++] = v[k];
   legsim_real lambda[LEGSIM_MAX_ROWS];
   legsim_multipliers(sim, lambda);
-  for (int i = 0; i < 2 * legsim_model(sim)->n_joints && i < LEGSIM_MAX_ROWS; ++i) out[n++] = lambda[i];
+  for (int i = 0; i < legsim_n_constraints(sim); ++i) out[n++] = lambda[i];
   legsim_reaction r[LEGSIM_MAX_JOINTS];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_reactions(sim, r));
   for (int j = 0; j < legsim_model(sim)->n_joints; ++j) {
