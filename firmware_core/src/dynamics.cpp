@@ -72,6 +72,20 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   return LEGSIM_OK;
 }
 
+bool dynamics_end_available(const Layout &layout) {
+  const Kernel *kern = layout.kernel;
+  return kern && kern->end && layout.m == kern->mj;
+}
+
+legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
+                           legsim_reaction *reaction, real &drift) {
+  Data &d = sim.data;
+  layout_forces(sim, layout, q, qd);
+  // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
+  return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, stage_trig(d),
+                            d.report.residual, drift, d.report.condition, d.lambda, qdd, reaction);
+}
+
 namespace {
 // f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
 // unit normal multiplier (the force on the foot is mu_k dir lambda_n t = -dir mu_k N t).
@@ -161,6 +175,15 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
   const Layout &lay = d.dyn;
   const Kernel *kern = lay.kernel;
+  if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && dynamics_end_available(lay)) {
+    // RK4's restart as its step's end: the reduced system, no factor kept (nor needed)
+    const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
+    real drift;
+    const legsim_status s = dynamics_end(sim, lay, d.q, d.qd, qdd, reactions ? d.reaction : nullptr, drift);
+    if (s != LEGSIM_OK) return s;
+    stop_forces_update(sim);
+    return LEGSIM_OK;
+  }
   if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)

@@ -69,9 +69,9 @@ namespace {
 // The step's end state (already in d.q, d.qd) committed, with its stop forces (the reactions
 // came with its solve); its end solve's factor is the state's unless the positions were
 // projected (assemble leaves the rows of its last iterate, not of the projected positions).
-legsim_status rk4_finish(Sim &sim) {
+legsim_status rk4_finish(Sim &sim, bool factor_kept = true) {
   Data &d = sim.data;
-  d.factor.of_state = !d.end_projected;
+  d.factor.of_state = factor_kept && !d.end_projected;
   stop_forces_update(sim);
   return LEGSIM_OK;
 }
@@ -111,7 +111,16 @@ legsim_status rk4_step(Sim &sim) {
   legsim_reaction *const reaction = sim.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
   d.report.iterations = 0;
   bool factor_ready = false;  // the rows and the factor at q1 kept, the positions on Phi = 0
-  if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
+  if (dynamics_end_available(lay) && !(projection && d.end_projected)) {
+    // The joint rows alone, in the reduced system (Kernel::end): the end derivative, the
+    // multipliers and the reactions, and the residual and drift that say whether the step
+    // needs projecting. The usual step ends here; one that needs projecting starts over
+    // below (no rows or factor kept), as after the fused solve.
+    real drift;
+    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, drift) == LEGSIM_OK &&
+        (!projection || (d.report.residual <= tol && drift <= tol)))
+      return rk4_finish(sim, false);
+  } else if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
     // The joint rows alone: the fused solve at (q1, v1) first, its rows and factor kept.
     // When neither the positions nor the velocities need projecting (the usual step), it
     // is the end derivative; when the velocities alone do, its factor serves their

@@ -124,6 +124,15 @@ struct Kernel {
   // (qdd not finite). nullptr for a structure without such a body (dynamics serves).
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                                  const VecQ &force, TrigCache *trig, VecQ &qdd);
+  // RK4's end of a step (and its restart at a state) in the same reduced system: besides
+  // qdd, the largest |Phi| (residual, as rows_max_residual) and |J qd| (drift, as
+  // velocity_drift) for its projection test, the condition estimate from the pivots (the
+  // reduced system's and the pins' own, the whole factor's to round-off), every row's
+  // multiplier (a pin's from its body's x and y equations) and, reaction not null, the
+  // joints' reactions. No rows or factor kept. Statuses as accelerations'. nullptr with it.
+  legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+                       const VecQ &force, TrigCache *trig, real &residual, real &drift, real &condition,
+                       VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
 };
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr

@@ -532,12 +532,12 @@ class Kernel:
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
         reduced = Reduced(self) if self.reduced else None
         if reduced and reduced.pinned:
-            o += reduced.emit_accelerations(sym)
-        accelerations = f"{sym}_accelerations" if reduced and reduced.pinned else "nullptr"
+            o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
+        fused = f"{sym}_accelerations, {sym}_end" if reduced and reduced.pinned else "nullptr, nullptr"
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
-                                                    accelerations)
+                                                    fused)
 
-    def emit_tables(self, sym, dynamics, newton, factored, accelerations="nullptr"):
+    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -550,7 +550,7 @@ class Kernel:
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, "
                  f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}, "
-                 f"{accelerations}}};")
+                 f"{reduced}}};")
         return "\n".join(o) + "\n"
 
 
@@ -613,18 +613,41 @@ class Reduced(Kernel):
     def w_name(self, b, k):
         return f"wr{b}" if b in self.pinned else f"w[{3 * b + k}]"
 
-    def emit_accelerations(self, sym):
-        """{sym}_accelerations: the fused solve of the reduced system, qdd alone."""
+    def emit_accelerations(self, sym, end=False):
+        """{sym}_accelerations: the fused solve of the reduced system, qdd alone. With end,
+        {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd|, the
+        condition estimate, every row's multiplier and the joints' reactions."""
         k, nq = self.full, 3 * self.nb
-        o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
-             "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
-             "TrigCache *trig, VecQ &qdd) {"]
+        if end:
+            o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end(const Model &model, "
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
+                 "TrigCache *trig, real &residual, real &drift, real &condition, VecR &lambda, VecQ &qdd, "
+                 "legsim_reaction *reaction) {"]
+        else:
+            o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
+                 "TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
         o += k.rows_locals()
-        unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
-                                                      for x in range(3) if k.rows[i][0][s] >= 0
-                                                      and k.rows[i][1][s][x] is V]
-        o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // the acceleration level: no Phi")
+        if end:
+            # rows_max_residual's and velocity_drift's loops (rk4_step), in row order
+            o.append("  real r = 0, jv;")
+            for i in range(k.m):
+                o.append(f"  if (!(std::abs(phi{i}) <= r)) r = std::abs(phi{i});")
+            o.append("  residual = r;")
+            o.append("  r = 0;")
+            for i in range(k.m):
+                o.append(f"  jv = std::abs({k.j_expr(i, lambda n: f'qd[{n}]', True)});")
+                o.append("  r = jv > r ? jv : r;")
+            o.append("  drift = r;")
+            unused = [f"c{i}_{s}_{x}" for i in self.full_pin_rows() for s in range(2) for x in range(3)
+                      if k.rows[i][0][s] >= 0 and k.rows[i][1][s][x] is V]
+        else:
+            unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
+                                                          for x in range(3) if k.rows[i][0][s] >= 0
+                                                          and k.rows[i][1][s][x] is V]
+        if unused:
+            o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // not needed here")
         for b, (n, r) in sorted(self.pinned.items()):
             o.append(f"  // body {b} on its pin (joint {n}): its angle alone")
             o.append(f"  const real wr{b} = 1 / ((mass[{3 * b}] * say{n} * say{n} + mass[{3 * b + 1}] * sax{n} * sax{n}) "
@@ -644,27 +667,72 @@ class Reduced(Kernel):
         for p in range(k.m):
             o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
             o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
-        o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
+        if end:
+            # the pivots' range: the reduced system's, which are the whole factor's after its
+            # pin rows, and the pin rows' own (eliminated before any other row on their body:
+            # their entries of J W J^T alone)
+            fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
+            o.append("  real pmin, pmax;")
+            o += self.factor_locals(True, fail)
+            for p in range(k.m):
+                if k.row_at[p] not in self.full_pin_rows():
+                    continue
+                assert all(k.row_at[q] in self.full_pin_rows() for q in k.l_nz[p])
+                for q in k.l_nz[p]:
+                    o.append(f"  const real PT{p}_{q} = {k.a_entry(p, q, True)}, PL{p}_{q} = PT{p}_{q} / P{q};")
+                sub = "".join(f" - PT{p}_{q} * PL{p}_{q}" for q in k.l_nz[p])
+                o.append(f"  const real P{p} = {k.a_entry(p, p, True)}{sub};")
+                o.append(f"  if (!(P{p} > floor)) {fail}")
+                o.append(f"  pmin = P{p} < pmin ? P{p} : pmin;")
+                o.append(f"  pmax = P{p} > pmax ? P{p} : pmax;")
+            o.append("  condition = std::sqrt(pmax / pmin);")
+            lname = lambda i: f"l{self.orig[i]}"  # noqa: E731  (the whole system's row)
+        else:
+            o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
+            lname = lambda i: f"l{i}"  # noqa: E731
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{i}")
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}")
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
         for n in range(nq):
             b, x = divmod(n, 3)
-            jt = self.jt_expr(n, lambda i: f"l{i}", True)
+            jt = self.jt_expr(n, lambda i: lname(i), True)
             if b not in self.pinned:
                 o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({jt}));")
                 o.append(f"  z += qdd[{n}] * real(0);")
             elif x == 2:
                 pn, r = self.pinned[b]
                 o.append(f"  const real pdd{b} = wr{b} * (fr{b} - ({jt}));")
-                o.append(f"  qdd[{n - 2}] = gam{r} + say{pn} * pdd{b};")
-                o.append(f"  qdd[{n - 1}] = gam{r + 1} - sax{pn} * pdd{b};")
+                o.append(f"  const real qx{b} = gam{r} + say{pn} * pdd{b}, qy{b} = gam{r + 1} - sax{pn} * pdd{b};")
+                o.append(f"  qdd[{n - 2}] = qx{b};")
+                o.append(f"  qdd[{n - 1}] = qy{b};")
                 o.append(f"  qdd[{n}] = pdd{b};")
-                o.append(f"  z += pdd{b} * real(0) + qdd[{n - 2}] * real(0) + qdd[{n - 1}] * real(0);")
+                o.append(f"  z += pdd{b} * real(0) + qx{b} * real(0) + qy{b} * real(0);")
+        if end:
+            # the pins' multipliers from their bodies' x and y equations, M qdd + J^T lambda = Q
+            for b, (n, r) in sorted(self.pinned.items()):
+                for e, axis in ((0, "x"), (1, "y")):
+                    terms = []
+                    for i in range(k.m):
+                        if i in (r, r + 1):
+                            continue
+                        for s in range(2):
+                            if k.rows[i][0][s] == b:
+                                cc, vs = k.coef(i, s, e, True)
+                                terms.append((cc, vs + [f"l{i}"]))
+                    others = product(terms)
+                    o.append(f"  const real l{r + e} = (force[{3 * b + e}] - mass[{3 * b + e}] * q{axis}{b})"
+                             + (f" - ({others});" if others != "0" else ";"))
+                o.append(f"  z += l{r} * real(0) + l{r + 1} * real(0);")
+            o += [f"  lambda[{i}] = l{i};" for i in range(k.m)]
+            o += k.reactions_locals()
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
         return o
+
+    def full_pin_rows(self):
+        """The whole system's rows of the pins (those the reduced system leaves out)."""
+        return {r + e for _, r in self.pinned.values() for e in (0, 1)}
 
 
 # Every generated function carries LEGSIM_KERNEL_TARGETS (kernel.hpp): on x86-64 with GCC
