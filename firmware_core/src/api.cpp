@@ -423,6 +423,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   state_changed(d);
   d.end_projected = false;
   d.factor.of_state = false;
+  d.factor.reduced = false;
   d.q.setZero();
   d.qd.setZero();
   d.qdd.setZero();

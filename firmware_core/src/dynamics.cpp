@@ -81,9 +81,12 @@ legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const 
                            legsim_reaction *reaction, real &drift) {
   Data &d = sim.data;
   layout_forces(sim, layout, q, qd);
+  d.factor.of_state = false;  // about to be written (rk4_finish says whose it is)
+  d.factor.reduced = true;
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, stage_trig(d),
-                            d.report.residual, drift, d.report.condition, d.lambda, qdd, reaction);
+                            d.report.residual, drift, d.report.condition, d.factor.a.data(), d.lambda, qdd,
+                            reaction);
 }
 
 namespace {
@@ -176,15 +179,24 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   const Layout &lay = d.dyn;
   const Kernel *kern = lay.kernel;
   if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && dynamics_end_available(lay)) {
-    // RK4's restart as its step's end: the reduced system, no factor kept (nor needed)
+    // RK4's restart as its step's end, in the reduced system: with the end's factor when it
+    // is the state's (a changed command or load alone), else anew
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
+    legsim_reaction *const reaction = reactions ? d.reaction : nullptr;
     real drift;
-    const legsim_status s = dynamics_end(sim, lay, d.q, d.qd, qdd, reactions ? d.reaction : nullptr, drift);
+    legsim_status s;
+    if (factor_ready && d.factor.reduced) {
+      layout_forces(sim, lay, d.q, d.qd);
+      s = kern->end_factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, d.force_q, stage_trig(d),
+                             d.factor.a.data(), d.lambda, qdd, reaction);
+    } else {
+      s = dynamics_end(sim, lay, d.q, d.qd, qdd, reaction, drift);
+    }
     if (s != LEGSIM_OK) return s;
     stop_forces_update(sim);
     return LEGSIM_OK;
   }
-  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide) {
+  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide && !d.factor.reduced) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)
     layout_forces(sim, lay, d.q, d.qd);

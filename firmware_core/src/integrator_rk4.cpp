@@ -69,9 +69,10 @@ namespace {
 // The step's end state (already in d.q, d.qd) committed, with its stop forces (the reactions
 // came with its solve); its end solve's factor is the state's unless the positions were
 // projected (assemble leaves the rows of its last iterate, not of the projected positions).
-legsim_status rk4_finish(Sim &sim, bool factor_kept = true) {
+legsim_status rk4_finish(Sim &sim, bool reduced = false) {
   Data &d = sim.data;
-  d.factor.of_state = factor_kept && !d.end_projected;
+  d.factor.of_state = !d.end_projected;
+  d.factor.reduced = reduced;  // Kernel::end's factor, not the whole system's
   stop_forces_update(sim);
   return LEGSIM_OK;
 }
@@ -119,7 +120,7 @@ legsim_status rk4_step(Sim &sim) {
     real drift;
     if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
-      return rk4_finish(sim, false);
+      return rk4_finish(sim, true);
   } else if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
     // The joint rows alone: the fused solve at (q1, v1) first, its rows and factor kept.
     // When neither the positions nor the velocities need projecting (the usual step), it

@@ -129,10 +129,16 @@ struct Kernel {
   // velocity_drift) for its projection test, the condition estimate from the pivots (the
   // reduced system's and the pins' own, the whole factor's to round-off), every row's
   // multiplier (a pin's from its body's x and y equations) and, reaction not null, the
-  // joints' reactions. No rows or factor kept. Statuses as accelerations'. nullptr with it.
+  // joints' reactions. No rows kept; the reduced system's factor (by position, as factor's
+  // storage) where keep_a is not null. Statuses as accelerations'. nullptr with it.
   legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                        const VecQ &force, TrigCache *trig, real &residual, real &drift, real &condition,
-                       VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+                       real *keep_a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+  // end's solve with its factor given (a): a restart after a changed command or load
+  // (state_refresh), as factored for the whole system. LEGSIM_ERR_DIVERGED (qdd not finite).
+  legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+                                const VecQ &force, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd,
+                                legsim_reaction *reaction);
 };
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr

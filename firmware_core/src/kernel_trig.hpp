@@ -187,6 +187,9 @@ inline void sincos_reduced(float x, float &s, float &c) {
 // phi. For |phi| < kGridMaxAngle only (the shifter's range).
 constexpr double kGridMaxAngle = 1e4;
 template <typename T>
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((always_inline))  // as body_trig (sim.hpp), its caller: GCC's inliner otherwise
+#endif                          // leaves it out of line in some kernels as the file grows
 inline void sincos_grid(T phi, int32_t &grid, T &gs, T &gc, T &s, T &c) {
   constexpr bool single = sizeof(T) == sizeof(float);
   // 1.5 * 2^52 (1.5 * 2^23 in float): adding and subtracting it rounds to the nearest integer

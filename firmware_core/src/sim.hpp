@@ -221,6 +221,9 @@ struct Factor {
   // A restart after a changed command solves with it (state_refresh): the same values
   // either way, so a refused call changes no later result.
   bool of_state;
+  // a holds the reduced system's factor of RK4's end (Kernel::end), not the whole one's:
+  // with of_state, a restart solves with Kernel::end_factored
+  bool reduced;
 };
 
 struct ActuatorState {
@@ -445,7 +448,7 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // the report, reaction where not null, drift = the largest |J qd|. No rows or factor kept.
 bool dynamics_end_available(const Layout &layout);
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real &drift);
+                           legsim_reaction *reaction, real &drift);  // the factor kept (Factor::reduced)
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state

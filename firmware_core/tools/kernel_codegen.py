@@ -532,12 +532,14 @@ class Kernel:
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
         reduced = Reduced(self) if self.reduced else None
         if reduced and reduced.pinned:
-            o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
-        fused = f"{sym}_accelerations, {sym}_end" if reduced and reduced.pinned else "nullptr, nullptr"
+            o += (reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
+                  + reduced.emit_accelerations(sym, end=True, factored=True))
+        fused = (f"{sym}_accelerations, {sym}_end, {sym}_end_factored" if reduced and reduced.pinned
+                 else "nullptr, nullptr, nullptr")
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
                                                     fused)
 
-    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr"):
+    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr, nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -613,23 +615,29 @@ class Reduced(Kernel):
     def w_name(self, b, k):
         return f"wr{b}" if b in self.pinned else f"w[{3 * b + k}]"
 
-    def emit_accelerations(self, sym, end=False):
+    def emit_accelerations(self, sym, end=False, factored=False):
         """{sym}_accelerations: the fused solve of the reduced system, qdd alone. With end,
         {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd|, the
-        condition estimate, every row's multiplier and the joints' reactions."""
+        condition estimate, every row's multiplier, the joints' reactions and, where asked,
+        the reduced factor (by position, as factor_store). With factored too,
+        {sym}_end_factored: the same solve with that factor given (Kernel::end_factored)."""
         k, nq = self.full, 3 * self.nb
-        if end:
+        if factored:
+            o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end_factored(const Model &model, "
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
+                 "TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
+        elif end:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
-                 "TrigCache *trig, real &residual, real &drift, real &condition, VecR &lambda, VecQ &qdd, "
-                 "legsim_reaction *reaction) {"]
+                 "TrigCache *trig, real &residual, real &drift, real &condition, real *keep_a, VecR &lambda, "
+                 "VecQ &qdd, legsim_reaction *reaction) {"]
         else:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
                  "TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
         o += k.rows_locals()
-        if end:
+        if end and not factored:
             # rows_max_residual's and velocity_drift's loops (rk4_step), in row order
             o.append("  real r = 0, jv;")
             for i in range(k.m):
@@ -640,9 +648,8 @@ class Reduced(Kernel):
                 o.append(f"  jv = std::abs({k.j_expr(i, lambda n: f'qd[{n}]', True)});")
                 o.append("  r = jv > r ? jv : r;")
             o.append("  drift = r;")
-            unused = [f"c{i}_{s}_{x}" for i in self.full_pin_rows() for s in range(2) for x in range(3)
-                      if k.rows[i][0][s] >= 0 and k.rows[i][1][s][x] is V]
-        else:
+            unused = []
+        else:  # (some Jacobian entries serve only the whole diagonal's floor: none here)
             unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
                                                           for x in range(3) if k.rows[i][0][s] >= 0
                                                           and k.rows[i][1][s][x] is V]
@@ -663,11 +670,14 @@ class Reduced(Kernel):
                 o.append(f"  const real t{n} = wr{b} * fr{b};")
         # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
         # the same number as dynamics' floor; the reduced one's are no larger)
-        o.append("  real max_diag = 0;")
-        for p in range(k.m):
-            o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
-            o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
-        if end:
+        if not factored:
+            o.append("  real max_diag = 0;")
+            for p in range(k.m):
+                o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
+                o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
+        if factored:
+            lname = lambda i: f"l{self.orig[i]}"  # noqa: E731
+        elif end:
             # the pivots' range: the reduced system's, which are the whole factor's after its
             # pin rows, and the pin rows' own (eliminated before any other row on their body:
             # their entries of J W J^T alone)
@@ -686,13 +696,16 @@ class Reduced(Kernel):
                 o.append(f"  pmin = P{p} < pmin ? P{p} : pmin;")
                 o.append(f"  pmax = P{p} > pmax ? P{p} : pmax;")
             o.append("  condition = std::sqrt(pmax / pmin);")
+            o.append("  if (keep_a) {")
+            o += ["  " + x for x in self.factor_store("keep_a")]
+            o.append("  }")
             lname = lambda i: f"l{self.orig[i]}"  # noqa: E731  (the whole system's row)
         else:
             o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
             lname = lambda i: f"l{i}"  # noqa: E731
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}")
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}", lval="a" if factored else "L")
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
         for n in range(nq):
             b, x = divmod(n, 3)
