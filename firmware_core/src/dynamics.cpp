@@ -8,12 +8,30 @@
 namespace legsim {
 
 namespace {
-// Q at (q, qd) for a solve on layout. Driven analyses: the drivers supply the actuator
-// forces. Stops act besides them.
-void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd) {
+// The options' disabled forces for a solve on layout. Driven analyses: the drivers supply the
+// actuator forces. Stops act besides them.
+uint32_t layout_disable(const Sim &sim, const Layout &layout) {
   uint32_t disable = sim.opt.disable;
   if (layout.m > sim.model.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
-  applied_forces(sim.model, disable, sim.data, q, qd, sim.data.force_q);
+  return disable;
+}
+
+// Q at (q, qd) for a solve on layout.
+void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd) {
+  applied_forces(sim.model, layout_disable(sim, layout), sim.data, q, qd, sim.data.force_q);
+}
+
+// The reduced solves' base forces (Kernel::accelerations): gravity alone, the model's own,
+// unless it is disabled or force elements act (then applied_forces' without the actuators,
+// which the solves apply). actuators: whether they act.
+const VecQ &reduced_base(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, bool &actuators) {
+  const uint32_t disable = layout_disable(sim, layout);
+  actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
+  Data &d = sim.data;
+  const bool elements = LEGSIM_WITH_FORCE_ELEMENTS && d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
+  if (!(disable & LEGSIM_DISABLE_GRAVITY) && !elements) return sim.model.gravity_force;
+  applied_forces(sim.model, disable | LEGSIM_DISABLE_ACTUATORS, d, q, qd, d.force_q);
+  return d.force_q;
 }
 }  // namespace
 
@@ -21,17 +39,19 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
                              bool rows_ready, bool keep, legsim_reaction *reaction) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  layout_forces(sim, layout, q, qd);
   const Kernel *kern = layout.kernel;
   if (kern && kern->accelerations && !keep && !reaction && !rows_ready && layout.m == kern->mj) {
     // RK4's stages: the accelerations alone, in the reduced system (neither multipliers nor
-    // a factor: the step's end solves the whole system); a singular matrix reports an
-    // infinite condition, as below
-    const legsim_status s = kern->accelerations(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q,
-                                                stage_trig(d), qdd);
+    // a factor: the step's end has its own); a singular matrix reports an infinite
+    // condition, as below
+    bool actuators;
+    const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
+    const legsim_status s = kern->accelerations(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d,
+                                                actuators, stage_trig(d), qdd);
     if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
     return s;
   }
+  layout_forces(sim, layout, q, qd);
   if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
@@ -80,13 +100,14 @@ bool dynamics_end_available(const Layout &layout) {
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                            legsim_reaction *reaction, real &drift) {
   Data &d = sim.data;
-  layout_forces(sim, layout, q, qd);
+  bool actuators;
+  const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
   d.factor.of_state = false;  // about to be written (rk4_finish says whose it is)
   d.factor.reduced = true;
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
-  return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, stage_trig(d),
-                            d.report.residual, drift, d.report.condition, d.factor.a.data(), d.lambda, qdd,
-                            reaction);
+  return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
+                            stage_trig(d), d.report.residual, drift, d.report.condition, d.factor.a.data(),
+                            d.lambda, qdd, reaction);
 }
 
 namespace {
@@ -186,9 +207,10 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     real drift;
     legsim_status s;
     if (factor_ready && d.factor.reduced) {
-      layout_forces(sim, lay, d.q, d.qd);
-      s = kern->end_factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, d.force_q, stage_trig(d),
-                             d.factor.a.data(), d.lambda, qdd, reaction);
+      bool actuators;
+      const VecQ &base = reduced_base(sim, lay, d.q, d.qd, actuators);
+      s = kern->end_factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, base, d, actuators,
+                             stage_trig(d), d.factor.a.data(), d.lambda, qdd, reaction);
     } else {
       s = dynamics_end(sim, lay, d.q, d.qd, qdd, reaction, drift);
     }

@@ -64,25 +64,6 @@ void add_force_elements(const Model &model, const Data &d, const VecQ &q, const 
 }
 #endif
 
-// The axial force of actuator a from its command at the cylinder's axis u = (s, -c) and
-// normal n = (c, s): d = r_rod - r_cyl, dd its rate, w the cylinder's angular velocity;
-// arm = d . n, the length's derivative by the cylinder's angle. A force command is the
-// force; a length command goes through the servo (PD on length and rate, saturated at
-// max_force: a real cylinder cannot push harder, and the event says so). The arithmetic
-// is actuator_length's (constraints.cpp), term for term.
-real axial_force(const Actuator &ac, const ActuatorState &st, Data &d, real s, real c, real dx,
-                 real dy, real dvx, real dvy, real w, real arm) {
-  if (st.mode == LEGSIM_ACTUATOR_FORCE) return st.setpoint;
-  const real len = (dx * s + dy * -c) + ac.offset_m;
-  const real rate = (dvx * s + dvy * -c) + w * arm;
-  real f = ac.kp * (st.setpoint - len) - ac.kd * rate;
-  if (f > ac.fmax || f < -ac.fmax) {
-    f = f > 0 ? ac.fmax : -ac.fmax;
-    raise_event(d, LEGSIM_EVENT_FORCE_SATURATED);
-  }
-  return f;
-}
-
 }  // namespace
 
 void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,

@@ -61,6 +61,10 @@ struct Kernel {
   // stuck (normal, tangential), in the general layout's order: the robot standing.
   int nc;
   const int8_t *contact_body;  // per contact: its body
+  // per actuator: its prismatic joint, cylinder and rod (the reduced solves apply their
+  // forces: a model whose actuators differ has no kernel)
+  int na;
+  const int8_t (*actuator)[3];
   int mj;                    // joint rows
   const uint8_t *perm;       // joint row -> position in the factor
   const uint8_t *first;      // by position: first column of L's envelope (fill included)
@@ -122,8 +126,12 @@ struct Kernel {
   // whole J M^-1 J^T's largest diagonal entry (dynamics' floor: both paths order the pin
   // rows so that the reduced pivots are the whole factor's later ones), LEGSIM_ERR_DIVERGED
   // (qdd not finite). nullptr for a structure without such a body (dynamics serves).
+  // The applied forces: base (gravity and the force elements, applied_forces' without the
+  // actuators) and, with actuators, each actuator's axial force from its command
+  // (actuator_force: its force and events into data) from the solve's own sin/cos; the sum
+  // into data.force_q, as applied_forces would leave it. The same for end and end_factored.
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
-                                 const VecQ &force, TrigCache *trig, VecQ &qdd);
+                                 const VecQ &base, Data &data, bool actuators, TrigCache *trig, VecQ &qdd);
   // RK4's end of a step (and its restart at a state) in the same reduced system: besides
   // qdd, the largest |Phi| (residual, as rows_max_residual) and |J qd| (drift, as
   // velocity_drift) for its projection test, the condition estimate from the pivots (the
@@ -132,13 +140,14 @@ struct Kernel {
   // joints' reactions. No rows kept; the reduced system's factor (by position, as factor's
   // storage) where keep_a is not null. Statuses as accelerations'. nullptr with it.
   legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
-                       const VecQ &force, TrigCache *trig, real &residual, real &drift, real &condition,
-                       real *keep_a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+                       const VecQ &base, Data &data, bool actuators, TrigCache *trig, real &residual,
+                       real &drift, real &condition, real *keep_a, VecR &lambda, VecQ &qdd,
+                       legsim_reaction *reaction);
   // end's solve with its factor given (a): a restart after a changed command or load
   // (state_refresh), as factored for the whole system. LEGSIM_ERR_DIVERGED (qdd not finite).
   legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
-                                const VecQ &force, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd,
-                                legsim_reaction *reaction);
+                                const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
+                                VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
 };
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr

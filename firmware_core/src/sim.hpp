@@ -401,6 +401,33 @@ void force_active_update(const Model &model, Data &d);
 void applied_forces(const Model &model, uint32_t disable, Data &d, const VecQ &q,
                     const VecQ &qd, VecQ &force_q);
 
+// The axial force of an actuator from its command at the cylinder's axis u = (s, -c) and
+// normal n = (c, s): d = r_rod - r_cyl, dd its rate, w the cylinder's angular velocity;
+// arm = d . n, the length's derivative by the cylinder's angle. A force command is the
+// force; a length command goes through the servo (PD on length and rate, saturated at
+// max_force: a real cylinder cannot push harder, and the event says so). The arithmetic
+// is actuator_length's (constraints.cpp), term for term.
+void raise_event(Data &d, uint32_t ev);  // status.cpp
+inline real axial_force(const Actuator &ac, const ActuatorState &st, Data &d, real s, real c, real dx,
+                        real dy, real dvx, real dvy, real w, real arm) {
+  if (st.mode == LEGSIM_ACTUATOR_FORCE) return st.setpoint;
+  const real len = (dx * s + dy * -c) + ac.offset_m;
+  const real rate = (dvx * s + dvy * -c) + w * arm;
+  real f = ac.kp * (st.setpoint - len) - ac.kd * rate;
+  if (f > ac.fmax || f < -ac.fmax) {
+    f = f > 0 ? ac.fmax : -ac.fmax;
+    raise_event(d, LEGSIM_EVENT_FORCE_SATURATED);
+  }
+  return f;
+}
+// The same, kept as the actuator's force (applied_forces' per actuator; the generated
+// reduced solves call it, kernel_codegen.py).
+inline real actuator_force(const Actuator &ac, ActuatorState &st, Data &d, real s, real c, real dx, real dy,
+                           real dvx, real dvy, real w) {
+  st.force = axial_force(ac, st, d, s, c, dx, dy, dvx, dvy, w, dx * c + dy * s);
+  return st.force;
+}
+
 // ---- forces.cpp (with applied_forces, which shares its servo law) ----
 // Axial force of each actuator from its command (servo law for length mode).
 void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,

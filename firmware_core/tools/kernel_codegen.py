@@ -134,6 +134,8 @@ class Kernel:
         self.nb = len(model["bodies"])
         self.joints = model["joints"]
         self.contacts = model.get("contacts", []) if stance else []
+        # each actuator's prismatic joint, cylinder and rod (model.cpp: its joint's bodies)
+        self.actuators = [(a["joint"], *self.joints[a["joint"]]["body"]) for a in model.get("actuators", [])]
         self.rows = joint_rows(self.joints)
         mj = len(self.rows)
         for c in self.contacts:  # normal then tangential row, on the foot's body alone
@@ -182,7 +184,8 @@ class Kernel:
 
     def signature(self):
         return (tuple((KIND[j["kind"]], j["body"][0], j["body"][1]) for j in self.joints) + (self.nb,)
-                + tuple(c["body"] for c in self.contacts) + (len(self.contacts),))
+                + tuple(c["body"] for c in self.contacts) + (len(self.contacts),)
+                + tuple(self.actuators) + (len(self.actuators),))
 
     # ---- the pieces, as lines of C++ over named values ----
     @staticmethod
@@ -547,8 +550,10 @@ class Kernel:
         o.append(f"const uint8_t {sym}_first[] = {{{', '.join(map(str, self.first))}}};")
         cb = ", ".join(str(c["body"]) for c in self.contacts) or "-1"
         o.append(f"const int8_t {sym}_contact[] = {{{cb}}};")
+        ab = ", ".join(f"{{{j}, {c}, {r}}}" for j, c, r in self.actuators) or "{-1, -1, -1}"
+        o.append(f"const int8_t {sym}_actuator[][3] = {{{ab}}};")
         o.append(f"const Kernel {sym} = {{\"{self.name}\", {self.nb}, {len(self.joints)}, {sym}_joint, "
-                 f"{len(self.contacts)}, {sym}_contact, "
+                 f"{len(self.contacts)}, {sym}_contact, {len(self.actuators)}, {sym}_actuator, "
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, "
                  f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}, "
@@ -571,7 +576,7 @@ class Reduced(Kernel):
     need neither (the step's end solves the whole system)."""
 
     def __init__(self, k):
-        self.name, self.nb, self.joints, self.contacts = k.name, k.nb, k.joints, k.contacts
+        self.name, self.nb, self.joints, self.contacts, self.actuators = k.name, k.nb, k.joints, k.contacts, k.actuators
         self.full = k
         first_row, r = [], 0
         for j in k.joints:
@@ -624,17 +629,18 @@ class Reduced(Kernel):
         k, nq = self.full, 3 * self.nb
         if factored:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end_factored(const Model &model, "
-                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
-                 "TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
+                 "Data &data, bool actuators, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd, "
+                 "legsim_reaction *reaction) {"]
         elif end:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end(const Model &model, "
-                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
-                 "TrigCache *trig, real &residual, real &drift, real &condition, real *keep_a, VecR &lambda, "
-                 "VecQ &qdd, legsim_reaction *reaction) {"]
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
+                 "Data &data, bool actuators, TrigCache *trig, real &residual, real &drift, real &condition, "
+                 "real *keep_a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
         else:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
-                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
-                 "TrigCache *trig, VecQ &qdd) {"]
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
+                 "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
         o += k.rows_locals()
         if end and not factored:
@@ -655,17 +661,18 @@ class Reduced(Kernel):
                                                           and k.rows[i][1][s][x] is V]
         if unused:
             o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // not needed here")
+        o += self.forces_locals()
         for b, (n, r) in sorted(self.pinned.items()):
             o.append(f"  // body {b} on its pin (joint {n}): its angle alone")
             o.append(f"  const real wr{b} = 1 / ((mass[{3 * b}] * say{n} * say{n} + mass[{3 * b + 1}] * sax{n} * sax{n}) "
                      f"+ mass[{3 * b + 2}]);")
-            o.append(f"  const real fr{b} = (say{n} * (force[{3 * b}] - mass[{3 * b}] * gam{r}) - "
-                     f"sax{n} * (force[{3 * b + 1}] - mass[{3 * b + 1}] * gam{r + 1})) + force[{3 * b + 2}];")
+            o.append(f"  const real fr{b} = (say{n} * (Q{3 * b} - mass[{3 * b}] * gam{r}) - "
+                     f"sax{n} * (Q{3 * b + 1} - mass[{3 * b + 1}] * gam{r + 1})) + Q{3 * b + 2};")
         o += self.defs
         for n in range(nq):
             b, x = divmod(n, 3)
             if b not in self.pinned:
-                o.append(f"  const real t{n} = w[{n}] * force[{n}];")
+                o.append(f"  const real t{n} = w[{n}] * Q{n};")
             elif x == 2:
                 o.append(f"  const real t{n} = wr{b} * fr{b};")
         # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
@@ -711,7 +718,7 @@ class Reduced(Kernel):
             b, x = divmod(n, 3)
             jt = self.jt_expr(n, lambda i: lname(i), True)
             if b not in self.pinned:
-                o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({jt}));")
+                o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({jt}));")
                 o.append(f"  z += qdd[{n}] * real(0);")
             elif x == 2:
                 pn, r = self.pinned[b]
@@ -734,13 +741,37 @@ class Reduced(Kernel):
                                 cc, vs = k.coef(i, s, e, True)
                                 terms.append((cc, vs + [f"l{i}"]))
                     others = product(terms)
-                    o.append(f"  const real l{r + e} = (force[{3 * b + e}] - mass[{3 * b + e}] * q{axis}{b})"
+                    o.append(f"  const real l{r + e} = (Q{3 * b + e} - mass[{3 * b + e}] * q{axis}{b})"
                              + (f" - ({others});" if others != "0" else ";"))
                 o.append(f"  z += l{r} * real(0) + l{r + 1} * real(0);")
             o += [f"  lambda[{i}] = l{i};" for i in range(k.m)]
             o += k.reactions_locals()
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
+        return o
+
+    def forces_locals(self):
+        """Q as locals Q<n>: base (gravity and the force elements) and, where actuators, each
+        actuator's axial force Fa along its cylinder's axis (applied_forces' arithmetic in its
+        order, forces.cpp; actuator_force gives Fa from the command), written to data.force_q
+        too (Data's Q of the last solve)."""
+        nq = 3 * self.nb
+        q = [f"base[{n}]" for n in range(nq)]
+        o = []
+        for a, (n, cyl, rod) in enumerate(self.actuators):
+            o.append(f"  // actuator {a} (joint {n}: cylinder {cyl}, rod {rod})")
+            o.append(f"  const real Fa{a} = actuators ? actuator_force(model.act[{a}], data.act[{a}], data, s{cyl}, c{cyl}, "
+                     f"dx{n}, dy{n}, ddx{n}, ddy{n}, w{cyl}) : real(0);")
+            o.append(f"  const real fs{a} = Fa{a} * s{cyl}, fc{a} = Fa{a} * c{cyl};")
+            i, j = 3 * cyl, 3 * rod
+            q[i] = f"{q[i]} - fs{a}"
+            q[i + 1] = f"{q[i + 1]} + fc{a}"
+            q[i + 2] = f"{q[i + 2]} + Fa{a} * dn{n}"
+            q[j] = f"{q[j]} + fs{a}"
+            q[j + 1] = f"{q[j + 1]} - fc{a}"
+        for n in range(nq):
+            o.append(f"  const real Q{n} = {q[n]};")
+            o.append(f"  data.force_q[{n}] = Q{n};")
         return o
 
     def full_pin_rows(self):
@@ -810,6 +841,8 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
       same = kn.joint[j][0] == int(model.joint[j].kind) && kn.joint[j][1] == model.joint[j].a &&
              kn.joint[j][2] == model.joint[j].b;
     for (int c = 0; same && c < nc; ++c) same = kn.contact_body[c] == model.contact[c].body;
+    same = same && kn.na == model.na;  // the reduced solves apply the actuators' forces
+    for (int a = 0; same && a < model.na; ++a) same = kn.actuator[a][0] == model.act[a].joint;
     if (same) return &kn;
   }
   return nullptr;

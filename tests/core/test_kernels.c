@@ -31,7 +31,7 @@ static legsim_model_desc slippery; /* outlives the sims */
 void setUp(void) {}
 void tearDown(void) {}
 
-enum scene { LEG_PUSH, LEG_SLOT_PUSH, LEG_ON_STOP, ROBOT_STUCK, ROBOT_SLIDING };
+enum scene { LEG_PUSH, LEG_SLOT_PUSH, LEG_ON_STOP, LEG_LOADED, LEG_WEIGHTLESS, ROBOT_STUCK, ROBOT_SLIDING };
 
 /* Everything a caller can read after a step, as one vector of numbers. */
 static int outputs(legsim_sim *sim, double *out) {
@@ -98,6 +98,19 @@ static legsim_sim *set_up(int slot, enum scene sc, legsim_integrator integ, int 
     legsim_actuator_lengths(sim, len, NULL);
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, 0, len[0]));
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 1, -400.0));
+  } else if (sc == LEG_LOADED || sc == LEG_WEIGHTLESS) {
+    /* the upper servo sent 10 cm away (it saturates: 20 kN/m), a load on the foot (a force element:
+     * the reduced solves take Q's base from applied_forces then); weightless: gravity off */
+    legsim_actuator_lengths(sim, len, NULL);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, 0, len[0] + 0.1));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 1, 30.0));
+    if (sc == LEG_LOADED) {
+      const legsim_real load[2] = {20.0, -150.0};
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_force(sim, 0, load));
+    } else {
+      opt.disable |= LEGSIM_DISABLE_GRAVITY;
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_options(sim, &opt));
+    }
   } else { /* the robot on the ground, three servos holding, the Fig. 7 Scene A push */
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, NULL, 0.0));
     legsim_actuator_lengths(sim, len, NULL);
@@ -134,6 +147,7 @@ static void same_scene(enum scene sc, legsim_integrator integ, const char *name)
   printf("%s: 1000 steps, largest relative difference %.3g, events 0x%x\n", name, worst, events);
   if (sc == LEG_ON_STOP) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_STROKE_MIN);
   if (sc == ROBOT_SLIDING) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_STICK_TO_SLIP);
+  if (sc == LEG_LOADED || sc == LEG_WEIGHTLESS) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_FORCE_SATURATED);
 }
 
 static void test_leg_push_rk4(void) { same_scene(LEG_PUSH, LEGSIM_INTEGRATOR_RK4, "leg 50 N rk4"); }
@@ -148,6 +162,12 @@ static void test_leg_slot_push_galpha(void) {
 static void test_leg_on_stop_rk4(void) { same_scene(LEG_ON_STOP, LEGSIM_INTEGRATOR_RK4, "leg on its stop rk4"); }
 static void test_leg_on_stop_galpha(void) {
   same_scene(LEG_ON_STOP, LEGSIM_INTEGRATOR_GENERALIZED_ALPHA, "leg on its stop generalized-alpha");
+}
+/* the reduced solves apply the actuators' forces themselves (Kernel::accelerations): a
+ * saturating servo, a force element, gravity off */
+static void test_leg_loaded_rk4(void) { same_scene(LEG_LOADED, LEGSIM_INTEGRATOR_RK4, "leg loaded rk4"); }
+static void test_leg_weightless_rk4(void) {
+  same_scene(LEG_WEIGHTLESS, LEGSIM_INTEGRATOR_RK4, "leg weightless rk4");
 }
 #ifdef HAVE_ROBOT
 static void test_robot_stuck_rk4(void) { same_scene(ROBOT_STUCK, LEGSIM_INTEGRATOR_RK4, "robot stuck rk4"); }
@@ -222,6 +242,13 @@ static void test_dispatch_by_structure(void) {
   other.joint[7].point[1][1] = p0[1];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage[1], sizeof storage[1], &other, &opt, &sim));
   TEST_ASSERT_EQUAL_INT(0, legsim_kernel_use(sim, 1));
+  /* the same joints, the actuators on each other's joints: the kernels apply their forces */
+  other = legsim_model_leg_revolute;
+  const int32_t j0 = other.actuator[0].joint;
+  other.actuator[0].joint = other.actuator[1].joint;
+  other.actuator[1].joint = j0;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage[1], sizeof storage[1], &other, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(0, legsim_kernel_use(sim, 1));
   TEST_ASSERT_EQUAL_INT(-1, legsim_kernel_use(NULL, 1));
 }
 
@@ -233,6 +260,8 @@ int main(void) {
   RUN_TEST(test_leg_slot_push_galpha);
   RUN_TEST(test_leg_on_stop_rk4);
   RUN_TEST(test_leg_on_stop_galpha);
+  RUN_TEST(test_leg_loaded_rk4);
+  RUN_TEST(test_leg_weightless_rk4);
 #ifdef HAVE_ROBOT
   RUN_TEST(test_robot_stuck_rk4);
   RUN_TEST(test_robot_stuck_galpha);
