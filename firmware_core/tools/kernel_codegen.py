@@ -237,13 +237,27 @@ class Kernel:
                      f"2 * w{b} * (ddx{n} * s{b} + ddy{n} * (-c{b})) + w{b} * w{b} * dn{n};")
         return o
 
-    def rows_locals(self):
-        """sin/cos once per body (through the TrigCache), then every joint's rows as locals."""
+    def rows_locals(self, shared=None):
+        """sin/cos once per body (through the TrigCache), then every joint's rows as locals.
+        shared: body -> an earlier body whose angle a prismatic joint keeps equal to its own
+        (to round-off after a projection, a stage's step further): its pair from that
+        body's by the angle-sum formulas with the small difference e (truncation below
+        e^4 / 24 < 5e-18 for |e| < 1e-4; the TrigCache past that)."""
         o = []
         used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
         for b in used:
             o.append(f"  real s{b}, c{b};")
-            o.append(f"  body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+            a = (shared or {}).get(b)
+            if a is None:
+                o.append(f"  body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+            else:
+                o.append(f"  if (const real e = q[{3 * b + 2}] - q[{3 * a + 2}]; std::abs(e) < real(1e-4)) {{")
+                o.append("    const real e2 = e * e, se = e - e * e2 * real(1.0 / 6), ce = 1 - e2 * real(0.5);")
+                o.append(f"    s{b} = s{a} * ce + c{a} * se;")
+                o.append(f"    c{b} = c{a} * ce - s{a} * se;")
+                o.append("  } else {")
+                o.append(f"    body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+                o.append("  }")
             o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}], vx{b} = qd[{3 * b}], "
                      f"vy{b} = qd[{3 * b + 1}], w{b} = qd[{3 * b + 2}];")
         r = 0
@@ -642,7 +656,7 @@ class Reduced(Kernel):
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
                  "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
-        o += k.rows_locals()
+        o += k.rows_locals(self.shared_angles())
         if end and not factored:
             # rows_max_residual's and velocity_drift's loops (rk4_step), in row order
             o.append("  real r = 0, jv;")
@@ -773,6 +787,12 @@ class Reduced(Kernel):
             o.append(f"  const real Q{n} = {q[n]};")
             o.append(f"  data.force_q[{n}] = Q{n};")
         return o
+
+    def shared_angles(self):
+        """body -> the body whose angle a prismatic joint keeps equal to its own (the rod ->
+        its cylinder), where that one's pair comes first (rows_locals' order)."""
+        return {j["body"][1]: j["body"][0] for j in self.joints
+                if j["kind"] == "prismatic" and 0 <= j["body"][0] < j["body"][1]}
 
     def full_pin_rows(self):
         """The whole system's rows of the pins (those the reduced system leaves out)."""
