@@ -98,7 +98,7 @@ bool dynamics_end_available(const Layout &layout) {
 }
 
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real &drift) {
+                           legsim_reaction *reaction, real tol, real &drift) {
   Data &d = sim.data;
   bool actuators;
   const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
@@ -106,7 +106,7 @@ legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const 
   d.factor.reduced = true;
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
-                            stage_trig(d), d.report.residual, drift, d.report.condition, d.factor.a.data(),
+                            stage_trig(d), tol, d.report.residual, drift, d.report.condition, d.factor.a.data(),
                             d.lambda, qdd, reaction);
 }
 
@@ -212,7 +212,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
       s = kern->end_factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, base, d, actuators,
                              stage_trig(d), d.factor.a.data(), d.lambda, qdd, reaction);
     } else {
-      s = dynamics_end(sim, lay, d.q, d.qd, qdd, reaction, drift);
+      s = dynamics_end(sim, lay, d.q, d.qd, qdd, reaction, real(INFINITY), drift);
     }
     if (s != LEGSIM_OK) return s;
     stop_forces_update(sim);

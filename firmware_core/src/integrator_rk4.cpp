@@ -118,7 +118,7 @@ legsim_status rk4_step(Sim &sim) {
     // needs projecting. The usual step ends here; one that needs projecting starts over
     // below (no rows or factor kept), as after the fused solve.
     real drift;
-    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, drift) == LEGSIM_OK &&
+    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
       return rk4_finish(sim, true);
   } else if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {

@@ -132,17 +132,18 @@ struct Kernel {
   // into data.force_q, as applied_forces would leave it. The same for end and end_factored.
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                                  const VecQ &base, Data &data, bool actuators, TrigCache *trig, VecQ &qdd);
-  // RK4's end of a step (and its restart at a state) in the same reduced system: besides
-  // qdd, the largest |Phi| (residual, as rows_max_residual) and |J qd| (drift, as
-  // velocity_drift) for its projection test, the condition estimate from the pivots (the
+  // RK4's end of a step (and its restart at a state) in the same reduced system: the largest
+  // |Phi| (residual, as rows_max_residual) and |J qd| (drift, as velocity_drift) for its
+  // projection test (where either is past tol, or not a number: no more, LEGSIM_OK; the step
+  // starts over), then besides qdd the condition estimate from the pivots (the
   // reduced system's and the pins' own, the whole factor's to round-off), every row's
   // multiplier (a pin's from its body's x and y equations) and, reaction not null, the
   // joints' reactions. No rows kept; the reduced system's factor (by position, as factor's
   // storage) where keep_a is not null. Statuses as accelerations'. nullptr with it.
   legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
-                       const VecQ &base, Data &data, bool actuators, TrigCache *trig, real &residual,
-                       real &drift, real &condition, real *keep_a, VecR &lambda, VecQ &qdd,
-                       legsim_reaction *reaction);
+                       const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
+                       real &residual, real &drift, real &condition, real *keep_a, VecR &lambda,
+                       VecQ &qdd, legsim_reaction *reaction);
   // end's solve with its factor given (a): a restart after a changed command or load
   // (state_refresh), as factored for the whole system. LEGSIM_ERR_DIVERGED (qdd not finite).
   legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,

@@ -471,11 +471,12 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // reaction not null: the joints' reactions too (reactions_from_multipliers; the fused solve
 // computes them from its locals), for the caller's all-or-nothing to put back on failure.
 // RK4's end of a step and its restart in the reduced system (Kernel::end), where the
-// layout's kernel has it: qdd, the multipliers, the condition estimate and the residual into
-// the report, reaction where not null, drift = the largest |J qd|. No rows or factor kept.
+// layout's kernel has it: the residual into the report, drift = the largest |J qd|, and
+// unless either is past tol (no more then) qdd, the multipliers, the condition estimate,
+// reaction where not null, and the reduced factor (Factor::reduced). No rows kept.
 bool dynamics_end_available(const Layout &layout);
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real &drift);  // the factor kept (Factor::reduced)
+                           legsim_reaction *reaction, real tol, real &drift);
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state

@@ -636,9 +636,9 @@ class Reduced(Kernel):
 
     def emit_accelerations(self, sym, end=False, factored=False):
         """{sym}_accelerations: the fused solve of the reduced system, qdd alone. With end,
-        {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd|, the
-        condition estimate, every row's multiplier, the joints' reactions and, where asked,
-        the reduced factor (by position, as factor_store). With factored too,
+        {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd| (no
+        more where either is past tol), the condition estimate, every row's multiplier, the
+        joints' reactions and, where asked, the reduced factor (by position, as factor_store). With factored too,
         {sym}_end_factored: the same solve with that factor given (Kernel::end_factored)."""
         k, nq = self.full, 3 * self.nb
         if factored:
@@ -649,8 +649,8 @@ class Reduced(Kernel):
         elif end:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
-                 "Data &data, bool actuators, TrigCache *trig, real &residual, real &drift, real &condition, "
-                 "real *keep_a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
+                 "Data &data, bool actuators, TrigCache *trig, real tol, real &residual, real &drift, "
+                 "real &condition, real *keep_a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
         else:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
@@ -668,6 +668,8 @@ class Reduced(Kernel):
                 o.append(f"  jv = std::abs({k.j_expr(i, lambda n: f'qd[{n}]', True)});")
                 o.append("  r = jv > r ? jv : r;")
             o.append("  drift = r;")
+            # a step that needs projecting starts over (rk4_step): no solve here
+            o.append("  if (!(residual <= tol && drift <= tol)) return LEGSIM_OK;")
             unused = []
         else:  # (some Jacobian entries serve only the whole diagonal's floor: none here)
             unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
