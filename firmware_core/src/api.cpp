@@ -31,7 +31,7 @@ void copy_head(V &dst, const V &src, int n) {
 }  // namespace
 
 Snapshot::Snapshot(const Sim &sim)
-    : past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
+    : history(sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA), past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
       t(sim.data.t), steps(sim.data.steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
       assembled(sim.data.assembled), derivative_valid(sim.data.derivative_valid),
       history_valid(sim.data.history_valid), forcing_only(sim.data.forcing_only) {
@@ -40,8 +40,10 @@ Snapshot::Snapshot(const Sim &sim)
   copy_head(q, d.q, m.nq);
   copy_head(qd, d.qd, m.nq);
   copy_head(qdd, d.qdd, m.nq);
-  copy_head(acc_aux, d.acc_aux, m.nq);
-  for (int k = 0; k < kPredictorOrder; ++k) copy_head(qdd_past[k], d.qdd_past[k], m.nq);
+  if (history) {
+    copy_head(acc_aux, d.acc_aux, m.nq);
+    for (int k = 0; k < kPredictorOrder; ++k) copy_head(qdd_past[k], d.qdd_past[k], m.nq);
+  }
   lambda = d.lambda;  // whole: the solves of every layout write it
   std::memcpy(reaction, d.reaction, sizeof(legsim_reaction) * size_t(m.nj));
   for (int a = 0; a < m.na; ++a) {
@@ -61,8 +63,10 @@ void Snapshot::restore(Sim &sim) const {
   copy_head(d.q, q, m.nq);
   copy_head(d.qd, qd, m.nq);
   copy_head(d.qdd, qdd, m.nq);
-  copy_head(d.acc_aux, acc_aux, m.nq);
-  for (int k = 0; k < kPredictorOrder; ++k) copy_head(d.qdd_past[k], qdd_past[k], m.nq);
+  if (history) {
+    copy_head(d.acc_aux, acc_aux, m.nq);
+    for (int k = 0; k < kPredictorOrder; ++k) copy_head(d.qdd_past[k], qdd_past[k], m.nq);
+  }
   d.past_steps = past_steps;
   d.newton_eta = newton_eta;
   d.lambda = lambda;
@@ -298,12 +302,16 @@ legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *lengt
 // its setpoint every step costs about one Newton iteration a step, not two.
 legsim_status state_refresh(Sim &sim, bool forcing_only = false) {
   Data &d = sim.data;
+  // the history is generalized-alpha's alone: RK4 calls leave it (Snapshot), and a change of
+  // integrator restarts it (legsim_set_options)
+  const bool history = sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
   VecQ before;
-  if (forcing_only) before = d.qdd;
+  if (forcing_only && history) before = d.qdd;
   const legsim_status s = dynamics_state_reactions(sim, d.qdd, forcing_only && d.factor.of_state);
   d.derivative_valid = s == LEGSIM_OK;
   d.history_valid = s == LEGSIM_OK;
   d.forcing_only = false;
+  if (!history) return s;
   if (s == LEGSIM_OK) d.acc_aux = d.qdd;
   if (s == LEGSIM_OK && forcing_only) {
     for (int k = 0; k < d.past_steps && k < kPredictorOrder; ++k)

@@ -322,6 +322,9 @@ struct Sim {
 // step starts from, and the report): calls that can fail half-way work on the
 // live state and put this back.
 struct Snapshot {
+  // generalized-alpha's history (acc_aux, qdd_past) too: only under it (RK4 calls never
+  // write it, state_refresh)
+  bool history;
   VecQ q, qd, qdd, acc_aux, qdd_past[kPastSlots];
   int past_steps;
   real newton_eta;
