@@ -21,6 +21,7 @@ void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd
   applied_forces(sim.model, layout_disable(sim, layout), sim.data, q, qd, sim.data.force_q);
 }
 
+#if LEGSIM_KERNELS_REDUCED
 // The reduced solves' base forces (Kernel::accelerations): gravity alone, the model's own,
 // unless it is disabled or force elements act (then applied_forces' without the actuators,
 // which the solves apply). actuators: whether they act.
@@ -33,6 +34,7 @@ const VecQ &reduced_base(Sim &sim, const Layout &layout, const VecQ &q, const Ve
   applied_forces(sim.model, disable | LEGSIM_DISABLE_ACTUATORS, d, q, qd, d.force_q);
   return d.force_q;
 }
+#endif
 }  // namespace
 
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
@@ -40,6 +42,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   const Model &m = sim.model;
   Data &d = sim.data;
   const Kernel *kern = layout.kernel;
+#if LEGSIM_KERNELS_REDUCED
   if (kern && kern->accelerations && !keep && !reaction && !rows_ready && layout.m == kern->mj) {
     // RK4's stages: the accelerations alone, in the reduced system (neither multipliers nor
     // a factor: the step's end has its own); a singular matrix reports an infinite
@@ -51,6 +54,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
     return s;
   }
+#endif
   layout_forces(sim, layout, q, qd);
   if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
@@ -92,11 +96,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   return LEGSIM_OK;
 }
 
-bool dynamics_end_available(const Layout &layout) {
-  const Kernel *kern = layout.kernel;
-  return kern && kern->end && layout.m == kern->mj;
-}
-
+#if LEGSIM_KERNELS_REDUCED
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                            legsim_reaction *reaction, real tol, real &drift) {
   Data &d = sim.data;
@@ -109,6 +109,7 @@ legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const 
                             stage_trig(d), tol, d.report.residual, drift, d.report.condition, d.factor.a.data(),
                             d.lambda, qdd, reaction);
 }
+#endif
 
 namespace {
 // f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
@@ -199,6 +200,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
   const Layout &lay = d.dyn;
   const Kernel *kern = lay.kernel;
+#if LEGSIM_KERNELS_REDUCED
   if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && dynamics_end_available(lay)) {
     // RK4's restart as its step's end, in the reduced system: with the end's factor when it
     // is the state's (a changed command or load alone), else anew
@@ -218,6 +220,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     stop_forces_update(sim);
     return LEGSIM_OK;
   }
+#endif
   if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide && !d.factor.reduced) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)

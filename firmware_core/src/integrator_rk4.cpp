@@ -112,6 +112,7 @@ legsim_status rk4_step(Sim &sim) {
   legsim_reaction *const reaction = sim.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
   d.report.iterations = 0;
   bool factor_ready = false;  // the rows and the factor at q1 kept, the positions on Phi = 0
+#if LEGSIM_KERNELS_REDUCED
   if (dynamics_end_available(lay) && !(projection && d.end_projected)) {
     // The joint rows alone, in the reduced system (Kernel::end): the end derivative, the
     // multipliers and the reactions, and the residual and drift that say whether the step
@@ -121,7 +122,9 @@ legsim_status rk4_step(Sim &sim) {
     if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
       return rk4_finish(sim, true);
-  } else if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
+  } else
+#endif
+  if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
     // The joint rows alone: the fused solve at (q1, v1) first, its rows and factor kept.
     // When neither the positions nor the velocities need projecting (the usual step), it
     // is the end derivative; when the velocities alone do, its factor serves their

@@ -151,6 +151,18 @@ struct Kernel {
                                 VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
 };
 
+// Whether RK4's end solve on layout takes the reduced system (dynamics_end): never in a build
+// without the reduced solves (LEGSIM_KERNELS_REDUCED 0: their callers are left out too).
+inline bool dynamics_end_available(const Layout &layout) {
+#if LEGSIM_KERNELS_REDUCED
+  const Kernel *kern = layout.kernel;
+  return kern && kern->end && layout.m == kern->mj;
+#else
+  (void)layout;
+  return false;
+#endif
+}
+
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr
 // (the general path).
 const Kernel *kernel_find(const Model &model, bool stance = false);

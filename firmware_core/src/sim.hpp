@@ -477,7 +477,6 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // layout's kernel has it: the residual into the report, drift = the largest |J qd|, and
 // unless either is past tol (no more then) qdd, the multipliers, the condition estimate,
 // reaction where not null, and the reduced factor (Factor::reduced). No rows kept.
-bool dynamics_end_available(const Layout &layout);
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                            legsim_reaction *reaction, real tol, real &drift);
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,

@@ -19,11 +19,21 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
   newton     one generalized-alpha Newton iteration fused, and
   factored   the forward-dynamics solve with the factor given, the joints' reactions with
              it: for each model's main system only (its joints, or its stance), of at most
-             --fused-max-rows rows.
-Every piece does the general path's arithmetic in the same order, so both give the same
-numbers bit for bit (tests/core/test_kernels.c).
+             --fused-max-rows rows;
+  and, where bodies are pinned to the frame (not with --no-reduced), RK4's solves in the
+  reduced system where those bodies keep their angles alone (Reduced), applying the
+  actuators' forces from their own sin/cos:
+  accelerations   a stage's accelerations;
+  end             the step's end: the projection test's residual and drift, then the
+                  accelerations, every row's multiplier, the reactions, the condition
+                  estimate and the reduced factor kept;
+  end_factored    the same solve with that factor (a restart after a new command).
+Every piece but the reduced ones does the general path's arithmetic in the same order, so
+both give the same numbers bit for bit; the reduced ones agree to round-off
+(tests/core/test_kernels.c).
 The geometry (joint points) is read from the Model at run time: the kernel depends on the
-structure only, and kernel_find (in the generated file) picks it by that structure.
+structure only (the joints, the contacts' bodies and the actuators' joints), and
+kernel_find (in the generated file) picks it by that structure.
 Each kernel is compiled only where the build's capacities hold its model. Python 3.11+,
 standard library only; model_codegen.py reads and checks the TOML files.
 """
@@ -586,8 +596,10 @@ class Reduced(Kernel):
     G_b^T (Q_b - M_b g_b), and the other rows' columns J_b G_b, their gamma less J_b g_b.
     The same accelerations as the whole system's (a Schur complement of it: its pivots are
     the whole factor's after the pin rows) with fewer operations: the leg's 16 rows become
-    10. Not a factor the general path can use, nor multipliers of the pins: RK4's stages
-    need neither (the step's end solves the whole system)."""
+    10. Not a factor the general path can use. The step's end (emit_accelerations with
+    end) gets the pins' multipliers back from their bodies' x and y equations, and the
+    whole factor's pivots as the reduced ones and the pin rows' own (eliminated before any
+    other row on their body: from their entries of J W J^T alone)."""
 
     def __init__(self, k):
         self.name, self.nb, self.joints, self.contacts, self.actuators = k.name, k.nb, k.joints, k.contacts, k.actuators
