@@ -34,7 +34,8 @@ Snapshot::Snapshot(const Sim &sim)
     : history(sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA), past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
       t(sim.data.t), steps(sim.data.steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
       assembled(sim.data.assembled), derivative_valid(sim.data.derivative_valid),
-      history_valid(sim.data.history_valid), forcing_only(sim.data.forcing_only) {
+      history_valid(sim.data.history_valid), forcing_only(sim.data.forcing_only),
+      end_projected(sim.data.end_projected) {
   const Data &d = sim.data;
   const Model &m = sim.model;
   copy_head(q, d.q, m.nq);
@@ -95,6 +96,7 @@ void Snapshot::restore(Sim &sim) const {
   d.derivative_valid = derivative_valid;
   d.history_valid = history_valid;
   d.forcing_only = forcing_only;
+  d.end_projected = end_projected;
   // The workspace is not put back: a refused step may have run to its end, its factor that
   // of a state now undone (the output check refuses after the solves).
   d.factor.of_state = false;
@@ -295,7 +297,8 @@ legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *lengt
 // free dynamics at the new state, and a fresh start of the generalized-alpha history.
 // forcing_only (a changed command or load alone: the state, its rows and the options as
 // they were): the same accelerations, from the state's factor when the last step left it
-// (Factor::of_state: RK4's end solve; the same values as a fresh factorization), and
+// (Factor::of_state: RK4's whole-system end solve; the same values as a fresh
+// factorization; the reduced end keeps none, and its restart is the same solve anyway), and
 // generalized-alpha keeps its Newton contraction estimate (the iteration matrix is the
 // same) and its predictor's past, shifted by the accelerations' jump (a step change of the
 // forcing moves them by about that much on either side of it): a controller that changes
@@ -431,7 +434,6 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   state_changed(d);
   d.end_projected = false;
   d.factor.of_state = false;
-  d.factor.reduced = false;
   d.q.setZero();
   d.qd.setZero();
   d.qdd.setZero();

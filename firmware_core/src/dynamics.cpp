@@ -43,7 +43,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   Data &d = sim.data;
   const Kernel *kern = layout.kernel;
 #if LEGSIM_KERNELS_REDUCED
-  if (kern && kern->accelerations && !keep && !reaction && !rows_ready && layout.m == kern->mj) {
+  if (kern && kern->accelerations && !keep && !reaction && !rows_ready && layout.m == kern->mj && !layout.nslide) {
     // RK4's stages: the accelerations alone, in the reduced system (neither multipliers nor
     // a factor: the step's end has its own); a singular matrix reports an infinite
     // condition, as below
@@ -98,16 +98,13 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
 
 #if LEGSIM_KERNELS_REDUCED
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real tol, real &drift) {
+                           legsim_reaction *reaction, real tol, real &residual, real &drift) {
   Data &d = sim.data;
   bool actuators;
   const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
-  d.factor.of_state = false;  // about to be written (rk4_finish says whose it is)
-  d.factor.reduced = true;
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
-                            stage_trig(d), tol, d.report.residual, drift, d.report.condition, d.factor.a.data(),
-                            d.lambda, qdd, reaction);
+                            stage_trig(d), tol, residual, drift, d.report.condition, d.lambda, qdd, reaction);
 }
 #endif
 
@@ -202,26 +199,18 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   const Kernel *kern = lay.kernel;
 #if LEGSIM_KERNELS_REDUCED
   if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && dynamics_end_available(lay)) {
-    // RK4's restart as its step's end, in the reduced system: with the end's factor when it
-    // is the state's (a changed command or load alone), else anew
+    // RK4's restart as its step's end, in the reduced system: the same solve whatever came
+    // before (a changed command alone or not), so a refused call changes no later result
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
-    legsim_reaction *const reaction = reactions ? d.reaction : nullptr;
-    real drift;
-    legsim_status s;
-    if (factor_ready && d.factor.reduced) {
-      bool actuators;
-      const VecQ &base = reduced_base(sim, lay, d.q, d.qd, actuators);
-      s = kern->end_factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, base, d, actuators,
-                             stage_trig(d), d.factor.a.data(), d.lambda, qdd, reaction);
-    } else {
-      s = dynamics_end(sim, lay, d.q, d.qd, qdd, reaction, real(INFINITY), drift);
-    }
+    real residual, drift;  // (no projection test here: the report's residual stays the step's)
+    const legsim_status s = dynamics_end(sim, lay, d.q, d.qd, qdd, reactions ? d.reaction : nullptr,
+                                         real(INFINITY), residual, drift);
     if (s != LEGSIM_OK) return s;
     stop_forces_update(sim);
     return LEGSIM_OK;
   }
 #endif
-  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide && !d.factor.reduced) {
+  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)
     layout_forces(sim, lay, d.q, d.qd);

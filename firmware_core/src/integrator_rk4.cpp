@@ -69,10 +69,9 @@ namespace {
 // The step's end state (already in d.q, d.qd) committed, with its stop forces (the reactions
 // came with its solve); its end solve's factor is the state's unless the positions were
 // projected (assemble leaves the rows of its last iterate, not of the projected positions).
-legsim_status rk4_finish(Sim &sim, bool reduced = false) {
+legsim_status rk4_finish(Sim &sim, bool factor_kept = true) {
   Data &d = sim.data;
-  d.factor.of_state = !d.end_projected;
-  d.factor.reduced = reduced;  // Kernel::end's factor, not the whole system's
+  d.factor.of_state = factor_kept && !d.end_projected;
   stop_forces_update(sim);
   return LEGSIM_OK;
 }
@@ -119,9 +118,10 @@ legsim_status rk4_step(Sim &sim) {
     // needs projecting. The usual step ends here; one that needs projecting starts over
     // below (no rows or factor kept), as after the fused solve.
     real drift;
-    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), drift) == LEGSIM_OK &&
+    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), d.report.residual,
+                     drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
-      return rk4_finish(sim, true);
+      return rk4_finish(sim, false);
   } else
 #endif
   if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {

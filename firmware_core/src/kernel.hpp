@@ -62,7 +62,7 @@ struct Kernel {
   int nc;
   const int8_t *contact_body;  // per contact: its body
   // per actuator: its prismatic joint, cylinder and rod (the reduced solves apply their
-  // forces: a model whose actuators differ has no kernel)
+  // forces: a model whose actuators differ has no kernel with them)
   int na;
   const int8_t (*actuator)[3];
   int mj;                    // joint rows
@@ -138,17 +138,11 @@ struct Kernel {
   // starts over), then besides qdd the condition estimate from the pivots (the
   // reduced system's and the pins' own, the whole factor's to round-off), every row's
   // multiplier (a pin's from its body's x and y equations) and, reaction not null, the
-  // joints' reactions. No rows kept; the reduced system's factor (by position, as factor's
-  // storage) where keep_a is not null. Statuses as accelerations'. nullptr with it.
+  // joints' reactions. No rows or factor kept. Statuses as accelerations'. nullptr with it.
   legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                        const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
-                       real &residual, real &drift, real &condition, real *keep_a, VecR &lambda,
-                       VecQ &qdd, legsim_reaction *reaction);
-  // end's solve with its factor given (a): a restart after a changed command or load
-  // (state_refresh), as factored for the whole system. LEGSIM_ERR_DIVERGED (qdd not finite).
-  legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
-                                const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
-                                VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+                       real &residual, real &drift, real &condition, VecR &lambda, VecQ &qdd,
+                       legsim_reaction *reaction);
 };
 
 // Whether RK4's end solve on layout takes the reduced system (dynamics_end): never in a build
@@ -156,7 +150,7 @@ struct Kernel {
 inline bool dynamics_end_available(const Layout &layout) {
 #if LEGSIM_KERNELS_REDUCED
   const Kernel *kern = layout.kernel;
-  return kern && kern->end && layout.m == kern->mj;
+  return kern && kern->end && layout.m == kern->mj && !layout.nslide;
 #else
   (void)layout;
   return false;

@@ -221,9 +221,6 @@ struct Factor {
   // A restart after a changed command solves with it (state_refresh): the same values
   // either way, so a refused call changes no later result.
   bool of_state;
-  // a holds the reduced system's factor of RK4's end (Kernel::end), not the whole one's:
-  // with of_state, a restart solves with Kernel::end_factored
-  bool reduced;
 };
 
 struct ActuatorState {
@@ -291,7 +288,7 @@ struct Data {
   TrigCache stage_trig_cache;
 #endif
   Factor factor;
-  bool end_projected;  // RK4: the last step's end needed projecting (a hint: same values either way)
+  bool end_projected;  // RK4: the last step's end needed projecting (its next end takes the general sequence)
   DriverValues drivers;
   VecQ force_q;  // generalized applied forces Q
   VecQ tq[4], tv[3];
@@ -338,6 +335,7 @@ struct Snapshot {
   uint64_t steps;
   uint32_t stroke_mask, stop_mask;
   bool assembled, derivative_valid, history_valid, forcing_only;
+  bool end_projected;  // which way RK4's next end goes: its values differ to round-off
 
   explicit Snapshot(const Sim &sim);  // the model's coordinates, joints and actuators
   void restore(Sim &sim) const;
@@ -474,11 +472,12 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // reaction not null: the joints' reactions too (reactions_from_multipliers; the fused solve
 // computes them from its locals), for the caller's all-or-nothing to put back on failure.
 // RK4's end of a step and its restart in the reduced system (Kernel::end), where the
-// layout's kernel has it: the residual into the report, drift = the largest |J qd|, and
-// unless either is past tol (no more then) qdd, the multipliers, the condition estimate,
-// reaction where not null, and the reduced factor (Factor::reduced). No rows kept.
+// layout's kernel has it (dynamics_end_available, kernel.hpp): residual and drift, the
+// largest |Phi| and |J qd|, and unless either is past tol (no more then) qdd, the
+// multipliers, the condition estimate into the report and reaction where not null. No rows
+// or factor kept.
 legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real tol, real &drift);
+                           legsim_reaction *reaction, real tol, real &residual, real &drift);
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state

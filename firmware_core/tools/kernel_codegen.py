@@ -24,10 +24,9 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
   reduced system where those bodies keep their angles alone (Reduced), applying the
   actuators' forces from their own sin/cos:
   accelerations   a stage's accelerations;
-  end             the step's end: the projection test's residual and drift, then the
-                  accelerations, every row's multiplier, the reactions, the condition
-                  estimate and the reduced factor kept;
-  end_factored    the same solve with that factor (a restart after a new command).
+  end             the step's end (and a restart): the projection test's residual and
+                  drift, then the accelerations, every row's multiplier, the reactions and
+                  the condition estimate.
 Every piece but the reduced ones does the general path's arithmetic in the same order, so
 both give the same numbers bit for bit; the reduced ones agree to round-off
 (tests/core/test_kernels.c).
@@ -559,14 +558,12 @@ class Kernel:
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
         reduced = Reduced(self) if self.reduced else None
         if reduced and reduced.pinned:
-            o += (reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
-                  + reduced.emit_accelerations(sym, end=True, factored=True))
-        fused = (f"{sym}_accelerations, {sym}_end, {sym}_end_factored" if reduced and reduced.pinned
-                 else "nullptr, nullptr, nullptr")
+            o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
+        fused = f"{sym}_accelerations, {sym}_end" if reduced and reduced.pinned else "nullptr, nullptr"
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
                                                     fused)
 
-    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr, nullptr"):
+    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -646,30 +643,24 @@ class Reduced(Kernel):
     def w_name(self, b, k):
         return f"wr{b}" if b in self.pinned else f"w[{3 * b + k}]"
 
-    def emit_accelerations(self, sym, end=False, factored=False):
+    def emit_accelerations(self, sym, end=False):
         """{sym}_accelerations: the fused solve of the reduced system, qdd alone. With end,
         {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd| (no
-        more where either is past tol), the condition estimate, every row's multiplier, the
-        joints' reactions and, where asked, the reduced factor (by position, as factor_store). With factored too,
-        {sym}_end_factored: the same solve with that factor given (Kernel::end_factored)."""
+        more where either is past tol), the condition estimate, every row's multiplier and the
+        joints' reactions."""
         k, nq = self.full, 3 * self.nb
-        if factored:
-            o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end_factored(const Model &model, "
-                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
-                 "Data &data, bool actuators, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd, "
-                 "legsim_reaction *reaction) {"]
-        elif end:
+        if end:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
                  "Data &data, bool actuators, TrigCache *trig, real tol, real &residual, real &drift, "
-                 "real &condition, real *keep_a, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
+                 "real &condition, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
         else:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
                  "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
         o += k.rows_locals(self.shared_angles())
-        if end and not factored:
+        if end:
             # rows_max_residual's and velocity_drift's loops (rk4_step), in row order
             o.append("  real r = 0, jv;")
             for i in range(k.m):
@@ -705,14 +696,11 @@ class Reduced(Kernel):
                 o.append(f"  const real t{n} = wr{b} * fr{b};")
         # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
         # the same number as dynamics' floor; the reduced one's are no larger)
-        if not factored:
-            o.append("  real max_diag = 0;")
-            for p in range(k.m):
-                o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
-                o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
-        if factored:
-            lname = lambda i: f"l{self.orig[i]}"  # noqa: E731
-        elif end:
+        o.append("  real max_diag = 0;")
+        for p in range(k.m):
+            o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
+            o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
+        if end:
             # the pivots' range: the reduced system's, which are the whole factor's after its
             # pin rows, and the pin rows' own (eliminated before any other row on their body:
             # their entries of J W J^T alone)
@@ -731,16 +719,13 @@ class Reduced(Kernel):
                 o.append(f"  pmin = P{p} < pmin ? P{p} : pmin;")
                 o.append(f"  pmax = P{p} > pmax ? P{p} : pmax;")
             o.append("  condition = std::sqrt(pmax / pmin);")
-            o.append("  if (keep_a) {")
-            o += ["  " + x for x in self.factor_store("keep_a")]
-            o.append("  }")
             lname = lambda i: f"l{self.orig[i]}"  # noqa: E731  (the whole system's row)
         else:
             o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
             lname = lambda i: f"l{i}"  # noqa: E731
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}", lval="a" if factored else "L")
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}")
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
         for n in range(nq):
             b, x = divmod(n, 3)
@@ -875,8 +860,9 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
       same = kn.joint[j][0] == int(model.joint[j].kind) && kn.joint[j][1] == model.joint[j].a &&
              kn.joint[j][2] == model.joint[j].b;
     for (int c = 0; same && c < nc; ++c) same = kn.contact_body[c] == model.contact[c].body;
-    same = same && kn.na == model.na;  // the reduced solves apply the actuators' forces
-    for (int a = 0; same && a < model.na; ++a) same = kn.actuator[a][0] == model.act[a].joint;
+    // the reduced solves apply the actuators' forces: their joints are part of the structure
+    same = same && (!kn.accelerations || kn.na == model.na);
+    for (int a = 0; same && kn.accelerations && a < model.na; ++a) same = kn.actuator[a][0] == model.act[a].joint;
     if (same) return &kn;
   }
   return nullptr;

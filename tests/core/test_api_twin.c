@@ -402,10 +402,39 @@ static void test_refused_calls_change_nothing(void) {
   TEST_ASSERT_GREATER_THAN_INT(50, (int)t.ok_by_kind[STEP]);
 }
 
+/* A controller's loop: a new length command every step (RK4 restarts from it), and on B
+ * alone a refused assembly (both strokes at an end: unreachable) before each step. A
+ * refused call puts the state back, not the workspace: the restart must not depend on
+ * what the workspace holds (the last step's factor, or not). */
+static void test_refused_calls_between_new_commands(void) {
+  for (int integ = 0; integ < 2; ++integ) {
+    legsim_options o = legsim_default_options();
+    o.integrator = integ ? LEGSIM_INTEGRATOR_GENERALIZED_ALPHA : LEGSIM_INTEGRATOR_RK4;
+    legsim_sim *a = leg_at_stand(&st_a, &legsim_model_leg_revolute, o);
+    legsim_sim *b = leg_at_stand(&st_b, &legsim_model_leg_revolute, o);
+    const legsim_model_desc *m = legsim_model(b);
+    const legsim_real unreachable[2] = {(legsim_real)m->actuator[0].stroke_min_m,
+                                        (legsim_real)m->actuator[1].stroke_max_m};
+    legsim_real len[NA];
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(a, len, NULL));
+    for (int k = 0; k < 200; ++k) {
+      snprintf(g_where, sizeof g_where, "%s, step %d", integ ? "generalized-alpha" : "RK4", k);
+      TEST_ASSERT_TRUE_MESSAGE(legsim_assemble(b, unreachable) != LEGSIM_OK, g_where);
+      const legsim_real l = len[0] + (legsim_real)(0.0005 * sin(0.05 * k));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(a, 0, l));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(b, 0, l));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(a, 1));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(b, 1));
+      assert_twins(a, b);
+    }
+  }
+}
+
 int main(int argc, char **argv) {
   if (argc > 1) g_seeds = atoi(argv[1]);
   if (argc > 2) g_calls = atoi(argv[2]);
   UNITY_BEGIN();
   RUN_TEST(test_refused_calls_change_nothing);
+  RUN_TEST(test_refused_calls_between_new_commands);
   return UNITY_END();
 }
