@@ -215,7 +215,8 @@ struct Factor {
   real condition;
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
   // This is the sim's state's factor exactly, as a fresh factorization would give it (RK4's
-  // end solve left it, the positions not projected after), and untouched since: factor_order
+  // whole-system end solve left it, the positions not projected after; its reduced end,
+  // Kernel::end, keeps none), and untouched since: factor_order
   // and factor_build, which every write of a factor goes through, clear it, and so does a
   // refused call (Snapshot::restore: all-or-nothing restores the state, not the workspace).
   // A restart after a changed command solves with it (state_refresh): the same values
