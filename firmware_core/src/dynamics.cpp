@@ -42,19 +42,6 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   const Model &m = sim.model;
   Data &d = sim.data;
   const Kernel *kern = layout.kernel;
-#if LEGSIM_KERNELS_REDUCED
-  if (kern && kern->accelerations && !keep && !reaction && !rows_ready && layout.m == kern->mj && !layout.nslide) {
-    // RK4's stages: the accelerations alone, in the reduced system (neither multipliers nor
-    // a factor: the step's end has its own); a singular matrix reports an infinite
-    // condition, as below
-    bool actuators;
-    const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
-    const legsim_status s = kern->accelerations(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d,
-                                                actuators, stage_trig(d), qdd);
-    if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
-    return s;
-  }
-#endif
   layout_forces(sim, layout, q, qd);
   if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
     // the joint rows alone: the generated solve, fused (the same values as below)
@@ -94,6 +81,23 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   if (!all_finite(qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
   if (reaction) reactions_from_multipliers(m, d.rows, d.lambda, reaction);
   return LEGSIM_OK;
+}
+
+legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+#if LEGSIM_KERNELS_REDUCED
+  if (reduced_available(layout)) {
+    // neither multipliers nor a factor (the step's end has its own); a singular matrix
+    // reports an infinite condition, as dynamics_solve
+    Data &d = sim.data;
+    bool actuators;
+    const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
+    const legsim_status s = layout.kernel->accelerations(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd,
+                                                         base, d, actuators, stage_trig(d), qdd);
+    if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
+    return s;
+  }
+#endif
+  return dynamics_solve(sim, layout, q, qd, qdd, false, false);
 }
 
 #if LEGSIM_KERNELS_REDUCED
@@ -198,7 +202,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   const Layout &lay = d.dyn;
   const Kernel *kern = lay.kernel;
 #if LEGSIM_KERNELS_REDUCED
-  if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && dynamics_end_available(lay)) {
+  if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay)) {
     // RK4's restart as its step's end, in the reduced system: the same solve whatever came
     // before (a changed command alone or not), so a refused call changes no later result
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);

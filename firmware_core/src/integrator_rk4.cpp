@@ -88,7 +88,7 @@ legsim_status rk4_step(Sim &sim) {
   stage_first(n, h2, d.q.data(), d.qd.data(), d.qdd.data(), qs.data(), vs.data());
   // stages 2 and 3 at the midpoint (weight 2), 4 at the end
   for (int stage = 0; stage < 3; ++stage) {
-    const legsim_status s = dynamics_solve(sim, d.dyn, qs, vs, a, false, false);  // a alone
+    const legsim_status s = dynamics_stage(sim, d.dyn, qs, vs, a);
     if (s != LEGSIM_OK) return s;
     if (stage == 0)
       stage_second(n, 2, h2, d.q.data(), d.qd.data(), d.qdd.data(), a.data(), qs.data(), vs.data(), sum_v.data(),
@@ -112,7 +112,7 @@ legsim_status rk4_step(Sim &sim) {
   d.report.iterations = 0;
   bool factor_ready = false;  // the rows and the factor at q1 kept, the positions on Phi = 0
 #if LEGSIM_KERNELS_REDUCED
-  if (dynamics_end_available(lay) && !(projection && d.end_projected)) {
+  if (reduced_available(lay) && !(projection && d.end_projected)) {
     // The joint rows alone, in the reduced system (Kernel::end): the end derivative, the
     // multipliers and the reactions, and the residual and drift that say whether the step
     // needs projecting. The usual step ends here; one that needs projecting starts over

@@ -129,7 +129,7 @@ struct Kernel {
   // The applied forces: base (gravity and the force elements, applied_forces' without the
   // actuators) and, with actuators, each actuator's axial force from its command
   // (actuator_force: its force and events into data) from the solve's own sin/cos; the sum
-  // into data.force_q, as applied_forces would leave it. The same for end and end_factored.
+  // into data.force_q, as applied_forces would leave it. The same for end.
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                                  const VecQ &base, Data &data, bool actuators, TrigCache *trig, VecQ &qdd);
   // RK4's end of a step (and its restart at a state) in the same reduced system: the largest
@@ -145,12 +145,14 @@ struct Kernel {
                        legsim_reaction *reaction);
 };
 
-// Whether RK4's end solve on layout takes the reduced system (dynamics_end): never in a build
-// without the reduced solves (LEGSIM_KERNELS_REDUCED 0: their callers are left out too).
-inline bool dynamics_end_available(const Layout &layout) {
+// Whether RK4's solves on layout take the reduced system (dynamics_stage, dynamics_end: the
+// joint rows alone, a kernel with Kernel::accelerations and Kernel::end, which come
+// together): never in a build without them (LEGSIM_KERNELS_REDUCED 0: their callers are
+// left out too).
+inline bool reduced_available(const Layout &layout) {
 #if LEGSIM_KERNELS_REDUCED
   const Kernel *kern = layout.kernel;
-  return kern && kern->end && layout.m == kern->mj && !layout.nslide;
+  return kern && kern->accelerations && kern->end && layout.m == kern->mj && !layout.nslide;
 #else
   (void)layout;
   return false;

@@ -467,20 +467,23 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // ---- dynamics.cpp ----
 // qdd and lambda from M qdd + J^T lambda = Q, J qdd = gamma, for layout rows.
 // rows_ready: d.rows and d.factor already hold this (q, qd) on this layout. keep = false:
-// the caller needs only qdd (RK4's stages), so d.rows, d.factor and d.lambda need not be
-// written (a layout of the joint rows alone with a generated kernel skips them, and where
-// the kernel has a reduced system, solves that: the same qdd to round-off).
+// the caller needs only qdd and lambda, so d.rows and d.factor need not be written (a
+// layout of the joint rows alone with a generated kernel skips them).
 // reaction not null: the joints' reactions too (reactions_from_multipliers; the fused solve
 // computes them from its locals), for the caller's all-or-nothing to put back on failure.
-// RK4's end of a step and its restart in the reduced system (Kernel::end), where the
-// layout's kernel has it (dynamics_end_available, kernel.hpp): residual and drift, the
-// largest |Phi| and |J qd|, and unless either is past tol (no more then) qdd, the
-// multipliers, the condition estimate into the report and reaction where not null. No rows
-// or factor kept.
-legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real tol, real &residual, real &drift);
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
+// RK4's stage: qdd alone at (q, qd) on layout. In the reduced system where the layout's
+// kernel has it (reduced_available, kernel.hpp; Kernel::accelerations: the same qdd as
+// dynamics_solve's to round-off, nothing else written but Q), else dynamics_solve without
+// keep.
+legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
+// RK4's end of a step and its restart in the reduced system (Kernel::end), where
+// reduced_available: residual and drift, the largest |Phi| and |J qd|, and unless either
+// is past tol (no more then) qdd, the multipliers, the condition estimate into the report
+// and reaction where not null. No rows or factor kept.
+legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
+                           legsim_reaction *reaction, real tol, real &residual, real &drift);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 // The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
 // generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).
