@@ -153,7 +153,7 @@ class Kernel:
         # general path places rows after a joint kernel's block (so both factor alike)
         self.structure(mj)
         self.fused = True  # generate() decides
-        self.reduced = True  # and this (RK4's reduced stage solve)
+        self.reduced = True  # and this (RK4's reduced solves)
 
     def structure(self, mj, order=None):
         """The elimination order of the rows (rows mj.. kept last, in order; or the order
@@ -583,7 +583,7 @@ class Kernel:
 
 
 class Reduced(Kernel):
-    """RK4's stage solve (accelerations alone) in fewer rows. A body pinned to the frame by
+    """RK4's solves (a stage's accelerations; the step's end) in fewer rows. A body pinned to the frame by
     one revolute joint moves with its angle alone: its accelerations are
     qdd_b = G_b phidd_b + g_b, G_b = (say, -sax, 1) (the pin point's offset (sax, say)) and
     g_b = (gamma_r, gamma_r+1, 0) (the pin rows' gamma), which is every qdd that satisfies
@@ -609,8 +609,7 @@ class Reduced(Kernel):
         # body -> (its pin joint, the pin's first row)
         self.pinned = {j["body"][0]: (n, first_row[n]) for n, j in enumerate(k.joints)
                        if j["kind"] == "revolute_to_frame" and j["body"][0] in pinned}
-        pin_rows = {r + e for _, r in self.pinned.values() for e in (0, 1)}
-        self.orig = [i for i in range(k.m) if i not in pin_rows]  # reduced row -> row
+        self.orig = [i for i in range(k.m) if i not in self.full_pin_rows()]  # reduced row -> row
         self.rows, self.defs = [], []
         for i in self.orig:
             bodies, slots = k.rows[i]
@@ -674,7 +673,7 @@ class Reduced(Kernel):
             # a step that needs projecting starts over (rk4_step): no solve here
             o.append("  if (!(residual <= tol && drift <= tol)) return LEGSIM_OK;")
             unused = []
-        else:  # (some Jacobian entries serve only the whole diagonal's floor: none here)
+        else:  # a stage needs no Phi, and some Jacobian entries serve only the floor below
             unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
                                                           for x in range(3) if k.rows[i][0][s] >= 0
                                                           and k.rows[i][1][s][x] is V]
@@ -707,14 +706,15 @@ class Reduced(Kernel):
             fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
             o.append("  real pmin, pmax;")
             o += self.factor_locals(True, fail)
+            pins = self.full_pin_rows()
             for p in range(k.m):
-                if k.row_at[p] not in self.full_pin_rows():
+                if k.row_at[p] not in pins:
                     continue
-                assert all(k.row_at[q] in self.full_pin_rows() for q in k.l_nz[p])
+                assert all(k.row_at[q] in pins for q in k.l_nz[p])
                 for q in k.l_nz[p]:
                     o.append(f"  const real PT{p}_{q} = {k.a_entry(p, q, True)}, PL{p}_{q} = PT{p}_{q} / P{q};")
                 sub = "".join(f" - PT{p}_{q} * PL{p}_{q}" for q in k.l_nz[p])
-                o.append(f"  const real P{p} = {k.a_entry(p, p, True)}{sub};")
+                o.append(f"  const real P{p} = F{p}{sub};  // (its diagonal entry: F{p} above)")
                 o.append(f"  if (!(P{p} > floor)) {fail}")
                 o.append(f"  pmin = P{p} < pmin ? P{p} : pmin;")
                 o.append(f"  pmax = P{p} > pmax ? P{p} : pmax;")
@@ -883,7 +883,7 @@ def main(argv=None):
     p.add_argument("--fused-max-rows", type=int, default=None, metavar="N",
                    help="fused solves only for kernels of at most N rows (default: no limit)")
     p.add_argument("--no-reduced", action="store_true",
-                   help="no reduced stage solves for RK4 (Kernel::accelerations): less flash")
+                   help="no reduced solves for RK4 (Kernel::accelerations, end): less flash")
     p.add_argument("--out", required=True, help="the C++ source to write")
     args = p.parse_args(argv)
     try:
