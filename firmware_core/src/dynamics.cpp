@@ -25,11 +25,13 @@ void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd
 // The reduced solves' base forces (Kernel::accelerations): gravity alone, the model's own,
 // unless it is disabled or force elements act (then applied_forces' without the actuators,
 // which the solves apply). actuators: whether they act.
-const VecQ &reduced_base(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, bool &actuators) {
+// elements: whether force elements act (their forces may depend on the velocities).
+const VecQ &reduced_base(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, bool &actuators,
+                         bool &elements) {
   const uint32_t disable = layout_disable(sim, layout);
   actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
   Data &d = sim.data;
-  const bool elements = LEGSIM_WITH_FORCE_ELEMENTS && d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
+  elements = LEGSIM_WITH_FORCE_ELEMENTS && d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
   if (!(disable & LEGSIM_DISABLE_GRAVITY) && !elements) return sim.model.gravity_force;
   applied_forces(sim.model, disable | LEGSIM_DISABLE_ACTUATORS, d, q, qd, d.force_q);
   return d.force_q;
@@ -89,8 +91,8 @@ legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, cons
     // neither multipliers nor a factor (the step's end has its own); a singular matrix
     // reports an infinite condition, as dynamics_solve
     Data &d = sim.data;
-    bool actuators;
-    const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
+    bool actuators, elements;
+    const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
     const legsim_status s = layout.kernel->accelerations(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd,
                                                          base, d, actuators, stage_trig(d), qdd);
     if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
@@ -101,14 +103,15 @@ legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, cons
 }
 
 #if LEGSIM_KERNELS_REDUCED
-legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real tol, real &residual, real &drift) {
+legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, VecQ &qd, VecQ &qdd,
+                           legsim_reaction *reaction, real tol, bool project, real &residual, real &drift) {
   Data &d = sim.data;
-  bool actuators;
-  const VecQ &base = reduced_base(sim, layout, q, qd, actuators);
+  bool actuators, elements;
+  const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
-                            stage_trig(d), tol, residual, drift, d.report.condition, d.lambda, qdd, reaction);
+                            stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
+                            d.lambda, qdd, reaction);
 }
 #endif
 
@@ -208,7 +211,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
     real residual, drift;  // (no projection test here: the report's residual stays the step's)
     const legsim_status s = dynamics_end(sim, lay, d.q, d.qd, qdd, reactions ? d.reaction : nullptr,
-                                         real(INFINITY), residual, drift);
+                                         real(INFINITY), false, residual, drift);
     if (s != LEGSIM_OK) return s;
     stop_forces_update(sim);
     return LEGSIM_OK;

@@ -115,11 +115,13 @@ legsim_status rk4_step(Sim &sim) {
   if (reduced_available(lay) && !(projection && d.end_projected)) {
     // The joint rows alone, in the reduced system (Kernel::end): the end derivative, the
     // multipliers and the reactions, and the residual and drift that say whether the step
-    // needs projecting. The usual step ends here; one that needs projecting starts over
-    // below (no rows or factor kept), as after the fused solve.
+    // needs projecting. The usual step ends here, also one whose velocities alone need
+    // projecting (the end projects them, with its factor, unless force elements act). One
+    // whose positions need projecting starts over below (no rows or factor kept), as after
+    // the fused solve.
     real drift;
-    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), d.report.residual,
-                     drift) == LEGSIM_OK &&
+    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), projection,
+                     d.report.residual, drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
       return rk4_finish(sim, false);
   } else

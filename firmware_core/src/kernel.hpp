@@ -128,21 +128,25 @@ struct Kernel {
   // (qdd not finite). nullptr for a structure without such a body (dynamics serves).
   // The applied forces: base (gravity and the force elements, applied_forces' without the
   // actuators) and, with actuators, each actuator's axial force from its command
-  // (actuator_force: its force and events into data) from the solve's own sin/cos; the sum
-  // into data.force_q, as applied_forces would leave it. The same for end.
+  // (actuator_force: its force and events into data) from the solve's own sin/cos (grid_trig,
+  // sim.hpp). The same for end, which writes the sum into data.force_q too, as
+  // applied_forces would leave it (a stage's is read by no one).
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                                  const VecQ &base, Data &data, bool actuators, TrigCache *trig, VecQ &qdd);
   // RK4's end of a step (and its restart at a state) in the same reduced system: the largest
   // |Phi| (residual, as rows_max_residual) and |J qd| (drift, as velocity_drift) for its
-  // projection test (where either is past tol, or not a number: no more, LEGSIM_OK; the step
-  // starts over), then besides qdd the condition estimate from the pivots (the
-  // reduced system's and the pins' own, the whole factor's to round-off), every row's
-  // multiplier (a pin's from its body's x and y equations) and, reaction not null, the
-  // joints' reactions. No rows or factor kept. Statuses as accelerations'. nullptr with it.
-  legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+  // projection test. Where the residual is past tol, or the drift is and not project (either
+  // not a number too): no more, LEGSIM_OK (the step starts over). Where the drift is past tol
+  // and project: qd projected onto J qd = 0 (M-weighted, as project; drift then 0), written
+  // only when the whole call succeeds; base must not depend on qd then. Then besides qdd the
+  // condition estimate from the pivots (the reduced system's and the pins' own, the whole
+  // factor's to round-off), every row's multiplier (a pin's from its body's x and y
+  // equations) and, reaction not null, the joints' reactions. No rows or factor kept.
+  // Statuses as accelerations'. nullptr with it.
+  legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
                        const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
-                       real &residual, real &drift, real &condition, VecR &lambda, VecQ &qdd,
-                       legsim_reaction *reaction);
+                       bool project, real &residual, real &drift, real &condition, VecR &lambda,
+                       VecQ &qdd, legsim_reaction *reaction);
 };
 
 // Whether RK4's solves on layout take the reduced system (dynamics_stage, dynamics_end: the

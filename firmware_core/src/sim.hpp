@@ -90,6 +90,19 @@ inline void body_trig(TrigCache *t, int b, real phi, real &s, real &c) {
   }
 }
 
+// body_trig's pair without its memory of the last angle (the grid's pair still): for RK4's
+// reduced solves, whose angles are new at every stage (a memory there is read in vain and
+// written for nothing). The same values as body_trig's.
+#if defined(__x86_64__) && defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void grid_trig(TrigCache *t, int b, real phi, real &s, real &c) {
+  if (std::abs(phi) < real(kGridMaxAngle))
+    sincos_grid(phi, t->grid[b], t->grid_s[b], t->grid_c[b], s, c);
+  else
+    sincos_reduced(phi, s, c);
+}
+
 // ---- compiled model (constant after legsim_init) ----
 struct Joint {
   legsim_joint_kind kind;
@@ -479,11 +492,13 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
 // keep.
 legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
 // RK4's end of a step and its restart in the reduced system (Kernel::end), where
-// reduced_available: residual and drift, the largest |Phi| and |J qd|, and unless either
-// is past tol (no more then) qdd, the multipliers, the condition estimate into the report
-// and reaction where not null. No rows or factor kept.
-legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real tol, real &residual, real &drift);
+// reduced_available: residual and drift, the largest |Phi| and |J qd|; where the drift is
+// past tol, project and no force element acts (their forces may depend on qd), qd projected
+// onto J qd = 0 and drift 0; unless the residual or the drift is past tol then (no more)
+// qdd, the multipliers, the condition estimate into the report and reaction where not null.
+// No rows or factor kept.
+legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, VecQ &qd, VecQ &qdd,
+                           legsim_reaction *reaction, real tol, bool project, real &residual, real &drift);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 // The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
 // generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).

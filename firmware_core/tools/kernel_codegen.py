@@ -198,80 +198,91 @@ class Kernel:
 
     # ---- the pieces, as lines of C++ over named values ----
     @staticmethod
-    def joint_locals(n, j, r):
+    def joint_locals(n, j, r, part=None):
         """One joint's rows as locals (phi<r>, gam<r>, c<r>_<slot>_<k>): the arithmetic of
-        revolute_rows / prismatic_rows / slot_rows (constraints.cpp) term by term."""
+        revolute_rows / prismatic_rows / slot_rows (constraints.cpp) term by term. part "q":
+        the lines of the positions alone (Phi, the Jacobian); "v": those of the velocities
+        (gamma); None: both."""
         kind, (a, b) = j["kind"], j["body"]
-        o = [f"  // joint {n}: {kind}, rows {r}.."]
+        o = [("", f"  // joint {n}: {kind}, rows {r}..")]
         def off(body, pt):  # offset(): xi u + eta n, u = (s, -c), n = (c, s)
             return (f"J{n}.{pt}.x() * s{body} + J{n}.{pt}.y() * c{body}",
                     f"J{n}.{pt}.x() * (-c{body}) + J{n}.{pt}.y() * s{body}")
         if kind != "prismatic":  # its rows have no joint points
-            o.append(f"  const Joint &J{n} = model.joint[{n}];")
+            o.append(("q", f"  const Joint &J{n} = model.joint[{n}];"))
         if kind in ("revolute", "revolute_to_frame"):
             ox, oy = off(a, "pa")
-            o.append(f"  const real sax{n} = {ox}, say{n} = {oy};")
+            o.append(("q", f"  const real sax{n} = {ox}, say{n} = {oy};"))
             if kind == "revolute_to_frame":
-                o.append(f"  const real phi{r} = (x{a} + sax{n}) - J{n}.pb.x(), phi{r + 1} = (y{a} + say{n}) - J{n}.pb.y();")
-                o.append(f"  const real gam{r} = w{a} * w{a} * sax{n}, gam{r + 1} = w{a} * w{a} * say{n};")
+                o.append(("q", f"  const real phi{r} = (x{a} + sax{n}) - J{n}.pb.x(), phi{r + 1} = (y{a} + say{n}) - J{n}.pb.y();"))
+                o.append(("v", f"  const real gam{r} = w{a} * w{a} * sax{n}, gam{r + 1} = w{a} * w{a} * say{n};"))
             else:
                 ox, oy = off(b, "pb")
-                o.append(f"  const real sbx{n} = {ox}, sby{n} = {oy};")
-                o.append(f"  const real phi{r} = (x{a} + sax{n}) - (x{b} + sbx{n}), "
-                         f"phi{r + 1} = (y{a} + say{n}) - (y{b} + sby{n});")
-                o.append(f"  const real gam{r} = w{a} * w{a} * sax{n} - w{b} * w{b} * sbx{n}, "
-                         f"gam{r + 1} = w{a} * w{a} * say{n} - w{b} * w{b} * sby{n};")
-                o.append(f"  const real c{r}_1_2 = -(-sby{n}), c{r + 1}_1_2 = -sbx{n};")
-            o.append(f"  const real c{r}_0_2 = -say{n}, c{r + 1}_0_2 = sax{n};")
+                o.append(("q", f"  const real sbx{n} = {ox}, sby{n} = {oy};"))
+                o.append(("q", f"  const real phi{r} = (x{a} + sax{n}) - (x{b} + sbx{n}), "
+                               f"phi{r + 1} = (y{a} + say{n}) - (y{b} + sby{n});"))
+                o.append(("v", f"  const real gam{r} = w{a} * w{a} * sax{n} - w{b} * w{b} * sbx{n}, "
+                               f"gam{r + 1} = w{a} * w{a} * say{n} - w{b} * w{b} * sby{n};"))
+                o.append(("q", f"  const real c{r}_1_2 = -(-sby{n}), c{r + 1}_1_2 = -sbx{n};"))
+            o.append(("q", f"  const real c{r}_0_2 = -say{n}, c{r + 1}_0_2 = sax{n};"))
         elif kind == "prismatic":
-            o.append(f"  const real dx{n} = x{b} - x{a}, dy{n} = y{b} - y{a}, ddx{n} = vx{b} - vx{a}, "
-                     f"ddy{n} = vy{b} - vy{a};")
-            o.append(f"  const real phi{r} = q[{3 * b + 2}] - q[{3 * a + 2}], gam{r} = 0;")
-            o.append(f"  const real dn{n} = dx{n} * c{a} + dy{n} * s{a};")
-            o.append(f"  const real phi{r + 1} = dn{n};")
-            o.append(f"  const real c{r + 1}_0_0 = -c{a}, c{r + 1}_0_1 = -s{a}, "
-                     f"c{r + 1}_0_2 = -(dx{n} * s{a} + dy{n} * (-c{a}));")
-            o.append(f"  const real c{r + 1}_1_0 = c{a}, c{r + 1}_1_1 = s{a};")
-            o.append(f"  const real gam{r + 1} = 2 * w{a} * (ddx{n} * s{a} + ddy{n} * (-c{a})) + w{a} * w{a} * dn{n};")
+            o.append(("q", f"  const real dx{n} = x{b} - x{a}, dy{n} = y{b} - y{a};"))
+            o.append(("v", f"  const real ddx{n} = vx{b} - vx{a}, ddy{n} = vy{b} - vy{a};"))
+            o.append(("q", f"  const real phi{r} = q[{3 * b + 2}] - q[{3 * a + 2}];"))
+            o.append(("v", f"  const real gam{r} = 0;"))
+            o.append(("q", f"  const real dn{n} = dx{n} * c{a} + dy{n} * s{a};"))
+            o.append(("q", f"  const real phi{r + 1} = dn{n};"))
+            o.append(("q", f"  const real c{r + 1}_0_0 = -c{a}, c{r + 1}_0_1 = -s{a}, "
+                           f"c{r + 1}_0_2 = -(dx{n} * s{a} + dy{n} * (-c{a}));"))
+            o.append(("q", f"  const real c{r + 1}_1_0 = c{a}, c{r + 1}_1_1 = s{a};"))
+            o.append(("v", f"  const real gam{r + 1} = 2 * w{a} * (ddx{n} * s{a} + ddy{n} * (-c{a})) + w{a} * w{a} * dn{n};"))
         else:  # slot: point on a on the axis of b
             ox, oy = off(a, "pa")
-            o.append(f"  const real sax{n} = {ox}, say{n} = {oy};")
-            o.append(f"  const real dx{n} = x{a} + sax{n} - x{b}, dy{n} = y{a} + say{n} - y{b};")
-            o.append(f"  const real ddx{n} = vx{a} + w{a} * (-say{n}) - vx{b}, ddy{n} = vy{a} + w{a} * sax{n} - vy{b};")
-            o.append(f"  const real dn{n} = dx{n} * c{b} + dy{n} * s{b};")
-            o.append(f"  const real phi{r} = dn{n};")
-            o.append(f"  const real c{r}_0_0 = c{b}, c{r}_0_1 = s{b}, c{r}_0_2 = -say{n} * c{b} + sax{n} * s{b};")
-            o.append(f"  const real c{r}_1_0 = -c{b}, c{r}_1_1 = -s{b}, c{r}_1_2 = -(dx{n} * s{b} + dy{n} * (-c{b}));")
-            o.append(f"  const real gam{r} = w{a} * w{a} * (sax{n} * c{b} + say{n} * s{b}) + "
-                     f"2 * w{b} * (ddx{n} * s{b} + ddy{n} * (-c{b})) + w{b} * w{b} * dn{n};")
-        return o
+            o.append(("q", f"  const real sax{n} = {ox}, say{n} = {oy};"))
+            o.append(("q", f"  const real dx{n} = x{a} + sax{n} - x{b}, dy{n} = y{a} + say{n} - y{b};"))
+            o.append(("v", f"  const real ddx{n} = vx{a} + w{a} * (-say{n}) - vx{b}, ddy{n} = vy{a} + w{a} * sax{n} - vy{b};"))
+            o.append(("q", f"  const real dn{n} = dx{n} * c{b} + dy{n} * s{b};"))
+            o.append(("q", f"  const real phi{r} = dn{n};"))
+            o.append(("q", f"  const real c{r}_0_0 = c{b}, c{r}_0_1 = s{b}, c{r}_0_2 = -say{n} * c{b} + sax{n} * s{b};"))
+            o.append(("q", f"  const real c{r}_1_0 = -c{b}, c{r}_1_1 = -s{b}, c{r}_1_2 = -(dx{n} * s{b} + dy{n} * (-c{b}));"))
+            o.append(("v", f"  const real gam{r} = w{a} * w{a} * (sax{n} * c{b} + say{n} * s{b}) + "
+                           f"2 * w{b} * (ddx{n} * s{b} + ddy{n} * (-c{b})) + w{b} * w{b} * dn{n};"))
+        return [line for tag, line in o if part is None or tag in ("", part)]
 
-    def rows_locals(self, shared=None):
+    def rows_locals(self, shared=None, part=None, velocity=None, trig="body_trig"):
         """sin/cos once per body (through the TrigCache), then every joint's rows as locals.
         shared: body -> an earlier body whose angle a prismatic joint keeps equal to its own
         (to round-off after a projection, a stage's step further): its pair from that
         body's by the angle-sum formulas with the small difference e (truncation below
-        e^4 / 24 < 5e-18 for |e| < 1e-4; the TrigCache past that)."""
+        e^4 / 24 < 5e-18 for |e| < 1e-4; the TrigCache past that). part: as joint_locals'
+        (the sin/cos and the positions with "q"; the velocities, velocity(n) for coordinate
+        n, default qd[n], with "v"). No contacts with part. trig: the function that gives a
+        body's pair (sim.hpp: body_trig, or grid_trig without its memory)."""
+        assert part is None or not self.contacts
+        vel = velocity or (lambda n: f"qd[{n}]")
         o = []
         used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
         for b in used:
-            o.append(f"  real s{b}, c{b};")
-            a = (shared or {}).get(b)
-            if a is None:
-                o.append(f"  body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
-            else:
-                o.append(f"  if (const real e = q[{3 * b + 2}] - q[{3 * a + 2}]; std::abs(e) < real(1e-4)) {{")
-                o.append("    const real e2 = e * e, se = e - e * e2 * real(1.0 / 6), ce = 1 - e2 * real(0.5);")
-                o.append(f"    s{b} = s{a} * ce + c{a} * se;")
-                o.append(f"    c{b} = c{a} * ce - s{a} * se;")
-                o.append("  } else {")
-                o.append(f"    body_trig(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
-                o.append("  }")
-            o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}], vx{b} = qd[{3 * b}], "
-                     f"vy{b} = qd[{3 * b + 1}], w{b} = qd[{3 * b + 2}];")
+            if part != "v":
+                o.append(f"  real s{b}, c{b};")
+                a = (shared or {}).get(b)
+                if a is None:
+                    o.append(f"  {trig}(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+                else:
+                    o.append(f"  if (const real e = q[{3 * b + 2}] - q[{3 * a + 2}]; std::abs(e) < real(1e-4)) {{")
+                    o.append("    const real e2 = e * e, se = e - e * e2 * real(1.0 / 6), ce = 1 - e2 * real(0.5);")
+                    o.append(f"    s{b} = s{a} * ce + c{a} * se;")
+                    o.append(f"    c{b} = c{a} * ce - s{a} * se;")
+                    o.append("  } else {")
+                    o.append(f"    {trig}(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
+                    o.append("  }")
+                o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}];")
+            if part != "q":
+                o.append(f"  [[maybe_unused]] const real vx{b} = {vel(3 * b)}, vy{b} = {vel(3 * b + 1)}, "
+                         f"w{b} = {vel(3 * b + 2)};")
         r = 0
         for n, j in enumerate(self.joints):
-            o += self.joint_locals(n, j, r)
+            o += self.joint_locals(n, j, r, part)
             r += NROWS[j["kind"]]
         for k, c in enumerate(self.contacts):
             o += self.contact_locals(k, c["body"], r)
@@ -610,7 +621,7 @@ class Reduced(Kernel):
         self.pinned = {j["body"][0]: (n, first_row[n]) for n, j in enumerate(k.joints)
                        if j["kind"] == "revolute_to_frame" and j["body"][0] in pinned}
         self.orig = [i for i in range(k.m) if i not in self.full_pin_rows()]  # reduced row -> row
-        self.rows, self.defs = [], []
+        self.rows, self.defs_e, self.defs_g = [], [], []  # the columns on the angles; the gammas
         for i in self.orig:
             bodies, slots = k.rows[i]
             new, gamma = [], []
@@ -625,15 +636,15 @@ class Reduced(Kernel):
                 if cx[0] == 0 and cy[0] == 0 and not cp[1]:
                     new.append((0, 0, cp[0]))  # on the angle alone: a constant still
                 else:
-                    self.defs.append(f"  const real e{i}_{s} = "
+                    self.defs_e.append(f"  const real e{i}_{s} = "
                                      f"{product([(cx[0], cx[1] + [f'say{n}']), (-cy[0], cy[1] + [f'sax{n}']), cp])};")
                     new.append((0, 0, f"e{i}_{s}"))
                 gamma += [(cx[0], cx[1] + [f"gam{r}"]), (cy[0], cy[1] + [f"gam{r + 1}"])]
             self.rows.append((bodies, tuple(new)))
             if any(c != 0 for c, _ in gamma):
-                self.defs.append(f"  const real gr{i} = gam{i} - ({product(gamma)});")
+                self.defs_g.append(f"  const real gr{i} = gam{i} - ({product(gamma)});")
             else:
-                self.defs.append(f"  const real gr{i} = gam{i};")
+                self.defs_g.append(f"  const real gr{i} = gam{i};")
         # the whole system's order without the pin rows (which it eliminates first): the
         # same pivots after them, to round-off
         at = {i: r for r, i in enumerate(self.orig)}
@@ -644,62 +655,61 @@ class Reduced(Kernel):
 
     def emit_accelerations(self, sym, end=False):
         """{sym}_accelerations: the fused solve of the reduced system, qdd alone. With end,
-        {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd| (no
-        more where either is past tol), the condition estimate, every row's multiplier and the
-        joints' reactions."""
+        {sym}_end: RK4's end of a step besides (Kernel::end): the largest |Phi| and |J qd|
+        (no more where |Phi| is past tol, or |J qd| is and not project), the velocities'
+        projection where |J qd| is past tol, the condition estimate, every row's multiplier
+        and the joints' reactions."""
         k, nq = self.full, 3 * self.nb
         if end:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_end(const Model &model, "
-                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
-                 "Data &data, bool actuators, TrigCache *trig, real tol, real &residual, real &drift, "
-                 "real &condition, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
+                 "[[maybe_unused]] const DriverValues &dv, const VecQ &q, VecQ &qd, const VecQ &base, "
+                 "Data &data, bool actuators, TrigCache *trig, real tol, bool project, real &residual, "
+                 "real &drift, real &condition, VecR &lambda, VecQ &qdd, legsim_reaction *reaction) {"]
         else:
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
                  "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
-        o += k.rows_locals(self.shared_angles())
-        if end:
+        pinned_w = [f"  const real wr{b} = 1 / ((mass[{3 * b}] * say{n} * say{n} + mass[{3 * b + 1}] * sax{n} * sax{n}) "
+                    f"+ mass[{3 * b + 2}]);  // body {b} on its pin (joint {n}): its angle alone"
+                    for b, (n, r) in sorted(self.pinned.items())]
+        pinned_f = [f"  const real fr{b} = (say{n} * (Q{3 * b} - mass[{3 * b}] * gam{r}) - "
+                    f"sax{n} * (Q{3 * b + 1} - mass[{3 * b + 1}] * gam{r + 1})) + Q{3 * b + 2};"
+                    for b, (n, r) in sorted(self.pinned.items())]
+        # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
+        # the same number as dynamics' floor; the reduced one's are no larger)
+        floor = ["  real max_diag = 0;"]
+        for p in range(k.m):
+            floor.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
+            floor.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
+        if not end:
+            o += k.rows_locals(self.shared_angles(), trig="grid_trig")
+            # a stage needs no Phi, and some Jacobian entries serve only the floor below
+            unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
+                                                      for x in range(3) if k.rows[i][0][s] >= 0
+                                                      and k.rows[i][1][s][x] is V]
+            o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // not needed here")
+            o += self.forces_locals(store=False) + pinned_w + pinned_f + self.defs_e + self.defs_g + self.t_locals() + floor
+            o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
+            lname = lambda i: f"l{i}"  # noqa: E731
+        else:
+            # the positions' part first: the projection test and the factor need no velocities
+            o += k.rows_locals(self.shared_angles(), part="q", trig="grid_trig")
+            o.append("  real " + ", ".join(f"V{n} = qd[{n}]" for n in range(nq)) + ";  // projected below")
             # rows_max_residual's and velocity_drift's loops (rk4_step), in row order
             o.append("  real r = 0, jv;")
             for i in range(k.m):
                 o.append(f"  if (!(std::abs(phi{i}) <= r)) r = std::abs(phi{i});")
             o.append("  residual = r;")
+            o.append("  if (!(r <= tol)) return LEGSIM_OK;  // its positions need projecting: rk4_step's sequence")
             o.append("  r = 0;")
             for i in range(k.m):
-                o.append(f"  jv = std::abs({k.j_expr(i, lambda n: f'qd[{n}]', True)});")
+                o.append(f"  jv = std::abs({k.j_expr(i, lambda n: f'V{n}', True)});")
                 o.append("  r = jv > r ? jv : r;")
             o.append("  drift = r;")
-            # a step that needs projecting starts over (rk4_step): no solve here
-            o.append("  if (!(residual <= tol && drift <= tol)) return LEGSIM_OK;")
-            unused = []
-        else:  # a stage needs no Phi, and some Jacobian entries serve only the floor below
-            unused = [f"phi{i}" for i in range(k.m)] + [f"c{i}_{s}_{x}" for i in range(k.m) for s in range(2)
-                                                          for x in range(3) if k.rows[i][0][s] >= 0
-                                                          and k.rows[i][1][s][x] is V]
-        if unused:
-            o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // not needed here")
-        o += self.forces_locals()
-        for b, (n, r) in sorted(self.pinned.items()):
-            o.append(f"  // body {b} on its pin (joint {n}): its angle alone")
-            o.append(f"  const real wr{b} = 1 / ((mass[{3 * b}] * say{n} * say{n} + mass[{3 * b + 1}] * sax{n} * sax{n}) "
-                     f"+ mass[{3 * b + 2}]);")
-            o.append(f"  const real fr{b} = (say{n} * (Q{3 * b} - mass[{3 * b}] * gam{r}) - "
-                     f"sax{n} * (Q{3 * b + 1} - mass[{3 * b + 1}] * gam{r + 1})) + Q{3 * b + 2};")
-        o += self.defs
-        for n in range(nq):
-            b, x = divmod(n, 3)
-            if b not in self.pinned:
-                o.append(f"  const real t{n} = w[{n}] * Q{n};")
-            elif x == 2:
-                o.append(f"  const real t{n} = wr{b} * fr{b};")
-        # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
-        # the same number as dynamics' floor; the reduced one's are no larger)
-        o.append("  real max_diag = 0;")
-        for p in range(k.m):
-            o.append(f"  const real F{p} = {k.a_entry(p, p, True)};")
-            o.append(f"  max_diag = F{p} > max_diag ? F{p} : max_diag;")
-        if end:
+            o.append("  const bool projected = !(r <= tol);")
+            o.append("  if (projected && !project) return LEGSIM_OK;")
+            o += pinned_w + self.defs_e + floor
             # the pivots' range: the reduced system's, which are the whole factor's after its
             # pin rows, and the pin rows' own (eliminated before any other row on their body:
             # their entries of J W J^T alone)
@@ -719,10 +729,10 @@ class Reduced(Kernel):
                 o.append(f"  pmin = P{p} < pmin ? P{p} : pmin;")
                 o.append(f"  pmax = P{p} > pmax ? P{p} : pmax;")
             o.append("  condition = std::sqrt(pmax / pmin);")
+            o += self.projection_locals()
+            o += k.rows_locals(part="v", velocity=lambda n: f"V{n}")
+            o += self.forces_locals() + pinned_f + self.defs_g + self.t_locals()
             lname = lambda i: f"l{self.orig[i]}"  # noqa: E731  (the whole system's row)
-        else:
-            o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
-            lname = lambda i: f"l{i}"  # noqa: E731
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
         o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}")
@@ -759,15 +769,62 @@ class Reduced(Kernel):
                 o.append(f"  z += l{r} * real(0) + l{r + 1} * real(0);")
             o += [f"  lambda[{i}] = l{i};" for i in range(k.m)]
             o += k.reactions_locals()
-        o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
+            o.append("  if (!(z == z)) return LEGSIM_ERR_DIVERGED;")
+            o.append("  if (projected) {  // the state's velocities now: J qd = 0 to round-off")
+            o.append("    " + " ".join(f"qd[{n}] = V{n};" for n in range(nq)))
+            o.append("    drift = 0;")
+            o.append("  }")
+            o.append("  return LEGSIM_OK;")
+        else:
+            o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
         return o
 
-    def forces_locals(self):
+    def t_locals(self):
+        """M^-1 Q in the reduced coordinates: t<n> (a pinned body's on its angle alone)."""
+        o = []
+        for n in range(3 * self.nb):
+            b, x = divmod(n, 3)
+            if b not in self.pinned:
+                o.append(f"  const real t{n} = w[{n}] * Q{n};")
+            elif x == 2:
+                o.append(f"  const real t{n} = wr{b} * fr{b};")
+        return o
+
+    def projection_locals(self):
+        """Where projected: the velocities V<n> projected onto J V = 0, M-weighted, as the
+        general path's project does it in the whole system (linear_solve.cpp), here in the
+        reduced one (the same result to round-off): a pinned body's velocities v_b become
+        its angle's rate u_b = wr_b G_b^T M_b v_b (the M-nearest G_b u_b, which meets its
+        pin's rows), and with the reduced rows J_r, W_r (wr_b on a pinned body's angle):
+        u <- u - W_r J_r^T (J_r W_r J_r^T)^-1 J_r u, the factor's, then v_b = G_b u_b. The
+        whole projection is this one: it is M-orthogonal to the pins' G_b u, and the rest is
+        the reduced problem."""
+        o = ["  if (projected) {"]
+        for b, (n, r) in sorted(self.pinned.items()):
+            o.append(f"    const real ur{b} = wr{b} * ((mass[{3 * b}] * say{n} * V{3 * b} - mass[{3 * b + 1}] * sax{n} * "
+                     f"V{3 * b + 1}) + mass[{3 * b + 2}] * V{3 * b + 2});")
+        u = lambda n: f"ur{n // 3}" if n // 3 in self.pinned else f"V{n}"  # noqa: E731
+        o += [f"    const real pc{i} = {self.j_expr(i, u, True)};" for i in range(self.m)]
+        o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}")]
+        for n in range(3 * self.nb):
+            b, x = divmod(n, 3)
+            jt = self.jt_expr(n, lambda i: f"py{i}", True)
+            if b not in self.pinned:
+                if jt != "0":
+                    o.append(f"    V{n} -= w[{n}] * ({jt});")
+            elif x == 2:
+                pn, _ = self.pinned[b]
+                o.append(f"    const real up{b} = ur{b} - wr{b} * ({jt});")
+                o.append(f"    V{n - 2} = say{pn} * up{b}, V{n - 1} = -sax{pn} * up{b}, V{n} = up{b};")
+        o.append("  }")
+        return o
+
+    def forces_locals(self, store=True):
         """Q as locals Q<n>: base (gravity and the force elements) and, where actuators, each
         actuator's axial force Fa along its cylinder's axis (applied_forces' arithmetic in its
-        order, forces.cpp; actuator_force gives Fa from the command), written to data.force_q
-        too (Data's Q of the last solve)."""
+        order, forces.cpp; actuator_force gives Fa from the command); with store, written to
+        data.force_q too (Data's Q of the step's end; every other reader writes it first)."""
         nq = 3 * self.nb
         q = [f"base[{n}]" for n in range(nq)]
         o = []
@@ -784,7 +841,8 @@ class Reduced(Kernel):
             q[j + 1] = f"{q[j + 1]} - fc{a}"
         for n in range(nq):
             o.append(f"  const real Q{n} = {q[n]};")
-            o.append(f"  data.force_q[{n}] = Q{n};")
+            if store:
+                o.append(f"  data.force_q[{n}] = Q{n};")
         return o
 
     def shared_angles(self):
