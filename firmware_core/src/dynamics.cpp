@@ -8,14 +8,6 @@
 namespace legsim {
 
 namespace {
-// The options' disabled forces for a solve on layout. Driven analyses: the drivers supply the
-// actuator forces. Stops act besides them.
-uint32_t layout_disable(const Sim &sim, const Layout &layout) {
-  uint32_t disable = sim.opt.disable;
-  if (layout.m > sim.model.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
-  return disable;
-}
-
 // Q at (q, qd) for a solve on layout.
 void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd) {
   applied_forces(sim.model, layout_disable(sim, layout), sim.data, q, qd, sim.data.force_q);
@@ -85,29 +77,25 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   return LEGSIM_OK;
 }
 
-legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
 #if LEGSIM_KERNELS_REDUCED
   if (reduced_available(layout)) {
-    // neither multipliers nor a factor (the step's end has its own); a singular matrix
-    // reports an infinite condition, as dynamics_solve
-    Data &d = sim.data;
     bool actuators, elements;
     const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
-    const legsim_status s = layout.kernel->accelerations(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd,
-                                                         base, d, actuators, stage_trig(d), qdd);
-    if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
-    return s;
+    return reduced_stage(sim, *layout.kernel, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
+                         q, qd, qdd);
   }
 #endif
   return dynamics_solve(sim, layout, q, qd, qdd, false, false);
 }
 
 #if LEGSIM_KERNELS_REDUCED
-legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, VecQ &qd, VecQ &qdd,
+legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd,
                            legsim_reaction *reaction, real tol, bool project, real &residual, real &drift) {
   Data &d = sim.data;
-  bool actuators, elements;
-  const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
+  const Layout &layout = *plan.layout;
+  bool actuators = plan.actuators, elements = false;
+  const VecQ &base = plan.kernel ? *plan.base : reduced_base(sim, layout, q, qd, actuators, elements);
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
                             stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
@@ -210,7 +198,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     // before (a changed command alone or not), so a refused call changes no later result
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
     real residual, drift;  // (no projection test here: the report's residual stays the step's)
-    const legsim_status s = dynamics_end(sim, lay, d.q, d.qd, qdd, reactions ? d.reaction : nullptr,
+    const legsim_status s = dynamics_end(sim, stage_plan(sim, lay), d.q, d.qd, qdd, reactions ? d.reaction : nullptr,
                                          real(INFINITY), false, residual, drift);
     if (s != LEGSIM_OK) return s;
     stop_forces_update(sim);

@@ -87,8 +87,9 @@ legsim_status rk4_step(Sim &sim) {
   // stage 1: (v0, a0) at the start
   stage_first(n, h2, d.q.data(), d.qd.data(), d.qdd.data(), qs.data(), vs.data());
   // stages 2 and 3 at the midpoint (weight 2), 4 at the end
+  const StagePlan plan = stage_plan(sim, d.dyn);
   for (int stage = 0; stage < 3; ++stage) {
-    const legsim_status s = dynamics_stage(sim, d.dyn, qs, vs, a);
+    const legsim_status s = dynamics_stage(sim, plan, qs, vs, a);
     if (s != LEGSIM_OK) return s;
     if (stage == 0)
       stage_second(n, 2, h2, d.q.data(), d.qd.data(), d.qdd.data(), a.data(), qs.data(), vs.data(), sum_v.data(),
@@ -120,7 +121,7 @@ legsim_status rk4_step(Sim &sim) {
     // whose positions need projecting starts over below (no rows or factor kept), as after
     // the fused solve.
     real drift;
-    if (dynamics_end(sim, lay, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), projection,
+    if (dynamics_end(sim, plan, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), projection,
                      d.report.residual, drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
       return rk4_finish(sim, false);

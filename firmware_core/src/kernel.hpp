@@ -163,6 +163,53 @@ inline bool reduced_available(const Layout &layout) {
 #endif
 }
 
+// RK4's solves of one step on a layout (dynamics_stage, dynamics_end): what stays the same
+// from solve to solve, decided once (stage_plan): where the reduced system serves and its
+// base forces are gravity alone (no force element acts), its kernel, driver values, base
+// and whether the actuators act; else kernel null (each solve decides: dynamics_stage_solve,
+// sim.hpp, and reduced_base).
+struct StagePlan {
+  const Layout *layout;
+  const Kernel *kernel;
+  const DriverValues *dv;
+  const VecQ *base;
+  bool actuators;
+};
+inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
+  StagePlan p{&layout, nullptr, nullptr, nullptr, false};
+  if (!reduced_available(layout)) return p;
+  const uint32_t disable = layout_disable(sim, layout);
+  const bool elements = LEGSIM_WITH_FORCE_ELEMENTS && sim.data.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
+  if (elements || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
+  p.kernel = layout.kernel;
+  p.dv = layout.stops ? &sim.data.stop_drivers : &sim.data.drivers;
+  p.base = &sim.model.gravity_force;
+  p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
+  return p;
+}
+// RK4's end of a step and its restart in the reduced system (Kernel::end), on the plan's
+// layout where reduced_available: residual and drift, the largest |Phi| and |J qd|; where the drift is
+// past tol, project and no force element acts (their forces may depend on qd), qd projected
+// onto J qd = 0 and drift 0; unless the residual or the drift is past tol then (no more)
+// qdd, the multipliers, the condition estimate into the report and reaction where not null.
+// No rows or factor kept.
+legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd,
+                           legsim_reaction *reaction, real tol, bool project, real &residual, real &drift);
+// A stage's solve in the reduced system (Kernel::accelerations): neither multipliers nor a
+// factor (the step's end has its own); a singular matrix reports an infinite condition, as
+// dynamics_solve.
+inline legsim_status reduced_stage(Sim &sim, const Kernel &kern, const DriverValues &dv, const VecQ &base,
+                                   bool actuators, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+  const legsim_status s = kern.accelerations(sim.model, dv, q, qd, base, sim.data, actuators, stage_trig(sim.data), qdd);
+  if (s == LEGSIM_ERR_SINGULAR) sim.data.report.condition = real(INFINITY);
+  return s;
+}
+// RK4's stage solve at (q, qd): dynamics_stage_solve's, with the plan's decisions.
+inline legsim_status dynamics_stage(Sim &sim, const StagePlan &plan, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+  if (!plan.kernel) return dynamics_stage_solve(sim, *plan.layout, q, qd, qdd);
+  return reduced_stage(sim, *plan.kernel, *plan.dv, *plan.base, plan.actuators, q, qd, qdd);
+}
+
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr
 // (the general path).
 const Kernel *kernel_find(const Model &model, bool stance = false);

@@ -486,19 +486,19 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // computes them from its locals), for the caller's all-or-nothing to put back on failure.
 legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
-// RK4's stage: qdd alone at (q, qd) on layout. In the reduced system where the layout's
-// kernel has it (reduced_available, kernel.hpp; Kernel::accelerations: the same qdd as
-// dynamics_solve's to round-off, nothing else written but Q), else dynamics_solve without
-// keep.
-legsim_status dynamics_stage(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
-// RK4's end of a step and its restart in the reduced system (Kernel::end), where
-// reduced_available: residual and drift, the largest |Phi| and |J qd|; where the drift is
-// past tol, project and no force element acts (their forces may depend on qd), qd projected
-// onto J qd = 0 and drift 0; unless the residual or the drift is past tol then (no more)
-// qdd, the multipliers, the condition estimate into the report and reaction where not null.
-// No rows or factor kept.
-legsim_status dynamics_end(Sim &sim, const Layout &layout, const VecQ &q, VecQ &qd, VecQ &qdd,
-                           legsim_reaction *reaction, real tol, bool project, real &residual, real &drift);
+// The options' disabled forces for a solve on layout. Driven analyses: the drivers supply the
+// actuator forces. Stops act besides them.
+inline uint32_t layout_disable(const Sim &sim, const Layout &layout) {
+  uint32_t disable = sim.opt.disable;
+  if (layout.m > sim.model.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
+  return disable;
+}
+// RK4's stage solve, qdd alone at (q, qd) on layout: in the reduced system where the
+// layout's kernel has it (reduced_available, kernel.hpp; Kernel::accelerations: the same qdd
+// as dynamics_solve's to round-off, nothing else written), else dynamics_solve without keep.
+// The stages of a step call it through dynamics_stage (kernel.hpp), with what they share
+// decided once.
+legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
 // The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
 // generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).
