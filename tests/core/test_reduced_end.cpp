@@ -1,0 +1,175 @@
+// RK4's end of a step in the reduced system (Kernel::end through dynamics_end, kernel.hpp)
+// against the general path's sequence at the same state (rk4_step's: project, then
+// dynamics_solve): velocities off J qd = 0 by a known amount are projected M-weighted in
+// the whole system by project (linear_solve.cpp), and the end's own projection, in the
+// reduced system where each pinned body keeps its angle alone, must give the same
+// velocities, accelerations, multipliers and reactions to round-off. Also what the end
+// leaves alone: the velocities unless it solves, and a step whose positions need projecting.
+// Only where the build has the reduced solves (LEGSIM_KERNELS_REDUCED); else it says so.
+#include <cmath>
+#include <cstdio>
+
+#include "kernel.hpp"
+#include "legsim/legsim.h"
+#include "legsim/models.h"
+#include "unity.h"
+
+void setUp(void) {}
+void tearDown(void) {}
+
+namespace {
+using namespace legsim;
+
+#if LEGSIM_KERNELS_REDUCED && !LEGSIM_USE_FLOAT
+alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[64 * 1024];
+constexpr real kTol = 1e-10;  // the default options' newton_tol
+constexpr int NJ = 8;         // the leg's joints
+
+// The leg at its stand pose pushed by 50 N on its upper actuator for 0.2 s (RK4): a moving
+// state.
+Sim &moving_leg() {
+  legsim_options opt = legsim_default_options();
+  opt.integrator = LEGSIM_INTEGRATOR_RK4;
+  TEST_ASSERT_EQUAL_DOUBLE(kTol, opt.newton_tol);
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_TRUE(legsim_sim_size() <= sizeof storage);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &legsim_model_leg_revolute, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 50.0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 200));
+  Sim &s = *reinterpret_cast<Sim *>(sim);
+  TEST_ASSERT_TRUE_MESSAGE(reduced_available(s.data.dyn), "the leg's layout has the reduced solves");
+  return s;
+}
+
+// v + 1e-6 m/s (rad/s) times a fixed pattern: off J v = 0 by about that much
+VecQ drifted(const VecQ &v, int n) {
+  VecQ out = v;
+  for (int k = 0; k < n; ++k) out[k] += real(1e-6) * std::sin(real(1.3) * k + real(0.4));
+  return out;
+}
+
+real max_abs(const real *a, const real *b, int n) {
+  real e = 0;
+  for (int k = 0; k < n; ++k) e = std::fmax(e, std::fabs(a[k] - b[k]));
+  return e;
+}
+real max_abs(const real *a, int n) {
+  real e = 0;
+  for (int k = 0; k < n; ++k) e = std::fmax(e, std::fabs(a[k]));
+  return e;
+}
+
+void test_projects_as_the_whole_system(void) {
+  Sim &s = moving_leg();
+  Data &d = s.data;
+  const Model &m = s.model;
+  const Layout &lay = d.dyn;
+  const int n = m.nq, mr = lay.m;
+  const VecQ q = d.q, v = drifted(d.qd, n);
+
+  // the general path: rows at (q, v), factor, project, gamma at the projected v, solve
+  VecQ v_ref = v, qdd_ref;
+  VecR tmp;
+  rows_eval(m, lay, d.stop_drivers, q, v_ref, d.rows);
+  TEST_ASSERT_TRUE(rows_max_residual(lay, d.rows) <= kTol);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, factor_build(lay, d.rows, m.minv, d.factor));
+  const real condition_ref = d.factor.condition;
+  j_times(lay, d.rows, v, tmp);
+  const real drift_before = max_abs(tmp.data(), mr);
+  TEST_ASSERT_TRUE(drift_before > 100 * kTol);
+  project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v_ref, tmp);
+  rows_eval(m, lay, d.stop_drivers, q, v_ref, d.rows);
+  legsim_reaction reaction_ref[NJ];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_solve(s, lay, q, v_ref, qdd_ref, true, true, reaction_ref));
+  const VecR lambda_ref = d.lambda;
+
+  // the end's
+  VecQ v_end = v, qdd_end;
+  legsim_reaction reaction_end[NJ];
+  real residual = -1, drift = -1;
+  d.lambda.setZero();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, lay), q, v_end, qdd_end, reaction_end, kTol, true,
+                                                residual, drift));
+  TEST_ASSERT_TRUE(residual <= kTol);
+  TEST_ASSERT_EQUAL_DOUBLE(0.0, drift);  // projected
+
+  // its velocities meet J v = 0 as well as project's, and are project's to round-off
+  rows_eval(m, lay, d.stop_drivers, q, v_end, d.rows);
+  j_times(lay, d.rows, v_end, tmp);
+  const real drift_after = max_abs(tmp.data(), mr);
+  const real dv = max_abs(v_end.data(), v_ref.data(), n), vs = max_abs(v_ref.data(), n);
+  const real dqdd = max_abs(qdd_end.data(), qdd_ref.data(), n), qdds = max_abs(qdd_ref.data(), n);
+  const real dl = max_abs(d.lambda.data(), lambda_ref.data(), mr), ls = max_abs(lambda_ref.data(), mr);
+  const real dr = max_abs(&reaction_end[0].force_n[0], &reaction_ref[0].force_n[0], 3 * m.nj);
+  std::printf("drift %.3g -> %.3g; differences from the general path: v %.3g (of %.3g), qdd %.3g (of %.3g), "
+              "lambda %.3g (of %.3g), reactions %.3g N, condition %.3g vs %.3g\n",
+              drift_before, drift_after, dv, vs, dqdd, qdds, dl, ls, dr, d.report.condition, condition_ref);
+  TEST_ASSERT_TRUE(drift_after <= 1e-14 * vs);
+  TEST_ASSERT_TRUE(dv <= 1e-14 * vs);
+  TEST_ASSERT_TRUE(dqdd <= 1e-12 * qdds);
+  TEST_ASSERT_TRUE(dl <= 1e-12 * ls);
+  TEST_ASSERT_TRUE(dr <= 1e-12 * ls);
+  TEST_ASSERT_TRUE(std::fabs(d.report.condition - condition_ref) <= 1e-12 * condition_ref);
+  // and not the drifted velocities: the projection moved them by about the drift
+  TEST_ASSERT_TRUE(max_abs(v_end.data(), v.data(), n) > 1e-7);
+}
+
+// Not asked to project (a restart, or force elements acting): it stops at the test and
+// leaves the velocities and the accelerations as they were.
+void test_leaves_alone_unless_it_solves(void) {
+  Sim &s = moving_leg();
+  Data &d = s.data;
+  const int n = s.model.nq;
+  const VecQ q = d.q, v = drifted(d.qd, n);
+  VecQ v_end = v, qdd;
+  qdd.setConstant(7);
+  real residual, drift;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q, v_end, qdd, nullptr, kTol, false,
+                                                residual, drift));
+  TEST_ASSERT_TRUE(residual <= kTol);
+  TEST_ASSERT_TRUE(drift > 100 * kTol);
+  TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
+  for (int k = 0; k < n; ++k) TEST_ASSERT_EQUAL_DOUBLE(7.0, qdd[k]);
+
+  // positions off Phi = 0 (1e-6 m on the foot's link): rk4_step's sequence, not the end
+  VecQ q_off = q;
+  q_off[15] += real(1e-6);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q_off, v_end, qdd, nullptr, kTol, true,
+                                                residual, drift));
+  TEST_ASSERT_TRUE(residual > kTol);
+  TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
+  for (int k = 0; k < n; ++k) TEST_ASSERT_EQUAL_DOUBLE(7.0, qdd[k]);
+}
+
+// A load on the foot (a force element: its forces may depend on the velocities): the plan
+// leaves the base to each solve, and the end does not project.
+void test_no_projection_under_force_elements(void) {
+  Sim &s = moving_leg();
+  Data &d = s.data;
+  const int n = s.model.nq;
+  const legsim_real load[2] = {20.0, -150.0};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_force(reinterpret_cast<legsim_sim *>(&s), 0, load));
+  const StagePlan plan = stage_plan(s, d.dyn);
+  TEST_ASSERT_NULL(plan.kernel);
+  const VecQ q = d.q, v = drifted(d.qd, n);
+  VecQ v_end = v, qdd;
+  real residual, drift;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, plan, q, v_end, qdd, nullptr, kTol, true, residual, drift));
+  TEST_ASSERT_TRUE(drift > 100 * kTol);
+  TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
+}
+#endif
+}  // namespace
+
+int main(void) {
+  UNITY_BEGIN();
+#if LEGSIM_KERNELS_REDUCED && !LEGSIM_USE_FLOAT
+  RUN_TEST(test_projects_as_the_whole_system);
+  RUN_TEST(test_leaves_alone_unless_it_solves);
+  RUN_TEST(test_no_projection_under_force_elements);
+#else
+  std::printf("this build has no reduced solves (LEGSIM_KERNELS_REDUCED 0): nothing to compare\n");
+#endif
+  return UNITY_END();
+}
