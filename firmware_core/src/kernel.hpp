@@ -135,8 +135,8 @@ struct Kernel {
                                  const VecQ &base, Data &data, bool actuators, TrigCache *trig, VecQ &qdd);
   // RK4's end of a step (and its restart at a state) in the same reduced system: the largest
   // |Phi| (residual, as rows_max_residual) and |J qd| (drift, as velocity_drift) for its
-  // projection test. Where the residual is past tol, or the drift is and not project (either
-  // not a number too): no more, LEGSIM_OK (the step starts over). Where the drift is past tol
+  // projection test. Where the residual is past tol, or the drift is and not project: no
+  // more, LEGSIM_OK (the step starts over). Where the drift is past tol
   // and project: qd projected onto J qd = 0 (M-weighted, as project; drift then 0), written
   // only when the whole call succeeds; base must not depend on qd then. Then besides qdd the
   // condition estimate from the pivots (the reduced system's and the pins' own, the whole

@@ -495,7 +495,8 @@ inline uint32_t layout_disable(const Sim &sim, const Layout &layout) {
 }
 // RK4's stage solve, qdd alone at (q, qd) on layout: in the reduced system where the
 // layout's kernel has it (reduced_available, kernel.hpp; Kernel::accelerations: the same qdd
-// as dynamics_solve's to round-off, nothing else written), else dynamics_solve without keep.
+// as dynamics_solve's to round-off, and as it the actuators' forces and events; no
+// multipliers or factor), else dynamics_solve without keep.
 // The stages of a step call it through dynamics_stage (kernel.hpp), with what they share
 // decided once.
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);

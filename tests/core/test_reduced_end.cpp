@@ -1,5 +1,6 @@
 // RK4's end of a step in the reduced system (Kernel::end through dynamics_end, kernel.hpp)
-// against the general path's sequence at the same state (rk4_step's: project, then
+// against the general path's sequence at the same state (the revolute and slot legs; a
+// force command, a servo, gravity off) (rk4_step's: project, then
 // dynamics_solve): velocities off J qd = 0 by a known amount are projected M-weighted in
 // the whole system by project (linear_solve.cpp), and the end's own projection, in the
 // reduced system where each pinned body keeps its angle alone, must give the same
@@ -25,20 +26,33 @@ alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[64 * 1024];
 constexpr real kTol = 1e-10;  // the default options' newton_tol
 constexpr int NJ = 8;         // the leg's joints
 
-// The leg at its stand pose pushed by 50 N on its upper actuator for 0.2 s (RK4): a moving
-// state.
-Sim &moving_leg() {
+// How a scene drives the leg from its stand pose (RK4).
+enum Drive { PUSH_50N, SERVO, PUSH_WEIGHTLESS };
+
+// The leg (model: its revolute or slot variant) at its stand pose, driven for n steps: 50 N
+// on the upper actuator; or its servo sent 5 cm out (the actuator's force then depends on
+// the velocities); or 50 N with gravity off (no stage plan: each solve takes its base
+// forces from reduced_base). A moving state on the reduced system (no stop reached).
+Sim &moving_leg(const legsim_model_desc *model = &legsim_model_leg_revolute, Drive drive = PUSH_50N, int n = 200) {
   legsim_options opt = legsim_default_options();
   opt.integrator = LEGSIM_INTEGRATOR_RK4;
+  if (drive == PUSH_WEIGHTLESS) opt.disable |= LEGSIM_DISABLE_GRAVITY;
   TEST_ASSERT_EQUAL_DOUBLE(kTol, opt.newton_tol);
   legsim_sim *sim = nullptr;
   TEST_ASSERT_TRUE(legsim_sim_size() <= sizeof storage);
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &legsim_model_leg_revolute, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, model, &opt, &sim));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 50.0));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 200));
+  if (drive == SERVO) {
+    legsim_real len[2];
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, len, nullptr));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, 0, len[0] + 0.05));
+  } else {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 50.0));
+  }
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
   Sim &s = *reinterpret_cast<Sim *>(sim);
   TEST_ASSERT_TRUE_MESSAGE(reduced_available(s.data.dyn), "the leg's layout has the reduced solves");
+  TEST_ASSERT_TRUE((stage_plan(s, s.data.dyn).kernel != nullptr) == (drive != PUSH_WEIGHTLESS));
   return s;
 }
 
@@ -60,8 +74,7 @@ real max_abs(const real *a, int n) {
   return e;
 }
 
-void test_projects_as_the_whole_system(void) {
-  Sim &s = moving_leg();
+void projects_as_the_whole_system(Sim &s, const char *scene) {
   Data &d = s.data;
   const Model &m = s.model;
   const Layout &lay = d.dyn;
@@ -102,9 +115,9 @@ void test_projects_as_the_whole_system(void) {
   const real dqdd = max_abs(qdd_end.data(), qdd_ref.data(), n), qdds = max_abs(qdd_ref.data(), n);
   const real dl = max_abs(d.lambda.data(), lambda_ref.data(), mr), ls = max_abs(lambda_ref.data(), mr);
   const real dr = max_abs(&reaction_end[0].force_n[0], &reaction_ref[0].force_n[0], 3 * m.nj);
-  std::printf("drift %.3g -> %.3g; differences from the general path: v %.3g (of %.3g), qdd %.3g (of %.3g), "
+  std::printf("%s: drift %.3g -> %.3g; differences from the general path: v %.3g (of %.3g), qdd %.3g (of %.3g), "
               "lambda %.3g (of %.3g), reactions %.3g N, condition %.3g vs %.3g\n",
-              drift_before, drift_after, dv, vs, dqdd, qdds, dl, ls, dr, d.report.condition, condition_ref);
+              scene, drift_before, drift_after, dv, vs, dqdd, qdds, dl, ls, dr, d.report.condition, condition_ref);
   TEST_ASSERT_TRUE(drift_after <= 1e-14 * vs);
   TEST_ASSERT_TRUE(dv <= 1e-14 * vs);
   TEST_ASSERT_TRUE(dqdd <= 1e-12 * qdds);
@@ -113,6 +126,17 @@ void test_projects_as_the_whole_system(void) {
   TEST_ASSERT_TRUE(std::fabs(d.report.condition - condition_ref) <= 1e-12 * condition_ref);
   // and not the drifted velocities: the projection moved them by about the drift
   TEST_ASSERT_TRUE(max_abs(v_end.data(), v.data(), n) > 1e-7);
+}
+
+void test_projects_as_the_whole_system(void) { projects_as_the_whole_system(moving_leg(), "leg, 50 N"); }
+void test_projects_as_the_whole_system_slot(void) {
+  projects_as_the_whole_system(moving_leg(&legsim_model_leg_slot, PUSH_50N, 50), "slot leg, 50 N");
+}
+void test_projects_as_the_whole_system_servo(void) {
+  projects_as_the_whole_system(moving_leg(&legsim_model_leg_revolute, SERVO), "leg, servo");
+}
+void test_projects_as_the_whole_system_weightless(void) {
+  projects_as_the_whole_system(moving_leg(&legsim_model_leg_revolute, PUSH_WEIGHTLESS), "leg, 50 N, no gravity");
 }
 
 // Not asked to project (a restart, or force elements acting): it stops at the test and
@@ -166,6 +190,9 @@ int main(void) {
   UNITY_BEGIN();
 #if LEGSIM_KERNELS_REDUCED && !LEGSIM_USE_FLOAT
   RUN_TEST(test_projects_as_the_whole_system);
+  RUN_TEST(test_projects_as_the_whole_system_slot);
+  RUN_TEST(test_projects_as_the_whole_system_servo);
+  RUN_TEST(test_projects_as_the_whole_system_weightless);
   RUN_TEST(test_leaves_alone_unless_it_solves);
   RUN_TEST(test_no_projection_under_force_elements);
 #else
