@@ -23,7 +23,7 @@ const VecQ &reduced_base(Sim &sim, const Layout &layout, const VecQ &q, const Ve
   const uint32_t disable = layout_disable(sim, layout);
   actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
   Data &d = sim.data;
-  elements = LEGSIM_WITH_FORCE_ELEMENTS && d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
+  elements = force_elements_act(sim, disable);
   if (!(disable & LEGSIM_DISABLE_GRAVITY) && !elements) return sim.model.gravity_force;
   applied_forces(sim.model, disable | LEGSIM_DISABLE_ACTUATORS, d, q, qd, d.force_q);
   return d.force_q;

@@ -136,13 +136,13 @@ struct Kernel {
   // RK4's end of a step (and its restart at a state) in the same reduced system: the largest
   // |Phi| (residual, as rows_max_residual) and |J qd| (drift, as velocity_drift) for its
   // projection test. Where the residual is past tol, or the drift is and not project: no
-  // more, LEGSIM_OK (the step starts over). Where the drift is past tol
-  // and project: qd projected onto J qd = 0 (M-weighted, as project; drift then 0), written
-  // only when the whole call succeeds; base must not depend on qd then. Then besides qdd the
-  // condition estimate from the pivots (the reduced system's and the pins' own, the whole
-  // factor's to round-off), every row's multiplier (a pin's from its body's x and y
-  // equations) and, reaction not null, the joints' reactions. No rows or factor kept.
-  // Statuses as accelerations'. nullptr with it.
+  // more, LEGSIM_OK (the step starts over). Where the drift is past tol and project: qd
+  // projected onto J qd = 0 (M-weighted, as project; drift then 0), written only when the
+  // whole call succeeds; base must not depend on qd then. Then besides qdd the condition
+  // estimate from the pivots (the reduced system's and the pins' own, the whole factor's to
+  // round-off), every row's multiplier (a pin's from its body's x and y equations) and,
+  // reaction not null, the joints' reactions. No rows or factor kept. Statuses as
+  // accelerations'. nullptr with it.
   legsim_status (*end)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
                        const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
                        bool project, real &residual, real &drift, real &condition, VecR &lambda,
@@ -179,8 +179,7 @@ inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
   StagePlan p{&layout, nullptr, nullptr, nullptr, false};
   if (!reduced_available(layout)) return p;
   const uint32_t disable = layout_disable(sim, layout);
-  const bool elements = LEGSIM_WITH_FORCE_ELEMENTS && sim.data.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
-  if (elements || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
+  if (force_elements_act(sim, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
   p.kernel = layout.kernel;
   p.dv = layout.stops ? &sim.data.stop_drivers : &sim.data.drivers;
   p.base = &sim.model.gravity_force;
@@ -188,11 +187,11 @@ inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
   return p;
 }
 // RK4's end of a step and its restart in the reduced system (Kernel::end), on the plan's
-// layout where reduced_available: residual and drift, the largest |Phi| and |J qd|; where the drift is
-// past tol, project and no force element acts (their forces may depend on qd), qd projected
-// onto J qd = 0 and drift 0; unless the residual or the drift is past tol then (no more)
-// qdd, the multipliers, the condition estimate into the report and reaction where not null.
-// No rows or factor kept.
+// layout where reduced_available: residual and drift, the largest |Phi| and |J qd|; where
+// the drift is past tol, project and no force element acts (their forces may depend on qd),
+// qd projected onto J qd = 0 and drift 0; unless the residual or the drift is past tol then
+// (no more) qdd, the multipliers, the condition estimate into the report and reaction where
+// not null. No rows or factor kept.
 legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd,
                            legsim_reaction *reaction, real tol, bool project, real &residual, real &drift);
 // A stage's solve in the reduced system (Kernel::accelerations): neither multipliers nor a

@@ -493,6 +493,11 @@ inline uint32_t layout_disable(const Sim &sim, const Layout &layout) {
   if (layout.m > sim.model.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
   return disable;
 }
+// Whether force elements act in a solve with these disabled forces (their forces may depend
+// on the velocities).
+inline bool force_elements_act(const Sim &sim, uint32_t disable) {
+  return LEGSIM_WITH_FORCE_ELEMENTS && sim.data.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
+}
 // RK4's stage solve, qdd alone at (q, qd) on layout: in the reduced system where the
 // layout's kernel has it (reduced_available, kernel.hpp; Kernel::accelerations: the same qdd
 // as dynamics_solve's to round-off, and as it the actuators' forces and events; no
