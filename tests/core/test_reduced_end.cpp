@@ -1,12 +1,12 @@
 // RK4's end of a step in the reduced system (Kernel::end through dynamics_end, kernel.hpp)
-// against the general path's sequence at the same state (the revolute and slot legs; a
-// force command, a servo, gravity off) (rk4_step's: project, then
-// dynamics_solve): velocities off J qd = 0 by a known amount are projected M-weighted in
-// the whole system by project (linear_solve.cpp), and the end's own projection, in the
-// reduced system where each pinned body keeps its angle alone, must give the same
-// velocities, accelerations, multipliers and reactions to round-off. Also what the end
-// leaves alone: the velocities unless it solves, and a step whose positions need projecting.
-// Only where the build has the reduced solves (LEGSIM_KERNELS_REDUCED); else it says so.
+// against the general path's sequence at the same state (rk4_step's: project, then
+// dynamics_solve), on the revolute and slot legs under a force command, a servo and with
+// gravity off: velocities off J qd = 0 by a known amount are projected M-weighted in the
+// whole system by project (linear_solve.cpp), and the end's own projection, in the reduced
+// system where each pinned body keeps its angle alone, must give the same velocities,
+// accelerations, multipliers and reactions to round-off. Also what the end leaves alone:
+// the velocities unless it solves, and a step whose positions need projecting. Built only
+// where the core has the reduced solves, in double (tests/core/CMakeLists.txt).
 #include <cmath>
 #include <cstdio>
 
@@ -18,10 +18,13 @@
 void setUp(void) {}
 void tearDown(void) {}
 
+#if !LEGSIM_KERNELS_REDUCED || LEGSIM_USE_FLOAT
+#error "test_reduced_end needs a double core with the reduced solves"
+#endif
+
 namespace {
 using namespace legsim;
 
-#if LEGSIM_KERNELS_REDUCED && !LEGSIM_USE_FLOAT
 alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[64 * 1024];
 constexpr real kTol = 1e-10;  // the default options' newton_tol
 constexpr int NJ = 8;         // the leg's joints
@@ -183,20 +186,15 @@ void test_no_projection_under_force_elements(void) {
   TEST_ASSERT_TRUE(drift > 100 * kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
 }
-#endif
 }  // namespace
 
 int main(void) {
   UNITY_BEGIN();
-#if LEGSIM_KERNELS_REDUCED && !LEGSIM_USE_FLOAT
   RUN_TEST(test_projects_as_the_whole_system);
   RUN_TEST(test_projects_as_the_whole_system_slot);
   RUN_TEST(test_projects_as_the_whole_system_servo);
   RUN_TEST(test_projects_as_the_whole_system_weightless);
   RUN_TEST(test_leaves_alone_unless_it_solves);
   RUN_TEST(test_no_projection_under_force_elements);
-#else
-  std::printf("this build has no reduced solves (LEGSIM_KERNELS_REDUCED 0): nothing to compare\n");
-#endif
   return UNITY_END();
 }
