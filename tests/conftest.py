@@ -51,3 +51,50 @@ def pytest_report_header(config):
     if NO_SKIP:
         return "LEGSIM_NO_SKIP=1: skips count as failures"
     return None
+
+
+# A line at least every LEGSIM_TEST_TICK seconds (default 20) while one test runs, so
+# that a long test (a SocketCAN scene in the VM, a peer engine's convergence run) is
+# not a silence of minutes in the log. The line goes to the terminal's own file
+# descriptor, which pytest's output capture saved before it redirected stdout.
+TICK_S = float(os.environ.get("LEGSIM_TEST_TICK", "20"))
+
+
+def _terminal_fd(config):
+    capman = config.pluginmanager.getplugin("capturemanager")
+    capturing = getattr(capman, "_global_capturing", None)
+    out = getattr(capturing, "out", None)
+    return getattr(out, "targetfd_save", None)  # None when capture is off (-s): use stdout
+
+
+@pytest.hookimpl(hookwrapper=True)
+def pytest_runtest_call(item):
+    import threading
+    import time
+
+    if TICK_S <= 0:
+        yield
+        return
+    fd = _terminal_fd(item.config)
+    done = threading.Event()
+    t0 = time.monotonic()
+
+    def tick():
+        first = True
+        while not done.wait(TICK_S):
+            # The first line starts a new one: pytest -v has written the test's name.
+            line = (("\n" if first else "") +
+                    f"    ... {item.nodeid}: still running, {time.monotonic() - t0:.0f} s\n")
+            first = False
+            try:
+                os.write(fd if fd is not None else 1, line.encode())
+            except OSError:
+                return
+
+    thread = threading.Thread(target=tick, name="legsim-test-tick", daemon=True)
+    thread.start()
+    try:
+        yield
+    finally:
+        done.set()
+        thread.join()

@@ -108,7 +108,8 @@ legsim_setup() {
 
 # legsim_build PRESET: configures and builds a CMake preset with the .venv's
 # python; the output goes to out/logs/build-PRESET.log, with a progress line
-# every 10 % of the build (and any warning or error) on stderr.
+# every 10 % of the build (and any warning or error) on stderr, and a line at
+# least every 20 s while one step (a large generated file) compiles.
 legsim_build() {
   local preset=$1 log=$legsim_logs/build-$1.log
   mkdir -p "$legsim_logs" && : >"$log"
@@ -117,8 +118,14 @@ legsim_build() {
   legsim_logged "build-$preset" cmake --preset "$preset" \
     -DPython3_EXECUTABLE="$legsim_root/.venv/bin/python" || return 1
   legsim_say "building the $preset preset"
-  local rc
-  cmake --build --preset "$preset" 2>&1 | tee -a "$log" | awk '
+  local rc ticker awk_cmd=(awk)
+  # mawk (Debian's awk) buffers a pipe's input unless told it is interactive.
+  awk -W version 2>/dev/null | grep -qi mawk && awk_cmd=(awk -W interactive)
+  (while sleep 20; do
+     echo "build:   ... $((SECONDS - t0)) s: $(tail -n 1 "$log" | tr -d '\r' | cut -c1-100)" >&2
+   done) &
+  ticker=$!
+  cmake --build --preset "$preset" 2>&1 | tee -a "$log" | "${awk_cmd[@]}" '
     /^\[[0-9]+\/[0-9]+\] / {
       split(substr($1, 2), f, "/"); n = f[1] + 0; t = f[2] + 0
       p = int(10 * n / t)
@@ -128,6 +135,8 @@ legsim_build() {
     /^ninja: no work to do/ { print "build: up to date"; fflush(); next }
     { print; fflush() }' >&2
   rc=${PIPESTATUS[0]}
+  kill "$ticker" 2>/dev/null
+  wait "$ticker" 2>/dev/null
   if ((rc)); then
     echo "setup: FAILED: cmake --build --preset $preset (exit status $rc); full log: $log" >&2
     return 1
