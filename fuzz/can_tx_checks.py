@@ -1,7 +1,8 @@
 #!/usr/bin/env python3
 """Emit can_tx_checks.h: every frame hil_sim may send, checked against can/legsim.dbc.
 
-For each message the HIL node sends (FAULT, ST_*, HEARTBEAT) a function unpacks the
+For each message the HIL nodes send (FAULT, ST_*, HEARTBEAT; the robot's leg 1, HIL_L1, its
+ST_*_L1) a function unpacks the
 payload with the code cantools generated from the same DBC (legsim_can.c) and reports,
 signal by signal, whether the value is inside the DBC's range (a NaN is never inside).
 The fuzz target of hil_sim's frame handling (fuzz/fuzz_can.cpp) applies the DBC's
@@ -17,11 +18,13 @@ from cantools.database.can.c_source import camel_to_snake_case
 def main():
     ap = argparse.ArgumentParser(description=__doc__)
     ap.add_argument('dbc')
-    ap.add_argument('--node', default='HIL', help='the sender whose frames are checked')
+    ap.add_argument('--node', action='append',
+                    help='a sender whose frames are checked (repeatable; default HIL and HIL_L1)')
     ap.add_argument('--database-name', default='legsim_can')
     ap.add_argument('-o', '--output', required=True)
     args = ap.parse_args()
     db = cantools.database.load_file(args.dbc, strict=True)
+    nodes = args.node or ['HIL', 'HIL_L1']
     dbn = args.database_name
     out = [f'/* Generated from {args.dbc.split("/")[-1]} by fuzz/can_tx_checks.py: do not edit. */',
            '#ifndef LEGSIM_FUZZ_CAN_TX_CHECKS_H', '#define LEGSIM_FUZZ_CAN_TX_CHECKS_H', '',
@@ -37,7 +40,7 @@ def main():
            '  switch (id) {']
     n_msgs = 0
     for msg in db.messages:
-        if args.node not in msg.senders:
+        if not any(n in msg.senders for n in nodes):
             continue
         n_msgs += 1
         m = camel_to_snake_case(msg.name)
@@ -53,7 +56,7 @@ def main():
         out.append('    }')
     out += ['    default: return -1;', '  }', '}', '', '#endif', '']
     if n_msgs == 0:
-        sys.exit(f'{args.dbc}: no message sent by {args.node}')
+        sys.exit(f'{args.dbc}: no message sent by {", ".join(nodes)}')
     with open(args.output, 'w', encoding='utf-8') as f:
         f.write('\n'.join(out))
     return 0

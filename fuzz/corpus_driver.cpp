@@ -1,9 +1,10 @@
 // Runs a fuzz target's entry point (LLVMFuzzerTestOneInput) over files and folders
 // (recursively, in name order) without libFuzzer: the regression and seed corpora as plain
 // CTest tests in every build (host, asan). A violated invariant aborts (non-zero exit);
-// the last "run" line names the input.
+// the last "run" line names the input. --min-robot N fails the run when fewer than N inputs
+// reached the two-leg robot's code (fuzz/reach.h): the check that a target reaches the robot.
 //
-//   fuzz_<target>_corpus [--max-seconds S] PATH...
+//   fuzz_<target>_corpus [--max-seconds S] [--min-robot N] PATH...
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -16,16 +17,22 @@
 #include <vector>
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
+extern "C" int64_t fuzz_robot_inputs();  // fuzz/reach.h
 
 namespace fs = std::filesystem;
 
 int main(int argc, char **argv) {
   double max_seconds = 0;  // per input; 0: no limit
+  long long min_robot = 0;
   std::vector<fs::path> inputs;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--max-seconds" && i + 1 < argc) {
       max_seconds = std::atof(argv[++i]);
+      continue;
+    }
+    if (a == "--min-robot" && i + 1 < argc) {
+      min_robot = std::atoll(argv[++i]);
       continue;
     }
     std::error_code ec;
@@ -60,6 +67,10 @@ int main(int argc, char **argv) {
       ++slow;
     }
   }
-  std::printf("%zu inputs, %d too slow\n", inputs.size(), slow);
-  return slow ? 1 : 0;
+  const long long robot = static_cast<long long>(fuzz_robot_inputs());
+  std::printf("%zu inputs, %d too slow, %lld reached the robot\n", inputs.size(), slow, robot);
+  if (robot < min_robot)
+    std::fprintf(stderr, "%s: %lld inputs reached the robot, fewer than --min-robot %lld\n", argv[0],
+                 robot, min_robot);
+  return slow || robot < min_robot ? 1 : 0;
 }

@@ -1,10 +1,14 @@
 // Fuzz target: hil_sim's CAN frame handling (protocol + controller + session on the real
 // core), frames in memory, no socket.
 //
-// The input is a sequence of operations (fuzz/README.md, "The CAN input format"):
+// The input is a bus byte, then a sequence of operations (fuzz/README.md, "The CAN input
+// format"):
+//   bus byte: bit 0 set: hil_sim --robot (the two-leg robot, models/robot.toml: the box and
+//             both legs' frames), else the one leg (hil_sim)
 //   op byte: bits 0-1 what, bits 2-7 milliseconds the clock advances first
 //     0 frame:     id selector, flags, len, then len payload bytes (zeros past the end)
-//                  selector < 0xF0: one of kIds; else a raw id in the next 4 bytes (LE)
+//                  selector < 0xF0: one of the bus's ids (kIds, kRobotIds); else a raw id
+//                  in the next 4 bytes (LE)
 //                  flags: bit 0 extended id, bit 1 RTR, bit 2 classic CAN (else FD)
 //     1 work:      one byte n: Controller::work(n + 1) (a slice of a STEP in progress)
 //     2 rt tick:   Controller::rt_tick(now)
@@ -17,7 +21,9 @@
 // - every frame hil_sim sends is one of its DBC messages, 11-bit id, CAN FD, 64 bytes, and
 //   every signal is inside its DBC range (finite), except where the DBC says otherwise
 //   (Fault_Value of a NOT_FINITE fault is the offending NaN/Inf);
-// - samples go out whole: ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS;
+// - samples go out whole and in order: ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B,
+//   ST_STATUS; the robot's ST_BOX, then per leg its ST_POS .. ST_REACT_B and ST_CONTACT, then
+//   ST_STATUS and ST_STATUS_L1 (hil_sim/protocol.h);
 // - a rejected frame is answered with exactly one FAULT and changes nothing: a twin
 //   controller that never sees the rejected frames sends the same samples (bit for bit,
 //   but for the fault bit and last-fault code of ST_STATUS) and the same solver and
@@ -28,18 +34,29 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <iterator>
 #include <string>
 #include <vector>
 
 #include "controller.h"
+#include "legsim/models.h"
 #include "protocol.h"
+#include "reach.h"
 #include "session.h"
+#ifndef HIL_SIM_HAS_ROBOT
+#define HIL_SIM_HAS_ROBOT 0  // hil_sim_lib defines it when the robot is compiled in
+#endif
+#if HIL_SIM_HAS_ROBOT
+#include "legsim/robot_models.h"
+#endif
 
 extern "C" {
 #include "can_tx_checks.h"
 #include "legsim_can.h"
 #include "legsim_can_layout.h"
 }
+
+FUZZ_REACH_DEFINE
 
 namespace {
 
@@ -53,6 +70,48 @@ const uint32_t kIds[] = {
     LEGSIM_CAN_HEARTBEAT_FRAME_ID, 0x000u,                       0x7ffu,
     0x123u};
 constexpr size_t kNIds = sizeof kIds / sizeof kIds[0];
+// The robot's bus: the same ids, then leg 1's commands (twice as often) and the robot's
+// own state frames (sent by another node: ignored).
+const uint32_t kRobotIds[] = {
+    LEGSIM_CAN_CONTROL_FRAME_ID,  LEGSIM_CAN_ACT_CMD_FRAME_ID,   LEGSIM_CAN_LOAD_CMD_FRAME_ID,
+    LEGSIM_CAN_CONTROL_FRAME_ID,  LEGSIM_CAN_ACT_CMD_FRAME_ID,   LEGSIM_CAN_LOAD_CMD_FRAME_ID,
+    LEGSIM_CAN_FAULT_FRAME_ID,    LEGSIM_CAN_ST_POS_FRAME_ID,    LEGSIM_CAN_ST_STATUS_FRAME_ID,
+    LEGSIM_CAN_HEARTBEAT_FRAME_ID, 0x000u,                       0x7ffu,
+    0x123u,
+    LEGSIM_CAN_ACT_CMD_L1_FRAME_ID, LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID,
+    LEGSIM_CAN_ACT_CMD_L1_FRAME_ID, LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID,
+    LEGSIM_CAN_ST_BOX_FRAME_ID,   LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID, LEGSIM_CAN_ST_STATUS_L1_FRAME_ID};
+constexpr size_t kNRobotIds = sizeof kRobotIds / sizeof kRobotIds[0];
+
+// A sample's frames in the order they go out (hil_sim/protocol.h).
+const uint32_t kLegSample[] = {LEGSIM_CAN_ST_POS_FRAME_ID,     LEGSIM_CAN_ST_VEL_FRAME_ID,
+                               LEGSIM_CAN_ST_ACT_FRAME_ID,     LEGSIM_CAN_ST_REACT_A_FRAME_ID,
+                               LEGSIM_CAN_ST_REACT_B_FRAME_ID, LEGSIM_CAN_ST_STATUS_FRAME_ID};
+const uint32_t kRobotSample[] = {
+    LEGSIM_CAN_ST_BOX_FRAME_ID,        LEGSIM_CAN_ST_POS_FRAME_ID,
+    LEGSIM_CAN_ST_VEL_FRAME_ID,        LEGSIM_CAN_ST_ACT_FRAME_ID,
+    LEGSIM_CAN_ST_REACT_A_FRAME_ID,    LEGSIM_CAN_ST_REACT_B_FRAME_ID,
+    LEGSIM_CAN_ST_CONTACT_FRAME_ID,    LEGSIM_CAN_ST_POS_L1_FRAME_ID,
+    LEGSIM_CAN_ST_VEL_L1_FRAME_ID,     LEGSIM_CAN_ST_ACT_L1_FRAME_ID,
+    LEGSIM_CAN_ST_REACT_A_L1_FRAME_ID, LEGSIM_CAN_ST_REACT_B_L1_FRAME_ID,
+    LEGSIM_CAN_ST_CONTACT_L1_FRAME_ID, LEGSIM_CAN_ST_STATUS_FRAME_ID,
+    LEGSIM_CAN_ST_STATUS_L1_FRAME_ID};
+
+// The bus of an input: its ids and its sample.
+struct Bus {
+  bool robot;
+  const uint32_t *ids;
+  size_t n_ids;
+  const uint32_t *sample;
+  int n_sample;
+  int sample_index(uint32_t id) const {
+    for (int i = 0; i < n_sample; ++i)
+      if (sample[i] == id) return i;
+    return -1;
+  }
+};
+const Bus kLegBus{false, kIds, kNIds, kLegSample, static_cast<int>(std::size(kLegSample))};
+const Bus kRobotBus{true, kRobotIds, kNRobotIds, kRobotSample, static_cast<int>(std::size(kRobotSample))};
 
 [[noreturn]] void violated(const char *what, const std::string &detail) {
   std::fprintf(stderr, "fuzz_can: invariant violated: %s: %s\n", what, detail.c_str());
@@ -112,15 +171,16 @@ void check_tx_frame(const hil::Frame &f) {
 // Checks a stream of sent frames (format, ranges, whole samples) and returns what the
 // twin comparison looks at: samples with the fault bookkeeping masked, and the faults that
 // are not rejections (solver, command timeout) without their counter.
-std::vector<std::vector<uint8_t>> checked(const std::vector<hil::Frame> &frames, int *sample_pos) {
+std::vector<std::vector<uint8_t>> checked(const Bus &bus, const std::vector<hil::Frame> &frames,
+                                          int *sample_pos) {
   std::vector<std::vector<uint8_t>> out;
   for (const hil::Frame &f : frames) {
     check_tx_frame(f);
-    const bool in_sample = f.id >= LEGSIM_CAN_ST_POS_FRAME_ID && f.id <= LEGSIM_CAN_ST_STATUS_FRAME_ID;
-    if (in_sample) {
-      if (f.id != LEGSIM_CAN_ST_POS_FRAME_ID + static_cast<uint32_t>(*sample_pos))
+    const int in_sample = bus.sample_index(f.id);
+    if (in_sample >= 0) {
+      if (in_sample != *sample_pos)
         violated("sample frames out of order", hex_id(f.id) + " at position " + std::to_string(*sample_pos));
-      *sample_pos = (*sample_pos + 1) % hil::kSampleFrames;
+      *sample_pos = (*sample_pos + 1) % bus.n_sample;
     } else if (*sample_pos != 0) {
       violated("sample interrupted", hex_id(f.id) + " inside a sample");
     }
@@ -132,6 +192,12 @@ std::vector<std::vector<uint8_t>> checked(const std::vector<hil::Frame> &frames,
       m.st_status &= static_cast<uint16_t>(~hil::kStatusFault);
       m.st_last_fault = 0;
       legsim_can_st_status_pack(key.data() + 2, &m, f.len);
+    } else if (f.id == LEGSIM_CAN_ST_STATUS_L1_FRAME_ID) {
+      legsim_can_st_status_l1_t m;
+      legsim_can_st_status_l1_unpack(&m, f.data, f.len);
+      m.st_status &= static_cast<uint16_t>(~hil::kStatusFault);
+      m.st_last_fault = 0;
+      legsim_can_st_status_l1_pack(key.data() + 2, &m, f.len);
     } else if (f.id == LEGSIM_CAN_FAULT_FRAME_ID) {
       legsim_can_fault_t m;
       legsim_can_fault_unpack(&m, f.data, f.len);
@@ -168,11 +234,11 @@ class Reader {
   size_t n_, i_ = 0;
 };
 
-hil::Frame read_frame(Reader &r) {
+hil::Frame read_frame(Reader &r, const Bus &bus) {
   hil::Frame f;
   const uint8_t sel = r.byte();
   if (sel < 0xF0) {
-    f.id = kIds[sel % kNIds];
+    f.id = bus.ids[sel % bus.n_ids];
   } else {
     uint32_t id = 0;
     for (int k = 0; k < 4; ++k) id |= static_cast<uint32_t>(r.byte()) << (8 * k);
@@ -202,13 +268,20 @@ hil::Frame read_frame(Reader &r) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  fuzz_reach::input("fuzz_can");
+  Reader r(data, size);
+  const Bus &bus = (r.byte() & 1) && HIL_SIM_HAS_ROBOT ? kRobotBus : kLegBus;
+#if HIL_SIM_HAS_ROBOT
+  if (bus.robot) hil::Session::use_robot(&legsim_model_robot_revolute);  // hil_sim --robot
+  else
+#endif
+    hil::Session::use_models(&legsim_model_leg_revolute, &legsim_model_leg_slot);
   Rig a, b;  // a gets every frame; b never sees the frames a rejects
   int pos_a = 0, pos_b = 0;
   std::vector<std::vector<uint8_t>> seen_a, seen_b;
-  auto collect = [](Rig &rig, int *pos, std::vector<std::vector<uint8_t>> &seen) {
-    for (auto &k : checked(rig.rec.take(), pos)) seen.push_back(std::move(k));
+  auto collect = [&bus](Rig &rig, int *pos, std::vector<std::vector<uint8_t>> &seen) {
+    for (auto &k : checked(bus, rig.rec.take(), pos)) seen.push_back(std::move(k));
   };
-  Reader r(data, size);
   int64_t now_ns = 0;
   int ticks = 0;
   uint32_t hb_counter = 0;
@@ -217,7 +290,7 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
     now_ns += static_cast<int64_t>(op >> 2) * 1000000;
     switch (op & 3) {
       case 0: {
-        const hil::Frame f = read_frame(r);
+        const hil::Frame f = read_frame(r, bus);
         // The STEP before the frame is finished first (on_frame does so too): the frame's
         // own answer is then all that a.rec holds.
         a.ctl.finish_step();
@@ -231,8 +304,12 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
           if (g.id == LEGSIM_CAN_FAULT_FRAME_ID && reply.size() != 1)
             violated("a FAULT with other frames", "for frame " + hex_id(f.id));
         }
-        for (auto &k : checked(reply, &pos_a))
+        for (auto &k : checked(bus, reply, &pos_a))
           if (!rejected) seen_a.push_back(std::move(k));
+        // the robot reached: one of leg 1's commands accepted by hil_sim --robot
+        if (bus.robot && !rejected && !f.extended &&
+            (f.id == LEGSIM_CAN_ACT_CMD_L1_FRAME_ID || f.id == LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID))
+          fuzz_reach::robot();
         if (!rejected) b.ctl.on_frame(f, now_ns);
         collect(b, &pos_b, seen_b);
         break;

@@ -6,6 +6,12 @@
 // that returns LEGSIM_OK (assembling each pose, statics, RK4 and generalized-alpha steps)
 // the state, the report, the reactions and the actuator figures are finite; after a
 // refused call the report is still finite (issue 10, sections 1 and 2).
+//
+// A robot file names its leg files relative to its own folder, and the text is parsed as
+// if it were a file of a seed folder (kSeedFolders, absolute: whatever the working
+// directory): models/ (robot.toml's "leg.toml"), then tests/model/fixtures/ (the robot
+// fixtures' "../../../models/leg.toml") when a leg file cannot be read from the first.
+// A robot that loads is also put on its ground and stepped with its feet in contact.
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -16,8 +22,15 @@
 
 #include "legsim/legsim.h"
 #include "model_toml.hpp"
+#include "reach.h"
+
+FUZZ_REACH_DEFINE
 
 namespace {
+
+// "FOLDER/fuzz.toml": the source name, whose folder the loader reads leg files from.
+const char *const kSeedFolders[] = {LEGSIM_FUZZ_SOURCE_DIR "/models/fuzz.toml",
+                                    LEGSIM_FUZZ_SOURCE_DIR "/tests/model/fixtures/fuzz.toml"};
 
 [[noreturn]] void violated(const std::string &what) {
   std::fprintf(stderr, "fuzz_model: invariant violated: %s\n", what.c_str());
@@ -127,19 +140,50 @@ void exercise(const legsim_model_desc &m) {
       }
     }
   }
+  if (m.n_contacts > 0) {  // the robot: on its ground, feet stuck, then stepped
+    fuzz_reach::robot();
+    opt.integrator = LEGSIM_INTEGRATOR_RK4;
+    if (legsim_set_options(sim, &opt) != LEGSIM_OK) violated("default options refused");
+    if (n_poses > 0 && legsim_assemble_pose(sim, 0) != LEGSIM_OK) return;
+    st = legsim_assemble_on_ground(sim, nullptr, 0);
+    report_finite(sim, "assembling on the ground");
+    if (st != LEGSIM_OK) return;
+    outputs_finite(sim, "assembling on the ground");
+    legsim_contact c[LEGSIM_CONTACT_SLOTS];
+    if (legsim_contacts(sim, c) != LEGSIM_OK) violated("legsim_contacts refused after assembling on the ground");
+    for (int k = 0; k < m.n_contacts; ++k)
+      if (c[k].state != LEGSIM_CONTACT_STUCK) violated("a foot not stuck after assembling on the ground");
+    for (int k = 0; k < 10; ++k) {
+      st = legsim_step(sim, 1);
+      report_finite(sim, "steps on the ground");
+      if (st != LEGSIM_OK) break;
+      outputs_finite(sim, "steps on the ground");
+      if (legsim_contacts(sim, c) != LEGSIM_OK) violated("legsim_contacts refused after an OK step");
+      for (int j = 0; j < m.n_contacts; ++j) {
+        finite(&c[j].normal_n, 1, "contact normal force");
+        finite(&c[j].tangential_n, 1, "contact tangential force");
+        finite(c[j].position, 2, "contact position");
+      }
+    }
+  }
 }
 
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  fuzz_reach::input("fuzz_model");
   const char *text = reinterpret_cast<const char *>(data);
   for (const char *variant : {static_cast<const char *>(nullptr), "slot"}) {
     legsim_model_desc m;
-    char msg[512];
-    std::memset(msg, 'x', sizeof msg);  // a message must end inside msg
-    msg[0] = '\0';
-    const legsim_status st = legsim_model_parse_toml(text, size, "fuzz.toml", variant, &m, msg, sizeof msg);
-    check_message(st, msg, sizeof msg);
+    char msg[1024];
+    legsim_status st = LEGSIM_OK;
+    for (const char *source : kSeedFolders) {
+      std::memset(msg, 'x', sizeof msg);  // a message must end inside msg
+      msg[0] = '\0';
+      st = legsim_model_parse_toml(text, size, source, variant, &m, msg, sizeof msg);
+      check_message(st, msg, sizeof msg);
+      if (!(st == LEGSIM_ERR_BAD_INPUT && std::strstr(msg, ": cannot read: ") != nullptr)) break;
+    }
     if (st != LEGSIM_OK) {
       if (st != LEGSIM_ERR_MODEL && st != LEGSIM_ERR_CAPACITY && st != LEGSIM_ERR_BAD_INPUT)
         violated(std::string("unexpected status ") + legsim_status_str(st) + ": " + msg);

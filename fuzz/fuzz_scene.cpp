@@ -1,9 +1,12 @@
 // Fuzz target: the scene loader (firmware_core/host/scene_toml.cpp), TOML text in.
 //
 // The text is written to a scratch file (load_scene reads a path), read and checked,
-// bound against the compiled-in leg (the scene's variant if the leg has it, else the
-// revolute knee; a model file named by the scene is not read), written out resolved, and
-// run on a short horizon (at most kMaxSteps steps, a statics grid of at most kMaxGrid):
+// bound against a compiled-in model, written out resolved, and run on a short horizon (at
+// most kMaxSteps steps, a statics grid of at most kMaxGrid). The model: the two-leg robot
+// (models/robot.toml) for model = "builtin:robot" or a model file whose name says robot (as
+// every robot scene's does: scenes/robot_*.toml), else the leg; the scene's variant if the
+// model has it, else its first. A model file named by the scene is not read (the scratch
+// file has no folder of models), so a robot scene on another ground runs on robot.toml's.
 // - every input gives true or false with a message, never a crash or undefined behaviour;
 // - a scene that loads is accepted within the documented ranges (step counts, record
 //   interval): the run is streamed sample by sample (the 1e9-step regression);
@@ -20,7 +23,16 @@
 
 #include "legsim/legsim.h"
 #include "legsim/models.h"
+#if __has_include("legsim/robot_models.h")
+#include "legsim/robot_models.h"  // compiled in when the build's capacities hold the robot
+#define FUZZ_SCENE_HAS_ROBOT 1
+#else
+#define FUZZ_SCENE_HAS_ROBOT 0
+#endif
+#include "reach.h"
 #include "scene_toml.hpp"
+
+FUZZ_REACH_DEFINE
 
 namespace {
 
@@ -100,9 +112,28 @@ class CheckingWriter : public legsim_host::ResultWriter {
   int64_t n_ = 0;
 };
 
+// The compiled-in model a scene stands for (the header says which).
+const legsim_model_desc *model_of(const legsim_host::Scene &scene, bool *robot) {
+  const legsim_model_variant *variants = legsim_model_leg_variants;
+  int32_t n = legsim_model_leg_variant_count;
+  *robot = false;
+#if FUZZ_SCENE_HAS_ROBOT
+  const std::string file = scene.model.substr(scene.model.find_last_of('/') + 1);
+  if (scene.builtin == "robot" || (scene.builtin.empty() && file.find("robot") != std::string::npos)) {
+    variants = legsim_model_robot_variants;
+    n = legsim_model_robot_variant_count;
+    *robot = true;
+  }
+#endif
+  for (int32_t v = 0; v < n; ++v)
+    if (scene.variant == variants[v].name) return variants[v].model;
+  return variants[0].model;
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
+  fuzz_reach::input("fuzz_scene");
   const std::string path = scratch_path();
   FILE *f = std::fopen(path.c_str(), "wb");
   if (!f) violated("cannot write the scratch file " + path);
@@ -120,13 +151,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (scene.n_steps < 0 || scene.n_steps > 1000000000) violated("n_steps out of range");
   if (scene.record_every < 1 || scene.record_every > 10000000) violated("record_every out of range");
 
-  const legsim_model_desc *model = &legsim_model_leg_revolute;
-  for (int32_t v = 0; v < legsim_model_leg_variant_count; ++v)
-    if (scene.variant == legsim_model_leg_variants[v].name) model = legsim_model_leg_variants[v].model;
+  bool robot = false;
+  const legsim_model_desc *model = model_of(scene, &robot);
   if (!legsim_host::bind_scene(scene, *model, err)) {
     if (err.empty()) violated("bind_scene refused without a message");
     return 0;
   }
+  if (robot) fuzz_reach::robot();  // a robot scene bound: its run is the robot's
   std::ostringstream resolved;
   legsim_host::write_resolved(resolved, scene, *model);
 

@@ -17,9 +17,12 @@ import os
 import struct
 import sys
 
-# fuzz_can.cpp's kIds: the selector of a frame's id
+# fuzz_can.cpp's kIds (the leg's bus) and kRobotIds (the robot's: the same, then more): the
+# selector of a frame's id
 SEL = {'CONTROL': 0, 'ACT_CMD': 1, 'LOAD_CMD': 2, 'FAULT': 6, 'ST_POS': 7, 'HEARTBEAT': 9,
        'UNKNOWN': 12}
+ROBOT_SEL = dict(SEL, ACT_CMD_L1=13, LOAD_CMD_L1=14, ST_BOX=17, ST_CONTACT_L1=18, ST_STATUS_L1=19)
+LEG_BUS, ROBOT_BUS = 0, 1  # the input's first byte: hil_sim, hil_sim --robot
 RESET, STEP, START_RT, STOP_RT = 1, 2, 3, 4
 KEEP, FORCE, LENGTH = 0, 1, 2
 FLT_MAX = struct.unpack('<f', struct.pack('<I', 0x7f7fffff))[0]  # the largest finite float32
@@ -39,9 +42,10 @@ def write_if_changed(path, data):
 class Seq:
     """One fuzz_can input: operations as fuzz_can.cpp reads them."""
 
-    def __init__(self, db):
+    def __init__(self, db, bus=LEG_BUS):
         self.db = db
-        self.out = bytearray()
+        self.sel = ROBOT_SEL if bus == ROBOT_BUS else SEL
+        self.out = bytearray([bus])
 
     def op(self, what, ms=0):
         assert 0 <= ms < 64
@@ -52,7 +56,7 @@ class Seq:
         if raw_id is not None:
             self.out += bytes([0xF0]) + struct.pack('<I', raw_id)
         else:
-            self.out.append(SEL[name])
+            self.out.append(self.sel[name])
         self.out += bytes([flags, length])
         if payload is None:
             msg = self.db.get_message_by_name(name)
@@ -68,13 +72,13 @@ class Seq:
         sig.update({f'Ctrl_{k}': v for k, v in kw.items()})
         return self.frame('CONTROL', sig, ms)
 
-    def act(self, seq, mode_u, sp_u, mode_l=KEEP, sp_l=0.0, ms=0):
-        return self.frame('ACT_CMD', {'Act_Seq': seq, 'Act_Mode_upper': mode_u,
+    def act(self, seq, mode_u, sp_u, mode_l=KEEP, sp_l=0.0, ms=0, leg=0):
+        return self.frame('ACT_CMD_L1' if leg else 'ACT_CMD', {'Act_Seq': seq, 'Act_Mode_upper': mode_u,
                                       'Act_Setpoint_upper': sp_u, 'Act_Mode_lower': mode_l,
                                       'Act_Setpoint_lower': sp_l}, ms)
 
-    def load(self, seq, index, v1, v2=0.0, ms=0):
-        return self.frame('LOAD_CMD', {'Load_Seq': seq, 'Load_Index': index, 'Load_Value1': v1,
+    def load(self, seq, index, v1, v2=0.0, ms=0, leg=0):
+        return self.frame('LOAD_CMD_L1' if leg else 'LOAD_CMD', {'Load_Seq': seq, 'Load_Index': index, 'Load_Value1': v1,
                                        'Load_Value2': v2}, ms)
 
     def work(self, n):
@@ -93,6 +97,7 @@ class Seq:
 
 def can_seeds(db):
     S = lambda: Seq(db)  # noqa: E731
+    R = lambda: Seq(db, ROBOT_BUS)  # noqa: E731
     nan, inf = math.nan, math.inf
     return {
         'reset_step': S().control(1, RESET).control(2, STEP, NSteps=25).heartbeat(),
@@ -130,6 +135,33 @@ def can_seeds(db):
         # every finite float32 is a value a FAULT may echo (CI's fuzz run, session 5)
         'fault_value_flt_max': S().control(1, RESET).act(1, FORCE, FLT_MAX)
         .act(2, KEEP, 0.0, LENGTH, -FLT_MAX).load(1, 0, FLT_MAX, -FLT_MAX).control(2, STEP, NSteps=2),
+        # hil_sim --robot: both legs' frames, the box load, its RESET options, a watchdog per leg
+        'robot_reset_step': R().control(1, RESET, ActInit=1).control(2, STEP, NSteps=20).heartbeat(),
+        'robot_both_legs': R().control(1, RESET, ActInit=1).act(1, FORCE, 150.0)
+        .act(1, LENGTH, 0.7, KEEP, 0.0, leg=1).load(1, 0, 3.0, -20.0, leg=1).load(1, 2, 5.0, 1.0)
+        .load(2, 3, 2.0).control(2, STEP, NSteps=30).work(4).act(2, KEEP, 0.0, FORCE, -80.0, leg=1)
+        .control(3, STEP, NSteps=20).heartbeat(),
+        'robot_reset_options': R().control(1, RESET, ActInit=1, ContactLaw=1, FreeContacts=2,
+                                           UseLengths=1, Length_upper=0.62, Length_lower=0.52,
+                                           Length_upper_L1=0.63, Length_lower_L1=0.53)
+        .control(2, STEP, NSteps=40).heartbeat(),
+        'robot_watchdog_per_leg': R().control(1, RESET, ActInit=1, CmdTimeout=5)
+        .act(1, LENGTH, 0.6).act(1, LENGTH, 0.6, leg=1).control(2, STEP, NSteps=3)
+        .act(2, LENGTH, 0.6).control(3, STEP, NSteps=3).act(3, LENGTH, 0.6)
+        .control(4, STEP, NSteps=3).heartbeat().act(2, LENGTH, 0.6, leg=1).control(5, STEP, NSteps=9),
+        'robot_realtime': R().control(1, RESET, ActInit=1, CmdTimeout=5).control(2, START_RT)
+        .act(1, FORCE, 10.0).act(1, FORCE, 20.0, leg=1).tick(2).tick(2).act(2, FORCE, 10.0)
+        .tick(2).tick(2).heartbeat().control(3, STOP_RT),
+        'robot_bad_frames': R().act(1, FORCE, 1.0, leg=1).control(1, RESET, ActInit=1)
+        .act(1, FORCE, nan, leg=1).act(2, KEEP, 0.0, LENGTH, inf, leg=1).act(3, FORCE, 1e5, leg=1)
+        .act(4, LENGTH, 0.95, leg=1).act(5, 3, 0.6, leg=1).load(1, 1, 1.0, leg=1)
+        .load(2, 0, nan, leg=1).act(6, FORCE, 0.0, leg=1).act(6, FORCE, 10.0, leg=1)
+        .control(2, RESET, Variant=1).control(3, RESET, ContactLaw=2).control(4, RESET, FreeContacts=4)
+        .control(5, RESET, UseLengths=1, Length_upper=0.6, Length_lower=0.5, Length_upper_L1=0.6,
+                 Length_lower_L1=0.2)
+        .frame('ACT_CMD_L1', {'Act_Seq': 9, 'Act_Mode_upper': FORCE}, flags=4, length=8)
+        .frame('ST_BOX', payload=b'\x01' * 64).frame('ST_CONTACT_L1', payload=b'\x02' * 64)
+        .frame('ST_STATUS_L1', payload=b'\x03' * 64).control(6, STEP, NSteps=5),
     }
 
 

@@ -119,13 +119,11 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
       state_ = SimState::kLockstep;
       ctrl_seq_ = {true, req.seq};
       for (int k = 0; k < kMaxLegs; ++k) act_seq_[k] = load_seq_[k] = {};
-      last_act_id_ = kActCmdFrameId;
       timeout_ms_ = r.cmd_timeout_ms == kCmdTimeoutDefault ? config_.cmd_timeout_ms
                     : r.cmd_timeout_ms == kCmdTimeoutNone  ? 0
                                                            : r.cmd_timeout_ms;
       timeout_steps_ = (static_cast<uint64_t>(timeout_ms_) * 1000000u + p.step_ns - 1) / p.step_ns;
-      armed_ = safe_ = false;
-      steps_since_cmd_ = 0;
+      for (Watchdog &w : watchdog_) w = Watchdog{};
       if (config_.verbose)
         std::fprintf(stderr, "hil_sim: RESET variant %d integrator %d pose %d h %u ns\n",
                      p.variant, p.integrator, p.pose, p.step_ns);
@@ -143,12 +141,12 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
       rt_decimation_ = r.decimation != 0 ? r.decimation : config_.decimation;
       rt_ticks_ = 0;
       ++rt_epoch_;
-      last_cmd_ns_ = now_ns;  // the window restarts
+      for (Watchdog &w : watchdog_) w.last_cmd_ns = now_ns;  // the windows restart
       state_ = SimState::kRealtime;
       break;
     case Command::kStopRt:
       ctrl_seq_ = {true, req.seq};
-      steps_since_cmd_ = 0;  // the window restarts
+      for (Watchdog &w : watchdog_) w.steps_since_cmd = 0;  // the windows restart
       if (state_ == SimState::kRealtime) state_ = SimState::kLockstep;
       break;
   }
@@ -162,11 +160,11 @@ void Controller::handle_act(const Request &req, int64_t now_ns) {
     if (st != LEGSIM_OK) return solver_fault(st, &req);
   }
   act_seq_[req.leg] = {true, req.seq};
-  last_act_id_ = req.id;
-  armed_ = timeout_ms_ > 0;
-  safe_ = false;
-  steps_since_cmd_ = 0;
-  last_cmd_ns_ = now_ns;
+  Watchdog &w = watchdog_[req.leg];  // this leg's only: the other leg's runs on
+  w.armed = timeout_ms_ > 0;
+  w.safe = false;
+  w.steps_since_cmd = 0;
+  w.last_cmd_ns = now_ns;
 }
 
 void Controller::handle_load(const Request &req) {
@@ -183,15 +181,14 @@ void Controller::handle_load(const Request &req) {
 
 // ---- stepping -------------------------------------------------------------------------
 
-void Controller::trip(double elapsed_ms) {
-  armed_ = false;
-  safe_ = true;
-  legsim_status st = session_.apply_safe_state(config_.safe_mode);
+void Controller::trip(int leg, double elapsed_ms) {
+  watchdog_[leg].armed = false;
+  watchdog_[leg].safe = true;
+  legsim_status st = session_.apply_safe_state(config_.safe_mode, leg);
   Fault f;
   f.code = FaultCode::kCmdTimeout;
-  f.frame_id = last_act_id_ != 0 ? last_act_id_ : kActCmdFrameId;
-  f.seq = last_act_id_ == kActCmdFrameId || last_act_id_ == 0 ? act_seq_[0].last
-                                                              : act_seq_[1].last;
+  f.frame_id = kActCmdFrameId[leg];
+  f.seq = act_seq_[leg].last;
   f.detail = timeout_ms_;
   f.value = static_cast<float>(elapsed_ms);
   raise(f);
@@ -202,17 +199,16 @@ bool Controller::advance(uint32_t n, bool lockstep_watchdog, const Request *req)
   uint64_t remaining = n;
   while (remaining > 0) {
     uint64_t chunk = remaining;
-    if (lockstep_watchdog && armed_) {
-      if (steps_since_cmd_ >= timeout_steps_) {
-        trip(static_cast<double>(steps_since_cmd_) * session_.params().step_ns / 1e6);
-        continue;
-      }
-      chunk = std::min(chunk, timeout_steps_ - steps_since_cmd_);
+    for (int k = 0; lockstep_watchdog && k < Session::legs(); ++k) {
+      Watchdog &w = watchdog_[k];
+      if (w.armed && w.steps_since_cmd >= timeout_steps_)
+        trip(k, static_cast<double>(w.steps_since_cmd) * session_.params().step_ns / 1e6);
+      if (w.armed) chunk = std::min(chunk, timeout_steps_ - w.steps_since_cmd);
     }
     const uint64_t before = session_.step_count();
     legsim_status st = session_.step(static_cast<int32_t>(chunk));
     const uint64_t done = session_.step_count() - before;
-    steps_since_cmd_ += done;
+    for (Watchdog &w : watchdog_) w.steps_since_cmd += done;
     remaining -= std::min(done, remaining);
     if (st != LEGSIM_OK) {
       state_ = SimState::kHalted;
@@ -258,8 +254,10 @@ Controller::Shutdown Controller::shutdown() {
     out.safe_status = session_.apply_safe_state(config_.safe_mode);
     out.safe_applied = out.safe_status == LEGSIM_OK;
     if (out.safe_applied) {
-      safe_ = true;
-      armed_ = false;
+      for (Watchdog &w : watchdog_) {
+        w.safe = true;
+        w.armed = false;
+      }
     }
   }
   return out;
@@ -267,8 +265,11 @@ Controller::Shutdown Controller::shutdown() {
 
 void Controller::rt_tick(int64_t now_ns) {
   if (state_ != SimState::kRealtime) return;
-  if (armed_ && now_ns - last_cmd_ns_ > static_cast<int64_t>(timeout_ms_) * 1000000)
-    trip(static_cast<double>(now_ns - last_cmd_ns_) / 1e6);
+  for (int k = 0; k < Session::legs(); ++k) {
+    const Watchdog &w = watchdog_[k];
+    if (w.armed && now_ns - w.last_cmd_ns > static_cast<int64_t>(timeout_ms_) * 1000000)
+      trip(k, static_cast<double>(now_ns - w.last_cmd_ns) / 1e6);
+  }
   ++rt_ticks_;
   if (!advance(rt_steps_per_tick_, false, nullptr)) {
     publish();  // the last good state, HALTED
@@ -279,14 +280,17 @@ void Controller::rt_tick(int64_t now_ns) {
 
 // ---- output ---------------------------------------------------------------------------
 
-uint32_t Controller::status_bits(uint32_t events) const {
+uint32_t Controller::status_bits(uint32_t events, int leg) const {
   uint32_t s = status_from_events(events);
   if (session_.active()) s |= kStatusAssembled;
   if (state_ == SimState::kRealtime) s |= kStatusRealtime;
   if (state_ == SimState::kHalted) s |= kStatusHalted;
-  if (safe_) s |= kStatusSafeState;
+  for (int k = 0; k < kMaxLegs; ++k) {
+    if (leg >= 0 && k != leg) continue;
+    if (watchdog_[k].safe) s |= kStatusSafeState;
+    if (watchdog_[k].armed) s |= kStatusCmdWatchdog;
+  }
   if (fault_since_sample_) s |= kStatusFault;
-  if (armed_) s |= kStatusCmdWatchdog;
   if (step_left_ > 0) s |= kStatusStepping;
   return s;
 }
@@ -297,7 +301,7 @@ void Controller::publish() {
   legsim_status st = session_.sample(&s);
   if (st != LEGSIM_OK) legsim_ = st;
   StatusInfo info;
-  info.status = status_bits(s.report.events);
+  for (int k = 0; k < kMaxLegs; ++k) info.status[k] = status_bits(s.report.events, k);
   info.state = state_;
   info.legsim = legsim_;
   info.last_fault = last_fault_;
@@ -316,7 +320,7 @@ void Controller::publish() {
 
 void Controller::fill_heartbeat(HeartbeatInfo *hb) const {
   hb->state = state_;
-  hb->status = status_bits(session_.active() ? session_.events() : 0);
+  hb->status = status_bits(session_.active() ? session_.events() : 0, -1);
   hb->rx_frames = rx_frames_;
   hb->rx_rejected = rx_rejected_;
   hb->fault_count = fault_count_;

@@ -17,17 +17,19 @@
 // one state sample; accepted ACT_CMD and LOAD_CMD frames are not answered.
 //
 // The robot (Session::legs() == 2): each leg has its own ACT_CMD and LOAD_CMD ids with their
-// own sequence counters; a sample is every leg's frames (protocol.h). One command timeout
-// for the whole robot, fed by an accepted ACT_CMD of either leg; the safe state is applied to
-// every actuator.
+// own sequence counters; a sample is every leg's frames (protocol.h). Each leg is a node with
+// its own command timeout, fed only by its own ACT_CMD: a silent leg trips alone, whatever the
+// other leg is sent, and its safe state is on its own actuators.
 //
-// Command timeout: armed by an accepted ACT_CMD when a timeout is set; it trips when no
-// further ACT_CMD is accepted within the timeout, measured in simulated time in lockstep
-// (before the first step that would pass the timeout: ceil(timeout / h) steps after the
-// command) and in wall-clock time in real time (checked at every tick). A mode change
-// (START_RT, STOP_RT) restarts the window. Tripping puts the actuators in the safe state,
-// sends FAULT CMD_TIMEOUT once and sets the SAFE_STATE status bit; the next accepted
-// ACT_CMD leaves the safe state.
+// Command timeout (per leg): armed by an accepted ACT_CMD of that leg when a timeout is set;
+// it trips when no further ACT_CMD of that leg is accepted within the timeout, measured in
+// simulated time in lockstep (before the first step that would pass the timeout: ceil(timeout
+// / h) steps after the command) and in wall-clock time in real time (checked at every tick).
+// A mode change (START_RT, STOP_RT) restarts every leg's window, a RESET disarms them.
+// Tripping puts that leg's actuators in the safe state, sends FAULT CMD_TIMEOUT once (its
+// ACT_CMD id and counter) and sets SAFE_STATE in that leg's ST_STATUS; the leg's next accepted
+// ACT_CMD leaves the safe state. The heartbeat is one frame for the whole hil_sim (the DBC has
+// one HEARTBEAT): its SAFE_STATE and CMD_WATCHDOG bits are set when any leg's are.
 #ifndef HIL_SIM_CONTROLLER_H
 #define HIL_SIM_CONTROLLER_H
 
@@ -96,10 +98,11 @@ class Controller {
   void handle_act(const Request &req, int64_t now_ns);
   void handle_load(const Request &req);
   void end_step();
-  // Steps n with the lockstep watchdog (or none in real time); false after a failure.
+  // Steps n with the lockstep watchdogs (or none in real time); false after a failure.
   bool advance(uint32_t n, bool lockstep_watchdog, const Request *req);
-  void trip(double elapsed_ms);
-  uint32_t status_bits(uint32_t events) const;
+  void trip(int leg, double elapsed_ms);
+  // The status bits of leg's node; leg = -1: the heartbeat's (any leg's watchdog bits).
+  uint32_t status_bits(uint32_t events, int leg) const;
   void publish();
 
   Session &session_;
@@ -111,15 +114,17 @@ class Controller {
   FaultCode last_fault_ = FaultCode::kNone;
   bool fault_since_sample_ = false;
   SeqTrack ctrl_seq_, act_seq_[kMaxLegs], load_seq_[kMaxLegs];  // per leg: its own frame ids
-  uint32_t last_act_id_ = 0;   // the id of the last accepted ACT_CMD (of any leg), for CMD_TIMEOUT
 
-  // command timeout
+  // command timeout: the same limit for every leg, a watchdog per leg
+  struct Watchdog {
+    bool armed = false;
+    bool safe = false;
+    uint64_t steps_since_cmd = 0;  // lockstep
+    int64_t last_cmd_ns = 0;       // real time
+  };
   uint32_t timeout_ms_ = 0;
   uint64_t timeout_steps_ = 0;
-  bool armed_ = false;
-  bool safe_ = false;
-  uint64_t steps_since_cmd_ = 0;
-  int64_t last_cmd_ns_ = 0;
+  Watchdog watchdog_[kMaxLegs];
 
   // real time
   int64_t rt_period_ns_ = 0;

@@ -11,7 +11,7 @@ extern "C" {
 
 namespace hil {
 
-const uint32_t kActCmdFrameId = LEGSIM_CAN_ACT_CMD_FRAME_ID;
+const uint32_t kActCmdFrameId[kMaxLegs] = {LEGSIM_CAN_ACT_CMD_FRAME_ID, LEGSIM_CAN_ACT_CMD_L1_FRAME_ID};
 
 const char *fault_name(FaultCode code) {
   switch (code) {
@@ -455,7 +455,7 @@ void fill_status(const Sample &s, const StatusInfo &info, int leg, Status *st) {
   st->st_step_count = s.steps;
   st->st_residual = f32(s.residual);
   st->st_condition = f32(s.report.condition);
-  st->st_status = static_cast<uint16_t>(info.status);
+  st->st_status = static_cast<uint16_t>(info.status[leg]);
   st->st_stroke_mask = static_cast<uint8_t>((s.stroke_mask >> (leg * kActuators)) & 0x3u);
   st->st_state = static_cast<uint8_t>(info.state);
   st->st_legsim_status = static_cast<uint8_t>(info.legsim);

@@ -12,7 +12,7 @@
 namespace hil {
 
 constexpr int kProtocolVersion = 1;
-extern const uint32_t kActCmdFrameId;  // ACT_CMD, from the DBC
+extern const uint32_t kActCmdFrameId[kMaxLegs];  // ACT_CMD of leg 0, ACT_CMD_L1, from the DBC
 
 enum class FaultCode : uint8_t {
   kNone = 0,
@@ -100,7 +100,7 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault, int legs = 1);
 bool validate_request(const Request &req, const legsim_model_desc *model, Fault *fault);
 
 struct StatusInfo {
-  uint32_t status = 0;
+  uint32_t status[kMaxLegs] = {0, 0};  // per leg: its node's St_Status bits
   SimState state = SimState::kIdle;
   legsim_status legsim = LEGSIM_OK;
   FaultCode last_fault = FaultCode::kNone;

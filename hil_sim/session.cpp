@@ -215,12 +215,14 @@ legsim_status Session::set_load(int force, const double value[2]) {
   return legsim_set_force(sim_, force, v);
 }
 
-legsim_status Session::apply_safe_state(SafeMode mode) {
+legsim_status Session::apply_safe_state(SafeMode mode, int leg) {
   legsim_real len[kMaxActuators], rate[kMaxActuators];
   legsim_status st = LEGSIM_OK;
   if (mode == SafeMode::kHoldLength) st = legsim_actuator_lengths(sim_, len, rate);
   const legsim_model_desc *m = model();
-  for (int a = 0; a < m->n_actuators && st == LEGSIM_OK; ++a) {
+  const int first = leg < 0 ? 0 : leg * kActuators;
+  const int end = leg < 0 ? m->n_actuators : std::min(m->n_actuators, first + kActuators);
+  for (int a = first; a < end && st == LEGSIM_OK; ++a) {
     if (mode == SafeMode::kZeroForce) {
       st = legsim_command_force(sim_, a, 0);
     } else {

@@ -103,7 +103,9 @@ class Session {
   // Mode kKeep is a no-op. Values were checked against the model by the protocol.
   legsim_status command(int actuator, ActMode mode, double value);
   legsim_status set_load(int force, const double value[2]);  // the model's force index
-  legsim_status apply_safe_state(SafeMode mode);
+  // The safe state on leg's actuators (leg k: actuators 2k, 2k + 1), or on every actuator
+  // with leg = -1.
+  legsim_status apply_safe_state(SafeMode mode, int leg = -1);
 
   legsim_status sample(Sample *out) const;
   legsim_status clear_events();

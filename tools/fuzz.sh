@@ -14,7 +14,8 @@
 # to build/fuzz/fuzz/corpus-work/TARGET and is kept for the next run. An input that fails
 # (crash, sanitizer report, violated invariant, leak, timeout, out of memory) is written to
 # fuzz/regressions/TARGET/ for a human to commit (CTest then runs it in every build); the
-# script fails if any target failed. A summary line per target closes the run.
+# script fails if any target failed. A summary line per target closes the run, with how many
+# of the inputs run reached the two-leg robot (fuzz/reach.h).
 set -uo pipefail
 root=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$root"
@@ -76,6 +77,7 @@ for t in "${targets[@]}"; do
     execs=$(grep -o '#[0-9]*' "$log" | tail -1 | tr -d '#')
   fi
   corpus=$(find "$work" -type f | wc -l)
+  reach=$(grep -o '[0-9]* of [0-9]* inputs reached the robot' "$log" | tail -1)
   new=$(comm -13 <(echo "$before") <(ls "$out" | sort) | sed "s|^|$out/|" | tr '\n' ' ')
   if [ $rc -ne 0 ] || [ -n "$new" ]; then
     status=1
@@ -83,7 +85,7 @@ for t in "${targets[@]}"; do
     grep -m1 -A12 -E '^==[0-9]+==ERROR|runtime error|invariant violated|ERROR: libFuzzer' "$log" | head -20
     summary+=("fuzz_$t: FAILED after ${execs:-?} executions: ${new:-see $log}")
   else
-    summary+=("fuzz_$t: ok, ${execs:-?} executions in ${seconds} s, work corpus $corpus inputs")
+    summary+=("fuzz_$t: ok, ${execs:-?} executions in ${seconds} s, work corpus $corpus inputs; ${reach:-no reach count}")
   fi
 done
 echo "== summary"

@@ -82,7 +82,8 @@ struct Rig {
   hil::Session session;
   Recorder rec;
   hil::Controller ctl;
-  Rig() : ctl(session, rec, hil::ControllerConfig{}) {
+  explicit Rig(const hil::ControllerConfig &cfg = hil::ControllerConfig{})
+      : ctl(session, rec, cfg) {
     init_or_exit(session);
   }
   std::vector<hil::Frame> feed(const hil::Frame &f, uint64_t slice = 0) {
@@ -509,6 +510,133 @@ void test_one_leg_refuses_leg1_frames() {
         fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT);
 }
 
+// Each leg node has its own command watchdog: a leg silent past the timeout trips alone
+// (FAULT CMD_TIMEOUT naming its ACT_CMD id and counter, SAFE_STATE in its own ST_STATUS, its
+// actuators at zero force) while the other leg, still commanded, keeps its command and its
+// armed watchdog; in lockstep at the same step as the one leg (ceil(timeout / h) steps after
+// its last command) and in real time at the first tick past the timeout.
+legsim_can_st_status_t status0(const std::vector<hil::Frame> &v) {
+  legsim_can_st_status_t m;
+  legsim_can_st_status_init(&m);
+  if (const hil::Frame *f = find(v, LEGSIM_CAN_ST_STATUS_FRAME_ID)) legsim_can_st_status_unpack(&m, f->data, 64);
+  return m;
+}
+legsim_can_st_status_l1_t status1(const std::vector<hil::Frame> &v) {
+  legsim_can_st_status_l1_t m;
+  legsim_can_st_status_l1_init(&m);
+  if (const hil::Frame *f = find(v, LEGSIM_CAN_ST_STATUS_L1_FRAME_ID)) legsim_can_st_status_l1_unpack(&m, f->data, 64);
+  return m;
+}
+// The actuator forces of leg 0 (upper, lower) then leg 1, from a sample.
+void forces_of(const std::vector<hil::Frame> &v, float out[4]) {
+  legsim_can_st_act_t a0;
+  legsim_can_st_act_l1_t a1;
+  legsim_can_st_act_unpack(&a0, find(v, LEGSIM_CAN_ST_ACT_FRAME_ID)->data, 64);
+  legsim_can_st_act_l1_unpack(&a1, find(v, LEGSIM_CAN_ST_ACT_L1_FRAME_ID)->data, 64);
+  out[0] = a0.act_upper_force;
+  out[1] = a0.act_lower_force;
+  out[2] = a1.act_upper_force;
+  out[3] = a1.act_lower_force;
+}
+int faults_in(const std::vector<hil::Frame> &v) {
+  int n = 0;
+  for (const auto &f : v) n += f.id == LEGSIM_CAN_FAULT_FRAME_ID;
+  return n;
+}
+
+void test_watchdog_per_leg() {
+  constexpr uint8_t kLength = LEGSIM_CAN_ACT_CMD_ACT_MODE_UPPER_LENGTH_CHOICE;
+  hil::ControllerConfig cfg;  // 100 ms, zero force
+  Rig r(cfg);
+  legsim_can_control_t m = control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_act_init = 1;  // the default timeout (100 ms = 100 steps of 1 ms)
+  auto out = r.feed(pack(m));
+  legsim_can_st_act_t a0;
+  legsim_can_st_act_l1_t a1;
+  legsim_can_st_act_unpack(&a0, find(out, LEGSIM_CAN_ST_ACT_FRAME_ID)->data, 64);
+  legsim_can_st_act_l1_unpack(&a1, find(out, LEGSIM_CAN_ST_ACT_L1_FRAME_ID)->data, 64);
+  // both legs' servos hold their RESET lengths, commanded at step 0
+  const float len[4] = {a0.act_upper_length, a0.act_lower_length, a1.act_upper_length,
+                        a1.act_lower_length};
+  uint32_t seq0 = 1, seq1 = 1, ctrl = 2;
+  CHECK(r.feed(act(0, seq0++, kLength, len[0], kLength, len[1])).empty());
+  CHECK(r.feed(act(1, seq1++, kLength, len[2], kLength, len[3])).empty());
+  out = r.feed(step(ctrl++, 1));
+  CHECK((status0(out).st_status & hil::kStatusCmdWatchdog) && (status1(out).st_status & hil::kStatusCmdWatchdog));
+
+  // leg 0 commands every 40 steps, leg 1 is silent: leg 1 trips at step 100, alone
+  int faults = 0;
+  legsim_can_fault_t fault;
+  legsim_can_fault_init(&fault);
+  for (int i = 0; i < 5; ++i) {  // steps 1 .. 200
+    CHECK(r.feed(act(0, seq0++, kLength, len[0], kLength, len[1])).empty());
+    out = r.feed(step(ctrl++, 40), 7);
+    faults += faults_in(out);
+    if (faults_in(out) > 0) fault = fault_of(out);
+  }
+  CHECK(faults == 1);
+  CHECK(fault.fault_code == 7 && fault.fault_frame_id == LEGSIM_CAN_ACT_CMD_L1_FRAME_ID);
+  CHECK(fault.fault_seq == 1 && fault.fault_detail == 100 && fault.fault_step_count == 100);
+  const uint32_t s0 = status0(out).st_status, s1 = status1(out).st_status;
+  CHECK(!(s0 & hil::kStatusSafeState) && (s0 & hil::kStatusCmdWatchdog));
+  CHECK((s1 & hil::kStatusSafeState) && !(s1 & hil::kStatusCmdWatchdog));
+  float f[4];
+  forces_of(out, f);
+  CHECK(f[2] == 0.0f && f[3] == 0.0f);  // leg 1 in the safe state (zero force)
+  CHECK(f[0] != 0.0f && f[1] != 0.0f);  // leg 0's servos still hold
+  // the heartbeat says that a node is in its safe state and that one is armed
+  hil::HeartbeatInfo hb;
+  r.ctl.fill_heartbeat(&hb);
+  CHECK((hb.status & hil::kStatusSafeState) && (hb.status & hil::kStatusCmdWatchdog));
+
+  // leg 1 commanded again leaves its safe state; now leg 0 falls silent and trips alone,
+  // 100 steps after its last command (step 161), while leg 1 keeps its servo command
+  CHECK(r.feed(act(1, seq1++, kLength, len[2], kLength, len[3])).empty());
+  faults = 0;
+  for (int i = 0; i < 3; ++i) {  // steps 201 .. 320
+    CHECK(r.feed(act(1, seq1++, kLength, len[2], kLength, len[3])).empty());
+    out = r.feed(step(ctrl++, 40));
+    faults += faults_in(out);
+    if (faults_in(out) > 0) fault = fault_of(out);
+  }
+  CHECK(faults == 1);
+  CHECK(fault.fault_code == 7 && fault.fault_frame_id == LEGSIM_CAN_ACT_CMD_FRAME_ID);
+  CHECK(fault.fault_seq == seq0 - 1 && fault.fault_step_count == 261);
+  CHECK((status0(out).st_status & hil::kStatusSafeState) && !(status1(out).st_status & hil::kStatusSafeState));
+  forces_of(out, f);
+  CHECK(f[0] == 0.0f && f[1] == 0.0f && f[2] != 0.0f && f[3] != 0.0f);
+  // a RESET disarms both and leaves both safe states
+  m.ctrl_seq = ctrl++;
+  out = r.feed(pack(m));
+  CHECK(!((status0(out).st_status | status1(out).st_status) &
+          (hil::kStatusSafeState | hil::kStatusCmdWatchdog)));
+
+  // real time: leg 0 commands every 40 ticks, leg 1 silent since tick 0: leg 1 trips at the
+  // first tick more than 100 ms after its command, once
+  CHECK(r.feed(act(0, 1, kLength, len[0], kLength, len[1])).empty());
+  CHECK(r.feed(act(1, 1, kLength, len[2], kLength, len[3])).empty());
+  legsim_can_control_t rt = control(ctrl++, LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_RT_CHOICE);
+  rt.ctrl_rt_decimation = 1;
+  r.ctl.on_frame(pack(rt), 0);
+  r.rec.take();
+  faults = 0;
+  int64_t t = 0;
+  uint32_t s = 2;
+  for (int i = 1; i <= 160; ++i) {
+    t += 1000000;
+    if (i % 40 == 0) r.ctl.on_frame(act(0, s++, kLength, len[0], kLength, len[1]), t);
+    r.ctl.rt_tick(t);
+    out = r.rec.take();
+    if (faults_in(out) > 0) {
+      fault = fault_of(out);
+      CHECK(i == 101);
+    }
+    faults += faults_in(out);
+  }
+  CHECK(faults == 1 && fault.fault_frame_id == LEGSIM_CAN_ACT_CMD_L1_FRAME_ID);
+  CHECK(!(status0(out).st_status & hil::kStatusSafeState) && (status1(out).st_status & hil::kStatusSafeState));
+}
+
 }  // namespace
 
 int main() {
@@ -518,6 +646,7 @@ int main() {
   test_bad_leg1_frames();
   test_reset_with_lengths();
   test_contact_events_and_reset_options();
-  test_one_leg_refuses_leg1_frames();
+  test_watchdog_per_leg();
+  test_one_leg_refuses_leg1_frames();  // last: it switches to the one leg
   return report();
 }
