@@ -186,7 +186,7 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
   // the build has a stance kernel for the structure, or no kernel at all (not after a joint
   // kernel's block in a build without stance kernels): the general path orders as the
   // kernel it stands in for
-  bool stance = model.nc > 0 && contacts && !mid && ncoord == 0 && actuator_mask == 0;
+  bool stance = LEGSIM_MAX_CONTACTS > 0 && model.nc > 0 && contacts && !mid && ncoord == 0 && actuator_mask == 0;
   for (int k = 0; stance && k < model.nc; ++k) stance = contacts[k] == kContactStuck;
   if (stance && model.stance_kernel) out.kernel = model.stance_kernel;
   out.block = uint8_t(stance && (kernel_find(model, true) || !kernel_find(model)) ? m : 0);
@@ -243,10 +243,14 @@ bool rowset_common_below(const Rowset &a, const Rowset &b, int n) {
 // Rows 0 .. n-1 in reverse Cuthill-McKee order (breadth-first from a least-coupled row,
 // neighbours by degree, ties to the lowest index; then reversed): order[p] is the row
 // eliminated p-th.
-void cuthill_mckee(const Rowset *share, int n, int *order) {
+template <typename Share>
+void cuthill_mckee(const Share &share, int n, int *order) {
   int degree[kMaxRows], cm[kMaxRows], k = 0;
   bool placed[kMaxRows];
-  for (int i = 0; i < n; ++i) degree[i] = rowset_common(share[i], share[i]), placed[i] = false;
+  for (int i = 0; i < n; ++i) {
+    degree[i] = 0, placed[i] = false;
+    for (int j = 0; j < n; ++j) degree[i] += (j != i && share(i, j));
+  }
   while (k < n) {
     int start = -1;
     for (int i = 0; i < n; ++i)
@@ -257,7 +261,7 @@ void cuthill_mckee(const Rowset *share, int n, int *order) {
       for (;;) {  // the unplaced neighbours of cm[head], lowest degree first
         int next = -1;
         for (int j = 0; j < n; ++j)
-          if (!placed[j] && rowset_has(share[cm[head]], j) && (next < 0 || degree[j] < degree[next])) next = j;
+          if (!placed[j] && share(cm[head], j) && (next < 0 || degree[j] < degree[next])) next = j;
         if (next < 0) break;
         placed[next] = true;
         cm[k++] = next;
@@ -316,7 +320,7 @@ int fill(const Rowset *share, const int *order, int n) {
 // pinned bodies on their angles alone, which the kernels solve for RK4's stages
 // (kernel_codegen.py's Reduced, pins_first): the same pivots to round-off, so the same
 // pivot floor decides alike there.
-void pins_first(const Layout &out, const bool *is_pin, int *order, int n) {
+inline void pins_first(const Layout &out, const bool *is_pin, int *order, int n) {
   int result[kMaxRows], k = 0;
   bool placed[kMaxRows];
   for (int i = 0; i < n; ++i) placed[i] = false;
@@ -359,17 +363,11 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   // orders a kernel's block by the same rule (block_order), so the two paths factor alike.
   int mj = 0;
   while (mj < m && out.src[mj].kind == RowKind::Joint) ++mj;
-  const int nb = out.block > mj ? int(out.block) : mj;
-  Rowset share[kMaxRows];
-  for (int i = 0; i < nb; ++i) {
-    rowset_clear(share[i]);
-    for (int j = 0; j < nb; ++j)
-      if (j != i && share_body(i, j)) rowset_add(share[i], j);
-  }
+  const int nb = LEGSIM_MAX_CONTACTS > 0 && out.block > mj ? int(out.block) : mj;
   // reverse Cuthill-McKee over the joint rows (which keeps the envelope small), the
   // contact rows after them
-  int rcm[kMaxRows], md[kMaxRows];
-  cuthill_mckee(share, mj, rcm);
+  int rcm[kMaxRows];
+  cuthill_mckee(share_body, mj, rcm);
   for (int i = mj; i < nb; ++i) rcm[i] = i;
   bool is_pin[kMaxRows];
   for (int i = 0; i < nb; ++i) is_pin[i] = i < mj && pin_row(out, mj, i);
@@ -377,8 +375,16 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   // or, for a stance, minimum degree over the whole block where that leaves fewer entries
   // in the factor (a robot: each leg's rows first, the rows on the box, which all share it,
   // last). A joint block keeps reverse Cuthill-McKee: the rows after it solve against it
-  // through its envelope, which a minimum-degree order spreads.
-  if (nb > mj) {
+  // through its envelope, which a minimum-degree order spreads. (A build without contacts
+  // has no stance: its image leaves this out.)
+  if (LEGSIM_MAX_CONTACTS > 0 && nb > mj) {
+    Rowset share[kMaxRows];
+    for (int i = 0; i < nb; ++i) {
+      rowset_clear(share[i]);
+      for (int j = 0; j < nb; ++j)
+        if (j != i && share_body(i, j)) rowset_add(share[i], j);
+    }
+    int md[kMaxRows];
     min_degree(share, nb, md);
     pins_first(out, is_pin, md, nb);
     if (fill(share, md, nb) < fill(share, rcm, nb))
