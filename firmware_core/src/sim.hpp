@@ -181,10 +181,14 @@ struct Layout {
   int8_t body[kMaxRows][2];  // -1: no body in this slot
   int npairs;
   Pair pair[kMaxPairs];
-  // J W J^T is factored in a reverse Cuthill-McKee order of its rows (row i sits
-  // at position perm[i]), which keeps its envelope, and so the work, small.
+  // J W J^T is factored in an elimination order of its rows (row i sits at position
+  // perm[i]; layout_finish: reverse Cuthill-McKee or minimum degree, whichever leaves the
+  // factor fewer entries), which keeps the work small.
   uint8_t perm[kMaxRows];
   uint8_t first[kMaxRows];  // by position: the first non-zero column, the envelope
+  // The rows ordered together (layout_finish): a stance's joint and contact rows (all
+  // stuck, nothing else), or 0: the joint rows alone, the other rows after them.
+  uint8_t block;
   // Its actuator rows are stroke stops (Data::stop_drivers; the actuators still
   // push) rather than drivers that replace the actuators (Data::drivers).
   bool stops;

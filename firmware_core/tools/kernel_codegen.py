@@ -92,17 +92,69 @@ def rcm_order(m, share):
     return order[::-1]
 
 
+def min_degree_order(m, share):
+    """Rows in elimination order by minimum degree, exactly as layout_finish
+    (constraints.cpp) orders a block: at each step the row with the fewest neighbours
+    left in the elimination graph (ties to the lowest index), whose neighbours then
+    become neighbours of each other (the fill its elimination makes). On a robot the rows
+    of each leg go first and the rows on the box, which all share it, last."""
+    adj = [{j for j in range(m) if j != i and share[i][j]} for i in range(m)]
+    alive, order = set(range(m)), []
+    while alive:
+        i = min(alive, key=lambda r: (len(adj[r] & alive), r))
+        near = adj[i] & alive
+        for j in near:
+            adj[j] |= near - {j}
+        alive.remove(i)
+        order.append(i)
+    return order
+
+
+def fill(order, share):
+    """The number of L's entries below the diagonal (fill included) when the rows are
+    eliminated in this order (symbolic factorization)."""
+    n, reach = 0, []
+    for p, i in enumerate(order):
+        # row p's pattern: A's entries, and every column q that a column before it in the
+        # row reaches (L_pq non-zero when L_pk and L_qk both are, k < q)
+        lp = {q for q in range(p) if share[i][order[q]]}
+        for q in range(p):
+            if q not in lp and any(k in reach[q] for k in lp if k < q):
+                lp.add(q)
+        reach.append(lp)
+        n += len(lp)
+    return n
+
+
+def block_order(mj, m, share, rows, pinned):
+    """The elimination order of a kernel's block of m rows (its joint rows 0 .. mj-1, then
+    the stance's contact rows), the general path's rule (layout_finish): reverse
+    Cuthill-McKee over the joint rows with the contact rows after them, or, for a stance,
+    minimum degree over all the block's rows where that leaves fewer entries in the factor;
+    the pin rows moved ahead of the rows on their body either way (pins_first). A joint
+    block keeps reverse Cuthill-McKee: the rows after it (a sliding foot's, a stop's) solve
+    against it through its envelope, which a minimum-degree order spreads (a robot with a
+    foot sliding took 10 % more per step)."""
+    rcm = pins_first(rcm_order(mj, share) + list(range(mj, m)), rows, pinned, mj)
+    if m == mj:
+        return rcm
+    md = pins_first(min_degree_order(m, share), rows, pinned, mj)
+    return md if fill(md, share) < fill(rcm, share) else rcm
+
+
 def pinned_bodies(joints):
     """Bodies pinned to the frame by one revolute joint (and no other joint to the frame)."""
     to_frame = [j["body"][0] for j in joints if j["kind"] == "revolute_to_frame"]
     return {b for b in to_frame if to_frame.count(b) == 1}
 
 
-def pins_first(order, rows, pinned):
-    """order with the rows of each pinned body's pin (its rows to the frame: no second body)
-    moved to just before the first other row on that body (layout_finish, constraints.cpp,
-    does the same): every row's pivot after them is then the reduced system's (Reduced)."""
-    pin = [r[0][1] < 0 and r[0][0] in pinned for r in rows]
+def pins_first(order, rows, pinned, mj=None):
+    """order with the rows of each pinned body's pin (its rows to the frame: no second body;
+    joint rows only, the first mj when given) moved to just before the first other row on
+    that body (layout_finish, constraints.cpp, does the same): every row's pivot after them
+    is then the reduced system's (Reduced)."""
+    mj = len(rows) if mj is None else mj
+    pin = [i < mj and r[0][1] < 0 and r[0][0] in pinned for i, r in enumerate(rows)]
     out = []
     for i in order:
         if pin[i]:
@@ -162,7 +214,7 @@ class Kernel:
         share = [[any(x >= 0 and x == y for x in self.rows[i][0] for y in self.rows[j][0])
                   for j in range(m)] for i in range(m)]
         if order is None:
-            order = pins_first(rcm_order(mj, share), self.rows[:mj], pinned_bodies(self.joints)) + list(range(mj, m))
+            order = block_order(mj, m, share, self.rows, pinned_bodies(self.joints))
         self.perm = [0] * m
         for p, i in enumerate(order):
             self.perm[i] = p
