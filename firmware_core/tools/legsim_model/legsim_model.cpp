@@ -26,6 +26,7 @@
 #include <charconv>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <string>
 #include <utility>
@@ -331,8 +332,11 @@ bool load_all(const std::string &path, std::vector<Variant> &out) {
   return true;
 }
 
-// Written whole (a temporary file renamed): the build compares its time with the inputs'.
+// Written whole (a temporary file renamed), its folder made if missing.
 bool write_file(const std::string &path, const std::string &text) {
+  std::error_code ec;
+  const std::filesystem::path dir = std::filesystem::path(path).parent_path();
+  if (!dir.empty()) std::filesystem::create_directories(dir, ec);
   const std::string tmp = path + ".tmp";
   {
     std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
