@@ -1,11 +1,12 @@
-// Run-time model loader: models/leg.toml -> legsim_model_desc.
+// The model file loader: models/leg.toml (or a robot file) -> legsim_model_desc.
 //
-// A line-by-line port of firmware_core/tools/model_codegen.py (parse_model and its
-// helpers): same order of checks, same messages. Change both together; the tests in
-// tests/model compare the two (descriptions field by field, messages verbatim).
+// The one parser of model files: the run-time API below, and at build time the tool
+// legsim_model (firmware_core/tools/legsim_model), which writes what it loads as C
+// data, so that a model compiled in and the same model loaded at run time are equal
+// bit for bit. Every check and message of the format is here.
 //
-// toml++ may throw (toml::parse_error); so does this file internally (Fail) to keep
-// the port close to the Python. Everything is caught at the C boundary.
+// toml++ may throw (toml::parse_error); so does this file internally (Fail), which
+// keeps each check one line. Everything is caught at the C boundary.
 #include "model_toml.hpp"
 #include "toml_limits.hpp"
 
@@ -14,14 +15,24 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
-#include <fstream>
 #include <new>
 #include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
 
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 #include <toml++/toml.h>
+
+// The core's semantic checks (legsim_model_check) after the file's own. The build-time
+// tool legsim_model compiles this file without them (0): it writes the core's generated
+// sources, so it cannot link the core; the core checks a compiled-in model at legsim_init.
+#ifndef LEGSIM_MODEL_TOML_CORE_CHECK
+#define LEGSIM_MODEL_TOML_CORE_CHECK 1
+#endif
 
 namespace {
 
@@ -38,7 +49,7 @@ struct Fail {
   throw Fail{status, label + ": " + problem};
 }
 
-std::string g(double x) {  // Python's "%g" % x
+std::string g(double x) {  // numbers in messages: C's %g
   char buf[64];
   std::snprintf(buf, sizeof buf, "%g", x);
   return buf;
@@ -61,7 +72,7 @@ double to_double(Node v) {
 
 bool has(Table t, const std::string &key) { return t->get(key) != nullptr; }
 
-// Keys in sorted order (std::map order: bytewise, as Python's sorted()).
+// Keys in sorted order (bytewise).
 std::vector<std::string> sorted_keys(Table t) {
   std::vector<std::string> keys;
   for (auto &&kv : *t) keys.emplace_back(kv.first.str());
@@ -69,7 +80,7 @@ std::vector<std::string> sorted_keys(Table t) {
   return keys;
 }
 
-// Keys in file order (Python's dict order): by where each key first appears.
+// Keys in file order: by where each key first appears.
 std::vector<std::string> file_order_keys(Table t) {
   std::vector<std::tuple<uint32_t, uint32_t, std::string>> v;
   for (auto &&kv : *t) {
@@ -173,7 +184,7 @@ double get_nonnegative(Table t, const std::string &key, const std::string &label
   return x;
 }
 
-// The sane ranges of legsim.h (LEGSIM_MAX_* / LEGSIM_MIN_*), with model_codegen.py's message.
+// The sane ranges of legsim.h (LEGSIM_MAX_* / LEGSIM_MIN_*).
 double ranged(double x, double lo, double hi, const std::string &key, const std::string &label) {
   if (!(x >= lo && x <= hi))
     fail(label, q(key) + " must be in [" + g(lo) + ", " + g(hi) + "] (got " + g(x) + ")");
@@ -790,21 +801,37 @@ void put_msg(char *msg, size_t msg_len, const std::string &s) {
   msg[k] = '\0';
 }
 
-// Reads at most one byte past the TOML size limit: a larger file is refused by
-// the limits check without being read whole.
+// Reads a regular file, at most one byte past the TOML size limit: a larger file is
+// refused by the limits check without being read whole. Anything else (a FIFO, a
+// device, a folder) is refused without blocking: it is opened non-blocking and
+// checked before the first read.
 bool read_file(const char *path, std::string &text, std::string &err) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
+  const int fd = ::open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
     err = std::string(path) + ": cannot read: " + std::strerror(errno);
     return false;
   }
-  text.resize(kTomlMaxBytes + 1);
-  f.read(&text[0], static_cast<std::streamsize>(text.size()));
-  if (f.bad()) {
-    err = std::string(path) + ": cannot read: I/O error";
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    err = std::string(path) + ": cannot read: not a regular file";
     return false;
   }
-  text.resize(static_cast<size_t>(f.gcount()));
+  text.resize(kTomlMaxBytes + 1);
+  size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t k = ::read(fd, &text[got], text.size() - got);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) {
+      ::close(fd);
+      err = std::string(path) + ": cannot read: " + std::strerror(errno);
+      return false;
+    }
+    if (k == 0) break;
+    got += static_cast<size_t>(k);
+  }
+  ::close(fd);
+  text.resize(got);
   return true;
 }
 
@@ -837,20 +864,19 @@ toml::table parse_toml(const std::string &text, const std::string &source) {
 }
 
 // ---- a robot file: a box with leg files placed on it (docs/design/robot-on-ground.md) ----
-// The port of model_codegen.py's parse_robot and robot_guess: same checks, messages and
-// floating-point operations (the descriptions must agree bit for bit).
 constexpr double kMaxFriction = LEGSIM_MAX_FRICTION;
-constexpr double kMaxSlope = 1.5;         // rad, as legsim_model_check
+constexpr double kMaxSlope = 1.5;         // rad: |slope| <= 1.5 (legsim_ground_desc, legsim.h)
 constexpr double kCongruentTol = 1e-12;   // m: attach points against the leg's frame
 
 bool is_robot(Table doc) { return has(doc, "box") && has(doc, "leg"); }
 
-std::string path_join(const std::string &base, const std::string &file) {  // os.path.join
+// A leg file's path: relative to the robot file's folder unless absolute.
+std::string path_join(const std::string &base, const std::string &file) {
   if (base.empty() || (!file.empty() && file[0] == '/')) return file;
   return base.back() == '/' ? base + file : base + "/" + file;
 }
 
-std::string dir_name(const std::string &path) {  // os.path.dirname
+std::string dir_name(const std::string &path) {  // the folder part ("" for none)
   const size_t k = path.rfind('/');
   if (k == std::string::npos) return "";
   std::string d = path.substr(0, k + 1);
@@ -1003,6 +1029,11 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
       throw;
     }
     const legsim_model_desc &lm = leg.model;
+    // one gravity for the whole robot: a leg file that states another is refused, not ignored
+    if (lm.gravity_mps2[0] != gravity[0] || lm.gravity_mps2[1] != gravity[1])
+      fail(label, "the gravity of " + q(lfile) + ", [" + g(lm.gravity_mps2[0]) + ", " +
+                      g(lm.gravity_mps2[1]) + "] m/s^2, differs from the robot's [" + g(gravity[0]) +
+                      ", " + g(gravity[1]) + "] m/s^2 (they must be equal)");
     Table frame = ldoc.get("frame") ? ldoc.get("frame")->as_table() : nullptr;
     std::vector<std::string> fnames = frame ? sorted_keys(frame) : std::vector<std::string>{};
     if (fnames.empty()) fail(label, "the leg file has no [frame] points to attach");
@@ -1106,9 +1137,10 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
       has(gt, "point") ? ranged_vec(get_vec(gt, "point", 2, "ground"), -LEGSIM_MAX_COORD,
                                     LEGSIM_MAX_COORD, "point", "ground")
                        : std::vector<double>{0.0, 0.0};
-  const double slope =
-      has(gt, "slope") ? ranged(get_real(gt, "slope", "ground"), -kMaxSlope, kMaxSlope, "slope", "ground")
-                       : 0.0;
+  const double slope = has(gt, "slope") ? get_real(gt, "slope", "ground") : 0.0;
+  if (!(std::abs(slope) <= kMaxSlope))
+    fail("ground", "'slope' must be in [" + g(-kMaxSlope) + ", " + g(kMaxSlope) +
+                       "] rad (got " + g(slope) + ")");
   const double mu_s =
       ranged(get_nonnegative(gt, "mu_static", "ground"), 0.0, kMaxFriction, "mu_static", "ground");
   const double mu_k =
@@ -1193,12 +1225,14 @@ legsim_status parse_text(const std::string &text, const std::string &source, con
       f.message = source + ": " + f.message;
       throw;
     }
+#if LEGSIM_MODEL_TOML_CORE_CHECK
     char core_msg[256] = {0};
     const legsim_status st = legsim_model_check(&m, core_msg, sizeof core_msg);
     if (st != LEGSIM_OK) {
       put_msg(msg, msg_len, source + ": " + core_msg);
       return st;
     }
+#endif
     *out = m;
     put_msg(msg, msg_len, "");
     return LEGSIM_OK;

@@ -1,15 +1,18 @@
-/* Host-only run-time loader of a legsim model TOML (models/leg.toml) into a
- * legsim_model_desc.
+/* Host-only loader of a legsim model file (models/leg.toml, or a robot file such as
+ * models/robot.toml that places leg files on a box) into a legsim_model_desc.
  *
- * The mapping and every check (and its message) are those of the firmware's
- * code generator firmware_core/tools/model_codegen.py: one model file, one
- * meaning, whether it is compiled in or loaded at run time (tests/model checks
- * that both give the same descriptions and the same messages).
+ * The one parser of the format: the firmware's compiled-in models are this loader's
+ * output too (the build-time tool legsim_model writes it as C data), so a model
+ * compiled in and the same file loaded here are equal bit for bit.
  *
  * Messages read "FILE: ITEM: PROBLEM", e.g.
  *   models/leg.toml: joint 'D': body 7 does not exist (ids are 1..6)
  * After its own checks the loader runs legsim_model_check() (the core's
  * semantic checks) and prefixes its message with the file name.
+ *
+ * Only regular files are read (a FIFO or a device is refused, without blocking),
+ * the model file and a robot's leg files alike. A robot's leg files must have the
+ * robot's gravity.
  *
  * No exception escapes these functions. Usable from C and C++.
  */
@@ -46,7 +49,7 @@ legsim_status legsim_model_parse_toml(const char *text, size_t text_len, const c
                                       size_t msg_len);
 
 /* Variant names of the model file: "revolute" first, then its [variant.X] tables in
- * file order (the order of the code generator's legsim_model_<symbol>_variants[]).
+ * file order (the order of the compiled-in legsim_model_<symbol>_variants[]).
  * Writes at most max_names names; *n_names gets the total. Only reads the file
  * (use legsim_model_load_toml to validate a variant). */
 legsim_status legsim_model_toml_variants(const char *path, char (*names)[LEGSIM_NAME_LEN],

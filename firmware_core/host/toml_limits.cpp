@@ -1,7 +1,6 @@
 // A one-pass scanner of TOML text: it tracks only what the limits need (strings,
 // comments, bracket depth, dots between key separators), not the grammar; the
-// parser still judges the syntax. Mirrored line by line in
-// firmware_core/tools/model_codegen.py (toml_input_within_limits).
+// parser still judges the syntax.
 #include "toml_limits.hpp"
 
 namespace {

@@ -5,8 +5,7 @@
 // two-line file `zz = 1` / `é`, and on some after a backslash in a string. A file
 // that breaks a limit is refused with a clean message; the parser never sees it.
 //
-// Limits (the same in firmware_core/tools/model_codegen.py, which gives the same
-// messages):
+// Limits:
 //   - at most kTomlMaxBytes bytes;
 //   - valid UTF-8 (no overlong forms, surrogates or code points past U+10FFFF);
 //   - non-ASCII characters only inside strings and comments, and never right after a

@@ -1,7 +1,7 @@
 #!/usr/bin/env python3
 """Generate the fixed-sparsity joint-block kernels of the compiled-in models (kernel.hpp).
 
-    kernel_codegen.py --out legsim_kernels.cpp models/leg.toml models/robot.toml
+    kernel_codegen.py --out legsim_kernels.cpp leg.json robot.json
 
 For each distinct structure among the files' variants (joint kinds and the bodies they
 join; with --no-stance left out, also each model with contacts' stance: its joint rows and
@@ -34,16 +34,15 @@ The geometry (joint points) is read from the Model at run time: the kernel depen
 structure only (the joints, the contacts' bodies and the actuators' joints), and
 kernel_find (in the generated file) picks it by that structure.
 Each kernel is compiled only where the build's capacities hold its model. Python 3.11+,
-standard library only; model_codegen.py reads and checks the TOML files.
+standard library only; the models' structure comes from the model loader
+(legsim_model --emit-structure: one JSON file per model file, named after it).
 """
 from __future__ import annotations
 
 import argparse
+import json
 import os
 import sys
-
-sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
-import model_codegen  # noqa: E402
 
 KIND = {"revolute_to_frame": 0, "revolute": 1, "prismatic": 2, "slot": 3}
 NROWS = {"revolute_to_frame": 2, "revolute": 2, "prismatic": 2, "slot": 1}
@@ -912,6 +911,13 @@ class Reduced(Kernel):
 # and glibc, a baseline and an AVX copy, the same values bit for bit.
 
 
+def load_structure(path):
+    """[(variant, model)] of a model file, from `legsim_model FILE --emit-structure`'s JSON:
+    per model its bodies, joints (kind, body pair), actuators (joint) and contacts (body)."""
+    with open(path, encoding="utf-8") as f:
+        return [(v["name"], v["model"]) for v in json.load(f)["variants"]]
+
+
 def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None, reduced=True):
     """The generated file's text. Fused solves (dynamics, newton) go to each model's main
     system only (its joint rows if it has no contacts, else its stance kernel) and, with
@@ -921,7 +927,7 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
     kernels, seen = [], set()
     for path in paths:
         stem = os.path.splitext(os.path.basename(path))[0]
-        variants = model_codegen.load_all(path, {})
+        variants = load_structure(path)
         for variant, model in variants[:1] if default_only else variants:
             for stance in (False, True) if model.get("contacts") and stance_kernels else (False,):
                 k = Kernel(f"{stem} {variant}" + (" stance" if stance else ""), model, stance)
@@ -984,7 +990,7 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
 
 def main(argv=None):
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("toml", nargs="*", help="model files (models/leg.toml, models/robot.toml); "
+    p.add_argument("toml", nargs="*", help="structure files (legsim_model --emit-structure); "
                    "none: an empty table (kernel_find finds nothing)")
     p.add_argument("--default-only", action="store_true",
                    help="each file's default variant only (cross builds: the one an image uses)")
@@ -998,10 +1004,11 @@ def main(argv=None):
     args = p.parse_args(argv)
     try:
         text = generate(args.toml, args.default_only, not args.no_stance, args.fused_max_rows, not args.no_reduced)
-    except model_codegen.ModelError as e:
-        print(e.message, file=sys.stderr)
+    except (OSError, ValueError, KeyError) as e:
+        print(f"kernel_codegen: error: {e}", file=sys.stderr)
         return 1
-    model_codegen.write_file(args.out, text)
+    with open(args.out, "w", encoding="utf-8") as f:
+        f.write(text)
     return 0
 
 

@@ -1,6 +1,7 @@
-// One source of truth for the model: the descriptions compiled in by
-// tools/model_codegen.py equal, field by field, those the host loads at run time
-// (host/model_toml.cpp); every bad model gives the expected status and message.
+// One source of truth for the model: the descriptions compiled in (written as C by the
+// build tool legsim_model, tools/legsim_model) equal, field by field, those the host
+// loads at run time (host/model_toml.cpp); every bad model gives the expected status and
+// message.
 //
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
 #include <algorithm>
@@ -26,6 +27,11 @@
 #include "model_toml.hpp"
 #include "toml_limits.hpp"
 #include "unity.h"
+
+#include <signal.h>
+#include <sys/stat.h>
+#include <sys/wait.h>
+#include <unistd.h>
 
 void setUp(void) {}
 void tearDown(void) {}
@@ -204,7 +210,7 @@ static void test_mini_generated_equals_loaded(void) {
   check_same(kMini, legsim_model_mini_variants, legsim_model_mini_variant_count);
 }
 
-static void test_variant_names_in_codegen_order(void) {
+static void test_variant_names_in_compiled_in_order(void) {
   char names[4][LEGSIM_NAME_LEN];
   int32_t n = 0;
   char msg[256];
@@ -359,9 +365,9 @@ static void test_bad_fixtures_give_expected_errors(void) {
     std::vector<std::string> col;
     std::stringstream ss(line);
     for (std::string c; std::getline(ss, c, '\t');) col.push_back(c);
-    TEST_ASSERT_EQUAL_INT_MESSAGE(6, (int)col.size(), line.c_str());
+    TEST_ASSERT_EQUAL_INT_MESSAGE(5, (int)col.size(), line.c_str());
     const std::string path = kFixtures + col[0];
-    const std::string want = path + ": " + substitute_capacities(col[5]);
+    const std::string want = path + ": " + substitute_capacities(col[4]);
     const legsim_status want_st = status_named(col[2]);
 
     legsim_model_desc d;
@@ -370,7 +376,7 @@ static void test_bad_fixtures_give_expected_errors(void) {
     char msg[512] = {0};
     const legsim_status st = legsim_model_load_toml(path.c_str(), col[1].c_str(), &d, msg, sizeof msg);
     const std::string got = msg;
-    const bool msg_ok = col[4] == "exact" ? got == want : got.compare(0, want.size(), want) == 0;
+    const bool msg_ok = col[3] == "exact" ? got == want : got.compare(0, want.size(), want) == 0;
     if (st != want_st || !msg_ok)
       failures += " | " + col[0] + ": got " + legsim_status_str(st) + " \"" + got + "\" want " +
                   col[2] + " \"" + want + "\"";
@@ -438,8 +444,7 @@ static void test_parse_from_memory(void) {
 // ---- hostile text: bounded before toml++ sees it -------------------------------------------
 // toml++ 3.3.0 overflows the stack on a key or header of 50,000 dotted parts (about 100 KB)
 // and reaches code it marks unreachable on `zz = 1` followed by a non-ASCII letter; the
-// small cases are fixtures (expected.tsv, both tools), the large ones are made here and
-// in check_codegen_messages.py, with the same messages.
+// small cases are fixtures (expected.tsv), the large ones are made here.
 static std::string leg_text() {
   std::ifstream f(kLeg, std::ios::binary);
   std::stringstream ss;
@@ -582,12 +587,132 @@ static void test_robot_mapping(void) {
   TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, legsim_model_check(&r, msg, sizeof msg), msg);
 }
 
+// ---- files that are not regular files ------------------------------------------------------
+// The load in a child process, so that a load that blocks fails the test (after 10 s)
+// instead of hanging it: "STATUS MESSAGE", or "blocked".
+static std::string load_in_child(const std::string &path) {
+  int fd[2];
+  TEST_ASSERT_EQUAL_INT(0, ::pipe(fd));
+  const pid_t pid = ::fork();
+  TEST_ASSERT_TRUE(pid >= 0);
+  if (pid == 0) {
+    ::close(fd[0]);
+    legsim_model_desc d;
+    char msg[512] = {0};
+    const legsim_status st = legsim_model_load_toml(path.c_str(), nullptr, &d, msg, sizeof msg);
+    const std::string out = std::to_string(static_cast<int>(st)) + " " + msg;
+    if (::write(fd[1], out.data(), out.size()) < 0) ::_exit(2);
+    ::_exit(0);
+  }
+  ::close(fd[1]);
+  int wstatus = 0;
+  bool done = false;
+  for (int i = 0; i < 1000 && !done; ++i) {  // 10 s
+    done = ::waitpid(pid, &wstatus, WNOHANG) == pid;
+    if (!done) ::usleep(10000);
+  }
+  if (!done) {
+    ::kill(pid, SIGKILL);
+    ::waitpid(pid, &wstatus, 0);
+    ::close(fd[0]);
+    return "blocked";
+  }
+  std::string out;
+  char buf[512];
+  for (ssize_t k; (k = ::read(fd[0], buf, sizeof buf)) > 0;) out.append(buf, static_cast<size_t>(k));
+  ::close(fd[0]);
+  return out;
+}
+
+static void test_non_regular_files_are_refused_without_blocking(void) {
+  namespace fs = std::filesystem;
+  const fs::path dir = fs::temp_directory_path() / ("legsim_test_fifo_" + std::to_string(::getpid()));
+  fs::remove_all(dir);
+  fs::create_directories(dir);
+  const std::string fifo = (dir / "leg.toml").string(), robot = (dir / "robot.toml").string();
+  TEST_ASSERT_EQUAL_INT(0, ::mkfifo(fifo.c_str(), 0600));
+  {
+    std::ofstream f(robot);
+    f << "name = \"fifo-biped\"\n[box]\nmass = 20.0\nsize = [0.6, 0.3]\ninertia = 0.75\n"
+         "[[leg]]\nname = \"right\"\nfile = \"leg.toml\"\nattach = { A = [0.2, 0.1], B = [0.2, -0.15] }\n"
+         "[ground]\nmu_static = 0.6\nmu_kinetic = 0.5\n";
+  }
+  const std::string bad = std::to_string(static_cast<int>(LEGSIM_ERR_BAD_INPUT)) + " ";
+  // a robot whose leg file is a FIFO, the FIFO as the model file, a folder
+  TEST_ASSERT_EQUAL_STRING((bad + robot + ": leg 'right': file 'leg.toml': cannot read: not a regular file").c_str(),
+                           load_in_child(robot).c_str());
+  TEST_ASSERT_EQUAL_STRING((bad + fifo + ": cannot read: not a regular file").c_str(), load_in_child(fifo).c_str());
+  TEST_ASSERT_EQUAL_STRING((bad + dir.string() + ": cannot read: not a regular file").c_str(),
+                           load_in_child(dir.string()).c_str());
+  char names[2][LEGSIM_NAME_LEN];
+  int32_t n = 0;
+  char msg[256];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_model_toml_variants(fifo.c_str(), names, 2, &n, msg, sizeof msg));
+  fs::remove_all(dir);
+}
+
+// ---- the ground's slope: one rule, stated in legsim.h -------------------------------------
+// legsim.h's legsim_ground_desc states the bound ("|slope_rad| <= B"); the loader and the
+// core's check both take a slope of B and refuse the next double past it.
+static void test_slope_rule_is_the_headers(void) {
+  std::ifstream f("firmware_core/include/legsim/legsim.h");
+  std::stringstream ss;
+  ss << f.rdbuf();
+  const std::string h = ss.str();
+  const size_t end = h.find("typedef struct legsim_ground_desc");
+  TEST_ASSERT_TRUE(end != std::string::npos);
+  const std::string doc = h.substr(h.rfind("/*", end), end - h.rfind("/*", end));
+  const std::string rule = "|slope_rad| <= ";
+  const size_t at = doc.find(rule);
+  TEST_ASSERT_TRUE_MESSAGE(at != std::string::npos, ("legsim.h states no \"|slope_rad| <= B\": " + doc).c_str());
+  const double bound = std::strtod(doc.c_str() + at + rule.size(), nullptr);
+  TEST_ASSERT_TRUE(bound > 1.0 && bound < 1.5708);
+  const double past = std::nextafter(bound, 2.0);
+#if LEGSIM_MAX_CONTACTS >= 2 && LEGSIM_MAX_BODIES >= 13
+  char buf[32];
+  for (const double slope : {bound, -bound, past, -past}) {
+    std::ifstream rf("models/robot.toml");
+    std::stringstream rs;
+    rs << rf.rdbuf();
+    std::string text = rs.str();
+    const size_t k = text.find("slope = 0.0");
+    TEST_ASSERT_TRUE(k != std::string::npos);
+    std::snprintf(buf, sizeof buf, "%.17g", slope);
+    text.replace(k, std::strlen("slope = 0.0"), std::string("slope = ") + buf);
+    legsim_model_desc d;
+    char msg[512] = {0};
+    const legsim_status st =
+        legsim_model_parse_toml(text.data(), text.size(), "models/robot.toml", nullptr, &d, msg, sizeof msg);
+    if (std::abs(slope) <= bound) {
+      TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, st, msg);
+      TEST_ASSERT_EQUAL_DOUBLE(slope, d.ground.slope_rad);
+    } else {
+      TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_ERR_MODEL, st, msg);
+      std::snprintf(buf, sizeof buf, "%g", bound);
+      const std::string want = std::string("models/robot.toml: ground: 'slope' must be in [-") + buf + ", " + buf + "] rad";
+      TEST_ASSERT_EQUAL_INT_MESSAGE(0, std::string(msg).compare(0, want.size(), want), msg);
+    }
+  }
+#endif
+  // the core's check, on the compiled-in leg given a ground
+  legsim_model_desc m = legsim_model_leg_revolute;
+  char msg[256];
+  for (const double slope : {bound, -bound}) {
+    m.ground.slope_rad = slope;
+    TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, legsim_model_check(&m, msg, sizeof msg), msg);
+  }
+  for (const double slope : {past, -past}) {
+    m.ground.slope_rad = slope;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, legsim_model_check(&m, msg, sizeof msg));
+  }
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_leg_generated_equals_loaded);
   RUN_TEST(test_leg_compiled_as_cxx_equals_c);
   RUN_TEST(test_mini_generated_equals_loaded);
-  RUN_TEST(test_variant_names_in_codegen_order);
+  RUN_TEST(test_variant_names_in_compiled_in_order);
   RUN_TEST(test_leg_mapping);
   RUN_TEST(test_robot_generated_equals_loaded);
   RUN_TEST(test_robot_mapping);
@@ -599,5 +724,7 @@ int main(void) {
   RUN_TEST(test_parse_from_memory);
   RUN_TEST(test_hostile_text_is_refused_before_parsing);
   RUN_TEST(test_text_within_the_limits_still_loads);
+  RUN_TEST(test_non_regular_files_are_refused_without_blocking);
+  RUN_TEST(test_slope_rule_is_the_headers);
   return UNITY_END();
 }

@@ -167,7 +167,8 @@ typedef struct legsim_contact_desc {
 /* The ground: the line through point at angle slope_rad (counter-clockwise), tangent
  * t = (cos, sin), upward normal n = (-sin, cos); Coulomb friction with
  * 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. |point| <= LEGSIM_MAX_COORD,
- * |slope_rad| < pi/2. Unused (all zero) in a model without contacts. */
+ * |slope_rad| <= 1.5 (about 86 degrees; legsim_model_check and the model file loader
+ * refuse a steeper one). Unused (all zero) in a model without contacts. */
 typedef struct legsim_ground_desc {
   double point[2];
   double slope_rad;
