@@ -16,8 +16,9 @@
  * two cannot disagree.
  *
  * The start (fmi3ExitInitializationMode) is the scene runner's (firmware_core/host,
- * legsim_cli): the model's first pose assembled, then the actuators at length0_m (a robot:
- * both feet on the ground, their midpoint where the pose puts it, both stuck). fmi3DoStep
+ * legsim_cli): the model's first pose assembled, then, when any length0_m was set, the
+ * actuators at length0_m (else the pose's own lengths, which length0_m's start values are);
+ * a robot: both feet on the ground, their midpoint where the pose puts it, both stuck. fmi3DoStep
  * applies the commands and makes round(step / step_s) fixed steps (a communication step
  * must be a whole number of them); each command is re-applied before every step, as the CLI
  * does. A failing legsim call ends the step with fmi3Error and its status in the log. */
@@ -47,6 +48,7 @@ typedef struct fmu {
   fmi3InstanceEnvironment env;
   fmi3LogMessageCallback log;
   int initialized;
+  int lengths_set; /* a length0_m was set: assemble at length0_m, else the pose's own lengths */
   double step_s;
   int32_t integrator;
   int32_t mode[LEGSIM_MAX_ACTUATORS];
@@ -144,6 +146,7 @@ static void defaults(fmu *c) {
   c->integrator = (int32_t)o.integrator;
   c->time = 0;
   c->initialized = 0;
+  c->lengths_set = 0;
   double len[LEGSIM_MAX_ACTUATORS];
   legsim_fmu_stand_lengths(len);
   for (int a = 0; a < m->n_actuators; ++a) {
@@ -199,9 +202,9 @@ static fmi3Status start(fmu *c) {
     for (int i = 0; i < m->n_contacts; ++i)
       mid += ((k[i].position[0] - g->point[0]) * cos(g->slope_rad) +
               (k[i].position[1] - g->point[1]) * sin(g->slope_rad)) / m->n_contacts;
-    st = legsim_assemble_on_ground(c->sim, len, (legsim_real)mid);
+    st = legsim_assemble_on_ground(c->sim, c->lengths_set ? len : NULL, (legsim_real)mid);
     if (st != LEGSIM_OK) return fail(c, "legsim_assemble_on_ground (length0_m)", st);
-  } else if ((st = legsim_assemble(c->sim, len)) != LEGSIM_OK) {
+  } else if (c->lengths_set && (st = legsim_assemble(c->sim, len)) != LEGSIM_OK) {
     return fail(c, "legsim_assemble (length0_m)", st);
   }
   c->time = legsim_time(c->sim);
@@ -280,7 +283,11 @@ static int set_real(fmu *c, fmi3ValueReference ref, double v) {
   if (vr == VR_STEP && !c->initialized) { c->step_s = v; return 1; }
   if (vr >= VR_ACT && vr < VR_ACT + 10 * m->n_actuators) {
     int a = (vr - VR_ACT) / 10, i = (vr - VR_ACT) % 10;
-    if (i == 1 && !c->initialized) { c->length0[a] = v; return 1; }
+    if (i == 1 && !c->initialized) {
+      c->length0[a] = v;
+      c->lengths_set = 1;
+      return 1;
+    }
     if (i == 2) { c->force_cmd[a] = v; return 1; }
     if (i == 3) { c->length_cmd[a] = v; return 1; }
     return 0;
