@@ -105,7 +105,7 @@ def find_library(precision: str = "double", lib_path=None) -> Path:
         cands += _installed_candidates(precision)
     for c in cands:
         if c.is_file():
-            return c.resolve()
+            return Path(os.path.abspath(c))  # the name asked for, not a versioned link target
     where = ", ".join(dict.fromkeys(str(c) for c in cands))
     raise LibraryNotFound(
         f"{name} not found (looked at: {where}); install the wheel (pip install ./python), "
