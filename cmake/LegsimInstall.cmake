@@ -8,8 +8,15 @@
 #   include/legsim/legsim.h    the C API
 #   include/legsim/config.h    this build's precision, capacities and feature switches
 #   include/legsim/models.h    the compiled-in models (models/leg.toml: legsim_model_leg_*)
+#   include/legsim/robot_models.h  the robot (models/robot.toml: legsim_model_robot_*), when
+#                              the build's capacities hold it (LEGSIM_HAS_ROBOT)
+#   include/legsim/version.h   LEGSIM_VERSION_MAJOR/MINOR/PATCH, LEGSIM_VERSION_STRING
 #   <libdir>/liblegsim_core.a, liblegsim_models.a
-#   <libdir>/liblegsim.so, liblegsim_f32.so          host only: for the Python API
+#   <libdir>/liblegsim.so.X.Y.Z, liblegsim_f32.so.X.Y.Z   host only: for the Python API
+#                              (SONAME liblegsim.so.X.Y: 0.x minors may break the ABI)
+#   bin/legsim_cli             host only: runs a scene (and bin/hil_sim with LEGSIM_BUILD_HIL_SIM)
+#   share/legsim/models/, scenes/, can/legsim.dbc   the shipped models, scenes and the DBC
+#                              (scenes name their models relative to themselves: same tree)
 #   <libdir>/cmake/legsim/     find_package(legsim): legsim::core, legsim::<model> (legsim::leg)
 #   <libdir>/pkgconfig/legsim.pc (core and models), legsim-core.pc (the core alone)
 #
@@ -19,6 +26,11 @@
 # from the C++ runtime (memcpy, memset and libm only, `nm -u liblegsim_core.a`), so a
 # C program links it with the C compiler and -lm. tests/package proves both (a C
 # consumer built with CMake and with pkg-config, linked by the C compiler).
+#
+# Two install components: "runtime" (the shared libraries, the programs, models, scenes,
+# DBC) and "development" (headers, static libraries, the CMake and pkg-config files).
+# The Python wheel (python/pyproject.toml, scikit-build-core) installs "runtime" alone,
+# into its package directory, in the same layout (lib/, bin/, share/legsim/).
 include(CMakePackageConfigHelpers)
 
 set(legsim_cmake_install_dir ${CMAKE_INSTALL_LIBDIR}/cmake/legsim)
@@ -32,25 +44,60 @@ set_target_properties(legsim_models PROPERTIES EXPORT_NAME ${legsim_model_symbol
 target_link_libraries(legsim_core PRIVATE m)
 
 install(TARGETS legsim_core legsim_models EXPORT legsimTargets
-        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR})
+        ARCHIVE DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT development)
+# legsim/version.h (cmake/LegsimVersion.cmake) is part of the core's interface.
+target_include_directories(legsim_core PUBLIC $<BUILD_INTERFACE:${LEGSIM_VERSION_INCLUDE_DIR}>)
 # Host only: the core, the leg and the run-time loader in one shared library per
 # precision, for dynamic bindings (the Python API loads them; no C headers for them).
+# Versioned: liblegsim.so.X.Y.Z with the SONAME liblegsim.so.X.Y (a 0.x minor may break
+# the ABI, as the CMake package's SameMinorVersion says).
 foreach(legsim_shared legsim legsim_f32)
   if(TARGET ${legsim_shared})
-    install(TARGETS ${legsim_shared} LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR})
+    set_target_properties(${legsim_shared} PROPERTIES VERSION ${PROJECT_VERSION}
+      SOVERSION ${PROJECT_VERSION_MAJOR}.${PROJECT_VERSION_MINOR})
+    if(SKBUILD)
+      # A wheel holds no symbolic links: the one file, under the name the Python API loads
+      # (by path, with ctypes; nothing links against it).
+      install(FILES $<TARGET_FILE:${legsim_shared}> DESTINATION ${CMAKE_INSTALL_LIBDIR}
+              RENAME ${CMAKE_SHARED_LIBRARY_PREFIX}${legsim_shared}${CMAKE_SHARED_LIBRARY_SUFFIX}
+              COMPONENT runtime)
+    else()
+      install(TARGETS ${legsim_shared}
+              LIBRARY DESTINATION ${CMAKE_INSTALL_LIBDIR} COMPONENT runtime
+                NAMELINK_COMPONENT development)
+    endif()
   endif()
 endforeach()
+if(TARGET legsim_cli)
+  install(TARGETS legsim_cli RUNTIME DESTINATION ${CMAKE_INSTALL_BINDIR} COMPONENT runtime)
+endif()
+# hil_sim is defined later (hil_sim/): the top-level CMakeLists.txt installs it.
+
+# ---- models, scenes, DBC -------------------------------------------------------
+if(LEGSIM_BUILD_HOST)
+  set(legsim_data_dir ${CMAKE_INSTALL_DATADIR}/legsim)
+  install(DIRECTORY ${PROJECT_SOURCE_DIR}/models ${PROJECT_SOURCE_DIR}/scenes
+          DESTINATION ${legsim_data_dir} COMPONENT runtime FILES_MATCHING PATTERN "*.toml"
+          PATTERN "*.md")
+  install(FILES ${PROJECT_SOURCE_DIR}/can/legsim.dbc DESTINATION ${legsim_data_dir}/can
+          COMPONENT runtime)
+endif()
 
 # ---- headers -----------------------------------------------------------------
 install(DIRECTORY ${CMAKE_CURRENT_SOURCE_DIR}/include/legsim
-        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} FILES_MATCHING PATTERN "*.h")
-install(FILES ${CMAKE_CURRENT_BINARY_DIR}/generated/legsim/config.h
-              ${legsim_models_dir}/legsim/models.h
-        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/legsim)
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR} COMPONENT development
+        FILES_MATCHING PATTERN "*.h")
+set(legsim_generated_headers ${CMAKE_CURRENT_BINARY_DIR}/generated/legsim/config.h
+    ${legsim_models_dir}/legsim/models.h ${LEGSIM_VERSION_INCLUDE_DIR}/legsim/version.h)
+if(LEGSIM_HAS_ROBOT)
+  list(APPEND legsim_generated_headers ${legsim_models_dir}/legsim/robot_models.h)
+endif()
+install(FILES ${legsim_generated_headers}
+        DESTINATION ${CMAKE_INSTALL_INCLUDEDIR}/legsim COMPONENT development)
 
 # ---- CMake package: find_package(legsim) ---------------------------------------
 install(EXPORT legsimTargets NAMESPACE legsim:: FILE legsimTargets.cmake
-        DESTINATION ${legsim_cmake_install_dir})
+        DESTINATION ${legsim_cmake_install_dir} COMPONENT development)
 # What legsimConfig.cmake reports about the build (legsim_USE_FLOAT etc.).
 if(LEGSIM_USE_FLOAT)
   set(legsim_config_use_float ON)
@@ -66,7 +113,7 @@ write_basic_package_version_file(${CMAKE_CURRENT_BINARY_DIR}/legsimConfigVersion
   VERSION ${PROJECT_VERSION} COMPATIBILITY SameMinorVersion)
 install(FILES ${CMAKE_CURRENT_BINARY_DIR}/legsimConfig.cmake
               ${CMAKE_CURRENT_BINARY_DIR}/legsimConfigVersion.cmake
-        DESTINATION ${legsim_cmake_install_dir})
+        DESTINATION ${legsim_cmake_install_dir} COMPONENT development)
 
 # ---- pkg-config: legsim.pc, legsim-core.pc -----------------------------------------
 # Relocatable: the prefix is found from the .pc file's own place (${pcfiledir}), so
@@ -94,5 +141,5 @@ foreach(legsim_pc legsim legsim-core)
   configure_file(${PROJECT_SOURCE_DIR}/cmake/${legsim_pc}.pc.in
                  ${CMAKE_CURRENT_BINARY_DIR}/pkgconfig/${legsim_pc}.pc @ONLY)
   install(FILES ${CMAKE_CURRENT_BINARY_DIR}/pkgconfig/${legsim_pc}.pc
-          DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig)
+          DESTINATION ${CMAKE_INSTALL_LIBDIR}/pkgconfig COMPONENT development)
 endforeach()

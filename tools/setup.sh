@@ -99,6 +99,7 @@ legsim_venv() {
   local pip=(env PIP_DISABLE_PIP_VERSION_CHECK=1 PIP_NO_INPUT=1 "$venv/bin/python" -m pip) t0=$SECONDS
   legsim_logged setup-pip "${pip[@]}" install --upgrade pip &&
     legsim_logged setup-pip "${pip[@]}" install -e "$legsim_root/python" -e "$legsim_root/bench[test,peers]" &&
+    legsim_logged setup-pip "${pip[@]}" install "fmpy==0.3.32" &&  # the FMUs' client (tests/fmu)
     touch "$stamp" && legsim_say "Python packages installed ($((SECONDS - t0)) s)"
 }
 

@@ -9,9 +9,11 @@ Where a library is looked for (:func:`find_library`), first match wins:
 
 1. the ``lib_path`` argument (a file, or a directory holding the file);
 2. ``$LEGSIM_LIB_DIR`` (or its ``firmware_core/``): when set, only there;
-3. the build tree of the repository: ``build/host/firmware_core/`` under
+3. the library inside this package (``legsim/lib/``: an installed wheel,
+   python/pyproject.toml);
+4. the build tree of the repository: ``build/host/firmware_core/`` under
    ``$LEGSIM_ROOT``, else under the repository this package sits in;
-4. an installed library: ``ctypes.util.find_library`` (the loader's cache),
+5. an installed library: ``ctypes.util.find_library`` (the loader's cache),
    then ``<sys.prefix>/lib``, ``/usr/local/lib``, ``/usr/lib`` (and their
    multiarch directories).
 
@@ -49,6 +51,9 @@ _CONFIG_KEYS = ("LEGSIM_USE_FLOAT", "LEGSIM_NAME_LEN", "LEGSIM_MAX_BODIES", "LEG
 
 
 # ---- discovery -------------------------------------------------------------
+PACKAGE_DIR = Path(__file__).resolve().parent  # a wheel's lib/, bin/, share/legsim/ are here
+
+
 def _repo_roots() -> list[Path]:
     """$LEGSIM_ROOT, then the repository holding this package (python/legsim/)."""
     roots = []
@@ -95,15 +100,17 @@ def find_library(precision: str = "double", lib_path=None) -> Path:
         env = Path(os.environ["LEGSIM_LIB_DIR"])
         cands += [env / name, env / "firmware_core" / name]
     else:
+        cands.append(PACKAGE_DIR / "lib" / name)
         cands += [r / "build" / "host" / "firmware_core" / name for r in _repo_roots()]
         cands += _installed_candidates(precision)
     for c in cands:
         if c.is_file():
-            return c.resolve()
+            return Path(os.path.abspath(c))  # the name asked for, not a versioned link target
     where = ", ".join(dict.fromkeys(str(c) for c in cands))
     raise LibraryNotFound(
-        f"{name} not found (looked at: {where}); build it with `cmake --preset host && "
-        "cmake --build build/host`, install it (cmake --install), or set LEGSIM_LIB_DIR")
+        f"{name} not found (looked at: {where}); install the wheel (pip install ./python), "
+        "build it with `cmake --preset host && cmake --build build/host`, install it "
+        "(cmake --install), or set LEGSIM_LIB_DIR")
 
 
 def library_available(precision: str = "double", lib_path=None) -> bool:

@@ -22,6 +22,12 @@ from typing import Iterable, Union
 import numpy as np
 
 from ._lib import STORAGE_ALIGN, Library, load_library
+from .errors import BadInputError, Status
+
+# ranges of legsim.h (LEGSIM_MAX_COORD, LEGSIM_MAX_FORCE_N), for the messages that name an
+# argument outside its range (tests/python/test_api_errors.py checks them against legsim.h)
+MAX_COORD = 1e3         # m
+MAX_FORCE_N = 1e6       # N (loads; also N m for torques)
 from .model import Model
 
 INTEGRATORS = {"rk4": 0, "galpha": 1}
@@ -570,13 +576,47 @@ class Sim:
         """The stance of a robot: both feet on the ground line, their midpoint at
         ``feet_mid`` (m along the line), the actuators at ``lengths`` (m; None: the
         lengths of ``pose``), the box pose following; qd = 0 and the contacts stuck.
-        Starts from ``pose``'s guess (None: from the current q). Returns q."""
-        if pose is not None:
-            self.assemble_pose(pose)
+        Starts from ``pose``'s guess (None: from the current q). Returns q.
+
+        All or nothing: when it raises, the sim is as it was before the call (q, qd,
+        time, contact states, commands, report)."""
         arr = None if lengths is None else self._arr(lengths, self.n_actuators, "lengths")
-        self._check(self.library.cdll.legsim_assemble_on_ground(self.handle, arr, float(feet_mid)),
-                    "legsim_assemble_on_ground")
+        feet_mid = float(feet_mid)
+        index = None if pose is None else self.pose_index(pose)
+        # Two C calls (the pose's assembly, then the stance): the sim's storage is copied
+        # before and put back if either fails, so a refused call leaves no half-done pose.
+        saved = self._save()
+        try:
+            if index is not None:
+                self._check(self.library.cdll.legsim_assemble_pose(self.handle, index),
+                            "legsim_assemble_pose")
+            st = self.library.cdll.legsim_assemble_on_ground(self.handle, arr, feet_mid)
+            if st == Status.ERR_BAD_INPUT:
+                self._bad_input("legsim_assemble_on_ground",
+                                ("feet_mid", feet_mid, -MAX_COORD, MAX_COORD, "m"))
+            self._check(st, "legsim_assemble_on_ground")
+        except BaseException:
+            self._restore(saved)
+            raise
         return self.q
+
+    def _save(self) -> bytes:
+        """The whole sim (its storage's bytes: the sim holds no pointer outside its storage
+        and the model, which do not move)."""
+        return C.string_at(self._addr, self.library.sim_size)
+
+    def _restore(self, saved: bytes) -> None:
+        C.memmove(self._addr, saved, len(saved))
+
+    def _bad_input(self, function: str, *args) -> None:
+        """Raises BadInputError naming the first argument outside its range: ``args`` are
+        (name, value, low, high, unit), checked in order (NaN is outside every range).
+        Returns when none is (the caller then raises the generic error)."""
+        for name, value, lo, hi, unit in args:
+            if not (lo <= value <= hi):
+                raise BadInputError(Status.ERR_BAD_INPUT, function,
+                                    f"{name} = {value:g} {unit} is outside its range "
+                                    f"[{lo:g}, {hi:g}] {unit}")
 
     def box(self) -> np.ndarray:
         """(x m, y m, phi rad) of body 0 (a robot's box)."""
@@ -585,9 +625,16 @@ class Sim:
     # ---- commands ----
     def command_force(self, actuator: Union[int, str], force_n: float) -> None:
         """Applies an axial force (N, > 0 extends) with an actuator (index or name);
-        |force| <= max force, else BadInputError."""
-        self._check(self.library.cdll.legsim_command_force(
-            self.handle, self._actuator(actuator), float(force_n)), "legsim_command_force")
+        |force| <= its max force (``model.max_forces``), else BadInputError naming the
+        actuator, the force and the range."""
+        a, force_n = self._actuator(actuator), float(force_n)
+        st = self.library.cdll.legsim_command_force(self.handle, a, force_n)
+        if st == Status.ERR_BAD_INPUT and 0 <= a < self.n_actuators:
+            fmax = float(self.model.max_forces[a])
+            self._bad_input("legsim_command_force",
+                            (f"force_n of actuator {self.model.actuator_names[a]!r}", force_n,
+                             -fmax, fmax, "N"))
+        self._check(st, "legsim_command_force")
 
     def command_length(self, actuator: Union[int, str], length_m: float) -> None:
         """Makes an actuator's servo hold a length (m) inside its stroke (else
@@ -608,5 +655,9 @@ class Sim:
             raise ValueError(f"a force value has 1 (torque) or 2 (point force) entries, "
                              f"not {v.size}")
         arr = (self._real * 2)(*(v.tolist() + [0.0] * (2 - v.size)))
-        self._check(self.library.cdll.legsim_set_force(self.handle, int(force), arr),
-                    "legsim_set_force")
+        st = self.library.cdll.legsim_set_force(self.handle, int(force), arr)
+        if st == Status.ERR_BAD_INPUT:
+            self._bad_input("legsim_set_force",
+                            *((f"value[{i}]", float(x), -MAX_FORCE_N, MAX_FORCE_N, "N or N m")
+                              for i, x in enumerate(v)))
+        self._check(st, "legsim_set_force")

@@ -2,7 +2,8 @@
 """The core as an installed package, used as a user would (tests/package/CMakeLists.txt).
 
     package_test.py install   --cmake CMAKE --build BUILD_DIR --prefix PREFIX --libdir lib --nm NM
-                              [--fresh DIR ...]
+                              [--fresh DIR ...] [--runtime --version X.Y.Z --readelf READELF
+                              --programs legsim_cli [hil_sim]]
     package_test.py readme    --readme README.md --consumer tests/package/consumer
     package_test.py pkgconfig --readme README.md --consumer DIR --prefix PREFIX --libdir lib --work DIR
     package_test.py cross     --cmake CMAKE --build CROSS_BUILD_DIR --source SOURCE_DIR
@@ -13,6 +14,9 @@ install    `cmake --install BUILD_DIR --prefix PREFIX` into a fresh PREFIX, then
            stdint.h: no Eigen, no C++ header) and that the static libraries need nothing
            from the C++ runtime (their undefined symbols, less those they define).
            --fresh: consumer build directories to remove with the old PREFIX.
+           --runtime (a host build): the shared libraries are versioned (liblegsim.so.X.Y.Z,
+           SONAME liblegsim.so.X.Y), the programs, models, scenes and DBC are installed,
+           and the installed legsim_cli runs an installed robot scene.
 readme     the C and CMake blocks of the README's "## Using the core" are the consumer's
            main.c and CMakeLists.txt, byte for byte (the test compiles what the README shows).
 pkgconfig  runs the README's `cc ... $(pkg-config --cflags --libs legsim)` line in a fresh
@@ -38,7 +42,8 @@ import sys
 from pathlib import Path
 
 SECTION = "## Using the core"
-HEADERS_ALLOWED = {"stddef.h", "stdint.h", "legsim/legsim.h", "legsim/config.h", "legsim/models.h"}
+HEADERS_ALLOWED = {"stddef.h", "stdint.h", "legsim/legsim.h", "legsim/config.h", "legsim/models.h",
+                   "legsim/robot_models.h", "legsim/version.h"}
 # Undefined symbols that only the C++ runtime (libstdc++/libsupc++, the unwinder) provides.
 CXX_RUNTIME = re.compile(r"^(_Z|__cxa_|__gxx_|_Unwind_|__dynamic_cast)")
 PKG_CONFIG_LINE = re.compile(r"^cc .*\$\(pkg-config --cflags --libs legsim\).*$", re.M)
@@ -90,6 +95,46 @@ def cmd_install(a: argparse.Namespace) -> None:
         fail("the static libraries need the C++ runtime, so a C program cannot link them "
              f"with cc and -lm alone: {', '.join(cxx)}")
     print(f"static libraries need from outside: {', '.join(sorted(undefined))} (no C++ runtime)")
+    if a.runtime:
+        check_runtime(a, prefix)
+
+
+def soname(readelf: str, lib: Path) -> str:
+    out = subprocess.run([readelf, "-d", str(lib)], capture_output=True, text=True, check=True)
+    m = re.search(r"\(SONAME\).*\[(.+)\]", out.stdout)
+    return m.group(1) if m else ""
+
+
+def check_runtime(a: argparse.Namespace, prefix: Path) -> None:
+    """The host's runtime part: versioned shared libraries, the programs, the data, and the
+    installed CLI running an installed scene (no build or source tree on its paths)."""
+    major, minor, _ = a.version.split(".")
+    for name in ("legsim", "legsim_f32"):
+        real = prefix / a.libdir / f"lib{name}.so.{a.version}"
+        link = prefix / a.libdir / f"lib{name}.so"
+        if not real.is_file() or not link.is_symlink():
+            fail(f"expected {real} and the link {link} (VERSION/SOVERSION of {name})")
+        want = f"lib{name}.so.{major}.{minor}"
+        if soname(a.readelf, real) != want:
+            fail(f"{real}: SONAME {soname(a.readelf, real)!r}, expected {want!r}")
+    print(f"shared libraries: liblegsim.so.{a.version}, SONAME liblegsim.so.{major}.{minor}")
+    for prog in a.programs:
+        if not os.access(prefix / "bin" / prog, os.X_OK):
+            fail(f"{prefix / 'bin' / prog} not installed")
+    data = prefix / "share" / "legsim"
+    for f in ("models/leg.toml", "models/robot.toml", "scenes/robot_swing.toml",
+              "scenes/models/robot_slope_slide.toml", "can/legsim.dbc"):
+        if not (data / f).is_file():
+            fail(f"{data / f} not installed")
+    print(f"programs: {', '.join(a.programs)}; data: models, scenes, can/legsim.dbc")
+    # the installed CLI on an installed robot scene (its model found relative to the scene)
+    out = prefix / "robot_stand_statics.json"
+    r = run([str(prefix / "bin" / "legsim_cli"), str(data / "scenes" / "robot_stand_statics.toml"),
+             "--out", str(out)], cwd=prefix, capture_output=True, text=True)
+    if r.returncode != 0 or not out.is_file():
+        fail(f"installed legsim_cli on the installed robot_stand_statics.toml: exit "
+             f"{r.returncode}\n{r.stdout}{r.stderr}")
+    print("installed legsim_cli ran the installed scenes/robot_stand_statics.toml")
 
 
 # ---- readme -------------------------------------------------------------------
@@ -244,6 +289,11 @@ def main() -> None:
     i.add_argument("--libdir", required=True, help="CMAKE_INSTALL_LIBDIR, relative")
     i.add_argument("--nm", required=True)
     i.add_argument("--fresh", nargs="*", default=[], help="directories to remove first")
+    i.add_argument("--runtime", action="store_true",
+                   help="a host build: also check the shared libraries, programs and data")
+    i.add_argument("--version", default="", help="with --runtime: the project's version")
+    i.add_argument("--readelf", default="readelf")
+    i.add_argument("--programs", nargs="*", default=["legsim_cli"])
     r = sub.add_parser("readme")
     r.add_argument("--readme", required=True)
     r.add_argument("--consumer", required=True)

@@ -65,4 +65,4 @@ def test_the_repository_build_tree_is_found_without_the_environment(monkeypatch,
         pytest.skip("build/host is not built (this test checks the default location)")
     monkeypatch.delenv("LEGSIM_LIB_DIR", raising=False)
     monkeypatch.delenv("LEGSIM_ROOT", raising=False)
-    assert legsim.find_library("double") == built.resolve()
+    assert legsim.find_library("double").resolve() == built.resolve()

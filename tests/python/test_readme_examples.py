@@ -38,12 +38,33 @@ def test_top_readme_python_api_section(root, monkeypatch):
 
 def test_python_readme_example(root, monkeypatch):
     blocks = _python_blocks((root / "python" / "README.md").read_text())
-    assert len(blocks) == 1
+    assert len(blocks) == 2
     lines = _run(blocks[0], root, monkeypatch)
     assert lines[0].startswith("stand: lengths [0.6614 0.6245] m")
     assert lines[1] == "statics: [-93.929   1.387] N"
     assert lines[2].startswith("t = 0.100 s")
     assert lines[-1].startswith("LEGSIM_ERR_UNREACHABLE - ")
+
+
+def test_python_readme_robot_on_ground(root, monkeypatch):
+    """The robot section: the working sequence, and the figures its text gives."""
+    text = (root / "python" / "README.md").read_text()
+    blocks = _python_blocks(text)
+    assert len(blocks) == 2
+    lines = _run(blocks[1], root, monkeypatch)
+    assert lines == ["feet: ['stuck' 'stuck'] box (x, y, phi): [0. 1. 0.]",
+                     "statics: [326.539   1.387 326.539   1.387] N",
+                     "normal forces: [158.922 158.922] N",
+                     "t = 0.200 s, box height 1.000000 m"]
+    for shown in ("[326.539   1.387 326.539   1.387] N", "[158.922 158.922] N",
+                  "box height 1.000000 m"):
+        assert shown in text.split("## The robot on the ground")[1]
+    # the README's claim that the pose alone has no equilibrium
+    import legsim
+    sim = legsim.Sim(str(root / "models" / "robot.toml"))
+    sim.assemble_pose("stand")
+    with pytest.raises(legsim.NoEquilibriumError):
+        sim.statics()
 
 
 def test_package_docstring_example(root, monkeypatch):
