@@ -1,7 +1,7 @@
 """The bench's CAN link to hil_sim: python-can for the bus, cantools with can/legsim.dbc for
 the frames (the same file hil_sim's C code is generated from). Nothing here packs bits.
 
-    from legsim_bench.can_link import HilLink
+    from legsim_bench.hil.can_link import HilLink
 
     with HilLink() as hil:                      # socketcan/vcan0 unless configured otherwise
         s0 = hil.reset(variant="revolute", integrator="rk4", step_s=1e-3)
@@ -42,6 +42,7 @@ ACT_CMD_L1, ``set_load(0, fx, fy, leg=1)`` in LOAD_CMD_L1.
 from __future__ import annotations
 
 import collections
+import configparser
 import enum
 import os
 import time
@@ -319,8 +320,6 @@ def bus_config(interface: str | None = None, channel: str | int | None = None,
 def _config_file_with(key: str) -> str | None:
     """The last of python-can's config files whose [default] section sets `key` (later files
     override earlier ones in can.util.load_file_config)."""
-    import configparser
-
     found = None
     for name in can.util.CONFIG_FILES:
         path = Path(name).expanduser()
