@@ -196,7 +196,7 @@ def test_the_bench_and_the_core_name_the_same_events():
     assert bits == {n: k for k, n in enumerate(EVENT_NAMES)}
     assert set(CONTACT_EVENTS) == {"liftoff", "touchdown", "stick_to_slip", "slip_to_stick",
                                    "contact_inconsistent", "contact_ambiguous"}
-    cpp = (ROOT / "firmware_core" / "host" / "scene_toml.cpp").read_text()
+    cpp = (ROOT / "firmware_core" / "host" / "scene_write.cpp").read_text()
     for n in EVENT_NAMES:
         assert f'"{n}"}}' in cpp, n
 
