@@ -278,6 +278,7 @@ class ModelInfo:
     poses: tuple[str, ...]
     forces: tuple[tuple[str, str], ...]   # (name, kind)
     contacts: tuple[str, ...] = ()        # a robot's feet ("right.foot", "left.foot")
+    legs: int = 1                         # a robot's [[leg]]s
 
     @property
     def robot(self) -> bool:
@@ -310,7 +311,8 @@ class ModelInfo:
                     if "foot" in leg:
                         contacts.append(pre + "foot")
                 return cls(Path(path), builtin, ("revolute",), tuple(acts),
-                           tuple(str(p) for p in data.get("pose", {})), tuple(forces), tuple(contacts))
+                           tuple(str(p) for p in data.get("pose", {})), tuple(forces), tuple(contacts),
+                           len(data["leg"]))
             acts = tuple((str(a["name"]), (float(a["stroke"][0]), float(a["stroke"][1])),
                           float(a["max_force"])) for a in data.get("actuator", []))
             forces = tuple((str(f["name"]), str(f.get("kind", ""))) for f in data.get("force", []))
@@ -361,6 +363,11 @@ class Scene:
     def robot(self) -> bool:
         """The model has contacts (a robot file): checked against RobotModel."""
         return self.model_info is not None and self.model_info.robot
+
+    @property
+    def legs(self) -> int:
+        """The model's legs (a robot's [[leg]]s; 1 for a leg file): hil_sim's nodes on the bus."""
+        return self.model_info.legs if self.model_info is not None else 1
 
     @property
     def actuator_names(self) -> tuple[str, ...]:

@@ -62,3 +62,16 @@ def test_a_template_error_is_named():
         gen_dbc.generate("VERSION \"1\"\n")
     with pytest.raises(gen_dbc.TemplateError, match="has no @}"):
         gen_dbc.generate("@legs right\n@each{\nx\n")
+
+
+def test_the_link_takes_the_legs_and_actuators_from_the_dbc(tmp_path):
+    from legsim_bench.hil import can_link as cl
+    from legsim_bench.scene import load_scene
+
+    assert (cl.ROBOT_LEGS, cl.ACTUATORS) == (2, ("upper", "lower"))
+    p = tmp_path / "legsim.dbc"
+    p.write_text(gen_dbc.generate(TEMPLATE, 3))
+    assert cl._dbc_legs_and_actuators(p) == (3, ("upper", "lower"))
+    assert [cl.leg_frame("ACT_CMD", k) for k in range(3)] == ["ACT_CMD", "ACT_CMD_L1", "ACT_CMD_L2"]
+    # the runner's legs are the scene's model's
+    assert load_scene("robot_fig7", ROOT).legs == 2 and load_scene("upper_step_50N", ROOT).legs == 1

@@ -106,7 +106,7 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
         # no frames for it, or a robot scene with no bus given: legsim_cli (its CLI path)
         return record_analysis(scene, log=log)
 
-    legs = 2 if scene.robot else 1
+    legs = scene.legs
     if scene.robot and hasattr(link, "use_model"):
         raise RecordingError("the reference link plays the one leg only; a robot scene needs hil_sim --robot")
     if hasattr(link, "use_model"):       # the reference model playing hil_sim: same model file
@@ -197,9 +197,10 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                     value = f32(value)
                     args.append((mode_of[mode], value))
                     logged[names[a]] = [mode, value]
-                if scene.robot:   # each leg's own ACT_CMD (leg 1: ACT_CMD_L1)
-                    seqs = [link.command(*args[2 * g:2 * g + 2], leg=g) for g in range(legs)
-                            if any(x is not None for x in args[2 * g:2 * g + 2])]
+                if scene.robot:   # each leg's own ACT_CMD (leg k: ACT_CMD_Lk)
+                    n = len(args) // legs    # each leg's actuators
+                    seqs = [link.command(*args[n * g:n * g + n], leg=g) for g in range(legs)
+                            if any(x is not None for x in args[n * g:n * g + n])]
                     seq = seqs[0]
                     logged["seqs"] = seqs
                 else:
