@@ -120,7 +120,7 @@ class Engines:
         self.mujoco_why = "not asked for (--no-peers)"
         self.mujoco_version = None
         if with_peers:
-            try:
+            try:   # the peers (MuJoCo, optional and heavy) only when asked for
                 from .peers import leg_model, mujoco_leg
                 if not mujoco_leg.available():
                     raise compiled.DriverError("mujoco is not importable")

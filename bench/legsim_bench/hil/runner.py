@@ -198,9 +198,9 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                     args.append((mode_of[mode], value))
                     logged[names[a]] = [mode, value]
                 if scene.robot:   # each leg's own ACT_CMD (leg k: ACT_CMD_Lk)
-                    n = len(args) // legs    # each leg's actuators
-                    seqs = [link.command(*args[n * g:n * g + n], leg=g) for g in range(legs)
-                            if any(x is not None for x in args[n * g:n * g + n])]
+                    per = len(args) // legs    # each leg's actuators (n is the STEP count)
+                    seqs = [link.command(*args[per * g:per * g + per], leg=g) for g in range(legs)
+                            if any(x is not None for x in args[per * g:per * g + per])]
                     seq = seqs[0]
                     logged["seqs"] = seqs
                 else:
