@@ -81,7 +81,7 @@ def _progress_flag(args) -> bool | None:
 # ---- scenes ----------------------------------------------------------------------------------
 
 def cmd_scenes(args) -> int:
-    from .report import scene_table
+    from .report.tables import scene_table
 
     root = _root(args)
     rows = []
@@ -120,11 +120,12 @@ def _load_scenes(specs: list[str], root: Path):
 
 def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, Path | None, dict | None]]:
     """Records every scene on one link (and one hil_sim with --start-hil)."""
-    from .runner import HilProcess, RecordingError, record, save_recording
+    from .hil.runner import HilProcess, record
+    from .recording import RecordingError, save_recording
 
     hil = None
     if getattr(args, "dry_run", False):
-        from .runner import ReferenceLink
+        from .hil.reference_link import ReferenceLink
 
         out = []
         with ReferenceLink(root) as link:
@@ -156,7 +157,7 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
     try:
         t0 = time.monotonic()
         # python-can and cantools: slow in the VM
-        from .can_link import HilLink, bus_config, bus_origin, describe_bus
+        from .hil.can_link import HilLink, bus_config, bus_origin, describe_bus
         interface, channel = args.interface, args.channel
         given_by = {}
         if hil is not None:  # --start-hil: socketcan on hil_sim's channel unless named
@@ -212,13 +213,13 @@ def cmd_record(args) -> int:
 # ---- check -------------------------------------------------------------------------------------
 
 def _check_one(rec: dict, out_dir: Path, args, root: Path):
-    from .checks import evaluate
-    from .report import format_table, write_outputs
+    from .verdict.checks import evaluate
+    from .report.tables import format_table, write_outputs
 
     ev = evaluate(rec, root)
     files = write_outputs(ev, out_dir)
     if not args.no_plots:
-        from .plots import write_plots
+        from .report.plots import write_plots
         files.update(write_plots(ev, out_dir))
         out = rec.get("cli_output") or {}
         if rec.get("complete") and (out.get("contacts") or rec.get("legs", 1) > 1):
@@ -230,11 +231,10 @@ def _check_one(rec: dict, out_dir: Path, args, root: Path):
 
 def _robot_plots(rec: dict, scene, out_dir: Path) -> dict[str, Path]:
     """A robot scene's stick figures and GIF, from legsim_cli's output or a CAN recording."""
-    import tomllib
+    from .reference.model_file import read_model_file
+    from .report.robot_plots import RobotTrajectory, plot_snapshots, plot_time_series, write_robot_animation
 
-    from .robot_plots import RobotTrajectory, plot_snapshots, plot_time_series, write_robot_animation
-
-    box = tuple(tomllib.loads(Path(scene.model_path).read_text())["box"]["size"])
+    box = tuple(read_model_file(scene.model_path)["box"]["size"])
     if rec.get("cli_output"):
         traj = RobotTrajectory.from_cli_json(rec["cli_output"], box, title=scene.name)
     else:
@@ -265,7 +265,7 @@ def _recording_paths(specs: list[str]) -> list[Path]:
 
 
 def cmd_check(args) -> int:
-    from .runner import RecordingError, load_recording, save_recording
+    from .recording import RecordingError, load_recording, save_recording
 
     root = _root(args)
     paths = _recording_paths(args.recordings)
@@ -328,7 +328,7 @@ DEMO_SCENES = ("demo", "robot_fig7")
 
 
 def cmd_demo(args) -> int:
-    from .runner import hil_sim_path
+    from .hil.runner import hil_sim_path
 
     root = _root(args)
     if args.build:

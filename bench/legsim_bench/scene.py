@@ -1,6 +1,6 @@
 """Scenes (scenes/*.toml, schema in scenes/README.md): what to run and what to check.
 
-legsim_cli reads the same files (firmware_core/host/scene_toml.cpp) with the same rules and
+legsim_cli reads the same files (firmware_core/host/scene_parse.cpp) with the same rules and
 messages; dynamics runs on hil_sim over CAN, the other analyses in legsim_cli.
 
 Pure Python (tomllib, math): `legsim-bench record` runs where imports are slow (the QEMU VM),
@@ -25,7 +25,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["Scene", "ModelInfo", "SceneError", "RootNotFound", "Schedule", "ActuatorCommand", "Injection",
-           "Checks", "StrokeCheck", "load_scene", "parse_scene", "find_root", "shipped_scenes",
+           "Checks", "StrokeCheck", "load_scene", "parse_scene", "find_root", "cli_path", "shipped_scenes",
            "resolve_scene", "fault_codes", "scenes_dir", "ACTUATORS", "VARIANTS", "INTEGRATORS",
            "ANALYSES", "BUILTIN_MODEL", "RENAMED_KEYS", "DEFAULT_CHECKS",
            "DISABLE_FLAGS", "FRAME_IDS", "SEQ_SIGNALS", "FD_LENGTHS"]
@@ -40,7 +40,7 @@ BUILTIN_ROBOT = "builtin:robot"          # models/robot.toml, compiled in when t
 # legsim_default_options() of legsim.h (tests compare them with legsim_cli --check)
 DEFAULT_OPTIONS = {"rho_inf": 0.8, "max_newton_iter": 25, "newton_tol": 1e-10}
 MAX_RECORD_EVERY = 10_000_000           # the DBC's largest STEP (Ctrl_NSteps)
-# The bounds legsim_cli applies (firmware_core/host/scene_toml.cpp, toml_limits.hpp, legsim.h).
+# The bounds legsim_cli applies (firmware_core/host/scene_parse.cpp, toml_limits.hpp, legsim.h).
 MAX_TOML_BYTES = 1024 * 1024
 MAX_SAMPLES = 1_000_000                 # n_steps / record_every + 1
 MAX_FREQUENCY_HZ = 1e3
@@ -91,6 +91,20 @@ def find_root(start: str | os.PathLike | None = None) -> Path:
         "cannot find the legsim repository (a directory with models/leg.toml and can/legsim.dbc) "
         f"above {', '.join(str(s) for s in starts)}: run from inside the repository or set "
         "LEGSIM_ROOT=/path/to/legsim")
+
+
+def cli_path(root: Path | None = None) -> Path:
+    """legsim_cli: $LEGSIM_CLI, else the one of hil_sim's build ($LEGSIM_HIL_SIM's
+    ../firmware_core/legsim_cli), else build/host/firmware_core/legsim_cli."""
+    env = os.environ.get("LEGSIM_CLI")
+    if env:
+        return Path(env)
+    hil = os.environ.get("LEGSIM_HIL_SIM")
+    if hil:
+        p = Path(hil).resolve().parent.parent / "firmware_core" / "legsim_cli"
+        if p.is_file():
+            return p
+    return (root or find_root()) / "build" / "host" / "firmware_core" / "legsim_cli"
 
 
 def scenes_dir(root: Path | None = None) -> Path:
@@ -264,6 +278,7 @@ class ModelInfo:
     poses: tuple[str, ...]
     forces: tuple[tuple[str, str], ...]   # (name, kind)
     contacts: tuple[str, ...] = ()        # a robot's feet ("right.foot", "left.foot")
+    legs: int = 1                         # a robot's [[leg]]s
 
     @property
     def robot(self) -> bool:
@@ -296,7 +311,8 @@ class ModelInfo:
                     if "foot" in leg:
                         contacts.append(pre + "foot")
                 return cls(Path(path), builtin, ("revolute",), tuple(acts),
-                           tuple(str(p) for p in data.get("pose", {})), tuple(forces), tuple(contacts))
+                           tuple(str(p) for p in data.get("pose", {})), tuple(forces), tuple(contacts),
+                           len(data["leg"]))
             acts = tuple((str(a["name"]), (float(a["stroke"][0]), float(a["stroke"][1])),
                           float(a["max_force"])) for a in data.get("actuator", []))
             forces = tuple((str(f["name"]), str(f.get("kind", ""))) for f in data.get("force", []))
@@ -347,6 +363,11 @@ class Scene:
     def robot(self) -> bool:
         """The model has contacts (a robot file): checked against RobotModel."""
         return self.model_info is not None and self.model_info.robot
+
+    @property
+    def legs(self) -> int:
+        """The model's legs (a robot's [[leg]]s; 1 for a leg file): hil_sim's nodes on the bus."""
+        return self.model_info.legs if self.model_info is not None else 1
 
     @property
     def actuator_names(self) -> tuple[str, ...]:
@@ -494,7 +515,7 @@ STATICS_RULES = ("equal_friction", "min_tangential")
 # Coulomb cone, or the paper's rule (the foot with the smaller |T| is released)
 CONTACT_LAWS = ("lcp", "paper")
 # The keys and values of the two former schemas and what they are now (legsim_cli says the
-# same words: firmware_core/host/scene_toml.cpp).
+# same words: firmware_core/host/scene_parse.cpp).
 RENAMED_KEYS = {
     "output_every": "'output_every' is now 'record_every' (steps between recorded samples)",
     "decimation": "'decimation' is now 'record_every' (steps between recorded samples)",
@@ -506,7 +527,7 @@ RENAMED_VALUES = {"force_zero": "zero_force", "zero-force": "zero_force", "hold-
 ACTUATOR_MODES = ("zero_force", "hold_length")
 # [checks] keys that apply to each analysis, and the tolerances used when a scene gives none
 _DYN_CHECKS = (set(CHECK_KEYS) - set(ROBOT_CHECK_KEYS)) | {"compare", "stroke", "resolution_ratio"}
-# a robot scene (legsim_cli against RobotModel, legsim_bench.analyses)
+# a robot scene (legsim_cli against RobotModel, legsim_bench.verdict.analyses)
 ROBOT_CHECKS_FOR = {
     "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
                  "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps"},
@@ -574,7 +595,7 @@ def _choice(where, key, v, options) -> str:
 
 
 def _rule_choice(where, v, key="statics_rule", options=STATICS_RULES) -> str:
-    """'statics_rule' or 'contact_law' with legsim_cli's words (scene_toml.cpp: choice)."""
+    """'statics_rule' or 'contact_law' with legsim_cli's words (scene_parse.cpp: choice)."""
     if v not in options:
         raise SceneError(f"{where}: '{key}' must be {' or '.join(options)} (got {v!r})")
     return v
@@ -679,8 +700,8 @@ def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path |
                  **kw) -> Scene:
     """The rest of a scene whose model has contacts (a robot file): legsim_cli runs it (the
     in-process bench; the DBC has no robot frames here), the bench checks it against RobotModel
-    (legsim_bench.analyses). Actuators by their prefixed names; [[contact]] initial states.
-    The refusals are legsim_cli's words (scene_toml.cpp: parse_scene, bind_scene)."""
+    (legsim_bench.verdict.analyses). Actuators by their prefixed names; [[contact]] initial states.
+    The refusals are legsim_cli's words (scene_parse.cpp: parse_scene, bind_scene)."""
     analysis = kw["analysis"]
     if analysis == "statics_sweep":
         raise SceneError(f"{where}: statics_sweep of a model with contacts is not in this core yet (the legs "

@@ -1,5 +1,6 @@
 // Scene files (scenes/*.toml): what to load, which analysis to run with which inputs,
-// and the JSON/CSV writers of the results. Host only; uses the C API only.
+// and the JSON/CSV writers of the results. Host only; uses the C API only. Parsed and bound
+// in scene_parse.cpp, run in scene_run.cpp, written in scene_write.cpp.
 //
 // The schema (every key, unit, default and range) is documented in scenes/README.md;
 // the bench reads the same files (bench/legsim_bench/scene.py) and both refuse the same

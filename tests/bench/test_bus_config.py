@@ -13,12 +13,12 @@ can = pytest.importorskip("can")
 
 ROOT = Path(__file__).resolve().parents[2]
 try:
-    import legsim_bench.can_link  # noqa: F401
+    import legsim_bench.hil.can_link  # noqa: F401
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
 from legsim_bench import cli  # noqa: E402
-from legsim_bench.can_link import HilLink, bus_config, bus_origin, describe_bus  # noqa: E402
+from legsim_bench.hil.can_link import HilLink, bus_config, bus_origin, describe_bus  # noqa: E402
 
 
 @pytest.fixture

@@ -1,5 +1,5 @@
 """Checks on synthetic recordings (no CAN): the reference model plays hil_sim through
-runner.ReferenceLink; a correct recording passes, a perturbed one fails the right check.
+hil.reference_link.ReferenceLink; a correct recording passes, a perturbed one fails the right check.
 Also the bench's own joint equations and free-body balance against the reference model, and
 the table and files of the report."""
 import copy
@@ -15,15 +15,16 @@ from hypothesis import strategies as st
 
 ROOT = Path(__file__).resolve().parents[2]
 try:
-    import legsim_bench.checks  # noqa: F401
+    import legsim_bench.verdict.checks  # noqa: F401
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.checks import (Leg, Staircase, _timeline, constraint_residual,  # noqa: E402
-                                 evaluate, float32_quantum, static_balance)
-from legsim_bench.reference import LegModel  # noqa: E402
-from legsim_bench.report import format_table, write_outputs  # noqa: E402
-from legsim_bench.runner import ReferenceLink, f32, record  # noqa: E402
+from legsim_bench.hil.reference_link import ReferenceLink  # noqa: E402
+from legsim_bench.hil.runner import f32, record  # noqa: E402
+from legsim_bench.reference import LegModel, Staircase  # noqa: E402
+from legsim_bench.report.tables import format_table, write_outputs  # noqa: E402
+from legsim_bench.verdict.checks import _timeline, evaluate  # noqa: E402
+from legsim_bench.verdict.leg import Leg, constraint_residual, float32_quantum, static_balance  # noqa: E402
 from legsim_bench.scene import load_scene, parse_scene  # noqa: E402
 
 TOML = ROOT / "models" / "leg.toml"
@@ -431,7 +432,7 @@ def test_outputs_csv_and_json(step_rec, tmp_path):
 
 
 def test_plots_are_written(step_rec, tmp_path):
-    from legsim_bench.plots import write_plots
+    from legsim_bench.report.plots import write_plots
     _, rec = step_rec
     files = write_plots(evaluate(rec, ROOT), tmp_path)
     assert set(files) == {"motion", "actuators", "reactions", "errors"}

@@ -169,9 +169,10 @@ def test_python_dash_m_works():
 
 
 def test_record_imports_no_scipy_nor_matplotlib():
-    code = ("import sys; from legsim_bench import cli, runner, scene; "
-            "import legsim_bench.can_link; "
-            "bad = [m for m in ('scipy', 'matplotlib', 'legsim_bench.checks') if m in sys.modules]; "
+    code = ("import sys; from legsim_bench import cli, recording, scene; "
+            "from legsim_bench.hil import can_link, cli_run, runner; "
+            "bad = [m for m in ('scipy', 'matplotlib', 'legsim_bench.verdict', 'legsim_bench.reference') "
+            "if m in sys.modules]; "
             "print(bad); sys.exit(1 if bad else 0)")
     r = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT,
                        env={"PYTHONPATH": str(ROOT / "bench"), "PATH": "/usr/bin:/bin"})

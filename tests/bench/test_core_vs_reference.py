@@ -1,6 +1,6 @@
 """The core, driven in-process through the legsim Python API (python/legsim), against
 the bench's independent reference model, and the bench's own in-process helpers
-(legsim_bench/core.py). The API itself is tested in tests/python.
+(legsim_bench/benchmarks/core.py). The API itself is tested in tests/python.
 
 Needs the shared library liblegsim.so (the host CMake build, target legsim;
 LEGSIM_LIB_DIR overrides where it is looked for). Skipped, with that reason, only if
@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 
 import legsim
-from legsim_bench import core as lc
+from legsim_bench.benchmarks import core as lc
 from model_files import LEG_TOML
 
 if not legsim.library_available("double"):

@@ -20,11 +20,12 @@ import pytest
 
 ROOT = Path(__file__).resolve().parents[2]
 try:
-    import legsim_bench.results  # noqa: F401
+    import legsim_bench.benchmarks.results  # noqa: F401
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench import cli, results  # noqa: E402
+from legsim_bench import cli
+from legsim_bench.benchmarks import results  # noqa: E402
 
 BENCH_MODULES = {name: module for name, (module, _) in cli.BENCHMARKS.items()}
 MACHINE_LINES = (r"^## Machine$", r"^- CPU: .+, \d+ cores; ", r"^- load average \(1, 5, 15 min\) "

@@ -9,8 +9,8 @@ import subprocess
 import numpy as np
 import pytest
 
-from legsim_bench.analyses import (evaluate_analysis, record_analysis, robot_arrays, robot_reference,
-                                   robot_statics_reference)
+from legsim_bench.hil.cli_run import record_analysis
+from legsim_bench.verdict.analyses import evaluate_analysis, robot_arrays, robot_reference, robot_statics_reference
 from legsim_bench.scene import load_scene
 
 from test_robot_scenes import ROOT, _cli
@@ -20,7 +20,7 @@ def _bench(name):
     """A robot scene run in legsim_cli (record_analysis) and checked (evaluate_analysis)."""
     _cli()
     sc = load_scene(name, ROOT)
-    rec = record_analysis(sc, "json", root=ROOT)
+    rec = record_analysis(sc, root=ROOT)
     assert not rec["errors"], rec["errors"]
     return sc, rec["cli_output"], evaluate_analysis(rec, sc, ROOT)
 

@@ -1,4 +1,4 @@
-"""Tests of the robot plots (legsim_bench.robot_plots).
+"""Tests of the robot plots (legsim_bench.report.robot_plots).
 
 The drawn artists are read back and compared with what the model files and the
 reference say, computed here another way: box corners from the body
@@ -12,7 +12,7 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from legsim_bench import robot_plots as rp
+from legsim_bench.report import robot_plots as rp
 from legsim_bench.reference import LengthCommand, n, u
 from model_files import DATA, LEG
 

@@ -19,7 +19,8 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.analyses import cli_path, robot_arrays, robot_growth, robot_reference  # noqa: E402
+from legsim_bench.scene import cli_path  # noqa: E402
+from legsim_bench.verdict.analyses import robot_arrays, robot_growth, robot_reference  # noqa: E402
 from legsim_bench.scene import SceneError, load_scene, parse_scene  # noqa: E402
 
 ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7", "robot_both_upper",
@@ -171,7 +172,7 @@ def test_servo_stand_stays_put_and_both_uppers_raise_the_box():
 
 def test_a_robot_trajectory_from_the_cli_output_draws(fig7, tmp_path):
     pytest.importorskip("matplotlib")
-    from legsim_bench.robot_plots import RobotTrajectory, plot_snapshots, write_robot_animation
+    from legsim_bench.report.robot_plots import RobotTrajectory, plot_snapshots, write_robot_animation
     sc, out, d, model, ref = fig7
     traj = RobotTrajectory.from_cli_json(out, model.box_size, title="Fig. 7 (legsim_cli)")
     assert len(traj.t) == len(d["t"]) - 1                     # the first sample has no forces yet
@@ -185,9 +186,9 @@ def test_a_robot_trajectory_from_the_cli_output_draws(fig7, tmp_path):
 
 
 def test_the_bench_and_the_core_name_the_same_events():
-    """legsim_bench.analyses.EVENT_NAMES is legsim.h's bit order, as the Python binding names
+    """legsim_bench.verdict.analyses.EVENT_NAMES is legsim.h's bit order, as the Python binding names
     the bits (python/legsim/sim.py EVENTS, bit k is 1 << k) and legsim_cli writes them."""
-    from legsim_bench.analyses import CONTACT_EVENTS, EVENT_NAMES
+    from legsim_bench.verdict.analyses import CONTACT_EVENTS, EVENT_NAMES
     text = (ROOT / "python" / "legsim" / "sim.py").read_text()
     block = text[text.index("EVENTS = {"):]
     block = block[:block.index("}")]
@@ -195,7 +196,7 @@ def test_the_bench_and_the_core_name_the_same_events():
     assert bits == {n: k for k, n in enumerate(EVENT_NAMES)}
     assert set(CONTACT_EVENTS) == {"liftoff", "touchdown", "stick_to_slip", "slip_to_stick",
                                    "contact_inconsistent", "contact_ambiguous"}
-    cpp = (ROOT / "firmware_core" / "host" / "scene_toml.cpp").read_text()
+    cpp = (ROOT / "firmware_core" / "host" / "scene_write.cpp").read_text()
     for n in EVENT_NAMES:
         assert f'"{n}"}}' in cpp, n
 
@@ -206,8 +207,8 @@ def test_stand_statics_through_legsim_cli_matches_robot_model(rule, tmp_path):
     against RobotModel.statics: the bench's checks pass, and the numbers are the stand's:
     326.539 N upper, 1.387 N lower per leg, N = 158.922 N per foot (half the weight), T = 0 by
     symmetry under either rule, both feet held by their cones."""
-    from legsim_bench.checks import evaluate
-    from legsim_bench.runner import record
+    from legsim_bench.verdict.checks import evaluate
+    from legsim_bench.hil.runner import record
     _cli()
     text = (ROOT / "scenes" / "robot_stand_statics.toml").read_text()
     p = tmp_path / f"stand_{rule}.toml"
@@ -237,7 +238,7 @@ def test_the_two_rules_differ_on_a_slope(tmp_path):
     component along the line, W sin(slope), is shared by the indeterminate pair: equal_friction
     gives T_R/N_R = T_L/N_L, min_tangential T_R = T_L. legsim_cli matches RobotModel under each,
     the two differ, and N does not depend on the rule."""
-    from legsim_bench.analyses import robot_statics_reference
+    from legsim_bench.verdict.analyses import robot_statics_reference
     _cli()
     model = ROOT / "scenes" / "models" / "robot_slope_stand.toml"
     got = {}
@@ -264,8 +265,8 @@ def test_the_two_rules_differ_on_a_slope(tmp_path):
 
 
 def _bench(name):
-    from legsim_bench.checks import evaluate
-    from legsim_bench.runner import record
+    from legsim_bench.verdict.checks import evaluate
+    from legsim_bench.hil.runner import record
     _cli()
     sc = load_scene(name, ROOT)
     rec = record(sc, link=None)
@@ -295,7 +296,7 @@ def test_on_a_slope_the_feet_slide_where_mu_static_is_below_its_tangent():
     assert sc.checks.slips == ("right.foot", "left.foot")
     assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]
     d = robot_arrays(out)
-    from legsim_bench.analyses import robot_slip_starts
+    from legsim_bench.verdict.analyses import robot_slip_starts
     assert robot_slip_starts(d, 0) and robot_slip_starts(d, 1)
     assert any("stick_to_slip" in e for e in d["events"])
     sliding = d["state"] == "sliding"
@@ -303,8 +304,8 @@ def test_on_a_slope_the_feet_slide_where_mu_static_is_below_its_tangent():
     T, N = d["tangential"][sliding], d["normal"][sliding]
     assert T == pytest.approx(-0.10 * N * np.sign(slip[sliding]), rel=1e-9)
     # the same checks on the stand's run (feet stuck) fail: the check sees the states
-    from legsim_bench.analyses import _robot_slip_checks
-    from legsim_bench.checks import Evaluation
+    from legsim_bench.verdict.analyses import _robot_slip_checks
+    from legsim_bench.verdict.result import Evaluation
     stand = robot_arrays(_bench("robot_slope_stand")[1])
     ev2 = _robot_slip_checks(Evaluation(sc, {}, []), sc.checks.slips, stand, out["contacts"])
     assert not any(r.passed for r in ev2.results)
@@ -327,7 +328,7 @@ def test_sliding_configuration_slides_the_law_s_foot(name, law, foot):
     rule the right one, which has the smaller |T|; both at t = 0.344 s, within one step after
     RobotModel's stuck-stuck |T|/N reaches mu_static (0.34338 s), the run before it on the
     reference to 1e-8 m; the states change with their events."""
-    from legsim_bench.analyses import robot_slip_onset
+    from legsim_bench.verdict.analyses import robot_slip_onset
     sc, out, ev = _bench(name)
     assert sc.contact_law == law and sc.checks.slips == (foot,) and sc.checks.slip_onset_steps == 1
     assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]

@@ -105,7 +105,7 @@ def test_shipped_scenes_say_what_the_issue_asks():
 def test_fault_codes_come_from_the_dbc():
     codes = fault_codes(ROOT / "can" / "legsim.dbc")
     assert codes["NONE"] == 0 and codes["NOT_FINITE"] == 3 and codes["CMD_TIMEOUT"] == 7
-    from legsim_bench.can_link import FaultCode
+    from legsim_bench.hil.can_link import FaultCode
     assert codes == {f.name: int(f) for f in FaultCode}
 
 
@@ -237,7 +237,7 @@ def test_boundaries_cover_the_run(h_us, n, every):
 # ---- the one schema, from both sides -------------------------------------------------------
 
 def _cli():
-    from legsim_bench.analyses import cli_path
+    from legsim_bench.scene import cli_path
     p = cli_path(ROOT)
     if not p.is_file():
         pytest.skip(f"{p} not built (cmake --build --preset host --target legsim_cli, or LEGSIM_CLI)")
@@ -335,8 +335,8 @@ def test_the_heavy_shank_changes_statics_as_its_weight_on_the_foot_line_says(tmp
 
 
 def test_the_bench_runs_a_statics_scene_of_its_own_model_in_legsim_cli_and_checks_it():
-    from legsim_bench.checks import evaluate
-    from legsim_bench.runner import record
+    from legsim_bench.verdict.checks import evaluate
+    from legsim_bench.hil.runner import record
     _cli()
     sc = load_scene(FIXTURES / "heavy_shank_statics.toml", ROOT)
     assert not sc.over_can

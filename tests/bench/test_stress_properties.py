@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 
 import legsim
-from legsim_bench import core as lc
+from legsim_bench.benchmarks import core as lc
 
 if not legsim.library_available("double"):
     pytest.skip("liblegsim.so is not built (cmake --build build/host, or set LEGSIM_LIB_DIR)",

@@ -26,7 +26,7 @@ import pytest
 ROOT = Path(__file__).resolve().parents[2]
 if importlib.util.find_spec("legsim_bench") is None:
     sys.path.insert(0, str(ROOT / "bench"))
-from legsim_bench.vcan import vcan_problem as _vcan_problem  # noqa: E402
+from legsim_bench.hil.vcan import vcan_problem as _vcan_problem  # noqa: E402
 
 CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
 REQUIRE = os.environ.get("LEGSIM_HIL_REQUIRE") == "1"
@@ -78,7 +78,7 @@ class HilProcess:
     """hil_sim running on the bus, and a HilLink to it."""
 
     def __init__(self, binary: Path, channel: str, args: list[str]):
-        from legsim_bench.can_link import HilLink
+        from legsim_bench.hil.can_link import HilLink
 
         self.stderr_path = Path(os.environ.get("TMPDIR", "/tmp")) / f"hil_sim_{os.getpid()}_{id(self)}.log"
         self._stderr = open(self.stderr_path, "w+b")

@@ -13,8 +13,8 @@ import cantools
 import numpy as np
 import pytest
 
-from legsim_bench import can_link as cl
-from legsim_bench.can_link import ActMode, FaultCode, HilFault, HilLink, SimState, Status
+from legsim_bench.hil import can_link as cl
+from legsim_bench.hil.can_link import ActMode, FaultCode, HilFault, HilLink, SimState, Status
 
 
 @pytest.fixture(scope="module")

@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from conftest import expect_path, hil_sim_path, vcan_problem
-from legsim_bench.can_link import (ACT_CMD, CONTROL, HEARTBEAT, ST_STATUS, ActMode, FaultCode,
+from legsim_bench.hil.can_link import (ACT_CMD, CONTROL, HEARTBEAT, ST_STATUS, ActMode, FaultCode,
                                    HilFault, SimState, Status)
 
 PHYSICS = ("q", "qd", "lengths", "rates", "forces", "reactions")

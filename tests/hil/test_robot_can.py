@@ -11,7 +11,7 @@ import math
 import numpy as np
 import pytest
 
-from legsim_bench import can_link as cl
+from legsim_bench.hil import can_link as cl
 
 CE = cl.ContactEvent
 

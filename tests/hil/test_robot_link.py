@@ -8,8 +8,8 @@ import can
 import numpy as np
 import pytest
 
-from legsim_bench import can_link as cl
-from legsim_bench.can_link import HilLink
+from legsim_bench.hil import can_link as cl
+from legsim_bench.hil.can_link import HilLink
 
 
 @pytest.fixture

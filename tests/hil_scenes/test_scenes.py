@@ -33,7 +33,7 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.vcan import vcan_problem as _vcan_problem  # noqa: E402
+from legsim_bench.hil.vcan import vcan_problem as _vcan_problem  # noqa: E402
 from legsim_bench.scene import load_scene, shipped_scenes  # noqa: E402
 
 CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
@@ -67,8 +67,8 @@ class Hil:
         self.out_dir, self.proc, self.link, self.args = out_dir, None, None, None
 
     def for_scene(self, sc):
-        from legsim_bench.can_link import HilLink
-        from legsim_bench.runner import HilProcess, hil_sim_path
+        from legsim_bench.hil.can_link import HilLink
+        from legsim_bench.hil.runner import HilProcess, hil_sim_path
 
         if not sc.over_can:
             return None                      # legsim_cli: no bus
@@ -114,9 +114,10 @@ def test_shipped_scenes_exist():
 
 
 def _run(spec, hil, out_dir):
-    from legsim_bench.checks import evaluate
-    from legsim_bench.report import format_table, write_outputs
-    from legsim_bench.runner import record, save_recording
+    from legsim_bench.verdict.checks import evaluate
+    from legsim_bench.report.tables import format_table, write_outputs
+    from legsim_bench.hil.runner import record
+    from legsim_bench.recording import save_recording
 
     sc = load_scene(spec, ROOT)
     rec = record(sc, hil.for_scene(sc), progress=False)

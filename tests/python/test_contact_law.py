@@ -27,7 +27,7 @@ try:
     import legsim_bench.reference  # noqa: F401
 except ImportError:  # the bench is not installed: its source tree
     sys.path.insert(0, str(ROOT / "bench"))
-from legsim_bench.analyses import robot_reference  # noqa: E402
+from legsim_bench.verdict.analyses import robot_reference  # noqa: E402
 from legsim_bench.reference import contact_analytic as ca  # noqa: E402
 from legsim_bench.scene import load_scene  # noqa: E402
 

@@ -25,7 +25,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-from .. import results
+from . import results
 
 TARGETS = [  # preset, board, image, tolerance against the host (its real type), host twin
     ("cortex-m4f", "mps2-an386", "leg_m4f.elf", 1e-4, "legsim_leg_report_host"),

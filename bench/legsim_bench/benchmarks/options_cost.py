@@ -43,8 +43,9 @@ import numpy as np
 
 import legsim
 
-from .. import core as lc
-from .. import results
+from . import core as lc
+from . import results
+from .workprecision import describe_source
 
 REPO_ROOT = lc.REPO_ROOT
 FLAGS = tuple(legsim.DISABLE)  # legsim.h's enum legsim_disable
@@ -273,7 +274,6 @@ def write_outputs(out: Path, stem: str, rows, fw, info, reps, elapsed, source=""
 
 
 def _describe(src) -> str:
-    from .workprecision import describe_source
     return describe_source(Path(src))
 
 

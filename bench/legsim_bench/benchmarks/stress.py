@@ -42,7 +42,6 @@ import math
 import subprocess
 import sys
 import time
-import tomllib
 from collections import Counter
 from pathlib import Path
 
@@ -50,8 +49,9 @@ import numpy as np
 
 import legsim
 
-from .. import core as lc
-from .. import results
+from ..reference.model_file import read_model_file
+from . import core as lc
+from . import results
 
 REPO_ROOT = lc.REPO_ROOT
 MODEL_TOML = REPO_ROOT / "models" / "leg.toml"
@@ -80,7 +80,7 @@ class Energy:
     """E = T + V_gravity - sum F l from the model file's masses and inertias."""
 
     def __init__(self, toml_path=MODEL_TOML):
-        data = tomllib.loads(Path(toml_path).read_text())
+        data = read_model_file(toml_path)
         self.g = np.asarray(data.get("gravity", [0.0, -9.81]), float)
         m, J = [], []
         for b in data["body"]:

@@ -50,9 +50,10 @@ import numpy as np
 
 import legsim
 
-from .. import core as lc
-from .. import results
+from ..reference import ForceCommand, LegModel
 from . import compiled
+from . import core as lc
+from . import results
 
 REPO_ROOT = lc.REPO_ROOT
 MODEL_TOML = REPO_ROOT / "models" / "leg.toml"
@@ -119,7 +120,7 @@ class Engines:
         self.mujoco_why = "not asked for (--no-peers)"
         self.mujoco_version = None
         if with_peers:
-            try:
+            try:   # the peers (MuJoCo, optional and heavy) only when asked for
                 from .peers import leg_model, mujoco_leg
                 if not mujoco_leg.available():
                     raise compiled.DriverError("mujoco is not importable")
@@ -166,7 +167,6 @@ def sample_times(t_end: float) -> np.ndarray:
 
 def reference(scene: str, tol: float = REF_TOL) -> np.ndarray:
     """q of the bench's reference at sample_times (rows of 18)."""
-    from ..reference import ForceCommand, LegModel
     sc = SCENES[scene]
     model = LegModel.from_toml(str(MODEL_TOML))
     r = model.simulate(sc.t_end, t_eval=sample_times(sc.t_end),

@@ -10,10 +10,10 @@ Quick use::
 
 See model.py for the formulation and README.md for the API summary.
 """
-from .commands import ForceCommand, Hold, LengthCommand, Sinusoid, Step
+from .commands import ForceCommand, Hold, LengthCommand, Sinusoid, Staircase, Step
 from .model import (InverseDynamics, LegModel, NoEquilibriumError, ReferenceError, Result,
                     UnreachableError, WorstCase, n, u)
 
 __all__ = ["LegModel", "Result", "InverseDynamics", "WorstCase", "ForceCommand", "LengthCommand",
-           "Hold", "Step", "Sinusoid", "ReferenceError", "UnreachableError",
+           "Hold", "Step", "Sinusoid", "Staircase", "ReferenceError", "UnreachableError",
            "NoEquilibriumError", "u", "n"]

@@ -24,9 +24,11 @@ import math
 from dataclasses import dataclass
 from typing import Callable, Union
 
+import numpy as np
+
 Schedule = Union[float, Callable[[float], float]]
 
-__all__ = ["Hold", "Step", "Sinusoid", "ForceCommand", "LengthCommand",
+__all__ = ["Hold", "Step", "Sinusoid", "Staircase", "ForceCommand", "LengthCommand",
            "evaluate", "rate", "accel", "breakpoints"]
 
 
@@ -108,6 +110,27 @@ def accel(s: Schedule, t: float) -> float:
     if hasattr(s, "accel"):
         return float(s.accel(t))
     raise TypeError("this schedule has no accel(t); use Hold/Step/Sinusoid")
+
+
+class Staircase:
+    """What hil_sim holds: value v[i] after t[i] (left-continuous: at t[i] itself the previous
+    value, which is what a sample taken at t[i], before the new setpoint arrives, reflects).
+    A schedule of the reference model (callable, breakpoints: its integrator restarts there)."""
+
+    def __init__(self, times, values):
+        self.times = np.asarray(times, float)
+        self.values = np.asarray(values, float)
+        self.breakpoints = tuple(float(t) for t in self.times[1:])
+
+    def __call__(self, t: float) -> float:
+        i = int(np.searchsorted(self.times, t, side="left")) - 1
+        return float(self.values[max(i, 0)])
+
+    def rate(self, t: float) -> float:
+        return 0.0
+
+    def accel(self, t: float) -> float:
+        return 0.0
 
 
 def breakpoints(s) -> tuple:

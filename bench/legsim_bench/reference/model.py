@@ -48,7 +48,6 @@ stroke), the sampled nature of a discrete controller (the servo is continuous).
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from typing import Optional, Sequence
 
@@ -57,6 +56,7 @@ from scipy.integrate import solve_ivp
 
 from . import commands as _cmd
 from .commands import ForceCommand, LengthCommand
+from .model_file import read_model_file
 
 __all__ = ["LegModel", "Result", "InverseDynamics", "WorstCase",
            "ReferenceError", "UnreachableError", "NoEquilibriumError", "u", "n"]
@@ -326,9 +326,7 @@ class LegModel:
     # ---------------------------------------------------------------- build
     @classmethod
     def from_toml(cls, path, variant: str = "revolute") -> "LegModel":
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-        return cls(data, variant)
+        return cls(read_model_file(path), variant)
 
     def __init__(self, data: dict, variant: str = "revolute"):
         if variant not in ("revolute", "slot"):

@@ -51,7 +51,6 @@ and its normal N and tangential T components (tangent (cos a, sin a), normal
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Optional, Sequence
@@ -59,6 +58,7 @@ from typing import Optional, Sequence
 import numpy as np
 
 from .commands import ForceCommand
+from .model_file import read_model_file
 from .model import (LegModel, NoEquilibriumError, ReferenceError, add_force, add_reaction_columns,
                     command_breakpoints, command_forces, integrate_piecewise, n, reaction_offsets,
                     reactions_from_unknowns, u, world_point)
@@ -197,9 +197,7 @@ class RobotModel:
     @classmethod
     def from_toml(cls, path) -> "RobotModel":
         path = Path(path)
-        with open(path, "rb") as fh:
-            data = tomllib.load(fh)
-        return cls(data, path.parent)
+        return cls(read_model_file(path), path.parent)
 
     def __init__(self, data: dict, base_dir: Path = Path(".")):
         self.name = data.get("name", "")
@@ -228,8 +226,7 @@ class RobotModel:
         self._leg_stand: list[str] = []
         for k, ld in enumerate(data["leg"]):
             lpath = base_dir / ld["file"]
-            with open(lpath, "rb") as fh:
-                ldata = tomllib.load(fh)
+            ldata = read_model_file(lpath)
             variant = ld.get("variant", "revolute")
             if variant != "revolute":
                 raise ReferenceError("the robot reference supports the revolute (pinned-knee) leg only")

@@ -3,7 +3,7 @@
 Nothing here depends on an engine. It provides
 
 * :func:`load` -- the bodies, joints, actuators and stand pose read from the
-  TOML file (``tomllib``), every joint point resolved to body-fixed
+  model file (``legsim_bench.reference.model_file``), every joint point resolved to body-fixed
   ``(xi, eta)`` coordinates;
 * :func:`stand_q0` -- the stand pose in absolute coordinates (18 values, bodies
   in leg.toml order, ``x, y`` of the centre and ``phi``), computed in closed
@@ -21,11 +21,12 @@ r + xi u + eta n.  The proximal end is xi = -L/2, the distal end xi = +L/2.
 from __future__ import annotations
 
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
+
+from ...reference.model_file import read_model_file
 
 REPO_ROOT = Path(__file__).resolve().parents[4]
 DEFAULT_MODEL = REPO_ROOT / "models" / "leg.toml"
@@ -117,8 +118,7 @@ def load(path: str | Path | None = None, variant: str = "revolute") -> LegModel:
     if variant not in VARIANTS:
         raise ValueError(f"variant must be one of {VARIANTS}, not {variant!r}")
     path = Path(path) if path is not None else DEFAULT_MODEL
-    with open(path, "rb") as f:
-        raw = tomllib.load(f)
+    raw = read_model_file(path)
     bodies = []
     for b in raw["body"]:
         L, m = float(b["length"]), float(b["mass"])

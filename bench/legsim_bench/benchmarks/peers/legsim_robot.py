@@ -22,7 +22,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from ... import core as lc
+from .. import core as lc
 from . import robot_scenes as rs
 
 try:

@@ -27,7 +27,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ... import results
+from .. import results
 from . import legsim_robot as lr
 from . import mujoco_robot as mr
 from . import robot_scenes as rs

@@ -36,7 +36,6 @@ from __future__ import annotations
 
 import copy
 import math
-import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Optional
@@ -44,6 +43,7 @@ from typing import Optional
 import numpy as np
 
 from ...reference import ForceCommand, LengthCommand
+from ...reference.model_file import read_model_file
 from ...reference.robot import RobotModel
 
 REPO_ROOT = Path(__file__).resolve().parents[4]
@@ -59,9 +59,7 @@ def load_robot(path=None, **ground) -> RobotModel:
     """RobotModel of the robot file (default models/robot.toml), with the
     ``[ground]`` keys in ``ground`` replaced (slope, mu_static, mu_kinetic)."""
     path = Path(path) if path is not None else DEFAULT_ROBOT
-    with open(path, "rb") as fh:
-        data = tomllib.load(fh)
-    data = copy.deepcopy(data)
+    data = copy.deepcopy(read_model_file(path))
     data["ground"].update(ground)
     return RobotModel(data, path.parent)
 

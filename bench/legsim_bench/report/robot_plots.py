@@ -13,7 +13,7 @@ plot_time_series    box x, y, phi; per foot N and T with the friction cone; the
                     contact states
 write_robot_animation   a scene as GIF (or MP4) with a time label
 
-    python -m legsim_bench.robot_plots --reference fig7 -o out/robot/
+    python -m legsim_bench.report.robot_plots --reference fig7 -o out/robot/
 
 runs the reference's Fig. 7 Scene A (docs/design/robot-on-ground.md section 7)
 and writes robot_snapshots.png, robot_time_series.png and robot.gif.
@@ -38,6 +38,10 @@ from typing import Optional, Sequence
 
 import numpy as np
 
+from ..reference import ForceCommand, LengthCommand
+from ..reference.robot import RobotModel
+from ..scene import find_root
+
 __all__ = ["FREE", "STUCK", "SLIDING", "STATE_NAMES", "RobotTrajectory", "RobotArtists",
            "plot_snapshots", "plot_time_series", "write_robot_animation", "reference_fig7",
            "write_robot_plots", "main"]
@@ -53,6 +57,8 @@ _ARROW_COLOUR = "tab:red"
 
 
 def _plt():
+    # matplotlib (heavy, optional for the rest of the bench) is imported when a figure is drawn,
+    # here and in the drawing functions below
     import matplotlib
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt
@@ -605,10 +611,7 @@ def reference_fig7(model=None, t_end: float = 0.1, samples: int = 101,
     upper actuator in force mode at its hold force + 50 N, the other three on
     their servos. Scene B (``constant_force``): all four at their
     equal_friction statics forces, + 50 N on the right upper, from the stand."""
-    from .reference import ForceCommand, LengthCommand
-    from .reference.robot import RobotModel
     if model is None:
-        from .scene import find_root
         model = RobotModel.from_toml(find_root() / "models" / "robot.toml")
     t_eval = np.linspace(0.0, t_end, samples)
     if constant_force:
@@ -640,7 +643,7 @@ def write_robot_plots(traj: RobotTrajectory, out, fps: float = 25.0, speed: floa
 
 
 def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m legsim_bench.robot_plots",
+    p = argparse.ArgumentParser(prog="python -m legsim_bench.report.robot_plots",
                                 description="Plots and animation of the two-leg robot from the "
                                             "bench's reference model.")
     p.add_argument("--reference", choices=("fig7", "fig7-constant"), required=True,

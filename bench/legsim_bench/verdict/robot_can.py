@@ -1,10 +1,10 @@
 """The two-leg robot's dynamics scenes over CAN (``hil_sim --robot``, or ``--model ROBOT.toml``),
 checked against the bench's own robot model (:class:`legsim_bench.reference.robot.RobotModel`).
 
-``legsim-bench run robot_fig7`` records the scene on hil_sim (legsim_bench.runner.record: each
+``legsim-bench run robot_fig7`` records the scene on hil_sim (legsim_bench.hil.runner.record: each
 leg's ACT_CMD, LOAD_CMD, the RESET's lengths, contact law and free feet) and
 :func:`evaluate_robot_can` checks the recording with the checks the scene's ``[checks]`` names,
-as legsim_cli's run is checked (legsim_bench.analyses.evaluate_robot), with two differences
+as legsim_cli's run is checked (legsim_bench.verdict.analyses.evaluate_robot), with two differences
 that follow from the bus:
 
 * The reference replays what was sent, not the scene's doubles: the RESET's lengths and every
@@ -28,6 +28,11 @@ import math
 from pathlib import Path
 
 import numpy as np
+
+from ..reference import ForceCommand, LengthCommand, Staircase
+from ..reference.robot import RobotModel
+from . import analyses as an
+from .result import CheckResult, Evaluation
 
 F32_REL = 2.0 ** -24   # float32 round to nearest: |fl(x) - x| <= 2^-24 |x|
 
@@ -82,9 +87,6 @@ def can_reference(scene, rec: dict, times, root: Path | None = None):
     actuator on the staircase of its sent setpoints, the others as `init` says, the box load
     as sent (leg 0's LOAD_CMD 2 and 3). RobotModel has
     both feet stuck: a scene with a free foot is refused (ValueError)."""
-    from .checks import Staircase
-    from .reference import ForceCommand, LengthCommand
-    from .reference.robot import RobotModel
     if any(v != "stuck" for v in scene.contacts.values()):
         raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
     model = RobotModel.from_toml(scene.model_path)
@@ -116,7 +118,6 @@ def can_reference(scene, rec: dict, times, root: Path | None = None):
 
 def _sequence_check(ev, d: dict, feet) -> list[str]:
     """Each foot's state sequence against its own events over CAN (Ct_Events)."""
-    from .checks import CheckResult
     bad, seq = [], []
     for k, f in enumerate(feet):
         st = d["state"][:, k]
@@ -139,8 +140,6 @@ def _sequence_check(ev, d: dict, feet) -> list[str]:
 
 def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
     """The checks of a robot scene run on hil_sim over CAN (an Evaluation)."""
-    from . import analyses as an
-    from .checks import CheckResult, Evaluation
 
     ch = scene.checks
     results: list = []
@@ -205,7 +204,6 @@ def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
     seq = _sequence_check(ev, d, feet)
     reference = lambda sc, times, rt: can_reference(sc, rec, times, rt)  # noqa: E731
     if getattr(ch, "lifts", None) is not None:   # a swing: lift-off, touchdown (analyses' checks)
-        from .reference.robot import RobotModel
         mu_s = RobotModel.from_toml(scene.model_path).ground.mu_static
         return an._robot_lift_checks(ev, scene, d, feet, bodies, float(mu_s), root, tol_check,
                                      reference=reference)

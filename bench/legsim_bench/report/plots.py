@@ -12,13 +12,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import Evaluation
-from .scene import ACTUATORS
+from ..scene import ACTUATORS
+from ..verdict.result import Evaluation
 
 __all__ = ["write_plots"]
 
 
 def _plt():
+    # matplotlib (heavy, optional for the rest of the bench) is imported when a figure is drawn
     import matplotlib
     matplotlib.use("Agg", force=True)
     import matplotlib.pyplot as plt

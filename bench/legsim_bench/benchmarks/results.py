@@ -16,7 +16,7 @@ import platform
 import subprocess
 from pathlib import Path
 
-from .scene import find_root
+from ..scene import find_root
 
 DEFAULT_OUT = Path("out") / "bench-results"     # relative to the repository
 COMMITTED = Path("bench") / "results"            # the committed results

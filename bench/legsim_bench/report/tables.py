@@ -12,8 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from .checks import CheckResult, Evaluation
-from .scene import ACTUATORS
+from ..scene import ACTUATORS
+from ..verdict.result import CheckResult, Evaluation
 
 __all__ = ["format_table", "format_value", "write_outputs", "summary_line", "scene_table"]
 

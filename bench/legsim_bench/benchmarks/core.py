@@ -24,7 +24,7 @@ import legsim
 
 
 def _repo_root() -> Path:
-    """$LEGSIM_ROOT, else the repository this package sits in (bench/legsim_bench/)."""
+    """$LEGSIM_ROOT, else the repository this package sits in (bench/legsim_bench/benchmarks/)."""
     env = os.environ.get("LEGSIM_ROOT")
     if env and (Path(env) / "models" / "leg.toml").is_file():
         return Path(env).resolve()
@@ -32,7 +32,7 @@ def _repo_root() -> Path:
     for d in [*here.parents, Path.cwd(), *Path.cwd().parents]:
         if (d / "models" / "leg.toml").is_file():
             return d
-    return here.parents[2]
+    return here.parents[3]
 
 
 REPO_ROOT = _repo_root()

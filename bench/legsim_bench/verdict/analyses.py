@@ -1,102 +1,42 @@
-"""The analyses that have no CAN frames: statics, statics_sweep, inverse_dynamics, assembly.
+"""Verdicts on the analyses that have no CAN frames: statics, statics_sweep, inverse_dynamics,
+assembly, and a robot's runs in legsim_cli (legsim_bench.hil.cli_run).
 
-The DBC (can/legsim.dbc) carries dynamics only: RESET, STEP and state samples. A scene of
-another analysis is run by the bench in legsim_cli, the core on this host through the same
-scene file (`legsim_cli SCENE --format json`), and its numbers are checked against the
-bench's reference model exactly as hil_sim's are: the reference's closed-form pose, its
-Newton-Euler statics and inverse dynamics, its statics sweep, leg.toml's joint equations
-and the free-body balance (legsim_bench.checks). The recording is the same file format
-(`legsim-bench-recording/1`) with `"runner": "legsim_cli"` and the CLI's JSON output.
-
-legsim_cli is $LEGSIM_CLI, else the one of hil_sim's build ($LEGSIM_HIL_SIM's
-../firmware_core/legsim_cli), else build/host/firmware_core/legsim_cli.
+Their numbers are checked against the bench's reference model exactly as hil_sim's are: the
+reference's closed-form pose, its Newton-Euler statics and inverse dynamics, its statics sweep,
+leg.toml's joint equations and the free-body balance (legsim_bench.verdict.leg).
 """
 from __future__ import annotations
 
-import datetime as _dt
-import json
 import math
-import os
-import platform
-import subprocess
-import time
 from pathlib import Path
 
 import numpy as np
+from scipy.optimize import curve_fit
 
-from .scene import ACTUATORS, Scene, find_root
+from ..reference import ForceCommand, LegModel, LengthCommand
+from ..reference.commands import Sinusoid, Staircase, Step
+from ..reference.robot import RobotModel
+from ..scene import ACTUATORS, Scene, find_root
+from .leg import Leg, constraint_residual, slot_s, static_balance
+from .result import CheckResult, Evaluation
 
-__all__ = ["cli_path", "record_analysis", "evaluate_analysis", "evaluate_robot", "robot_reference",
+__all__ = ["evaluate_analysis", "evaluate_robot", "robot_reference",
            "robot_arrays", "robot_growth", "robot_statics_reference", "robot_inverse_reference", "robot_slip_starts", "robot_table2", "robot_slip_onset",
            "EVENT_NAMES",
            "CONTACT_EVENTS"]
 
 # legsim.h's event bits as legsim_cli names them in a sample's "events" (JSON) and the CSV's
-# ';'-separated `events` column ("none" if none; scene_toml.cpp: kEventNames), in bit order.
+# ';'-separated `events` column ("none" if none; scene_write.cpp: kEventNames), in bit order.
 EVENT_NAMES = ("stroke_min", "stroke_max", "force_saturated", "near_singular", "liftoff", "touchdown",
                "stick_to_slip", "slip_to_stick", "contact_inconsistent", "contact_ambiguous")
 # the contact transitions of a robot (docs/design/robot-on-ground.md section 8)
 CONTACT_EVENTS = EVENT_NAMES[4:]
 
 
-def cli_path(root: Path | None = None) -> Path:
-    env = os.environ.get("LEGSIM_CLI")
-    if env:
-        return Path(env)
-    hil = os.environ.get("LEGSIM_HIL_SIM")
-    if hil:
-        p = Path(hil).resolve().parent.parent / "firmware_core" / "legsim_cli"
-        if p.is_file():
-            return p
-    return (root or find_root()) / "build" / "host" / "firmware_core" / "legsim_cli"
-
-
-def record_analysis(scene: Scene, fmt: str, *, root: Path | None = None, log=None) -> dict:
-    """Runs the scene in legsim_cli; the recording holds its JSON output (or the error)."""
-    log = log or (lambda msg: None)
-    rec: dict = {
-        "format": fmt, "runner": "legsim_cli", "scene_name": scene.name,
-        "scene_path": str(scene.path) if scene.path else None, "scene_source": scene.source,
-        "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
-        "host": platform.node(), "python": platform.python_version(), "bus": "none (legsim_cli)",
-        "heartbeat": None, "samples": [], "commands": [], "loads": [], "injections": [],
-        "late_faults": [], "errors": [], "complete": False, "initial_lengths": None, "cli": None,
-    }
-    t0 = time.monotonic()
-    cli = cli_path(root)
-    if scene.path is None:
-        rec["errors"].append({"step": None, "error": "legsim_cli runs scene files: this scene has no path"})
-    elif not cli.is_file():
-        rec["errors"].append({"step": None, "error": f"legsim_cli not found at {cli}: build it (cmake "
-                              "--build --preset host --target legsim_cli) or set LEGSIM_CLI"})
-    else:
-        rec["cli"] = str(cli)
-        r = subprocess.run([str(cli), str(scene.path), "--format", "json"], capture_output=True,
-                           text=True, timeout=3600)
-        rec["cli_exit"] = r.returncode
-        try:
-            out = json.loads(r.stdout) if r.stdout.strip() else None
-        except json.JSONDecodeError as e:
-            out = None
-            rec["errors"].append({"step": None, "error": f"legsim_cli wrote no JSON: {e}"})
-        rec["cli_output"] = out
-        if r.returncode != 0:
-            rec["errors"].append({"step": None, "error": f"legsim_cli exit {r.returncode}: {r.stderr.strip()}"})
-        if out is not None:
-            # samples in the bench's shape for the summary lines (no faults: no bus)
-            rec["samples"] = [dict(s, faults=[]) for s in out.get("samples", [])]
-        rec["complete"] = r.returncode == 0 and out is not None and out.get("status") == "ok"
-    rec["wall_time_s"] = time.monotonic() - t0
-    for e in rec["errors"]:
-        log(e["error"])
-    return rec
-
-
 # ---- checks -------------------------------------------------------------------------------
 
 def _run_check(rec: dict, results: list, name: str):
     """Appends the check that legsim_cli ran to the end; its JSON output, or None if it did not."""
-    from .checks import CheckResult
 
     out = rec.get("cli_output")
     ok = bool(rec.get("complete")) and out is not None
@@ -132,7 +72,6 @@ def tol_checker(ch, results: list):
     """tol_check(name, key, err, unit, label, detail): appends the check of the largest |err|
     against the scene's [checks] key (none when the scene does not set it); label(row, col)
     says where the largest one is."""
-    from .checks import CheckResult  # here: checks imports this module
 
     def tol_check(name, key, err, unit, label, detail=""):
         tol = getattr(ch, key)
@@ -154,8 +93,6 @@ def _max(err) -> tuple[float, int, int]:
 
 def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
     """The checks of a legsim_cli run against the reference model (an Evaluation)."""
-    from .checks import CheckResult, Evaluation, Leg, _slot_s, constraint_residual, static_balance
-    from .reference import LegModel
 
     if scene.robot:
         return evaluate_robot(rec, scene, root)
@@ -197,7 +134,7 @@ def evaluate_analysis(rec: dict, scene: Scene, root: Path | None = None):
             model.theta_from_lengths(scene.lengths, near=model.stand_theta())
         if scene.variant == "slot":   # s is wherever the core's assembly put it (cf. checks)
             th = th.copy()
-            th[2] = _slot_s(Leg.from_toml(model_path, "slot"), d["q"][0])
+            th[2] = slot_s(Leg.from_toml(model_path, "slot"), d["q"][0])
         return th
 
     if scene.analysis == "statics_sweep":
@@ -270,8 +207,6 @@ def _robot_schedule(s, initial: float, h: float, t_end: float):
     """A scene schedule as the reference's (legsim_bench.reference.commands). A sinusoid as
     legsim_cli applies it: evaluated before every step of h and held over the step (a
     staircase on the step grid up to t_end)."""
-    from .checks import Staircase
-    from .reference.commands import Step, Sinusoid
     if s.kind == "hold":
         return float(s.value)
     if s.kind == "initial":
@@ -288,8 +223,6 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
     stand (at its `lengths`), both feet stuck, its commands (uncommanded actuators as `init`
     says). The reference has both feet stuck throughout: a scene with a free foot is refused
     (ValueError)."""
-    from .reference import ForceCommand, LengthCommand
-    from .reference.robot import RobotModel
     if any(v != "stuck" for v in scene.contacts.values()):
         raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
     model = RobotModel.from_toml(scene.model_path)
@@ -336,7 +269,6 @@ def robot_arrays(out: dict) -> dict:
 def _cosh_rate(t, y, rate0, extra=None):
     """The rate l of y = c (cosh(l t) - 1) [+ k extra] fitted over the run (the linear response
     of an unstable mode to a constant push from rest; `extra` absorbs a second-order term)."""
-    from scipy.optimize import curve_fit
     c0 = y[-1] / (math.cosh(rate0 * t[-1]) - 1.0)
     if extra is None:
         f = lambda tt, c, lam: c * (np.cosh(lam * tt) - 1.0)  # noqa: E731
@@ -356,8 +288,6 @@ def robot_growth(model, d: dict) -> dict:
     (the sway mode is antisymmetric, the only unstable one in x; the pitch oscillation is
     fitted with it) and its y (the heave mode, the only symmetric one; the sway's square
     enters y at second order and is fitted with it)."""
-    from scipy.optimize import curve_fit
-    from .reference import ForceCommand
     F = model.statics().actuator_forces
     rates = model.linearize([ForceCommand(float(f)) for f in F]).growth_rates
     t = d["t"]
@@ -374,7 +304,6 @@ def robot_statics_reference(scene: Scene):
     """(RobotModel, RobotStatics) of a robot statics scene: the stance at its `lengths` (the
     stand's by default), both feet stuck, the scene's statics_rule. The reference has no leg
     force elements: a scene that sets one is refused (ValueError)."""
-    from .reference.robot import RobotModel
     if any(any(x != 0 for x in v) for v in scene.forces.values()):
         raise ValueError("RobotModel's statics has no leg force elements; this scene sets "
                          + ", ".join(scene.forces))
@@ -390,7 +319,6 @@ def robot_inverse_reference(scene: Scene, times) -> list:
     stance at its `lengths`, both feet stuck, the three commanded lengths driving (their
     sinusoids' rates and accelerations exact), the fourth actuator following, the scene's
     statics_rule and box_load. ValueError unless exactly one actuator is uncommanded."""
-    from .reference.robot import RobotModel
     if any(any(x != 0 for x in v) for v in scene.forces.values()):
         raise ValueError("RobotModel has no leg force elements; this scene sets " + ", ".join(scene.forces))
     model = RobotModel.from_toml(scene.model_path)
@@ -421,7 +349,6 @@ def robot_inverse_reference(scene: Scene, times) -> list:
 def _robot_inverse_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_checks):
     """A robot inverse_dynamics scene against RobotModel.inverse_dynamics at every sample: the
     pose, the actuator forces (the follower's too), the joint reactions, per foot N and T."""
-    from .checks import CheckResult
     results = ev.results
     try:
         refs = robot_inverse_reference(scene, d["t"])
@@ -458,7 +385,6 @@ def _robot_inverse_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_
 def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_checks):
     """A robot statics scene's one sample against RobotModel.statics: the pose, the actuator
     forces, the joint reactions, per foot N and T, and whether each foot's cone holds."""
-    from .checks import CheckResult
     results = ev.results
     try:
         _, st = robot_statics_reference(scene)
@@ -498,7 +424,6 @@ def robot_slip_starts(d: dict, k: int, per_foot: bool = False) -> list[float]:
 def _robot_slip_checks(ev, slips, d: dict, feet, per_foot: bool = False):
     """[checks] slips: each listed foot goes from stuck to sliding with STICK_TO_SLIP (per_foot:
     its own, as in robot_slip_starts); the others stay stuck throughout."""
-    from .checks import CheckResult
     its = "its " if per_foot else ""
     for k, f in enumerate(feet):
         if f in slips:
@@ -534,7 +459,6 @@ def robot_table2(d: dict) -> str:
 def _robot_sequence_check(ev, d: dict, feet):
     """The contact-state sequence against the events: every change of a foot's state between
     two samples comes with its event in the later sample's events."""
-    from .checks import CheckResult
     bad, seq = [], []
     for k, f in enumerate(feet):
         st = d["state"][:, k]
@@ -588,7 +512,6 @@ def _robot_slip_onset_checks(ev, scene: Scene, d: dict, feet, root, tol_check, r
     """[checks] slip_onset_steps: legsim's first stick_to_slip within that many steps after
     RobotModel's stuck-stuck |T|/N reaches mu_static, the released foot the contact law's, and
     the stance before it (position_m, angle_rad, ground_force_n) against the reference."""
-    from .checks import CheckResult
     o = robot_slip_onset(scene, d, root, reference)
     if o["event_t"] is None or o.get("crossing_t") is None:
         ev.results.append(CheckResult("slip onset vs RobotModel's stance", False, None, None, "", "",
@@ -636,7 +559,6 @@ def _robot_lift_checks(ev, scene: Scene, d: dict, feet, bodies, mu_s: float, roo
     stance on both stuck feet (positions and angles). d: robot_arrays' layout (impulse
     optional); reference(scene, times, root) -> (model, result), robot_reference by default
     (a run over CAN passes its own)."""
-    from .checks import CheckResult
     results, lifts, t = ev.results, scene.checks.lifts, d["t"]
     reference = reference or robot_reference
     _robot_sequence_check(ev, d, feet)
@@ -708,7 +630,6 @@ def _robot_stance_checks(ev, model, r, d: dict, solved, acts, feet, joints, bodi
 
 def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     """The checks of a robot scene run in legsim_cli against RobotModel (an Evaluation)."""
-    from .checks import CheckResult, Evaluation
 
     ch = scene.checks
     results: list = []
@@ -734,7 +655,6 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
         tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
                   lambda r, c: where_t(r))
 
-    from .reference.robot import RobotModel
     if scene.analysis == "assembly":
         model = RobotModel.from_toml(scene.model_path)
         a = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))

@@ -1,7 +1,7 @@
 """The bench's CAN link to hil_sim: python-can for the bus, cantools with can/legsim.dbc for
 the frames (the same file hil_sim's C code is generated from). Nothing here packs bits.
 
-    from legsim_bench.can_link import HilLink
+    from legsim_bench.hil.can_link import HilLink
 
     with HilLink() as hil:                      # socketcan/vcan0 unless configured otherwise
         s0 = hil.reset(variant="revolute", integrator="rk4", step_s=1e-3)
@@ -42,8 +42,10 @@ ACT_CMD_L1, ``set_load(0, fx, fy, leg=1)`` in LOAD_CMD_L1.
 from __future__ import annotations
 
 import collections
+import configparser
 import enum
 import os
+import re
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -55,13 +57,34 @@ import numpy as np
 
 # $LEGSIM_DBC, else can/legsim.dbc under $LEGSIM_ROOT, else in this checkout
 DBC_PATH = Path(os.environ.get("LEGSIM_DBC") or
-                Path(os.environ.get("LEGSIM_ROOT") or Path(__file__).resolve().parents[2])
+                Path(os.environ.get("LEGSIM_ROOT") or Path(__file__).resolve().parents[3])
                 / "can" / "legsim.dbc")
 
 BODIES = ("upper_cylinder", "upper_rod", "thigh", "lower_cylinder", "lower_rod", "shank")
 JOINTS = ("A", "upper_actuator", "B_thigh", "B_lower", "C_rod_thigh", "C_rod_shank",
           "lower_actuator", "D")
-ACTUATORS = ("upper", "lower")
+
+
+def _dbc_legs_and_actuators(path: Path) -> tuple[int, tuple[str, ...]]:
+    """The robot's legs (hil_sim's nodes HIL, HIL_L1, ...: can/gen_dbc.py writes one per leg)
+    and a leg's actuators (ACT_CMD's Act_Mode_NAME signals), read from the DBC's text: the
+    DBC is made for a number of legs, the link follows it."""
+    text = path.read_text()
+    nodes = re.search(r"^BU_:(.*)$", text, re.M)
+    act = re.search(r"^BO_ \d+ ACT_CMD: .*?\n\n", text, re.M | re.S)
+    if not nodes or not act:
+        raise ValueError(f"{path}: no BU_ line or no ACT_CMD frame")
+    legs = sum(1 for n in nodes.group(1).split() if re.fullmatch(r"HIL(_L\d+)?", n))
+    return legs, tuple(re.findall(r"^ SG_ Act_Mode_(\w+) :", act.group(0), re.M))
+
+
+# the robot's legs, a leg's actuators (as the DBC's signals name them)
+ROBOT_LEGS, ACTUATORS = _dbc_legs_and_actuators(DBC_PATH)
+
+
+def leg_frame(name: str, leg: int) -> str:
+    """Leg k's copy of a leg frame (ACT_CMD, ST_POS, ...): NAME for leg 0, NAME_Lk else."""
+    return f"{name}_L{leg}" if leg else name
 
 CONTROL, ACT_CMD, LOAD_CMD = 0x080, 0x100, 0x110
 FAULT, HEARTBEAT = 0x020, 0x700
@@ -69,7 +92,6 @@ ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS = range(0x200, 0x206)
 STATE_IDS = (ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS)
 # the robot: leg k's frames at leg 0's ids + LEG_OFFSET * k; per foot ST_CONTACT; the box
 LEG_OFFSET = 0x20
-ROBOT_LEGS = 2
 ACT_CMD_L1, LOAD_CMD_L1 = ACT_CMD + LEG_OFFSET, LOAD_CMD + LEG_OFFSET
 ST_CONTACT, ST_BOX = 0x206, 0x240
 ST_POS_L1, ST_VEL_L1, ST_ACT_L1, ST_REACT_A_L1, ST_REACT_B_L1, ST_STATUS_L1 = \
@@ -319,8 +341,6 @@ def bus_config(interface: str | None = None, channel: str | int | None = None,
 def _config_file_with(key: str) -> str | None:
     """The last of python-can's config files whose [default] section sets `key` (later files
     override earlier ones in can.util.load_file_config)."""
-    import configparser
-
     found = None
     for name in can.util.CONFIG_FILES:
         path = Path(name).expanduser()
@@ -386,7 +406,8 @@ class HilLink:
         else:
             self.description = f"a given bus: {bus.channel_info}"
         self.bus = bus
-        self._seq = {CONTROL: 0, ACT_CMD: 0, LOAD_CMD: 0, ACT_CMD_L1: 0, LOAD_CMD_L1: 0}
+        self._seq = {CONTROL: 0, **{fid + LEG_OFFSET * k: 0 for k in range(ROBOT_LEGS)
+                                    for fid in (ACT_CMD, LOAD_CMD)}}
         self._partial: dict[int, dict[int, dict]] = {}   # tick -> frame id -> signals
         self._states: Deque[State] = collections.deque()
         self._faults: Deque[Fault] = collections.deque()
@@ -608,12 +629,11 @@ class HilLink:
                "Ctrl_Pose": pose, "Ctrl_StepSize": step_ns, "Ctrl_Disable": disable,
                "Ctrl_ActInit": 1 if hold_length else 0, "Ctrl_CmdTimeout": timeout,
                "Ctrl_ContactLaw": _enum(ContactLaw, contact_law), "Ctrl_FreeContacts": int(free_contacts)}
-        if lengths is not None:   # 2 (the leg) or 4 (the robot: leg 0's, then leg 1's)
-            sig.update(Ctrl_UseLengths=1, Ctrl_Length_upper=float(lengths[0]),
-                       Ctrl_Length_lower=float(lengths[1]))
-            if len(lengths) > 2:
-                sig.update(Ctrl_Length_upper_L1=float(lengths[2]),
-                           Ctrl_Length_lower_L1=float(lengths[3]))
+        if lengths is not None:   # a leg's, or the robot's: leg 0's, then leg 1's, ...
+            sig["Ctrl_UseLengths"] = 1
+            for i, v in enumerate(lengths):
+                leg, a = divmod(i, len(ACTUATORS))
+                sig[leg_frame(f"Ctrl_Length_{ACTUATORS[a]}", leg)] = float(v)
         self._states.clear()
         return self._control(Command.RESET, **sig)
 
@@ -636,7 +656,7 @@ class HilLink:
 
     def command(self, upper: tuple[ActMode, float] | None = None,
                 lower: tuple[ActMode, float] | None = None, leg: int = 0) -> int:
-        """One ACT_CMD (leg 1 of the robot: ACT_CMD_L1): (mode, setpoint) per actuator, None =
+        """One ACT_CMD (leg k of the robot: ACT_CMD_Lk): (mode, setpoint) per actuator, None =
         keep. Returns its counter."""
         fid = ACT_CMD + LEG_OFFSET * leg
         seq = self.next_seq(fid)
@@ -645,7 +665,7 @@ class HilLink:
             mode, value = cmd if cmd is not None else (ActMode.KEEP, 0.0)
             sig[f"Act_Mode_{name}"] = int(mode)
             sig[f"Act_Setpoint_{name}"] = float(value)
-        self.bus.send(self.encode("ACT_CMD" + ("_L1" if leg else ""), sig))
+        self.bus.send(self.encode(leg_frame("ACT_CMD", leg), sig))
         return seq
 
     def command_force(self, actuator: int | str, newtons: float) -> int:
@@ -661,18 +681,19 @@ class HilLink:
         return self.command()
 
     def _command_one(self, actuator, mode, value) -> int:
-        """actuator: 'upper'/'lower' or an index (the robot: 0-3, leg a // 2)."""
+        """actuator: 'upper'/'lower' or an index (the robot: leg a // 2's actuator a % 2)."""
         a = ACTUATORS.index(actuator) if isinstance(actuator, str) else int(actuator)
-        cmds = [None, None]
-        cmds[a % 2] = (mode, value)
-        return self.command(*cmds, leg=a // 2)
+        leg, a = divmod(a, len(ACTUATORS))
+        cmds: list = [None] * len(ACTUATORS)
+        cmds[a] = (mode, value)
+        return self.command(*cmds, leg=leg)
 
     def set_load(self, index: int, fx: float, fy: float = 0.0, leg: int = 0) -> int:
-        """A force element's value (0 = foot_load: world force (fx, fy) N); of leg 1 of the
-        robot (its own force elements) in LOAD_CMD_L1."""
+        """A force element's value (0 = foot_load: world force (fx, fy) N); of leg k of the
+        robot (its own force elements) in LOAD_CMD_Lk."""
         fid = LOAD_CMD + LEG_OFFSET * leg
         seq = self.next_seq(fid)
-        self.bus.send(self.encode("LOAD_CMD" + ("_L1" if leg else ""),
+        self.bus.send(self.encode(leg_frame("LOAD_CMD", leg),
                                   {"Load_Seq": seq, "Load_Index": index,
                                    "Load_Value1": float(fx), "Load_Value2": float(fy)}))
         return seq

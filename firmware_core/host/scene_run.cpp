@@ -1,0 +1,316 @@
+// Running a bound scene's analysis through the C API, handing each sample to a writer.
+// Host only.
+#include "scene_text.hpp"
+#include "scene_toml.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <charconv>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <fstream>
+#include <memory>
+#include <sstream>
+#include <string>
+#include <vector>
+
+namespace legsim_host {
+namespace {
+
+using scene_text::num;
+using scene_text::q;
+
+struct Storage {
+  void *p = nullptr;
+  explicit Storage(size_t n) {
+    const size_t a = LEGSIM_STORAGE_ALIGN;
+    p = std::aligned_alloc(a, (n + a - 1) / a * a);
+  }
+  ~Storage() { std::free(p); }
+  Storage(const Storage &) = delete;
+  Storage &operator=(const Storage &) = delete;
+};
+
+std::string call_failed(const std::string &what, legsim_status st) {
+  return what + ": " + status_enum_name(st) + " (" + legsim_status_str(st) + ")";
+}
+
+// Reads the sim's state into a sample; forces: from the analysis (or NULL: the sim's).
+void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_real *forces,
+            Sample &s) {
+  s = Sample{};
+  s.t = t;
+  const int32_t nq = legsim_n_coords(sim), na = legsim_n_actuators(sim), nj = legsim_n_joints(sim),
+                nc = legsim_n_constraints(sim);
+  std::vector<legsim_real> buf(std::max({nq, na, 3 * nj, nc, 1}));
+  legsim_get_q(sim, buf.data());
+  s.q.assign(buf.begin(), buf.begin() + nq);
+  if (na > 0) {
+    std::vector<legsim_real> len(na), rate(na), f(na);
+    legsim_actuator_lengths(sim, len.data(), rate.data());
+    if (forces)
+      std::copy(forces, forces + na, f.begin());
+    else
+      legsim_actuator_forces(sim, f.data());
+    s.length.assign(len.begin(), len.end());
+    s.rate.assign(rate.begin(), rate.end());
+    s.force.assign(f.begin(), f.end());
+  }
+  std::vector<legsim_reaction> r(std::max(nj, 1));
+  if (nj > 0 && legsim_reactions(sim, r.data()) == LEGSIM_OK) {
+    s.has_reactions = true;
+    for (int32_t j = 0; j < nj; ++j) {
+      s.reaction.push_back(r[j].force_n[0]);
+      s.reaction.push_back(r[j].force_n[1]);
+      s.reaction.push_back(r[j].moment_nm);
+    }
+  }
+  if (m.foot_body >= 0) {
+    legsim_real xy[2];
+    if (legsim_foot_position(sim, xy) == LEGSIM_OK) {
+      s.has_foot = true;
+      s.foot[0] = xy[0];
+      s.foot[1] = xy[1];
+    }
+  }
+  if (const int32_t nk = legsim_n_contacts(sim); nk > 0) {
+    s.contacts.resize(nk);
+    if (legsim_contacts(sim, s.contacts.data()) != LEGSIM_OK) s.contacts.clear();
+  }
+  legsim_real max_abs = 0;
+  if (legsim_constraints(sim, buf.data(), &max_abs) == LEGSIM_OK) s.residual = max_abs;
+  legsim_report rep;
+  if (legsim_get_report(sim, &rep) == LEGSIM_OK) {
+    s.iterations = rep.iterations;
+    s.condition = rep.condition;
+    s.events = rep.events;
+  }
+  legsim_clear_events(sim);
+}
+
+legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out, Result &res) {
+  Storage storage(legsim_sim_size());
+  if (!storage.p) {
+    res.error = "out of memory";
+    return LEGSIM_ERR_STORAGE;
+  }
+  legsim_sim *sim = nullptr;
+  // box_load: the description with the box's two force elements (it must outlive the sim)
+  std::unique_ptr<legsim_model_desc> loaded;
+  if (sc.has_box_load) {
+    loaded.reset(new legsim_model_desc(m));
+    std::string why;
+    if (!box_load_add(*loaded, sc.box_load, why)) {
+      res.error = "box_load: " + why;
+      return LEGSIM_ERR_CAPACITY;
+    }
+  }
+  legsim_status st =
+      legsim_init(storage.p, legsim_sim_size(), loaded ? loaded.get() : &m, &sc.options, &sim);
+  if (st != LEGSIM_OK) {
+    res.error = call_failed("legsim_init", st);
+    return st;
+  }
+  for (const auto &f : sc.forces) {
+    legsim_real v[2] = {static_cast<legsim_real>(f.value[0]), static_cast<legsim_real>(f.value[1])};
+    st = legsim_set_force(sim, f.index, v);
+    if (st != LEGSIM_OK) {
+      res.error = call_failed("setting force " + q(f.name), st);
+      return st;
+    }
+  }
+  if (sc.pose_index >= 0) {
+    st = legsim_assemble_pose(sim, sc.pose_index);
+    if (st != LEGSIM_OK) {
+      res.error = call_failed("assembling pose " + q(m.pose[sc.pose_index].name), st);
+      return st;
+    }
+  }
+  const int32_t na = legsim_n_actuators(sim);
+  const int32_t nk = legsim_n_contacts(sim);
+  if (nk > 0) {
+    // A robot stands on the ground: the feet on the line, their midpoint where the pose put
+    // it (its guess has them there), the box pose following; every contact stuck.
+    std::vector<legsim_contact> c(nk);
+    st = legsim_contacts(sim, c.data());
+    double mid = 0;
+    const legsim_ground_desc &g = m.ground;
+    for (const auto &k : c)
+      mid += ((k.position[0] - g.point[0]) * std::cos(g.slope_rad) +
+              (k.position[1] - g.point[1]) * std::sin(g.slope_rad)) / nk;
+    std::vector<legsim_real> len(sc.lengths.begin(), sc.lengths.end());
+    if (st == LEGSIM_OK)
+      st = legsim_assemble_on_ground(sim, sc.has_lengths ? len.data() : nullptr, static_cast<legsim_real>(mid));
+    if (st != LEGSIM_OK) {
+      std::string l;
+      for (size_t i = 0; i < sc.lengths.size(); ++i) l += (i ? ", " : "") + num(sc.lengths[i]);
+      res.error = call_failed(sc.has_lengths ? "assembling on the ground at the lengths [" + l + "]"
+                                             : std::string("assembling on the ground"), st);
+      return st;
+    }
+    for (const auto &ci : sc.contacts) {
+      st = legsim_set_contact_state(sim, ci.index, ci.state);
+      if (st != LEGSIM_OK) {
+        res.error = call_failed("setting contact " + q(ci.name) + " " +
+                                    (ci.state == LEGSIM_CONTACT_FREE ? "free" : "stuck"), st);
+        return st;
+      }
+    }
+  } else if (sc.has_lengths) {
+    std::vector<legsim_real> len(sc.lengths.begin(), sc.lengths.end());
+    st = legsim_assemble(sim, len.data());
+    if (st != LEGSIM_OK) {
+      std::string l;
+      for (size_t i = 0; i < sc.lengths.size(); ++i) l += (i ? ", " : "") + num(sc.lengths[i]);
+      res.error = call_failed("assembling the lengths [" + l + "]", st);
+      return st;
+    }
+  }
+  std::vector<legsim_real> forces(std::max(na, 1)), assembled(std::max(na, 1));
+  if (na > 0) legsim_actuator_lengths(sim, assembled.data(), nullptr);
+  // value = "initial": the length each actuator was assembled at
+  std::vector<Command> commands = sc.commands;
+  for (Command &c : commands)
+    if (c.signal.kind == Signal::kInitial) c.signal.value = assembled[c.index];
+  Sample sample;
+  auto emit = [&](double t, const legsim_real *f) {
+    record(sim, m, t, f, sample);
+    out.sample(sample);
+    ++res.n_samples;
+  };
+
+  switch (sc.analysis) {
+    case Analysis::kAssembly:
+      emit(legsim_time(sim), nullptr);
+      return LEGSIM_OK;
+
+    case Analysis::kStatics:
+      st = legsim_statics(sim, forces.data());
+      if (st != LEGSIM_OK) {
+        res.error = call_failed("statics", st);
+        return st;
+      }
+      emit(legsim_time(sim), forces.data());
+      return LEGSIM_OK;
+
+    case Analysis::kStaticsSweep:
+      st = legsim_statics_sweep(sim, sc.grid, &res.worst);
+      if (st != LEGSIM_OK) {
+        res.error = call_failed("statics sweep", st);
+        return st;
+      }
+      res.has_worst_case = true;
+      return LEGSIM_OK;
+
+    case Analysis::kInverseDynamics: {
+      // Uncommanded actuators hold their assembled length; a robot's (feet stuck) follow: their
+      // motion comes from the commanded lengths and the feet (legsim_inverse_dynamics_on_ground).
+      uint32_t follow = 0;
+      if (nk > 0) {
+        follow = (1u << na) - 1;
+        for (const auto &c : commands) follow &= ~(1u << c.index);
+      }
+      std::vector<legsim_real> len(std::max(na, 1)), rate(std::max(na, 1)), acc(std::max(na, 1));
+      for (int64_t k = 0; k <= sc.n_steps; ++k) {
+        const double t = static_cast<double>(k * sc.step_ns) / 1e9;
+        for (int32_t a = 0; a < na; ++a) {
+          len[a] = assembled[a];
+          rate[a] = acc[a] = 0;
+        }
+        for (const auto &c : commands) {
+          len[c.index] = static_cast<legsim_real>(c.signal.at(t));
+          rate[c.index] = static_cast<legsim_real>(c.signal.rate(t));
+          acc[c.index] = static_cast<legsim_real>(c.signal.accel(t));
+        }
+        st = nk > 0 ? legsim_inverse_dynamics_on_ground(sim, follow, len.data(), rate.data(), acc.data(),
+                                                        forces.data())
+                    : legsim_inverse_dynamics(sim, len.data(), rate.data(), acc.data(), forces.data());
+        if (st != LEGSIM_OK) {
+          res.failed_at_s = t;
+          res.error = call_failed("inverse dynamics at t = " + num(t) + " s", st);
+          return st;
+        }
+        if (k % sc.record_every == 0 || k == sc.n_steps) emit(t, forces.data());
+      }
+      return LEGSIM_OK;
+    }
+
+    case Analysis::kDynamics: {
+      // init: what every actuator does until a command says otherwise
+      for (int32_t a = 0; a < na; ++a) {
+        st = sc.init == ActuatorInit::kHoldLength ? legsim_command_length(sim, a, assembled[a])
+                                                   : legsim_command_force(sim, a, 0);
+        if (st != LEGSIM_OK) {
+          res.error = call_failed(std::string("init = ") + init_name(sc.init), st);
+          return st;
+        }
+      }
+      auto apply = [&](double t) -> legsim_status {
+        for (const auto &c : commands) {
+          const legsim_real v = static_cast<legsim_real>(c.signal.at(t));
+          const legsim_status s2 = c.mode == LEGSIM_ACTUATOR_FORCE ? legsim_command_force(sim, c.index, v)
+                                                                  : legsim_command_length(sim, c.index, v);
+          if (s2 != LEGSIM_OK) {
+            res.failed_at_s = t;
+            res.error = call_failed("command " + q(c.actuator) + " at t = " + num(t) + " s", s2);
+            return s2;
+          }
+        }
+        return LEGSIM_OK;
+      };
+      st = apply(0.0);
+      if (st != LEGSIM_OK) return st;
+      // A robot's first sample: the assembly's multipliers are not the dynamics' forces
+      // (the first step solves those), so its reactions and ground forces are null, as the
+      // leg's reactions are.
+      record(sim, m, legsim_time(sim), nullptr, sample);
+      if (legsim_n_contacts(sim) > 0) {
+        sample.has_reactions = false;
+        sample.contact_forces = false;
+      }
+      out.sample(sample);
+      ++res.n_samples;
+      for (int64_t k = 1; k <= sc.n_steps; ++k) {
+        const double t = legsim_time(sim);
+        st = apply(t);
+        if (st != LEGSIM_OK) return st;
+        st = legsim_step(sim, 1);
+        if (st != LEGSIM_OK) {
+          res.failed_at_s = t;
+          res.error = call_failed("step from t = " + num(t) + " s", st);
+          return st;
+        }
+        if (k % sc.record_every == 0 || k == sc.n_steps) emit(legsim_time(sim), nullptr);
+      }
+      return LEGSIM_OK;
+    }
+  }
+  return LEGSIM_OK;
+}
+
+}  // namespace
+
+legsim_status run_scene(const Scene &scene, const legsim_model_desc &model, ResultWriter &writer,
+                        Result &result) {
+  result = Result{};
+  try {
+    writer.begin();
+    result.status = run(scene, model, writer, result);
+  } catch (const std::exception &e) {
+    result.status = LEGSIM_ERR_STORAGE;
+    result.error = e.what();
+  } catch (...) {
+    result.status = LEGSIM_ERR_STORAGE;
+    result.error = "unexpected error";
+  }
+  try {
+    writer.end(result);
+  } catch (...) {
+    // the stream's own state tells the caller (a failed write)
+  }
+  return result.status;
+}
+
+}  // namespace legsim_host
