@@ -9,8 +9,7 @@ project(VERSION) of CMakeLists.txt is the source; these must agree with it:
   python/legsim/__init__.py                 __version__
   CHANGELOG.md                              the first released section, "## [X.Y.Z]"
   BUILD/firmware_core/liblegsim.so          file liblegsim.so.X.Y.Z, SONAME liblegsim.so.X.Y
-  can/legsim.dbc                            its general comment (CM_ "...") when it names a
-                                            version ("legsim X.Y.Z"): that one
+  can/legsim.dbc                            its general comment (CM_ "..."): "legsim X.Y.Z"
 Exits non-zero naming each disagreement.
 """
 from __future__ import annotations
@@ -66,10 +65,8 @@ def main() -> None:
     dbc = (src / "can" / "legsim.dbc").read_text()
     general = re.search(r'^CM_ "(.*?)";', dbc, re.M | re.S)
     dbc_version = re.search(r"\blegsim (\d+\.\d+\.\d+)\b", general.group(1)) if general else None
-    if dbc_version:
-        found["can/legsim.dbc comment"] = dbc_version.group(1)
-    else:
-        print("note: can/legsim.dbc's comment names no version (\"legsim X.Y.Z\")")
+    found["can/legsim.dbc comment"] = (dbc_version.group(1) if dbc_version
+                                       else '(no "legsim X.Y.Z" in its general comment)')
 
     bad = {k: v for k, v in found.items() if v != version}
     for k, v in found.items():
