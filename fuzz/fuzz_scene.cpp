@@ -1,4 +1,4 @@
-// Fuzz target: the scene loader (firmware_core/host/scene_toml.cpp), TOML text in.
+// Fuzz target: the scene loader (firmware_core/host/scene_parse.cpp, scene_toml.hpp), TOML text in.
 //
 // The text is written to a scratch file (load_scene reads a path), read and checked,
 // bound against a compiled-in model, written out resolved, and run on a short horizon (at

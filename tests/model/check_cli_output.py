@@ -20,7 +20,7 @@ import sys
 import tomllib
 
 failures = []
-# per contact in legsim_cli's output, after its state (firmware_core/host/scene_toml.cpp)
+# per contact in legsim_cli's output, after its state (firmware_core/host/scene_write.cpp)
 CONTACT_NUMBERS = ("normal", "tangential", "friction_use", "x", "y", "slip", "impulse_n", "impulse_t")
 
 
