@@ -24,6 +24,9 @@ export LEGSIM_ROOT="$root" LEGSIM_NO_SKIP=1 PYTHONUNBUFFERED=1
 logs=$legsim_logs
 # The SocketCAN tests (tests/hil, tests/hil_scenes: hil_sim and the bench on vcan0, and
 # the bench's CAN decoding on python-can's virtual bus) run where vcan0 is; the rest on the host.
+# Their VM (software emulation, one vCPU) checks every robot scene against the reference
+# inside it: about 20 min on an idle 2-core machine, 30 on a loaded one; the VM's limit is
+# 50 min (LEGSIM_VM_TIMEOUT).
 socketcan_tests=(tests/hil tests/hil_scenes)
 pytest_args=(-v -p no:cacheprovider -rfEs --color=no --continue-on-collection-errors)
 
@@ -53,7 +56,8 @@ mkdir -p "$logs"
 # pytest's temporary files go to /dev/shm: the VM's /tmp is the host's, over 9p,
 # where a deleted-then-truncated file fails.
 stage "socketcan (vcan0)" test-socketcan.log \
-  env LEGSIM_HIL_REQUIRE=1 "$root/tools/with-vcan" env TMPDIR=/dev/shm \
+  env LEGSIM_HIL_REQUIRE=1 LEGSIM_VM_TIMEOUT="${LEGSIM_VM_TIMEOUT:-3000}" \
+  "$root/tools/with-vcan" env TMPDIR=/dev/shm \
   "$py" -m pytest "${pytest_args[@]}" "${socketcan_tests[@]}"
 stage ctest test-ctest.log ctest --preset host
 ignore=()
