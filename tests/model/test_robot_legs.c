@@ -45,9 +45,10 @@ void test_loader_composes_four_legs(void) { check_composed("models/robot4.toml",
 void test_loader_composes_six_legs(void) { check_composed("models/robot6.toml", 6); }
 
 /* Stand on every foot, servos holding the stand lengths, for 3 s: the robot comes to
- * rest, so the feet's normal forces sum to the whole weight (sum of m g over bodies);
- * the model is mirror-symmetric, so foot k and foot L-1-k (its mirror image) carry the
- * same normal force, opposite tangential ones, at mirrored points. */
+ * rest, so the feet's normal forces sum to the whole weight (sum of m g over bodies,
+ * g = 9.81 m/s^2); the fixtures' boxes weigh the same per leg and their legs are alike, so
+ * every foot carries the same normal force; the model is mirror-symmetric, so foot k and
+ * foot L-1-k (its mirror image) carry opposite tangential forces at mirrored points. */
 static void check_standing(const char *path, int legs) {
   load(path);
   legsim_options opt = legsim_default_options();
@@ -73,6 +74,7 @@ static void check_standing(const char *path, int legs) {
     TEST_ASSERT_EQUAL_INT(LEGSIM_CONTACT_STUCK, k[i].state);
     TEST_ASSERT_TRUE(k[i].normal_n > 0);
     sum += k[i].normal_n;
+    TEST_ASSERT_DOUBLE_WITHIN(1e-6 * weight, k[0].normal_n, k[i].normal_n);
     const legsim_contact *m = &k[legs - 1 - i];
     TEST_ASSERT_DOUBLE_WITHIN(1e-6 * weight, m->normal_n, k[i].normal_n);
     TEST_ASSERT_DOUBLE_WITHIN(1e-6 * weight, -m->tangential_n, k[i].tangential_n);
