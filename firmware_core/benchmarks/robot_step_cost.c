@@ -22,6 +22,11 @@
  *             mu_kinetic = 0.1 (models/robot.toml has 0.6 / 0.5). The push makes the left
  *             foot slip at step 14 (one foot sliding, the right stuck), the right one at
  *             step 56 (both sliding) and a foot lifts off at step 781 (RK4).
+ * stand:PATH the robot file PATH (any number of legs), loaded at run time
+ *             (legsim_model_load_toml), every foot stuck on the ground
+ *             (legsim_assemble_on_ground), every actuator held by its servo at its stand
+ *             length, on the general path (legsim_kernel_use(sim, 0): the same path for
+ *             any number of legs, whatever kernels the build has): the scaling case.
  *
  * Each step is a kind: "stuck" (no foot sliding; the leg's steps too), "slip1" (one foot
  * sliding, the other stuck), "slip2" (both sliding), each only when the contact states
@@ -42,19 +47,23 @@
 
 #include "legsim/legsim.h"
 #include "legsim/models.h"
+#include "model_toml.hpp"
 #if __has_include("legsim/robot_models.h")
 #include "legsim/robot_models.h"
 #define HAVE_ROBOT 1
 #endif
 
-enum bench_case { CASE_LEG, CASE_LEG_LOOP, CASE_ROBOT, CASE_ROBOT_SLIP };
+enum bench_case { CASE_LEG, CASE_LEG_LOOP, CASE_ROBOT, CASE_ROBOT_SLIP, CASE_STAND };
 enum step_kind { KIND_STUCK, KIND_SLIP1, KIND_SLIP2, KIND_CHANGE, N_KINDS };
 static const char *const kind_name[N_KINDS] = {"stuck", "slip1", "slip2", "change"};
 
 #define MU_SLIPPERY 0.1
 #define MAX_STEPS 100000
 
-static _Alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[128 * 1024];
+static _Alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[1024 * 1024];
+static legsim_model_desc file_model; /* stand:PATH; must outlive the sim */
+/* the general path instead of a generated kernel (firmware_core/src/kernel.hpp) */
+int legsim_kernel_use(legsim_sim *sim, int on);
 #ifdef HAVE_ROBOT
 static legsim_model_desc robot_slippery; /* must outlive the sim */
 #endif
@@ -91,12 +100,19 @@ static legsim_status set_up(enum bench_case c, legsim_integrator integrator, leg
     model = &robot_slippery;
   }
 #endif
+  if (c == CASE_STAND) model = &file_model;
   legsim_options opt = legsim_default_options();
   opt.integrator = integrator;
   legsim_sim *sim = NULL;
   legsim_status st = legsim_init(storage, sizeof storage, model, &opt, &sim);
   if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
-  if (st == LEGSIM_OK && c != CASE_LEG && c != CASE_LEG_LOOP) {
+  if (st == LEGSIM_OK && c == CASE_STAND) {
+    legsim_real len[LEGSIM_MAX_ACTUATORS], rate[LEGSIM_MAX_ACTUATORS];
+    if (legsim_kernel_use(sim, 0) < 0) st = LEGSIM_ERR_STATE; /* every robot on the general path */
+    if (st == LEGSIM_OK) st = legsim_assemble_on_ground(sim, NULL, 0.0);
+    if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, rate);
+    for (int32_t a = 0; a < legsim_n_actuators(sim) && st == LEGSIM_OK; ++a) st = legsim_command_length(sim, a, len[a]);
+  } else if (st == LEGSIM_OK && c != CASE_LEG && c != CASE_LEG_LOOP) {
     legsim_real len[4], rate[4];
     st = legsim_assemble_on_ground(sim, NULL, 0.0);
     if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, rate);
@@ -147,7 +163,7 @@ static double median_of_kind(const double *us, long n, int kind) {
 
 int main(int argc, char **argv) {
   if ((argc != 4 && argc != 5) || (strcmp(argv[2], "rk4") && strcmp(argv[2], "galpha"))) {
-    fprintf(stderr, "usage: robot_step_cost leg|robot|robot-slip rk4|galpha N [REPS]\n");
+    fprintf(stderr, "usage: robot_step_cost leg|leg-loop|robot|robot-slip|stand:PATH rk4|galpha N [REPS]\n");
     return 2;
   }
   enum bench_case c;
@@ -155,12 +171,19 @@ int main(int argc, char **argv) {
   else if (!strcmp(argv[1], "leg-loop")) c = CASE_LEG_LOOP;
   else if (!strcmp(argv[1], "robot")) c = CASE_ROBOT;
   else if (!strcmp(argv[1], "robot-slip")) c = CASE_ROBOT_SLIP;
-  else {
-    fprintf(stderr, "robot_step_cost: CASE is leg, leg-loop, robot or robot-slip, not '%s'\n", argv[1]);
+  else if (!strncmp(argv[1], "stand:", 6)) {
+    char msg[256];
+    c = CASE_STAND;
+    if (legsim_model_load_toml(argv[1] + 6, NULL, &file_model, msg, sizeof msg) != LEGSIM_OK) {
+      fprintf(stderr, "robot_step_cost: %s\n", msg);
+      return 2;
+    }
+  } else {
+    fprintf(stderr, "robot_step_cost: CASE is leg, leg-loop, robot, robot-slip or stand:PATH, not '%s'\n", argv[1]);
     return 2;
   }
 #ifndef HAVE_ROBOT
-  if (c != CASE_LEG && c != CASE_LEG_LOOP) {
+  if (c == CASE_ROBOT || c == CASE_ROBOT_SLIP) {
     fprintf(stderr, "robot_step_cost: this build's capacities do not hold the robot\n");
     return 2;
   }

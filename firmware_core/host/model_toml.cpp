@@ -933,11 +933,14 @@ std::vector<std::vector<double>> robot_guess(const std::vector<Leg> &legs, const
     feet.push_back({bx + xi * std::sin(bphi) + eta * std::cos(bphi),
                     by - xi * std::cos(bphi) + eta * std::sin(bphi)});
   }
+  // the outer feet (the first and the last leg's) on the line, their midpoint at `mid`, as
+  // legsim_assemble_on_ground puts them; the feet between follow where the legs agree
   double theta, m0, m1;
   if (feet.size() > 1) {
-    theta = std::atan2(feet[0][1] - feet[1][1], feet[0][0] - feet[1][0]);
-    m0 = 0.5 * (feet[0][0] + feet[1][0]);
-    m1 = 0.5 * (feet[0][1] + feet[1][1]);
+    const std::vector<double> &f0 = feet.front(), &f1 = feet.back();
+    theta = std::atan2(f0[1] - f1[1], f0[0] - f1[0]);
+    m0 = 0.5 * (f0[0] + f1[0]);
+    m1 = 0.5 * (f0[1] + f1[1]);
   } else {
     theta = 0.0;
     m0 = feet[0][0];
@@ -1169,7 +1172,6 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
                                              : 0.0;
       const std::string state = has(pt, "contact") ? get_string(pt, "contact", label) : "stuck";
       if (state != "stuck") fail(label, "'contact' must be \"stuck\" (got " + q(state) + ")");
-      if (legs.size() > 2) fail(label, "a pose on the ground needs one or two legs");
       const double gp[2] = {gpoint[0], gpoint[1]};
       poses.push_back({pname, robot_guess(legs, gp, slope, legs_pose, mid, label)});
     }

@@ -1003,14 +1003,16 @@ legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *leng
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
-  if (m.nc < 1 || m.nc > 2 || !(std::abs(feet_mid_m) <= real(LEGSIM_MAX_COORD))) return LEGSIM_ERR_BAD_INPUT;
+  if (m.nc < 1 || !(std::abs(feet_mid_m) <= real(LEGSIM_MAX_COORD))) return LEGSIM_ERR_BAD_INPUT;
   if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
   const legsim_status lc = drive_to_lengths(sim, s, length_m);
   if (lc != LEGSIM_OK) return lc;
   d.drivers.feet_mid = feet_mid_m;
-  // joints, lengths, each foot's normal gap and the feet's midpoint along the line
+  // joints, lengths, the outer feet's normal gaps and their midpoint along the line: with
+  // the box's three coordinates that is all the stance fixes; a foot between the outer two
+  // must then lie on the line already (legs of one shape at one height), checked below
   uint8_t normal_only[kMaxContacts];
-  for (int k = 0; k < m.nc; ++k) normal_only[k] = kContactNormal;
+  for (int k = 0; k < m.nc; ++k) normal_only[k] = k == 0 || k == m.nc - 1 ? kContactNormal : kContactNone;
   d.work_mask = -1;  // built for this call only
   legsim_status st = layout_build(m, all_actuators(m), 0, d.work, normal_only, true);
   if (st == LEGSIM_OK) st = layout_finish(d.work, d.drivers);
@@ -1028,6 +1030,8 @@ legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *leng
     for (int k = 0; k < m.nc; ++k) {
       Vec2 p, v;
       contact_point(m, k, d.q, zero, p, v);
+      if (k > 0 && k < m.nc - 1 && !(std::abs(m.ground_n.dot(p - m.ground_point)) <= real(s.opt.newton_tol)))
+        return LEGSIM_ERR_STATE;  // a middle foot off the line
       d.contact[k].state = uint8_t(LEGSIM_CONTACT_STUCK);
       d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
     }

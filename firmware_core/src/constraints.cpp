@@ -171,12 +171,13 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
       out.body[m][1] = -1;
       ++m;
     }
-  // assembly on the ground: the midpoint of the (one or two) feet along the line
+  // assembly on the ground: the midpoint of the outer feet (the first and the last) along
+  // the line
   if (mid) {
-    if (m >= kMaxRows || model.nc < 1 || model.nc > 2) return LEGSIM_ERR_CAPACITY;
+    if (m >= kMaxRows || model.nc < 1) return LEGSIM_ERR_CAPACITY;
     out.src[m] = {RowKind::ContactMid, 0, 0};
     out.body[m][0] = int8_t(model.contact[0].body);
-    out.body[m][1] = int8_t(model.nc > 1 ? model.contact[kMaxContacts > 1 ? 1 : 0].body : -1);
+    out.body[m][1] = int8_t(model.nc > 1 ? model.contact[model.nc - 1].body : -1);
     ++m;
   }
   out.m = m;
@@ -474,8 +475,8 @@ void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv,
         break;
       case RowKind::ContactMid: {
         const real w = model.nc > 1 ? real(0.5) : real(1);
-        for (int k = 0; k < model.nc; ++k)
-          contact_row(model, model.ground_t, k, pose, dv.feet_mid, k, w, i, rows);
+        contact_row(model, model.ground_t, 0, pose, dv.feet_mid, 0, w, i, rows);
+        if (model.nc > 1) contact_row(model, model.ground_t, model.nc - 1, pose, dv.feet_mid, 1, w, i, rows);
         ++i;
         break;
       }

@@ -25,8 +25,11 @@ constexpr int kMaxContacts = LEGSIM_CONTACT_SLOTS;  // >= 1 slot; the model's co
 // Entries of J W J^T that can be non-zero: a row touches at most two bodies,
 // and a body appears in a handful of rows, so this is far below kMaxRows^2. A
 // robot's box is in every hip row (12 of them for two legs): 286 pairs for the
-// two-leg robot with all four stops, against 6 * 43 = 258 the one-leg rule gives.
-constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows;
+// two-leg robot with all four stops, against 6 * 43 = 258 the one-leg rule gives. With
+// more legs (one foot contact each) the box's 6 hip rows a leg pair with one another:
+// (6 L)^2 / 2 more, 648 for six legs (1,290 pairs in all for models/robot6.toml).
+constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows +
+                          (LEGSIM_MAX_CONTACTS > 2 ? 18 * LEGSIM_MAX_CONTACTS * LEGSIM_MAX_CONTACTS : 0);
 
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;

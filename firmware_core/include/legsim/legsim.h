@@ -507,11 +507,13 @@ legsim_status legsim_contacts(const legsim_sim *sim, legsim_contact *out);
 legsim_status legsim_set_contact_state(legsim_sim *sim, int32_t k, legsim_contact_state state);
 /* The stance: Newton from the current q (e.g. legsim_assemble_pose of a robot's
  * "stand", whose guess has the feet on the ground already) onto the joints, the
- * actuators at length_m (NULL: their current lengths) and one or two contacts on
- * the ground line, the midpoint of their points at feet_mid_m along the line from
- * its point (|feet_mid_m| <= LEGSIM_MAX_COORD). The box pose follows. qd = 0 and
- * every contact STUCK where it landed. Needs 1 or 2 contacts (else LEGSIM_ERR_BAD_INPUT);
- * errors as legsim_assemble, nothing changes on failure. */
+ * actuators at length_m (NULL: their current lengths) and the outer contacts (the
+ * first and the last) on the ground line, the midpoint of their points at feet_mid_m
+ * along the line from its point (|feet_mid_m| <= LEGSIM_MAX_COORD). The box pose
+ * follows. qd = 0 and every contact STUCK where it landed; a contact between the outer
+ * two must then be on the line (|gap| <= newton_tol, else LEGSIM_ERR_STATE). Needs at
+ * least one contact (else LEGSIM_ERR_BAD_INPUT); errors as legsim_assemble, nothing
+ * changes on failure. */
 legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *length_m,
                                         legsim_real feet_mid_m);
 
