@@ -484,6 +484,7 @@ class Scene:
                                     "frequency": s.frequency, "phase": s.phase}}
             cmds[c.name] = {"mode": c.mode, **sig}
         timed = self.analysis in TIMED
+        raw = tomllib.loads(self.source) if self.source else {}
         return {"name": self.name, "model": self.model,
                 "model_path": "" if self.model.startswith("builtin:") else str(self.model_path),
                 "variant": self.variant, "analysis": self.analysis, "integrator": self.integrator,
@@ -495,7 +496,9 @@ class Scene:
                 "max_newton_iter": self.max_newton_iter, "newton_tol": self.newton_tol,
                 "statics_rule": self.statics_rule, "contact_law": self.contact_law, "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
                 "contacts": dict(self.contacts),
-                "box_load": list(self.box_load) if self.box_load is not None else None}
+                "box_load": list(self.box_load) if self.box_load is not None else None,
+                # the bench's sections as written (legsim_cli --check prints them so)
+                "checks": _json_numbers(raw.get("checks")), "inject": _json_numbers(raw.get("inject", []))}
 
     def _where(self) -> str:
         return str(self.path) if self.path else self.name
@@ -565,6 +568,17 @@ DEFAULT_CHECKS = {
                          "actuator_force_n": 1e-6, "reaction_n": 1e-6, "moment_nm": 1e-6},
     "assembly": {"position_m": 1e-8, "angle_rad": 1e-8, "residual": 1e-8},
 }
+
+
+def _json_numbers(v):
+    """As legsim_cli --check writes a bench section: a non-finite number is "nan", "inf", "-inf"."""
+    if isinstance(v, dict):
+        return {k: _json_numbers(x) for k, x in v.items()}
+    if isinstance(v, list):
+        return [_json_numbers(x) for x in v]
+    if isinstance(v, float) and not math.isfinite(v):
+        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
+    return v
 
 
 def _num(where, key, v, *, positive=False, finite=True) -> float:

@@ -221,6 +221,43 @@ bool is_name(const std::string &s) {
   return true;
 }
 
+// The bench's sections as JSON for --check. JSON has no nan or inf: a non-finite number (a
+// bad input an injection sends on purpose) is the string "nan", "inf" or "-inf".
+void bench_json_to(std::ostream &o, const toml::node &n) {
+  if (const toml::table *t = n.as_table()) {
+    o << "{";
+    bool first = true;
+    for (auto &&kv : *t) {
+      o << (first ? "" : ", ") << toml::json_formatter{toml::value<std::string>(std::string(kv.first.str()))}
+        << ": ";
+      bench_json_to(o, kv.second);
+      first = false;
+    }
+    o << "}";
+  } else if (const toml::array *a = n.as_array()) {
+    o << "[";
+    for (size_t i = 0; i < a->size(); ++i) {
+      o << (i ? ", " : "");
+      bench_json_to(o, *a->get(i));
+    }
+    o << "]";
+  } else if (n.is_floating_point()) {
+    const double v = n.as_floating_point()->get();
+    char buf[40];
+    if (std::isnan(v)) std::snprintf(buf, sizeof buf, "\"nan\"");
+    else if (std::isinf(v)) std::snprintf(buf, sizeof buf, v > 0 ? "\"inf\"" : "\"-inf\"");
+    else std::snprintf(buf, sizeof buf, "%.17g", v);
+    o << buf;
+  } else {
+    o << toml::json_formatter{n, toml::format_flags::quote_dates_and_times};
+  }
+}
+std::string bench_json(const toml::node &n) {
+  std::ostringstream o;
+  bench_json_to(o, n);
+  return o.str();
+}
+
 void parse_scene(Table doc, Scene &s) {
   for (const auto &r : kRenamedKeys)
     if (doc->get(r.old_key)) fail(r.message);
@@ -387,9 +424,12 @@ void parse_scene(Table doc, Scene &s) {
   if (Node iv = doc->get("inject")) {
     const toml::array *a = iv->as_array();
     if (!a || !a->is_array_of_tables()) fail("'inject' must be an array of tables ([[inject]])");
+    s.inject_json = bench_json(*iv);
   }
-  if (Node cv = doc->get("checks"))
+  if (Node cv = doc->get("checks")) {
     if (!cv->is_table()) fail("'checks' must be a table ([checks])");
+    s.checks_json = bench_json(*cv);
+  }
 
   if (Node fv = doc->get("forces")) {
     Table ft = fv->as_table();

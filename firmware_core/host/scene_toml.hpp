@@ -87,6 +87,8 @@ struct Scene {
   ActuatorInit init = ActuatorInit::kZeroForce;
   int64_t cmd_timeout_ms = 0;            // bench only
   std::string safe_state = "zero_force"; // bench only
+  std::string checks_json = "null";     // bench only: [checks] as written, JSON (null: none)
+  std::string inject_json = "[]";       // bench only: [[inject]] as written, JSON
   std::vector<ForceValue> forces;
   std::vector<Command> commands;
   std::vector<ContactInit> contacts;     // [[contact]] (models with contacts only)

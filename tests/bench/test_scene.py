@@ -2,6 +2,7 @@
 the one schema from both sides (legsim_cli --check and the bench's reader agree on every file
 of scenes/, refuse the same files with the same words), a scene with its own model file."""
 import json
+import tomllib
 import math
 import os
 import re
@@ -263,6 +264,29 @@ def test_both_readers_resolve_every_scene_the_same(path):
         r["model_path"] = os.path.realpath(r["model_path"]) if r["model_path"] else ""
     cli.pop("scene")
     assert cli == bench
+
+
+@pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.stem)
+def test_check_carries_the_bench_sections(path):
+    """legsim_cli --check prints [checks] and [[inject]] as the file writes them (null and []
+    when absent), so that the resolved scene is the whole scene."""
+    rc, cli, err = _cli_check(path)
+    assert rc == 0, err
+    d = tomllib.loads(path.read_text())
+    assert cli["checks"] == d.get("checks")
+    inject = d.get("inject", [])
+    for x in inject:   # JSON has no nan or inf: --check writes them as strings
+        if "signals" in x:
+            x["signals"] = {k: (str(v) if isinstance(v, float) and not math.isfinite(v) else v)
+                            for k, v in x["signals"].items()}
+    assert cli["inject"] == inject
+
+
+def test_check_writes_non_finite_injections_as_strings():
+    rc, cli, err = _cli_check(ROOT / "scenes" / "bad_input.toml")
+    assert rc == 0, err
+    signals = [x["signals"] for x in cli["inject"] if "signals" in x]
+    assert signals[0]["Act_Setpoint_upper"] == "nan" and signals[1]["Load_Value2"] == "inf"
 
 
 def _expected_messages():
