@@ -23,9 +23,10 @@ py="$root/.venv/bin/python"
 export LEGSIM_ROOT="$root" LEGSIM_NO_SKIP=1 PYTHONUNBUFFERED=1
 logs=$legsim_logs
 # The SocketCAN tests (tests/hil, tests/hil_scenes: hil_sim and the bench on vcan0, and
-# the bench's CAN decoding on python-can's virtual bus) run where vcan0 is; the rest on the host.
-# Their VM (software emulation, one vCPU) checks every robot scene against the reference
-# inside it: about 20 min on an idle 2-core machine, 30 on a loaded one; the VM's limit is
+# the bench's CAN decoding on python-can's virtual bus) run where vcan0 is; the rest on the host,
+# among them tests/hil_verdicts, which checks the scenes' recordings against the reference (in
+# the VM, software emulation on one vCPU, the references ran 28 times slower). The scenes record
+# into an emptied out/hil_scenes/ so that no verdict reads an older run. The VM's limit is
 # 50 min (LEGSIM_VM_TIMEOUT).
 socketcan_tests=(tests/hil tests/hil_scenes)
 pytest_args=(-v -p no:cacheprovider -rfEs --color=no --continue-on-collection-errors)
@@ -53,6 +54,8 @@ stage() {
 }
 
 mkdir -p "$logs"
+export LEGSIM_SCENES_OUT="$root/out/hil_scenes"
+rm -rf "$LEGSIM_SCENES_OUT"
 # pytest's temporary files go to /dev/shm: the VM's /tmp is the host's, over 9p,
 # where a deleted-then-truncated file fails.
 stage "socketcan (vcan0)" test-socketcan.log \

@@ -314,11 +314,14 @@ def test_command_timeout_realtime(hil):
     hil.start_realtime(decimation=20)
     t0 = time.monotonic()
     hil.command_force("upper", 0.0)
-    f = hil.wait_fault(timeout=3, code=FaultCode.CMD_TIMEOUT)
+    f = hil.wait_fault(timeout=10, code=FaultCode.CMD_TIMEOUT)
     waited = time.monotonic() - t0
     hil.stop_realtime()
-    assert f.detail == 100 and f.value >= 100.0
-    assert 0.1 <= waited < 1.5
+    # The silence hil_sim measured on its own clock when it tripped: past the 100 ms timeout
+    # and within a few of its 1 ms ticks (half a second allows an emulated VM's stalls). The
+    # bench's own wait adds its decoding latency, so it only bounds the trip from below.
+    assert f.detail == 100 and 100.0 <= f.value < 600.0, f.value
+    assert waited >= 0.1
 
 
 # ---- exit -----------------------------------------------------------------------------------

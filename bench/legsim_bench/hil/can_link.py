@@ -572,7 +572,10 @@ class HilLink:
         if msg is None:
             return False
         self._handle(msg)
-        while (msg := self.bus.recv(0)) is not None:
+        # Then what is queued, within the caller's time budget: on a bus faster than this
+        # process decodes (an emulated VM in real time) an unbounded drain never returns.
+        end = time.monotonic() + max(timeout, 0.05)
+        while time.monotonic() < end and (msg := self.bus.recv(0)) is not None:
             self._handle(msg)
         return True
 
