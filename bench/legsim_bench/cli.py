@@ -4,6 +4,7 @@
     legsim-bench run SCENE... [--start-hil]     record + check in one process (bus here)
     legsim-bench record SCENE... [--start-hil]  only drive the bus and write recording.json
     legsim-bench check RECORDING...             reference model, checks, table, CSV/JSON/PNG
+    legsim-bench check --log TRACE [--scene S]  a raw CAN trace decoded into a recording, checked
     legsim-bench demo [--build] [--all]         build, vcan0 (here or in the VM), hil_sim,
                                                 record, check: the README's main command
     legsim-bench workprecision|options|stress|mcu   the benchmarks (their own options; results
@@ -13,6 +14,9 @@
 SCENE is a path or a shipped scene's name ("demo" = the scene marked demo = true).
 Bus: --interface/--channel, else python-can's configuration (CAN_INTERFACE/CAN_CHANNEL,
 can.rc, ~/.canrc), else socketcan on vcan0; `record` and `run` print which bus they opened.
+Raw CAN trace: `record` and `run` log every session's frames beside its recording.json
+(trace.log, candump format) or to --log PATH (.log candump, .asc, .blf by the suffix);
+`check --log PATH` replays one into a recording and checks it (hil/trace.py).
 Exit status: 0 every check passed, 1 a check failed or a run did not complete, 2 usage,
 scene or setup error (no repository, no hil_sim, no bus).
 
@@ -118,6 +122,31 @@ def _load_scenes(specs: list[str], root: Path):
     return [load_scene(s, root) for s in specs]
 
 
+DEFAULT_TRACE = "trace.log"   # beside recording.json: candump's format, read by can-utils too
+
+
+def _trace_paths(args, scenes, out_base: Path) -> dict[str, Path | None]:
+    """Where each scene's raw CAN trace goes: --log PATH ({scene} in it for several scenes),
+    else DIR/<scene>/trace.log; none with --no-log or for a scene that has no frames."""
+    from .hil.trace import TraceError, trace_path
+
+    spec = getattr(args, "log", None)
+    if spec and len(scenes) > 1 and "{scene}" not in spec:
+        raise SetupError(f"--log {spec}: several scenes need {{scene}} in the path "
+                         "(e.g. --log 'traces/{scene}.blf')")
+    out = {}
+    for sc in scenes:
+        if getattr(args, "no_log", False) or not sc.over_can or getattr(args, "dry_run", False):
+            out[sc.name] = None
+            continue
+        p = Path(spec.replace("{scene}", sc.name)) if spec else out_base / sc.name / DEFAULT_TRACE
+        try:
+            out[sc.name] = trace_path(p)
+        except TraceError as e:
+            raise SetupError(str(e)) from None
+    return out
+
+
 def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, Path | None, dict | None]]:
     """Records every scene on one link (and one hil_sim with --start-hil)."""
     from .hil.runner import HilProcess, record
@@ -145,6 +174,7 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
             rec = record(sc, None, progress=_progress_flag(args))
             out.append((sc, save_recording(rec, out_base / sc.name / "recording.json"), rec))
         return out
+    traces = _trace_paths(args, scenes, out_base)
     if args.start_hil:
         if args.interface not in (None, "socketcan"):
             raise SetupError("--start-hil needs the socketcan interface")
@@ -186,8 +216,12 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
                     hil.stop()
                     hil = HilProcess.for_scene(sc, hil.channel, args.hil_sim, hil.log_path).__enter__()
                 print(f"recording {sc.name}: {sc.summary()}", flush=True)
-                rec = record(sc, link, progress=_progress_flag(args),
-                             log=lambda m: print(m, file=sys.stderr))
+                with link.trace(traces[sc.name]) as trace:
+                    rec = record(sc, link, progress=_progress_flag(args),
+                                 log=lambda m: print(m, file=sys.stderr))
+                if trace is not None:
+                    rec["trace"] = str(traces[sc.name])
+                    print(f"  trace: {trace.frames} frames -> {traces[sc.name]}", flush=True)
                 path = save_recording(rec, out_base / sc.name / "recording.json")
                 status = "complete" if rec["complete"] else "INCOMPLETE: " + "; ".join(
                     e["error"] for e in rec["errors"])
@@ -264,15 +298,45 @@ def _recording_paths(specs: list[str]) -> list[Path]:
     return paths
 
 
+def _replay_traces(args, root: Path) -> list:
+    """check --log: each trace decoded into a recording by replaying its scene on it."""
+    from .hil.runner import replay_trace
+    from .hil.trace import TraceError
+    from .recording import RecordingError, load_recording, save_recording, scene_of
+
+    evs = []
+    for spec in args.log:
+        trace = Path(spec)
+        try:
+            if args.scene:
+                scene = load_scene(args.scene, root)
+            elif (trace.parent / "recording.json").is_file():
+                scene = scene_of(load_recording(trace.parent / "recording.json"), root)
+            else:
+                raise SetupError(f"{trace}: which scene? give --scene (no recording.json beside the "
+                                 "trace to take it from)")
+            rec = replay_trace(trace, scene, dbc=root / "can" / "legsim.dbc", timeout=args.timeout)
+        except (TraceError, RecordingError) as e:
+            raise SetupError(str(e)) from None
+        out_dir = Path(args.out) / rec["scene_name"] if args.out else trace.parent / "replay"
+        print(f"replayed {trace}: scene {scene.name}, {len(rec['samples'])} samples -> "
+              f"{save_recording(rec, out_dir / 'recording.json')}")
+        ev, _ = _check_one(rec, out_dir, args, root)
+        evs.append(ev)
+        print()
+    return evs
+
+
 def cmd_check(args) -> int:
     from .recording import RecordingError, load_recording, save_recording
 
     root = _root(args)
     paths = _recording_paths(args.recordings)
-    if not paths:
-        _err("no recording given (a recording.json, or a directory holding */recording.json)")
+    if not paths and not getattr(args, "log", None):
+        _err("no recording given (a recording.json, or a directory holding */recording.json, "
+             "or --log TRACE)")
         return EXIT_SETUP
-    evs = []
+    evs = _replay_traces(args, root) if getattr(args, "log", None) else []
     for p in paths:
         try:
             rec = load_recording(p)
@@ -428,9 +492,15 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--no-plots", action="store_true", help="no PNG plots (no matplotlib import)")
         q.add_argument("--brief", action="store_true", help="details of the failing checks only")
 
+    def log_opts(q):
+        q.add_argument("--log", metavar="PATH", help="raw CAN trace of the session (.log candump, "
+                       ".asc, .blf; {scene} in PATH for several scenes; default DIR/<scene>/trace.log)")
+        q.add_argument("--no-log", action="store_true", help="no raw CAN trace")
+
     s = sub.add_parser("run", help="run scenes on a live hil_sim: record + check")
     s.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file or shipped name ('all', 'demo')")
     _add_bus(s)
+    log_opts(s)
     out_opts(s, "output directory")
     check_opts(s)
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -442,13 +512,19 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("record", help="only drive the bus and write the raw recording (for the VM)")
     s.add_argument("scenes", nargs="+", metavar="SCENE")
     _add_bus(s)
+    log_opts(s)
     out_opts(s, "where recordings go: DIR/<scene>/recording.json")
     s.add_argument("--no-progress", action="store_true")
     s.set_defaults(func=cmd_record)
 
     s = sub.add_parser("check", help="check recordings: reference model, table, CSV/JSON/PNG")
-    s.add_argument("recordings", nargs="+", metavar="RECORDING",
+    s.add_argument("recordings", nargs="*", metavar="RECORDING",
                    help="recording.json, or a directory with recording.json or */recording.json")
+    s.add_argument("--log", action="append", default=[], metavar="TRACE",
+                   help="a raw CAN trace (.log, .asc, .blf) of a session: replayed into a recording "
+                   "and checked (outputs in TRACE's directory/replay/ unless --out); repeatable")
+    s.add_argument("--scene", help="the scene of --log (default: the one in the recording.json beside it)")
+    s.add_argument("--timeout", type=float, default=5.0, help="the session's answer timeout, s (as live)")
     s.add_argument("--out", "-o", metavar="DIR", help="write outputs to DIR/<scene>/ (default: beside "
                    "the recording)")
     check_opts(s)
