@@ -26,6 +26,7 @@ else, since it runs inside the QEMU VM where imports are slow.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import shlex
 import subprocess
@@ -147,6 +148,36 @@ def _trace_paths(args, scenes, out_base: Path) -> dict[str, Path | None]:
     return out
 
 
+@contextlib.contextmanager
+def _sniffer(path, interface, channel):
+    """--sniff PATH: the whole bus as a second listener sees it (every frame of every node, no
+    filter, the interface's time stamps) logged by python-can's Notifier and Logger while the
+    scenes run, like candump beside the bench (works in the VM, where can-utils may be absent)."""
+    if not path:
+        yield None
+        return
+    import can
+
+    from .hil.can_link import bus_config
+    from .hil.trace import TraceError, trace_path
+
+    try:
+        trace_path(path)
+    except TraceError as e:
+        raise SetupError(f"--sniff: {e}") from None
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    bus = can.Bus(**bus_config(interface, channel))
+    logger = can.Logger(str(path))
+    notifier = can.Notifier(bus, [logger], timeout=0.05)
+    print(f"sniffer: every frame on the bus -> {path}", flush=True)
+    try:
+        yield logger
+    finally:
+        notifier.stop()
+        logger.stop()
+        bus.shutdown()
+
+
 def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, Path | None, dict | None]]:
     """Records every scene on one link (and one hil_sim with --start-hil)."""
     from .hil.runner import HilProcess, record
@@ -175,10 +206,17 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
             out.append((sc, save_recording(rec, out_base / sc.name / "recording.json"), rec))
         return out
     traces = _trace_paths(args, scenes, out_base)
+    start_origin = {}
     if args.start_hil:
-        if args.interface not in (None, "socketcan"):
-            raise SetupError("--start-hil needs the socketcan interface")
-        channel = args.channel or os.environ.get("CAN_CHANNEL") or "vcan0"
+        from .hil.can_link import bus_config, bus_origin
+
+        # hil_sim runs on SocketCAN: the channel from --channel or python-can's configuration
+        cfg = bus_config(args.interface, args.channel)
+        start_origin = bus_origin(args.interface, args.channel, cfg)
+        if cfg["interface"] != "socketcan":
+            raise SetupError(f"--start-hil runs hil_sim on socketcan, not on {cfg['interface']} "
+                             f"(from {start_origin['interface']})")
+        channel = str(cfg["channel"])
         try:
             hil = HilProcess(channel, args.hil_sim, log_path=out_base / "hil_sim.log").__enter__()
         except RecordingError as e:
@@ -195,7 +233,8 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
                 interface, given_by["interface"] = "socketcan", "--start-hil"
             if channel is None:
                 channel = hil.channel
-                given_by["channel"] = "CAN_CHANNEL" if os.environ.get("CAN_CHANNEL") else "--start-hil"
+                given_by["channel"] = start_origin["channel"] if start_origin["channel"] != "default" \
+                    else "--start-hil"
         try:
             link = HilLink(interface, channel, dbc=root / "can" / "legsim.dbc",
                            timeout=args.timeout, given_by=given_by)
@@ -209,7 +248,7 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
         print(f"bus: {link.description}" + (f", open in {time.monotonic() - t0:.1f} s (import "
               "and connect)" if args.verbose else ""), flush=True)
         out = []
-        with link:
+        with link, _sniffer(getattr(args, "sniff", None), interface, channel):
             for sc in scenes:
                 if hil is not None and sc.over_can and hil.args != sc.hil_args():
                     # the scene's own model file: a hil_sim started with --model FILE
@@ -496,6 +535,8 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--log", metavar="PATH", help="raw CAN trace of the session (.log candump, "
                        ".asc, .blf; {scene} in PATH for several scenes; default DIR/<scene>/trace.log)")
         q.add_argument("--no-log", action="store_true", help="no raw CAN trace")
+        q.add_argument("--sniff", metavar="PATH", help="also log the whole bus as another listener "
+                       "sees it (all nodes, no filter; .log, .asc, .blf), as candump would")
 
     s = sub.add_parser("run", help="run scenes on a live hil_sim: record + check")
     s.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file or shipped name ('all', 'demo')")

@@ -282,3 +282,28 @@ def test_record_writes_a_trace_beside_each_recording_by_default(tmp_path, capsys
     rc = cli.main(["record", "--interface", "virtual", "--channel", ch, "--log", str(tmp_path / "x.txt"),
                    "free_fall"])
     assert rc == 2 and "named by its format" in capsys.readouterr().err
+
+
+def test_sniff_logs_the_bus_beside_the_bench(tmp_path, capsys):
+    """--sniff: a second listener on the bus logs every frame (here the bench's RESET and a
+    stranger's frame the bench's own trace filters out), as candump would."""
+    ch = f"sniffed-{random.random()}"
+    stranger = can.Bus(interface="virtual", channel=ch)
+    done = threading.Event()
+
+    def chatter():   # another node's frame every 50 ms while the bench runs
+        while not done.wait(0.05):
+            stranger.send(can.Message(arbitration_id=0x7AB, data=b"\x01\x02", is_extended_id=False))
+    later = threading.Thread(target=chatter)
+    later.start()
+    rc = cli.main(["record", "--interface", "virtual", "--channel", ch, "--timeout", "0.3",
+                   "--no-progress", "--out", str(tmp_path), "--sniff", str(tmp_path / "bus.asc"),
+                   "free_fall"])
+    done.set()
+    later.join()
+    stranger.shutdown()
+    assert rc == 1 and "sniffer: every frame on the bus" in capsys.readouterr().out
+    with can.LogReader(str(tmp_path / "bus.asc")) as r:
+        ids = [m.arbitration_id for m in r]
+    assert cl.CONTROL in ids and 0x7AB in ids
+    assert 0x7AB not in [m.arbitration_id for m in read_trace(tmp_path / "free_fall" / "trace.log")]
