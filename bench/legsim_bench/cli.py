@@ -291,22 +291,31 @@ def _check_one(rec: dict, out_dir: Path, args, root: Path):
 
     ev = evaluate(rec, root)
     files = write_outputs(ev, out_dir)
+    out = rec.get("cli_output") or {}
+    robot = None
+    if rec.get("complete") and (out.get("contacts") or rec.get("legs", 1) > 1):
+        from .report.tables import write_robot_tables
+
+        robot = _robot_trajectories(rec, ev)   # the robot: its samples.csv, reference.csv
+        files.update(write_robot_tables(robot[0], out_dir, reference=robot[1]))
     if not args.no_plots:
         from .report.plots import write_plots
         files.update(write_plots(ev, out_dir))
-        out = rec.get("cli_output") or {}
-        if rec.get("complete") and (out.get("contacts") or rec.get("legs", 1) > 1):
-            files.update(_robot_plots(rec, ev.scene, out_dir))  # the robot: stick figures, animation
+        if robot is not None:
+            files.update(_robot_plots(*robot, out_dir))  # stick figures, time series, animation
     print(format_table(ev, details=not args.brief))
     print(f"  files: {out_dir}/ ({', '.join(sorted(p.name for p in files.values()))})")
     return ev, files
 
 
-def _robot_plots(rec: dict, scene, out_dir: Path) -> dict[str, Path]:
-    """A robot scene's stick figures and GIF, from legsim_cli's output or a CAN recording."""
+def _robot_trajectories(rec: dict, ev):
+    """A robot run as report.robot_plots.RobotTrajectory, from legsim_cli's output or a CAN
+    recording, and the verdict's reference (RobotModel, where it applies) as one, or None."""
     from .reference.model_file import read_model_file
-    from .report.robot_plots import RobotTrajectory, plot_snapshots, plot_time_series, write_robot_animation
+    from .reference.robot import RobotModel
+    from .report.robot_plots import RobotTrajectory
 
+    scene = ev.scene
     box = tuple(read_model_file(scene.model_path)["box"]["size"])
     if rec.get("cli_output"):
         traj = RobotTrajectory.from_cli_json(rec["cli_output"], box, title=scene.name)
@@ -315,9 +324,20 @@ def _robot_plots(rec: dict, scene, out_dir: Path) -> dict[str, Path]:
 
         traj = RobotTrajectory.from_recording(rec, legsim.Model.from_toml(scene.model_path), box,
                                               title=scene.name)
+    ref = getattr(ev, "robot_reference", None)
+    if ref is not None:
+        ref = RobotTrajectory.from_reference(RobotModel.from_toml(scene.model_path), ref,
+                                             title=f"{scene.name} (reference)")
+    return traj, ref
+
+
+def _robot_plots(traj, ref, out_dir: Path) -> dict[str, Path]:
+    """A robot run's stick figures, time series (the reference overlaid) and GIF."""
+    from .report.robot_plots import plot_snapshots, plot_time_series, write_robot_animation
+
     span = float(traj.t[-1] - traj.t[0])
     return {"snapshots": plot_snapshots(traj, out_dir / "robot_snapshots.png")[0],
-            "time_series": plot_time_series(traj, out_dir / "robot_time_series.png"),
+            "time_series": plot_time_series(traj, out_dir / "robot_time_series.png", reference=ref),
             # about 2 s of animation whatever the scene's length
             "animation": write_robot_animation(traj, out_dir / "robot.gif", fps=20,
                                                speed=max(span / 2.0, 1e-3))}
