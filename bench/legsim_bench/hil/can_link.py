@@ -458,9 +458,10 @@ class HilLink:
             writer.close()
 
     def _send(self, msg: can.Message) -> None:
-        if self._trace is not None:
-            self._trace.write(msg, rx=False)
+        sent = time.time()   # python-can's time base (Message.timestamp: s since the epoch)
         self.bus.send(msg)
+        if self._trace is not None:   # a frame the bus refused is not in the trace
+            self._trace.write(msg, rx=False, timestamp=sent)
 
     # ---- encoding ----------------------------------------------------------------------
 

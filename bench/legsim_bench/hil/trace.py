@@ -64,8 +64,9 @@ class TraceWriter:
         self.frames = 0
         self._last = float("-inf")
 
-    def write(self, msg: can.Message, *, rx: bool) -> None:
-        ts = msg.timestamp if rx and msg.timestamp else time.time()
+    def write(self, msg: can.Message, *, rx: bool, timestamp: float | None = None) -> None:
+        """One frame: rx, read from the bus (its own time stamp); else sent at `timestamp`."""
+        ts = (msg.timestamp if rx else timestamp) or time.time()
         self._last = max(self._last, ts)   # handling order; the formats want no step back
         self.logger(_copy(msg, self._last, rx, self.channel))
         self.frames += 1
