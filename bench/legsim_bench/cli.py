@@ -4,6 +4,7 @@
     legsim-bench run SCENE... [--start-hil]     record + check in one process (bus here)
     legsim-bench record SCENE... [--start-hil]  only drive the bus and write recording.json
     legsim-bench check RECORDING...             reference model, checks, table, CSV/JSON/PNG
+    legsim-bench check --log TRACE [--scene S]  a raw CAN trace decoded into a recording, checked
     legsim-bench demo [--build] [--all]         build, vcan0 (here or in the VM), hil_sim,
                                                 record, check: the README's main command
     legsim-bench workprecision|options|stress|mcu   the benchmarks (their own options; results
@@ -13,6 +14,9 @@
 SCENE is a path or a shipped scene's name ("demo" = the scene marked demo = true).
 Bus: --interface/--channel, else python-can's configuration (CAN_INTERFACE/CAN_CHANNEL,
 can.rc, ~/.canrc), else socketcan on vcan0; `record` and `run` print which bus they opened.
+Raw CAN trace: `record` and `run` log every session's frames beside its recording.json
+(trace.log, candump format) or to --log PATH (.log candump, .asc, .blf by the suffix);
+`check --log PATH` replays one into a recording and checks it (hil/trace.py).
 Exit status: 0 every check passed, 1 a check failed or a run did not complete, 2 usage,
 scene or setup error (no repository, no hil_sim, no bus).
 
@@ -22,6 +26,7 @@ else, since it runs inside the QEMU VM where imports are slow.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import os
 import shlex
 import subprocess
@@ -118,6 +123,61 @@ def _load_scenes(specs: list[str], root: Path):
     return [load_scene(s, root) for s in specs]
 
 
+DEFAULT_TRACE = "trace.log"   # beside recording.json: candump's format, read by can-utils too
+
+
+def _trace_paths(args, scenes, out_base: Path) -> dict[str, Path | None]:
+    """Where each scene's raw CAN trace goes: --log PATH ({scene} in it for several scenes),
+    else DIR/<scene>/trace.log; none with --no-log or for a scene that has no frames."""
+    from .hil.trace import TraceError, trace_path
+
+    spec = getattr(args, "log", None)
+    if spec and len(scenes) > 1 and "{scene}" not in spec:
+        raise SetupError(f"--log {spec}: several scenes need {{scene}} in the path "
+                         "(e.g. --log 'traces/{scene}.blf')")
+    out = {}
+    for sc in scenes:
+        if getattr(args, "no_log", False) or not sc.over_can or getattr(args, "dry_run", False):
+            out[sc.name] = None
+            continue
+        p = Path(spec.replace("{scene}", sc.name)) if spec else out_base / sc.name / DEFAULT_TRACE
+        try:
+            out[sc.name] = trace_path(p)
+        except TraceError as e:
+            raise SetupError(str(e)) from None
+    return out
+
+
+@contextlib.contextmanager
+def _sniffer(path, interface, channel):
+    """--sniff PATH: the whole bus as a second listener sees it (every frame of every node, no
+    filter, the interface's time stamps) logged by python-can's Notifier and Logger while the
+    scenes run, like candump beside the bench (works in the VM, where can-utils may be absent)."""
+    if not path:
+        yield None
+        return
+    import can
+
+    from .hil.can_link import bus_config
+    from .hil.trace import TraceError, trace_path
+
+    try:
+        trace_path(path)
+    except TraceError as e:
+        raise SetupError(f"--sniff: {e}") from None
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    bus = can.Bus(**bus_config(interface, channel))
+    logger = can.Logger(str(path))
+    notifier = can.Notifier(bus, [logger], timeout=0.05)
+    print(f"sniffer: every frame on the bus -> {path}", flush=True)
+    try:
+        yield logger
+    finally:
+        notifier.stop()
+        logger.stop()
+        bus.shutdown()
+
+
 def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, Path | None, dict | None]]:
     """Records every scene on one link (and one hil_sim with --start-hil)."""
     from .hil.runner import HilProcess, record
@@ -145,10 +205,18 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
             rec = record(sc, None, progress=_progress_flag(args))
             out.append((sc, save_recording(rec, out_base / sc.name / "recording.json"), rec))
         return out
+    traces = _trace_paths(args, scenes, out_base)
+    start_origin = {}
     if args.start_hil:
-        if args.interface not in (None, "socketcan"):
-            raise SetupError("--start-hil needs the socketcan interface")
-        channel = args.channel or os.environ.get("CAN_CHANNEL") or "vcan0"
+        from .hil.can_link import bus_config, bus_origin
+
+        # hil_sim runs on SocketCAN: the channel from --channel or python-can's configuration
+        cfg = bus_config(args.interface, args.channel)
+        start_origin = bus_origin(args.interface, args.channel, cfg)
+        if cfg["interface"] != "socketcan":
+            raise SetupError(f"--start-hil runs hil_sim on socketcan, not on {cfg['interface']} "
+                             f"(from {start_origin['interface']})")
+        channel = str(cfg["channel"])
         try:
             hil = HilProcess(channel, args.hil_sim, log_path=out_base / "hil_sim.log").__enter__()
         except RecordingError as e:
@@ -165,7 +233,8 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
                 interface, given_by["interface"] = "socketcan", "--start-hil"
             if channel is None:
                 channel = hil.channel
-                given_by["channel"] = "CAN_CHANNEL" if os.environ.get("CAN_CHANNEL") else "--start-hil"
+                given_by["channel"] = start_origin["channel"] if start_origin["channel"] != "default" \
+                    else "--start-hil"
         try:
             link = HilLink(interface, channel, dbc=root / "can" / "legsim.dbc",
                            timeout=args.timeout, given_by=given_by)
@@ -179,15 +248,19 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
         print(f"bus: {link.description}" + (f", open in {time.monotonic() - t0:.1f} s (import "
               "and connect)" if args.verbose else ""), flush=True)
         out = []
-        with link:
+        with link, _sniffer(getattr(args, "sniff", None), interface, channel):
             for sc in scenes:
                 if hil is not None and sc.over_can and hil.args != sc.hil_args():
                     # the scene's own model file: a hil_sim started with --model FILE
                     hil.stop()
                     hil = HilProcess.for_scene(sc, hil.channel, args.hil_sim, hil.log_path).__enter__()
                 print(f"recording {sc.name}: {sc.summary()}", flush=True)
-                rec = record(sc, link, progress=_progress_flag(args),
-                             log=lambda m: print(m, file=sys.stderr))
+                with link.trace(traces[sc.name]) as trace:
+                    rec = record(sc, link, progress=_progress_flag(args),
+                                 log=lambda m: print(m, file=sys.stderr))
+                if trace is not None:
+                    rec["trace"] = str(traces[sc.name])
+                    print(f"  trace: {trace.frames} frames -> {traces[sc.name]}", flush=True)
                 path = save_recording(rec, out_base / sc.name / "recording.json")
                 status = "complete" if rec["complete"] else "INCOMPLETE: " + "; ".join(
                     e["error"] for e in rec["errors"])
@@ -218,22 +291,31 @@ def _check_one(rec: dict, out_dir: Path, args, root: Path):
 
     ev = evaluate(rec, root)
     files = write_outputs(ev, out_dir)
+    out = rec.get("cli_output") or {}
+    robot = None
+    if rec.get("complete") and (out.get("contacts") or rec.get("legs", 1) > 1):
+        from .report.tables import write_robot_tables
+
+        robot = _robot_trajectories(rec, ev)   # the robot: its samples.csv, reference.csv
+        files.update(write_robot_tables(robot[0], out_dir, reference=robot[1]))
     if not args.no_plots:
         from .report.plots import write_plots
         files.update(write_plots(ev, out_dir))
-        out = rec.get("cli_output") or {}
-        if rec.get("complete") and (out.get("contacts") or rec.get("legs", 1) > 1):
-            files.update(_robot_plots(rec, ev.scene, out_dir))  # the robot: stick figures, animation
+        if robot is not None:
+            files.update(_robot_plots(*robot, out_dir))  # stick figures, time series, animation
     print(format_table(ev, details=not args.brief))
     print(f"  files: {out_dir}/ ({', '.join(sorted(p.name for p in files.values()))})")
     return ev, files
 
 
-def _robot_plots(rec: dict, scene, out_dir: Path) -> dict[str, Path]:
-    """A robot scene's stick figures and GIF, from legsim_cli's output or a CAN recording."""
+def _robot_trajectories(rec: dict, ev):
+    """A robot run as report.robot_plots.RobotTrajectory, from legsim_cli's output or a CAN
+    recording, and the verdict's reference (RobotModel, where it applies) as one, or None."""
     from .reference.model_file import read_model_file
-    from .report.robot_plots import RobotTrajectory, plot_snapshots, plot_time_series, write_robot_animation
+    from .reference.robot import RobotModel
+    from .report.robot_plots import RobotTrajectory
 
+    scene = ev.scene
     box = tuple(read_model_file(scene.model_path)["box"]["size"])
     if rec.get("cli_output"):
         traj = RobotTrajectory.from_cli_json(rec["cli_output"], box, title=scene.name)
@@ -242,9 +324,20 @@ def _robot_plots(rec: dict, scene, out_dir: Path) -> dict[str, Path]:
 
         traj = RobotTrajectory.from_recording(rec, legsim.Model.from_toml(scene.model_path), box,
                                               title=scene.name)
+    ref = getattr(ev, "robot_reference", None)
+    if ref is not None:
+        ref = RobotTrajectory.from_reference(RobotModel.from_toml(scene.model_path), ref,
+                                             title=f"{scene.name} (reference)")
+    return traj, ref
+
+
+def _robot_plots(traj, ref, out_dir: Path) -> dict[str, Path]:
+    """A robot run's stick figures, time series (the reference overlaid) and GIF."""
+    from .report.robot_plots import plot_snapshots, plot_time_series, write_robot_animation
+
     span = float(traj.t[-1] - traj.t[0])
     return {"snapshots": plot_snapshots(traj, out_dir / "robot_snapshots.png")[0],
-            "time_series": plot_time_series(traj, out_dir / "robot_time_series.png"),
+            "time_series": plot_time_series(traj, out_dir / "robot_time_series.png", reference=ref),
             # about 2 s of animation whatever the scene's length
             "animation": write_robot_animation(traj, out_dir / "robot.gif", fps=20,
                                                speed=max(span / 2.0, 1e-3))}
@@ -264,15 +357,45 @@ def _recording_paths(specs: list[str]) -> list[Path]:
     return paths
 
 
+def _replay_traces(args, root: Path) -> list:
+    """check --log: each trace decoded into a recording by replaying its scene on it."""
+    from .hil.runner import replay_trace
+    from .hil.trace import TraceError
+    from .recording import RecordingError, load_recording, save_recording, scene_of
+
+    evs = []
+    for spec in args.log:
+        trace = Path(spec)
+        try:
+            if args.scene:
+                scene = load_scene(args.scene, root)
+            elif (trace.parent / "recording.json").is_file():
+                scene = scene_of(load_recording(trace.parent / "recording.json"), root)
+            else:
+                raise SetupError(f"{trace}: which scene? give --scene (no recording.json beside the "
+                                 "trace to take it from)")
+            rec = replay_trace(trace, scene, dbc=root / "can" / "legsim.dbc", timeout=args.timeout)
+        except (TraceError, RecordingError) as e:
+            raise SetupError(str(e)) from None
+        out_dir = Path(args.out) / rec["scene_name"] if args.out else trace.parent / "replay"
+        print(f"replayed {trace}: scene {scene.name}, {len(rec['samples'])} samples -> "
+              f"{save_recording(rec, out_dir / 'recording.json')}")
+        ev, _ = _check_one(rec, out_dir, args, root)
+        evs.append(ev)
+        print()
+    return evs
+
+
 def cmd_check(args) -> int:
     from .recording import RecordingError, load_recording, save_recording
 
     root = _root(args)
     paths = _recording_paths(args.recordings)
-    if not paths:
-        _err("no recording given (a recording.json, or a directory holding */recording.json)")
+    if not paths and not getattr(args, "log", None):
+        _err("no recording given (a recording.json, or a directory holding */recording.json, "
+             "or --log TRACE)")
         return EXIT_SETUP
-    evs = []
+    evs = _replay_traces(args, root) if getattr(args, "log", None) else []
     for p in paths:
         try:
             rec = load_recording(p)
@@ -428,9 +551,17 @@ def build_parser() -> argparse.ArgumentParser:
         q.add_argument("--no-plots", action="store_true", help="no PNG plots (no matplotlib import)")
         q.add_argument("--brief", action="store_true", help="details of the failing checks only")
 
+    def log_opts(q):
+        q.add_argument("--log", metavar="PATH", help="raw CAN trace of the session (.log candump, "
+                       ".asc, .blf; {scene} in PATH for several scenes; default DIR/<scene>/trace.log)")
+        q.add_argument("--no-log", action="store_true", help="no raw CAN trace")
+        q.add_argument("--sniff", metavar="PATH", help="also log the whole bus as another listener "
+                       "sees it (all nodes, no filter; .log, .asc, .blf), as candump would")
+
     s = sub.add_parser("run", help="run scenes on a live hil_sim: record + check")
     s.add_argument("scenes", nargs="+", metavar="SCENE", help="scene file or shipped name ('all', 'demo')")
     _add_bus(s)
+    log_opts(s)
     out_opts(s, "output directory")
     check_opts(s)
     s.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -442,13 +573,19 @@ def build_parser() -> argparse.ArgumentParser:
     s = sub.add_parser("record", help="only drive the bus and write the raw recording (for the VM)")
     s.add_argument("scenes", nargs="+", metavar="SCENE")
     _add_bus(s)
+    log_opts(s)
     out_opts(s, "where recordings go: DIR/<scene>/recording.json")
     s.add_argument("--no-progress", action="store_true")
     s.set_defaults(func=cmd_record)
 
     s = sub.add_parser("check", help="check recordings: reference model, table, CSV/JSON/PNG")
-    s.add_argument("recordings", nargs="+", metavar="RECORDING",
+    s.add_argument("recordings", nargs="*", metavar="RECORDING",
                    help="recording.json, or a directory with recording.json or */recording.json")
+    s.add_argument("--log", action="append", default=[], metavar="TRACE",
+                   help="a raw CAN trace (.log, .asc, .blf) of a session: replayed into a recording "
+                   "and checked (outputs in TRACE's directory/replay/ unless --out); repeatable")
+    s.add_argument("--scene", help="the scene of --log (default: the one in the recording.json beside it)")
+    s.add_argument("--timeout", type=float, default=5.0, help="the session's answer timeout, s (as live)")
     s.add_argument("--out", "-o", metavar="DIR", help="write outputs to DIR/<scene>/ (default: beside "
                    "the recording)")
     check_opts(s)

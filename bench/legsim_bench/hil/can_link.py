@@ -12,7 +12,11 @@ the frames (the same file hil_sim's C code is generated from). Nothing here pack
 Bus configuration, first found wins: the interface/channel arguments, python-can's own
 configuration (``can.rc``, the environment CAN_INTERFACE / CAN_CHANNEL, ``~/.canrc``), then
 the default ``socketcan`` on ``vcan0``. CAN FD is always on. A ready python-can bus can be
-passed instead (``bus=``), e.g. ``can.Bus(interface="virtual", ...)`` in tests.
+passed instead (``bus=``), e.g. ``can.Bus(interface="virtual", ...)`` in tests, or a
+recorded session to replay (hil/trace.py's TraceBus).
+
+Raw trace: ``with hil.trace("session.blf"): ...`` writes every frame sent and read in the
+block through python-can's log writers (.log candump, .asc, .blf by the suffix).
 
 Protocol (details in can/README.md):
 - every CONTROL frame (reset, step, start_realtime, stop_realtime) is answered by one state
@@ -43,6 +47,7 @@ from __future__ import annotations
 
 import collections
 import configparser
+import contextlib
 import enum
 import os
 import re
@@ -276,7 +281,7 @@ class State:
     ctrl_seq: int
     step_ns: int
     faults: list[Fault] = field(default_factory=list)   # faults received since the previous sample
-    received: float = 0.0      # time.monotonic() when ST_STATUS arrived
+    received: float = 0.0      # link.clock() when ST_STATUS arrived
     legs: int = 1              # 2: the robot (box first in q, contacts, per-leg counters)
     contacts: list[Contact] = field(default_factory=list)   # robot: one per foot, leg order
     act_seqs: tuple[int, ...] = ()   # robot: each leg's St_ActSeq (act_seq is leg 0's)
@@ -403,9 +408,15 @@ class HilLink:
             #: which bus this is and where its configuration came from (for the user)
             self.description = describe_bus(cfg, bus_origin(interface, channel, cfg, given_by))
             bus = can.Bus(**cfg, can_filters=filters)
+            self._channel = cfg.get("channel")
         else:
             self.description = f"a given bus: {bus.channel_info}"
+            self._channel = None   # a given bus's channel may be anything (virtual: queues)
         self.bus = bus
+        #: the clock the link waits on and stamps samples with (s): the monotonic clock, or a
+        #: replayed trace's own (trace.TraceBus.clock)
+        self.clock: Callable[[], float] = getattr(bus, "clock", time.monotonic)
+        self._trace = None   # a trace.TraceWriter while a session is logged
         self._seq = {CONTROL: 0, **{fid + LEG_OFFSET * k: 0 for k in range(ROBOT_LEGS)
                                     for fid in (ACT_CMD, LOAD_CMD)}}
         self._partial: dict[int, dict[int, dict]] = {}   # tick -> frame id -> signals
@@ -428,6 +439,30 @@ class HilLink:
     def __exit__(self, *exc) -> None:
         self.close()
 
+    @contextlib.contextmanager
+    def trace(self, path: str | os.PathLike | None):
+        """Within the block, every frame sent and read goes to a raw CAN trace at `path`
+        (python-can's writer for its suffix: .log candump, .asc, .blf; see hil/trace.py).
+        None: no trace. Yields the writer (its `frames` count) or None."""
+        if path is None:
+            yield None
+            return
+        from .trace import TraceWriter
+
+        writer = TraceWriter(path, self._channel)
+        self._trace = writer
+        try:
+            yield writer
+        finally:
+            self._trace = None
+            writer.close()
+
+    def _send(self, msg: can.Message) -> None:
+        sent = time.time()   # python-can's time base (Message.timestamp: s since the epoch)
+        self.bus.send(msg)
+        if self._trace is not None:   # a frame the bus refused is not in the trace
+            self._trace.write(msg, rx=False, timestamp=sent)
+
     # ---- encoding ----------------------------------------------------------------------
 
     def encode(self, name: str, signals: dict, *, strict: bool = True,
@@ -447,11 +482,13 @@ class HilLink:
 
     def send_raw(self, msg: can.Message) -> None:
         """Sends any frame as it is (no counter, no checks): for bad-input tests."""
-        self.bus.send(msg)
+        self._send(msg)
 
     # ---- receiving ---------------------------------------------------------------------
 
     def _handle(self, msg: can.Message) -> None:
+        if self._trace is not None:
+            self._trace.write(msg, rx=True)
         if msg.is_extended_id or msg.is_error_frame or msg.is_remote_frame:
             return
         fid = msg.arbitration_id
@@ -475,7 +512,7 @@ class HilLink:
                 rt_rate_hz=sig["Hb_RtRate"], rx_frames=sig["Hb_RxFrames"],
                 rx_rejected=sig["Hb_RxRejected"], fault_count=sig["Hb_FaultCount"],
                 tx_errors=sig["Hb_TxErrors"], sim_time=sig["Hb_SimTime"],
-                received=time.monotonic())
+                received=self.clock())
             self.last_heartbeat = hb
             self._heartbeats.append(hb)
         else:
@@ -535,7 +572,7 @@ class HilLink:
             iterations=st["St_Iterations"], variant=Variant(st["St_Variant"]),
             integrator=Integrator(st["St_Integrator"]), act_seq=st["St_ActSeq"],
             ctrl_seq=st["St_CtrlSeq"], step_ns=st["St_StepSize"], faults=faults,
-            received=time.monotonic())
+            received=self.clock())
 
     def _robot_state_from(self, parts: dict[int, dict]) -> State:
         """The robot's sample: leg k's frames decoded as the one leg's, placed in the core's
@@ -574,18 +611,18 @@ class HilLink:
         self._handle(msg)
         # Then what is queued, within the caller's time budget: on a bus faster than this
         # process decodes (an emulated VM in real time) an unbounded drain never returns.
-        end = time.monotonic() + max(timeout, 0.05)
-        while time.monotonic() < end and (msg := self.bus.recv(0)) is not None:
+        end = self.clock() + max(timeout, 0.05)
+        while self.clock() < end and (msg := self.bus.recv(0)) is not None:
             self._handle(msg)
         return True
 
     def _wait(self, ready: Callable[[], object], timeout: float, what: str):
-        deadline = time.monotonic() + timeout
+        deadline = self.clock() + timeout
         while True:
             got = ready()
             if got is not None and got is not False:
                 return got
-            left = deadline - time.monotonic()
+            left = deadline - self.clock()
             if left <= 0:
                 raise HilError(f"no {what} from hil_sim within {timeout:g} s "
                                f"(is it running on this bus?)")
@@ -598,7 +635,7 @@ class HilLink:
         values = {"Ctrl_Seq": seq, "Ctrl_Command": int(command), "Ctrl_StepSize": 1_000_000,
                   "Ctrl_NSteps": 1, "Ctrl_RtStepsPerTick": 1}
         values.update(signals)
-        self.bus.send(self.encode("CONTROL", values))
+        self._send(self.encode("CONTROL", values))
 
         def answer():
             for s in self._states:  # the sample answering this frame; others stay queued
@@ -668,7 +705,7 @@ class HilLink:
             mode, value = cmd if cmd is not None else (ActMode.KEEP, 0.0)
             sig[f"Act_Mode_{name}"] = int(mode)
             sig[f"Act_Setpoint_{name}"] = float(value)
-        self.bus.send(self.encode(leg_frame("ACT_CMD", leg), sig))
+        self._send(self.encode(leg_frame("ACT_CMD", leg), sig))
         return seq
 
     def command_force(self, actuator: int | str, newtons: float) -> int:
@@ -696,7 +733,7 @@ class HilLink:
         robot (its own force elements) in LOAD_CMD_Lk."""
         fid = LOAD_CMD + LEG_OFFSET * leg
         seq = self.next_seq(fid)
-        self.bus.send(self.encode(leg_frame("LOAD_CMD", leg),
+        self._send(self.encode(leg_frame("LOAD_CMD", leg),
                                   {"Load_Seq": seq, "Load_Index": index,
                                    "Load_Value1": float(fx), "Load_Value2": float(fy)}))
         return seq
@@ -710,8 +747,8 @@ class HilLink:
 
     def states(self, duration: float) -> Iterator[State]:
         """State samples for `duration` seconds of wall time."""
-        end = time.monotonic() + duration
-        while (left := end - time.monotonic()) > 0:
+        end = self.clock() + duration
+        while (left := end - self.clock()) > 0:
             if self._states:
                 yield self._states.popleft()
             else:

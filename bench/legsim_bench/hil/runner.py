@@ -32,7 +32,7 @@ from ..scene import ACTUATORS, SEQ_SIGNALS, Scene, find_root
 from .can_link import ACT_CMD, CONTROL, LOAD_CMD, ActMode, HilError, HilFault, SimState
 from .cli_run import record_analysis
 
-__all__ = ["record", "HilProcess", "hil_sim_path", "f32"]
+__all__ = ["record", "replay_trace", "HilProcess", "hil_sim_path", "f32"]
 
 
 def f32(x: float) -> float:
@@ -124,7 +124,8 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
         "late_faults": [], "errors": [], "complete": False, "initial_lengths": None,
         "legs": legs, "actuators": list(scene.actuator_names),
     }
-    t_wall0 = time.monotonic()
+    clock = getattr(link, "clock", time.monotonic)   # a replayed trace has its own
+    t_wall0 = clock()
     try:
         hb = link.heartbeat(timeout=min(3.0, float(getattr(link, "timeout", 3.0))))
         rec["heartbeat"] = {"protocol_version": hb.protocol_version, "state": hb.state.name,
@@ -244,7 +245,31 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
         rec["late_faults"] = [_fault_dict(f) for f in link.faults()]
     except Exception:  # noqa: BLE001 - a closing bus must not lose the recording
         pass
-    rec["wall_time_s"] = time.monotonic() - t_wall0
+    rec["wall_time_s"] = clock() - t_wall0
+    return rec
+
+
+def replay_trace(path, scene: Scene, *, dbc=None, timeout: float = 5.0) -> dict:
+    """The recording of a session decoded from its raw CAN trace: `scene` is run again by
+    record() on a link whose bus plays the trace back (hil/trace.py), so that the frames go
+    through the link's own decoding and the runner's own bookkeeping, as live. TraceError if
+    the trace cannot be read or the scene sends other frames than the trace holds."""
+    from .can_link import HilLink
+    from .trace import TraceBus, TraceError
+
+    bus = TraceBus(path)
+    try:
+        rec = record(scene, HilLink(bus=bus, dbc=dbc, timeout=timeout), progress=False)
+    finally:
+        bus.shutdown()
+    if bus.unsent:
+        raise TraceError(f"{path}: the scene {scene.name} stopped sending {bus.unsent} frames before "
+                         "the trace's end: a trace of another scene")
+    rec["trace"] = str(path)
+    if not rec["complete"] and bus.ran_out:
+        rec["errors"].append({"step": rec["samples"][-1]["step"] if rec["samples"] else None,
+                              "error": f"the trace {path} ends while the bench waits for hil_sim: "
+                              "cut short, or hil_sim stopped answering in the recorded session"})
     return rec
 
 

@@ -43,7 +43,7 @@ from ..reference.robot import RobotModel
 from ..scene import find_root
 
 __all__ = ["FREE", "STUCK", "SLIDING", "STATE_NAMES", "RobotTrajectory", "RobotArtists",
-           "plot_snapshots", "plot_time_series", "write_robot_animation", "reference_fig7",
+           "plot_snapshots", "snapshot_samples", "CONTACT_EVENTS", "plot_time_series", "write_robot_animation", "reference_fig7",
            "write_robot_plots", "main"]
 
 # contact states, in the order of the core's legsim_contact_state {FREE, STUCK, SLIDING}
@@ -92,6 +92,25 @@ def _states(values, shape) -> np.ndarray:
     return a.astype(int)
 
 
+# the contact events (legsim_event bits 4-7) and the state change each one is
+CONTACT_EVENTS = {"liftoff": ("stuck", "sliding"), "touchdown": ("free",),
+                  "stick_to_slip": ("stuck",), "slip_to_stick": ("sliding",)}
+_EVENT_TO = {"liftoff": "free", "touchdown": None, "stick_to_slip": "sliding", "slip_to_stick": "stuck"}
+
+
+def _foot_events(names, before, after, events) -> list[str]:
+    """A sample's contact events ("liftoff", ...: the core's, for every foot at once) as
+    "FOOT EVENT", each put on the foot whose state changed that way (else unnamed)."""
+    out = []
+    for e in events:
+        if e not in CONTACT_EVENTS:
+            continue
+        feet = [f for f, a, b in zip(names, before, after) if a != b and a in CONTACT_EVENTS[e]
+                and (_EVENT_TO[e] is None or b == _EVENT_TO[e])] if before is not None else []
+        out += [f"{f} {e}" for f in feet] or [e]
+    return out
+
+
 @dataclass
 class RobotTrajectory:
     """A run of the robot, N samples, nb bodies, nf feet (any source).
@@ -121,6 +140,7 @@ class RobotTrajectory:
     mu_kinetic: float
     box: int = 0
     title: str = ""
+    events: Optional[list] = None   # per sample: its contact events, "left.foot liftoff", ...
 
     def __post_init__(self):
         f = lambda x: np.asarray(x, float)  # noqa: E731
@@ -150,6 +170,13 @@ class RobotTrajectory:
         if not 0.0 <= self.mu_kinetic <= self.mu_static:
             raise ValueError("RobotTrajectory: need 0 <= mu_kinetic <= mu_static")
         self.contact = _states(self.contact, (N, nf))
+        self.events = [[] for _ in range(N)] if self.events is None else [list(e) for e in self.events]
+        if len(self.events) != N:
+            raise ValueError(f"RobotTrajectory.events: {len(self.events)} samples, expected {N}")
+
+    def event_samples(self) -> list[tuple[int, str]]:
+        """(sample index, its events joined) of every sample with a contact event."""
+        return [(k, ", ".join(e)) for k, e in enumerate(self.events) if e]
 
     # --------------------------------------------------------- construction
     @classmethod
@@ -177,18 +204,24 @@ class RobotTrajectory:
         scene's ``legsim.Model`` (body names and lengths, feet, ground); ``box_size`` (w, h) m
         as for from_cli_json."""
         feet, g, nb = model.contact_names, model.ground, len(model.body_names)
-        S = [s for s in rec["samples"] if len(s.get("contacts") or []) == len(feet) and
+        # The RESET's sample (step 0) is left out, as legsim_cli leaves out its first sample's
+        # forces: its ground forces are the assembly's multipliers (32.6 N per foot for the
+        # stand), not the dynamics' forces, which the first step solves (159-180 N).
+        S = [s for s in rec["samples"] if s.get("step", 1) > 0 and
+             len(s.get("contacts") or []) == len(feet) and
              all(c["normal"] is not None and c["tangential"] is not None for c in s["contacts"])]
         if not S:
             raise ValueError("recording: no sample with every foot's ST_CONTACT (a robot scene?)")
         per = lambda key: [[c[key] for c in s["contacts"]] for s in S]  # noqa: E731
+        events = [[f"{f} {e}" for f, c in zip(feet, s["contacts"]) for e in c.get("events", [])
+                   if e in CONTACT_EVENTS] for s in S]
         return cls(t=[s["t"] for s in S], body_names=model.body_names,
                    q=np.array([s["q"] for s in S], float).reshape(len(S), nb, 3),
                    body_lengths=model.lengths, box_size=box_size, foot_names=feet,
                    feet=np.stack([np.array(per("x"), float), np.array(per("y"), float)], axis=-1),
                    contact=np.array(per("state")), normal=per("normal"), tangential=per("tangential"),
                    ground_point=g["point"], ground_slope=g["slope"], mu_static=g["mu_static"],
-                   mu_kinetic=g["mu_kinetic"], box=0, title=title)
+                   mu_kinetic=g["mu_kinetic"], box=0, title=title, events=events)
 
     @classmethod
     def from_cli_json(cls, out: dict, box_size, title: str = "") -> "RobotTrajectory":
@@ -202,13 +235,16 @@ class RobotTrajectory:
             raise ValueError("legsim_cli output: no sample with solved ground forces (a robot scene?)")
         bodies, feet, g = out["bodies"], out["contacts"], out["ground"]
         per = lambda key: [[s["contacts"][f][key] for f in feet] for s in S]  # noqa: E731
+        states = per("state")
+        events = [_foot_events(feet, states[k - 1] if k else None, states[k], s.get("events") or [])
+                  for k, s in enumerate(S)]
         return cls(t=[s["t"] for s in S], body_names=bodies,
                    q=[[[s["q"][b][c] for c in ("x", "y", "phi")] for b in bodies] for s in S],
                    body_lengths=out["body_lengths"], box_size=box_size, foot_names=feet,
                    feet=np.stack([np.array(per("x"), float), np.array(per("y"), float)], axis=-1),
-                   contact=np.array(per("state")), normal=per("normal"), tangential=per("tangential"),
+                   contact=np.array(states), normal=per("normal"), tangential=per("tangential"),
                    ground_point=g["point"], ground_slope=g["slope"], mu_static=g["mu_static"],
-                   mu_kinetic=g["mu_kinetic"], box=0, title=title)
+                   mu_kinetic=g["mu_kinetic"], box=0, title=title, events=events)
 
     # ------------------------------------------------------------- geometry
     @property
@@ -415,18 +451,33 @@ def _box_delta(traj: RobotTrajectory, k: int) -> str:
     return f"box moved {1e3 * d[0]:+.2f}, {1e3 * d[1]:+.2f} mm, {d[2]:+.5f} rad"
 
 
+MAX_EVENT_PANELS = 12
+
+
+def snapshot_samples(traj: RobotTrajectory, n: int = 4) -> np.ndarray:
+    """The default instants of the snapshots: n evenly over the run, and every sample with a
+    contact event (lift-off, touchdown, stick/slip; the first MAX_EVENT_PANELS), in time order."""
+    even = traj.at_times(np.linspace(traj.t[0], traj.t[-1], n))
+    events = [k for k, _ in traj.event_samples()][:MAX_EVENT_PANELS]
+    return np.array(sorted(set(int(k) for k in even) | set(events)), int)
+
+
 def plot_snapshots(traj: RobotTrajectory, path, times: Optional[Sequence[float]] = None,
                    n: int = 4, n_per_m: Optional[float] = None, panel_in: float = 3.4):
-    """A strip of panels, one per instant (default: n evenly over the run); each
-    panel draws its instant in full (feet, ground forces) and the earlier
-    instants of the strip faded behind it. Equal axis scale."""
+    """A strip of panels, one per instant (default: n evenly over the run and one at every
+    contact event, snapshot_samples); each panel draws its instant in full (feet, ground
+    forces, its events in the title) and the earlier instants of the strip faded behind it.
+    Equal axis scale."""
     plt = _plt()
-    times = np.linspace(traj.t[0], traj.t[-1], n) if times is None else np.asarray(times, float)
-    if times.size == 0:
-        raise ValueError("plot_snapshots: no instants")
-    if np.any(times < traj.t[0] - 1e-12) or np.any(times > traj.t[-1] + 1e-12):
-        raise ValueError(f"plot_snapshots: instants outside the run [{traj.t[0]:g}, {traj.t[-1]:g}] s")
-    idx = traj.at_times(times)
+    if times is None:
+        idx = snapshot_samples(traj, n)
+    else:
+        times = np.asarray(times, float)
+        if times.size == 0:
+            raise ValueError("plot_snapshots: no instants")
+        if np.any(times < traj.t[0] - 1e-12) or np.any(times > traj.t[-1] + 1e-12):
+            raise ValueError(f"plot_snapshots: instants outside the run [{traj.t[0]:g}, {traj.t[-1]:g}] s")
+        idx = traj.at_times(times)
     n_per_m = nice_force_scale(traj) if n_per_m is None else float(n_per_m)
     lo, hi = scene_limits(traj, n_per_m, idx)
     aspect = (hi[1] - lo[1]) / (hi[0] - lo[0])
@@ -445,7 +496,9 @@ def plot_snapshots(traj: RobotTrajectory, path, times: Optional[Sequence[float]]
         ax.set_ylim(lo[1], hi[1])
         ax.set_aspect("equal", adjustable="box")
         ax.grid(True, alpha=0.3)
-        ax.set_title(f"t = {traj.t[k]:.4g} s\n{_box_delta(traj, k)}", fontsize=9)
+        what = ("\n" + ", ".join(traj.events[k])) if traj.events[k] else ""
+        ax.set_title(f"t = {traj.t[k]:.4g} s{what}\n{_box_delta(traj, k)}", fontsize=9,
+                     color="darkred" if what else "black")
         ax.set_xlabel("x (m)")
         _scale_bar(ax, n_per_m, loc="upper left" if p == 0 else "upper right")
     axes[0].set_ylabel("y (m)")
@@ -463,9 +516,11 @@ def plot_snapshots(traj: RobotTrajectory, path, times: Optional[Sequence[float]]
     return path, drawn
 
 
-def plot_time_series(traj: RobotTrajectory, path):
+def plot_time_series(traj: RobotTrajectory, path, reference: Optional[RobotTrajectory] = None):
     """Box x, y (from the first sample), phi; per foot N and T with the friction
-    cone |T| <= mu_s N shaded and mu_k N dashed; the contact states."""
+    cone |T| <= mu_s N shaded and mu_k N dashed; the contact states. ``reference``: the
+    bench's RobotModel over the times it applies (both feet stuck), drawn dashed black over
+    the run's curves. The contact events are marked by vertical lines."""
     plt = _plt()
     nf = len(traj.foot_names)
     rows = max(3, nf + 1)
@@ -479,7 +534,13 @@ def plot_time_series(traj: RobotTrajectory, path):
     for r in range(rows):
         ax = axes[r, 0]
         if r < 3:
-            ax.plot(t, vals[r], "-", color="0.2", lw=1.5)
+            ax.plot(t, vals[r], "-", color="0.2", lw=1.5, label="run")
+            if reference is not None:
+                rq = reference.q[:, reference.box]
+                ax.plot(reference.t, [1e3 * (rq[:, 0] - b0[0]), 1e3 * (rq[:, 1] - b0[1]), rq[:, 2]][r],
+                        "--", color="k", lw=1.0, label="reference (RobotModel)")
+                if r == 0:
+                    ax.legend(fontsize=7, frameon=False)
             ax.set_ylabel(lab[r] + (f"\n{start[r]}" if start[r] else ""), fontsize=8)
             ax.grid(True, alpha=0.3)
         else:
@@ -494,6 +555,11 @@ def plot_time_series(traj: RobotTrajectory, path):
                     label=f"mu_k N (mu_k {traj.mu_kinetic:g})" if sgn > 0 else None)
         ax.plot(t, N, "-", color="tab:blue", lw=1.5, label="N normal")
         ax.plot(t, T, "-", color=_ARROW_COLOUR, lw=1.5, label="T tangential")
+        if reference is not None:
+            j = reference.foot_names.index(traj.foot_names[f])
+            ax.plot(reference.t, reference.normal[:, j], "--", color="k", lw=1.0,
+                    label="reference N, T (RobotModel)")
+            ax.plot(reference.t, reference.tangential[:, j], "--", color="k", lw=1.0)
         ax.axhline(0.0, color="0.5", lw=0.6)
         ax.set_ylabel(f"{traj.foot_names[f]} (N)", fontsize=8)
         ax.grid(True, alpha=0.3)
@@ -513,6 +579,11 @@ def plot_time_series(traj: RobotTrajectory, path):
     ax.legend(fontsize=7, loc="center left", bbox_to_anchor=(1.01, 0.5), frameon=False)
     for r in range(nf + 1, rows):
         axes[r, 1].axis("off")
+    for k, what in traj.event_samples():   # the contact events, on every time axis
+        for ax in list(axes[:3, 0]) + list(axes[:nf + 1, 1]):
+            ax.axvline(t[k], color="darkred", lw=0.8, ls=":", alpha=0.8)
+        axes[nf, 1].annotate(what, (t[k], 2.3), fontsize=6, color="darkred", rotation=90,
+                             ha="right", va="top")
     for ax in axes[-1]:
         ax.set_xlabel("t (s)")
     # the column bottoms that are switched off leave the x labels to the last drawn row

@@ -117,6 +117,35 @@ def _write_csv(path: Path, cols: list[str], rows) -> None:
             w.writerow([repr(float(x)) if isinstance(x, (float, np.floating)) else x for x in r])
 
 
+def write_robot_tables(traj, out: str | Path, reference=None) -> dict[str, Path]:
+    """A robot run's samples.csv (report.robot_plots.RobotTrajectory: every plotted sample) and,
+    given the reference's trajectory, reference.csv. Columns with their units: t (s); per body
+    x, y (m), phi (rad); per foot its state, N and T (N, the ground's force on it along the
+    ground's normal and tangent), its x, y (m); the sample's contact events (';'-separated)."""
+    from .robot_plots import STATE_NAMES
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+
+    def table(tr, path, events: bool):
+        cols = ["t_s"] + [f"{b}.{c}" for b in tr.body_names for c in ("x_m", "y_m", "phi_rad")]
+        for f in tr.foot_names:
+            cols += [f"{f}.state", f"{f}.N_N", f"{f}.T_N", f"{f}.x_m", f"{f}.y_m"]
+        rows = []
+        for k in range(len(tr.t)):
+            r = [tr.t[k], *tr.q[k].reshape(-1)]
+            for j in range(len(tr.foot_names)):
+                r += [STATE_NAMES[tr.contact[k, j]], tr.normal[k, j], tr.tangential[k, j], *tr.feet[k, j]]
+            rows.append(r + [";".join(tr.events[k])] if events else r)
+        _write_csv(path, cols + (["events"] if events else []), rows)
+        return path
+
+    files = {"samples": table(traj, out / "samples.csv", True)}
+    if reference is not None:
+        files["reference"] = table(reference, out / "reference.csv", False)
+    return files
+
+
 def write_outputs(ev: Evaluation, out: str | Path) -> dict[str, Path]:
     """samples.csv (every received sample), reference.csv (the reference at the same
     times), checks.csv (the table) and checks.json (the table, tolerances, set-up, faults, summary)."""
