@@ -1,0 +1,122 @@
+"""The robot reference's event location (legsim_bench.reference.robot_events) against
+closed forms and the stuck-feet reference (RobotModel.simulate, another formulation):
+
+- a level drop falls rigidly and lands both feet at t = sqrt(2 d / g), located to 1e-13 s;
+- its touchdown loses exactly Carnot's energy, computed independently from the 39 absolute
+  coordinates and the Newton-Euler columns of the joints and ground rows (ca.inelastic_impact);
+  and E(0) - E(after) is the same (the fall does no other work);
+- after the landing, the motion on the stuck feet is RobotModel.simulate's from the post-impact
+  state (coordinate partitioning vs the contact rows);
+- a slip onset is located where the stuck-feet reference's |T| crosses mu_s N;
+- without events, the run is RobotModel.simulate's to 1e-12.
+"""
+from __future__ import annotations
+
+import copy
+import math
+
+import numpy as np
+import pytest
+
+from legsim_bench.reference import ForceCommand, LengthCommand
+from legsim_bench.reference import contact_analytic as ca
+from legsim_bench.reference.robot import Assembly, RobotModel, _IND
+from legsim_bench.reference.robot_events import simulate_events
+from model_files import DATA, ROBOT
+
+G = 9.81
+
+
+def drop(robot, d, t_end, t_eval):
+    a = robot.assemble()
+    z0 = a.z.copy()
+    z0[1] += d
+    cmds = [LengthCommand(float(x)) for x in a.lengths]   # the servos hold: nothing in the fall
+    return a, cmds, simulate_events(robot, t_end, t_eval, z0, np.zeros(7), ("free", "free"),
+                                    actuators=cmds)
+
+
+def carnot_absolute(robot, q, v_minus):
+    """Carnot's loss of the stance at q (39 absolute coordinates): the constraint rows are
+    the Newton-Euler columns of the 32 joint reactions and the 2 x 2 ground forces."""
+    A, _, _, _ = robot._ne_system(q, np.zeros_like(q), np.zeros(robot.na), (0.0, 0.0, 0.0), np.zeros(2))
+    return ca.inelastic_impact(np.diag(robot._Mflat), A.T, v_minus)
+
+
+@pytest.mark.parametrize("d", [0.01, 0.003])
+def test_level_drop_lands_at_the_free_fall_time_and_loses_carnots_energy(robot, d):
+    t_td = math.sqrt(2 * d / G)
+    a, _, res = drop(robot, d, t_td + 0.002, [0.0, t_td + 0.002])
+    ev = res.events
+    assert [(e.kind, e.foot) for e in ev] == [("touchdown", 0), ("touchdown", 1)]
+    print(f"d = {d}: touchdown at {ev[0].t!r} s, free fall {t_td!r} s "
+          f"({ev[0].t - t_td:+.2e} s); kinetic energy lost {ev[0].kinetic_lost:.12f} J")
+    assert abs(ev[0].t - t_td) < 1e-13 and ev[1].t == ev[0].t
+    assert ev[0].after == ("stuck", "stuck")
+    # the impact's closed form, in the absolute coordinates of the landed pose
+    v_minus = np.zeros(3 * robot.nb)
+    v_minus[1::3] = -math.sqrt(2 * G * d)
+    v_plus, _, lost = carnot_absolute(robot, a.q, v_minus)
+    assert abs(ev[0].kinetic_lost - lost) < 1e-12 * lost
+    K = robot.kinematics(ev[0].z, ev[0].zd_plus)
+    assert np.max(np.abs(K.J.reshape(-1, 7) @ ev[0].zd_minus - v_minus)) < 1e-12
+    assert np.max(np.abs(K.J.reshape(-1, 7) @ ev[0].zd_plus - v_plus)) < 1e-12
+    assert np.max(np.abs(K.foot - a.feet)) < 1e-12 and np.max(np.abs(K.P.reshape(-1) - a.q)) < 1e-12
+    # the energy balance: the drop's potential energy less the post-impact kinetic energy
+    e_after = sum(robot.energy(ev[0].z, ev[0].zd_plus))
+    assert abs((res.energy[0] - e_after) - lost) < 1e-11
+    # impulses: inside the cone, mirror images, together the momentum removed (vertical)
+    P = ev[0].impulse
+    assert np.all(P[:, 0] > 0) and np.all(np.abs(P[:, 1]) <= robot.ground.mu_static * P[:, 0])
+    assert P[0, 0] == pytest.approx(P[1, 0], rel=1e-12) and P[0, 1] == pytest.approx(-P[1, 1], rel=1e-9)
+    if d == 0.01:
+        assert round(lost, 4) == 0.6784   # the figure of the 1 cm drop
+
+
+def test_stance_after_the_landing_is_the_stuck_feet_reference(robot):
+    d = 0.01
+    t_td = math.sqrt(2 * d / G)
+    t = np.array([t_td + 0.02, t_td + 0.05])
+    a, cmds, res = drop(robot, d, float(t[-1]), t)
+    ev = res.events[0]
+    z, zd = ev.z, ev.zd_plus
+    K = robot.kinematics(z, zd)
+    start = Assembly(z.copy(), K.P.reshape(-1), K.foot.copy(), a.lengths.copy())
+    t_td = ev.t
+    # RobotModel's clock starts at 0: the servo commands are constant, so it may
+    ref = robot.simulate(float(t[-1] - t_td), t - t_td, actuators=cmds, start=start,
+                         i0=z[_IND], id0=zd[_IND])
+    err = np.max(np.abs(ref.q - res.q))
+    print(f"after the landing: |q - q_stuck-reference| {err:.2e}")
+    assert err < 1e-11
+    assert np.all(res.states == "stuck")
+
+
+def test_slip_onset_is_where_the_stuck_reference_leaves_the_cone():
+    data = copy.deepcopy(DATA)
+    data["ground"].update(mu_static=0.1, mu_kinetic=0.1)
+    r = RobotModel(data, ROBOT.parent)
+    a = r.assemble()
+    cmds = [ForceCommand(185.55)] + [LengthCommand(float(x)) for x in a.lengths[1:]]
+    res = simulate_events(r, 0.02, [0.0, 0.02], a.z, np.zeros(7), actuators=cmds)
+    assert [(e.kind, e.foot) for e in res.events] == [("stick_to_slip", 1)]
+    t_ev = res.events[0].t
+    # the stuck-feet reference's friction use of the left foot crosses mu_s: bracket it
+    dt = 1e-6
+    st = r.simulate(t_ev + dt, [t_ev - dt, t_ev + dt], actuators=cmds)
+    f = np.abs(st.tangential[:, 1]) - 0.1 * st.normal[:, 1]
+    assert f[0] < 0 < f[1]
+    root = t_ev - dt + 2 * dt * (-f[0]) / (f[1] - f[0])     # secant: error ~ dt^2 f''/f'
+    print(f"slip onset {t_ev!r} s, the stuck reference's cone crossing {root!r} s")
+    assert abs(root - t_ev) < 1e-10
+    assert res.states[-1].tolist() == ["stuck", "sliding"]
+
+
+def test_no_event_run_is_the_stuck_feet_reference(robot):
+    a = robot.assemble()
+    cmds = [ForceCommand(185.55)] + [LengthCommand(float(x)) for x in a.lengths[1:]]
+    t = np.linspace(0.0, 0.1, 6)
+    res = simulate_events(robot, 0.1, t, a.z, np.zeros(7), actuators=cmds)
+    ref = robot.simulate(0.1, t, actuators=cmds)
+    assert res.events == []
+    assert np.max(np.abs(res.q - ref.q)) < 1e-11
