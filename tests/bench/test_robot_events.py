@@ -120,3 +120,37 @@ def test_no_event_run_is_the_stuck_feet_reference(robot):
     ref = robot.simulate(0.1, t, actuators=cmds)
     assert res.events == []
     assert np.max(np.abs(res.q - ref.q)) < 1e-11
+
+
+def test_sliding_loses_exactly_the_friction_work():
+    """Through the slip onset and while the left foot slides (the Fig. 7 push on mu 0.1/0.1),
+    the kinetic and gravity energy changes by the actuators' power plus the friction's
+    (T v_t of the sliding foot; the stuck foot and the normal forces do no work), integrated
+    by Simpson's rule on either side of the onset: the sliding mode's force (N, its direction
+    against the slip) and the switch at the located onset."""
+    from scipy.integrate import simpson
+    data = copy.deepcopy(DATA)
+    data["ground"].update(mu_static=0.1, mu_kinetic=0.1)
+    r = RobotModel(data, ROBOT.parent)
+    a = r.assemble()
+    cmds = [ForceCommand(185.55)] + [LengthCommand(float(x)) for x in a.lengths[1:]]
+    t_end, n1 = 0.04, 201
+    t_ev = simulate_events(r, t_end, [0.0], a.z, np.zeros(7), actuators=cmds).events[0].t
+    t = np.concatenate([np.linspace(0.0, t_ev, n1), np.linspace(t_ev, t_end, 501)])
+    t[n1 - 1] = np.nextafter(t_ev, 0.0)          # the last sample before the onset, in the stuck mode
+    res = simulate_events(r, t_end, t, a.z, np.zeros(7), actuators=cmds)
+    assert res.states[n1 - 1].tolist() == ["stuck", "stuck"] and res.states[n1].tolist() == ["stuck", "sliding"]
+    assert np.all(res.slip[n1:, 1] * res.tangential[n1:, 1] <= 1e-12)  # friction against the slip
+    assert np.allclose(np.abs(res.tangential[n1:, 1]), 0.1 * res.normal[n1:, 1], rtol=1e-12)
+    power = np.zeros(len(t))
+    for i, (tt, z, zd) in enumerate(zip(res.t, res.z, res.zd)):
+        K = r.kinematics(z, zd)
+        power[i] = r._forces(cmds, tt, K) @ K.ld
+    power += np.sum(res.tangential * res.slip, axis=1)
+    work = simpson(power[:n1], x=res.t[:n1]) + simpson(power[n1:], x=res.t[n1:])
+    friction = simpson(np.sum(res.tangential * res.slip, axis=1)[n1:], x=res.t[n1:])
+    change = res.energy[-1] - res.energy[0]
+    print(f"energy change {change:.12f} J, work of the actuators and friction {work:.12f} J "
+          f"(friction {friction:.6e} J)")
+    assert friction < -1e-4
+    assert abs(change - work) < 1e-9

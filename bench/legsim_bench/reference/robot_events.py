@@ -74,7 +74,9 @@ class ContactEvent:
 class EventResult:
     """Samples at t_eval: z, zd (N, 7); q, qd (N, 39) world; feet (N, 2, 2);
     states (N, 2) mode names; kinetic, potential (gravity and box load) (N,);
-    events in time order; nfev the right-hand side's evaluations."""
+    per foot the ground's force along its normal and tangent, normal and tangential
+    (N, 2), and the sliding velocity along the tangent, slip (N, 2) (m/s); events in
+    time order; nfev the right-hand side's evaluations."""
     t: np.ndarray
     z: np.ndarray
     zd: np.ndarray
@@ -84,6 +86,9 @@ class EventResult:
     states: np.ndarray
     kinetic: np.ndarray
     potential: np.ndarray
+    normal: np.ndarray
+    tangential: np.ndarray
+    slip: np.ndarray
     events: list = field(default_factory=list)
     nfev: int = 0
 
@@ -327,7 +332,7 @@ def simulate_events(model: RobotModel, t_end: float, t_eval, z0, zd0, states=(ST
                 ys[-1] = sol.y[:, -1]
             T_out.extend(te[sel])
             Y_out.extend(ys)
-            S_out.extend([mode.state] * int(np.sum(sel)))
+            S_out.extend([mode] * int(np.sum(sel)))
         if last:
             break
         # the event: the first one located (several at the same instant: all of them)
@@ -383,11 +388,14 @@ def simulate_events(model: RobotModel, t_end: float, t_eval, z0, zd0, states=(ST
     q, qd = np.zeros((n, 3 * model.nb)), np.zeros((n, 3 * model.nb))
     feet = np.zeros((n, 2, 2))
     kin, pot = np.zeros(n), np.zeros(n)
+    Nn, Tt, vt = np.zeros((n, 2)), np.zeros((n, 2)), np.zeros((n, 2))
     for i, yy in enumerate(Y):
+        _, Nn[i], Tt[i], _, vt[i] = dyn.solve(float(Tn[i]), yy, S_out[i])
         K = model.kinematics(yy[:7], yy[7:])
         q[i] = K.P.reshape(-1)
         qd[i] = K.J.reshape(-1, 7) @ yy[7:]
         feet[i] = K.foot
         kin[i], pot[i] = model.energy(yy[:7], yy[7:], box_load, None, gravity)
-    return EventResult(Tn, Y[:, :7].copy(), Y[:, 7:].copy(), q, qd, feet, np.array(S_out).reshape(-1, 2),
-                       kin, pot, events, dyn.nfev)
+    states = np.array([m.state for m in S_out]).reshape(-1, 2)
+    return EventResult(Tn, Y[:, :7].copy(), Y[:, 7:].copy(), q, qd, feet, states, kin, pot,
+                       Nn, Tt, vt, events, dyn.nfev)
