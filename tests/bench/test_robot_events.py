@@ -154,3 +154,55 @@ def test_sliding_loses_exactly_the_friction_work():
           f"(friction {friction:.6e} J)")
     assert friction < -1e-4
     assert abs(change - work) < 1e-9
+
+
+def test_liftoff_is_located_where_the_normal_force_reaches_zero():
+    """The robot pitching on constant forces (event_order.py's lift-off case, mu 0.6/0.6): the
+    left foot's |T|/N grows without bound as N falls, so it slips, then lifts off where its
+    sliding-mode N is zero; then it rises off the ground."""
+    from legsim_bench.reference.robot_events import _Dynamics, modes_from
+    data = copy.deepcopy(DATA)
+    data["ground"].update(mu_static=0.6, mu_kinetic=0.6)
+    r = RobotModel(data, ROBOT.parent)
+    a = r.assemble()
+    cmds = [ForceCommand(float(f)) for f in r.statics().actuator_forces]
+    T, _ = r._partition(r.kinematics(a.z, np.zeros(7)))
+    zd0 = T @ np.array([0.0, -2.5, 0.0])
+    t = np.linspace(0.0, 0.12, 61)
+    res = simulate_events(r, 0.12, t, a.z, zd0, actuators=cmds)
+    assert [(e.kind, e.foot) for e in res.events] == [("stick_to_slip", 1), ("liftoff", 1)]
+    slip, lift = res.events
+    assert 0 < lift.t - slip.t < 1e-4 and lift.before == ("stuck", "sliding") and lift.after == ("stuck", "free")
+    dyn = _Dynamics(r, cmds, r.gravity, (0.0, 0.0, 0.0))
+    sign = -int(np.sign(dyn.solve(slip.t, np.concatenate([slip.z, slip.zd_minus]), modes_from(("stuck", "stuck")))[2][1]))
+    _, N, _, gap, _ = dyn.solve(lift.t, np.concatenate([lift.z, lift.zd_minus]),
+                                modes_from(("stuck", "sliding"), (0, sign)))
+    weight = float(np.sum(r._m)) * 9.81
+    print(f"slip {slip.t!r} s, lift-off {lift.t!r} s: N there {N[1]:.2e} N, gap {gap[1]:.2e} m")
+    assert abs(N[1]) < 1e-9 * weight and abs(gap[1]) < 1e-12
+    after = res.t > lift.t
+    gaps = res.feet[after, 1] @ r.ground.normal
+    assert np.all(gaps > 0) and res.states[-1].tolist() == ["stuck", "free"]
+    assert np.all(res.normal[after, 1] == 0.0) and np.all(res.normal[:, 0] > 0)
+
+
+def test_a_sliding_foot_sticks_where_its_velocity_reaches_zero(robot):
+    """From the servo equilibrium, the left lower set-point 15 mm shorter makes the left foot
+    slide at once (resolved at t = 0) and stick again where its sliding velocity is zero."""
+    a = robot.assemble()
+    cmds = [LengthCommand(float(x)) for x in a.lengths]
+    z_eq = robot.equilibrium(cmds)
+    cmds[3] = LengthCommand(float(a.lengths[3] - 0.015))
+    t = np.linspace(0.0, 0.05, 51)
+    res = simulate_events(robot, 0.05, t, z_eq, np.zeros(7), actuators=cmds)
+    assert [(e.t == 0.0, e.kind, e.foot) for e in res.events] == [(True, "stick_to_slip", 1),
+                                                                  (False, "slip_to_stick", 1)]
+    stick = res.events[1]
+    vt = robot.ground.tangent @ (robot.kinematics(stick.z, stick.zd_plus).footJ[1] @ stick.zd_plus)
+    print(f"slip to stick at {stick.t!r} s, v_t there {vt:.2e} m/s")
+    assert abs(vt) < 1e-12
+    sliding = (res.t > 0) & (res.t < stick.t)
+    assert np.all(res.states[sliding, 1] == "sliding") and len(np.unique(np.sign(res.slip[sliding, 1]))) == 1
+    held = res.t > stick.t
+    assert np.all(res.states[held, 1] == "stuck")
+    assert np.all(np.abs(res.tangential[held, 1]) <= robot.ground.mu_static * res.normal[held, 1])
