@@ -7,8 +7,11 @@ closed forms and the stuck-feet reference (RobotModel.simulate, another formulat
   and E(0) - E(after) is the same (the fall does no other work);
 - after the landing, the motion on the stuck feet is RobotModel.simulate's from the post-impact
   state (coordinate partitioning vs the contact rows);
-- a slip onset is located where the stuck-feet reference's |T| crosses mu_s N;
-- without events, the run is RobotModel.simulate's to 1e-12.
+- a slip onset is located where the stuck-feet reference's |T| crosses mu_s N, and the
+  sliding loses exactly the friction work;
+- a lift-off where the normal force is zero, a slip to stick where the sliding velocity is;
+- a landing outside the static cone slides with mu_k and loses less than a stuck one;
+- without events, the run is RobotModel.simulate's to 1e-11.
 """
 from __future__ import annotations
 
@@ -206,3 +209,32 @@ def test_a_sliding_foot_sticks_where_its_velocity_reaches_zero(robot):
     held = res.t > stick.t
     assert np.all(res.states[held, 1] == "stuck")
     assert np.all(np.abs(res.tangential[held, 1]) <= robot.ground.mu_static * res.normal[held, 1])
+
+
+def test_touchdown_outside_the_cone_slides_with_kinetic_friction():
+    """The 1 cm drop moving sideways at 1 m/s onto mu 0.1/0.1: the sticking impulses would
+    leave the cone, so both feet land sliding: the normal approach is removed, the tangential
+    impulse is mu_k P_n against the slip, and less energy is lost than by a stuck landing."""
+    data = copy.deepcopy(DATA)
+    data["ground"].update(mu_static=0.1, mu_kinetic=0.1)
+    r = RobotModel(data, ROBOT.parent)
+    a = r.assemble()
+    z0 = a.z.copy()
+    z0[1] += 0.01
+    zd0 = np.zeros(7)
+    zd0[0] = 1.0
+    cmds = [LengthCommand(float(x)) for x in a.lengths]
+    res = simulate_events(r, 0.05, [0.0, 0.05], z0, zd0, ("free", "free"), actuators=cmds)
+    e = res.events[0]
+    assert [(x.kind, x.foot) for x in res.events] == [("touchdown", 0), ("touchdown", 1)]
+    assert abs(e.t - math.sqrt(2 * 0.01 / G)) < 1e-13 and e.after == ("sliding", "sliding")
+    K = r.kinematics(e.z, e.zd_plus)
+    vn = [r.ground.normal @ (K.footJ[k] @ e.zd_plus) for k in range(2)]
+    vt = np.array([r.ground.tangent @ (K.footJ[k] @ e.zd_plus) for k in range(2)])
+    assert np.max(np.abs(vn)) < 1e-12 and np.all(vt > 0)
+    assert np.all(e.impulse[:, 0] > 0)
+    assert np.allclose(e.impulse[:, 1], -0.1 * e.impulse[:, 0], rtol=1e-12)
+    v_minus = (K.J.reshape(-1, 7) @ e.zd_minus)
+    _, _, stuck_loss = carnot_absolute(r, K.P.reshape(-1), v_minus)
+    print(f"sliding landing loses {e.kinetic_lost:.9f} J, a stuck one {stuck_loss:.9f} J")
+    assert 0 < e.kinetic_lost < stuck_loss
