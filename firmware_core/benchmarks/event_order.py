@@ -1,0 +1,228 @@
+#!/usr/bin/env python3
+"""The core's accuracy through contact events: the two-leg robot through a touchdown, a
+lift-off and a slip onset, and a run without events (the control), with RK4 and
+generalized-alpha over h = 2e-3 ... 1.25e-4 s, against the bench's event-locating reference
+(legsim_bench.reference.robot_events: each event found to ~1e-15 s on DOP853's dense output).
+
+    LEGSIM_ROOT=$PWD PYTHONPATH=$PWD/python:$PWD/bench python firmware_core/benchmarks/event_order.py
+        [--cases touchdown,liftoff,slip,none] [--integrators rk4,galpha]
+
+Per case, integrator and h it prints: the error at the case's fixed time after the event
+(max over the 39 coordinates, m and rad), the whole run's max error on the 2 ms grid, the
+observed order log2(e(2h) / e(h)), and the step at whose end the core reports each event
+(the core reports no event time: the event lies in the step that ends there, so its delay
+is in [0, h)) beside the reference's event time, and the error over the first event's delay
+and its square (constant when the error is first or second order in the delay: an event
+taken at the step's end). For the touchdown, the energy the impact
+takes at h = 1 ms against the exact one. A Markdown table on stdout; results.md keeps it.
+
+Cases (all the robot of models/robot.toml, its stand assembled on the ground):
+- touchdown: the stand lifted 1 cm, the servos holding the stand lengths, both feet free.
+  It falls rigidly (the servos exert nothing at their set-points) and lands on both feet at
+  t = sqrt(2 d / g); fixed time 0.1 s.
+- liftoff: the ground at mu_static = mu_kinetic = 0.6 (the friction force continuous at a
+  slip onset), constant actuator forces (the stand's statics), the right thigh started at
+  -2.5 rad/s with the feet stuck (a consistent velocity): the robot pitches, the left foot's
+  |T|/N grows without bound as N falls, so it slips at 96.32 ms and lifts off 23 us later;
+  fixed time 0.12 s.
+- slip: the ground at mu_static = mu_kinetic = 0.1, the right upper actuator at 185.55 N
+  (the Fig. 7 push), the other three servos at the stand lengths: the left foot starts to
+  slide at 13.48 ms (the friction force is continuous there); fixed time 0.04 s.
+- none: the same push on the robot's own ground (0.6 / 0.5): both feet stay stuck, no
+  event; fixed time 0.1 s.
+"""
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+import os
+import sys
+from pathlib import Path
+
+import numpy as np
+
+ROOT = Path(__file__).resolve().parents[2]
+sys.path[:0] = [str(ROOT / "python"), str(ROOT / "bench")]
+
+import legsim  # noqa: E402
+from legsim_bench.reference import ForceCommand, LengthCommand  # noqa: E402
+from legsim_bench.reference.model_file import read_model_file  # noqa: E402
+from legsim_bench.reference.robot import RobotModel  # noqa: E402
+from legsim_bench.reference.robot_events import simulate_events  # noqa: E402
+
+STEPS = (2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)
+GRID = 2e-3                      # the whole-run error's sample grid (s): on every h's grid
+ROBOT = ROOT / "models" / "robot.toml"
+DROP_M = 0.01
+G = 9.81
+
+
+class Case:
+    """A scene set up alike in the reference and in the core."""
+
+    def __init__(self, name, t_end, ground=None, text=""):
+        self.name, self.t_end, self.text = name, t_end, text
+        data = read_model_file(ROBOT)
+        if ground:
+            data = copy.deepcopy(data)
+            data["ground"].update(ground)
+        self.ground = ground or {}
+        self.ref = RobotModel(data, ROBOT.parent)
+        self.asm = self.ref.assemble()
+        self.states = ("stuck", "stuck")
+        self.z0, self.zd0 = self.asm.z.copy(), np.zeros(7)
+        self.commands = [LengthCommand(float(x)) for x in self.asm.lengths]
+
+    def reference(self):
+        t = np.arange(0, round(self.t_end / GRID) + 1) * GRID
+        return simulate_events(self.ref, self.t_end, t, self.z0, self.zd0, self.states,
+                               actuators=self.commands)
+
+    def sim(self, integrator, h):
+        model = legsim.Model.from_toml(str(ROBOT))
+        for k, v in self.ground.items():
+            setattr(model.desc.ground, k, v)
+        s = legsim.Sim(model, integrator=integrator, step=h)
+        s.assemble_on_ground()
+        # the reference's start exactly (the core's assembly is within its Newton tolerance)
+        K = self.ref.kinematics(self.z0, self.zd0)
+        s.set_state(K.P.reshape(-1), K.J.reshape(-1, 7) @ self.zd0)
+        for k, st in enumerate(self.states):
+            s.set_contact(k, st)
+        for a, c in enumerate(self.commands):
+            if isinstance(c, ForceCommand):
+                s.command_force(a, c.force)
+            else:
+                s.command_length(a, c.length)
+        s.clear_events()
+        return s
+
+
+def cases():
+    td = Case("touchdown", 0.1, text="1 cm level drop, servos")
+    td.z0[1] += DROP_M
+    td.states = ("free", "free")
+
+    lo = Case("liftoff", 0.12, ground={"mu_static": 0.6, "mu_kinetic": 0.6},
+              text="pitching on stuck feet, constant forces")
+    lo.commands = [ForceCommand(float(f)) for f in lo.ref.statics().actuator_forces]
+    T, _ = lo.ref._partition(lo.ref.kinematics(lo.z0, np.zeros(7)))
+    lo.zd0 = T @ np.array([0.0, -2.5, 0.0])
+
+    sl = Case("slip", 0.04, ground={"mu_static": 0.1, "mu_kinetic": 0.1},
+              text="push on mu = 0.1, left foot slides")
+    sl.commands[0] = ForceCommand(185.55)
+
+    no = Case("none", 0.1, text="push on mu 0.6/0.5, feet stuck (control)")
+    no.commands[0] = ForceCommand(185.55)
+    return {c.name: c for c in (td, lo, sl, no)}
+
+
+def q_error(qa, qb):
+    """max |difference| over the 39 coordinates (m, rad; angles wrapped)."""
+    d = (np.asarray(qa) - np.asarray(qb)).reshape(-1, 3)
+    d[:, 2] = (d[:, 2] + math.pi) % (2 * math.pi) - math.pi
+    return float(np.max(np.abs(d)))
+
+
+def kinetic(s, qd):
+    v = np.asarray(qd).reshape(-1, 3)
+    return 0.5 * float(np.sum(s.model.masses * (v[:, 0] ** 2 + v[:, 1] ** 2))
+                       + np.sum(s.model.inertias * v[:, 2] ** 2))
+
+
+def potential(s, q):
+    return float(np.sum(s.model.masses * G * np.asarray(q).reshape(-1, 3)[:, 1]))
+
+
+def run_core(case, integrator, h, ref):
+    s = case.sim(integrator, h)
+    n = round(case.t_end / h)
+    every = round(GRID / h)
+    errs, events = [], []
+    lost = None
+    e0 = kinetic(s, s.qd) + potential(s, s.q)
+    for k in range(1, n + 1):
+        qd_before = s.qd
+        s.step(1)
+        ev = [e for e in s.events() if e in ("touchdown", "liftoff", "stick_to_slip", "slip_to_stick")]
+        if ev:
+            events.append((k * h, ev))
+            if "touchdown" in ev and lost is None:
+                # the fall is rigid (every body at one velocity, no spin): the core's
+                # pre-impact velocity at the step's end is the step start's + g h
+                v = qd_before.reshape(-1, 3)
+                rigid = np.max(np.abs(v - v[0])) < 1e-9 and np.max(np.abs(v[:, 2])) < 1e-9
+                vm = v.copy()
+                vm[:, 1] -= G * h
+                lost = {"rigid": rigid, "impulse": kinetic(s, vm.reshape(-1)) - kinetic(s, s.qd),
+                        "balance": e0 - kinetic(s, s.qd) - potential(s, s.q)}
+        s.clear_events()
+        if k % every == 0:
+            errs.append(q_error(s.q, ref.q[k // every]))
+    return errs[-1], max(errs), events, lost
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--cases", default="touchdown,liftoff,slip,none")
+    ap.add_argument("--integrators", default="rk4,galpha")
+    a = ap.parse_args()
+    all_cases = cases()
+    rows, energy, ref_table = [], [], []
+    for name in a.cases.split(","):
+        case = all_cases[name]
+        ref = case.reference()
+        ref_events = [(e.t, e.kind, e.foot) for e in ref.events]
+        ref_table.append((name, ref_events))
+        print(f"{name}: reference events {ref_events}", file=sys.stderr)
+        for integ in a.integrators.split(","):
+            prev = None
+            for h in STEPS:
+                e_end, e_max, events, lost = run_core(case, integ, h, ref)
+                order = "" if prev is None else f"{math.log2(prev / e_end):.2f}"
+                prev = e_end
+                first = events[0] if events else None
+                dt = None if not (first and ref.events) else first[0] - ref.events[0].t
+                delay = "" if dt is None else f"{dt:.3e}"
+                ratio = "" if not dt else f"{e_end / dt:.3g} | {e_end / dt ** 2:.3g}"
+                ratio = ratio or " | "
+                core_ev = "; ".join(f"{t * 1e3:.4g} ms {'+'.join(ev)}" for t, ev in events[:3]) or "none"
+                if len(events) > 3:
+                    core_ev += f"; ... ({len(events)} steps with events)"
+                rows.append((name, integ, h, e_end, e_max, order, core_ev, delay, ratio))
+                print(f"  {integ} h={h:g}: err {e_end:.3e} max {e_max:.3e} order {order} events {core_ev}",
+                      file=sys.stderr)
+                if name == "touchdown" and h == 1e-3 and lost:
+                    energy.append((integ, lost, ref.events[0].kinetic_lost))
+    cmd = "firmware_core/benchmarks/event_order.py" + ("" if len(sys.argv) < 2 else " " + " ".join(sys.argv[1:]))
+    print(f"`{cmd}` (reference: RobotModel + robot_events, DOP853 rtol 1e-12, atol 1e-13)\n")
+    print("Reference events (s):\n")
+    for name, evs in ref_table:
+        print(f"- {name}: " + (", ".join(f"{kind} foot {k} at {t:.12f}" for t, kind, k in evs) or "none"))
+    print()
+    print("| case | integrator | h (s) | error at the fixed time | max error on the 2 ms grid | "
+          "order (fixed time) | steps at whose end the core reports an event | first event's delay (s) | "
+          "error / delay | error / delay^2 |")
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    for name, integ, h, e_end, e_max, order, core_ev, delay, ratio in rows:
+        print(f"| {name} | {integ} | {h:g} | {e_end:.3e} | {e_max:.3e} | {order} | {core_ev} | {delay} | {ratio} |")
+    if energy:
+        print("\nTouchdown energy, 1 cm level drop, h = 1 ms:\n")
+        print("| integrator | kinetic energy the impulse takes (J) | energy lost, E(0) - E(after) (J) | "
+              "exact (J) | impulse's error | balance's error |")
+        print("|---|---|---|---|---|---|")
+        for integ, lost, exact in energy:
+            if not lost["rigid"]:
+                print(f"| {integ} | (the fall was not rigid) | {lost['balance']:.10f} | {exact:.10f} | | "
+                      f"{(lost['balance'] - exact) / exact:+.3e} |")
+                continue
+            print(f"| {integ} | {lost['impulse']:.10f} | {lost['balance']:.10f} | {exact:.10f} | "
+                  f"{(lost['impulse'] - exact) / exact:+.3e} | {(lost['balance'] - exact) / exact:+.3e} |")
+    return 0
+
+
+if __name__ == "__main__":
+    os.environ.setdefault("LEGSIM_ROOT", str(ROOT))
+    sys.exit(main())
