@@ -344,13 +344,13 @@ std::string parse_injections(const toml::array &a, const Scene &s) {
       frame_text = std::string(*fv->value<std::string_view>());
       std::string names;
       for (const auto &f : kInjectFrames) {
-        names += std::string(f.name) + ", ";
+        names += (names.empty() ? "" : ", ") + std::string(f.name);
         if (upper(frame_text) == f.name) {
           frame = f.name;
           id = f.id;
         }
       }
-      if (id < 0) fail(w + "'frame' must be " + names + "or an 11-bit id (got " + q(frame_text) + ")");
+      if (id < 0) fail(w + "'frame' must be " + names + " or an 11-bit id (got " + q(frame_text) + ")");
     } else if (fv && fv->is_integer() && *fv->value<int64_t>() >= 0 && *fv->value<int64_t>() < (1 << 11)) {
       id = *fv->value<int64_t>();
       frame_text = std::to_string(id);
