@@ -167,7 +167,7 @@ std::string dirname_of(const std::string &path) {
 }
 
 // Keys and values of the two former schemas (scenes/cli and bench/scenes) and what they are
-// now: an old file gets a message naming the new key (the bench says the same words).
+// now: an old file gets a message naming the new key.
 struct Renamed {
   const char *old_key;
   const char *message;
@@ -248,6 +248,8 @@ void bench_json_to(std::ostream &o, const toml::node &n) {
     else if (std::isinf(v)) std::snprintf(buf, sizeof buf, v > 0 ? "\"inf\"" : "\"-inf\"");
     else std::snprintf(buf, sizeof buf, "%.17g", v);
     o << buf;
+    // a float stays a float in JSON (1.0, not 1): readers that keep the type see TOML's
+    if (std::isfinite(v) && !std::strpbrk(buf, ".e")) o << ".0";
   } else {
     o << toml::json_formatter{n, toml::format_flags::quote_dates_and_times};
   }
