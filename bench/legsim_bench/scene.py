@@ -1,61 +1,54 @@
 """Scenes (scenes/*.toml, schema in scenes/README.md): what to run and what to check.
 
-legsim_cli reads the same files (firmware_core/host/scene_parse.cpp) with the same rules and
-messages; dynamics runs on hil_sim over CAN, the other analyses in legsim_cli.
+legsim_cli is the one reader of scene files (firmware_core/host/scene_parse.cpp): the bench
+runs `legsim_cli SCENE --check` and builds its Scene from the resolved scene it prints (JSON),
+refusals included, in legsim_cli's words. Dynamics runs on hil_sim over CAN, the other
+analyses in legsim_cli. What is the bench's own stays here: the step grid and the exchanges
+with hil_sim (boundaries, setpoints), the verdicts' default tolerances, and what its CAN link
+and its reference model can carry (a scene legsim_cli runs may still be one the bench cannot).
 
-Pure Python (tomllib, math): `legsim-bench record` runs where imports are slow (the QEMU VM),
-so nothing here pulls numpy, scipy or matplotlib.
+Pure Python (json, subprocess, math): `legsim-bench record` runs where imports are slow (the
+QEMU VM), so nothing here pulls numpy, scipy or matplotlib.
 
     from legsim_bench.scene import load_scene, shipped_scenes, find_root
     sc = load_scene("upper_step_50N")          # a scene of scenes/ by name, or a path
     sc.n_steps, sc.boundaries(), sc.setpoints(k)
 
 Times in a scene are seconds; the bench works on the step grid: a time t is step round(t / h)
-(it must lie on the grid, within 1e-9 s). The bench is a sampled controller: it sends its
-actuator setpoints at every exchange with hil_sim (every `record_every` steps, and at every
-schedule or injection time), and hil_sim holds them until the next one.
+(legsim_cli refuses a time off the grid, by more than 1e-9 s). The bench is a sampled
+controller: it sends its actuator setpoints at every exchange with hil_sim (every
+`record_every` steps, and at every schedule or injection time), and hil_sim holds them until
+the next one.
 """
 from __future__ import annotations
 
+import json
 import math
 import os
 import re
-import tomllib
+import subprocess
 from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["Scene", "ModelInfo", "SceneError", "RootNotFound", "Schedule", "ActuatorCommand", "Injection",
-           "Checks", "StrokeCheck", "load_scene", "parse_scene", "find_root", "cli_path", "shipped_scenes",
-           "resolve_scene", "fault_codes", "scenes_dir", "ACTUATORS", "VARIANTS", "INTEGRATORS",
-           "ANALYSES", "BUILTIN_MODEL", "RENAMED_KEYS", "DEFAULT_CHECKS",
-           "DISABLE_FLAGS", "FRAME_IDS", "SEQ_SIGNALS", "FD_LENGTHS"]
+           "Checks", "StrokeCheck", "load_scene", "parse_scene", "scene_from_resolved", "find_root", "cli_path",
+           "shipped_scenes", "resolve_scene", "fault_codes", "scenes_dir", "ACTUATORS", "VARIANTS",
+           "BUILTIN_MODEL", "DEFAULT_CHECKS", "ROBOT_DEFAULT_CHECKS", "DISABLE_FLAGS", "SEQ_SIGNALS"]
 
 ACTUATORS = ("upper", "lower")
 VARIANTS = ("revolute", "slot")          # Ctrl_Variant of the DBC (a model file may have more)
-INTEGRATORS = ("rk4", "generalized_alpha")
-ANALYSES = ("dynamics", "statics", "statics_sweep", "inverse_dynamics", "assembly")
 TIMED = ("dynamics", "inverse_dynamics")
 BUILTIN_MODEL = "builtin:leg"
 BUILTIN_ROBOT = "builtin:robot"          # models/robot.toml, compiled in when the capacities hold it
-# legsim_default_options() of legsim.h (tests compare them with legsim_cli --check)
+# legsim_default_options() of legsim.h: RESET carries no solver options, hil_sim runs these
 DEFAULT_OPTIONS = {"rho_inf": 0.8, "max_newton_iter": 25, "newton_tol": 1e-10}
-MAX_RECORD_EVERY = 10_000_000           # the DBC's largest STEP (Ctrl_NSteps)
-# The bounds legsim_cli applies (firmware_core/host/scene_parse.cpp, toml_limits.hpp, legsim.h).
-MAX_TOML_BYTES = 1024 * 1024
-MAX_SAMPLES = 1_000_000                 # n_steps / record_every + 1
-MAX_FREQUENCY_HZ = 1e3
-MAX_PHASE_RAD = 1e3                     # LEGSIM_MAX_COORD
-MAX_TIME_S = 1e9                        # LEGSIM_MAX_TIME_S
-MAX_FORCE_N = 1e6                       # LEGSIM_MAX_FORCE_N
-NEWTON_TOL_RANGE = (1e-15, 1e-3)        # LEGSIM_MIN/MAX_NEWTON_TOL
 # legsim_disable bits (legsim.h), as Ctrl_Disable carries them
 DISABLE_FLAGS = {"gravity": 0, "force_elements": 1, "reactions": 2, "projection": 3,
                  "actuators": 4, "stroke_limits": 5}
-# bench -> hil_sim frames of can/legsim.dbc and their sequence-counter signals
-FRAME_IDS = {"CONTROL": 0x080, "ACT_CMD": 0x100, "LOAD_CMD": 0x110}
+# sequence-counter signals of the bench -> hil_sim frames of can/legsim.dbc
 SEQ_SIGNALS = {"CONTROL": "Ctrl_Seq", "ACT_CMD": "Act_Seq", "LOAD_CMD": "Load_Seq"}
-FD_LENGTHS = (0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64)
 GRID_TOL_S = 1e-9
+CLI_TIMEOUT_S = 120
 
 
 class SceneError(ValueError):
@@ -269,58 +262,22 @@ class Checks:
 
 @dataclass(frozen=True)
 class ModelInfo:
-    """What the scene reader needs of a model file (its own reading of the TOML: pure Python,
-    no core): variant names, actuators (name, stroke, max_force), pose and force names."""
+    """What the bench needs of the scene's model, as legsim_cli read it: its file (the reference
+    models read it themselves), actuators (name, stroke, max_force), poses, force elements
+    (name, kind), contacts and legs."""
     path: Path
-    builtin: bool                      # the compiled-in leg (models/leg.toml at build time)
+    builtin: bool                      # compiled in (models/leg.toml or models/robot.toml at build time)
     variants: tuple[str, ...]
     actuators: tuple[tuple[str, tuple[float, float], float], ...]
     poses: tuple[str, ...]
     forces: tuple[tuple[str, str], ...]   # (name, kind)
     contacts: tuple[str, ...] = ()        # a robot's feet ("right.foot", "left.foot")
-    legs: int = 1                         # a robot's [[leg]]s
+    legs: int = 1                         # a robot's legs (one foot each)
 
     @property
     def robot(self) -> bool:
         """A model with contacts: a robot file ([box] + [[leg]], docs/design/robot-on-ground.md)."""
         return bool(self.contacts)
-
-    @staticmethod
-    def _load(path: Path, where: str) -> dict:
-        try:
-            return tomllib.loads(Path(path).read_text())
-        except OSError as e:
-            raise SceneError(f"{where}: model {path}: cannot read: {e.strerror or e}") from None
-        except tomllib.TOMLDecodeError as e:
-            raise SceneError(f"{where}: model {path}: not valid TOML: {e}") from None
-
-    @classmethod
-    def read(cls, path: Path, builtin: bool, where: str) -> "ModelInfo":
-        data = cls._load(path, where)
-        try:
-            if "box" in data and "leg" in data:
-                # a robot file: each [[leg]] places a leg file; names take the leg's prefix, in
-                # the loader's order (the box, then each leg's items in its file's order)
-                acts, forces, contacts = [], [], []
-                for ld in data["leg"]:
-                    leg = cls._load(Path(path).parent / str(ld["file"]), where)
-                    pre = str(ld.get("prefix", str(ld["name"]) + "."))
-                    acts += [(pre + str(a["name"]), (float(a["stroke"][0]), float(a["stroke"][1])),
-                              float(a["max_force"])) for a in leg.get("actuator", [])]
-                    forces += [(pre + str(f["name"]), str(f.get("kind", ""))) for f in leg.get("force", [])]
-                    if "foot" in leg:
-                        contacts.append(pre + "foot")
-                return cls(Path(path), builtin, ("revolute",), tuple(acts),
-                           tuple(str(p) for p in data.get("pose", {})), tuple(forces), tuple(contacts),
-                           len(data["leg"]))
-            acts = tuple((str(a["name"]), (float(a["stroke"][0]), float(a["stroke"][1])),
-                          float(a["max_force"])) for a in data.get("actuator", []))
-            forces = tuple((str(f["name"]), str(f.get("kind", ""))) for f in data.get("force", []))
-        except (KeyError, TypeError, ValueError, IndexError) as e:
-            raise SceneError(f"{where}: model {path}: bad [[actuator]], [[force]] or [[leg]] ({e!r})") from None
-        variants = ("revolute", *[str(v) for v in data.get("variant", {})])
-        return cls(Path(path), builtin, variants, acts, tuple(str(p) for p in data.get("pose", {})),
-                   forces)
 
 
 @dataclass
@@ -328,7 +285,7 @@ class Scene:
     name: str
     description: str
     path: Path | None
-    source: str                        # the TOML text (recordings carry it)
+    source: str                        # the TOML text, as written (recordings carry it)
     variant: str
     integrator: str
     step_ns: int
@@ -358,6 +315,7 @@ class Scene:
     statics_rule: str = "equal_friction"          # a robot's statics: legsim_statics_rule
     contact_law: str = "lcp"                      # a robot's dynamics: legsim_contact_law
     box_load: tuple | None = None                 # a robot's box: (Fx, Fy N, M N m)
+    resolved_json: dict = field(default_factory=dict)  # legsim_cli --check's JSON (recordings carry it)
 
     @property
     def robot(self) -> bool:
@@ -467,79 +425,16 @@ class Scene:
                 + ("" if self.builtin_model else f", model {self.model}"))
 
     def resolved(self) -> dict:
-        """The values legsim_cli --check prints for the same file (tests compare the two)."""
-        cmds = {}
-        for c in self.commands:
-            if c is None:
-                continue
-            s = c.schedule
-            if s.kind == "hold":
-                sig = {"value": s.value}
-            elif s.kind == "initial":
-                sig = {"value": "initial"}
-            elif s.kind == "step":
-                sig = {"step": {"t0": s.t0, "before": s.before, "after": s.after}}
-            else:
-                sig = {"sinusoid": {"offset": s.offset, "amplitude": s.amplitude,
-                                    "frequency": s.frequency, "phase": s.phase}}
-            cmds[c.name] = {"mode": c.mode, **sig}
-        timed = self.analysis in TIMED
-        raw = tomllib.loads(self.source) if self.source else {}
-        return {"name": self.name, "model": self.model,
-                "model_path": "" if self.model.startswith("builtin:") else str(self.model_path),
-                "variant": self.variant, "analysis": self.analysis, "integrator": self.integrator,
-                "step_ns": self.step_ns, "n_steps": self.n_steps if timed else 0,
-                "record_every": self.record_every, "pose": self.pose_name,
-                "lengths": list(self.lengths) if self.lengths is not None else None,
-                "grid": self.grid, "init": self.init, "cmd_timeout_ms": self.cmd_timeout_ms,
-                "safe_state": self.safe_state, "disable": self.disable_bits, "rho_inf": self.rho_inf,
-                "max_newton_iter": self.max_newton_iter, "newton_tol": self.newton_tol,
-                "statics_rule": self.statics_rule, "contact_law": self.contact_law, "forces": {k: list(v) for k, v in self.forces.items()}, "commands": cmds,
-                "contacts": dict(self.contacts),
-                "box_load": list(self.box_load) if self.box_load is not None else None,
-                # the bench's sections as written (legsim_cli --check prints them so)
-                "checks": _json_numbers(raw.get("checks")), "inject": _json_numbers(raw.get("inject", []))}
+        """The resolved scene as legsim_cli --check printed it (the Scene is built from it)."""
+        return json.loads(json.dumps(self.resolved_json))
 
     def _where(self) -> str:
         return str(self.path) if self.path else self.name
 
 
-# ---- parsing ---------------------------------------------------------------------------
-
-_TOP_KEYS = {"description", "name", "demo", "model", "variant", "analysis", "integrator",
-             "step_s", "duration", "record_every", "disable", "rho_inf", "max_newton_iter",
-             "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
-             "box_load",
-             "forces", "command", "contact", "inject", "checks", "statics_rule", "contact_law"}
-CONTACT_STATES = ("stuck", "free")
-# legsim_statics_rule: what fixes the statics of a stance on two stuck feet (legsim.h)
-STATICS_RULES = ("equal_friction", "min_tangential")
-# legsim_contact_law: the feet's transitions in a step (legsim.h): each foot by its own
-# Coulomb cone, or the paper's rule (the foot with the smaller |T| is released)
-CONTACT_LAWS = ("lcp", "paper")
-# The keys and values of the two former schemas and what they are now (legsim_cli says the
-# same words: firmware_core/host/scene_parse.cpp).
-RENAMED_KEYS = {
-    "output_every": "'output_every' is now 'record_every' (steps between recorded samples)",
-    "decimation": "'decimation' is now 'record_every' (steps between recorded samples)",
-    "step": "'step' is now 'step_s' (the step size, s); 'step = { t0, before, after }' is a step "
-            "signal in a [[command]]",
-    "foot_load": "'foot_load' is now a force element value: [forces] foot_load = [Fx, Fy] (N)",
-}
-RENAMED_VALUES = {"force_zero": "zero_force", "zero-force": "zero_force", "hold-length": "hold_length"}
-ACTUATOR_MODES = ("zero_force", "hold_length")
-# [checks] keys that apply to each analysis, and the tolerances used when a scene gives none
-_DYN_CHECKS = (set(CHECK_KEYS) - set(ROBOT_CHECK_KEYS)) | {"compare", "stroke", "resolution_ratio"}
-# a robot scene (legsim_cli against RobotModel, legsim_bench.verdict.analyses)
-ROBOT_CHECKS_FOR = {
-    "dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
-                 "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps"},
-    "assembly": {"position_m", "angle_rad", "residual"},
-    "inverse_dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n",
-                         "ground_force_n"},
-    "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
-                "ground_force_n"},
-}
+# ---- the verdicts' default tolerances -------------------------------------------------------
+# (legsim_cli checks which [checks] keys apply to each analysis; without [checks] the bench
+# checks these)
 ROBOT_DEFAULT_CHECKS = {
     "dynamics": {"position_m": 1e-6, "angle_rad": 1e-6, "actuator_force_n": 1e-3, "ground_force_n": 1e-3,
                  "residual": 1e-8},
@@ -548,15 +443,6 @@ ROBOT_DEFAULT_CHECKS = {
                          "reaction_n": 1e-6, "ground_force_n": 1e-6},
     "statics": {"position_m": 1e-10, "angle_rad": 1e-10, "residual": 1e-10, "statics_force_n": 1e-6,
                 "statics_reaction_n": 1e-6, "ground_force_n": 1e-6},
-}
-CHECKS_FOR = {
-    "dynamics": _DYN_CHECKS,
-    "statics": {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n",
-                "balance_n", "balance_nm"},
-    "statics_sweep": {"statics_force_n", "statics_reaction_n"},
-    "inverse_dynamics": {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n",
-                         "moment_nm"},
-    "assembly": {"position_m", "angle_rad", "residual"},
 }
 DEFAULT_CHECKS = {
     "dynamics": {"position_m": 1e-5, "angle_rad": 1e-5, "reaction_n": 0.01, "moment_nm": 1e-3,
@@ -568,65 +454,6 @@ DEFAULT_CHECKS = {
                          "actuator_force_n": 1e-6, "reaction_n": 1e-6, "moment_nm": 1e-6},
     "assembly": {"position_m": 1e-8, "angle_rad": 1e-8, "residual": 1e-8},
 }
-
-
-def _json_numbers(v):
-    """As legsim_cli --check writes a bench section: a non-finite number is "nan", "inf", "-inf"."""
-    if isinstance(v, dict):
-        return {k: _json_numbers(x) for k, x in v.items()}
-    if isinstance(v, list):
-        return [_json_numbers(x) for x in v]
-    if isinstance(v, float) and not math.isfinite(v):
-        return "nan" if math.isnan(v) else ("inf" if v > 0 else "-inf")
-    return v
-
-
-def _num(where, key, v, *, positive=False, finite=True) -> float:
-    if isinstance(v, bool) or not isinstance(v, (int, float)):
-        raise SceneError(f"{where}: {key} must be a number, not {v!r}")
-    v = float(v)
-    if finite and not math.isfinite(v):
-        raise SceneError(f"{where}: {key} must be finite")
-    if positive and not v > 0:
-        raise SceneError(f"{where}: {key} must be > 0")
-    return v
-
-
-def _int(where, key, v, lo=None, hi=None) -> int:
-    if isinstance(v, bool) or not isinstance(v, int):
-        raise SceneError(f"{where}: {key} must be an integer, not {v!r}")
-    if (lo is not None and v < lo) or (hi is not None and v > hi):
-        raise SceneError(f"{where}: {key} = {v} outside {lo}..{hi}")
-    return v
-
-
-def _choice(where, key, v, options) -> str:
-    if isinstance(v, str) and v in RENAMED_VALUES and v not in options:
-        raise SceneError(f'{where}: {key} = "{v}" is now {key} = "{RENAMED_VALUES[v]}"')
-    if not isinstance(v, str) or v.lower() not in options:
-        raise SceneError(f"{where}: {key} must be one of {', '.join(options)}, not {v!r}")
-    return v.lower()
-
-
-def _rule_choice(where, v, key="statics_rule", options=STATICS_RULES) -> str:
-    """'statics_rule' or 'contact_law' with legsim_cli's words (scene_parse.cpp: choice)."""
-    if v not in options:
-        raise SceneError(f"{where}: '{key}' must be {' or '.join(options)} (got {v!r})")
-    return v
-
-
-def _unknown(where, d: dict, allowed) -> None:
-    extra = sorted(set(d) - set(allowed))
-    if extra:
-        raise SceneError(f"{where}: unknown key(s) {', '.join(extra)} (allowed: {', '.join(sorted(allowed))})")
-
-
-def _contact_list(where: str, d: dict, key: str, info) -> list:
-    """d[key]: a list of the model's contacts (info.contacts), else a SceneError naming them."""
-    feet = d[key]
-    if not isinstance(feet, list) or not all(isinstance(x, str) and x in info.contacts for x in feet):
-        raise SceneError(f"{where}: '{key}' must be a list of the model's contacts ({', '.join(info.contacts)})")
-    return feet
 
 
 def _fmt(x: float) -> str:
@@ -642,520 +469,162 @@ def _on_grid(where: str, t: float, step_ns: int, what: str) -> int:
     return k
 
 
-def _pair(where, key, v) -> tuple[float, float]:
-    if not isinstance(v, list) or len(v) != 2:
-        raise SceneError(f"{where}: {key} must be a list of two numbers")
-    return (_num(where, key, v[0]), _num(where, key, v[1]))
+def _number(v):
+    """A number of the resolved JSON: legsim_cli writes a non-finite one as "nan", "inf", "-inf"."""
+    return float(v) if isinstance(v, str) and v in ("nan", "inf", "-inf") else v
 
 
-def _schedule(where: str, c: dict) -> Schedule:
-    kinds = [k for k in ("value", "step", "sinusoid") if k in c]
-    if len(kinds) != 1:
-        raise SceneError(f"{where}: give exactly one of value, step, sinusoid")
-    k = kinds[0]
-    if k == "value":
-        v = c["value"]
-        if v == "initial":
-            return Schedule("initial")
-        return Schedule("hold", value=_num(where, "value (a number, or \"initial\")", v))
-    if k == "step":
+# ---- the resolved scene -> Scene --------------------------------------------------------------
+
+def _schedule(c: dict) -> Schedule:
+    if "step" in c:
         s = c["step"]
-        if not isinstance(s, dict):
-            raise SceneError(f"{where}: step must be a table {{t0, before, after}}")
-        _unknown(f"{where} step", s, {"t0", "before", "after"})
-        for key in ("t0", "after"):
-            if key not in s:
-                raise SceneError(f"{where}: step needs {key}")
-        t0 = _num(where, "step.t0", s["t0"])
-        if not 0 <= t0 <= MAX_TIME_S:
-            raise SceneError(f"{where}: step: 't0' must be in [0, {MAX_TIME_S:g}] s (got {_fmt(t0)})")
-        return Schedule("step", t0=t0,
-                        before=_num(where, "step.before", s.get("before", 0.0)),
-                        after=_num(where, "step.after", s["after"]))
-    s = c["sinusoid"]
-    if not isinstance(s, dict):
-        raise SceneError(f"{where}: sinusoid must be a table {{offset, amplitude, frequency}}")
-    _unknown(f"{where} sinusoid", s, {"offset", "amplitude", "frequency", "phase"})
-    for key in ("offset", "amplitude", "frequency"):
-        if key not in s:
-            raise SceneError(f"{where}: sinusoid needs {key}")
-    freq = _num(where, "frequency", s["frequency"], positive=True)
-    if freq > MAX_FREQUENCY_HZ:
-        raise SceneError(f"{where}: frequency must be at most {MAX_FREQUENCY_HZ:g} Hz (got {_fmt(freq)})")
-    phase = _num(where, "phase", s.get("phase", 0.0))
-    if abs(phase) > MAX_PHASE_RAD:
-        raise SceneError(f"{where}: phase must be in [-{MAX_PHASE_RAD:g}, {MAX_PHASE_RAD:g}] rad "
-                         f"(got {_fmt(phase)})")
-    return Schedule("sinusoid", offset=_num(where, "offset", s["offset"]),
-                    amplitude=_num(where, "amplitude", s["amplitude"]),
-                    frequency=freq, phase=phase)
+        return Schedule("step", t0=s["t0"], before=s["before"], after=s["after"])
+    if "sinusoid" in c:
+        s = c["sinusoid"]
+        return Schedule("sinusoid", offset=s["offset"], amplitude=s["amplitude"], frequency=s["frequency"],
+                        phase=s["phase"])
+    return Schedule("initial") if c["value"] == "initial" else Schedule("hold", value=c["value"])
 
 
-def _model(where: str, spec, path: Path | None, root: Path | None) -> ModelInfo:
-    """The scene's model: "builtin:leg" (hil_sim's and legsim_cli's compiled-in leg; the bench
-    reads the file it was compiled from, models/leg.toml) or a file relative to the scene."""
-    if not isinstance(spec, str) or not spec:
-        raise SceneError(f"{where}: model must name a model file (or \"{BUILTIN_MODEL}\")")
-    if spec.startswith("builtin:"):
-        if spec not in (BUILTIN_MODEL, BUILTIN_ROBOT):
-            raise SceneError(f"{where}: unknown builtin model {spec[8:]!r} (this build has: leg, robot)")
+def _checks(d: dict, info: ModelInfo) -> Checks:
+    ch = d["checks"]
+    if ch is None:   # scenes/README.md: the tolerances without [checks]
+        ch = dict((ROBOT_DEFAULT_CHECKS if info.robot else DEFAULT_CHECKS)[d["analysis"]])
+    kw = {k: float(ch[k]) for k in CHECK_KEYS if k in ch}
+    for key in ("compare", "resolution_ratio"):
+        if key in ch:
+            kw[key] = ch[key]
+    if "stroke" in ch:
+        s = ch["stroke"]
+        kw["stroke"] = StrokeCheck([a[0] for a in info.actuators].index(s["actuator"]), s["end"],
+                                   float(s.get("tolerance_m", 1e-6)))
+    for key in ("slips", "lifts"):
+        if key in ch:
+            kw[key] = tuple(ch[key])
+    return Checks(**kw)
+
+
+def _injection(x: dict) -> Injection:
+    if "silence_steps" in x:
+        return Injection(step=x["step"], expect=x["expect"], label=x["label"], silence_steps=x["silence_steps"])
+    return Injection(step=x["step"], expect=x["expect"], label=x["label"], frame=x["frame"],
+                     frame_id=x["frame_id"], signals={k: _number(v) for k, v in x["signals"].items()},
+                     seq=x["seq"], length=x["length"], expect_signal=x["expect_signal"])
+
+
+def scene_from_resolved(d: dict, path: str | os.PathLike | None = None, source: str = "", *,
+                        root: Path | None = None) -> Scene:
+    """A Scene from legsim_cli --check's JSON (as recordings carry it): SceneError when the bench
+    cannot run it (its CAN link or its reference model cannot carry what the scene asks)."""
+    path = Path(path) if path is not None else None
+    where = str(path) if path else d["name"]
+    mi = d["model_info"]
+    if d["model"].startswith("builtin:"):
         try:
             r = root or find_root()
         except RootNotFound as e:
             raise SceneError(f"{where}: {e}") from None
-        return ModelInfo.read(r / "models" / (spec[8:] + ".toml"), True, where)
-    p = Path(spec)
-    if not p.is_absolute():
-        p = (path.parent if path is not None else Path.cwd()) / p
-    return ModelInfo.read(p, False, where)
-
-
-def _robot_scene(d: dict, where: str, text: str, path: Path | None, root: Path | None, info: ModelInfo,
-                 **kw) -> Scene:
-    """The rest of a scene whose model has contacts (a robot file): legsim_cli runs it (the
-    in-process bench; the DBC has no robot frames here), the bench checks it against RobotModel
-    (legsim_bench.verdict.analyses). Actuators by their prefixed names; [[contact]] initial states.
-    The refusals are legsim_cli's words (scene_parse.cpp: parse_scene, bind_scene)."""
-    analysis = kw["analysis"]
-    if analysis == "statics_sweep":
-        raise SceneError(f"{where}: statics_sweep of a model with contacts is not in this core yet (the legs "
-                         "move, the feet cannot stay on the ground): run dynamics, statics, inverse_dynamics or "
-                         "assembly")
-    if "inject" in d:
-        raise SceneError(f"{where}: [[inject]] is not for a robot scene (the bench's injections are the one leg's "
-                         "frames; tests/hil/test_robot_can.py sends the robot bad frames)")
-    names = tuple(a[0] for a in info.actuators)
-    raw_cmds = d.get("command", [])
-    if raw_cmds and analysis not in TIMED:
-        raise SceneError(f"{where}: [[command]] applies to dynamics and inverse_dynamics only")
-    if not isinstance(raw_cmds, list):
-        raise SceneError(f"{where}: 'command' must be an array of tables ([[command]])")
+        model_path, builtin = r / "models" / (d["model"][len("builtin:"):] + ".toml"), True
+    else:
+        model_path, builtin = Path(d["model_path"]), False
+    info = ModelInfo(model_path, builtin, (d["variant"],),
+                     tuple((a["name"], (a["stroke"][0], a["stroke"][1]), a["max_force"]) for a in mi["actuators"]),
+                     tuple(mi["poses"]), tuple((f["name"], f["kind"]) for f in mi["forces"]),
+                     tuple(mi["contacts"]), mi["legs"])
+    names = [a[0] for a in info.actuators]
     cmds: list[ActuatorCommand | None] = [None] * len(names)
-    for i, c in enumerate(raw_cmds):
-        if not isinstance(c, dict):
-            raise SceneError(f"{where}: 'command' must be an array of tables ([[command]])")
-        _unknown(f"{where}: command #{i + 1}", c, {"actuator", "mode", "value", "step", "sinusoid"})
-        act = c.get("actuator")
-        if not isinstance(act, str):
-            raise SceneError(f"{where}: command #{i + 1}: 'actuator' must be a string")
-        cw = f"{where}: command '{act}'"
-        if act not in names:
-            raise SceneError(f"{cw}: the model has no actuator '{act}'")
-        a = names.index(act)
-        if cmds[a] is not None:
-            raise SceneError(f"{cw}: a second command for the same actuator")
-        mode = c.get("mode")
-        if mode not in ("force", "length"):
-            raise SceneError(f"{cw}: 'mode' must be force or length (got {mode!r})")
-        sch = _schedule(cw, c)
-        if analysis == "inverse_dynamics" and mode != "length":
-            raise SceneError(f"{cw}: inverse_dynamics prescribes lengths: use mode = \"length\"")
-        if sch.kind == "initial" and mode != "length":
-            raise SceneError(f"{cw}: value = \"initial\" is for mode = \"length\" (hold the assembled length)")
-        if sch.kind == "step":
-            _on_grid(where, sch.t0, kw["step_ns"], f"command '{act}': step t0 =")
-        if sch.extremes() is not None:
-            _, (smin, smax), fmax = info.actuators[a]
-            lo, hi = sch.extremes()
-            if mode == "force" and max(abs(lo), abs(hi)) > fmax:
-                raise SceneError(f"{cw}: forces up to {_fmt(max(abs(lo), abs(hi)))} N exceed max_force "
-                                 f"{_fmt(fmax)} N")
-            if mode == "length" and (lo < smin or hi > smax):
-                raise SceneError(f"{cw}: lengths {_fmt(lo)}..{_fmt(hi)} m leave the stroke [{_fmt(smin)}, "
-                                 f"{_fmt(smax)}]")
-        cmds[a] = ActuatorCommand(a, mode, sch, act)
+    for name, c in d["commands"].items():
+        a = names.index(name)
+        cmds[a] = ActuatorCommand(a, c["mode"], _schedule(c), name if info.robot else "")
+    forces = {k: tuple(v) for k, v in d["forces"].items()}
+    pose_name = d["pose"]
+    scene = Scene(name=d["name"], description=d["description"], path=path, source=source,
+                  variant=d["variant"], integrator=d["integrator"], step_ns=d["step_ns"], n_steps=d["n_steps"],
+                  record_every=d["record_every"], pose=info.poses.index(pose_name) if pose_name else 0,
+                  lengths=tuple(d["lengths"]) if d["lengths"] is not None else None, init=d["init"],
+                  cmd_timeout_ms=d["cmd_timeout_ms"], safe_state=d["safe_state"],
+                  disable=tuple(k for k, b in DISABLE_FLAGS.items() if d["disable"] >> b & 1),
+                  foot_load=None if info.robot else forces.get("foot_load"), commands=tuple(cmds),
+                  injections=tuple(_injection(x) for x in d["inject"]), checks=_checks(d, info),
+                  demo=d["demo"], analysis=d["analysis"], model=d["model"], model_info=info,
+                  pose_name=pose_name, forces=forces, grid=d["grid"], rho_inf=d["rho_inf"],
+                  max_newton_iter=d["max_newton_iter"], newton_tol=d["newton_tol"], contacts=dict(d["contacts"]),
+                  statics_rule=d["statics_rule"], contact_law=d["contact_law"],
+                  box_load=tuple(d["box_load"]) if d["box_load"] is not None else None, resolved_json=d)
+    if not info.robot:
+        _bench_can_run_leg(scene, where)
+    return scene
 
-    contacts: dict[str, str] = {}
-    raw = d.get("contact", [])
-    if raw and analysis not in ("dynamics", "assembly"):
-        raise SceneError(f"{where}: [[contact]] applies to dynamics and assembly only")
-    if not isinstance(raw, list) or not all(isinstance(x, dict) for x in raw):
-        raise SceneError(f"{where}: 'contact' must be an array of tables ([[contact]])")
-    for i, c in enumerate(raw):
-        _unknown(f"{where}: contact #{i + 1}", c, {"name", "state"})
-        cname = c.get("name")
-        if not isinstance(cname, str):
-            raise SceneError(f"{where}: contact #{i + 1}: missing key 'name'")
-        cw = f"{where}: contact '{cname}'"
-        if cname in contacts:
-            raise SceneError(f"{cw}: a second [[contact]] for the same contact")
-        state = c.get("state")
-        if state not in CONTACT_STATES:
-            raise SceneError(f"{cw}: 'state' must be stuck or free (got {state!r})")
-        if cname not in info.contacts:
-            raise SceneError(f"{cw}: the model has no contact '{cname}' (contacts: {', '.join(info.contacts)})")
-        contacts[cname] = state
 
-    ch = d.get("checks")
-    if ch is None:
-        ch = dict(ROBOT_DEFAULT_CHECKS[analysis])
-    if not isinstance(ch, dict):
-        raise SceneError(f"{where}: [checks] must be a table")
-    _unknown(f"{where} [checks] (robot {analysis})", ch, ROBOT_CHECKS_FOR[analysis])
-    slips = None
-    if "slips" in ch:
-        # the feet that must slip (stick_to_slip): RobotModel's stance on stuck feet is then
-        # no reference, and the checks against it do not apply
-        slips = _contact_list(f"{where} [checks]", ch, "slips", info)
-        # with slip_onset_steps the stance is compared up to the first slip, where it still holds
-        before = ("position_m", "angle_rad", "ground_force_n") if "slip_onset_steps" in ch else ()
-        against = sorted(k for k in ch if k not in ("slips", "residual", "slip_onset_steps") + before)
-        if against:
-            raise SceneError(f"{where} [checks]: {', '.join(against)} compare with RobotModel's stance on "
-                             "stuck feet, which 'slips' leaves: leave them out")
-        slips = tuple(slips)
-    if "slip_onset_steps" in ch and not slips:
-        raise SceneError(f"{where} [checks]: 'slip_onset_steps' needs 'slips' (the foot that slips first)")
-    lifts = None
-    if "lifts" in ch:
-        # the feet that must lift off and touch down again (stuck): RobotModel's stance on
-        # both stuck feet is the reference until the first lift-off only
-        lifts = _contact_list(f"{where} [checks]", ch, "lifts", info)
-        against = sorted(k for k in ch if k not in ("lifts", "residual", "position_m", "angle_rad"))
-        if against or slips:
-            raise SceneError(f"{where} [checks]: {', '.join(against or ['slips'])} compare with RobotModel's "
-                             "stance on stuck feet, which 'lifts' leaves: leave them out")
-        lifts = tuple(lifts)
-    checks = Checks(**{k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch},
-                    slips=slips, lifts=lifts)
-    if not checks.tolerances():
-        raise SceneError(f"{where}: [checks] names nothing to check")
-    return Scene(name=kw["sname"], description=str(d.get("description", "")), path=path, source=text,
-                 variant=kw["variant"], integrator=kw["integrator"], step_ns=kw["step_ns"],
-                 n_steps=kw["n_steps"], record_every=kw["rec"], pose=kw["pose"], lengths=kw["lengths"],
-                 init=kw["init"], cmd_timeout_ms=_int(where, "cmd_timeout_ms", d.get("cmd_timeout_ms", 0), 0, 65534),
-                 safe_state=_choice(where, "safe_state", d.get("safe_state", "zero_force"), ACTUATOR_MODES),
-                 disable=kw["disable"], foot_load=None, commands=tuple(cmds), injections=(), checks=checks,
-                 demo=bool(d.get("demo", False)), analysis=analysis, model=kw["model_spec"], model_info=info,
-                 pose_name=kw["pose_name"], forces=kw["forces"], rho_inf=kw["rho_inf"],
-                 max_newton_iter=kw["max_iter"], newton_tol=kw["newton_tol"], contacts=contacts,
-                 statics_rule=kw["statics_rule"], contact_law=kw["contact_law"], box_load=kw["box_load"])
+def _bench_can_run_leg(sc: Scene, where: str) -> None:
+    """What the bench's CAN link (can/legsim.dbc) and its leg reference model can carry: the
+    scene is legsim_cli's to run, the bench refuses it saying why."""
+    names = sc.actuator_names
+    if names != ACTUATORS:
+        raise SceneError(f"{where}: the bench runs the leg's actuators {', '.join(ACTUATORS)} (the DBC's "
+                         f"signals and the reference model); the model has {', '.join(names) or 'none'}")
+    extra = sorted(set(sc.forces) - {"foot_load"})
+    if extra:
+        raise SceneError(f"{where}: the bench's reference model knows the force element foot_load only "
+                         f"(got {', '.join(extra)})")
+    model_forces = [f[0] for f in sc.model_info.forces]
+    if sc.foot_load is not None and model_forces.index("foot_load") != 0:
+        raise SceneError(f"{where}: foot_load is force element #{model_forces.index('foot_load')} of the model; "
+                         "the bench sends it as LOAD_CMD Load_Index 0 (the leg's first [[force]])")
+    if sc.variant != "revolute" and sc.analysis in ("statics", "statics_sweep", "inverse_dynamics"):
+        raise SceneError(f"{where}: {sc.analysis} of the {sc.variant!r} variant: the bench's reference model "
+                         "has statics and inverse dynamics for the revolute knee only (2 lengths, 2 dof)")
+    if sc.analysis == "dynamics":
+        if sc.variant not in VARIANTS:
+            raise SceneError(f"{where}: over CAN the variant is Ctrl_Variant: revolute or slot (got {sc.variant!r})")
+        if sc.pose > 1:
+            raise SceneError(f"{where}: over CAN the pose is Ctrl_Pose 0..1; {sc.pose_name!r} is pose #{sc.pose}")
+        for key, dv in DEFAULT_OPTIONS.items():
+            if getattr(sc, key) != dv:
+                raise SceneError(f"{where}: {key} = {getattr(sc, key)!r}: RESET carries no solver options and "
+                                 f"hil_sim runs the core's default ({dv!r}); dynamics over CAN cannot use another")
 
+
+# ---- reading a scene: legsim_cli --check -------------------------------------------------------
+
+def _check(args: list[str], where: str, text: str | None, root: Path | None) -> dict:
+    cli = cli_path(root)
+    if not cli.is_file():
+        raise SceneError(f"{where}: legsim_cli reads the scene files, and it is not at {cli}: build it "
+                         "(cmake --build --preset host --target legsim_cli) or set LEGSIM_CLI")
+    try:
+        r = subprocess.run([str(cli), *args, "--check"], input=text, capture_output=True, text=True,
+                           timeout=CLI_TIMEOUT_S)
+    except (OSError, subprocess.TimeoutExpired) as e:
+        raise SceneError(f"{where}: cannot run {cli}: {e}") from None
+    if r.returncode != 0:
+        msg = r.stderr.strip().removeprefix("legsim_cli: error: ")
+        raise SceneError(msg or f"{where}: legsim_cli --check exit {r.returncode}")
+    try:
+        return json.loads(r.stdout)
+    except json.JSONDecodeError as e:
+        raise SceneError(f"{where}: legsim_cli --check wrote no JSON ({e})") from None
 
 
 def parse_scene(text: str, path: str | os.PathLike | None = None, *, root: Path | None = None,
                 name: str | None = None) -> Scene:
-    """A Scene from TOML text (SceneError on anything that cannot be run). The rules are
-    legsim_cli's (scenes/README.md); on top, what the bench cannot do says why."""
-    path = Path(path) if path is not None else None
-    where = str(path) if path else (name or "scene")
-    if len(text.encode("utf-8", "surrogatepass")) > MAX_TOML_BYTES:
-        raise SceneError(f"{where}: TOML input refused: larger than {MAX_TOML_BYTES} bytes")
+    """A Scene from TOML text, read by legsim_cli as if it were the file at `path` (its name,
+    its folder for a relative model path; else `name` in the working directory). SceneError
+    on anything that cannot be run, in legsim_cli's words."""
+    as_path = str(path) if path is not None else (name or "scene")
+    d = _check(["-", "--as", as_path], as_path, text, root)
+    return scene_from_resolved(d, Path(path) if path is not None else None, text, root=root)
+
+
+def load_scene(spec: str | os.PathLike, root: Path | None = None) -> Scene:
+    path = resolve_scene(spec, root)
+    d = _check([str(path)], str(path), None, root)
     try:
-        d = tomllib.loads(text)
-    except tomllib.TOMLDecodeError as e:
-        raise SceneError(f"{where}: not valid TOML: {e}") from None
-    except RecursionError:  # tomllib recurses per nesting level
-        raise SceneError(f"{where}: TOML input refused: nested too deeply") from None
-    for old, msg in RENAMED_KEYS.items():
-        if old in d:
-            raise SceneError(f"{where}: {msg}")
-    _unknown(where, d, _TOP_KEYS)
-    sname = d.get("name") or name or (path.stem if path else "scene")
-    if not isinstance(sname, str) or not re.fullmatch(r"[A-Za-z0-9_.-]+", sname):
-        raise SceneError(f"{where}: name must be letters, digits, '_', '-', '.': {sname!r}")
-    if not isinstance(d.get("demo", False), bool):
-        raise SceneError(f"{where}: demo must be true or false")
-
-    analysis = _choice(where, "analysis", d.get("analysis", "dynamics"), ANALYSES)
-    timed = analysis in TIMED
-    dynamics = analysis == "dynamics"
-
-    def only(key, applies, which):
-        if key in d and not applies:
-            raise SceneError(f"{where}: '{key}' applies to {which} only")
-
-    model_spec = d.get("model", BUILTIN_MODEL)
-    info = _model(where, model_spec, path, root)
-    variant = d.get("variant", "revolute")
-    if not isinstance(variant, str) or variant not in info.variants:
-        raise SceneError(f"{where}: variant {variant!r} is not in the model {info.path.name} "
-                         f"(available: {', '.join(info.variants)})")
-    integrator = _choice(where, "integrator", d.get("integrator", "rk4"), INTEGRATORS)
-    h = _num(where, "step_s", d.get("step_s", 0.001))
-    step_ns = round(h * 1e9)
-    if not h > 0 or abs(step_ns / 1e9 - h) > 1e-15 or not 1000 <= step_ns <= 100_000_000:
-        raise SceneError(f"{where}: 'step_s' must be a whole number of ns in 1 us .. 100 ms (got {_fmt(h)})")
-    rho_inf = _num(where, "rho_inf", d.get("rho_inf", DEFAULT_OPTIONS["rho_inf"]))
-    if not 0 <= rho_inf <= 1:
-        raise SceneError(f"{where}: 'rho_inf' must be in [0, 1] (got {_fmt(rho_inf)})")
-    max_iter = _int(where, "max_newton_iter", d.get("max_newton_iter", DEFAULT_OPTIONS["max_newton_iter"]),
-                    1, 1000)
-    newton_tol = _num(where, "newton_tol", d.get("newton_tol", DEFAULT_OPTIONS["newton_tol"]), positive=True)
-    if not NEWTON_TOL_RANGE[0] <= newton_tol <= NEWTON_TOL_RANGE[1]:
-        raise SceneError(f"{where}: 'newton_tol' must be in [{NEWTON_TOL_RANGE[0]:g}, "
-                         f"{NEWTON_TOL_RANGE[1]:g}] (m, rad; got {_fmt(newton_tol)})")
-    disable = d.get("disable", [])
-    if not isinstance(disable, list):
-        raise SceneError(f"{where}: disable must be a list of names")
-    disable = tuple(_choice(where, "disable", x, tuple(DISABLE_FLAGS)) for x in disable)
-
-    only("duration", timed, "dynamics and inverse_dynamics")
-    only("record_every", timed, "dynamics and inverse_dynamics")
-    n_steps, rec = 0, 1
-    if timed:
-        if "duration" not in d:
-            raise SceneError(f"{where}: missing key 'duration' (s)")
-        dur = _num(where, "duration", d["duration"], positive=True)
-        n_steps = math.floor(dur * 1e9 / step_ns + 0.5)
-        if abs(n_steps * step_ns / 1e9 - dur) > GRID_TOL_S:
-            lo = math.floor(dur * 1e9 / step_ns)
-            raise SceneError(f"{where}: 'duration' {_fmt(dur)} s is not a whole number of steps of "
-                             f"{_fmt(h)} s ({_fmt(lo * step_ns / 1e9)} or {_fmt((lo + 1) * step_ns / 1e9)} "
-                             "s would be)")
-        if not 1 <= n_steps <= 1e9:
-            raise SceneError(f"{where}: 'duration' / 'step_s' must give 1 to 1e9 steps")
-        rec = _int(where, "record_every", d.get("record_every", 1), 1, MAX_RECORD_EVERY)
-        if n_steps // rec + 1 > MAX_SAMPLES:
-            raise SceneError(f"{where}: 'duration' / ('step_s' x 'record_every') asks for "
-                             f"{n_steps // rec + 1} samples, more than {MAX_SAMPLES}: raise 'record_every'")
-
-    pose_name = d.get("pose", info.poses[0] if info.poses else None)
-    if pose_name is None:
-        raise SceneError(f"{where}: the model has no pose to assemble")
-    if not isinstance(pose_name, str):
-        raise SceneError(f"{where}: pose must be the name of a pose of the model (e.g. pose = \"stand\")")
-    if pose_name not in info.poses:
-        raise SceneError(f"{where}: pose {pose_name!r} is not in the model (poses: "
-                         f"{', '.join(info.poses) or 'none'})")
-    pose = info.poses.index(pose_name)
-    lengths = None
-    if "lengths" in d:
-        if analysis == "statics_sweep":
-            raise SceneError(f"{where}: 'lengths' does not apply to statics_sweep")
-        v = d["lengths"]
-        if not isinstance(v, list) or len(v) != len(info.actuators):
-            raise SceneError(f"{where}: 'lengths' must hold {len(info.actuators)} values, one per actuator")
-        lengths = tuple(_num(where, "lengths", x) for x in v)
-        for a, (an, (smin, smax), _) in enumerate(info.actuators):
-            if not smin <= lengths[a] <= smax:
-                raise SceneError(f"{where}: lengths[{a}] = {_fmt(lengths[a])} m is outside the stroke of "
-                                 f"actuator '{an}' [{_fmt(smin)}, {_fmt(smax)}]")
-    only("grid", analysis == "statics_sweep", "statics_sweep")
-    only("statics_rule", analysis in ("statics", "inverse_dynamics"), "statics and inverse_dynamics")
-    statics_rule = _rule_choice(where, d.get("statics_rule", "equal_friction"))
-    if "statics_rule" in d and not info.robot:
-        raise SceneError(f"{where}: 'statics_rule' applies to a model with contacts only (a stance on two feet)")
-    only("contact_law", dynamics, "dynamics")
-    contact_law = _rule_choice(where, d.get("contact_law", "lcp"), "contact_law", CONTACT_LAWS)
-    if "contact_law" in d and not info.robot:
-        raise SceneError(f"{where}: 'contact_law' applies to a model with contacts only (a robot's feet)")
-    # a load on a robot's box: [Fx, Fy] N at its centre and M N m (legsim_cli: box_load_add)
-    only("box_load", analysis in ("dynamics", "statics", "inverse_dynamics"), "statics, dynamics and inverse_dynamics")
-    box_load = None
-    if "box_load" in d:
-        v = d["box_load"]
-        if not isinstance(v, list) or len(v) != 3:
-            raise SceneError(f"{where}: 'box_load' must be [Fx, Fy, M] (N, N, N m: a load on the box)")
-        box_load = tuple(_num(where, "'box_load'", x) for x in v)
-        if any(abs(x) > MAX_FORCE_N for x in box_load):
-            raise SceneError(f"{where}: 'box_load' must be within +-{MAX_FORCE_N:g} (N, N, N m)")
-        if not info.robot:
-            raise SceneError(f"{where}: 'box_load' applies to a model with contacts only (the robot's box)")
-        for fname, _ in info.forces:
-            if fname in ("box.load", "box.moment"):
-                raise SceneError(f"{where}: 'box_load': the model has a force element named '{fname}' already")
-    grid = _int(where, "grid", d.get("grid", 11), 2, 1000)
-    only("init", dynamics, "dynamics")
-    init = _choice(where, "init", d.get("init", "zero_force"), ACTUATOR_MODES)
-    for key in ("cmd_timeout_ms", "safe_state", "inject"):
-        only(key, dynamics, "dynamics (over CAN)")
-    timeout = _int(where, "cmd_timeout_ms", d.get("cmd_timeout_ms", 0), 0, 65534)
-    safe = _choice(where, "safe_state", d.get("safe_state", "zero_force"), ACTUATOR_MODES)
-
-    forces = {}
-    fv = d.get("forces", {})
-    if not isinstance(fv, dict):
-        raise SceneError(f"{where}: 'forces' must be a table: NAME = [Fx, Fy] or NAME = torque")
-    kinds = dict(info.forces)
-    for fname, v in fv.items():
-        w = f"forces.{fname}"
-        vals = [v] if not isinstance(v, list) else v
-        if not 1 <= len(vals) <= 2:
-            raise SceneError(f"{where}: {w} must be a number or an array of 1 or 2 numbers")
-        vals = tuple(_num(where, w, x) for x in vals)
-        if any(abs(x) > MAX_FORCE_N for x in vals):
-            raise SceneError(f"{where}: {w} must be within +-{MAX_FORCE_N:g} (N or N m)")
-        if fname not in kinds:
-            raise SceneError(f"{where}: {w}: the model has no force element '{fname}'")
-        if kinds[fname] == "point" and len(vals) != 2:
-            raise SceneError(f"{where}: {w}: a point force takes [Fx, Fy] (N)")
-        if kinds[fname] == "torque" and len(vals) != 1:
-            raise SceneError(f"{where}: {w}: a torque takes one value (N m)")
-        if kinds[fname] == "spring_damper":
-            raise SceneError(f"{where}: {w}: a spring_damper has no value to set")
-        forces[fname] = vals
-
-    act_names = tuple(a[0] for a in info.actuators)
-    if info.robot:
-        return _robot_scene(d, where, text, path, root, info, sname=sname, analysis=analysis,
-                            model_spec=model_spec, variant=variant, integrator=integrator,
-                            step_ns=step_ns, n_steps=n_steps, rec=rec, pose=pose, pose_name=pose_name,
-                            lengths=lengths, init=init, disable=disable, forces=forces,
-                            rho_inf=rho_inf, max_iter=max_iter, newton_tol=newton_tol,
-                            statics_rule=statics_rule, contact_law=contact_law, box_load=box_load)
-    # The bench knows the leg: the DBC carries two actuators, upper and lower, and its
-    # reference model the one force element foot_load.
-    if act_names != ACTUATORS:
-        raise SceneError(f"{where}: the bench runs the leg's actuators {', '.join(ACTUATORS)} (the DBC's "
-                         f"signals and the reference model); the model has {', '.join(act_names) or 'none'}")
-    extra = sorted(set(forces) - {"foot_load"})
-    if extra:
-        raise SceneError(f"{where}: the bench's reference model knows the force element foot_load only "
-                         f"(got {', '.join(extra)})")
-    foot = forces.get("foot_load")
-    load_index = [f[0] for f in info.forces].index("foot_load") if foot is not None else 0
-    if load_index != 0:
-        raise SceneError(f"{where}: foot_load is force element #{load_index} of the model; the bench "
-                         "sends it as LOAD_CMD Load_Index 0 (the leg's first [[force]])")
-    if variant != "revolute" and analysis in ("statics", "statics_sweep", "inverse_dynamics"):
-        raise SceneError(f"{where}: {analysis} of the {variant!r} variant: the bench's reference model "
-                         "has statics and inverse dynamics for the revolute knee only (2 lengths, 2 dof)")
-    if dynamics:
-        # what RESET and the frames cannot carry: refused, with the reason
-        if variant not in VARIANTS:
-            raise SceneError(f"{where}: over CAN the variant is Ctrl_Variant: revolute or slot (got {variant!r})")
-        if pose > 1:
-            raise SceneError(f"{where}: over CAN the pose is Ctrl_Pose 0..1; {pose_name!r} is pose #{pose}")
-        for key, dv in DEFAULT_OPTIONS.items():
-            if key in d and d[key] != dv:
-                raise SceneError(f"{where}: {key} = {d[key]!r}: RESET carries no solver options and hil_sim "
-                                 f"runs the core's default ({dv!r}); dynamics over CAN cannot use another")
-
-    cmds: list[ActuatorCommand | None] = [None, None]
-    raw_cmds = d.get("command", [])
-    if raw_cmds and not timed:
-        raise SceneError(f"{where}: [[command]] applies to dynamics and inverse_dynamics only")
-    if not isinstance(raw_cmds, list):
-        raise SceneError(f"{where}: command must be an array of tables [[command]]")
-    for i, c in enumerate(raw_cmds):
-        cw = f"{where} [[command]] #{i + 1}"
-        if not isinstance(c, dict):
-            raise SceneError(f"{cw}: must be a table")
-        _unknown(cw, c, {"actuator", "mode", "value", "step", "sinusoid"})
-        act = _choice(cw, "actuator", c.get("actuator"), ACTUATORS)
-        a = ACTUATORS.index(act)
-        if cmds[a] is not None:
-            raise SceneError(f"{cw}: a second command for actuator {act}")
-        mode = _choice(cw, "mode", c.get("mode"), ("force", "length"))
-        if analysis == "inverse_dynamics" and mode != "length":
-            raise SceneError(f"{cw}: inverse_dynamics prescribes lengths: use mode = \"length\"")
-        sch = _schedule(cw, c)
-        if sch.kind == "initial" and mode != "length":
-            raise SceneError(f"{cw}: value = \"initial\" is for mode = \"length\" (hold the assembled length)")
-        if sch.kind == "step":
-            _on_grid(where, sch.t0, step_ns, f"command '{act}': step t0 =")
-        if sch.extremes() is not None:
-            _, (smin, smax), fmax = info.actuators[a]
-            lo, hi = sch.extremes()
-            if mode == "force" and max(abs(lo), abs(hi)) > fmax:
-                raise SceneError(f"{cw}: |force| up to {max(abs(lo), abs(hi)):g} N exceeds max_force {fmax:g} N")
-            if mode == "length" and (lo < smin or hi > smax):
-                raise SceneError(f"{cw}: lengths {lo:g}..{hi:g} m leave the stroke {smin:g}..{smax:g} m")
-        cmds[a] = ActuatorCommand(a, mode, sch)
-
-    codes = None
-    try:
-        codes = fault_codes((root or find_root()) / "can" / "legsim.dbc")
-    except (RootNotFound, OSError):
-        pass
-
-    scene = Scene(name=sname, description=str(d.get("description", "")), path=path, source=text,
-                  variant=variant, integrator=integrator, step_ns=step_ns, n_steps=n_steps,
-                  record_every=rec, pose=pose, lengths=lengths, init=init,
-                  cmd_timeout_ms=timeout, safe_state=safe, disable=disable, foot_load=foot,
-                  commands=(cmds[0], cmds[1]), injections=(), checks=Checks(),
-                  demo=bool(d.get("demo", False)), analysis=analysis, model=model_spec,
-                  model_info=info, pose_name=pose_name, forces=forces, grid=grid, rho_inf=rho_inf,
-                  max_newton_iter=max_iter, newton_tol=newton_tol)
-    if timeout and rec * step_ns >= timeout * 1_000_000:
-        raise SceneError(f"{where}: an exchange every {rec * step_ns / 1e6:g} ms (record_every x step_s) "
-                         f"would let the {timeout} ms command timeout trip between ACT_CMDs")
-
-    injections = []
-    raw_inj = d.get("inject", [])
-    if not isinstance(raw_inj, list):
-        raise SceneError(f"{where}: inject must be an array of tables [[inject]]")
-    for i, x in enumerate(raw_inj):
-        iw = f"{where} [[inject]] #{i + 1}"
-        if not isinstance(x, dict):
-            raise SceneError(f"{iw}: must be a table")
-        _unknown(iw, x, {"at", "frame", "signals", "seq", "length", "expect", "expect_signal",
-                         "silence", "label"})
-        if "at" not in x or "expect" not in x:
-            raise SceneError(f"{iw}: needs at (s) and expect (a Fault_Code name)")
-        k = scene.to_step(_num(iw, "at", x["at"]), "at")
-        if not 0 <= k < n_steps:
-            raise SceneError(f"{iw}: at = {x['at']} s is outside the run (0 .. {dur:g} s)")
-        expect = str(x["expect"]).upper()
-        if codes is not None and expect not in codes:
-            raise SceneError(f"{iw}: expect = {x['expect']!r} is not a Fault_Code of the DBC "
-                             f"({', '.join(codes)})")
-        label = str(x.get("label", ""))
-        if "silence" in x:
-            if "frame" in x:
-                raise SceneError(f"{iw}: give frame or silence, not both")
-            ns = scene.to_step(_num(iw, "silence", x["silence"], positive=True), "silence")
-            if timeout == 0:
-                raise SceneError(f"{iw}: a silence needs cmd_timeout_ms > 0")
-            injections.append(Injection(step=k, expect=expect, label=label or f"silence {x['silence']:g} s",
-                                        silence_steps=ns))
-            continue
-        fr = x.get("frame")
-        if isinstance(fr, str):
-            frame = fr.upper()
-            if frame not in FRAME_IDS:
-                raise SceneError(f"{iw}: frame must be one of {', '.join(FRAME_IDS)} or an integer id")
-            fid = FRAME_IDS[frame]
-        elif isinstance(fr, int) and not isinstance(fr, bool) and 0 <= fr < (1 << 11):
-            frame, fid = None, fr
-        else:
-            raise SceneError(f"{iw}: frame must be a DBC message name or an 11-bit id")
-        sig = x.get("signals", {})
-        if not isinstance(sig, dict):
-            raise SceneError(f"{iw}: signals must be a table")
-        for sk, sv in sig.items():
-            if isinstance(sv, bool) or not isinstance(sv, (int, float)):
-                raise SceneError(f"{iw}: signal {sk} must be a number (nan and inf allowed)")
-        seq = x.get("seq", "next")
-        if not (seq in ("next", "stale") or (isinstance(seq, int) and not isinstance(seq, bool)
-                                              and 0 <= seq < 2 ** 32)):
-            raise SceneError(f"{iw}: seq must be \"next\", \"stale\" or a 32-bit integer")
-        if frame is None and seq == "stale":
-            raise SceneError(f"{iw}: seq = \"stale\" needs a DBC frame")
-        length = _int(iw, "length", x.get("length", 64), 0, 64)
-        if length not in FD_LENGTHS:
-            raise SceneError(f"{iw}: length must be a CAN FD payload length {FD_LENGTHS}")
-        esig = x.get("expect_signal")
-        injections.append(Injection(step=k, expect=expect, label=label or f"{fr} {sig}", frame=frame,
-                                    frame_id=fid, signals=dict(sig), seq=seq, length=length,
-                                    expect_signal=str(esig) if esig is not None else None))
-    scene.injections = tuple(sorted(injections, key=lambda i: i.step))
-
-    ch = d.get("checks")
-    if ch is None:
-        ch = dict(DEFAULT_CHECKS[analysis])   # scenes/README.md: the tolerances without [checks]
-    if not isinstance(ch, dict):
-        raise SceneError(f"{where}: [checks] must be a table")
-    _unknown(f"{where} [checks] ({analysis})", ch, CHECKS_FOR[analysis])
-    kw = {k: _num(f"{where} [checks]", k, ch[k], positive=True) for k in CHECK_KEYS if k in ch}
-    if "compare" in ch:
-        kw["compare"] = _choice(f"{where} [checks]", "compare", ch["compare"], ("all", "until_stroke"))
-    if "resolution_ratio" in ch:
-        kw["resolution_ratio"] = _num(f"{where} [checks]", "resolution_ratio", ch["resolution_ratio"], positive=True)
-    if "stroke" in ch:
-        s = ch["stroke"]
-        sw = f"{where} [checks.stroke]"
-        if not isinstance(s, dict):
-            raise SceneError(f"{sw}: must be a table {{actuator, end, tolerance_m}}")
-        _unknown(sw, s, {"actuator", "end", "tolerance_m"})
-        kw["stroke"] = StrokeCheck(ACTUATORS.index(_choice(sw, "actuator", s.get("actuator"), ACTUATORS)),
-                                   _choice(sw, "end", s.get("end"), ("min", "max")),
-                                   _num(sw, "tolerance_m", s.get("tolerance_m", 1e-6), positive=True))
-    scene.checks = Checks(**kw)
-    if not scene.checks.tolerances() and not scene.injections and scene.checks.stroke is None:
-        raise SceneError(f"{where}: [checks] names nothing to check")
-    return scene
+        source = path.read_text()
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(f"{path}: cannot read: {e}") from None
+    return scene_from_resolved(d, path, source, root=root)
 
 
 def shipped_scenes(root: Path | None = None) -> list[Path]:
@@ -1172,26 +641,15 @@ def resolve_scene(spec: str | os.PathLike, root: Path | None = None) -> Path:
         return p
     ships = shipped_scenes(root)
     if str(spec) == "demo":
-        demos = [s for s in ships if _is_demo(s)]
-        if demos:
-            return demos[0]
+        for s in ships:
+            try:
+                if _check([str(s)], str(s), None, root)["demo"]:
+                    return s
+            except SceneError:
+                continue
         raise SceneError("no shipped scene is marked demo = true")
     for s in ships:
         if s.stem.lower() == str(spec).lower():
             return s
     names = ", ".join(s.stem for s in ships) or "none"
     raise SceneError(f"no scene {spec!r}: not a file, nor a shipped scene ({names})")
-
-
-def _is_demo(path: Path) -> bool:
-    try:
-        return bool(tomllib.loads(path.read_text()).get("demo", False))
-    except (OSError, tomllib.TOMLDecodeError):
-        return False
-
-
-def load_scene(spec: str | os.PathLike, root: Path | None = None) -> Scene:
-    path = resolve_scene(spec, root)
-    if path.stat().st_size > MAX_TOML_BYTES:  # refused before it is read
-        raise SceneError(f"{path}: TOML input refused: larger than {MAX_TOML_BYTES} bytes")
-    return parse_scene(path.read_text(), path, root=root)

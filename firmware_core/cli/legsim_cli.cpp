@@ -3,6 +3,7 @@
 //
 //   legsim_cli SCENE.toml [--out FILE.json|FILE.csv] [--format json|csv]
 //   legsim_cli SCENE.toml --check
+//   legsim_cli - --as PATH --check      (the scene's text on stdin, read as the file PATH)
 //
 // The scene names the model file (loaded at run time, host/model_toml.cpp) or
 // "builtin:leg" (the default: the leg compiled in from models/leg.toml; "builtin:robot"
@@ -14,6 +15,7 @@
 #include <cstring>
 #include <fstream>
 #include <iostream>
+#include <iterator>
 #include <string>
 
 #include "legsim/legsim.h"
@@ -25,6 +27,7 @@
 #define LEGSIM_CLI_HAS_ROBOT 0
 #endif
 #include "model_toml.hpp"
+#include "toml_limits.hpp"
 #include "scene_toml.hpp"
 
 namespace {
@@ -32,11 +35,14 @@ namespace {
 const char *kUsage =
     "usage: legsim_cli SCENE.toml [--out FILE.json|FILE.csv] [--format json|csv]\n"
     "       legsim_cli SCENE.toml --check\n"
+    "       legsim_cli - --as PATH [--check]\n"
     "  Runs the scene (model, analysis, inputs; scenes/README.md) and writes time, body\n"
     "  coordinates, actuator lengths and forces, joint reactions, constraint residual and\n"
     "  status, sample by sample. Without --out the output goes to stdout; the format\n"
     "  follows --format, else the extension of --out, else JSON.\n"
-    "  --check: read the scene and its model, print the resolved scene as JSON, run nothing.\n";
+    "  --check: read the scene and its model, print the resolved scene as JSON, run nothing.\n"
+    "  -: read the scene's text from stdin, as if it were the file --as PATH (its name, and\n"
+    "  its folder for a relative model path; default \"stdin\").\n";
 
 int usage_error(const std::string &msg) {
   std::cerr << "legsim_cli: " << msg << "\n" << kUsage;
@@ -51,7 +57,7 @@ bool ends_with(const std::string &s, const char *suffix) {
 }  // namespace
 
 int main(int argc, char **argv) {
-  std::string scene_path, out_path, format;
+  std::string scene_path, out_path, format, as_path;
   bool check_only = false;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -60,6 +66,9 @@ int main(int argc, char **argv) {
       return 0;
     } else if (a == "--check") {
       check_only = true;
+    } else if (a == "--as") {
+      if (++i >= argc) return usage_error("--as needs a file name");
+      as_path = argv[i];
     } else if (a == "--out" || a == "-o") {
       if (++i >= argc) return usage_error("--out needs a file name");
       out_path = argv[i];
@@ -70,7 +79,7 @@ int main(int argc, char **argv) {
       format = argv[i];
     } else if (a.rfind("--format=", 0) == 0) {
       format = a.substr(9);
-    } else if (!a.empty() && a[0] == '-') {
+    } else if (a.size() > 1 && a[0] == '-') {
       return usage_error("unknown option " + a);
     } else if (scene_path.empty()) {
       scene_path = a;
@@ -82,9 +91,21 @@ int main(int argc, char **argv) {
   if (format.empty()) format = ends_with(out_path, ".csv") ? "csv" : "json";
   if (format != "json" && format != "csv") return usage_error("--format must be json or csv");
 
+  if (!as_path.empty() && scene_path != "-") return usage_error("--as names a scene read from stdin (-)");
   legsim_host::Scene scene;
   std::string err;
-  if (!legsim_host::load_scene(scene_path, scene, err)) {
+  bool loaded;
+  if (scene_path == "-") {
+    // read at most one byte past the TOML limit: a larger text is refused without being held
+    std::string text;
+    std::istreambuf_iterator<char> it(std::cin), end;
+    for (; it != end && text.size() <= kTomlMaxBytes; ++it) text.push_back(*it);
+    scene_path = as_path.empty() ? "stdin" : as_path;
+    loaded = legsim_host::load_scene_text(text, scene_path, scene, err);
+  } else {
+    loaded = legsim_host::load_scene(scene_path, scene, err);
+  }
+  if (!loaded) {
     std::cerr << "legsim_cli: error: " << err << "\n";
     return 2;
   }

@@ -167,7 +167,7 @@ std::string dirname_of(const std::string &path) {
 }
 
 // Keys and values of the two former schemas (scenes/cli and bench/scenes) and what they are
-// now: an old file gets a message naming the new key (the bench says the same words).
+// now: an old file gets a message naming the new key.
 struct Renamed {
   const char *old_key;
   const char *message;
@@ -248,6 +248,8 @@ void bench_json_to(std::ostream &o, const toml::node &n) {
     else if (std::isinf(v)) std::snprintf(buf, sizeof buf, v > 0 ? "\"inf\"" : "\"-inf\"");
     else std::snprintf(buf, sizeof buf, "%.17g", v);
     o << buf;
+    // a float stays a float in JSON (1.0, not 1): readers that keep the type see TOML's
+    if (std::isfinite(v) && !std::strpbrk(buf, ".e")) o << ".0";
   } else {
     o << toml::json_formatter{n, toml::format_flags::quote_dates_and_times};
   }
@@ -256,6 +258,291 @@ std::string bench_json(const toml::node &n) {
   std::ostringstream o;
   bench_json_to(o, n);
   return o.str();
+}
+
+// ---- the bench's sections: [[inject]] (bad input over CAN) and [checks] (its verdicts) ----
+
+// Fault_Code of can/legsim.dbc (VAL_ ... Fault_Code), by value; tests/bench/test_scene.py
+// compares this list with the DBC's.
+const char *const kFaultCodes[] = {"NONE",      "UNKNOWN_ID", "BAD_LENGTH",  "NOT_FINITE", "OUT_OF_RANGE",
+                                   "STALE_SEQ", "BAD_STATE",  "CMD_TIMEOUT", "SOLVER"};
+// The bench -> hil_sim frames of can/legsim.dbc an injection may name (ids as the DBC's BO_).
+struct InjectFrame {
+  const char *name;
+  int id;
+};
+const InjectFrame kInjectFrames[] = {{"CONTROL", 0x080}, {"ACT_CMD", 0x100}, {"LOAD_CMD", 0x110}};
+const int kFdLengths[] = {0, 1, 2, 3, 4, 5, 6, 7, 8, 12, 16, 20, 24, 32, 48, 64};
+
+std::string upper(std::string v) {
+  for (char &c : v) c = static_cast<char>(std::toupper(static_cast<unsigned char>(c)));
+  return v;
+}
+
+std::string jstring(const std::string &v) {
+  std::ostringstream o;
+  o << toml::json_formatter{toml::value<std::string>(v)};
+  return o.str();
+}
+
+// A time of the run as a step: on the grid and within 0 .. n_steps - 1.
+int64_t step_in_run(Node v, const Scene &s, const std::string &w, const char *key) {
+  const double t = real_of(v, w + q(key));
+  const int64_t k = on_grid(t, s.step_ns, w + q(key) + " =");
+  if (k < 0 || k >= s.n_steps)
+    fail(w + q(key) + " = " + num(t) + " s is outside the run (0 .. " +
+         num(static_cast<double>(s.n_steps) * s.step_ns / 1e9) + " s)");
+  return k;
+}
+
+struct Injection {
+  int64_t step;
+  std::string json;
+};
+
+// [[inject]] resolved for the bench: the step, the frame's id, the expected Fault_Code name.
+std::string parse_injections(const toml::array &a, const Scene &s) {
+  std::vector<Injection> out;
+  int k = 0;
+  for (auto &&e : a) {
+    ++k;
+    Table x = e.as_table();
+    const std::string w = "inject #" + std::to_string(k) + ": ";
+    check_keys(x, {"at", "frame", "signals", "seq", "length", "expect", "expect_signal", "silence", "label"}, w);
+    if (!x->get("at") || !x->get("expect")) fail(w + "needs 'at' (s) and 'expect' (a Fault_Code name)");
+    Injection inj;
+    inj.step = step_in_run(x->get("at"), s, w, "at");
+    const std::string expect = upper(get_string(x, "expect", w, true));
+    bool known = false;
+    std::string codes;
+    for (const char *c : kFaultCodes) {
+      codes += (codes.empty() ? "" : ", ") + std::string(c);
+      known = known || expect == c;
+    }
+    if (!known)
+      fail(w + "'expect' = " + q(get_string(x, "expect", w, true)) + " is not a Fault_Code of the DBC (" + codes +
+           ")");
+    std::string label = get_string(x, "label", w, false);
+    const std::string expect_signal = get_string(x, "expect_signal", w, false);
+    std::ostringstream o;
+    o << "{\"step\": " << inj.step << ", \"expect\": " << jstring(expect);
+    if (Node sv = x->get("silence")) {
+      if (x->get("frame")) fail(w + "give 'frame' or 'silence', not both");
+      for (const char *key : {"signals", "seq", "length", "expect_signal"})
+        if (x->get(key)) fail(w + q(key) + " applies to a frame, not to a silence");
+      const double d = real_of(sv, w + "'silence'");
+      if (!(d > 0)) fail(w + "'silence' must be > 0 (s; got " + num(d) + ")");
+      const int64_t n = on_grid(d, s.step_ns, w + "'silence' =");
+      if (s.cmd_timeout_ms == 0) fail(w + "a silence needs cmd_timeout_ms > 0");
+      if (label.empty()) label = "silence " + num(d) + " s";
+      o << ", \"label\": " << jstring(label) << ", \"silence_steps\": " << n << "}";
+      out.push_back({inj.step, o.str()});
+      continue;
+    }
+    Node fv = x->get("frame");
+    std::string frame, frame_text;
+    int64_t id = -1;
+    if (fv && fv->is_string()) {
+      frame_text = std::string(*fv->value<std::string_view>());
+      std::string names;
+      for (const auto &f : kInjectFrames) {
+        names += (names.empty() ? "" : ", ") + std::string(f.name);
+        if (upper(frame_text) == f.name) {
+          frame = f.name;
+          id = f.id;
+        }
+      }
+      if (id < 0) fail(w + "'frame' must be " + names + " or an 11-bit id (got " + q(frame_text) + ")");
+    } else if (fv && fv->is_integer() && *fv->value<int64_t>() >= 0 && *fv->value<int64_t>() < (1 << 11)) {
+      id = *fv->value<int64_t>();
+      frame_text = std::to_string(id);
+    } else {
+      fail(w + "'frame' must be a DBC message name (CONTROL, ACT_CMD, LOAD_CMD) or an 11-bit id");
+    }
+    std::string signals = "{}";
+    if (Node gv = x->get("signals")) {
+      Table g = gv->as_table();
+      if (!g) fail(w + "'signals' must be a table { NAME = value }");
+      for (auto &&kv : *g)
+        if (!is_number(&kv.second))
+          fail(w + "signal " + q(std::string(kv.first.str())) + " must be a number (nan and inf allowed)");
+      signals = bench_json(*g);
+    }
+    std::string seq = "\"next\"";
+    if (Node qv = x->get("seq")) {
+      if (qv->is_string() && (*qv->value<std::string_view>() == "next" || *qv->value<std::string_view>() == "stale"))
+        seq = jstring(std::string(*qv->value<std::string_view>()));
+      else if (qv->is_integer() && *qv->value<int64_t>() >= 0 && *qv->value<int64_t>() <= 0xFFFFFFFFll)
+        seq = std::to_string(*qv->value<int64_t>());
+      else
+        fail(w + "'seq' must be \"next\", \"stale\" or a 32-bit integer");
+      if (frame.empty() && seq == "\"stale\"") fail(w + "seq = \"stale\" needs a DBC frame (its counter)");
+    }
+    const int64_t length = get_int(x, "length", w, 64, 0, 64);
+    if (std::find(std::begin(kFdLengths), std::end(kFdLengths), length) == std::end(kFdLengths))
+      fail(w + "'length' must be a CAN FD payload length (0..8, 12, 16, 20, 24, 32, 48 or 64; got " +
+           std::to_string(length) + ")");
+    if (label.empty()) label = frame_text + " " + signals;
+    o << ", \"label\": " << jstring(label) << ", \"frame\": " << (frame.empty() ? "null" : jstring(frame))
+      << ", \"frame_id\": " << id << ", \"signals\": " << signals << ", \"seq\": " << seq
+      << ", \"length\": " << length
+      << ", \"expect_signal\": " << (expect_signal.empty() ? "null" : jstring(expect_signal)) << "}";
+    out.push_back({inj.step, o.str()});
+  }
+  std::stable_sort(out.begin(), out.end(), [](const Injection &a, const Injection &b) { return a.step < b.step; });
+  std::string json = "[";
+  for (size_t i = 0; i < out.size(); ++i) json += (i ? ", " : "") + out[i].json;
+  return json + "]";
+}
+
+// [checks]: tolerances (> 0, in the key's unit) and options of the bench's verdicts.
+const char *const kTolerances[] = {"position_m",  "angle_rad",       "reaction_n",         "moment_nm",
+                                   "actuator_force_n", "residual",   "balance_n",          "balance_nm",
+                                   "stays_put_m", "statics_force_n", "statics_reaction_n", "ground_force_n",
+                                   "growth_rel",  "slip_onset_steps"};
+bool is_tolerance(const std::string &k) {
+  return std::find_if(std::begin(kTolerances), std::end(kTolerances),
+                      [&](const char *t) { return k == t; }) != std::end(kTolerances);
+}
+
+std::vector<std::string> names_of(Node v, const std::string &w) {
+  const toml::array *a = v->as_array();
+  if (!a) fail(w + " must be a list of names");
+  std::vector<std::string> out;
+  for (auto &&e : *a) {
+    if (!e.is_string()) fail(w + " must be a list of names");
+    out.emplace_back(*e.value<std::string_view>());
+  }
+  return out;
+}
+
+void parse_checks(Table t, CheckSpec &c) {
+  c.given = true;
+  const std::string w = "[checks] ";
+  for (auto &&kv : *t) {
+    const std::string key(kv.first.str());
+    c.keys.push_back(key);
+    if (is_tolerance(key)) {
+      const double v = real_of(&kv.second, w + q(key));
+      if (!(v > 0)) fail(w + q(key) + " must be > 0 (got " + num(v) + ")");
+      ++c.n_tolerances;
+    } else if (key == "resolution_ratio") {
+      const double v = real_of(&kv.second, w + q(key));
+      if (!(v > 0)) fail(w + q(key) + " must be > 0 (got " + num(v) + ")");
+    } else if (key == "compare") {
+      static const char *const kCompare[] = {"all", "until_stroke"};
+      choice(t, "compare", kCompare, 2, "all");
+    } else if (key == "stroke") {
+      Table st = kv.second.as_table();
+      const std::string sw = "[checks.stroke] ";
+      if (!st) fail(sw + "must be a table {actuator, end, tolerance_m}");
+      check_keys(st, {"actuator", "end", "tolerance_m"}, sw);
+      c.stroke_actuator = get_string(st, "actuator", sw, true);
+      const std::string end = get_string(st, "end", sw, true);
+      if (end != "min" && end != "max") fail(sw + "'end' must be min or max (got " + q(end) + ")");
+      const double tol = get_real(st, "tolerance_m", sw, false, 1e-6);
+      if (!(tol > 0)) fail(sw + "'tolerance_m' must be > 0 (got " + num(tol) + ")");
+    } else if (key == "slips") {
+      c.has_slips = true;
+      c.slips = names_of(&kv.second, w + "'slips'");
+    } else if (key == "lifts") {
+      c.has_lifts = true;
+      c.lifts = names_of(&kv.second, w + "'lifts'");
+    }
+    // any other key: refused at bind time, where the keys that apply are known
+  }
+}
+
+// The [checks] keys that apply to an analysis of a leg or of a robot (a model with contacts).
+std::vector<std::string> checks_for(Analysis a, bool robot) {
+  switch (a) {
+    case Analysis::kDynamics:
+      if (robot)
+        return {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
+                "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps"};
+      return {"position_m", "angle_rad", "reaction_n", "moment_nm", "actuator_force_n", "residual", "balance_n",
+              "balance_nm", "stays_put_m", "statics_force_n", "statics_reaction_n", "compare", "stroke",
+              "resolution_ratio"};
+    case Analysis::kStatics:
+      if (robot)
+        return {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n", "ground_force_n"};
+      return {"position_m", "angle_rad", "residual", "statics_force_n", "statics_reaction_n", "balance_n",
+              "balance_nm"};
+    case Analysis::kStaticsSweep: return {"statics_force_n", "statics_reaction_n"};
+    case Analysis::kInverseDynamics:
+      if (robot)
+        return {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n"};
+      return {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "moment_nm"};
+    case Analysis::kAssembly: return {"position_m", "angle_rad", "residual"};
+  }
+  return {};
+}
+
+std::string joined(const std::vector<std::string> &v) {
+  std::string o;
+  for (size_t i = 0; i < v.size(); ++i) o += (i ? ", " : "") + v[i];
+  return o;
+}
+
+// The keys of [checks] written other than those in keep, sorted.
+std::vector<std::string> checks_other_than(const CheckSpec &c, std::initializer_list<const char *> keep) {
+  std::vector<std::string> out;
+  for (const std::string &k : c.keys)
+    if (std::none_of(keep.begin(), keep.end(), [&](const char *x) { return k == x; })) out.push_back(k);
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+// [checks] against the model: the keys that apply, the actuator and feet named.
+void bind_checks(const Scene &s, const legsim_model_desc &m) {
+  const CheckSpec &c = s.checks;
+  const bool robot = m.n_contacts > 0;
+  if (!c.given) return;
+  std::vector<std::string> allowed = checks_for(s.analysis, robot);
+  std::sort(allowed.begin(), allowed.end());
+  const std::string where =
+      std::string("[checks] (") + (robot ? "robot " : "") + analysis_name(s.analysis) + "): ";
+  for (const std::string &k : c.keys)
+    if (std::find(allowed.begin(), allowed.end(), k) == allowed.end())
+      fail(where + "unknown key " + q(k) + " (allowed: " + joined(allowed) + ")");
+  if (!c.stroke_actuator.empty()) {
+    std::vector<std::string> acts;
+    for (int32_t a = 0; a < m.n_actuators; ++a) acts.push_back(scene_text::name_of(m.actuator[a].name));
+    if (std::find(acts.begin(), acts.end(), c.stroke_actuator) == acts.end())
+      fail("[checks.stroke] 'actuator' must be an actuator of the model (" + joined(acts) + "; got " +
+           q(c.stroke_actuator) + ")");
+  }
+  std::vector<std::string> feet;
+  for (int32_t k = 0; k < m.n_contacts; ++k) feet.push_back(scene_text::name_of(m.contact[k].name));
+  for (const auto *list : {&c.slips, &c.lifts})
+    for (const std::string &f : *list)
+      if (std::find(feet.begin(), feet.end(), f) == feet.end())
+        fail(std::string("[checks] ") + (list == &c.slips ? "'slips'" : "'lifts'") +
+             " must be a list of the model's contacts (" + joined(feet) + "; got " + q(f) + ")");
+  const bool onset = std::find(c.keys.begin(), c.keys.end(), "slip_onset_steps") != c.keys.end();
+  if (c.has_slips) {
+    // the feet that must slip: RobotModel's stance on stuck feet is no reference then, except up
+    // to the first slip when slip_onset_steps asks for it
+    const std::vector<std::string> against =
+        onset ? checks_other_than(c, {"slips", "residual", "slip_onset_steps", "position_m", "angle_rad",
+                                      "ground_force_n"})
+              : checks_other_than(c, {"slips", "residual", "slip_onset_steps"});
+    if (!against.empty())
+      fail("[checks]: " + joined(against) +
+           " compare with RobotModel's stance on stuck feet, which 'slips' leaves: leave them out");
+  }
+  if (onset && (!c.has_slips || c.slips.empty()))
+    fail("[checks]: 'slip_onset_steps' needs 'slips' (the foot that slips first)");
+  if (c.has_lifts) {
+    // the feet that lift off and touch down: the stance is the reference until the first lift-off
+    std::vector<std::string> against = checks_other_than(c, {"lifts", "residual", "position_m", "angle_rad"});
+    if (against.empty() && c.has_slips) against = {"slips"};
+    if (!against.empty())
+      fail("[checks]: " + joined(against) +
+           " compare with RobotModel's stance on stuck feet, which 'lifts' leaves: leave them out");
+  }
+  if (c.n_tolerances == 0 && (robot || (s.n_injections == 0 && c.stroke_actuator.empty())))
+    fail("[checks] names nothing to check");
 }
 
 void parse_scene(Table doc, Scene &s) {
@@ -421,14 +708,20 @@ void parse_scene(Table doc, Scene &s) {
   only("inject", dynamics, "dynamics (over CAN)");
   s.cmd_timeout_ms = get_int(doc, "cmd_timeout_ms", "", 0, 0, 65534);
   s.safe_state = choice(doc, "safe_state", kInits, 2, "zero_force");
+  if (s.cmd_timeout_ms > 0 && s.record_every * s.step_ns >= s.cmd_timeout_ms * 1000000)
+    fail("an exchange every " + num(static_cast<double>(s.record_every * s.step_ns) / 1e6) +
+         " ms (record_every x step_s) would let the " + std::to_string(s.cmd_timeout_ms) +
+         " ms command timeout trip between ACT_CMDs");
   if (Node iv = doc->get("inject")) {
     const toml::array *a = iv->as_array();
     if (!a || !a->is_array_of_tables()) fail("'inject' must be an array of tables ([[inject]])");
-    s.inject_json = bench_json(*iv);
+    s.n_injections = static_cast<int>(a->size());
+    s.inject_json = parse_injections(*a, s);
   }
   if (Node cv = doc->get("checks")) {
     if (!cv->is_table()) fail("'checks' must be a table ([checks])");
     s.checks_json = bench_json(*cv);
+    parse_checks(cv->as_table(), s.checks);
   }
 
   if (Node fv = doc->get("forces")) {
@@ -604,10 +897,8 @@ const char *status_enum_name(legsim_status s) {
   return "LEGSIM_ERR_UNKNOWN";
 }
 
-bool load_scene(const std::string &path, Scene &scene, std::string &err) {
+bool load_scene_text(const std::string &text, const std::string &path, Scene &scene, std::string &err) {
   try {
-    std::string text;
-    if (!read_text(path, text, err)) return false;
     std::string why;
     if (!toml_input_within_limits(text, why)) {
       err = path + ": TOML input refused: " + why;
@@ -644,6 +935,39 @@ bool load_scene(const std::string &path, Scene &scene, std::string &err) {
     err = path + ": unexpected error";
   }
   return false;
+}
+
+bool load_scene(const std::string &path, Scene &scene, std::string &err) {
+  std::string text;
+  if (!read_text(path, text, err)) return false;
+  return load_scene_text(text, path, scene, err);
+}
+
+void write_resolved_model(std::ostream &o, const Scene &sc, const legsim_model_desc &m) {
+  using scene_text::name_of;
+  auto names = [&](const char *key, int32_t n, auto get) {
+    o << ", \"" << key << "\": [";
+    for (int32_t i = 0; i < n; ++i) o << (i ? ", " : "") << jstring(get(i));
+    o << "]";
+  };
+  o << ", \"description\": " << jstring(sc.description) << ", \"demo\": " << (sc.demo ? "true" : "false")
+    << ", \"model_info\": {\"actuators\": [";
+  for (int32_t a = 0; a < m.n_actuators; ++a) {
+    const legsim_actuator_desc &ad = m.actuator[a];
+    o << (a ? ", " : "") << "{\"name\": " << jstring(name_of(ad.name)) << ", \"stroke\": [" << num(ad.stroke_min_m)
+      << ", " << num(ad.stroke_max_m) << "], \"max_force\": " << num(ad.max_force_n) << "}";
+  }
+  o << "], \"forces\": [";
+  for (int32_t f = 0; f < m.n_forces; ++f) {
+    const legsim_force_kind k = m.force[f].kind;
+    o << (f ? ", " : "") << "{\"name\": " << jstring(name_of(m.force[f].name)) << ", \"kind\": \""
+      << (k == LEGSIM_FORCE_POINT ? "point" : k == LEGSIM_FORCE_TORQUE ? "torque" : "spring_damper") << "\"}";
+  }
+  o << "]";
+  names("poses", m.n_poses, [&](int32_t i) { return name_of(m.pose[i].name); });
+  names("contacts", m.n_contacts, [&](int32_t i) { return name_of(m.contact[i].name); });
+  // a robot's legs: one foot each (its contacts); a leg file is one leg
+  o << ", \"legs\": " << std::max<int32_t>(1, m.n_contacts) << "}";
 }
 
 bool box_load_add(legsim_model_desc &d, const double load[3], std::string &why) {
@@ -752,6 +1076,11 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
         fail("contact " + q(ci.name) + ": the model has no contact " + q(ci.name) + " (contacts: " +
              (list.empty() ? "none" : list) + ")");
     }
+    // the bench's sections
+    if (m.n_contacts > 0 && s.n_injections > 0)
+      fail("[[inject]] is not for a robot scene (the bench's injections are the one leg's frames; "
+           "tests/hil/test_robot_can.py sends the robot bad frames)");
+    bind_checks(s, m);
     // commands
     for (size_t c = 0; c < s.commands.size(); ++c) {
       Command &cmd = s.commands[c];

@@ -2,11 +2,11 @@
 // and the JSON/CSV writers of the results. Host only; uses the C API only. Parsed and bound
 // in scene_parse.cpp, run in scene_run.cpp, written in scene_write.cpp.
 //
-// The schema (every key, unit, default and range) is documented in scenes/README.md;
-// the bench reads the same files (bench/legsim_bench/scene.py) and both refuse the same
-// things with the same messages. Keys of the bench only ([checks], [[inject]],
-// cmd_timeout_ms, safe_state: the CAN link and its checks) are accepted here, type-checked
-// and otherwise ignored: legsim_cli has no bus.
+// The schema (every key, unit, default and range) is documented in scenes/README.md.
+// This is the one reader of scene files: the bench reads the resolved scene this reader
+// prints (legsim_cli --check, write_resolved). Keys of the bench only ([checks], [[inject]],
+// cmd_timeout_ms, safe_state: the CAN link and its verdicts) are checked here as fully as
+// the others and otherwise ignored: legsim_cli has no bus.
 #ifndef LEGSIM_HOST_SCENE_TOML_HPP
 #define LEGSIM_HOST_SCENE_TOML_HPP
 
@@ -55,6 +55,17 @@ struct ContactInit {
   legsim_contact_state state = LEGSIM_CONTACT_STUCK;
 };
 
+// [checks]: the bench's verdicts. Values are checked at parse time, the keys that apply
+// (which depend on the model: a leg or a robot) and the feet named at bind time.
+struct CheckSpec {
+  bool given = false;               // [checks] written (else the bench's default tolerances)
+  std::vector<std::string> keys;    // the keys written, in file order
+  int n_tolerances = 0;             // keys that are tolerances
+  std::string stroke_actuator;      // [checks.stroke] actuator ("" without it)
+  bool has_slips = false, has_lifts = false;
+  std::vector<std::string> slips, lifts;  // feet (a robot's contacts)
+};
+
 enum class Analysis { kDynamics, kStatics, kStaticsSweep, kInverseDynamics, kAssembly };
 const char *analysis_name(Analysis a);
 
@@ -88,7 +99,9 @@ struct Scene {
   int64_t cmd_timeout_ms = 0;            // bench only
   std::string safe_state = "zero_force"; // bench only
   std::string checks_json = "null";     // bench only: [checks] as written, JSON (null: none)
-  std::string inject_json = "[]";       // bench only: [[inject]] as written, JSON
+  CheckSpec checks;                     // bench only: [checks], checked
+  int n_injections = 0;                 // bench only: [[inject]] tables
+  std::string inject_json = "[]";       // bench only: [[inject]] resolved (steps, frame ids), JSON
   std::vector<ForceValue> forces;
   std::vector<Command> commands;
   std::vector<ContactInit> contacts;     // [[contact]] (models with contacts only)
@@ -106,14 +119,19 @@ bool box_load_add(legsim_model_desc &desc, const double load[3], std::string &wh
 // Reads and checks a scene file (everything that does not need the model).
 // On error returns false with "PATH: problem" in err. Never throws.
 bool load_scene(const std::string &path, Scene &scene, std::string &err);
+// The same for scene text given as if it were the file at path (its name, its folder).
+bool load_scene_text(const std::string &text, const std::string &path, Scene &scene, std::string &err);
 
 // Checks the scene against a model (names of actuators, forces, poses; lengths in
 // stroke; forces within max_force) and binds the names to indices.
 bool bind_scene(Scene &scene, const legsim_model_desc &model, std::string &err);
 
-// The resolved scene as one JSON object (legsim_cli --check): the values both scene
-// readers must agree on (tests/bench/test_scene.py compares them with the bench's).
+// The resolved scene as one JSON object (legsim_cli --check): everything the bench reads of
+// a scene (bench/legsim_bench/scene.py builds its Scene from it).
 void write_resolved(std::ostream &out, const Scene &scene, const legsim_model_desc &model);
+// The part of it that says what the bench needs of the model and the scene's own words:
+// ", \"description\": ..., \"demo\": ..., \"model_info\": {...}" (write_resolved appends it).
+void write_resolved_model(std::ostream &out, const Scene &scene, const legsim_model_desc &model);
 
 // ---- results ----------------------------------------------------------------------
 struct Sample {

@@ -175,7 +175,9 @@ void write_resolved(std::ostream &o, const Scene &sc, const legsim_model_desc &m
     o << "[" << jnum(sc.box_load[0]) << ", " << jnum(sc.box_load[1]) << ", " << jnum(sc.box_load[2]) << "]";
   else
     o << "null";
-  o << ", \"checks\": " << sc.checks_json << ", \"inject\": " << sc.inject_json << "}\n";
+  o << ", \"checks\": " << sc.checks_json << ", \"inject\": " << sc.inject_json;
+  write_resolved_model(o, sc, m);
+  o << "}\n";
 }
 
 void JsonWriter::begin() {

@@ -1,6 +1,6 @@
-"""Scene files: the shipped scenes, the schema's rules and the step-grid arithmetic (no CAN);
-the one schema from both sides (legsim_cli --check and the bench's reader agree on every file
-of scenes/, refuse the same files with the same words), a scene with its own model file."""
+"""Scene files: the shipped scenes, the schema's rules and the step-grid arithmetic (no CAN).
+legsim_cli is the one reader: the bench's Scene is built from its --check JSON and its
+refusals are legsim_cli's words; a scene with its own model file."""
 import json
 import tomllib
 import math
@@ -20,7 +20,7 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.scene import (RootNotFound, SceneError, fault_codes, find_root,  # noqa: E402
+from legsim_bench.scene import (RootNotFound, SceneError, StrokeCheck, fault_codes, find_root,  # noqa: E402
                                 load_scene, parse_scene, resolve_scene, shipped_scenes)
 
 SHIPPED = {"free_fall", "upper_step_50N", "length_sinusoid", "static_hold_300N", "slot_variant",
@@ -108,6 +108,21 @@ def test_fault_codes_come_from_the_dbc():
     assert codes["NONE"] == 0 and codes["NOT_FINITE"] == 3 and codes["CMD_TIMEOUT"] == 7
     from legsim_bench.hil.can_link import FaultCode
     assert codes == {f.name: int(f) for f in FaultCode}
+    # legsim_cli's [[inject]] expect names are the DBC's, in the DBC's order of values
+    with pytest.raises(SceneError) as e:
+        scene(BASE + '\n[[inject]]\nat = 0.02\nframe = "ACT_CMD"\nexpect = "EXPLODED"\n')
+    listed = re.search(r"is not a Fault_Code of the DBC \((.*)\)", str(e.value)).group(1).split(", ")
+    assert listed == sorted(codes, key=codes.get)
+
+
+def test_injected_frames_are_the_dbc_s():
+    """The frames an injection may name, and their ids, are the DBC's bench -> hil_sim frames."""
+    cantools = pytest.importorskip("cantools")
+    db = cantools.database.load_file(str(ROOT / "can" / "legsim.dbc"))
+    for name in ("CONTROL", "ACT_CMD", "LOAD_CMD"):
+        sc = scene(BASE + f'\n[[inject]]\nat = 0.02\nframe = "{name.lower()}"\nexpect = "NOT_FINITE"\n')
+        inj = sc.injections[0]
+        assert (inj.frame, inj.frame_id) == (name, db.get_message_by_name(name).frame_id)
 
 
 def test_defaults_and_grid():
@@ -182,17 +197,58 @@ def test_a_second_command_for_an_actuator_is_refused():
 
 
 @pytest.mark.parametrize("inject, message", [
-    ('at = 0.02\nframe = "ACT_CMD"\nexpect = "EXPLODED"', "not a Fault_Code"),
-    ('at = 0.02\nframe = "NOPE"\nexpect = "UNKNOWN_ID"', "frame must be"),
-    ('at = 0.5\nframe = "ACT_CMD"\nexpect = "NOT_FINITE"', "outside the run"),
-    ('at = 0.02\nsilence = 0.01\nexpect = "CMD_TIMEOUT"', "cmd_timeout_ms"),
-    ('at = 0.02\nframe = "ACT_CMD"\nlength = 33\nexpect = "BAD_LENGTH"', "payload length"),
-    ('at = 0.02\nframe = 0x123\nseq = "stale"\nexpect = "UNKNOWN_ID"', "stale"),
-    ('at = 0.02\nframe = "ACT_CMD"', "expect"),
+    ('at = 0.02\nframe = "ACT_CMD"\nexpect = "EXPLODED"', "inject #1: 'expect' = 'EXPLODED' is not a Fault_Code "
+                                                          "of the DBC (NONE, UNKNOWN_ID, "),
+    ('at = 0.02\nframe = "NOPE"\nexpect = "UNKNOWN_ID"', "inject #1: 'frame' must be CONTROL, ACT_CMD, LOAD_CMD "
+                                                        "or an 11-bit id (got 'NOPE')"),
+    ('at = 0.02\nframe = 0x800\nexpect = "UNKNOWN_ID"', "'frame' must be a DBC message name"),
+    ('at = 0.5\nframe = "ACT_CMD"\nexpect = "NOT_FINITE"', "inject #1: 'at' = 0.5 s is outside the run (0 .. 0.1 s)"),
+    ('at = 0.0205\nframe = "ACT_CMD"\nexpect = "NOT_FINITE"', "'at' = 0.0205 s is not on the step grid"),
+    ('at = 0.02\nsilence = 0.01\nexpect = "CMD_TIMEOUT"', "inject #1: a silence needs cmd_timeout_ms > 0"),
+    ('at = 0.02\nsilence = -0.01\nexpect = "CMD_TIMEOUT"', "'silence' must be > 0 (s; got -0.01)"),
+    ('at = 0.02\nsilence = 0.01\nframe = "ACT_CMD"\nexpect = "CMD_TIMEOUT"', "give 'frame' or 'silence', not both"),
+    ('at = 0.02\nframe = "ACT_CMD"\nlength = 33\nexpect = "BAD_LENGTH"',
+     "'length' must be a CAN FD payload length (0..8, 12, 16, 20, 24, 32, 48 or 64; got 33)"),
+    ('at = 0.02\nframe = "ACT_CMD"\nlength = 65\nexpect = "BAD_LENGTH"', "'length' must be in 0..64 (got 65)"),
+    ('at = 0.02\nframe = 0x123\nseq = "stale"\nexpect = "UNKNOWN_ID"', 'seq = "stale" needs a DBC frame'),
+    ('at = 0.02\nframe = "ACT_CMD"\nseq = "old"\nexpect = "STALE_SEQ"', "'seq' must be \"next\", \"stale\" or a 32-bit"),
+    ('at = 0.02\nframe = "ACT_CMD"\nsignals = { Act_Mode_upper = "x" }\nexpect = "OUT_OF_RANGE"',
+     "signal 'Act_Mode_upper' must be a number (nan and inf allowed)"),
+    ('at = 0.02\nframe = "ACT_CMD"\ncolour = 1\nexpect = "OUT_OF_RANGE"', "inject #1: unknown key 'colour'"),
+    ('at = 0.02\nframe = "ACT_CMD"', "inject #1: needs 'at' (s) and 'expect' (a Fault_Code name)"),
 ])
 def test_bad_injections_are_refused(inject, message):
-    with pytest.raises(SceneError, match=message):
+    with pytest.raises(SceneError) as e:
         scene(BASE + "\n[[inject]]\n" + inject + "\n")
+    assert message in str(e.value)
+
+
+@pytest.mark.parametrize("checks, message", [
+    ("position_m = -1.0", "t: [checks] 'position_m' must be > 0 (got -1)"),
+    ("position_m = nan", "[checks] 'position_m' is not finite"),
+    ('position_m = "small"', "[checks] 'position_m' must be a number"),
+    ("resolution_ratio = 0.0\nposition_m = 1e-5", "[checks] 'resolution_ratio' must be > 0 (got 0)"),
+    ('compare = "some"\nposition_m = 1e-5', "'compare' must be all or until_stroke (got 'some')"),
+    ('stroke = { actuator = "upper", end = "middle" }', "[checks.stroke] 'end' must be min or max (got 'middle')"),
+    ('stroke = { actuator = "knee", end = "max" }',
+     "[checks.stroke] 'actuator' must be an actuator of the model (upper, lower; got 'knee')"),
+    ('stroke = { actuator = "upper", end = "max", tolerance_m = 0.0 }', "'tolerance_m' must be > 0 (got 0)"),
+    ('stroke = { actuator = "upper", end = "max", colour = 1 }', "[checks.stroke] unknown key 'colour'"),
+    ("ground_force_n = 1.0", "[checks] (dynamics): unknown key 'ground_force_n' (allowed: actuator_force_n, "),
+    ("", "t: [checks] names nothing to check"),
+])
+def test_bad_checks_are_refused(checks, message):
+    with pytest.raises(SceneError) as e:
+        scene(BASE.replace("position_m = 1e-5", checks))
+    assert message in str(e.value)
+
+
+def test_a_stroke_check_or_an_injection_is_something_to_check():
+    sc = scene(BASE.replace("position_m = 1e-5", 'stroke = { actuator = "lower", end = "min" }'))
+    assert sc.checks.stroke == StrokeCheck(1, "min", 1e-6) and not sc.checks.tolerances()
+    sc = scene(BASE.replace("position_m = 1e-5", "") + '[[inject]]\nat = 0.02\nframe = "ACT_CMD"\nexpect = "not_finite"\n')
+    assert [(i.step, i.expect, i.frame, i.frame_id, i.seq, i.length) for i in sc.injections] == \
+        [(20, "NOT_FINITE", "ACT_CMD", 0x100, "next", 64)]
 
 
 def test_scene_names_resolve_and_unknown_ones_say_what_exists(tmp_path):
@@ -207,7 +263,7 @@ def test_scene_names_resolve_and_unknown_ones_say_what_exists(tmp_path):
         resolve_scene(tmp_path / "missing.toml", ROOT)
     bad = tmp_path / "bad.toml"
     bad.write_text("duration = [")
-    with pytest.raises(SceneError, match="not valid TOML"):
+    with pytest.raises(SceneError, match="bad.toml: TOML syntax error"):
         load_scene(bad, ROOT)
 
 
@@ -254,57 +310,90 @@ SCENE_FILES = sorted(ROOT.glob("scenes/*.toml")) + sorted(FIXTURES.glob("*.toml"
 
 
 @pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.stem)
-def test_both_readers_resolve_every_scene_the_same(path):
-    """Step size, duration (steps), record interval, pose, loads, commands, options: legsim_cli
-    --check and the bench's reader give the same values for the same file."""
+def test_the_scene_is_built_from_legsim_cli_s_resolved_scene(path):
+    """Every scene file: the bench's Scene holds the values legsim_cli --check printed (step,
+    duration in steps, record interval, pose, commands, options), and [checks] as written."""
     rc, cli, err = _cli_check(path)
     assert rc == 0, err
-    bench = load_scene(path, ROOT).resolved()
-    for r in (cli, bench):
-        r["model_path"] = os.path.realpath(r["model_path"]) if r["model_path"] else ""
-    cli.pop("scene")
-    assert cli == bench
+    sc = load_scene(path, ROOT)
+    assert sc.resolved() == cli
+    assert (sc.name, sc.analysis, sc.variant, sc.integrator, sc.step_ns, sc.n_steps, sc.record_every) == \
+        (cli["name"], cli["analysis"], cli["variant"], cli["integrator"], cli["step_ns"], cli["n_steps"],
+         cli["record_every"])
+    assert sc.pose_name == cli["pose"] and sc.model_info.poses[sc.pose] == cli["pose"]
+    assert {c.name: c.mode for c in sc.commands if c is not None} == {k: v["mode"] for k, v in cli["commands"].items()}
+    assert (sc.rho_inf, sc.max_newton_iter, sc.newton_tol, sc.disable_bits) == \
+        (cli["rho_inf"], cli["max_newton_iter"], cli["newton_tol"], cli["disable"])
+    assert cli["checks"] == tomllib.loads(path.read_text()).get("checks")
+    assert len(sc.injections) == len(cli["inject"])
 
 
-@pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.stem)
-def test_check_carries_the_bench_sections(path):
-    """legsim_cli --check prints [checks] and [[inject]] as the file writes them (null and []
-    when absent), so that the resolved scene is the whole scene."""
-    rc, cli, err = _cli_check(path)
-    assert rc == 0, err
-    d = tomllib.loads(path.read_text())
-    assert cli["checks"] == d.get("checks")
-    inject = d.get("inject", [])
-    for x in inject:   # JSON has no nan or inf: --check writes them as strings
-        if "signals" in x:
-            x["signals"] = {k: (str(v) if isinstance(v, float) and not math.isfinite(v) else v)
-                            for k, v in x["signals"].items()}
-    assert cli["inject"] == inject
-
-
-def test_check_writes_non_finite_injections_as_strings():
+def test_check_resolves_the_injections():
+    """bad_input's [[inject]]: steps, frame ids of the DBC, fault names, and non-finite values
+    as strings (JSON has neither nan nor inf), read back as floats."""
     rc, cli, err = _cli_check(ROOT / "scenes" / "bad_input.toml")
     assert rc == 0, err
     signals = [x["signals"] for x in cli["inject"] if "signals" in x]
     assert signals[0]["Act_Setpoint_upper"] == "nan" and signals[1]["Load_Value2"] == "inf"
+    assert [x["step"] for x in cli["inject"]] == sorted(x["step"] for x in cli["inject"])
+    first = cli["inject"][0]
+    assert (first["step"], first["frame"], first["frame_id"], first["expect"], first["length"]) == \
+        (20, "ACT_CMD", 0x100, "NOT_FINITE", 64)
+    silence = next(x for x in cli["inject"] if "silence_steps" in x)
+    assert (silence["step"], silence["silence_steps"], silence["expect"]) == (200, 100, "CMD_TIMEOUT")
+    sc = load_scene(ROOT / "scenes" / "bad_input.toml", ROOT)
+    assert math.isnan(sc.injections[0].signals["Act_Setpoint_upper"])
+    assert sc.injections[1].signals["Load_Value2"] == math.inf
 
 
 def _expected_messages():
     rows = [line.rstrip("\n").split("\t") for line in (BAD / "expected.tsv").read_text().splitlines()
             if line.strip() and not line.startswith("#")]
-    return [(name, texts[0]) for name, code, *texts in rows
-            if name.startswith(("old_", "duration_", "step_", "limit_", "robot_"))]
+    return [(name, texts[0]) for name, code, *texts in rows if code == "2"]
 
 
 @pytest.mark.parametrize("name, text", _expected_messages(), ids=lambda v: str(v)[:40])
-def test_both_readers_refuse_old_keys_and_off_grid_times_with_the_same_words(name, text):
-    """Old keys and values name the new key; duration = 0.0505 (50.5 steps) is refused, never
-    rounded: the bench says what legsim_cli says (tests/model/fixtures/scenes/expected.tsv)."""
+def test_the_bench_refuses_a_bad_scene_in_legsim_cli_s_words(name, text):
+    """Every bad scene legsim_cli refuses (tests/model/fixtures/scenes/expected.tsv: old keys
+    naming the new one, off-grid times, limits, bad checks and injections) is the bench's
+    SceneError with legsim_cli's message."""
     with pytest.raises(SceneError) as e:
         load_scene(BAD / name, ROOT)
     assert text in str(e.value)
-    rc, _, err = _cli_check(BAD / name)
-    assert rc == 2 and text in err
+
+
+def test_a_scene_read_from_text_is_read_as_its_file():
+    """parse_scene hands legsim_cli the text as if it were the file: its name, its folder for a
+    relative model path, the messages naming it."""
+    text = (FIXTURES / "heavy_shank_statics.toml").read_text()
+    sc = parse_scene(text, FIXTURES / "copy.toml", root=ROOT)
+    assert sc.model_path == FIXTURES / "models" / "heavy_shank.toml" and sc.source == text
+    assert sc.resolved() == dict(load_scene(FIXTURES / "heavy_shank_statics.toml", ROOT).resolved(),
+                                 scene=str(FIXTURES / "copy.toml"), name=sc.name)
+    with pytest.raises(SceneError, match=re.escape("copy.toml: 'analysis' must be")):
+        parse_scene('analysis = "kinematics"\n', FIXTURES / "copy.toml", root=ROOT)
+    with pytest.raises(SceneError, match="TOML input refused"):
+        parse_scene("# " + "x" * (1 << 20) + "\n", name="big", root=ROOT)
+
+
+def test_recordings_carry_the_resolved_scene(tmp_path):
+    """A recording's scene comes back from its resolved JSON, without the TOML; an old one
+    (no scene_resolved) has its TOML read by legsim_cli; one with neither says so."""
+    from legsim_bench.recording import RecordingError, load_recording, save_recording, scene_of
+    sc = load_scene("bad_input", ROOT)
+    rec = {"format": "legsim-bench-recording/1", "scene_name": sc.name, "scene_path": str(sc.path),
+           "scene_source": sc.source, "scene_resolved": sc.resolved()}
+    back = scene_of(load_recording(save_recording(rec, tmp_path / "r.json")), ROOT)
+    assert back.resolved() == sc.resolved() and back.checks == sc.checks
+    assert [repr(i) for i in back.injections] == [repr(i) for i in sc.injections]   # nan != nan
+    # the TOML is not read again: a recording whose text was lost still gives its scene
+    assert scene_of(dict(rec, scene_source="not toml at all ["), ROOT).boundaries() == sc.boundaries()
+    old = {k: v for k, v in rec.items() if k != "scene_resolved"}
+    assert scene_of(old, ROOT).resolved() == sc.resolved()
+    with pytest.raises(RecordingError, match="carries no scene"):
+        scene_of({"format": "legsim-bench-recording/1"}, ROOT)
+    with pytest.raises(RecordingError, match="scene_resolved"):
+        scene_of(dict(rec, scene_resolved={"name": "x"}), ROOT)
 
 
 def test_old_keys_name_the_new_one():

@@ -24,6 +24,7 @@ def record_analysis(scene: Scene, *, root: Path | None = None, log=None) -> dict
     rec: dict = {
         "format": FORMAT, "runner": "legsim_cli", "scene_name": scene.name,
         "scene_path": str(scene.path) if scene.path else None, "scene_source": scene.source,
+        "scene_resolved": scene.resolved(),
         "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "host": platform.node(), "python": platform.python_version(), "bus": "none (legsim_cli)",
         "heartbeat": None, "samples": [], "commands": [], "loads": [], "injections": [],

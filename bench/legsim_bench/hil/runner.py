@@ -117,6 +117,7 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
     rec: dict = {
         "format": FORMAT, "scene_name": scene.name,
         "scene_path": str(scene.path) if scene.path else None, "scene_source": scene.source,
+        "scene_resolved": scene.resolved(),
         "started": _dt.datetime.now(_dt.timezone.utc).isoformat(timespec="seconds"),
         "host": platform.node(), "python": platform.python_version(),
         "bus": str(getattr(link.bus, "channel_info", "")),

@@ -95,6 +95,22 @@ def _wrap(a: float) -> float:
 # --------------------------------------------------------------------------
 # Newton-Euler columns of the joint reactions (shared by the leg and the robot)
 # --------------------------------------------------------------------------
+def body_point(length: float, end: str, spec: dict):
+    """The body-fixed point (xi, eta) (m) a model file names on a body of this length: its
+    proximal or distal end, its centre, `at = [xi, eta]`, or None for its axis (a slot)."""
+    if end == "proximal":
+        return (-length / 2.0, 0.0)
+    if end == "distal":
+        return (length / 2.0, 0.0)
+    if end == "center":
+        return (0.0, 0.0)
+    if end == "at":
+        return tuple(map(float, spec["at"]))
+    if end == "axis":
+        return None
+    raise ValueError(f"unknown end {end!r}")
+
+
 def world_point(q, bi, pt) -> np.ndarray:
     """World position (m) of the body-fixed point pt = (xi, eta) of body bi; q (nb, 3)."""
     x, y, ph = q[bi]
@@ -347,18 +363,7 @@ class LegModel:
         self.body_names = [b.name for b in self.bodies]
 
         def end_point(bi, end, spec):
-            L = self.bodies[bi].length
-            if end == "proximal":
-                return (-L / 2.0, 0.0)
-            if end == "distal":
-                return (L / 2.0, 0.0)
-            if end == "center":
-                return (0.0, 0.0)
-            if end == "at":
-                return tuple(map(float, spec["at"]))
-            if end == "axis":
-                return None
-            raise ValueError(f"unknown end {end!r}")
+            return body_point(self.bodies[bi].length, end, spec)
 
         variants = data.get("variant", {})
         vspec = variants.get(variant, {}) if variant != "revolute" else {}
@@ -520,9 +525,7 @@ class LegModel:
             self.load_name = None
 
     def _end(self, bi, end, spec):
-        L = self.bodies[bi].length
-        return {"proximal": (-L / 2, 0.0), "distal": (L / 2, 0.0),
-                "center": (0.0, 0.0)}.get(end) or tuple(map(float, spec["at"]))
+        return body_point(self.bodies[bi].length, end, spec)
 
     # --------------------------------------------------------- kinematics
     def _jets(self, th, thd) -> _Jets:

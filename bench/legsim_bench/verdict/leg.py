@@ -9,6 +9,7 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..reference.model import body_point, world_point
 from ..reference.model_file import read_model_file
 
 __all__ = ["Joint", "Leg", "u", "nrm", "cross", "constraint_residual", "static_balance",
@@ -72,17 +73,7 @@ class Leg:
             raise ValueError(f"leg.toml has no variant {variant!r}")
 
         def point(bi, end, spec):
-            if end == "proximal":
-                return (-L[bi] / 2, 0.0)
-            if end == "distal":
-                return (L[bi] / 2, 0.0)
-            if end in ("center", "centre"):
-                return (0.0, 0.0)
-            if end == "at":
-                return tuple(map(float, spec["at"]))
-            if end == "axis":
-                return None
-            raise ValueError(f"unknown end {end!r}")
+            return body_point(L[bi], end, spec)
 
         joints = []
         for jd in data["joint"]:
@@ -127,10 +118,11 @@ class Leg:
         return [j.name for j in self.joints]
 
     def world(self, q, bi, pt):
-        """World position of body-fixed point pt = (xi, eta) of body bi; q (..., 18)."""
-        r = q[..., 3 * bi:3 * bi + 2]
-        ph = q[..., 3 * bi + 2]
-        return r + pt[0] * u(ph) + pt[1] * nrm(ph)
+        """World position (m) of body-fixed point pt = (xi, eta) of body bi in every pose of
+        q (..., 3 nb): the reference's world_point, pose by pose."""
+        q = np.asarray(q, float)
+        poses = q.reshape(-1, q.shape[-1] // 3, 3)
+        return np.array([world_point(p, bi, pt) for p in poses]).reshape(q.shape[:-1] + (2,))
 
     def constraints(self, q) -> np.ndarray:
         """Phi(q) (..., n_constraints): leg.toml's joint equations in absolute coordinates
