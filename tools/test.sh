@@ -24,8 +24,8 @@ export LEGSIM_ROOT="$root" LEGSIM_NO_SKIP=1 PYTHONUNBUFFERED=1
 logs=$legsim_logs
 # The SocketCAN tests (tests/hil, tests/hil_scenes: hil_sim and the bench on vcan0, and
 # the bench's CAN decoding on python-can's virtual bus) run where vcan0 is; the rest on the host,
-# among them tests/hil_verdicts, which checks the scenes' recordings against the reference (in
-# the VM, software emulation on one vCPU, the references ran 28 times slower). The scenes record
+# among them tests/hil_verdicts, which checks the scenes' recordings against the reference at
+# native speed (the VM emulates its one vCPU). The scenes record
 # into an emptied out/hil_scenes/ so that no verdict reads an older run. The VM's limit is
 # 50 min (LEGSIM_VM_TIMEOUT).
 socketcan_tests=(tests/hil tests/hil_scenes)

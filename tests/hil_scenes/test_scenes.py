@@ -11,8 +11,8 @@ One hil_sim per model (from $LEGSIM_HIL_SIM, else build/host/hil_sim/hil_sim; wi
 --model FILE for a scene's own model) and one CAN link for the module; each scene RESETs its
 own session and is recorded to $LEGSIM_SCENES_OUT/NAME/recording.json (default out/hil_scenes/
 in the repository). Here each run must complete; the verdicts against the reference model are
-tests/hil_verdicts/, on the host: in the emulated VM the robot's references ran 28 times
-slower (robot_sliding: 9 min against 19 s), and numpy stays out of the VM.
+tests/hil_verdicts/, on the host, where the robot's reference simulations run at native speed
+(the VM emulates its CPU).
 
 Without vcan0 or without the binary every test is skipped with the reason (so the module
 can be collected anywhere), unless LEGSIM_HIL_REQUIRE=1 turns the skips into failures.
