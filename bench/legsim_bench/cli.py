@@ -324,7 +324,7 @@ def _robot_trajectories(rec: dict, ev):
 
         traj = RobotTrajectory.from_recording(rec, legsim.Model.from_toml(scene.model_path), box,
                                               title=scene.name)
-    ref = getattr(ev, "robot_reference", None)
+    ref = ev.reference_run
     if ref is not None:
         ref = RobotTrajectory.from_reference(RobotModel.from_toml(scene.model_path), ref,
                                              title=f"{scene.name} (reference)")
