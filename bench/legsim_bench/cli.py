@@ -37,6 +37,7 @@ from pathlib import Path
 from .scene import RootNotFound, SceneError, find_root, load_scene, shipped_scenes
 
 EXIT_OK, EXIT_FAIL, EXIT_SETUP = 0, 1, 2
+DEFAULT_TIMEOUT_S = 5.0   # the link's answer timeout (s) unless --timeout
 
 # lazily registered benchmark commands: name -> (module, help)
 BENCHMARKS = {
@@ -72,7 +73,8 @@ def _add_bus(p: argparse.ArgumentParser) -> None:
     g.add_argument("--interface", "-i", help="python-can interface (default: CAN_INTERFACE, can.rc, "
                    "~/.canrc, else socketcan)")
     g.add_argument("--channel", "-c", help="channel (default: CAN_CHANNEL, can.rc, ~/.canrc, else vcan0)")
-    g.add_argument("--timeout", type=float, default=5.0, help="seconds to wait for an answer (default 5)")
+    g.add_argument("--timeout", type=float, default=DEFAULT_TIMEOUT_S,
+                   help=f"seconds to wait for an answer (default {DEFAULT_TIMEOUT_S:g})")
     g.add_argument("--start-hil", action="store_true",
                    help="start hil_sim on the channel for the run (socketcan; binary from "
                    "$LEGSIM_HIL_SIM or build/host/hil_sim/hil_sim)")
@@ -137,7 +139,7 @@ def _trace_paths(args, scenes, out_base: Path) -> dict[str, Path | None]:
                          "(e.g. --log 'traces/{scene}.blf')")
     out = {}
     for sc in scenes:
-        if getattr(args, "no_log", False) or not sc.over_can or getattr(args, "dry_run", False):
+        if getattr(args, "no_log", False) or not sc.over_can:
             out[sc.name] = None
             continue
         p = Path(spec.replace("{scene}", sc.name)) if spec else out_base / sc.name / DEFAULT_TRACE
@@ -184,6 +186,14 @@ def _record_all(args, root: Path, scenes, out_base: Path) -> list[tuple[object, 
     from .recording import RecordingError, save_recording
 
     hil = None
+    logs = [opt for opt, value in (("--log", getattr(args, "log", None)), ("--sniff", getattr(args, "sniff", None)))
+            if value]
+    if logs and getattr(args, "dry_run", False):
+        raise SetupError(f"{' and '.join(logs)}: a --dry-run uses no bus (the reference model plays "
+                         "hil_sim): there are no frames to log")
+    if logs and not any(sc.over_can for sc in scenes):
+        raise SetupError(f"{' and '.join(logs)}: no scene given runs over CAN (they run in legsim_cli): "
+                         "there are no frames to log")
     if getattr(args, "dry_run", False):
         from .hil.reference_link import ReferenceLink
 
@@ -324,7 +334,7 @@ def _robot_trajectories(rec: dict, ev):
 
         traj = RobotTrajectory.from_recording(rec, legsim.Model.from_toml(scene.model_path), box,
                                               title=scene.name)
-    ref = getattr(ev, "robot_reference", None)
+    ref = ev.reference_run
     if ref is not None:
         ref = RobotTrajectory.from_reference(RobotModel.from_toml(scene.model_path), ref,
                                              title=f"{scene.name} (reference)")
@@ -366,15 +376,23 @@ def _replay_traces(args, root: Path) -> list:
     evs = []
     for spec in args.log:
         trace = Path(spec)
+        beside = trace.parent / "recording.json"
         try:
+            live = load_recording(beside) if beside.is_file() else None
             if args.scene:
                 scene = load_scene(args.scene, root)
-            elif (trace.parent / "recording.json").is_file():
-                scene = scene_of(load_recording(trace.parent / "recording.json"), root)
+            elif live is not None:
+                try:
+                    scene = scene_of(live, root)
+                except SceneError as e:
+                    raise SetupError(f"{trace}: the scene of {beside} cannot be run: {e}") from None
             else:
                 raise SetupError(f"{trace}: which scene? give --scene (no recording.json beside the "
                                  "trace to take it from)")
-            rec = replay_trace(trace, scene, dbc=root / "can" / "legsim.dbc", timeout=args.timeout)
+            # the live session's answer timeout, unless --timeout says otherwise
+            timeout = args.timeout if args.timeout is not None else \
+                float((live or {}).get("timeout_s") or DEFAULT_TIMEOUT_S)
+            rec = replay_trace(trace, scene, dbc=root / "can" / "legsim.dbc", timeout=timeout)
         except (TraceError, RecordingError) as e:
             raise SetupError(str(e)) from None
         out_dir = Path(args.out) / rec["scene_name"] if args.out else trace.parent / "replay"
@@ -585,7 +603,8 @@ def build_parser() -> argparse.ArgumentParser:
                    help="a raw CAN trace (.log, .asc, .blf) of a session: replayed into a recording "
                    "and checked (outputs in TRACE's directory/replay/ unless --out); repeatable")
     s.add_argument("--scene", help="the scene of --log (default: the one in the recording.json beside it)")
-    s.add_argument("--timeout", type=float, default=5.0, help="the session's answer timeout, s (as live)")
+    s.add_argument("--timeout", type=float, default=None, help="the session's answer timeout, s "
+                   f"(default: the live one, from the recording.json beside the trace, else {DEFAULT_TIMEOUT_S:g})")
     s.add_argument("--out", "-o", metavar="DIR", help="write outputs to DIR/<scene>/ (default: beside "
                    "the recording)")
     check_opts(s)

@@ -2,7 +2,8 @@
 """The core's accuracy through contact events: the two-leg robot through a touchdown, a
 lift-off and a slip onset, and a run without events (the control), with RK4 and
 generalized-alpha over h = 2e-3 ... 1.25e-4 s, against the bench's event-locating reference
-(legsim_bench.reference.robot_events: each event found to ~1e-15 s on DOP853's dense output).
+(legsim_bench.reference.robot_events: each event located on DOP853's dense output, the drop's
+touchdown to 1e-13 s of sqrt(2 d / g)).
 
     LEGSIM_ROOT=$PWD PYTHONPATH=$PWD/python:$PWD/bench python firmware_core/benchmarks/event_order.py
         [--cases touchdown,liftoff,slip,none] [--integrators rk4,galpha]

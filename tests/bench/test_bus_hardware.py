@@ -14,6 +14,7 @@ from can.interfaces.virtual import VirtualBus  # noqa: E402
 
 from legsim_bench import cli  # noqa: E402
 from legsim_bench.hil import can_link as cl  # noqa: E402
+from legsim_bench.hil import runner  # noqa: E402
 from legsim_bench.hil.can_link import HilLink, bus_config  # noqa: E402
 
 
@@ -82,18 +83,26 @@ def test_start_hil_refuses_a_configured_adapter_that_is_not_socketcan(canrc, cap
 
 
 def test_start_hil_takes_the_configured_socketcan_channel(canrc, capsys, monkeypatch, tmp_path):
-    """hil_sim is started on can0 named by the file (a stand-in binary writes its arguments);
+    """hil_sim is started on can0 named by the file (a stand-in binary; its argv is taken where
+    the bench starts it, not from the child, which may not have run yet when it is stopped);
     the bench then opens socketcan can0 and says where the channel came from."""
     path = canrc("interface = socketcan\nchannel = can0\n")
-    args_file = tmp_path / "args"
     fake = tmp_path / "hil_sim"
-    fake.write_text(f"#!/bin/sh\necho \"$@\" > {args_file}\nexec sleep 30\n")
+    fake.write_text("#!/bin/sh\nexec sleep 30\n")
     fake.chmod(fake.stat().st_mode | stat.S_IXUSR)
     monkeypatch.setenv("LEGSIM_HIL_SIM", str(fake))
+    started = []
+    popen = runner.subprocess.Popen
+
+    def record_argv(argv, *a, **kw):
+        started.append(list(argv))
+        return popen(argv, *a, **kw)
+    monkeypatch.setattr(runner.subprocess, "Popen", record_argv)
     rc = cli.main(["record", "--start-hil", "--timeout", "0.2", "--no-progress", "--out",
                    str(tmp_path / "out"), "free_fall"])
     out, err = capsys.readouterr()
-    assert args_file.read_text().split()[:2] == ["--channel", "can0"]
+    hil = [argv for argv in started if argv[0] == str(fake)]   # (legsim_cli reads the scene)
+    assert len(hil) == 1 and hil[0][1:3] == ["--channel", "can0"]
     assert "hil_sim started on can0" in out
     # no SocketCAN (or no can0) here: the bus cannot open and says which and from where
     if rc == 2:

@@ -129,6 +129,8 @@ def session(tmp_path):
         try:
             with HilLink(bus=can.Bus(interface="virtual", channel=channel, receive_own_messages=False),
                          dbc=DBC, timeout=5.0) as link:
+                # HEARTBEATs queued before the session: the one recorded is the next (live and replayed)
+                time.sleep(0.25)
                 with link.trace(trace) as writer:
                     rec = record(scene, link, progress=False)
                 link.bus.shutdown()
@@ -149,7 +151,7 @@ def _same_samples(a: dict, b: dict):
                     "ctrl_seq", "act_seq", "faults", "state", "last_fault"):
             assert json.dumps(sa[key]) == json.dumps(sb[key]), (key, sa["step"])   # NaN == NaN
     for key in ("commands", "loads", "injections", "errors", "complete", "late_faults",
-                "initial_lengths"):
+                "initial_lengths", "heartbeat"):
         assert json.dumps(a[key]) == json.dumps(b[key]), key
 
 
@@ -176,6 +178,7 @@ def test_a_session_replays_from_its_trace_to_the_same_samples_and_verdict(sessio
 
     replayed = replay_trace(trace, scene, dbc=DBC)
     _same_samples(live, replayed)
+    assert live["heartbeat"] is not None
     assert replayed["trace"] == str(trace)
     ev_live, ev_replay = evaluate(live, ROOT), evaluate(replayed, ROOT)
     assert ev_live.passed and ev_replay.passed
@@ -307,3 +310,27 @@ def test_sniff_logs_the_bus_beside_the_bench(tmp_path, capsys):
         ids = [m.arbitration_id for m in r]
     assert cl.CONTROL in ids and 0x7AB in ids
     assert 0x7AB not in [m.arbitration_id for m in read_trace(tmp_path / "free_fall" / "trace.log")]
+
+
+def test_check_log_waits_as_long_as_the_live_session(tmp_path, capsys):
+    """The live link's answer timeout is in the recording; `check --log` replays with it (no
+    --timeout given): the RESET nobody answered times out after the live 0.3 s, not 5 s."""
+    ch = f"nobody-{random.random()}"
+    rc = cli.main(["record", "--interface", "virtual", "--channel", ch, "--timeout", "0.3",
+                   "--no-progress", "--out", str(tmp_path), "free_fall"])
+    assert rc == 1
+    live = json.loads((tmp_path / "free_fall" / "recording.json").read_text())
+    assert live["timeout_s"] == 0.3
+    assert any("within 0.3 s" in e["error"] for e in live["errors"])
+    capsys.readouterr()
+    rc = cli.main(["check", "--no-plots", "--log", str(tmp_path / "free_fall" / "trace.log")])
+    assert rc == 1 and "replayed" in capsys.readouterr().out
+    replayed = json.loads((tmp_path / "free_fall" / "replay" / "recording.json").read_text())
+    assert replayed["timeout_s"] == 0.3
+    assert replayed["errors"][0] == live["errors"][0]
+    assert replayed["wall_time_s"] == pytest.approx(live["wall_time_s"], abs=0.1)
+    # --timeout still overrides it
+    rc = cli.main(["check", "--no-plots", "--log", str(tmp_path / "free_fall" / "trace.log"),
+                   "--timeout", "0.7", "--out", str(tmp_path / "longer")])
+    longer = json.loads((tmp_path / "longer" / "free_fall" / "recording.json").read_text())
+    assert longer["timeout_s"] == 0.7 and any("within 0.7 s" in e["error"] for e in longer["errors"])

@@ -187,3 +187,33 @@ def test_the_demo_s_scenes_all_run_over_can():
     scenes = cli._load_scenes(list(cli.DEMO_SCENES), ROOT)
     assert [sc.name for sc in scenes] == ["upper_step_50N", "robot_fig7"]
     assert all(sc.over_can for sc in scenes)
+
+
+def test_log_and_sniff_without_frames_to_log_are_refused(capsys, tmp_path):
+    """--log and --sniff need a bus: with --dry-run, or when no scene runs over CAN, they are
+    refused (exit 2, nothing recorded) instead of doing nothing."""
+    from legsim_bench.scene import load_scene
+
+    for opts in (["--log", str(tmp_path / "t.log")], ["--sniff", str(tmp_path / "bus.asc")]):
+        rc, _, err = run(capsys, "run", "--dry-run", "--no-plots", "--no-progress", "--out",
+                         str(tmp_path / "dry"), *opts, "free_fall")
+        assert rc == 2 and f"{opts[0]}: a --dry-run uses no bus" in err
+        assert not (tmp_path / "dry").exists()
+    assert not load_scene("statics_foot_300N", ROOT).over_can
+    rc, _, err = run(capsys, "record", "--no-progress", "--out", str(tmp_path / "cli"),
+                     "--log", str(tmp_path / "t.log"), "--sniff", str(tmp_path / "bus.asc"),
+                     "statics_foot_300N")
+    assert rc == 2 and "--log and --sniff: no scene given runs over CAN" in err
+    assert not (tmp_path / "cli").exists() and not (tmp_path / "t.log").exists()
+
+
+def test_check_log_names_a_recording_whose_scene_the_bench_cannot_run(capsys, tmp_path, dry_dir):
+    """check --log takes the scene from the recording.json beside the trace: a scene the bench
+    cannot run (here a variant CAN does not carry) is a clear error, exit 2."""
+    rec = json.loads((dry_dir / "free_fall" / "recording.json").read_text())
+    rec["scene_resolved"]["variant"] = "hinge"
+    (tmp_path / "recording.json").write_text(json.dumps(rec))
+    rc, _, err = run(capsys, "check", "--no-plots", "--log", str(tmp_path / "trace.log"))
+    assert rc == 2
+    assert f"{tmp_path / 'trace.log'}: the scene of {tmp_path / 'recording.json'} cannot be run" in err
+    assert "over CAN the variant is Ctrl_Variant" in err

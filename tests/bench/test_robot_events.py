@@ -72,8 +72,6 @@ def test_level_drop_lands_at_the_free_fall_time_and_loses_carnots_energy(robot, 
     P = ev[0].impulse
     assert np.all(P[:, 0] > 0) and np.all(np.abs(P[:, 1]) <= robot.ground.mu_static * P[:, 0])
     assert P[0, 0] == pytest.approx(P[1, 0], rel=1e-12) and P[0, 1] == pytest.approx(-P[1, 1], rel=1e-9)
-    if d == 0.01:
-        assert round(lost, 4) == 0.6784   # the figure of the 1 cm drop
 
 
 def test_stance_after_the_landing_is_the_stuck_feet_reference(robot):

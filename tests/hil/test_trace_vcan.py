@@ -37,7 +37,8 @@ def test_a_session_on_vcan_replays_from_its_blf_trace_to_the_same_verdict(vcan, 
     assert sum(m.arbitration_id == cl.CONTROL for m in frames if not m.is_rx) == len(live["samples"])
 
     replayed = replay_trace(trace, scene_of(live, ROOT), dbc=ROOT / "can" / "legsim.dbc")
-    for key in ("samples", "commands", "loads", "injections", "errors", "complete", "late_faults"):
+    for key in ("samples", "commands", "loads", "injections", "errors", "complete", "late_faults",
+                "heartbeat"):
         if key == "samples":
             strip = lambda ss: [{k: v for k, v in s.items() if k != "wall"} for s in ss]  # noqa: E731
             assert json.dumps(strip(live[key])) == json.dumps(strip(replayed[key]))

@@ -775,7 +775,14 @@ class HilLink:
 
     def heartbeat(self, timeout: float | None = None) -> Heartbeat:
         """The next HEARTBEAT (every 100 ms by default) sent after this call."""
-        self.poll(0)  # older ones still in the socket's buffer do not count
+        # Older ones still in the socket's buffer do not count, nor are they part of a traced
+        # session: the trace starts with what came after this call, so that its replay (whose
+        # clock starts at the trace's first frame) waits for the same HEARTBEAT as live.
+        trace, self._trace = self._trace, None
+        try:
+            self.poll(0)
+        finally:
+            self._trace = trace
         self._heartbeats.clear()
         return self._wait(lambda: self._heartbeats.popleft() if self._heartbeats else None,
                           self.timeout if timeout is None else timeout, "HEARTBEAT")

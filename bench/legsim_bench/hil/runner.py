@@ -124,6 +124,8 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
         "heartbeat": None, "samples": [], "commands": [], "loads": [], "injections": [],
         "late_faults": [], "errors": [], "complete": False, "initial_lengths": None,
         "legs": legs, "actuators": list(scene.actuator_names),
+        # the link's answer timeout (s): a replay of the session's trace waits as long
+        "timeout_s": float(link.timeout),
     }
     clock = getattr(link, "clock", time.monotonic)   # a replayed trace has its own
     t_wall0 = clock()
@@ -253,8 +255,9 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
 def replay_trace(path, scene: Scene, *, dbc=None, timeout: float = 5.0) -> dict:
     """The recording of a session decoded from its raw CAN trace: `scene` is run again by
     record() on a link whose bus plays the trace back (hil/trace.py), so that the frames go
-    through the link's own decoding and the runner's own bookkeeping, as live. TraceError if
-    the trace cannot be read or the scene sends other frames than the trace holds."""
+    through the link's own decoding and the runner's own bookkeeping, as live. `timeout`: the
+    live link's (its recording's "timeout_s"), so that waits end as they did live. TraceError
+    if the trace cannot be read or the scene sends other frames than the trace holds."""
     from .can_link import HilLink
     from .trace import TraceBus, TraceError
 

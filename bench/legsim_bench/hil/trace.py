@@ -5,7 +5,9 @@ Writing: :meth:`HilLink.trace` logs every frame the link sends (direction Tx, st
 sent) and every frame it reads (Rx, the interface's time stamp) through python-can's own
 writers, the format chosen by the file's suffix: ``.log`` candump (can-utils), ``.asc``
 Vector ASCII, ``.blf`` Vector binary. Frames are written in the order the link handled them,
-with time stamps made non-decreasing, so the file is the session as the bench saw it.
+with time stamps made non-decreasing, so the file is the session as the bench saw it
+(HEARTBEATs already queued when :meth:`HilLink.heartbeat` is called, which it discards, are
+left out: they came before the session).
 
 Replay: :class:`TraceBus` is a python-can bus that plays such a file back to a HilLink. The
 bench runs the scene again on it (legsim_bench.hil.runner.record, the same code as live):

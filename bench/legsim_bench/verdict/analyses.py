@@ -588,7 +588,7 @@ def _robot_lift_checks(ev, scene: Scene, d: dict, feet, bodies, mu_s: float, roo
         except ValueError as e:
             results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
             return ev
-        ev.robot_reference = r   # the report's reference curves (until the lift-off)
+        ev.reference_run = r   # the report's reference curves (until the lift-off)
         dq = d["q"][:first] - r.q
         dq[:, 2::3] = _wrap(dq[:, 2::3])
         tol_check("positions x, y vs RobotModel until the lift-off", "position_m", np.delete(dq, np.s_[2::3], axis=1),
@@ -680,7 +680,7 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
     except ValueError as e:
         results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
         return ev
-    ev.robot_reference = r   # the report's reference curves
+    ev.reference_run = r   # the report's reference curves
     pose_checks(r.q, robot_table2(d))
     # Forces where the core has solved them: not the first sample (the first step solves
     # them), nor a sample at a command's breakpoint (it holds the forces of the step that

@@ -40,6 +40,7 @@ class Evaluation:
     data: dict = field(default_factory=dict)     # arrays: t, q, ... (received)
     ref: dict | None = None                      # arrays of the reference at the same times
     leg: Leg | None = None
+    reference_run: object | None = None          # robot: the reference's run (the report's curves)
 
     @property
     def passed(self) -> bool:

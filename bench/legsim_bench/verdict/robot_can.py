@@ -216,7 +216,7 @@ def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
     except ValueError as e:
         results.append(CheckResult("reference: RobotModel", False, None, None, "", "", str(e)))
         return ev
-    ev.robot_reference = r   # the report's reference curves
+    ev.reference_run = r   # the report's reference curves
     pose_checks(r.q, an.robot_table2(d))   # Table II of the paper
     box = np.abs(d["q"][:, :3] - r.q[:, :3])
     results.append(CheckResult("box pose (ST_BOX) vs RobotModel (float32 over CAN)",
