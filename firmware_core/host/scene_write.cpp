@@ -107,6 +107,10 @@ const char *contact_state_name(legsim_contact_state st) {
 // Per contact, in this order: state, then the numbers (JSON keys and CSV column suffixes).
 const char *kContactNumbers[] = {"normal", "tangential", "friction_use", "x", "y", "slip", "impulse_n",
                                  "impulse_t"};
+// The CSV's column names carry their SI units (as the FMU's variables: _m, _rad, _n, _nm).
+const char *kContactColumns[] = {"normal_n", "tangential_n", "friction_use", "x_m", "y_m", "slip_m_per_s",
+                                 "impulse_n_n_s", "impulse_t_n_s"};
+const char *kXyzColumns[3] = {"x_m", "y_m", "phi_rad"};
 double contact_number(const legsim_contact &c, int i) {
   const legsim_real v[] = {c.normal_n, c.tangential_n, c.friction_use, c.position[0],
                            c.position[1], c.slip_mps, c.impulse_ns[0], c.impulse_ns[1]};
@@ -305,27 +309,28 @@ void CsvWriter::begin() {
   const legsim_model_desc &m = m_;
   if (sc_.analysis == Analysis::kStaticsSweep) {
     // One row per joint reaction and per actuator force: the worst case of the sweep.
-    o_ << "item,kind,max_force";
-    for (int a = 0; a < m.n_actuators; ++a) o_ << ",at_" << csv_field(name_of(m.actuator[a].name));
+    o_ << "item,kind,max_force_n";
+    for (int a = 0; a < m.n_actuators; ++a) o_ << ",at_" << csv_field(name_of(m.actuator[a].name) + "_m");
     o_ << ",status\n";
     return;
   }
-  o_ << "t";
+  o_ << "t_s";
   for (int b = 0; b < m.n_bodies; ++b)
-    for (int c = 0; c < 3; ++c) o_ << "," << csv_field(name_of(m.body[b].name) + "." + kXyz[c]);
+    for (int c = 0; c < 3; ++c) o_ << "," << csv_field(name_of(m.body[b].name) + "." + kXyzColumns[c]);
   for (int a = 0; a < m.n_actuators; ++a) {
     const std::string n = name_of(m.actuator[a].name);
-    o_ << "," << csv_field(n + ".length") << "," << csv_field(n + ".rate") << "," << csv_field(n + ".force");
+    o_ << "," << csv_field(n + ".length_m") << "," << csv_field(n + ".rate_m_per_s") << ","
+       << csv_field(n + ".force_n");
   }
   for (int j = 0; j < m.n_joints; ++j) {
     const std::string n = name_of(m.joint[j].name);
-    o_ << "," << csv_field(n + ".fx") << "," << csv_field(n + ".fy") << "," << csv_field(n + ".moment");
+    o_ << "," << csv_field(n + ".fx_n") << "," << csv_field(n + ".fy_n") << "," << csv_field(n + ".moment_nm");
   }
-  if (m.foot_body >= 0) o_ << ",foot.x,foot.y";
+  if (m.foot_body >= 0) o_ << ",foot.x_m,foot.y_m";
   for (int k = 0; k < m.n_contacts; ++k) {
     const std::string n = name_of(m.contact[k].name);
     o_ << "," << csv_field(n + ".state");
-    for (int i = 0; i < kNContactNumbers; ++i) o_ << "," << csv_field(n + "." + kContactNumbers[i]);
+    for (int i = 0; i < kNContactNumbers; ++i) o_ << "," << csv_field(n + "." + kContactColumns[i]);
     o_ << "," << csv_field(n + ".holds");
   }
   o_ << ",residual,events,status\n";

@@ -86,10 +86,10 @@ def main() -> None:
         if v.causality != "output":
             continue
         n = v.name
-        for fmu_suffix, csv_suffix in ((".x_m", ".x"), (".y_m", ".y"), (".phi_rad", ".phi"),
-                                       (".length_out_m", ".length"), (".force_out_n", ".force"),
-                                       (".fx_n", ".fx"), (".fy_n", ".fy"), (".moment_nm", ".moment"),
-                                       (".normal_n", ".normal"), (".tangential_n", ".tangential")):
+        for fmu_suffix, csv_suffix in ((".x_m", ".x_m"), (".y_m", ".y_m"), (".phi_rad", ".phi_rad"),
+                                       (".length_out_m", ".length_m"), (".force_out_n", ".force_n"),
+                                       (".fx_n", ".fx_n"), (".fy_n", ".fy_n"), (".moment_nm", ".moment_nm"),
+                                       (".normal_n", ".normal_n"), (".tangential_n", ".tangential_n")):
             if n.endswith(fmu_suffix):
                 col = n[:-len(fmu_suffix)].removeprefix("joint_") + csv_suffix
                 if col in rows[0]:
@@ -103,13 +103,13 @@ def main() -> None:
                        validate=False)
     times = res["time"]
     worst, where, compared = 0.0, "", 0
-    by_t = {round(float(row["t"]) / h): row for row in rows}
+    by_t = {round(float(row["t_s"]) / h): row for row in rows}
     for i, t in enumerate(times):
         k = round(t / h)
         if k == 0 or k not in by_t:
             continue
         row = by_t[k]
-        if abs(float(row["t"]) - t) > 1e-9 * max(1.0, t):
+        if abs(float(row["t_s"]) - t) > 1e-9 * max(1.0, t):
             fail(f"sample times differ: CLI {row['t']}, FMU {t}")
         for fmu_name, col in pairs:
             if row[col] == "":

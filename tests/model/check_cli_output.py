@@ -22,6 +22,8 @@ import tomllib
 failures = []
 # per contact in legsim_cli's output, after its state (firmware_core/host/scene_write.cpp)
 CONTACT_NUMBERS = ("normal", "tangential", "friction_use", "x", "y", "slip", "impulse_n", "impulse_t")
+CONTACT_COLUMNS = ("normal_n", "tangential_n", "friction_use", "x_m", "y_m", "slip_m_per_s", "impulse_n_n_s",
+                   "impulse_t_n_s")
 
 
 def check(cond, what):
@@ -129,25 +131,28 @@ def check_good(cli, scene, outdir):
         header = list(rows[0].keys()) if rows else []
     if analysis == "statics_sweep":
         check(len(rows) == len(joints) + len(acts), f"{name}: CSV sweep rows")
-        check(header[:3] == ["item", "kind", "max_force"], f"{name}: CSV sweep header {header[:3]}")
+        check(header == ["item", "kind", "max_force_n", *[f"at_{a}_m" for a in acts], "status"],
+              f"{name}: CSV sweep header {header}")
         return
     check(len(rows) == len(samples), f"{name}: CSV has {len(rows)} rows for {len(samples)} samples")
-    want = ["t"] + [f"{b}.{c}" for b in bodies for c in ("x", "y", "phi")] + \
-        [f"{a}.{k}" for a in acts for k in ("length", "rate", "force")] + \
-        [f"{j}.{k}" for j in joints for k in ("fx", "fy", "moment")] + \
-        ([f"{c}.{k}" for c in contacts for k in ("state", *CONTACT_NUMBERS, "holds")] if robot else ["foot.x", "foot.y"]) + \
+    # the columns carry their SI units
+    want = ["t_s"] + [f"{b}.{c}" for b in bodies for c in ("x_m", "y_m", "phi_rad")] + \
+        [f"{a}.{k}" for a in acts for k in ("length_m", "rate_m_per_s", "force_n")] + \
+        [f"{j}.{k}" for j in joints for k in ("fx_n", "fy_n", "moment_nm")] + \
+        ([f"{c}.{k}" for c in contacts for k in ("state", *CONTACT_COLUMNS, "holds")] if robot
+         else ["foot.x_m", "foot.y_m"]) + \
         ["residual", "events", "status"]
     check(header == want, f"{name}: CSV header {header}")
     for row, s in zip(rows, samples):
         check(row["status"] == "ok", f"{name}: CSV status {row['status']}")
         check((row["events"].split(";") if row["events"] != "none" else []) == s["events"],
               f"{name}: CSV events {row['events']!r} vs JSON {s['events']}")
-        check(float(row["t"]) == s["t"], f"{name}: CSV t")
+        check(float(row["t_s"]) == s["t"], f"{name}: CSV t")
         b0 = bodies[0]
-        check(float(row[f"{b0}.phi"]) == s["q"][b0]["phi"], f"{name}: CSV and JSON disagree")
+        check(float(row[f"{b0}.phi_rad"]) == s["q"][b0]["phi"], f"{name}: CSV and JSON disagree")
     # stdout and --format
     r = run(cli, scene, None, "csv")
-    check(r.returncode == 0 and r.stdout.startswith("t,"), f"{name}: CSV on stdout")
+    check(r.returncode == 0 and r.stdout.startswith("t_s,"), f"{name}: CSV on stdout")
 
 
 def check_bad(cli, table, outdir):
@@ -178,7 +183,7 @@ def check_bad(cli, table, outdir):
             check(r.returncode == 1, f"{scene}: CSV run exit {r.returncode}")
             with open(cs, newline="", encoding="utf-8") as f:
                 rows = list(csv.reader(f))
-            check(len(rows) >= 1 and rows[0][0] in ("t", "item"), f"{scene}: CSV header {rows[:1]}")
+            check(len(rows) >= 1 and rows[0][0] in ("t_s", "item"), f"{scene}: CSV header {rows[:1]}")
             for row in rows[1:]:
                 check(len(row) == len(rows[0]) and all(v != "" for v in row),
                       f"{scene}: CSV row with empty fields {row[:4]}...")
