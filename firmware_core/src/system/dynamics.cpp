@@ -3,7 +3,7 @@
 // (M is diagonal, so this is the whole cost).
 #include <utility>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 
 namespace legsim {
 

@@ -23,7 +23,7 @@
 //   grows toward 1 step by step, so a second iteration measures it again before it can
 //   mislead). eta is kept at least kEtaMin: a first correction is accepted only up to
 //   tol / kEtaMin, where the terms of second order in dq are still far below tol.
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 
 namespace legsim {
 

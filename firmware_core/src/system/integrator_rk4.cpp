@@ -3,7 +3,7 @@
 // onto Phi_q qd = 0, both M-weighted. The derivative at the start of a step is
 // the one left by the previous step's end (first same as last), so a step
 // costs three stage solves and one end solve.
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 
 namespace legsim {
 

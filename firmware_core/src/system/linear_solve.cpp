@@ -6,7 +6,7 @@
 // factorization and its solves are chains of them).
 #include <cstring>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 
 namespace legsim {
 
