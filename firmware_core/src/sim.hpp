@@ -99,7 +99,7 @@ struct RowSource {
 // (J W J^T)(i, j) gets coef[i][si] . w . coef[j][sj]; the offsets into the
 // flattened coefficient and matrix arrays are worked out once, at layout time.
 struct Pair {
-  uint16_t ci, cj;  // (3 * (2 * row + slot)) of each side
+  uint16_t ci, cj;  // (kBodyDof * (2 * row + slot)) of each side
   uint16_t aij;     // i * kMaxRows + j
 };
 
@@ -131,7 +131,7 @@ struct Layout {
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
 struct Rows {
-  real coef[kMaxRows][2][3];  // d(row)/d(x, y, phi) of each slot's body
+  real coef[kMaxRows][2][kBodyDof];  // d(row)/d(x, y, phi) of each slot's body
   VecR phi;                   // Phi(q)
   VecR nu;                    // Phi_q qd = nu (driver rates)
   VecR gamma;                 // Phi_q qdd = gamma

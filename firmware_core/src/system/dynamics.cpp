@@ -4,6 +4,7 @@
 #include <utility>
 
 #include "planar/kernel.hpp"
+#include "planar/mass.hpp"
 
 namespace legsim {
 
@@ -60,7 +61,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     if (s != LEGSIM_OK) return s;
   }
   VecQ tmp;
-  for (int k = 0; k < m.nq; ++k) tmp[k] = m.minv[k] * d.force_q[k];
+  for (int k = 0; k < m.nq; ++k) tmp[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k]);
   j_times(layout, d.rows, tmp, d.lambda);
   for (int i = 0; i < layout.m; ++i) d.lambda[i] -= d.rows.gamma[i];
   if (layout.nslide) {
@@ -71,7 +72,7 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   }
   jt_times(m, layout, d.rows, d.lambda, tmp);
   if (layout.nslide) friction_add(sim, layout, q, d.lambda, -1, tmp);
-  for (int k = 0; k < m.nq; ++k) qdd[k] = m.minv[k] * (d.force_q[k] - tmp[k]);
+  for (int k = 0; k < m.nq; ++k) qdd[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k] - tmp[k]);
   if (!all_finite(qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
   if (reaction) reactions_from_multipliers(m, d.rows, d.lambda, reaction);
   return LEGSIM_OK;

@@ -24,6 +24,7 @@
 //   mislead). eta is kept at least kEtaMin: a first correction is accepted only up to
 //   tol / kEtaMin, where the terms of second order in dq are still far below tol.
 #include "planar/kernel.hpp"
+#include "planar/mass.hpp"
 
 namespace legsim {
 
@@ -35,16 +36,16 @@ namespace {
 // r = M qdd + r - Q (r holds J^T lambda); t = M^-1 r
 LEGSIM_KERNEL_TARGETS void residual(int n, const R_ mass, const R_ minv, const R_ qdd1, const R_ force, R_ res, R_ tmp) {
   for (int k = 0; k < n; ++k) {
-    res[k] += mass[k] * qdd1[k] - force[k];
-    tmp[k] = minv[k] * res[k];
+    res[k] += Bodies::mass_times(mass, k, qdd1[k]) - force[k];
+    tmp[k] = Bodies::mass_inverse_times(minv, k, res[k]);
   }
 }
 // the Newton correction dq = -(M^-1 / beta') (r + J^T dlambda) applied to q1, v1, qdd1
 LEGSIM_KERNEL_TARGETS void correct(int n, real bprime, real gprime, const R_ minv, const R_ res, const R_ tmp, R_ q1, R_ v1,
              R_ qdd1, R_ dq) {
   for (int k = 0; k < n; ++k) {
-    dq[k] = -minv[k] * (res[k] + tmp[k]) / bprime;
-    q1[k] += dq[k];
+    dq[k] = -Bodies::mass_inverse_times(minv, k, res[k] + tmp[k]) / bprime;
+    q1[k] = Bodies::config_add(q1[k], dq[k]);
     v1[k] += gprime * dq[k];
     qdd1[k] += bprime * dq[k];
   }
@@ -65,7 +66,8 @@ LEGSIM_KERNEL_TARGETS void start(int n, real h, real af, real am, real beta, rea
                                  const R_ qdd, const R_ acc_aux, const R_ qdd1, R_ q1, R_ v1) {
   for (int k = 0; k < n; ++k) {
     const real a1 = (af * qdd[k] + (1 - af) * qdd1[k] - am * acc_aux[k]) / (1 - am);
-    q1[k] = q[k] + h * qd[k] + h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1);
+    // q (+) h qd (+) h^2 (...): two increments, in the order of q + h qd + h^2 (...)
+    q1[k] = Bodies::config_add(Bodies::config_add(q[k], h * qd[k]), h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1));
     v1[k] = qd[k] + h * ((1 - gam) * acc_aux[k] + gam * a1);
   }
 }

@@ -221,7 +221,7 @@ legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
           if (pi < p0) continue;                          // the kernel's own
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
-          out.pair[np++] = {uint16_t(3 * (2 * i + si)), uint16_t(3 * (2 * j + sj)),
+          out.pair[np++] = {uint16_t(kBodyDof * (2 * i + si)), uint16_t(kBodyDof * (2 * j + sj)),
                             uint16_t(pi * kMaxRows + pj)};
           if (pj < out.first[pi]) out.first[pi] = uint8_t(pj);
         }
