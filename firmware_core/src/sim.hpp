@@ -127,6 +127,16 @@ struct Layout {
   uint8_t nslide;
   uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
   const Kernel *kernel;  // the model's kernel serves rows 0 .. kernel->mj-1 (nullptr: none)
+  // The path of each solve on this layout, chosen once when it is built (layout_path): the
+  // kernel whose generated solve serves the whole system (its block is all the rows: the
+  // joint rows alone, or a stance), or nullptr: the general path (with the kernel's block
+  // where it has one). The solvers call through it and never ask again.
+  struct Path {
+    const Kernel *dynamics;  // Kernel::dynamics, the forward-dynamics solve
+    const Kernel *newton;    // Kernel::newton, generalized-alpha's Newton iteration
+    const Kernel *factored;  // Kernel::factored, the solve with a given factor
+    const Kernel *reduced;   // Kernel::accelerations and Kernel::end, RK4 in the reduced system
+  } path;
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
@@ -333,6 +343,8 @@ legsim_status model_compile(const legsim_model_desc *desc, Model &model);
 // contacts (NULL: none): per contact its ContactRows; mid: one ContactMid row (assembly).
 legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out,
                            const uint8_t *contacts = nullptr, bool mid = false);
+// The layout's solve path (Layout::path) from its kernel and rows (layout_build's last step).
+void layout_path(Layout &out);
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
 legsim_status layout_finish(Layout &out, const DriverValues &drivers);
 // Evaluates Phi, the Jacobian and the velocity/acceleration right-hand sides.

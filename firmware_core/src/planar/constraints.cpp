@@ -194,6 +194,7 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
   out.npairs = 0;
   out.stops = false;
   out.nslide = 0;
+  layout_path(out);
   return LEGSIM_OK;
 }
 

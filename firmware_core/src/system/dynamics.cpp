@@ -5,6 +5,7 @@
 
 #include "planar/kernel.hpp"
 #include "planar/mass.hpp"
+#include "system/solve.hpp"
 
 namespace legsim {
 
@@ -36,9 +37,9 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
                              bool rows_ready, bool keep, legsim_reaction *reaction) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  const Kernel *kern = layout.kernel;
+  const Kernel *kern = layout.path.dynamics;
   layout_forces(sim, layout, q, qd);
-  if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
+  if (kern && !rows_ready) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
     // without keep, no condition estimate either (the factor is not kept, the step reports
@@ -64,14 +65,8 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   for (int k = 0; k < m.nq; ++k) tmp[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k]);
   j_times(layout, d.rows, tmp, d.lambda);
   for (int i = 0; i < layout.m; ++i) d.lambda[i] -= d.rows.gamma[i];
-  if (layout.nslide) {
-    const legsim_status s = coupled_solve(sim, layout, q, d.lambda);
-    if (s != LEGSIM_OK) return s;
-  } else {
-    factor_solve(d.factor, d.lambda);
-  }
-  jt_times(m, layout, d.rows, d.lambda, tmp);
-  if (layout.nslide) friction_add(sim, layout, q, d.lambda, -1, tmp);
+  if (const legsim_status s = multiplier_solve(sim, layout, q, d.lambda); s != LEGSIM_OK) return s;
+  constraint_forces(sim, layout, q, d.lambda, tmp);
   for (int k = 0; k < m.nq; ++k) qdd[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k] - tmp[k]);
   if (!all_finite(qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
   if (reaction) reactions_from_multipliers(m, d.rows, d.lambda, reaction);
@@ -83,7 +78,7 @@ legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q
   if (reduced_available(layout)) {
     bool actuators, elements;
     const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
-    return reduced_stage(sim, *layout.kernel, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
+    return reduced_stage(sim, *layout.path.reduced, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
                          q, qd, qdd);
   }
 #endif
@@ -98,7 +93,7 @@ legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ 
   bool actuators = plan.actuators, elements = false;
   const VecQ &base = plan.kernel ? *plan.base : reduced_base(sim, layout, q, qd, actuators, elements);
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
-  return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
+  return layout.path.reduced->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
                             stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
                             d.lambda, qdd, reaction);
 }
@@ -192,7 +187,7 @@ legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
   const Layout &lay = d.dyn;
-  const Kernel *kern = lay.kernel;
+  const Kernel *kern = lay.path.factored;
 #if LEGSIM_KERNELS_REDUCED
   if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay)) {
     // RK4's restart as its step's end, in the reduced system: the same solve whatever came
@@ -206,7 +201,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     return LEGSIM_OK;
   }
 #endif
-  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide) {
+  if (factor_ready && kern) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)
     layout_forces(sim, lay, d.q, d.qd);

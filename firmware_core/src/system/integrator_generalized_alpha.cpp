@@ -25,6 +25,7 @@
 //   tol / kEtaMin, where the terms of second order in dq are still far below tol.
 #include "planar/kernel.hpp"
 #include "planar/mass.hpp"
+#include "system/solve.hpp"
 
 namespace legsim {
 
@@ -109,8 +110,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   eta = std::sqrt(eta) * std::sqrt(std::sqrt(eta));
   real dq_before = 0;  // the last iteration's |dq|
   // the joint rows alone: each iteration's solve generated and fused (the same values)
-  const Kernel *kern =
-      lay.kernel && lay.kernel->newton && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
+  const Kernel *kern = lay.path.newton;
   if (kern) factor_order(lay, d.factor);  // the iterations write its entries
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
     applied_forces(m, sim.opt.disable, d, q1, v1, d.force_q);
@@ -126,20 +126,14 @@ legsim_status generalized_alpha_step(Sim &sim) {
       d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;
       // r = M qdd + J^T lambda - Q
-      jt_times(m, lay, d.rows, lambda, res);
-      if (lay.nslide) friction_add(sim, lay, q1, lambda, -1, res);  // sliding feet's friction
+      constraint_forces(sim, lay, q1, lambda, res);
       // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
       residual(n, m.mass, m.minv, qdd1.data(), d.force_q.data(), res.data(), tmp.data());
       j_times(lay, d.rows, tmp, d.rhs);
       for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
-      if (lay.nslide) {
-        s = coupled_solve(sim, lay, q1, d.rhs);  // the friction's coupling, exactly
-        if (s != LEGSIM_OK) return s;
-      } else {
-        factor_solve(d.factor, d.rhs);
-      }
-      jt_times(m, lay, d.rows, d.rhs, tmp);
-      if (lay.nslide) friction_add(sim, lay, q1, d.rhs, -1, tmp);
+      s = multiplier_solve(sim, lay, q1, d.rhs);
+      if (s != LEGSIM_OK) return s;
+      constraint_forces(sim, lay, q1, d.rhs, tmp);
     }
     VecQ dq;
     correct(n, bprime, gprime, m.minv, res.data(), tmp.data(), q1.data(), v1.data(), qdd1.data(),

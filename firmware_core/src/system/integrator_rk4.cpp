@@ -128,7 +128,7 @@ legsim_status rk4_step(Sim &sim) {
       return rk4_finish(sim, false);
   } else
 #endif
-  if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
+  if (lay.path.dynamics && !(projection && d.end_projected)) {
     // The joint rows alone: the fused solve at (q1, v1) first, its rows and factor kept.
     // When neither the positions nor the velocities need projecting (the usual step), it
     // is the end derivative; when the velocities alone do, its factor serves their

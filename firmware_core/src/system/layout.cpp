@@ -151,6 +151,21 @@ inline void pins_first(const Layout &out, const bool *is_pin, int *order, int n)
 }
 }  // namespace
 
+void layout_path(Layout &out) {
+  const Kernel *k = out.kernel;
+  // the kernel's block is the whole system: no rows after it (a sliding contact's normal
+  // row, a stop, a driver would follow the block)
+  const bool whole = k && out.m == k->mj;
+  out.path.dynamics = whole && k->dynamics ? k : nullptr;
+  out.path.newton = whole && k->newton ? k : nullptr;
+  out.path.factored = whole && k->factored ? k : nullptr;
+#if LEGSIM_KERNELS_REDUCED
+  out.path.reduced = whole && k->accelerations && k->end ? k : nullptr;
+#else
+  out.path.reduced = nullptr;  // a build without them leaves their callers out too
+#endif
+}
+
 legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   const int m = out.m;
   for (int i = 0; i < m; ++i)
