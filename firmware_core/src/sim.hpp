@@ -467,14 +467,16 @@ inline bool force_elements_act(const Sim &sim, uint32_t disable) {
 // decided once.
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
-// The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
-// generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).
-void friction_add(const Sim &sim, const Layout &layout, const VecQ &q, const VecR &lambda, real sign,
-                  VecQ &y);
+// The friction of the sliding contacts of layout (contact.cpp): y += sign * sum_i f_i
+// lambda[row_i], f_i the generalized friction force per unit normal multiplier (dir mu_k
+// G_t^T, at q); friction_column: f_i of contact k, its body's kBodyDof entries.
+void friction_add(const Model &m, const Data &d, const Layout &layout, const VecQ &q, const VecR &lambda,
+                  real sign, VecQ &y);
+void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (&f)[kBodyDof]);
 // Solves (J M^-1 J^T - J M^-1 F E^T) x = rhs in place with the factor of J M^-1 J^T (F: the
 // sliding contacts' friction columns, E: their normal rows) by the Woodbury identity: one
 // extra solve per sliding contact. LEGSIM_ERR_CONTACT when the coupled matrix is singular.
-legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR &x);
+legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x);
 void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
 // factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within

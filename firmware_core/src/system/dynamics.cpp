@@ -65,8 +65,8 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   for (int k = 0; k < m.nq; ++k) tmp[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k]);
   j_times(layout, d.rows, tmp, d.lambda);
   for (int i = 0; i < layout.m; ++i) d.lambda[i] -= d.rows.gamma[i];
-  if (const legsim_status s = multiplier_solve(sim, layout, q, d.lambda); s != LEGSIM_OK) return s;
-  constraint_forces(sim, layout, q, d.lambda, tmp);
+  if (const legsim_status s = multiplier_solve(m, d, layout, q, d.lambda); s != LEGSIM_OK) return s;
+  constraint_forces(m, d, layout, q, d.lambda, tmp);
   for (int k = 0; k < m.nq; ++k) qdd[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k] - tmp[k]);
   if (!all_finite(qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
   if (reaction) reactions_from_multipliers(m, d.rows, d.lambda, reaction);
@@ -99,47 +99,19 @@ legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ 
 }
 #endif
 
-namespace {
-// f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
-// unit normal multiplier (the force on the foot is mu_k dir lambda_n t = -dir mu_k N t).
-void friction_column(const Sim &sim, int k, const VecQ &q, real (&f)[3]) {
-  const Model &m = sim.model;
-  const Contact &c = m.contact[k];
-  const real phi = q[3 * c.body + 2];
-  const Vec2 sp = c.point.x() * axis_u(phi) + c.point.y() * normal_n(phi);
-  const real g = real(sim.data.contact[k].slip_dir) * m.mu_k;
-  f[0] = g * m.ground_t.x();
-  f[1] = g * m.ground_t.y();
-  f[2] = g * m.ground_t.dot(perp(sp));
-}
-}  // namespace
-
-void friction_add(const Sim &sim, const Layout &layout, const VecQ &q, const VecR &lambda, real sign,
-                  VecQ &y) {
-  for (int i = 0; i < layout.nslide; ++i) {
-    const int k = layout.slide_contact[i], b = sim.model.contact[k].body;
-    real f[3];
-    friction_column(sim, k, q, f);
-    const real l = sign * lambda[layout.slide_row[i]];
-    for (int c = 0; c < 3; ++c) y[3 * b + c] += f[c] * l;
-  }
-}
-
 // M qdd = Q - J^T lambda + F E^T lambda, J qdd = gamma: (A - J M^-1 F E^T) lambda = rhs with
 // A = J M^-1 J^T. With U = -J M^-1 F: lambda = x - Z (I + E^T Z)^-1 E^T x, x = A^-1 rhs,
 // Z = A^-1 U (Woodbury). At most kMaxContacts columns: a small dense elimination.
-legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR &x) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x) {
   const int ns = layout.nslide;
   factor_solve(d.factor, x);
   VecR z[kMaxContacts];
   for (int j = 0; j < ns; ++j) {
     const int k = layout.slide_contact[j], b = m.contact[k].body;
-    real f[3];
-    friction_column(sim, k, q, f);
+    real f[kBodyDof];
+    friction_column(m, d, k, q, f);
     VecQ mf = VecQ::Zero();
-    for (int c = 0; c < 3; ++c) mf[3 * b + c] = -m.minv[3 * b + c] * f[c];
+    for (int c = 0; c < kBodyDof; ++c) mf[kBodyDof * b + c] = -Bodies::mass_inverse_times(m.minv, kBodyDof * b + c, f[c]);
     j_times(layout, d.rows, mf, z[j]);
     factor_solve(d.factor, z[j]);
   }

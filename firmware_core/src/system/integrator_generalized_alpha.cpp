@@ -126,14 +126,14 @@ legsim_status generalized_alpha_step(Sim &sim) {
       d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;
       // r = M qdd + J^T lambda - Q
-      constraint_forces(sim, lay, q1, lambda, res);
+      constraint_forces(m, d, lay, q1, lambda, res);
       // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
       residual(n, m.mass, m.minv, qdd1.data(), d.force_q.data(), res.data(), tmp.data());
       j_times(lay, d.rows, tmp, d.rhs);
       for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
-      s = multiplier_solve(sim, lay, q1, d.rhs);
+      s = multiplier_solve(m, d, lay, q1, d.rhs);
       if (s != LEGSIM_OK) return s;
-      constraint_forces(sim, lay, q1, d.rhs, tmp);
+      constraint_forces(m, d, lay, q1, d.rhs, tmp);
     }
     VecQ dq;
     correct(n, bprime, gprime, m.minv, res.data(), tmp.data(), q1.data(), v1.data(), qdd1.data(),
