@@ -6,17 +6,12 @@
 #include <Eigen/Core>
 #include <cstdint>
 
-#include "kernel_trig.hpp"
 #include "legsim/legsim.h"
+#include "planar/body.hpp"
 
 namespace legsim {
 
-using real = legsim_real;
-using Vec2 = Eigen::Matrix<real, 2, 1>;
-using Vec3 = Eigen::Matrix<real, 3, 1>;
-
-constexpr int kMaxBodies = LEGSIM_MAX_BODIES;
-constexpr int kMaxCoords = 3 * LEGSIM_MAX_BODIES;
+constexpr int kMaxCoords = kBodyDof * kMaxBodies;
 constexpr int kMaxJoints = LEGSIM_MAX_JOINTS;
 constexpr int kMaxActuators = LEGSIM_MAX_ACTUATORS;
 constexpr int kMaxForces = LEGSIM_MAX_FORCES;
@@ -36,75 +31,7 @@ using VecR = Eigen::Matrix<real, kMaxRows, 1>;
 // row-major: the factorization's inner products run along rows
 using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows, Eigen::RowMajor>;
 
-// Unit axis u(phi) = (sin, -cos) and normal n(phi) = (cos, sin) of eq. (1).
-// (sincos_any: the library's in double, kernel_trig.hpp's reduction in float)
-inline Vec2 axis_u(real phi) {
-  real s, c;
-  sincos_any(phi, s, c);
-  return Vec2(s, -c);
-}
-inline Vec2 normal_n(real phi) {
-  real s, c;
-  sincos_any(phi, s, c);
-  return Vec2(c, s);
-}
-// Rotation by +90 degrees: d/dphi of a body-fixed vector s is perp(s).
-inline Vec2 perp(const Vec2 &s) { return Vec2(-s.y(), s.x()); }
-inline real cross2(const Vec2 &a, const Vec2 &b) { return a.x() * b.y() - a.y() * b.x(); }
-
 struct Kernel;  // generated joint-block kernels (kernel.hpp)
-
-// sin and cos of each body's angle where they were last evaluated: a stage evaluates the
-// applied forces, the rows and the stroke checks at the same q, so each angle's pair is
-// computed once (keyed by the angle's value: a pure function remembered, never stale).
-// A new angle phi is reached from the pair at the nearest multiple k / 64 rad (remembered
-// too: a body turns through such a cell in many stages) by the angle-sum formulas
-// (sincos_grid, kernel_trig.hpp): in double about 30 instructions instead of 70, within
-// 2.5 ulp (tests/core/test_body_trig.cpp); in float a fraction of its full reduction, within
-// 2 ulp (tests/core/test_trig.cpp); still a pure function of phi.
-struct TrigCache {
-  real phi[kMaxBodies], s[kMaxBodies], c[kMaxBodies];
-  real grid_s[kMaxBodies], grid_c[kMaxBodies];  // sin, cos of grid[b] / 64
-  int32_t grid[kMaxBodies];                      // INT32_MIN: none
-};
-void trig_clear(TrigCache &t);  // nothing remembered (NaN keys)
-// Inlined always on x86-64 (flash does not count there): GCC's inliner otherwise leaves some
-// of a large generated kernel's calls out of line, and which ones moves with the rest of
-// the generated file (the robot's RK4 step took 1,440 instructions more when the leg's
-// reduced stage solve was added).
-#if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((always_inline))
-#endif
-inline void body_trig(TrigCache *t, int b, real phi, real &s, real &c) {
-  if (t && t->phi[b] == phi) {
-    s = t->s[b];
-    c = t->c[b];
-    return;
-  }
-  if (t && std::abs(phi) < real(kGridMaxAngle)) {
-    sincos_grid(phi, t->grid[b], t->grid_s[b], t->grid_c[b], s, c);  // kernel_trig.hpp
-  } else {
-    sincos_reduced(phi, s, c);
-  }
-  if (t) {
-    t->phi[b] = phi;
-    t->s[b] = s;
-    t->c[b] = c;
-  }
-}
-
-// body_trig's pair without its memory of the last angle (the grid's pair still): for RK4's
-// reduced solves, whose angles are new at every stage (a memory there is read in vain and
-// written for nothing). The same values as body_trig's.
-#if defined(__x86_64__) && defined(__GNUC__)
-__attribute__((always_inline))
-#endif
-inline void grid_trig(TrigCache *t, int b, real phi, real &s, real &c) {
-  if (std::abs(phi) < real(kGridMaxAngle))
-    sincos_grid(phi, t->grid[b], t->grid_s[b], t->grid_c[b], s, c);
-  else
-    sincos_reduced(phi, s, c);
-}
 
 // ---- compiled model (constant after legsim_init) ----
 struct Joint {
@@ -172,7 +99,7 @@ struct RowSource {
 // (J W J^T)(i, j) gets coef[i][si] . w . coef[j][sj]; the offsets into the
 // flattened coefficient and matrix arrays are worked out once, at layout time.
 struct Pair {
-  uint16_t ci, cj;  // (3 * (2 * row + slot)) of each side
+  uint16_t ci, cj;  // (kBodyDof * (2 * row + slot)) of each side
   uint16_t aij;     // i * kMaxRows + j
 };
 
@@ -200,11 +127,21 @@ struct Layout {
   uint8_t nslide;
   uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
   const Kernel *kernel;  // the model's kernel serves rows 0 .. kernel->mj-1 (nullptr: none)
+  // The path of each solve on this layout, chosen once when it is built (layout_path): the
+  // kernel whose generated solve serves the whole system (its block is all the rows: the
+  // joint rows alone, or a stance), or nullptr: the general path (with the kernel's block
+  // where it has one). The solvers call through it and never ask again.
+  struct Path {
+    const Kernel *dynamics;  // Kernel::dynamics, the forward-dynamics solve
+    const Kernel *newton;    // Kernel::newton, generalized-alpha's Newton iteration
+    const Kernel *factored;  // Kernel::factored, the solve with a given factor
+    const Kernel *reduced;   // Kernel::accelerations and Kernel::end, RK4 in the reduced system
+  } path;
 };
 
 // Values of the rows at one (q, qd): sparse Jacobian, residual, right-hand sides.
 struct Rows {
-  real coef[kMaxRows][2][3];  // d(row)/d(x, y, phi) of each slot's body
+  real coef[kMaxRows][2][kBodyDof];  // d(row)/d(x, y, phi) of each slot's body
   VecR phi;                   // Phi(q)
   VecR nu;                    // Phi_q qd = nu (driver rates)
   VecR gamma;                 // Phi_q qdd = gamma
@@ -380,6 +317,21 @@ legsim_status all_or_nothing(Sim &sim, F &&call) {
 
 // Positions and velocities a sim may hold: finite and within LEGSIM_MAX_ABS_Q/QD.
 bool state_sane(const VecQ &q, const VecQ &qd, int n);
+// q and qd finite (the cheap test a step starts with).
+bool state_finite(const VecQ &q, const VecQ &qd, int n);
+
+// ---- system/step.cpp: the step's stages ----
+// n_steps steps, each all-or-nothing; the sim is assembled, its state finite.
+legsim_status steps_run(Sim &sim, int32_t n_steps);
+// After the state changed outside a step: accelerations, multipliers and reactions at the
+// new state, and a fresh start of generalized-alpha's history. forcing_only: only a command
+// or a load changed (the state, its rows and the options as they were).
+legsim_status state_refresh(Sim &sim, bool forcing_only = false);
+// A changed command or load: both integrators restart from the accelerations under the new
+// forces (the same value sent again changes nothing).
+void commands_changed(Data &d);
+// The state, its rows or the options changed outside a step: a full restart.
+void state_changed(Data &d);
 
 // ---- model.cpp ----
 legsim_status model_check(const legsim_model_desc *desc, char *msg, size_t len);
@@ -391,6 +343,8 @@ legsim_status model_compile(const legsim_model_desc *desc, Model &model);
 // contacts (NULL: none): per contact its ContactRows; mid: one ContactMid row (assembly).
 legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out,
                            const uint8_t *contacts = nullptr, bool mid = false);
+// The layout's solve path (Layout::path) from its kernel and rows (layout_build's last step).
+void layout_path(Layout &out);
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
 legsim_status layout_finish(Layout &out, const DriverValues &drivers);
 // Evaluates Phi, the Jacobian and the velocity/acceleration right-hand sides.
@@ -513,14 +467,16 @@ inline bool force_elements_act(const Sim &sim, uint32_t disable) {
 // decided once.
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
-// The friction of the sliding contacts of layout: y += sign * sum_i f_i lambda[row_i], f_i the
-// generalized friction force per unit normal multiplier (dir mu_k G_t^T, at q).
-void friction_add(const Sim &sim, const Layout &layout, const VecQ &q, const VecR &lambda, real sign,
-                  VecQ &y);
+// The friction of the sliding contacts of layout (contact.cpp): y += sign * sum_i f_i
+// lambda[row_i], f_i the generalized friction force per unit normal multiplier (dir mu_k
+// G_t^T, at q); friction_column: f_i of contact k, its body's kBodyDof entries.
+void friction_add(const Model &m, const Data &d, const Layout &layout, const VecQ &q, const VecR &lambda,
+                  real sign, VecQ &y);
+void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (&f)[kBodyDof]);
 // Solves (J M^-1 J^T - J M^-1 F E^T) x = rhs in place with the factor of J M^-1 J^T (F: the
 // sliding contacts' friction columns, E: their normal rows) by the Woodbury identity: one
 // extra solve per sliding contact. LEGSIM_ERR_CONTACT when the coupled matrix is singular.
-legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR &x);
+legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x);
 void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
 // factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within

@@ -1,4 +1,4 @@
-/* The generated joint-block kernels (firmware_core/src/kernel.hpp) against the general
+/* The generated joint-block kernels (firmware_core/src/planar/kernel.hpp) against the general
  * path: the same scenes run twice, once on the kernel and once with it switched off
  * (legsim_kernel_use), must give the same trajectories (q, qd, qdd), multipliers,
  * reactions, actuator and contact forces, events and statuses to round-off, over 1 s,
@@ -22,7 +22,7 @@
 #define HAVE_ROBOT 1
 #endif
 
-/* firmware_core/src/kernel.hpp: 1 when the sim now uses a kernel, 0 when not */
+/* firmware_core/src/planar/kernel.hpp: 1 when the sim now uses a kernel, 0 when not */
 int legsim_kernel_use(legsim_sim *sim, int on);
 
 #define MAXQ (3 * LEGSIM_MAX_BODIES)

@@ -10,7 +10,7 @@
 #include <cmath>
 #include <cstdio>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 #include "legsim/legsim.h"
 #include "legsim/models.h"
 #include "unity.h"

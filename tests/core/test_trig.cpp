@@ -9,7 +9,7 @@
 #include <cstring>
 #include <cstdio>
 
-#include "kernel_trig.hpp"
+#include "planar/kernel_trig.hpp"
 #include "unity.h"
 
 void setUp(void) {}

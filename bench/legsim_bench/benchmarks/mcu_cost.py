@@ -33,8 +33,9 @@ TARGETS = [  # preset, board, image, tolerance against the host (its real type),
     ("cortex-m7-robot", "mps2-an500", "robot_m7.elf", 1e-6, "legsim_robot_report_host"),
 ]
 # The M4F image's build choices (cache variables on top of the cortex-m4f preset).
-_HOT = "legsim_kernels.cpp;src/linear_solve.cpp;src/api.cpp;src/dynamics.cpp;src/integrator_rk4.cpp;" \
-       "src/integrator_generalized_alpha.cpp"
+_HOT = "legsim_kernels.cpp;src/system/linear_solve.cpp;src/system/step.cpp;src/system/guard.cpp;src/system/dynamics.cpp;" \
+       "src/system/integrator_rk4.cpp;src/system/integrator_generalized_alpha.cpp;src/api/common.cpp;src/api/model.cpp;" \
+       "src/api/state.cpp;src/api/step.cpp;src/api/analyses.cpp"
 CHOICES = [  # name, cache variables
     ("preset (-Os, LTO; -O2 for the API, the dynamics solve and the integrators)", {}),
     ("-Os everywhere, LTO", {"LEGSIM_MCU_HOT_SOURCES": ""}),

@@ -3,7 +3,8 @@
 // onto Phi_q qd = 0, both M-weighted. The derivative at the start of a step is
 // the one left by the previous step's end (first same as last), so a step
 // costs three stage solves and one end solve.
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
+#include "planar/mass.hpp"
 
 namespace legsim {
 
@@ -14,7 +15,7 @@ namespace {
 #define R_ real *__restrict
 LEGSIM_STAGE_TARGETS void stage_first(int n, real h2, const R_ q0, const R_ v0, const R_ a0, R_ qs, R_ vs) {
   for (int k = 0; k < n; ++k) {
-    qs[k] = q0[k] + h2 * v0[k];
+    qs[k] = Bodies::config_add(q0[k], h2 * v0[k]);
     vs[k] = v0[k] + h2 * a0[k];
   }
 }
@@ -24,7 +25,7 @@ LEGSIM_STAGE_TARGETS void stage_second(int n, real w, real hn, const R_ q0, cons
   for (int k = 0; k < n; ++k) {
     sum_v[k] = v0[k] + w * vs[k];
     sum_a[k] = a0[k] + w * a[k];
-    qs[k] = q0[k] + hn * vs[k];
+    qs[k] = Bodies::config_add(q0[k], hn * vs[k]);
     vs[k] = v0[k] + hn * a[k];
   }
 }
@@ -33,7 +34,7 @@ LEGSIM_STAGE_TARGETS void stage_next(int n, real w, real hn, const R_ q0, const 
   for (int k = 0; k < n; ++k) {
     sum_v[k] += w * vs[k];
     sum_a[k] += w * a[k];
-    qs[k] = q0[k] + hn * vs[k];
+    qs[k] = Bodies::config_add(q0[k], hn * vs[k]);
     vs[k] = v0[k] + hn * a[k];
   }
 }
@@ -46,7 +47,7 @@ LEGSIM_STAGE_TARGETS bool stage_last(int n, real h6, R_ q, R_ v, const R_ vs, co
                                       const R_ sum_a) {
   real sq = 0, sv = 0;
   for (int k = 0; k < n; ++k) {
-    const real q1 = q[k] + h6 * (sum_v[k] + vs[k]), v1 = v[k] + h6 * (sum_a[k] + a[k]);
+    const real q1 = Bodies::config_add(q[k], h6 * (sum_v[k] + vs[k])), v1 = v[k] + h6 * (sum_a[k] + a[k]);
     q[k] = q1;
     v[k] = v1;
     sq += std::abs(q1);
@@ -127,7 +128,7 @@ legsim_status rk4_step(Sim &sim) {
       return rk4_finish(sim, false);
   } else
 #endif
-  if (lay.kernel && lay.kernel->dynamics && lay.m == lay.kernel->mj && !(projection && d.end_projected)) {
+  if (lay.path.dynamics && !(projection && d.end_projected)) {
     // The joint rows alone: the fused solve at (q1, v1) first, its rows and factor kept.
     // When neither the positions nor the velocities need projecting (the usual step), it
     // is the end derivative; when the velocities alone do, its factor serves their

@@ -3,7 +3,7 @@
 // with the kernels (tools/kernel_codegen.py).
 #include <cstring>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 
 extern "C" int legsim_kernel_use(legsim_sim *sim, int on) {
   using namespace legsim;

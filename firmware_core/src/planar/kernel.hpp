@@ -155,8 +155,7 @@ struct Kernel {
 // left out too).
 inline bool reduced_available(const Layout &layout) {
 #if LEGSIM_KERNELS_REDUCED
-  const Kernel *kern = layout.kernel;
-  return kern && kern->accelerations && kern->end && layout.m == kern->mj && !layout.nslide;
+  return layout.path.reduced != nullptr;  // chosen when the layout was built (layout_path)
 #else
   (void)layout;
   return false;
@@ -180,7 +179,7 @@ inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
   if (!reduced_available(layout)) return p;
   const uint32_t disable = layout_disable(sim, layout);
   if (force_elements_act(sim, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
-  p.kernel = layout.kernel;
+  p.kernel = layout.path.reduced;
   p.dv = layout.stops ? &sim.data.stop_drivers : &sim.data.drivers;
   p.base = &sim.model.gravity_force;
   p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);

@@ -23,7 +23,9 @@
 //   grows toward 1 step by step, so a second iteration measures it again before it can
 //   mislead). eta is kept at least kEtaMin: a first correction is accepted only up to
 //   tol / kEtaMin, where the terms of second order in dq are still far below tol.
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
+#include "planar/mass.hpp"
+#include "system/solve.hpp"
 
 namespace legsim {
 
@@ -35,16 +37,16 @@ namespace {
 // r = M qdd + r - Q (r holds J^T lambda); t = M^-1 r
 LEGSIM_KERNEL_TARGETS void residual(int n, const R_ mass, const R_ minv, const R_ qdd1, const R_ force, R_ res, R_ tmp) {
   for (int k = 0; k < n; ++k) {
-    res[k] += mass[k] * qdd1[k] - force[k];
-    tmp[k] = minv[k] * res[k];
+    res[k] += Bodies::mass_times(mass, k, qdd1[k]) - force[k];
+    tmp[k] = Bodies::mass_inverse_times(minv, k, res[k]);
   }
 }
 // the Newton correction dq = -(M^-1 / beta') (r + J^T dlambda) applied to q1, v1, qdd1
 LEGSIM_KERNEL_TARGETS void correct(int n, real bprime, real gprime, const R_ minv, const R_ res, const R_ tmp, R_ q1, R_ v1,
              R_ qdd1, R_ dq) {
   for (int k = 0; k < n; ++k) {
-    dq[k] = -minv[k] * (res[k] + tmp[k]) / bprime;
-    q1[k] += dq[k];
+    dq[k] = -Bodies::mass_inverse_times(minv, k, res[k] + tmp[k]) / bprime;
+    q1[k] = Bodies::config_add(q1[k], dq[k]);
     v1[k] += gprime * dq[k];
     qdd1[k] += bprime * dq[k];
   }
@@ -65,7 +67,8 @@ LEGSIM_KERNEL_TARGETS void start(int n, real h, real af, real am, real beta, rea
                                  const R_ qdd, const R_ acc_aux, const R_ qdd1, R_ q1, R_ v1) {
   for (int k = 0; k < n; ++k) {
     const real a1 = (af * qdd[k] + (1 - af) * qdd1[k] - am * acc_aux[k]) / (1 - am);
-    q1[k] = q[k] + h * qd[k] + h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1);
+    // q (+) h qd (+) h^2 (...): two increments, in the order of q + h qd + h^2 (...)
+    q1[k] = Bodies::config_add(Bodies::config_add(q[k], h * qd[k]), h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1));
     v1[k] = qd[k] + h * ((1 - gam) * acc_aux[k] + gam * a1);
   }
 }
@@ -107,8 +110,7 @@ legsim_status generalized_alpha_step(Sim &sim) {
   eta = std::sqrt(eta) * std::sqrt(std::sqrt(eta));
   real dq_before = 0;  // the last iteration's |dq|
   // the joint rows alone: each iteration's solve generated and fused (the same values)
-  const Kernel *kern =
-      lay.kernel && lay.kernel->newton && lay.m == lay.kernel->mj && !lay.nslide ? lay.kernel : nullptr;
+  const Kernel *kern = lay.path.newton;
   if (kern) factor_order(lay, d.factor);  // the iterations write its entries
   for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
     applied_forces(m, sim.opt.disable, d, q1, v1, d.force_q);
@@ -124,20 +126,14 @@ legsim_status generalized_alpha_step(Sim &sim) {
       d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;
       // r = M qdd + J^T lambda - Q
-      jt_times(m, lay, d.rows, lambda, res);
-      if (lay.nslide) friction_add(sim, lay, q1, lambda, -1, res);  // sliding feet's friction
+      constraint_forces(m, d, lay, q1, lambda, res);
       // (J M^-1 J^T) dlambda = beta' Phi - J M^-1 r ;  dq = -(M^-1 / beta') (r + J^T dlambda)
       residual(n, m.mass, m.minv, qdd1.data(), d.force_q.data(), res.data(), tmp.data());
       j_times(lay, d.rows, tmp, d.rhs);
       for (int i = 0; i < lay.m; ++i) d.rhs[i] = bprime * d.rows.phi[i] - d.rhs[i];
-      if (lay.nslide) {
-        s = coupled_solve(sim, lay, q1, d.rhs);  // the friction's coupling, exactly
-        if (s != LEGSIM_OK) return s;
-      } else {
-        factor_solve(d.factor, d.rhs);
-      }
-      jt_times(m, lay, d.rows, d.rhs, tmp);
-      if (lay.nslide) friction_add(sim, lay, q1, d.rhs, -1, tmp);
+      s = multiplier_solve(m, d, lay, q1, d.rhs);
+      if (s != LEGSIM_OK) return s;
+      constraint_forces(m, d, lay, q1, d.rhs, tmp);
     }
     VecQ dq;
     correct(n, bprime, gprime, m.minv, res.data(), tmp.data(), q1.data(), v1.data(), qdd1.data(),

@@ -1,6 +1,7 @@
 // Assembly: Newton-Raphson onto Phi(q) = 0 (joint equations plus drivers), with
 // the W-weighted minimum-norm correction dq = -W J^T (J W J^T)^-1 Phi, which is
 // Newton's step when the system is square and the nearest solution when it is not.
+#include "planar/mass.hpp"
 #include "sim.hpp"
 
 namespace legsim {
@@ -35,7 +36,7 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
     factor_solve(d.factor, d.rhs);
     VecQ corr;
     jt_times(m, layout, d.rows, d.rhs, corr);
-    for (int k = 0; k < m.nq; ++k) q[k] -= w[k] * corr[k];
+    for (int k = 0; k < m.nq; ++k) q[k] = Bodies::config_add(q[k], -Bodies::mass_inverse_times(w, k, corr[k]));
   }
   // the condition where it landed: a converged dead centre is still a dead centre
   if (full) {

@@ -3,7 +3,7 @@
 #include <cstring>
 #include <type_traits>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
 
 namespace legsim {
 namespace {

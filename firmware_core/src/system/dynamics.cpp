@@ -3,7 +3,9 @@
 // (M is diagonal, so this is the whole cost).
 #include <utility>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
+#include "planar/mass.hpp"
+#include "system/solve.hpp"
 
 namespace legsim {
 
@@ -35,9 +37,9 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
                              bool rows_ready, bool keep, legsim_reaction *reaction) {
   const Model &m = sim.model;
   Data &d = sim.data;
-  const Kernel *kern = layout.kernel;
+  const Kernel *kern = layout.path.dynamics;
   layout_forces(sim, layout, q, qd);
-  if (kern && kern->dynamics && !rows_ready && layout.m == kern->mj) {
+  if (kern && !rows_ready) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
     // without keep, no condition estimate either (the factor is not kept, the step reports
@@ -60,18 +62,12 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
     if (s != LEGSIM_OK) return s;
   }
   VecQ tmp;
-  for (int k = 0; k < m.nq; ++k) tmp[k] = m.minv[k] * d.force_q[k];
+  for (int k = 0; k < m.nq; ++k) tmp[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k]);
   j_times(layout, d.rows, tmp, d.lambda);
   for (int i = 0; i < layout.m; ++i) d.lambda[i] -= d.rows.gamma[i];
-  if (layout.nslide) {
-    const legsim_status s = coupled_solve(sim, layout, q, d.lambda);
-    if (s != LEGSIM_OK) return s;
-  } else {
-    factor_solve(d.factor, d.lambda);
-  }
-  jt_times(m, layout, d.rows, d.lambda, tmp);
-  if (layout.nslide) friction_add(sim, layout, q, d.lambda, -1, tmp);
-  for (int k = 0; k < m.nq; ++k) qdd[k] = m.minv[k] * (d.force_q[k] - tmp[k]);
+  if (const legsim_status s = multiplier_solve(m, d, layout, q, d.lambda); s != LEGSIM_OK) return s;
+  constraint_forces(m, d, layout, q, d.lambda, tmp);
+  for (int k = 0; k < m.nq; ++k) qdd[k] = Bodies::mass_inverse_times(m.minv, k, d.force_q[k] - tmp[k]);
   if (!all_finite(qdd, m.nq)) return LEGSIM_ERR_DIVERGED;
   if (reaction) reactions_from_multipliers(m, d.rows, d.lambda, reaction);
   return LEGSIM_OK;
@@ -82,7 +78,7 @@ legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q
   if (reduced_available(layout)) {
     bool actuators, elements;
     const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
-    return reduced_stage(sim, *layout.kernel, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
+    return reduced_stage(sim, *layout.path.reduced, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
                          q, qd, qdd);
   }
 #endif
@@ -97,53 +93,25 @@ legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ 
   bool actuators = plan.actuators, elements = false;
   const VecQ &base = plan.kernel ? *plan.base : reduced_base(sim, layout, q, qd, actuators, elements);
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
-  return layout.kernel->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
+  return layout.path.reduced->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
                             stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
                             d.lambda, qdd, reaction);
 }
 #endif
 
-namespace {
-// f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
-// unit normal multiplier (the force on the foot is mu_k dir lambda_n t = -dir mu_k N t).
-void friction_column(const Sim &sim, int k, const VecQ &q, real (&f)[3]) {
-  const Model &m = sim.model;
-  const Contact &c = m.contact[k];
-  const real phi = q[3 * c.body + 2];
-  const Vec2 sp = c.point.x() * axis_u(phi) + c.point.y() * normal_n(phi);
-  const real g = real(sim.data.contact[k].slip_dir) * m.mu_k;
-  f[0] = g * m.ground_t.x();
-  f[1] = g * m.ground_t.y();
-  f[2] = g * m.ground_t.dot(perp(sp));
-}
-}  // namespace
-
-void friction_add(const Sim &sim, const Layout &layout, const VecQ &q, const VecR &lambda, real sign,
-                  VecQ &y) {
-  for (int i = 0; i < layout.nslide; ++i) {
-    const int k = layout.slide_contact[i], b = sim.model.contact[k].body;
-    real f[3];
-    friction_column(sim, k, q, f);
-    const real l = sign * lambda[layout.slide_row[i]];
-    for (int c = 0; c < 3; ++c) y[3 * b + c] += f[c] * l;
-  }
-}
-
 // M qdd = Q - J^T lambda + F E^T lambda, J qdd = gamma: (A - J M^-1 F E^T) lambda = rhs with
 // A = J M^-1 J^T. With U = -J M^-1 F: lambda = x - Z (I + E^T Z)^-1 E^T x, x = A^-1 rhs,
 // Z = A^-1 U (Woodbury). At most kMaxContacts columns: a small dense elimination.
-legsim_status coupled_solve(Sim &sim, const Layout &layout, const VecQ &q, VecR &x) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x) {
   const int ns = layout.nslide;
   factor_solve(d.factor, x);
   VecR z[kMaxContacts];
   for (int j = 0; j < ns; ++j) {
     const int k = layout.slide_contact[j], b = m.contact[k].body;
-    real f[3];
-    friction_column(sim, k, q, f);
+    real f[kBodyDof];
+    friction_column(m, d, k, q, f);
     VecQ mf = VecQ::Zero();
-    for (int c = 0; c < 3; ++c) mf[3 * b + c] = -m.minv[3 * b + c] * f[c];
+    for (int c = 0; c < kBodyDof; ++c) mf[kBodyDof * b + c] = -Bodies::mass_inverse_times(m.minv, kBodyDof * b + c, f[c]);
     j_times(layout, d.rows, mf, z[j]);
     factor_solve(d.factor, z[j]);
   }
@@ -191,7 +159,7 @@ legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;
   const Layout &lay = d.dyn;
-  const Kernel *kern = lay.kernel;
+  const Kernel *kern = lay.path.factored;
 #if LEGSIM_KERNELS_REDUCED
   if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay)) {
     // RK4's restart as its step's end, in the reduced system: the same solve whatever came
@@ -205,7 +173,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
     return LEGSIM_OK;
   }
 #endif
-  if (factor_ready && kern && kern->factored && lay.m == kern->mj && !lay.nslide) {
+  if (factor_ready && kern) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)
     layout_forces(sim, lay, d.q, d.qd);

@@ -6,7 +6,8 @@
 // factorization and its solves are chains of them).
 #include <cstring>
 
-#include "kernel.hpp"
+#include "planar/kernel.hpp"
+#include "planar/mass.hpp"
 
 namespace legsim {
 
@@ -26,22 +27,22 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
   // weight each row's coefficients once, then every non-zero entry is one dot product
-  real wc[kMaxRows][2][3];
+  real wc[kMaxRows][2][kBodyDof];
   for (int i = mk; i < m; ++i)
     for (int sl = 0; sl < 2; ++sl) {
       const int b = layout.body[i][sl];
       if (b < 0) continue;
-      const real *c = rows.coef[i][sl], *wb = w + 3 * b;
-      wc[i][sl][0] = c[0] * wb[0];
-      wc[i][sl][1] = c[1] * wb[1];
-      wc[i][sl][2] = c[2] * wb[2];
+      const real *c = rows.coef[i][sl];
+      for (int e = 0; e < kBodyDof; ++e) wc[i][sl][e] = Bodies::mass_inverse_times(w, kBodyDof * b + e, c[e]);
     }
   const real *wflat = &wc[0][0][0], *cflat = &rows.coef[0][0][0];
   real *aflat = f.a.data();
   for (int k = 0; k < layout.npairs; ++k) {
     const Pair &p = layout.pair[k];
     const real *ci = wflat + p.ci, *cj = cflat + p.cj;
-    aflat[p.aij] += ci[0] * cj[0] + ci[1] * cj[1] + ci[2] * cj[2];
+    real dot = ci[0] * cj[0];
+    for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
+    aflat[p.aij] += dot;
   }
   real max_diag = 0;
   for (int i = mk; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
@@ -193,9 +194,7 @@ void jt_times(const Model &model, const Layout &layout, const Rows &rows, const 
       const int b = layout.body[i][s];
       if (b < 0) continue;
       const real *c = rows.coef[i][s];
-      y[3 * b] += c[0] * x[i];
-      y[3 * b + 1] += c[1] * x[i];
-      y[3 * b + 2] += c[2] * x[i];
+      for (int e = 0; e < kBodyDof; ++e) y[kBodyDof * b + e] += c[e] * x[i];
     }
 }
 
@@ -211,7 +210,10 @@ void j_times(const Layout &layout, const Rows &rows, const VecQ &x, VecR &y) {
       const int b = layout.body[i][k];
       if (b < 0) continue;
       const real *c = rows.coef[i][k];
-      s += c[0] * x[3 * b] + c[1] * x[3 * b + 1] + c[2] * x[3 * b + 2];
+      const real *xb = x.data() + kBodyDof * b;
+      real t = c[0] * xb[0];
+      for (int e = 1; e < kBodyDof; ++e) t += c[e] * xb[e];
+      s += t;
     }
     y[i] = s;
   }
@@ -224,7 +226,7 @@ void project(const Model &model, const Layout &layout, const Rows &rows, const F
   factor_solve(f, tmp);
   VecQ corr;
   jt_times(model, layout, rows, tmp, corr);
-  for (int k = 0; k < model.nq; ++k) x[k] -= w[k] * corr[k];
+  for (int k = 0; k < model.nq; ++k) x[k] -= Bodies::mass_inverse_times(w, k, corr[k]);
 }
 
 bool all_finite(const VecQ &v, int n) {

@@ -6,6 +6,7 @@
 #include <limits>
 
 #include "sim.hpp"
+#include "system/solve.hpp"
 
 namespace legsim {
 
@@ -92,15 +93,10 @@ legsim_status impact(Sim &sim, const uint32_t hit) {
   VecR mu;
   j_times(lay, d.rows, d.qd, mu);
   for (int i = 0; i < lay.m; ++i) mu[i] -= d.rows.nu[i];
-  if (lay.nslide) {
-    s = coupled_solve(sim, lay, d.q, mu);
-    if (s != LEGSIM_OK) return s;
-  } else {
-    factor_solve(d.factor, mu);
-  }
+  s = multiplier_solve(m, d, lay, d.q, mu);
+  if (s != LEGSIM_OK) return s;
   VecQ g;
-  jt_times(m, lay, d.rows, mu, g);
-  if (lay.nslide) friction_add(sim, lay, d.q, mu, -1, g);
+  constraint_forces(m, d, lay, d.q, mu, g);
   for (int k = 0; k < m.nq; ++k) d.qd[k] -= m.minv[k] * g[k];
   real pn[kMaxContacts], pt[kMaxContacts];
   contact_forces_of_layout(m, lay, mu, pn, pt);
@@ -508,6 +504,30 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
     if ((changing >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
   raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
   return LEGSIM_OK;
+}
+
+// ---- the sliding contacts' friction (Coulomb, mu_k): its columns in the equations of motion ----
+// f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
+// unit normal multiplier (the force on the foot is mu_k dir lambda_n t = -dir mu_k N t).
+void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (&f)[kBodyDof]) {
+  const Contact &c = m.contact[k];
+  const real phi = q[3 * c.body + 2];
+  const Vec2 sp = c.point.x() * axis_u(phi) + c.point.y() * normal_n(phi);
+  const real g = real(d.contact[k].slip_dir) * m.mu_k;
+  f[0] = g * m.ground_t.x();
+  f[1] = g * m.ground_t.y();
+  f[2] = g * m.ground_t.dot(perp(sp));
+}
+
+void friction_add(const Model &m, const Data &d, const Layout &layout, const VecQ &q, const VecR &lambda,
+                  real sign, VecQ &y) {
+  for (int i = 0; i < layout.nslide; ++i) {
+    const int k = layout.slide_contact[i], b = m.contact[k].body;
+    real f[kBodyDof];
+    friction_column(m, d, k, q, f);
+    const real l = sign * lambda[layout.slide_row[i]];
+    for (int c = 0; c < kBodyDof; ++c) y[kBodyDof * b + c] += f[c] * l;
+  }
 }
 
 }  // namespace legsim

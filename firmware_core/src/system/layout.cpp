@@ -1,0 +1,248 @@
+// The layout's structure: an elimination order of the rows (reverse Cuthill-McKee or minimum
+// degree over the rows that share a body, whichever leaves the factor fewer entries; a
+// generated kernel's own order for its block) and the entries of J W J^T that can be
+// non-zero. Dimension-free: it reads which bodies each row touches, never what the rows are.
+#include "planar/kernel.hpp"
+
+namespace legsim {
+
+namespace {
+legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first);
+}  // namespace
+
+// The coordinate drivers' bodies are known once their values are: finish the
+// layout and list the entries of J W J^T that can be non-zero.
+namespace {
+// Row i of the joint block (rows 0 .. mj-1) is a row of a pinned body's pin: a joint to the
+// frame (no second body) on a body that has no other.
+bool pin_row(const Layout &out, int mj, int i) {
+  if (out.body[i][1] >= 0) return false;
+  int rows = 0;  // the body's rows to the frame: 2 for one revolute joint
+  for (int j = 0; j < mj; ++j) rows += out.body[j][1] < 0 && out.body[j][0] == out.body[i][0];
+  return rows == 2;
+}
+}  // namespace
+
+namespace {
+// A set of rows, one bit each.
+constexpr int kRowWords = (kMaxRows + 31) / 32;
+struct Rowset {
+  uint32_t w[kRowWords];
+};
+void rowset_clear(Rowset &s) {
+  for (uint32_t &x : s.w) x = 0;
+}
+void rowset_add(Rowset &s, int i) { s.w[i / 32] |= uint32_t(1) << (i % 32); }
+void rowset_remove(Rowset &s, int i) { s.w[i / 32] &= ~(uint32_t(1) << (i % 32)); }
+bool rowset_has(const Rowset &s, int i) { return (s.w[i / 32] >> (i % 32)) & 1u; }
+// |a & b|, and whether a & b has a member below n
+int rowset_common(const Rowset &a, const Rowset &b) {
+  int n = 0;
+  for (int k = 0; k < kRowWords; ++k) n += __builtin_popcount(a.w[k] & b.w[k]);
+  return n;
+}
+bool rowset_common_below(const Rowset &a, const Rowset &b, int n) {
+  for (int k = 0; k * 32 < n; ++k) {
+    uint32_t x = a.w[k] & b.w[k];
+    if (n - k * 32 < 32) x &= (uint32_t(1) << (n - k * 32)) - 1;
+    if (x) return true;
+  }
+  return false;
+}
+
+// Rows 0 .. n-1 in reverse Cuthill-McKee order (breadth-first from a least-coupled row,
+// neighbours by degree, ties to the lowest index; then reversed): order[p] is the row
+// eliminated p-th.
+template <typename Share>
+void cuthill_mckee(const Share &share, int n, int *order) {
+  int degree[kMaxRows], cm[kMaxRows], k = 0;
+  bool placed[kMaxRows];
+  for (int i = 0; i < n; ++i) {
+    degree[i] = 0, placed[i] = false;
+    for (int j = 0; j < n; ++j) degree[i] += (j != i && share(i, j));
+  }
+  while (k < n) {
+    int start = -1;
+    for (int i = 0; i < n; ++i)
+      if (!placed[i] && (start < 0 || degree[i] < degree[start])) start = i;
+    placed[start] = true;
+    cm[k++] = start;
+    for (int head = k - 1; head < k; ++head) {
+      for (;;) {  // the unplaced neighbours of cm[head], lowest degree first
+        int next = -1;
+        for (int j = 0; j < n; ++j)
+          if (!placed[j] && share(cm[head], j) && (next < 0 || degree[j] < degree[next])) next = j;
+        if (next < 0) break;
+        placed[next] = true;
+        cm[k++] = next;
+      }
+    }
+  }
+  for (int p = 0; p < n; ++p) order[p] = cm[n - 1 - p];
+}
+
+// Rows 0 .. n-1 by minimum degree: at each step the row with the fewest neighbours left in
+// the elimination graph (ties to the lowest index), whose neighbours then become each
+// other's (the fill its elimination makes).
+void min_degree(const Rowset *share, int n, int *order) {
+  Rowset adj[kMaxRows], alive;
+  rowset_clear(alive);
+  for (int i = 0; i < n; ++i) adj[i] = share[i], rowset_add(alive, i);
+  for (int p = 0; p < n; ++p) {
+    int best = -1, best_degree = 0;
+    for (int i = 0; i < n; ++i) {
+      if (!rowset_has(alive, i)) continue;
+      const int d = rowset_common(adj[i], alive);
+      if (best < 0 || d < best_degree) best = i, best_degree = d;
+    }
+    order[p] = best;
+    rowset_remove(alive, best);
+    Rowset near;
+    for (int k = 0; k < kRowWords; ++k) near.w[k] = adj[best].w[k] & alive.w[k];
+    for (int j = 0; j < n; ++j)
+      if (rowset_has(near, j)) {
+        for (int k = 0; k < kRowWords; ++k) adj[j].w[k] |= near.w[k];
+        rowset_remove(adj[j], j);
+      }
+  }
+}
+
+// L's entries below the diagonal (fill included) with the rows eliminated in this order
+// (symbolic factorization, by position).
+int fill(const Rowset *share, const int *order, int n) {
+  Rowset l[kMaxRows];
+  int count = 0;
+  for (int p = 0; p < n; ++p) {
+    rowset_clear(l[p]);
+    for (int q = 0; q < p; ++q)
+      if (rowset_has(share[order[p]], order[q])) rowset_add(l[p], q);
+    // L_pq is non-zero where A_pq is, or L_pk and L_qk both are for some k < q
+    for (int q = 0; q < p; ++q)
+      if (!rowset_has(l[p], q) && rowset_common_below(l[p], l[q], q)) rowset_add(l[p], q);
+    count += rowset_common(l[p], l[p]);
+  }
+  return count;
+}
+
+// The rows of a body's pin (its one revolute joint to the frame) moved to just before the
+// first other row on that body: they couple only rows on their body, which share it
+// anyway (no fill), and every pivot after them is then the one of the system with the
+// pinned bodies on their angles alone, which the kernels solve for RK4's stages
+// (kernel_codegen.py's Reduced, pins_first): the same pivots to round-off, so the same
+// pivot floor decides alike there.
+inline void pins_first(const Layout &out, const bool *is_pin, int *order, int n) {
+  int result[kMaxRows], k = 0;
+  bool placed[kMaxRows];
+  for (int i = 0; i < n; ++i) placed[i] = false;
+  for (int p = 0; p < n; ++p) {
+    const int i = order[p];
+    if (is_pin[i]) continue;
+    for (int s = 0; s < 2; ++s)
+      for (int l = 0; l < n; ++l) {
+        const int j = order[l];
+        if (is_pin[j] && !placed[j] && out.body[i][s] >= 0 && out.body[j][0] == out.body[i][s])
+          result[k++] = j, placed[j] = true;
+      }
+    result[k++] = i;
+  }
+  for (int l = 0; l < n; ++l)
+    if (is_pin[order[l]] && !placed[order[l]]) result[k++] = order[l];
+  for (int p = 0; p < n; ++p) order[p] = result[p];
+}
+}  // namespace
+
+void layout_path(Layout &out) {
+  const Kernel *k = out.kernel;
+  // the kernel's block is the whole system: no rows after it (a sliding contact's normal
+  // row, a stop, a driver would follow the block)
+  const bool whole = k && out.m == k->mj;
+  out.path.dynamics = whole && k->dynamics ? k : nullptr;
+  out.path.newton = whole && k->newton ? k : nullptr;
+  out.path.factored = whole && k->factored ? k : nullptr;
+#if LEGSIM_KERNELS_REDUCED
+  out.path.reduced = whole && k->accelerations && k->end ? k : nullptr;
+#else
+  out.path.reduced = nullptr;  // a build without them leaves their callers out too
+#endif
+}
+
+legsim_status layout_finish(Layout &out, const DriverValues &dv) {
+  const int m = out.m;
+  for (int i = 0; i < m; ++i)
+    if (out.src[i].kind == RowKind::Coordinate) out.body[i][0] = int8_t(dv.coord[out.src[i].index].body);
+  auto share_body = [&](int i, int j) {
+    for (int si = 0; si < 2; ++si)
+      for (int sj = 0; sj < 2; ++sj)
+        if (out.body[i][si] >= 0 && out.body[i][si] == out.body[j][sj]) return true;
+    return false;
+  };
+  const Kernel *k = out.kernel;
+  if (k) {
+    // the joint block in the kernel's order, the other rows after it as they come: their
+    // rows of the factor are the Schur complement's on the kernel's factor
+    for (int i = 0; i < m; ++i) out.perm[i] = i < k->mj ? k->perm[i] : uint8_t(i);
+    return layout_pairs(out, k->mj, k->first);
+  }
+  // The block (the joint rows, or a stance's joint and contact rows: Layout::block) in an
+  // elimination order, the other rows after it as they come. tools/kernel_codegen.py
+  // orders a kernel's block by the same rule (block_order), so the two paths factor alike.
+  int mj = 0;
+  while (mj < m && out.src[mj].kind == RowKind::Joint) ++mj;
+  const int nb = LEGSIM_MAX_CONTACTS > 0 && out.block > mj ? int(out.block) : mj;
+  // reverse Cuthill-McKee over the joint rows (which keeps the envelope small), the
+  // contact rows after them
+  int rcm[kMaxRows];
+  cuthill_mckee(share_body, mj, rcm);
+  for (int i = mj; i < nb; ++i) rcm[i] = i;
+  bool is_pin[kMaxRows];
+  for (int i = 0; i < nb; ++i) is_pin[i] = i < mj && pin_row(out, mj, i);
+  pins_first(out, is_pin, rcm, nb);
+  // or, for a stance, minimum degree over the whole block where that leaves fewer entries
+  // in the factor (a robot: each leg's rows first, the rows on the box, which all share it,
+  // last). A joint block keeps reverse Cuthill-McKee: the rows after it solve against it
+  // through its envelope, which a minimum-degree order spreads. (A build without contacts
+  // has no stance: its image leaves this out.)
+  if (LEGSIM_MAX_CONTACTS > 0 && nb > mj) {
+    Rowset share[kMaxRows];
+    for (int i = 0; i < nb; ++i) {
+      rowset_clear(share[i]);
+      for (int j = 0; j < nb; ++j)
+        if (j != i && share_body(i, j)) rowset_add(share[i], j);
+    }
+    int md[kMaxRows];
+    min_degree(share, nb, md);
+    pins_first(out, is_pin, md, nb);
+    if (fill(share, md, nb) < fill(share, rcm, nb))
+      for (int p = 0; p < nb; ++p) rcm[p] = md[p];
+  }
+  for (int p = 0; p < nb; ++p) out.perm[rcm[p]] = uint8_t(p);
+  for (int i = nb; i < m; ++i) out.perm[i] = uint8_t(i);
+  return layout_pairs(out, 0, nullptr);
+}
+
+namespace {
+// The entries of J W J^T at positions from p0 on (those before: the kernel's block, whose
+// envelope is first[]) and each position's envelope.
+legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
+  const int m = out.m;
+  int np = 0;
+  for (int p = 0; p < m; ++p) out.first[p] = p < p0 ? first[p] : uint8_t(p);
+  for (int i = 0; i < m; ++i)
+    for (int j = 0; j < m; ++j)
+      for (int si = 0; si < 2; ++si)
+        for (int sj = 0; sj < 2; ++sj) {
+          const int pi = out.perm[i], pj = out.perm[j];
+          if (pj > pi || (i == j && sj < si)) continue;  // each lower entry (and diagonal pair) once
+          if (pi < p0) continue;                          // the kernel's own
+          if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
+          if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
+          out.pair[np++] = {uint16_t(kBodyDof * (2 * i + si)), uint16_t(kBodyDof * (2 * j + sj)),
+                            uint16_t(pi * kMaxRows + pj)};
+          if (pj < out.first[pi]) out.first[pi] = uint8_t(pj);
+        }
+  out.npairs = np;
+  return LEGSIM_OK;
+}
+}  // namespace
+
+}  // namespace legsim
