@@ -286,8 +286,9 @@ def test_realtime_runs_at_1khz_and_reports_jitter(hil, record_property):
     t0 = time.monotonic()
     time.sleep(2.0)
     hb = hil.heartbeat(timeout=2)
+    running = time.monotonic() - t0          # hil_sim ran in real time at least this long
     s1 = hil.stop_realtime()
-    wall = time.monotonic() - t0
+    wall = time.monotonic() - t0             # and at most this long (STOP_RT's answer late)
     samples = list(hil.states(0))
     figures = (f"real time 1 kHz for {wall:.2f} s: {s1.step_count} ticks run, {hb.rt_overruns} "
                f"overruns (skipped); wake-up lateness max {hb.jitter_max_us:.0f} us, mean "
@@ -301,8 +302,8 @@ def test_realtime_runs_at_1khz_and_reports_jitter(hil, record_property):
     assert hb.jitter_p99_us <= hb.jitter_max_us + 1
     # every period of the 1 kHz clock is a tick run or an overrun skipped
     periods = s1.step_count + hb.rt_overruns
-    assert 0.9 * wall * 1000 < periods < 1.05 * wall * 1000 + 50
-    assert s1.step_count > 0.25 * wall * 1000
+    assert 0.9 * running * 1000 < periods < 1.05 * wall * 1000 + 50
+    assert s1.step_count > 0.25 * running * 1000
     # one sample every 50 ticks, in order
     assert all(s.step_count % 50 == 0 for s in samples)
     assert len(samples) >= s1.step_count // 50 - 2
