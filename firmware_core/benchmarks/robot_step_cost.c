@@ -62,7 +62,7 @@ static const char *const kind_name[N_KINDS] = {"stuck", "slip1", "slip2", "chang
 
 static _Alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[1024 * 1024];
 static legsim_model_desc file_model; /* stand:PATH; must outlive the sim */
-/* the general path instead of a generated kernel (firmware_core/src/kernel.hpp) */
+/* the general path instead of a generated kernel (firmware_core/src/planar/kernel.hpp) */
 int legsim_kernel_use(legsim_sim *sim, int on);
 #ifdef HAVE_ROBOT
 static legsim_model_desc robot_slippery; /* must outlive the sim */

@@ -205,6 +205,10 @@ constexpr int kPastSlots = kPredictorOrder > 0 ? kPredictorOrder : 1;
 struct Data {
   double t;
   uint64_t steps;
+  // t is origin_t + (steps - origin_steps) * origin_step_s, not a running sum of h (whose
+  // round-off grows with the steps): the origin moves when the time is set or h changes.
+  double origin_t, origin_step_s;
+  uint64_t origin_steps;
   bool assembled;
   bool derivative_valid;  // qdd and lambda belong to the current state and commands (RK4's start)
   bool history_valid;     // qdd and acc_aux are the generalized-alpha history of this state
@@ -289,8 +293,8 @@ struct Snapshot {
   ContactData contact[kMaxContacts];
   real stick[kMaxContacts];
   legsim_report report;
-  double t;
-  uint64_t steps;
+  double t, origin_t, origin_step_s;
+  uint64_t steps, origin_steps;
   uint32_t stroke_mask, stop_mask;
   bool assembled, derivative_valid, history_valid, forcing_only;
   bool end_projected;  // which way RK4's next end goes: its values differ to round-off

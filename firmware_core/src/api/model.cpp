@@ -46,6 +46,9 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   const Model &m = sim->model;
   d.t = 0;
   d.steps = 0;
+  d.origin_t = 0;
+  d.origin_steps = 0;
+  d.origin_step_s = options->step_s;
   d.assembled = false;
   state_changed(d);
   d.end_projected = false;

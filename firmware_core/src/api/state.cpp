@@ -87,6 +87,8 @@ legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legs
     d.q = qn;
     d.qd = qdn;
     d.t = t_s;
+    d.origin_t = t_s;
+    d.origin_steps = d.steps;
     d.assembled = true;
     legsim_status c = stops_clear(s);
     if (c == LEGSIM_OK) c = contacts_release(s);

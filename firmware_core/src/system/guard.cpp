@@ -22,7 +22,8 @@ void copy_head(V &dst, const V &src, int n) {
 
 Snapshot::Snapshot(const Sim &sim)
     : history(sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA), past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
-      t(sim.data.t), steps(sim.data.steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
+      t(sim.data.t), origin_t(sim.data.origin_t), origin_step_s(sim.data.origin_step_s),
+      steps(sim.data.steps), origin_steps(sim.data.origin_steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
       assembled(sim.data.assembled), derivative_valid(sim.data.derivative_valid),
       history_valid(sim.data.history_valid), forcing_only(sim.data.forcing_only),
       end_projected(sim.data.end_projected) {
@@ -80,7 +81,10 @@ void Snapshot::restore(Sim &sim) const {
     stops_layout(sim);  // the same rows as before: cannot fail
   }
   d.t = t;
+  d.origin_t = origin_t;
+  d.origin_step_s = origin_step_s;
   d.steps = steps;
+  d.origin_steps = origin_steps;
   d.stroke_mask = stroke_mask;
   d.assembled = assembled;
   d.derivative_valid = derivative_valid;

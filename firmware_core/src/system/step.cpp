@@ -100,8 +100,13 @@ inline legsim_status stage_stops_release(Sim &s, bool stops) {
 inline void stage_advance(Sim &s, bool rk4) {
   Data &d = s.data;
   if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
-  d.t += s.opt.step_s;
+  if (s.opt.step_s != d.origin_step_s) {  // a new step size: the time line starts here
+    d.origin_t = d.t;
+    d.origin_steps = d.steps;
+    d.origin_step_s = s.opt.step_s;
+  }
   ++d.steps;
+  d.t = d.origin_t + static_cast<double>(d.steps - d.origin_steps) * d.origin_step_s;
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
 }
 
