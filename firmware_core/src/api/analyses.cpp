@@ -7,6 +7,18 @@
 using namespace legsim;
 using namespace legsim::api;
 
+namespace {
+// The velocity and acceleration analyses drive every actuator of a free mechanism: feet on the
+// ground would over-determine the motion (the driven motion with stuck feet is
+// legsim_inverse_dynamics_on_ground's, which sets q, qd and qdd). Then the input's range.
+legsim_status free_motion_check(const Sim &s, const legsim_real *values, double bound) {
+  if (!s.data.assembled) return LEGSIM_ERR_STATE;
+  for (int k = 0; k < s.model.nc; ++k)
+    if (s.data.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
+  return bounded_array(values, s.model.na, bound) ? LEGSIM_OK : LEGSIM_ERR_BAD_INPUT;
+}
+}  // namespace
+
 extern "C" {
 
 legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
@@ -45,12 +57,8 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
-  if (!d.assembled) return LEGSIM_ERR_STATE;
-  // feet on the ground: their rows and the lengths over-determine the motion; the driven
-  // motion with stuck feet is legsim_inverse_dynamics_on_ground's (it sets q, qd and qdd)
-  for (int k = 0; k < m.nc; ++k)
-    if (d.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
-  if (!bounded_array(rate_mps, m.na, LEGSIM_MAX_RATE_MPS)) return LEGSIM_ERR_BAD_INPUT;
+  const legsim_status c = free_motion_check(s, rate_mps, LEGSIM_MAX_RATE_MPS);
+  if (c != LEGSIM_OK) return c;
   legsim_actuator_lengths(sim, d.drivers.length, nullptr);
   for (int a = 0; a < m.na; ++a) {
     d.drivers.rate[a] = rate_mps[a];
@@ -77,12 +85,8 @@ legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *a
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
-  if (!d.assembled) return LEGSIM_ERR_STATE;
-  // feet on the ground: their rows and the lengths over-determine the motion; the driven
-  // motion with stuck feet is legsim_inverse_dynamics_on_ground's (it sets q, qd and qdd)
-  for (int k = 0; k < m.nc; ++k)
-    if (d.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
-  if (!bounded_array(accel_mps2, m.na, LEGSIM_MAX_ACCEL_MPS2)) return LEGSIM_ERR_BAD_INPUT;
+  const legsim_status c = free_motion_check(s, accel_mps2, LEGSIM_MAX_ACCEL_MPS2);
+  if (c != LEGSIM_OK) return c;
   legsim_actuator_lengths(sim, d.drivers.length, d.drivers.rate);
   for (int a = 0; a < m.na; ++a) d.drivers.accel[a] = accel_mps2[a];
   d.drivers.ncoord = 0;
