@@ -6,8 +6,10 @@
 For each distinct structure among the files' variants (joint kinds and the bodies they
 join; with --no-stance left out, also each model with contacts' stance: its joint rows and
 both rows of every contact, all stuck), writes straight-line C++ for those rows:
-  rows       Phi, the Jacobian, nu and gamma (the row units of constraints.cpp written
-             out term by term, one sin/cos pair per body, no dispatch);
+  rows       Phi, the Jacobian, nu and gamma: calls of the row units (planar/rows.hpp,
+             which the general path calls too) with the joints' and bodies' indices fixed,
+             one sin/cos pair per body, no dispatch; the physics is in those units alone,
+             this file knows each kind's sparsity (joint_rows);
   factor     the lower envelope of J W J^T (products with the Jacobian's constant
              entries folded away) and its factor L D L^T in the general path's order
              (reverse Cuthill-McKee, the contact rows after) with its fill worked out here
@@ -46,12 +48,14 @@ import sys
 
 KIND = {"revolute_to_frame": 0, "revolute": 1, "prismatic": 2, "slot": 3}
 NROWS = {"revolute_to_frame": 2, "revolute": 2, "prismatic": 2, "slot": 1}
+# each kind's row unit (rows.hpp): <unit>_position (Phi, the Jacobian), <unit>_gamma
+UNIT = {"revolute_to_frame": "revolute", "revolute": "revolute", "prismatic": "prismatic", "slot": "slot"}
 V = None  # a Jacobian entry known only at run time (rows.coef)
 
 
 def joint_rows(joints):
     """Per joint row: its two bodies (-1: none) and per slot the 3 coefficients,
-    each a constant or V (as the row units of constraints.cpp write them)."""
+    each a constant or V (as the row units of rows.hpp write them): a kind's sparsity."""
     rows = []
     for j in joints:
         a, b = j["body"]
@@ -250,65 +254,45 @@ class Kernel:
     # ---- the pieces, as lines of C++ over named values ----
     @staticmethod
     def joint_locals(n, j, r, part=None):
-        """One joint's rows as locals (phi<r>, gam<r>, c<r>_<slot>_<k>): the arithmetic of
-        revolute_rows / prismatic_rows / slot_rows (constraints.cpp) term by term. part "q":
-        the lines of the positions alone (Phi, the Jacobian); "v": those of the velocities
-        (gamma); None: both."""
+        """One joint's rows as locals (phi<r>, gam<r>, c<r>_<slot>_<k>, the entries
+        joint_rows marks V), from its row unit (rows.hpp) called on its bodies' poses pose<b>
+        into JointRows J<n>. part "q": the positions' part alone (Phi, the Jacobian); "v":
+        the velocities' (gamma); None: both. Also names what other pieces use: a revolute
+        joint's offset sa (sax<n>, say<n>: a pin's, Reduced) and a prismatic joint's d, its
+        rate and d.n (dx<n>, dy<n>, ddx<n>, ddy<n>, dn<n>: an actuator's, forces_locals)."""
         kind, (a, b) = j["kind"], j["body"]
+        unit = UNIT[kind]
+        other = "nullptr" if kind == "revolute_to_frame" else f"&pose{b}" if kind == "revolute" else f"pose{b}"
+        joint = "" if kind == "prismatic" else f"model.joint[{n}], "  # its rows have no joint points
         o = [("", f"  // joint {n}: {kind}, rows {r}..")]
-        def off(body, pt):  # offset(): xi u + eta n, u = (s, -c), n = (c, s)
-            return (f"J{n}.{pt}.x() * s{body} + J{n}.{pt}.y() * c{body}",
-                    f"J{n}.{pt}.x() * (-c{body}) + J{n}.{pt}.y() * s{body}")
-        if kind != "prismatic":  # its rows have no joint points
-            o.append(("q", f"  const Joint &J{n} = model.joint[{n}];"))
+        o.append(("q", f"  JointRows J{n};"))
+        o.append(("q", f"  {unit}_position({joint}pose{a}, {other}, J{n});"))
+        q, v = [], []
+        for e, (bodies, slots) in enumerate(joint_rows([j])):
+            q.append(f"phi{r + e} = J{n}.phi[{e}]")
+            q += [f"c{r + e}_{sl}_{k} = J{n}.coef[{e}][{sl}][{k}]" for sl in range(2) for k in range(3)
+                  if bodies[sl] >= 0 and slots[sl][k] is V]
+            v.append(f"gam{r + e} = J{n}.gamma[{e}]")
         if kind in ("revolute", "revolute_to_frame"):
-            ox, oy = off(a, "pa")
-            o.append(("q", f"  const real sax{n} = {ox}, say{n} = {oy};"))
-            if kind == "revolute_to_frame":
-                o.append(("q", f"  const real phi{r} = (x{a} + sax{n}) - J{n}.pb.x(), phi{r + 1} = (y{a} + say{n}) - J{n}.pb.y();"))
-                o.append(("v", f"  const real gam{r} = w{a} * w{a} * sax{n}, gam{r + 1} = w{a} * w{a} * say{n};"))
-            else:
-                ox, oy = off(b, "pb")
-                o.append(("q", f"  const real sbx{n} = {ox}, sby{n} = {oy};"))
-                o.append(("q", f"  const real phi{r} = (x{a} + sax{n}) - (x{b} + sbx{n}), "
-                               f"phi{r + 1} = (y{a} + say{n}) - (y{b} + sby{n});"))
-                o.append(("v", f"  const real gam{r} = w{a} * w{a} * sax{n} - w{b} * w{b} * sbx{n}, "
-                               f"gam{r + 1} = w{a} * w{a} * say{n} - w{b} * w{b} * sby{n};"))
-                o.append(("q", f"  const real c{r}_1_2 = -(-sby{n}), c{r + 1}_1_2 = -sbx{n};"))
-            o.append(("q", f"  const real c{r}_0_2 = -say{n}, c{r + 1}_0_2 = sax{n};"))
+            q += [f"sax{n} = J{n}.sa.x()", f"say{n} = J{n}.sa.y()"]
         elif kind == "prismatic":
-            o.append(("q", f"  const real dx{n} = x{b} - x{a}, dy{n} = y{b} - y{a};"))
-            o.append(("v", f"  const real ddx{n} = vx{b} - vx{a}, ddy{n} = vy{b} - vy{a};"))
-            o.append(("q", f"  const real phi{r} = q[{3 * b + 2}] - q[{3 * a + 2}];"))
-            o.append(("v", f"  const real gam{r} = 0;"))
-            o.append(("q", f"  const real dn{n} = dx{n} * c{a} + dy{n} * s{a};"))
-            o.append(("q", f"  const real phi{r + 1} = dn{n};"))
-            o.append(("q", f"  const real c{r + 1}_0_0 = -c{a}, c{r + 1}_0_1 = -s{a}, "
-                           f"c{r + 1}_0_2 = -(dx{n} * s{a} + dy{n} * (-c{a}));"))
-            o.append(("q", f"  const real c{r + 1}_1_0 = c{a}, c{r + 1}_1_1 = s{a};"))
-            o.append(("v", f"  const real gam{r + 1} = 2 * w{a} * (ddx{n} * s{a} + ddy{n} * (-c{a})) + w{a} * w{a} * dn{n};"))
-        else:  # slot: point on a on the axis of b
-            ox, oy = off(a, "pa")
-            o.append(("q", f"  const real sax{n} = {ox}, say{n} = {oy};"))
-            o.append(("q", f"  const real dx{n} = x{a} + sax{n} - x{b}, dy{n} = y{a} + say{n} - y{b};"))
-            o.append(("v", f"  const real ddx{n} = vx{a} + w{a} * (-say{n}) - vx{b}, ddy{n} = vy{a} + w{a} * sax{n} - vy{b};"))
-            o.append(("q", f"  const real dn{n} = dx{n} * c{b} + dy{n} * s{b};"))
-            o.append(("q", f"  const real phi{r} = dn{n};"))
-            o.append(("q", f"  const real c{r}_0_0 = c{b}, c{r}_0_1 = s{b}, c{r}_0_2 = -say{n} * c{b} + sax{n} * s{b};"))
-            o.append(("q", f"  const real c{r}_1_0 = -c{b}, c{r}_1_1 = -s{b}, c{r}_1_2 = -(dx{n} * s{b} + dy{n} * (-c{b}));"))
-            o.append(("v", f"  const real gam{r} = w{a} * w{a} * (sax{n} * c{b} + say{n} * s{b}) + "
-                           f"2 * w{b} * (ddx{n} * s{b} + ddy{n} * (-c{b})) + w{b} * w{b} * dn{n};"))
+            q += [f"dx{n} = J{n}.d.x()", f"dy{n} = J{n}.d.y()", f"dn{n} = J{n}.phi[1]"]
+            v += [f"ddx{n} = J{n}.dd.x()", f"ddy{n} = J{n}.dd.y()"]
+        o.append(("q", "  [[maybe_unused]] const real " + ", ".join(q) + ";"))
+        o.append(("v", f"  {unit}_gamma(pose{a}, {other}, J{n});"))
+        o.append(("v", "  [[maybe_unused]] const real " + ", ".join(v) + ";"))
         return [line for tag, line in o if part is None or tag in ("", part)]
 
     def rows_locals(self, shared=None, part=None, velocity=None, trig="body_trig"):
-        """sin/cos once per body (through the TrigCache), then every joint's rows as locals.
-        shared: body -> an earlier body whose angle a prismatic joint keeps equal to its own
-        (to round-off after a projection, a stage's step further): its pair from that
-        body's by the angle-sum formulas with the small difference e (truncation below
-        e^4 / 24 < 5e-18 for |e| < 1e-4; the TrigCache past that). part: as joint_locals'
-        (the sin/cos and the positions with "q"; the velocities, velocity(n) for coordinate
-        n, default qd[n], with "v"). No contacts with part. trig: the function that gives a
-        body's pair (sim.hpp: body_trig, or grid_trig without its memory)."""
+        """sin/cos once per body (through the TrigCache) and its pose pose<b> (rows.hpp), then
+        every joint's rows as locals. shared: body -> an earlier body whose angle a
+        prismatic joint keeps equal to its own (to round-off after a projection, a stage's
+        step further): its pair from that body's by the angle-sum formulas with the small
+        difference e (truncation below e^4 / 24 < 5e-18 for |e| < 1e-4; the TrigCache past
+        that). part: as joint_locals' (the sin/cos and the positions with "q"; the
+        velocities, velocity(n) for coordinate n, default qd[n], with "v"). No contacts with
+        part. trig: the function that gives a body's pair (sim.hpp: body_trig, or grid_trig
+        without its memory)."""
         assert part is None or not self.contacts
         vel = velocity or (lambda n: f"qd[{n}]")
         o = []
@@ -327,10 +311,9 @@ class Kernel:
                     o.append("  } else {")
                     o.append(f"    {trig}(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
                     o.append("  }")
-                o.append(f"  [[maybe_unused]] const real x{b} = q[{3 * b}], y{b} = q[{3 * b + 1}];")
+                o.append(f"  BodyPose pose{b} = body_pose(q, {b}, s{b}, c{b});")
             if part != "q":
-                o.append(f"  [[maybe_unused]] const real vx{b} = {vel(3 * b)}, vy{b} = {vel(3 * b + 1)}, "
-                         f"w{b} = {vel(3 * b + 2)};")
+                o.append(f"  body_velocity(pose{b}, {vel(3 * b)}, {vel(3 * b + 1)}, {vel(3 * b + 2)});")
         r = 0
         for n, j in enumerate(self.joints):
             o += self.joint_locals(n, j, r, part)
@@ -342,19 +325,15 @@ class Kernel:
 
     @staticmethod
     def contact_locals(k, b, r):
-        """A stuck contact's rows as contact_row (constraints.cpp) computes them: the gap
-        along the ground's normal and the offset along its tangent from the stick point."""
+        """A stuck contact's two rows from contact_row (rows.hpp), as the general path sums
+        them (rows_eval: onto 0): the gap along the ground's normal, the offset along its
+        tangent from the stick point."""
         o = [f"  // contact {k}: stuck, rows {r}.."]
-        o.append(f"  const Contact &C{k} = model.contact[{k}];")
-        o.append(f"  const real fx{k} = C{k}.point.x() * s{b} + C{k}.point.y() * c{b}, "
-                 f"fy{k} = C{k}.point.x() * (-c{b}) + C{k}.point.y() * s{b};")
-        o.append(f"  const real gx{k} = (x{b} + fx{k}) - model.ground_point.x(), "
-                 f"gy{k} = (y{b} + fy{k}) - model.ground_point.y();")
-        for e, row, target in (("ground_n", r, "real(0)"), ("ground_t", r + 1, f"dv.stick[{k}]")):
-            ex, ey = f"model.{e}.x()", f"model.{e}.y()"
-            o.append(f"  const real phi{row} = real(0) + (({ex} * gx{k} + {ey} * gy{k}) - {target});")
-            o.append(f"  const real c{row}_0_0 = {ex}, c{row}_0_1 = {ey}, c{row}_0_2 = {ex} * (-fy{k}) + {ey} * fx{k};")
-            o.append(f"  const real gam{row} = real(0) + (w{b} * w{b} * ({ex} * fx{k} + {ey} * fy{k}));")
+        o.append(f"  ContactRow cn{k}, ct{k};")
+        for e, name, row, target in (("ground_n", "cn", r, "real(0)"), ("ground_t", "ct", r + 1, f"dv.stick[{k}]")):
+            o.append(f"  contact_row(model.contact[{k}].point, model.ground_point, model.{e}, {target}, real(1), pose{b}, {name}{k});")
+            o.append(f"  const real phi{row} = real(0) + {name}{k}.phi, gam{row} = real(0) + {name}{k}.gamma;")
+            o.append(f"  const real " + ", ".join(f"c{row}_0_{x} = {name}{k}.coef[{x}]" for x in range(3)) + ";")
         return o
 
     def rows_store(self, rows="rows."):
@@ -511,8 +490,8 @@ class Kernel:
         m, R = self.m, "R"
         o = []
         a = lambda p, q: f"a[{p} * {R} + {q}]"  # noqa: E731
-        # rows: the row units of constraints.cpp written out per joint, the same arithmetic in
-        # the same order (so the same values to the last bit), one sin/cos pair per body
+        # rows: the row units (rows.hpp) called per joint, as the general path calls them (so
+        # the same values to the last bit), one sin/cos pair per body
         o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_rows(const Model &model, [[maybe_unused]] const DriverValues &dv, const VecQ &q, "
                  "const VecQ &qd, Rows &rows, TrigCache *trig) {")
         o += self.rows_locals() + self.rows_store()
@@ -882,7 +861,7 @@ class Reduced(Kernel):
         for a, (n, cyl, rod) in enumerate(self.actuators):
             o.append(f"  // actuator {a} (joint {n}: cylinder {cyl}, rod {rod})")
             o.append(f"  const real Fa{a} = actuators ? actuator_force(model.act[{a}], data.act[{a}], data, s{cyl}, c{cyl}, "
-                     f"dx{n}, dy{n}, ddx{n}, ddy{n}, w{cyl}) : real(0);")
+                     f"dx{n}, dy{n}, ddx{n}, ddy{n}, pose{cyl}.w) : real(0);")
             o.append(f"  const real fs{a} = Fa{a} * s{cyl}, fc{a} = Fa{a} * c{cyl};")
             i, j = 3 * cyl, 3 * rod
             q[i] = f"{q[i]} - fs{a}"
@@ -940,7 +919,7 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
     o = ["// Generated by firmware_core/tools/kernel_codegen.py from "
          + (", ".join(os.path.basename(p) for p in paths) or "no model (LEGSIM_KERNELS=OFF)")
          + ". Do not edit.",
-         "#include <cmath>", "", "#include \"planar/kernel.hpp\"", "",
+         "#include <cmath>", "", "#include \"planar/kernel.hpp\"", "#include \"planar/rows.hpp\"", "",
          "// A build without generalized-alpha (LEGSIM_WITH_GENERALIZED_ALPHA 0) has no use for its",
          "// fused Newton iteration: left out, its flash saved.",
          "#if LEGSIM_WITH_GENERALIZED_ALPHA",

@@ -1,7 +1,7 @@
-// Constraint equations Phi(q) = 0: one small unit per joint kind with its rows,
-// Jacobian coefficients and acceleration right-hand side gamma (Phi_q qdd = gamma),
-// plus the driver rows (actuator lengths, coordinates) appended after them.
+// Constraint equations Phi(q) = 0 of a layout: its rows (the joints', then the drivers'
+// and the contacts') from the row units (rows.hpp), which the generated kernels call too.
 #include "planar/kernel.hpp"
+#include "planar/rows.hpp"
 
 namespace legsim {
 
@@ -14,119 +14,75 @@ void trig_clear(TrigCache &t) {
 
 namespace {
 
-struct BodyPose {
-  Vec2 r, rd;   // centre and its velocity
-  real phi, w;  // angle and angular velocity
-  Vec2 u, n;
-};
-
 BodyPose pose_of(const VecQ &q, const VecQ &qd, int b, TrigCache *trig) {  // one sin/cos pair per body
-  BodyPose p;
-  p.r = Vec2(q[3 * b], q[3 * b + 1]);
-  p.rd = Vec2(qd[3 * b], qd[3 * b + 1]);
-  p.phi = q[3 * b + 2];
-  p.w = qd[3 * b + 2];
   real s, c;
-  body_trig(trig, b, p.phi, s, c);
-  p.u = Vec2(s, -c);  // axis_u
-  p.n = Vec2(c, s);   // normal_n
+  body_trig(trig, b, q[kBodyDof * b + 2], s, c);
+  BodyPose p = body_pose(q, b, s, c);
+  body_velocity(p, qd[kBodyDof * b], qd[kBodyDof * b + 1], qd[kBodyDof * b + 2]);
   return p;
 }
 
-// Body-fixed (xi, eta) to a world-axes offset from the centre.
-Vec2 offset(const BodyPose &p, const Vec2 &xi_eta) { return xi_eta.x() * p.u + xi_eta.y() * p.n; }
-
-void set_coef(real (&c)[3], const Vec2 &g, real gphi) {
-  c[0] = g.x();
-  c[1] = g.y();
-  c[2] = gphi;
-}
-
-// Revolute (eqs. (2)-(11)): point on a = point on b (or a frame point).
-// Phi = ra + sa - rb - sb; gamma = wa^2 sa - wb^2 sb.
-void revolute_rows(const Joint &j, const BodyPose *pose, int row, Rows &out) {
-  const BodyPose &a = pose[j.a];
-  const Vec2 sa = offset(a, j.pa);
-  Vec2 phi = a.r + sa, gamma = a.w * a.w * sa;
-  Vec2 sb = Vec2::Zero();
-  if (j.b == LEGSIM_FRAME) {
-    phi -= j.pb;
-  } else {
-    const BodyPose &b = pose[j.b];
-    sb = offset(b, j.pb);
-    phi -= b.r + sb;
-    gamma -= b.w * b.w * sb;
-    const Vec2 psb = perp(sb);
-    set_coef(out.coef[row][1], Vec2(-1, 0), -psb.x());
-    set_coef(out.coef[row + 1][1], Vec2(0, -1), -psb.y());
+// A unit's rows into Rows from row `row` on (slot 1 only where the rows have a second body).
+void store(const JointRows &j, int nrows, bool two, int row, Rows &out) {
+  for (int k = 0; k < nrows; ++k) {
+    for (int x = 0; x < kBodyDof; ++x) out.coef[row + k][0][x] = j.coef[k][0][x];
+    if (two)
+      for (int x = 0; x < kBodyDof; ++x) out.coef[row + k][1][x] = j.coef[k][1][x];
+    out.phi[row + k] = j.phi[k];
+    out.gamma[row + k] = j.gamma[k];
+    out.nu[row + k] = 0;
   }
-  const Vec2 psa = perp(sa);
-  set_coef(out.coef[row][0], Vec2(1, 0), psa.x());
-  set_coef(out.coef[row + 1][0], Vec2(0, 1), psa.y());
-  out.phi[row] = phi.x();
-  out.phi[row + 1] = phi.y();
-  out.gamma[row] = gamma.x();
-  out.gamma[row + 1] = gamma.y();
-  out.nu[row] = out.nu[row + 1] = 0;
 }
 
-// Prismatic (eqs. (12)-(16)): phi_b - phi_a = 0 and (rb - ra) . na = 0.
-void prismatic_rows(const Joint &j, const BodyPose *pose, int row, Rows &out) {
-  const BodyPose &a = pose[j.a], &b = pose[j.b];
-  const Vec2 d = b.r - a.r, dd = b.rd - a.rd;
-  out.phi[row] = b.phi - a.phi;
-  set_coef(out.coef[row][0], Vec2::Zero(), -1);
-  set_coef(out.coef[row][1], Vec2::Zero(), 1);
-  out.gamma[row] = 0;
-  out.phi[row + 1] = d.dot(a.n);
-  set_coef(out.coef[row + 1][0], -a.n, -d.dot(a.u));
-  set_coef(out.coef[row + 1][1], a.n, 0);
-  out.gamma[row + 1] = 2 * a.w * dd.dot(a.u) + a.w * a.w * d.dot(a.n);
-  out.nu[row] = out.nu[row + 1] = 0;
+void joint_rows(const Joint &j, const BodyPose *pose, int row, Rows &out) {
+  JointRows r;
+  const BodyPose &a = pose[j.a];
+  switch (j.kind) {
+    case LEGSIM_JOINT_REVOLUTE_TO_FRAME:
+    case LEGSIM_JOINT_REVOLUTE: {
+      const BodyPose *b = j.b == LEGSIM_FRAME ? nullptr : &pose[j.b];
+      revolute_position(j, a, b, r);
+      revolute_gamma(a, b, r);
+      store(r, 2, b, row, out);
+      break;
+    }
+    case LEGSIM_JOINT_PRISMATIC:
+      prismatic_position(a, pose[j.b], r);
+      prismatic_gamma(a, pose[j.b], r);
+      store(r, 2, true, row, out);
+      break;
+    case LEGSIM_JOINT_SLOT:
+      slot_position(j, a, pose[j.b], r);
+      slot_gamma(a, pose[j.b], r);
+      store(r, 1, true, row, out);
+      break;
+  }
 }
 
-// Slot (eq. (18)): point on a lies on the axis of b: (ra + sa - rb) . nb = 0.
-void slot_rows(const Joint &j, const BodyPose *pose, int row, Rows &out) {
-  const BodyPose &a = pose[j.a], &b = pose[j.b];
-  const Vec2 sa = offset(a, j.pa);
-  const Vec2 d = a.r + sa - b.r;
-  const Vec2 dd = a.rd + a.w * perp(sa) - b.rd;
-  out.phi[row] = d.dot(b.n);
-  set_coef(out.coef[row][0], b.n, perp(sa).dot(b.n));
-  set_coef(out.coef[row][1], -b.n, -d.dot(b.u));
-  out.gamma[row] = a.w * a.w * sa.dot(b.n) + 2 * b.w * dd.dot(b.u) + b.w * b.w * d.dot(b.n);
-  out.nu[row] = 0;
-}
-
-// Actuator length driver: (r_rod - r_cyl) . u_cyl + offset - l(t) = 0.
-void actuator_row(const Actuator &ac, const DriverValues &dv, int index, const BodyPose *pose,
-                  int row, Rows &out) {
-  const BodyPose &a = pose[ac.cyl], &b = pose[ac.rod];
-  const Vec2 d = b.r - a.r, dd = b.rd - a.rd;
-  out.phi[row] = d.dot(a.u) + ac.offset_m - dv.length[index];
-  set_coef(out.coef[row][0], -a.u, d.dot(a.n));
-  set_coef(out.coef[row][1], a.u, 0);
+void actuator_rows(const Actuator &ac, const DriverValues &dv, int index, const BodyPose *pose, int row,
+                   Rows &out) {
+  JointRows r;
+  actuator_position(ac, dv.length[index], pose[ac.cyl], pose[ac.rod], r);
+  actuator_gamma(dv.accel[index], pose[ac.cyl], pose[ac.rod], r);
+  store(r, 1, true, row, out);
   out.nu[row] = dv.rate[index];
-  out.gamma[row] = dv.accel[index] - 2 * a.w * dd.dot(a.n) + a.w * a.w * d.dot(a.u);
 }
 
-// Contact rows: a foot point p = r + s on the ground line through g along t, normal n.
-// Normal: n.(p - g) = 0; tangential: t.(p - g) - stick = 0; both with gamma = w^2 e.s.
-void contact_row(const Model &m, const Vec2 &e, int k, const BodyPose *pose, real target,
-                 int slot, real weight, int row, Rows &out) {
+// Contact k's row along e into slot `slot` of row `row`, summed onto the slots before it.
+void contact_rows(const Model &m, const Vec2 &e, int k, const BodyPose *pose, real target, int slot,
+                  real weight, int row, Rows &out) {
   const Contact &c = m.contact[k];
-  const BodyPose &b = pose[c.body];
-  const Vec2 sp = offset(b, c.point);
+  ContactRow r;
+  contact_row(c.point, m.ground_point, e, slot == 0 ? target : real(0), weight, pose[c.body], r);
   if (slot == 0) out.phi[row] = out.gamma[row] = 0;
-  out.phi[row] += weight * e.dot(b.r + sp - m.ground_point) - (slot == 0 ? target : real(0));
-  set_coef(out.coef[row][slot], weight * e, weight * e.dot(perp(sp)));
-  out.gamma[row] += weight * b.w * b.w * e.dot(sp);
+  out.phi[row] += r.phi;
+  for (int x = 0; x < kBodyDof; ++x) out.coef[row][slot][x] = r.coef[x];
+  out.gamma[row] += r.gamma;
   out.nu[row] = 0;
 }
 
-void coordinate_row(const legsim_coord_driver &c, const VecQ &q, int row, Rows &out) {
-  const int k = 3 * c.body + c.coord;
-  out.phi[row] = q[k] - real(c.value);
+void coordinate_rows(const legsim_coord_driver &c, const VecQ &q, int row, Rows &out) {
+  out.phi[row] = coordinate_phi(c, q);
   out.coef[row][0][0] = out.coef[row][0][1] = out.coef[row][0][2] = 0;
   out.coef[row][0][c.coord] = 1;
   out.nu[row] = out.gamma[row] = 0;
@@ -225,35 +181,30 @@ void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv,
     switch (s.kind) {
       case RowKind::Joint: {
         const Joint &j = model.joint[s.index];
-        switch (j.kind) {
-          case LEGSIM_JOINT_REVOLUTE_TO_FRAME:
-          case LEGSIM_JOINT_REVOLUTE: revolute_rows(j, pose, i, rows); break;
-          case LEGSIM_JOINT_PRISMATIC: prismatic_rows(j, pose, i, rows); break;
-          case LEGSIM_JOINT_SLOT: slot_rows(j, pose, i, rows); break;
-        }
+        joint_rows(j, pose, i, rows);
         i += j.nrows;
         break;
       }
       case RowKind::ActuatorLength:
-        actuator_row(model.act[s.index], dv, s.index, pose, i, rows);
+        actuator_rows(model.act[s.index], dv, s.index, pose, i, rows);
         ++i;
         break;
       case RowKind::Coordinate:
-        coordinate_row(dv.coord[s.index], q, i, rows);
+        coordinate_rows(dv.coord[s.index], q, i, rows);
         ++i;
         break;
       case RowKind::ContactNormal:
-        contact_row(model, model.ground_n, s.index, pose, 0, 0, 1, i, rows);
+        contact_rows(model, model.ground_n, s.index, pose, 0, 0, 1, i, rows);
         ++i;
         break;
       case RowKind::ContactTangent:
-        contact_row(model, model.ground_t, s.index, pose, dv.stick[s.index], 0, 1, i, rows);
+        contact_rows(model, model.ground_t, s.index, pose, dv.stick[s.index], 0, 1, i, rows);
         ++i;
         break;
       case RowKind::ContactMid: {
         const real w = model.nc > 1 ? real(0.5) : real(1);
-        contact_row(model, model.ground_t, 0, pose, dv.feet_mid, 0, w, i, rows);
-        if (model.nc > 1) contact_row(model, model.ground_t, model.nc - 1, pose, dv.feet_mid, 1, w, i, rows);
+        contact_rows(model, model.ground_t, 0, pose, dv.feet_mid, 0, w, i, rows);
+        if (model.nc > 1) contact_rows(model, model.ground_t, model.nc - 1, pose, dv.feet_mid, 1, w, i, rows);
         ++i;
         break;
       }
