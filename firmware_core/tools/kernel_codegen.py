@@ -257,9 +257,8 @@ class Kernel:
         """One joint's rows as locals (phi<r>, gam<r>, c<r>_<slot>_<k>, the entries
         joint_rows marks V), from its row unit (rows.hpp) called on its bodies' poses pose<b>
         into JointRows J<n>. part "q": the positions' part alone (Phi, the Jacobian); "v":
-        the velocities' (gamma); None: both. Also names what other pieces use: a revolute
-        joint's offset sa (sax<n>, say<n>: a pin's, Reduced) and a prismatic joint's d, its
-        rate and d.n (dx<n>, dy<n>, ddx<n>, ddy<n>, dn<n>: an actuator's, forces_locals)."""
+        the velocities' (gamma); None: both. Also names a prismatic joint's d, its rate and
+        d.n (dx<n>, dy<n>, ddx<n>, ddy<n>, dn<n>: an actuator's, forces_locals)."""
         kind, (a, b) = j["kind"], j["body"]
         unit = UNIT[kind]
         other = "nullptr" if kind == "revolute_to_frame" else f"&pose{b}" if kind == "revolute" else f"pose{b}"
@@ -273,9 +272,7 @@ class Kernel:
             q += [f"c{r + e}_{sl}_{k} = J{n}.coef[{e}][{sl}][{k}]" for sl in range(2) for k in range(3)
                   if bodies[sl] >= 0 and slots[sl][k] is V]
             v.append(f"gam{r + e} = J{n}.gamma[{e}]")
-        if kind in ("revolute", "revolute_to_frame"):
-            q += [f"sax{n} = J{n}.sa.x()", f"say{n} = J{n}.sa.y()"]
-        elif kind == "prismatic":
+        if kind == "prismatic":
             q += [f"dx{n} = J{n}.d.x()", f"dy{n} = J{n}.d.y()", f"dn{n} = J{n}.phi[1]"]
             v += [f"ddx{n} = J{n}.dd.x()", f"ddy{n} = J{n}.dd.y()"]
         o.append(("q", "  [[maybe_unused]] const real " + ", ".join(q) + ";"))
@@ -667,7 +664,7 @@ class Reduced(Kernel):
                     new.append((0, 0, cp[0]))  # on the angle alone: a constant still
                 else:
                     self.defs_e.append(f"  const real e{i}_{s} = "
-                                     f"{product([(cx[0], cx[1] + [f'say{n}']), (-cy[0], cy[1] + [f'sax{n}']), cp])};")
+                                     f"{product([(cx[0], cx[1] + [f'J{n}.sa.y()']), (-cy[0], cy[1] + [f'J{n}.sa.x()']), cp])};")
                     new.append((0, 0, f"e{i}_{s}"))
                 gamma += [(cx[0], cx[1] + [f"gam{r}"]), (cy[0], cy[1] + [f"gam{r + 1}"])]
             self.rows.append((bodies, tuple(new)))
@@ -700,11 +697,10 @@ class Reduced(Kernel):
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
                  "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
-        pinned_w = [f"  const real wr{b} = 1 / ((mass[{3 * b}] * say{n} * say{n} + mass[{3 * b + 1}] * sax{n} * sax{n}) "
-                    f"+ mass[{3 * b + 2}]);  // body {b} on its pin (joint {n}): its angle alone"
+        # a pinned body on its angle alone (rows.hpp's pin units)
+        pinned_w = [f"  const real wr{b} = pin_inverse_inertia(mass + {3 * b}, J{n});  // body {b} on its pin (joint {n})"
                     for b, (n, r) in sorted(self.pinned.items())]
-        pinned_f = [f"  const real fr{b} = (say{n} * (Q{3 * b} - mass[{3 * b}] * gam{r}) - "
-                    f"sax{n} * (Q{3 * b + 1} - mass[{3 * b + 1}] * gam{r + 1})) + Q{3 * b + 2};"
+        pinned_f = [f"  const real fr{b} = pin_force(mass + {3 * b}, J{n}, Q{3 * b}, Q{3 * b + 1}, Q{3 * b + 2});"
                     for b, (n, r) in sorted(self.pinned.items())]
         # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
         # the same number as dynamics' floor; the reduced one's are no larger)
@@ -776,7 +772,8 @@ class Reduced(Kernel):
             elif x == 2:
                 pn, r = self.pinned[b]
                 o.append(f"  const real pdd{b} = wr{b} * (fr{b} - ({jt}));")
-                o.append(f"  const real qx{b} = gam{r} + say{pn} * pdd{b}, qy{b} = gam{r + 1} - sax{pn} * pdd{b};")
+                o.append(f"  const Vec2 acc{b} = pin_acceleration(J{pn}, pdd{b});")
+                o.append(f"  const real qx{b} = acc{b}.x(), qy{b} = acc{b}.y();")
                 o.append(f"  qdd[{n - 2}] = qx{b};")
                 o.append(f"  qdd[{n - 1}] = qy{b};")
                 o.append(f"  qdd[{n}] = pdd{b};")
@@ -832,8 +829,7 @@ class Reduced(Kernel):
         the reduced problem."""
         o = ["  if (projected) {"]
         for b, (n, r) in sorted(self.pinned.items()):
-            o.append(f"    const real ur{b} = wr{b} * ((mass[{3 * b}] * say{n} * V{3 * b} - mass[{3 * b + 1}] * sax{n} * "
-                     f"V{3 * b + 1}) + mass[{3 * b + 2}] * V{3 * b + 2});")
+            o.append(f"    const real ur{b} = pin_rate(mass + {3 * b}, J{n}, wr{b}, V{3 * b}, V{3 * b + 1}, V{3 * b + 2});")
         u = lambda n: f"ur{n // 3}" if n // 3 in self.pinned else f"V{n}"  # noqa: E731
         o += [f"    const real pc{i} = {self.j_expr(i, u, True)};" for i in range(self.m)]
         o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}")]
@@ -846,7 +842,8 @@ class Reduced(Kernel):
             elif x == 2:
                 pn, _ = self.pinned[b]
                 o.append(f"    const real up{b} = ur{b} - wr{b} * ({jt});")
-                o.append(f"    V{n - 2} = say{pn} * up{b}, V{n - 1} = -sax{pn} * up{b}, V{n} = up{b};")
+                o.append(f"    const Vec2 vel{b} = pin_velocity(J{pn}, up{b});")
+                o.append(f"    V{n - 2} = vel{b}.x(), V{n - 1} = vel{b}.y(), V{n} = up{b};")
         o.append("  }")
         return o
 

@@ -137,6 +137,30 @@ LEGSIM_ROW_UNIT void actuator_gamma(real accel, const BodyPose &a, const BodyPos
   o.gamma[0] = accel - 2 * a.w * o.dd.dot(a.n) + a.w * a.w * o.d.dot(a.u);
 }
 
+// A body pinned to the frame by one revolute joint (RK4's reduced solves, kernel_codegen.py's
+// Reduced) moves on its angle alone: qd_b = G u, qdd_b = G udd + g, G = (sa_y, -sa_x, 1)
+// (sa: the pin point's offset from the centre), g = (gamma_0, gamma_1, 0) (the pin rows'
+// gamma): every motion its two rows allow. m: the body's mass matrix (m, m, J).
+// 1 / (G^T M_b G): the inverse of its moment of inertia about the pin.
+LEGSIM_ROW_UNIT real pin_inverse_inertia(const real *m, const JointRows &pin) {
+  return 1 / ((m[0] * pin.sa.y() * pin.sa.y() + m[1] * pin.sa.x() * pin.sa.x()) + m[2]);
+}
+// G^T (Q_b - M_b g): the force on its angle, from its applied forces (qx, qy, qphi).
+LEGSIM_ROW_UNIT real pin_force(const real *m, const JointRows &pin, real qx, real qy, real qphi) {
+  return (pin.sa.y() * (qx - m[0] * pin.gamma[0]) - pin.sa.x() * (qy - m[1] * pin.gamma[1])) + qphi;
+}
+// G udd + g: its centre's acceleration from its angle's udd.
+LEGSIM_ROW_UNIT Vec2 pin_acceleration(const JointRows &pin, real udd) {
+  return Vec2(pin.gamma[0] + pin.sa.y() * udd, pin.gamma[1] - pin.sa.x() * udd);
+}
+// wr G^T M_b v (wr = pin_inverse_inertia): the angle's rate whose motion G u is the
+// M-nearest to its velocities v = (vx, vy, w).
+LEGSIM_ROW_UNIT real pin_rate(const real *m, const JointRows &pin, real wr, real vx, real vy, real w) {
+  return wr * ((m[0] * pin.sa.y() * vx - m[1] * pin.sa.x() * vy) + m[2] * w);
+}
+// G u's centre velocity.
+LEGSIM_ROW_UNIT Vec2 pin_velocity(const JointRows &pin, real u) { return Vec2(pin.sa.y() * u, -pin.sa.x() * u); }
+
 // A contact row: a foot point p = r + s on the ground line through g, along the direction
 // e (the line's normal: the gap n.(p - g) = 0; its tangent: t.(p - g) - stick = 0, target
 // the stick point), times weight (the feet's midpoint row sums two feet's halves);
