@@ -68,8 +68,8 @@ struct Kernel {
   int mj;                    // joint rows
   const uint8_t *perm;       // joint row -> position in the factor
   const uint8_t *first;      // by position: first column of L's envelope (fill included)
-  // Rows 0 .. mj-1 of Phi, the Jacobian, nu and gamma at (q, qd), with the arithmetic of
-  // the row units of constraints.cpp term by term (the same values to the last bit);
+  // Rows 0 .. mj-1 of Phi, the Jacobian, nu and gamma at (q, qd), from the row units
+  // (rows.hpp) as the general path calls them (the same values to the last bit);
   // sin/cos through trig.
   void (*rows)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, Rows &rows,
                TrigCache *trig);
