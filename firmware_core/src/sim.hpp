@@ -26,6 +26,11 @@ constexpr int kMaxContacts = LEGSIM_CONTACT_SLOTS;  // >= 1 slot; the model's co
 constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows +
                           (LEGSIM_MAX_CONTACTS > 2 ? 18 * LEGSIM_MAX_CONTACTS * LEGSIM_MAX_CONTACTS : 0);
 
+// A build for three or more contacts (legs) can factor J W J^T with a body that all the
+// legs share, the box, as a Schur complement (Layout::separator); its rows' coefficients on
+// that body are kept with the factor. A smaller build keeps one slot.
+constexpr int kSeparatorRows = LEGSIM_MAX_CONTACTS >= 3 ? kMaxRows : 1;
+
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
 // row-major: the factorization's inner products run along rows
@@ -116,6 +121,12 @@ struct Layout {
   // factor fewer entries), which keeps the work small.
   uint8_t perm[kMaxRows];
   uint8_t first[kMaxRows];  // by position: the first non-zero column, the envelope
+  // A body (the box of a robot on three or more legs) whose removal splits the rows into
+  // groups that share no other body, or -1. With one, the pairs and the envelope are the
+  // ones of B = J W J^T less the body's share U W_b U^T (U: each row's coefficients on it),
+  // block diagonal by group, each group's rows together; the solves add the body back as a
+  // Schur complement (linear_solve.cpp), so the work grows linearly with the groups.
+  int8_t separator;
   // The rows ordered together (layout_finish): a stance's joint and contact rows (all
   // stuck, nothing else), or 0: the joint rows alone, the other rows after them.
   uint8_t block;
@@ -171,6 +182,12 @@ struct Factor {
   uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
+  // Layout::separator's body, or -1; with one, a holds the factor of B and, by position, u
+  // the rows' coefficients on the body, z = B^-1 u, wb its weights and s the factor of
+  // S = W_b^-1 + u^T z (L D L^T, 1 / D on the diagonal): (B + u W_b u^T)^-1 = B^-1 - z S^-1 z^T.
+  int separator;
+  real u[kSeparatorRows][kBodyDof], z[kSeparatorRows][kBodyDof];
+  real wb[kBodyDof], s[kBodyDof][kBodyDof];
   // This is the sim's state's factor exactly, as a fresh factorization would give it (RK4's
   // whole-system end solve left it, the positions not projected after; its reduced end,
   // Kernel::end, keeps none), and untouched since: factor_order
