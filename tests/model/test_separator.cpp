@@ -144,6 +144,24 @@ void test_two_legs_have_no_separator(void) {
   TEST_ASSERT_EQUAL_INT(-1, s.data.joints.separator);
 }
 
+// The leg: its upper rod splits its rows into three groups too, but only six rows act on it
+// (a clique cheaper than the Schur complement): no separator, on the general path either.
+void test_leg_has_no_separator(void) {
+  char msg[256] = "";
+  TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, legsim_model_load_toml("models/leg.toml", NULL, &model, msg, sizeof msg), msg);
+  legsim_sim *sim = nullptr;
+  legsim_options opt = legsim_default_options();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &model, &opt, &sim));
+  TEST_ASSERT_TRUE(legsim_kernel_use(sim, 0) >= 0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 5));
+  Sim &s = *reinterpret_cast<Sim *>(sim);
+  TEST_ASSERT_NULL(s.data.dyn.kernel);
+  TEST_ASSERT_EQUAL_INT(16, s.data.dyn.m);
+  TEST_ASSERT_EQUAL_INT(-1, s.data.dyn.separator);
+  TEST_ASSERT_EQUAL_INT(-1, s.data.joints.separator);
+}
+
 void test_four_legs_solve_as_dense(void) { check_separated("models/robot4.toml", 4); }
 void test_six_legs_solve_as_dense(void) { check_separated("models/robot6.toml", 6); }
 
@@ -214,6 +232,7 @@ void test_condition_with_separator(void) {
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_two_legs_have_no_separator);
+  RUN_TEST(test_leg_has_no_separator);
   RUN_TEST(test_four_legs_solve_as_dense);
   RUN_TEST(test_six_legs_solve_as_dense);
   RUN_TEST(test_singular_b_falls_back);

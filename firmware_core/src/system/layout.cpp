@@ -44,11 +44,14 @@ int separated_groups(const Layout &out, int m, int sep, int *group) {
   return n;
 }
 
-// The body, if any, whose removal leaves the most groups, at least three (ties to the lowest
-// body). With two legs the row-space order is the cheaper one: the box's twelve rows are a
-// clique either way, and the Schur complement adds its three columns' solves (the measured
-// work: docs/design/kernels.md), so a two-leg robot keeps the order its generated stance
-// kernel shares with this path.
+// The body, if any, whose removal leaves the most groups, at least three, and that more than
+// kSeparatorMinRows rows act on (ties to the lowest body). Those rows are a clique of J W J^T
+// in any order, and the Schur complement costs three solves with B a factorization instead:
+// with the twelve hip rows of two legs the clique is the cheaper (measured: the general path
+// 3 % more a step with the box as the separator, firmware_core/benchmarks/results.md), so
+// the two-leg robot, and the leg (six rows on its upper rod), keep the order their generated
+// kernels share with this path (kernel_codegen.py's separator: the same rule).
+constexpr int kSeparatorMinRows = 12;
 int separator_body(const Layout &out, int m, int *group) {
   if (kSeparatorRows < kMaxRows) return -1;  // a build for fewer legs keeps no room for it
   bool seen[kMaxBodies] = {};
@@ -58,6 +61,9 @@ int separator_body(const Layout &out, int m, int *group) {
       const int b = out.body[i][s];
       if (b < 0 || seen[b]) continue;
       seen[b] = true;
+      int on_b = 0;
+      for (int r = 0; r < m; ++r) on_b += out.body[r][0] == b || out.body[r][1] == b;
+      if (on_b <= kSeparatorMinRows) continue;
       const int n = separated_groups(out, m, b, g);
       if (n > best_groups || (n == best_groups && best >= 0 && b < best)) {
         best = b, best_groups = n;
