@@ -809,23 +809,6 @@ void parse_scene(Table doc, Scene &s) {
   }
 }
 
-bool read_text(const std::string &path, std::string &text, std::string &err) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    err = path + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
-  // Read at most one byte past the limit: a larger file is refused without being held.
-  text.resize(kTomlMaxBytes + 1);
-  f.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<size_t>(f.gcount()));
-  if (f.bad()) {
-    err = path + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
-  return true;
-}
-
 }  // namespace
 
 // ---- signals -------------------------------------------------------------------------
@@ -939,7 +922,7 @@ bool load_scene_text(const std::string &text, const std::string &path, Scene &sc
 
 bool load_scene(const std::string &path, Scene &scene, std::string &err) {
   std::string text;
-  if (!read_text(path, text, err)) return false;
+  if (!read_toml_file(path.c_str(), text, err)) return false;  // a regular file only
   return load_scene_text(text, path, scene, err);
 }
 

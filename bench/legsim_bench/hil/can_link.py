@@ -285,6 +285,7 @@ class State:
     legs: int = 1              # 2: the robot (box first in q, contacts, per-leg counters)
     contacts: list[Contact] = field(default_factory=list)   # robot: one per foot, leg order
     act_seqs: tuple[int, ...] = ()   # robot: each leg's St_ActSeq (act_seq is leg 0's)
+    statuses: tuple[Status, ...] = ()   # robot: each leg node's St_Status (status is leg 0's)
 
     @property
     def status_names(self) -> list[str]:
@@ -591,6 +592,7 @@ class HilLink:
         s.reactions = np.concatenate([leg.reactions for leg in legs])
         s.stroke_mask = sum(leg.stroke_mask << (2 * k) for k, leg in enumerate(legs))
         s.act_seqs = tuple(leg.act_seq for leg in legs)
+        s.statuses = tuple(leg.status for leg in legs)
         s.legs = ROBOT_LEGS
         s.contacts = []
         for k in range(ROBOT_LEGS):
