@@ -432,7 +432,7 @@ std::string parse_injections(const toml::array &a, const Scene &s) {
 const char *const kTolerances[] = {"position_m",  "angle_rad",       "reaction_n",         "moment_nm",
                                    "actuator_force_n", "residual",   "balance_n",          "balance_nm",
                                    "stays_put_m", "statics_force_n", "statics_reaction_n", "ground_force_n",
-                                   "growth_rel",  "slip_onset_steps"};
+                                   "growth_rel",  "slip_onset_steps", "in_stroke_m"};
 bool is_tolerance(const std::string &k) {
   return std::find_if(std::begin(kTolerances), std::end(kTolerances),
                       [&](const char *t) { return k == t; }) != std::end(kTolerances);
@@ -481,6 +481,10 @@ void parse_checks(Table t, CheckSpec &c) {
     } else if (key == "lifts") {
       c.has_lifts = true;
       c.lifts = names_of(&kv.second, w + "'lifts'");
+    } else if (key == "events") {
+      if (!kv.second.is_boolean() || !*kv.second.value<bool>())
+        fail(w + "'events' must be true (the reference that locates the contact events; leave it out for none)");
+      c.events = true;
     }
     // any other key: refused at bind time, where the keys that apply are known
   }
@@ -492,7 +496,7 @@ std::vector<std::string> checks_for(Analysis a, bool robot) {
     case Analysis::kDynamics:
       if (robot)
         return {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
-                "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps"};
+                "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps", "events", "in_stroke_m"};
       return {"position_m", "angle_rad", "reaction_n", "moment_nm", "actuator_force_n", "residual", "balance_n",
               "balance_nm", "stays_put_m", "statics_force_n", "statics_reaction_n", "compare", "stroke",
               "resolution_ratio"};
@@ -574,7 +578,29 @@ void bind_checks(const Scene &s, const legsim_model_desc &m) {
       fail("[checks]: " + joined(against) +
            " compare with RobotModel's stance on stuck feet, which 'lifts' leaves: leave them out");
   }
-  if (c.n_tolerances == 0 && (robot || (s.n_injections == 0 && c.stroke_actuator.empty())))
+  // a start off the stance (lifted, moving, a foot free or sliding) leaves RobotModel's stuck feet:
+  // its reference is the event-locating one (events = true), with constant commands (or a
+  // switch, compared until its event)
+  bool off_stance = s.start.given;
+  for (const ContactInit &ci : s.contacts) off_stance = off_stance || ci.state != LEGSIM_CONTACT_STUCK;
+  if (c.events) {
+    const std::vector<std::string> against =
+        checks_other_than(c, {"events", "position_m", "angle_rad", "residual", "ground_force_n", "in_stroke_m"});
+    if (!against.empty())
+      fail("[checks]: " + joined(against) + " do not go with 'events' (its reference checks position_m, angle_rad, "
+           "ground_force_n; residual and in_stroke_m need none)");
+    for (const Command &cmd : s.commands)
+      if (cmd.signal.kind == Signal::kSinusoid || cmd.signal.kind == Signal::kStep)
+        fail("[checks] 'events': command " + q(cmd.actuator) +
+             " changes with time; the event-locating reference takes constant commands (or a 'switch')");
+  } else if (off_stance) {
+    const std::vector<std::string> against = checks_other_than(c, {"residual", "in_stroke_m"});
+    if (!against.empty())
+      fail("[checks]: " + joined(against) + " compare with RobotModel's stance on stuck feet, which the start (" +
+           (s.start.given ? "[start]" : "a foot not stuck") + ") leaves: add events = true (the reference that "
+           "locates the contact events)");
+  }
+  if (c.n_tolerances == 0 && !c.events && (robot || (s.n_injections == 0 && c.stroke_actuator.empty())))
     fail("[checks] names nothing to check");
 }
 

@@ -97,8 +97,10 @@ void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_
 // the ground (|gap| <= newton_tol) stuck by default, above it free; a [[contact]] state that
 // the start cannot honour (stuck or sliding off the ground, stuck while moving, a foot below
 // the ground, a foot on the ground and moving without a state) is refused, never adjusted.
-legsim_status start_state(legsim_sim *sim, const Scene &sc, const legsim_model_desc &m, std::string &error) {
-  const StartState &b = sc.start;
+}  // namespace
+
+legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &m, const StartState &b,
+                          const int32_t *given_state, double tol, std::string &error) {
   const int32_t nq = legsim_n_coords(sim), nk = legsim_n_contacts(sim);
   std::vector<legsim_real> q(nq), qd(nq, 0);
   std::vector<legsim_contact> c(nk);
@@ -131,7 +133,6 @@ legsim_status start_state(legsim_sim *sim, const Scene &sc, const legsim_model_d
     qd[i + 2] = static_cast<legsim_real>(b.spin_radps);
   }
   // each foot's start state, decided before anything changes (all or nothing)
-  const double tol = sc.options.newton_tol;
   std::vector<legsim_contact_state> want(nk, LEGSIM_CONTACT_FREE);
   for (int32_t k = 0; k < nk; ++k) {
     double p[2], v[2];
@@ -139,15 +140,13 @@ legsim_status start_state(legsim_sim *sim, const Scene &sc, const legsim_model_d
     const double gap = nx * (p[0] - g.point[0]) + ny * (p[1] - g.point[1]);
     const double speed = std::hypot(v[0], v[1]), vn = nx * v[0] + ny * v[1];
     const std::string name = "contact " + q_name(m, k);
-    const ContactInit *given = nullptr;
-    for (const auto &ci : sc.contacts)
-      if (ci.index == k) given = &ci;
+    const int32_t given = given_state ? given_state[k] : -1;
     if (gap < -tol) {
       error = "[start]: " + name + " would start " + num(-gap) + " m below the ground";
       return LEGSIM_ERR_STATE;
     }
     const bool on_ground = gap <= tol;
-    if (!given) {
+    if (given < 0) {
       if (on_ground && speed > tol) {
         error = "[start]: " + name + " is on the ground and moving at " + num(speed) +
                 " m/s at t = 0: give its [[contact]] state (free or sliding)";
@@ -156,18 +155,21 @@ legsim_status start_state(legsim_sim *sim, const Scene &sc, const legsim_model_d
       want[k] = on_ground ? LEGSIM_CONTACT_STUCK : LEGSIM_CONTACT_FREE;
       continue;
     }
-    want[k] = given->state;
-    if (given->state != LEGSIM_CONTACT_FREE && !on_ground) {
-      error = "[start]: " + name + " cannot start " +
-              (given->state == LEGSIM_CONTACT_STUCK ? "stuck" : "sliding") + ": it is " + num(gap) +
-              " m above the ground";
+    if (given != LEGSIM_CONTACT_FREE && given != LEGSIM_CONTACT_STUCK && given != LEGSIM_CONTACT_SLIDING) {
+      error = "[start]: " + name + ": no contact state " + std::to_string(given);
+      return LEGSIM_ERR_BAD_INPUT;
+    }
+    want[k] = static_cast<legsim_contact_state>(given);
+    if (given != LEGSIM_CONTACT_FREE && !on_ground) {
+      error = "[start]: " + name + " cannot start " + (given == LEGSIM_CONTACT_STUCK ? "stuck" : "sliding") +
+              ": it is " + num(gap) + " m above the ground";
       return LEGSIM_ERR_STATE;
     }
-    if (given->state == LEGSIM_CONTACT_STUCK && speed > tol) {
+    if (given == LEGSIM_CONTACT_STUCK && speed > tol) {
       error = "[start]: " + name + " cannot start stuck: the start moves it at " + num(speed) + " m/s";
       return LEGSIM_ERR_STATE;
     }
-    if (given->state == LEGSIM_CONTACT_SLIDING && std::fabs(vn) > tol) {
+    if (given == LEGSIM_CONTACT_SLIDING && std::fabs(vn) > tol) {
       error = "[start]: " + name + " cannot start sliding: the start moves it off the line at " + num(vn) +
               " m/s";
       return LEGSIM_ERR_STATE;
@@ -190,6 +192,8 @@ legsim_status start_state(legsim_sim *sim, const Scene &sc, const legsim_model_d
   }
   return LEGSIM_OK;
 }
+
+namespace {
 
 legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out, Result &res) {
   Storage storage(legsim_sim_size());
@@ -252,7 +256,9 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
       return st;
     }
     if (sc.start.given) {
-      st = start_state(sim, sc, m, res.error);
+      std::vector<int32_t> given(nk, -1);
+      for (const auto &ci : sc.contacts) given[ci.index] = ci.state;
+      st = start_apply(sim, m, sc.start, given.data(), sc.options.newton_tol, res.error);
       if (st != LEGSIM_OK) return st;
     }
     for (const auto &ci : sc.contacts) {

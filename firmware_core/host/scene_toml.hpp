@@ -86,6 +86,7 @@ struct CheckSpec {
   int n_tolerances = 0;             // keys that are tolerances
   std::string stroke_actuator;      // [checks.stroke] actuator ("" without it)
   bool has_slips = false, has_lifts = false;
+  bool events = false;              // events = true: the event-locating reference (robot dynamics)
   std::vector<std::string> slips, lifts;  // feet (a robot's contacts)
 };
 
@@ -230,6 +231,16 @@ class CsvWriter : public ResultWriter {
   const Scene &sc_;
   const legsim_model_desc &m_;
 };
+
+// [start] on a robot assembled on the ground (legsim_assemble_on_ground: every contact stuck,
+// the stance's contact positions fresh): moves it rigidly as `start` says and sets each
+// contact's state: given_state[k] (a legsim_contact_state, or -1: stuck on the ground within
+// tol (m), free above it; NULL: none given). Refuses (LEGSIM_ERR_STATE, error says why) a foot
+// below the ground, a given state the start cannot honour (stuck or sliding off the ground,
+// stuck while moving, sliding off the line) and a foot on the ground, moving, with no state:
+// nothing is adjusted. legsim_cli's run and hil_sim's RESET both use it.
+legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &model, const StartState &start,
+                          const int32_t *given_state, double tol, std::string &error);
 
 // Runs a bound scene on the model (which must outlive the call), handing each sample to
 // the writer as it is made. Never throws. Returns the status (also in result.status).
