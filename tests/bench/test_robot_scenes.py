@@ -77,7 +77,7 @@ def test_robot_keys_are_refused_or_checked_by_the_reader():
                         ("[[command]]\nactuator = \"upper\"\nmode = \"force\"\nvalue = 1.0\n",
                          "command 'upper': the model has no actuator 'upper'"),
                         ("[[contact]]\nname = \"right.foot\"\nstate = \"sliding\"\n",
-                         "'state' must be stuck or free (got 'sliding')")]:
+                         "a foot starts sliding only in dynamics with a")]:
         with pytest.raises(SceneError, match=words.replace("(", r"\(").replace(")", r"\)")):
             parse_scene(base + text, name="t", root=ROOT)
     with pytest.raises(SceneError, match="statics_sweep of a model with contacts is not in this core yet"):
