@@ -34,10 +34,10 @@ constexpr int64_t kMaxSamples = 1000000;
 constexpr double kMaxFrequencyHz = 1e3;          // command sinusoids
 // [start]: the robot's rigid start motion (docs in scenes/README.md, [start])
 constexpr double kMaxLiftM = 10.0;               // m above the stance
-constexpr double kMaxTiltRad = 1.5;              // as the ground's slope
+constexpr double kMaxTiltRad = LEGSIM_MAX_SLOPE_RAD;  // as the ground's slope
 constexpr double kMaxStartSpeedMps = 100.0;      // each component of the box's velocity
 constexpr double kMaxStartSpinRadps = 100.0;
-constexpr double kMaxSlopeRad = 1.5;             // legsim_ground_desc's rule
+constexpr double kMaxSlopeRad = LEGSIM_MAX_SLOPE_RAD;  // legsim_ground_desc's rule
 
 // The contact events a command can switch on (legsim.h's bits).
 struct EventName {
