@@ -13,6 +13,7 @@ namespace legsim {
 
 void factor_order(const Layout &layout, Factor &f) {
   f.of_state = false;  // about to be written
+  f.nredundant = 0;
   f.m = layout.m;
   f.kernel = layout.kernel;
   std::memcpy(f.perm, layout.perm, sizeof f.perm);
@@ -23,6 +24,9 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   const int m = layout.m;
   const Kernel *kern = layout.kernel;
   const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
+  // dependent rows that may be dropped: only the dynamics' layout with more rows than
+  // coordinates has them, and only that many (Layout::surplus)
+  const int surplus = layout.stops ? layout.surplus : 0;
   factor_order(layout, f);
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
@@ -88,6 +92,14 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
       d -= t * ai[k];
     }
     if (!(d > kPivotFloor * max_diag)) {
+      if (f.nredundant < surplus && d == d) {
+        // a row that depends on the ones before it: dropped (1 / D = 0 zeroes its
+        // column of L in the rows after it and its multiplier in every solve)
+        for (int r = 0; r < m; ++r)
+          if (f.perm[r] == i) f.redundant[f.nredundant++] = uint8_t(r);
+        ai[i] = 0;
+        continue;
+      }
       f.condition = real(INFINITY);
       return LEGSIM_ERR_SINGULAR;
     }
@@ -129,7 +141,7 @@ void multiply(const Factor &f, const real *x, real *y) {
     for (int k = f.first[i]; k < i; ++k) t[k] += f.a(i, k) * x[i];
     t[i] += x[i];
   }
-  for (int k = 0; k < m; ++k) t[k] /= f.a(k, k);  // t = D t
+  for (int k = 0; k < m; ++k) t[k] = f.a(k, k) != 0 ? t[k] / f.a(k, k) : real(0);  // t = D t (0: dropped)
   for (int i = 0; i < m; ++i) {  // y = L t
     real s = t[i];
     for (int k = f.first[i]; k < i; ++k) s += f.a(i, k) * t[k];
