@@ -95,3 +95,35 @@ def test_crouch_onto_all_four_stops_is_simulable(integrator, command):
     assert np.max(np.abs(s.qd)) < 1e-6
     weight = -sum(s.model.masses) * s.model.gravity[1]
     assert abs(c["normal"].sum() - weight) < 1e-6 * weight
+
+
+def _robot_file(tmp_path, mu):
+    """models/robot.toml with the ground's friction mu (static and kinetic)."""
+    text = ROBOT.read_text().replace('file = "leg.toml"', f'file = "{ROOT / "models" / "leg.toml"}"')
+    text = text.replace("mu_static = 0.6", f"mu_static = {mu}").replace("mu_kinetic = 0.5",
+                                                                          f"mu_kinetic = {mu}")
+    path = tmp_path / f"robot_mu{mu}.toml"
+    path.write_text(text)
+    return path
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+@pytest.mark.parametrize("mu,dy,steps", [(0.6, 10.0, 1600), (0.6, -1.0, 200), (0.0, -1.0, 200)])
+def test_stops_are_checked_after_a_touchdown_s_projection(tmp_path, integrator, mu, dy, steps):
+    # the robot dropped from 10 m, or started with its feet 1 m inside the ground: the
+    # touchdown's projection puts the feet on the line and must leave no actuator past a stop
+    _robot_sim()  # skips when the build has no room for the robot
+    s = legsim.Sim(str(_robot_file(tmp_path, mu)), integrator=integrator)
+    q = s.assemble_on_ground().copy()
+    s.set_contact(0, "free")
+    s.set_contact(1, "free")
+    q[1::3] += dy
+    s.set_state(q)
+    lmax = np.array([hi for _, hi in s.model.strokes])
+    worst = -np.inf
+    for _ in range(steps):
+        s.step(1)
+        L = s.actuator_lengths()[0]
+        worst = max(worst, np.max(LMIN - L), np.max(L - lmax))
+    assert "touchdown" in s.events() and "stroke_min" in s.events()
+    assert worst <= 1e-9, worst
