@@ -80,10 +80,10 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 
 namespace {
 
-// An inelastic impact onto the rows of Data::dyn (the modes given): the velocity jump
+// An inelastic impact onto the rows of Data::dyn (the new modes): the velocity jump
 // v+ = v- - M^-1 (J^T mu - F E^T mu) with J v+ = nu, mu from the coupled system, and
 // per contact with rows its impulse on the foot (normal, tangential), N s.
-legsim_status impact_rows(Sim &sim, const uint32_t hit) {
+legsim_status impact(Sim &sim, const uint32_t hit) {
   const Model &m = sim.model;
   Data &d = sim.data;
   const Layout &lay = d.dyn;
@@ -141,12 +141,8 @@ enum Mode : uint8_t { kStick, kSlipPlus, kSlipMinus, kSlide, kFree };
 // does not pull (N >= 0), a stuck one holds (|T| <= mu_s N, a_t = 0), one starting to slip
 // does so on the static cone (T = -s mu_s N) in its direction (s a_t > 0), a sliding one
 // keeps T = -dir mu_k N. tol_f, tol_a: round-off allowances (N, m/s^2).
-// mu_onset: the friction of slip+ and slip- (the static mu_s for forces at rest, by default;
-// an impact's slip runs with mu_k).
 bool mode_consistent(const Model &m, int n, const real (&W)[2 * kMaxContacts][2 * kMaxContacts],
-                     const real *b, const uint8_t *mode, const int8_t *dir, real tol_f, real tol_a,
-                     real mu_onset = -1) {
-  if (mu_onset < 0) mu_onset = m.mu_s;
+                     const real *b, const uint8_t *mode, const int8_t *dir, real tol_f, real tol_a) {
   const int nr = 2 * n;
   real A[2 * kMaxContacts][2 * kMaxContacts + 1] = {};
   for (int i = 0; i < n; ++i) {
@@ -163,7 +159,7 @@ bool mode_consistent(const Model &m, int n, const real (&W)[2 * kMaxContacts][2 
     } else {
       const real sgn = mode[i] == kSlipPlus ? real(1) : mode[i] == kSlipMinus ? real(-1) : real(dir[i]);
       A[rt][rt] = 1;
-      A[rt][rn] = sgn * (mode[i] == kSlide ? m.mu_k : mu_onset);  // T + s mu N = 0
+      A[rt][rn] = sgn * (mode[i] == kSlide ? m.mu_k : m.mu_s);  // T + s mu N = 0
     }
   }
   for (int col = 0; col < nr; ++col) {  // Gaussian elimination, partial pivoting
@@ -201,185 +197,6 @@ bool mode_consistent(const Model &m, int n, const real (&W)[2 * kMaxContacts][2 
     if (mode[i] == kSlipMinus && !(at < -tol_a)) return false;
   }
   return true;
-}
-
-// The Delassus matrix of the contact rows row[0 .. nr-1] of a layout from the factor of its
-// S = J M^-1 J^T: W^-1 = (S^-1)_cc (one solve per contact row), then W by Gauss-Jordan.
-// false: W^-1 is singular (a contact row the factor dropped as dependent, or redundant contacts).
-bool delassus(const Factor &f, const int *row, int nr, real (&W)[2 * kMaxContacts][2 * kMaxContacts]) {
-  real G[2 * kMaxContacts][4 * kMaxContacts] = {};
-  for (int j = 0; j < nr; ++j) {
-    VecR e = VecR::Zero();
-    e[row[j]] = 1;
-    factor_solve(f, e);
-    for (int i = 0; i < nr; ++i) G[i][j] = e[row[i]];
-    G[j][nr + j] = 1;
-  }
-  real gmax = 0;
-  for (int i = 0; i < nr; ++i) gmax = std::max(gmax, std::abs(G[i][i]));
-  for (int col = 0; col < nr; ++col) {
-    int piv = col;
-    for (int i = col + 1; i < nr; ++i)
-      if (std::abs(G[i][col]) > std::abs(G[piv][col])) piv = i;
-    if (!(std::abs(G[piv][col]) > kPivotFloor * gmax)) return false;
-    for (int j = 0; j < 2 * nr; ++j) std::swap(G[col][j], G[piv][j]);
-    const real dv = G[col][col];
-    for (int j = 0; j < 2 * nr; ++j) G[col][j] /= dv;
-    for (int i = 0; i < nr; ++i) {
-      if (i == col) continue;
-      const real r = G[i][col];
-      for (int j = 0; j < 2 * nr; ++j) G[i][j] -= r * G[col][j];
-    }
-  }
-  for (int i = 0; i < nr; ++i)
-    for (int j = 0; j < nr; ++j) W[i][j] = G[i][nr + j];
-  return true;
-}
-
-// The impact as a linear complementarity problem (design section 2, step 6): the contact
-// velocities after the impact are v = W P + b (P = (P_n, P_t) per closed contact, the
-// impulses on the feet; W the Delassus matrix with the joints and stops held, b the
-// velocities an impact on the joints and stops alone leaves). Per closed contact a mode:
-// stick (v = 0, P_n >= 0, |P_t| <= mu_s P_n), slip+ or slip- (v_n = 0, P_t = -s mu_k P_n,
-// P_n >= 0, s v_t > 0) or free (P = 0, v_n >= 0: the foot separates). Every combination (at
-// most 4^2) is one small solve (mode_consistent, as contact_modes_choose for the forces); the
-// first consistent one in the priority order wins (the current mode, then stick, slip, free:
-// the least sum of ranks), several: CONTACT_AMBIGUOUS. The chosen modes are set (a foot that
-// separates is free: LIFTOFF; one that slides or sticks: STICK_TO_SLIP, SLIP_TO_STICK when it
-// was not in that mode), and the impact is applied onto their rows (impact_rows: the same
-// equations, solved on the layout). hit: the contacts that report their impulse. When W is
-// singular (redundant contact rows) or no mode is consistent (CONTACT_INCONSISTENT), the
-// impact is bilateral on the given modes, as before the enumeration.
-legsim_status impact(Sim &sim, uint32_t hit) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
-  int idx[kMaxContacts], n = 0;
-  ContactData saved[kMaxContacts];
-  real saved_stick[kMaxContacts];
-  for (int k = 0; k < m.nc; ++k) {
-    saved[k] = d.contact[k];
-    saved_stick[k] = d.stop_drivers.stick[k];
-    if (d.contact[k].state != LEGSIM_CONTACT_FREE) idx[n++] = k;
-  }
-  if (n == 0) return impact_rows(sim, hit);
-  for (int i = 0; i < n; ++i) {  // every closed contact stuck where it is, for W and b
-    ContactData &c = d.contact[idx[i]];
-    if (c.state == LEGSIM_CONTACT_STUCK) continue;
-    Vec2 p, v;
-    contact_point(m, idx[i], d.q, d.qd, p, v);
-    c.state = LEGSIM_CONTACT_STUCK;
-    d.stop_drivers.stick[idx[i]] = m.ground_t.dot(p - m.ground_point);
-  }
-  auto bilateral = [&]() -> legsim_status {  // the given modes, bilateral
-    for (int k = 0; k < m.nc; ++k) {
-      d.contact[k] = saved[k];
-      d.stop_drivers.stick[k] = saved_stick[k];
-    }
-    const legsim_status s = stops_layout(sim);
-    return s == LEGSIM_OK ? impact_rows(sim, hit) : s;
-  };
-  legsim_status s = stops_layout(sim);
-  if (s != LEGSIM_OK) return s;
-  const Layout &lay = d.dyn;
-  rows_eval(m, lay, d.stop_drivers, d.q, d.qd, d.rows);
-  s = factor_build(lay, d.rows, m.minv, d.factor);
-  if (s != LEGSIM_OK) return s;
-  int row[2 * kMaxContacts];
-  const int nr = 2 * n;
-  for (int i = 0; i < nr; ++i) row[i] = -1;
-  for (int r = m.m; r < lay.m; ++r)
-    for (int i = 0; i < n; ++i)
-      if (lay.src[r].index == idx[i]) {
-        if (lay.src[r].kind == RowKind::ContactNormal) row[2 * i] = r;
-        if (lay.src[r].kind == RowKind::ContactTangent) row[2 * i + 1] = r;
-      }
-  real W[2 * kMaxContacts][2 * kMaxContacts];
-  bool ok = true;
-  for (int i = 0; i < nr; ++i) ok = ok && row[i] >= 0;
-  for (int i = 0; ok && i < d.factor.nredundant; ++i)
-    for (int j = 0; j < nr; ++j) ok = ok && d.factor.redundant[i] != row[j];
-  if (!ok || !delassus(d.factor, row, nr, W)) return bilateral();
-  VecR mu;  // the impulses that stop every closed contact (all stuck): b = W mu_c
-  j_times(lay, d.rows, d.qd, mu);
-  for (int i = 0; i < lay.m; ++i) mu[i] -= d.rows.nu[i];
-  factor_solve(d.factor, mu);
-  real b[2 * kMaxContacts], pmax = 0, bmax = 0;
-  for (int i = 0; i < nr; ++i) {
-    b[i] = 0;
-    for (int j = 0; j < nr; ++j) b[i] += W[i][j] * mu[row[j]];
-    pmax = std::max(pmax, std::abs(mu[row[i]]));
-  }
-  for (int i = 0; i < nr; ++i) bmax = std::max(bmax, std::abs(b[i]));
-  for (int i = 0; i < nr; ++i)
-    if (!std::isfinite(b[i])) return bilateral();
-  const real eps = real(1e4) * std::numeric_limits<real>::epsilon();
-  const real tol_f = eps * (1 + pmax), tol_a = eps * (1 + bmax);
-  static constexpr uint8_t choice[4] = {kStick, kSlipPlus, kSlipMinus, kFree};
-  uint8_t cur[kMaxContacts];
-  int8_t dir[kMaxContacts];
-  int total = 1;
-  for (int i = 0; i < n; ++i) {
-    const ContactData &c0 = saved[idx[i]];
-    dir[i] = c0.slip_dir;
-    cur[i] = c0.state != LEGSIM_CONTACT_SLIDING ? kStick : c0.slip_dir > 0 ? kSlipPlus : kSlipMinus;
-    total *= 4;
-  }
-  auto rank = [](uint8_t md, uint8_t current) {
-    return md == current ? 0 : md == kStick ? 1 : md == kFree ? 3 : 2;
-  };
-  int consistent = 0, best_score = 1 << 30;
-  uint8_t best[kMaxContacts] = {};
-  for (int code = 0; code < total; ++code) {
-    uint8_t mode[kMaxContacts];
-    int rest = code, score = 0;
-    for (int i = 0; i < n; ++i) {
-      mode[i] = choice[rest % 4];
-      rest /= 4;
-      score += rank(mode[i], cur[i]);
-    }
-    if (!mode_consistent(m, n, W, b, mode, dir, tol_f, tol_a, m.mu_k)) continue;
-    ++consistent;
-    if (score < best_score) {
-      best_score = score;
-      for (int i = 0; i < n; ++i) best[i] = mode[i];
-    }
-  }
-  if (consistent == 0) {
-    for (int i = 0; i < n; ++i) d.contact[idx[i]].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
-    raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
-    return bilateral();
-  }
-  if (consistent > 1) raise_event(d, LEGSIM_EVENT_CONTACT_AMBIGUOUS);
-  for (int i = 0; i < n; ++i) {  // the chosen modes (the stick points as set above)
-    const int k = idx[i];
-    ContactData &c = d.contact[k];
-    const ContactData &c0 = saved[k];
-    if (best[i] != kStick || c0.state == LEGSIM_CONTACT_STUCK) d.stop_drivers.stick[k] = saved_stick[k];
-    if (best[i] == cur[i]) {
-      c.state = c0.state;
-      continue;
-    }
-    if (consistent > 1) c.events |= LEGSIM_EVENT_CONTACT_AMBIGUOUS;
-    uint32_t ev;
-    if (best[i] == kFree) {
-      c.state = LEGSIM_CONTACT_FREE;
-      c.normal = c.tangential = 0;
-      ev = LEGSIM_EVENT_LIFTOFF;
-    } else if (best[i] == kStick) {
-      c.state = LEGSIM_CONTACT_STUCK;
-      ev = LEGSIM_EVENT_SLIP_TO_STICK;
-    } else {
-      c.state = LEGSIM_CONTACT_SLIDING;
-      c.slip_dir = int8_t(best[i] == kSlipPlus ? 1 : -1);
-      ev = LEGSIM_EVENT_STICK_TO_SLIP;
-    }
-    // a foot touching down that slides at once: the touchdown says it (as a sliding impact)
-    if (ev == LEGSIM_EVENT_STICK_TO_SLIP && ((hit >> k) & 1u)) continue;
-    c.events |= ev;
-    raise_event(d, ev);
-  }
-  s = stops_layout(sim);
-  return s == LEGSIM_OK ? impact_rows(sim, hit) : s;
 }
 
 // Section 2, step 5: the current modes of the closed contacts failed their inequalities.
