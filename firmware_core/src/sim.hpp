@@ -137,6 +137,11 @@ struct Layout {
   // force mu_k lambda_n along the tangent, which makes the system non-symmetric.
   uint8_t nslide;
   uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
+  // Rows beyond the coordinates (Data::dyn only: max(0, m - nq), stops_layout): that many
+  // rows must depend on the others (e.g. both feet stuck with all four stops: 40 rows on 39
+  // coordinates, the self-stress of the stance), and factor_build drops that many dependent
+  // rows (the basic solution: their multipliers 0); one more vanishing pivot is singular.
+  uint8_t surplus;
   const Kernel *kernel;  // the model's kernel serves rows 0 .. kernel->mj-1 (nullptr: none)
   // The path of each solve on this layout, chosen once when it is built (layout_path): the
   // kernel whose generated solve serves the whole system (its block is all the rows: the
@@ -181,6 +186,11 @@ struct Factor {
   uint8_t perm[kMaxRows];   // row -> position, as in the layout
   uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
+  // The rows the factorization dropped as dependent on the rows before them in its order
+  // (at most Layout::surplus of them, by row index): 1 / D is 0 there, so a solve gives
+  // them a zero multiplier and satisfies their equations through the others'.
+  int nredundant;
+  uint8_t redundant[kMaxRows];
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
   // Layout::separator's body, or -1; with one, a holds the factor of B and, by position, u
   // the rows' coefficients on the body, z = B^-1 u, wb its weights and s the factor of

@@ -13,6 +13,7 @@ namespace legsim {
 
 void factor_order(const Layout &layout, Factor &f) {
   f.of_state = false;  // about to be written
+  f.nredundant = 0;
   f.m = layout.m;
   f.kernel = layout.kernel;
   f.separator = -1;  // factor_build sets it once B is factored
@@ -24,7 +25,7 @@ namespace {
 // L D L^T of the assembled lower triangle of f.a in place, positions mk .. m-1 (those before:
 // the kernel's block, already factored), its pivots' range into pmin, pmax; false at a
 // pivot at or below the floor.
-bool eliminate(Factor &f, int mk, real max_diag, real &pmin, real &pmax) {
+bool eliminate(Factor &f, int mk, int surplus, real max_diag, real &pmin, real &pmax) {
   const int m = f.m;
   for (int i = mk; i < m; ++i) {
     const int fi = f.first[i];
@@ -51,7 +52,17 @@ bool eliminate(Factor &f, int mk, real max_diag, real &pmin, real &pmax) {
       ai[k] = t * f.a(k, k);
       d -= t * ai[k];
     }
-    if (!(d > kPivotFloor * max_diag)) return false;
+    if (!(d > kPivotFloor * max_diag)) {
+      if (f.nredundant < surplus && d == d) {
+        // a row that depends on the ones before it: dropped (1 / D = 0 zeroes its
+        // column of L in the rows after it and its multiplier in every solve)
+        for (int r = 0; r < m; ++r)
+          if (f.perm[r] == i) f.redundant[f.nredundant++] = uint8_t(r);
+        ai[i] = 0;
+        continue;
+      }
+      return false;
+    }
     pmin = d < pmin ? d : pmin;
     pmax = d > pmax ? d : pmax;
     ai[i] = 1 / d;
@@ -118,6 +129,9 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   const int m = layout.m;
   const Kernel *kern = layout.kernel;
   const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
+  // dependent rows that may be dropped: only the dynamics' layout with more rows than
+  // coordinates has them, and only that many (Layout::surplus)
+  const int surplus = layout.stops ? layout.surplus : 0;
   factor_order(layout, f);
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
@@ -166,7 +180,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     pmin = max_diag;
     pmax = 0;
   }
-  bool ok = eliminate(f, mk, max_diag, pmin, pmax);
+  bool ok = eliminate(f, mk, surplus, max_diag, pmin, pmax);
   if (!ok && layout.separator >= 0) {
     // B singular (a group whose rows fix its bodies with the separator held, e.g. a leg
     // stretched straight) says nothing of J W J^T: factor the whole of it, dense
@@ -186,7 +200,8 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
         for (int e = 0; e < kBodyDof; ++e) f.a(i, j) += f.u[i][e] * f.wb[e] * f.u[j][e];
     pmin = max_diag;
     pmax = 0;
-    ok = eliminate(f, mk, max_diag, pmin, pmax);
+    f.nredundant = 0;
+    ok = eliminate(f, mk, surplus, max_diag, pmin, pmax);
   } else if (ok && layout.separator >= 0) {
     f.separator = layout.separator;
     ok = separator_complement(f);
@@ -249,7 +264,7 @@ void multiply(const Factor &f, const real *x, real *y) {
     for (int k = f.first[i]; k < i; ++k) t[k] += f.a(i, k) * x[i];
     t[i] += x[i];
   }
-  for (int k = 0; k < m; ++k) t[k] /= f.a(k, k);  // t = D t
+  for (int k = 0; k < m; ++k) t[k] = f.a(k, k) != 0 ? t[k] / f.a(k, k) : real(0);  // t = D t (0: dropped)
   for (int i = 0; i < m; ++i) {  // y = L t
     real s = t[i];
     for (int k = f.first[i]; k < i; ++k) s += f.a(i, k) * t[k];
