@@ -39,8 +39,34 @@ CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
 REQUIRE = os.environ.get("LEGSIM_HIL_REQUIRE") == "1"
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 SCENES = [p.stem for p in shipped_scenes(ROOT)]
-# heavy_shank_free_fall names models/heavy_shank.toml (shank + 2 kg); robot_box_load pushes the box.
-FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml"]
+# heavy_shank_free_fall names models/heavy_shank.toml (shank + 2 kg); robot_box_load pushes the box;
+# robot_slide_start starts both feet sliding (START_CMD's Start_SlidingContacts).
+FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml", "robot_slide_start.toml"]
+
+# Scenes that show a bug of the core another branch fixes (issue 22): each is shipped with the
+# checks it should meet and marked xfail (strict: it turns green, and must be unmarked, when the
+# fix merges). XFAIL_RUN: the run itself fails (hil_sim HALTED); XFAIL_VERDICT: its verdict
+# (tests/hil_verdicts) fails.
+TOUCHDOWN_AT_STEP_END = ("issue 22 section 1 (branch events): the touchdown is taken at the end of the step "
+                         "that crossed it, 3.0e-4 rad off the event-locating reference after a 1 cm drop")
+XFAIL_RUN = {
+    "robot_stops_stuck": "the lengths at the stroke minima travel as float32: 0.35 arrives as 0.3499999940 m, "
+                         "below the lower actuators' 0.35 m minimum, and hil_sim HALTS with NOT_CONVERGED at "
+                         "step 0 where legsim_cli refuses such a length with a message (CLI run passes)",
+}
+XFAIL_VERDICT = {
+    **XFAIL_RUN,
+    "robot_drop_1cm": TOUCHDOWN_AT_STEP_END,
+    "robot_throw": TOUCHDOWN_AT_STEP_END,
+    "robot_land_switch": TOUCHDOWN_AT_STEP_END,
+    "robot_slope_steep": "issue 22 section 1 (branch events): a starting contact state that cannot hold is "
+                         "resolved after the first step, not at t = 0",
+}
+
+
+def xfail(names, reasons):
+    return [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=reasons[n])) if n in reasons else n
+            for n in names]
 
 
 def _skip_or_fail(reason: str):
@@ -123,7 +149,7 @@ def _record(spec, hil, out_dir):
     assert rec["complete"], f"{sc.name}: run did not complete: {rec['errors']}"
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", xfail(SCENES, XFAIL_RUN))
 def test_scene(name, hil, out_dir):
     _record(name, hil, out_dir)
 

@@ -82,10 +82,16 @@ inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops) {
 }
 
 // Touchdown, lift-off, stick and slip (contact.cpp); a change solves the derivative anew.
-inline legsim_status stage_contacts(Sim &s) {
+// A touchdown projects the state onto the feet's rows, which can push an actuator past a
+// stroke end: the stops are checked after it as after the integrator's projection.
+inline legsim_status stage_contacts(Sim &s, bool stops) {
   if (!s.model.nc) return LEGSIM_OK;
   bool changed = false;
-  const legsim_status r = contact_transitions(s, changed);
+  legsim_status r = contact_transitions(s, changed);
+  if (r == LEGSIM_OK && changed && stops) {
+    bool stopped = false;
+    r = stroke_limits_enforce(s, stopped);
+  }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
@@ -122,7 +128,7 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
       legsim_status r = stage_start(s, rk4);
       if (r == LEGSIM_OK) r = stage_integrate(s, rk4);
       if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops);
-      if (r == LEGSIM_OK) r = stage_contacts(s);
+      if (r == LEGSIM_OK) r = stage_contacts(s, stops);
       if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
       if (r != LEGSIM_OK) return r;
       stage_advance(s, rk4);
