@@ -50,6 +50,8 @@ KIND = {"revolute_to_frame": 0, "revolute": 1, "prismatic": 2, "slot": 3}
 NROWS = {"revolute_to_frame": 2, "revolute": 2, "prismatic": 2, "slot": 1}
 # each kind's row unit (rows.hpp): <unit>_position (Phi, the Jacobian), <unit>_gamma
 UNIT = {"revolute_to_frame": "revolute", "revolute": "revolute", "prismatic": "prismatic", "slot": "slot"}
+# what each kind's <unit>_gamma reads of the JointRows its <unit>_position filled
+GAMMA_READS = {"revolute_to_frame": ("sa",), "revolute": ("sa", "sb"), "prismatic": ("d",), "slot": ("sa", "d")}
 V = None  # a Jacobian entry known only at run time (rows.coef)
 
 
@@ -294,29 +296,48 @@ class Kernel:
     def joint_locals(n, j, r, part=None):
         """One joint's rows as locals (phi<r>, gam<r>, c<r>_<slot>_<k>, the entries
         joint_rows marks V), from its row unit (rows.hpp) called on its bodies' poses pose<b>
-        into JointRows J<n>. part "q": the positions' part alone (Phi, the Jacobian); "v":
-        the velocities' (gamma); None: both. Also names a prismatic joint's d, its rate and
-        d.n (dx<n>, dy<n>, ddx<n>, ddy<n>, dn<n>: an actuator's, forces_locals)."""
+        into a JointRows in a block of its own, so that only one joint's JointRows is live at
+        a time (out of line, as at -Os on Cortex-M, each would otherwise keep its own stack
+        slot for the whole kernel). part "q": the positions' part alone (Phi, the Jacobian),
+        keeping in locals what the gamma unit reads back (sa<n>, sb<n>, d<n>); "v": the
+        velocities' (gamma) from those; None: both in one block. Also names a prismatic
+        joint's d, its rate and d.n (dx<n>, dy<n>, ddx<n>, ddy<n>, dn<n>: an actuator's,
+        forces_locals) and a pin's offset (sax<n>, say<n>: the pin units')."""
         kind, (a, b) = j["kind"], j["body"]
         unit = UNIT[kind]
         other = "nullptr" if kind == "revolute_to_frame" else f"&pose{b}" if kind == "revolute" else f"pose{b}"
         joint = "" if kind == "prismatic" else f"model.joint[{n}], "  # its rows have no joint points
-        o = [("", f"  // joint {n}: {kind}, rows {r}..")]
-        o.append(("q", f"  JointRows J{n};"))
-        o.append(("q", f"  {unit}_position({joint}pose{a}, {other}, J{n});"))
-        q, v = [], []
+        q, v = [], []  # (local, the JointRows field it takes)
         for e, (bodies, slots) in enumerate(joint_rows([j])):
-            q.append(f"phi{r + e} = J{n}.phi[{e}]")
-            q += [f"c{r + e}_{sl}_{k} = J{n}.coef[{e}][{sl}][{k}]" for sl in range(2) for k in range(3)
+            q.append((f"phi{r + e}", f"phi[{e}]"))
+            q += [(f"c{r + e}_{sl}_{k}", f"coef[{e}][{sl}][{k}]") for sl in range(2) for k in range(3)
                   if bodies[sl] >= 0 and slots[sl][k] is V]
-            v.append(f"gam{r + e} = J{n}.gamma[{e}]")
+            v.append((f"gam{r + e}", f"gamma[{e}]"))
         if kind == "prismatic":
-            q += [f"dx{n} = J{n}.d.x()", f"dy{n} = J{n}.d.y()", f"dn{n} = J{n}.phi[1]"]
-            v += [f"ddx{n} = J{n}.dd.x()", f"ddy{n} = J{n}.dd.y()"]
-        o.append(("q", "  [[maybe_unused]] const real " + ", ".join(q) + ";"))
-        o.append(("v", f"  {unit}_gamma(pose{a}, {other}, J{n});"))
-        o.append(("v", "  [[maybe_unused]] const real " + ", ".join(v) + ";"))
-        return [line for tag, line in o if part is None or tag in ("", part)]
+            q += [(f"dx{n}", "d.x"), (f"dy{n}", "d.y"), (f"dn{n}", "phi[1]")]
+            v += [(f"ddx{n}", "dd.x"), (f"ddy{n}", "dd.y")]
+        if kind == "revolute_to_frame":
+            q += [(f"sax{n}", "sa.x"), (f"say{n}", "sa.y")]
+        keep = GAMMA_READS[kind] if part is not None else ()  # what gamma reads, across parts
+        o = [f"  // joint {n}: {kind}, rows {r}.."]
+        if part != "v":
+            o.append("  [[maybe_unused]] real " + ", ".join(x for x, _ in q) + ";")
+            o += [f"  XY {f}{n};" for f in keep]
+        if part != "q":
+            o.append("  [[maybe_unused]] real " + ", ".join(x for x, _ in v) + ";")
+        o.append("  {")
+        o.append("    JointRows J;")
+        if part != "v":
+            o.append(f"    {unit}_position({joint}pose{a}, {other}, J);")
+            o.append("    " + " ".join(f"{x} = J.{f};" for x, f in q))
+            o += [f"    {f}{n} = J.{f};" for f in keep]
+        else:
+            o += [f"    J.{f} = {f}{n};" for f in keep]
+        if part != "q":
+            o.append(f"    {unit}_gamma(pose{a}, {other}, J);")
+            o.append("    " + " ".join(f"{x} = J.{f};" for x, f in v))
+        o.append("  }")
+        return o
 
     def rows_locals(self, shared=None, part=None, velocity=None, trig="body_trig"):
         """sin/cos once per body (through the TrigCache) and its pose pose<b> (rows.hpp), then
@@ -364,11 +385,14 @@ class Kernel:
         them (rows_eval: onto 0): the gap along the ground's normal, the offset along its
         tangent from the stick point."""
         o = [f"  // contact {k}: stuck, rows {r}.."]
-        o.append(f"  ContactRow cn{k}, ct{k};")
-        for e, name, row, target in (("ground_n", "cn", r, "real(0)"), ("ground_t", "ct", r + 1, f"dv.stick[{k}]")):
-            o.append(f"  contact_row(model.contact[{k}].point, model.ground_point, model.{e}, {target}, real(1), pose{b}, {name}{k});")
-            o.append(f"  const real phi{row} = real(0) + {name}{k}.phi, gam{row} = real(0) + {name}{k}.gamma;")
-            o.append(f"  const real " + ", ".join(f"c{row}_0_{x} = {name}{k}.coef[{x}]" for x in range(3)) + ";")
+        for e, row, target in (("ground_n", r, "real(0)"), ("ground_t", r + 1, f"dv.stick[{k}]")):
+            o.append(f"  real phi{row}, gam{row}, " + ", ".join(f"c{row}_0_{x}" for x in range(3)) + ";")
+            o.append("  {  // (a block of its own: joint_locals says why)")
+            o.append("    ContactRow C;")
+            o.append(f"    contact_row(model.contact[{k}].point, model.ground_point, model.{e}, {target}, real(1), pose{b}, C);")
+            o.append(f"    phi{row} = real(0) + C.phi, gam{row} = real(0) + C.gamma;")
+            o.append("    " + " ".join(f"c{row}_0_{x} = C.coef[{x}];" for x in range(3)))
+            o.append("  }")
         return o
 
     def rows_store(self, rows="rows."):
@@ -702,7 +726,7 @@ class Reduced(Kernel):
                     new.append((0, 0, cp[0]))  # on the angle alone: a constant still
                 else:
                     self.defs_e.append(f"  const real e{i}_{s} = "
-                                     f"{product([(cx[0], cx[1] + [f'J{n}.sa.y()']), (-cy[0], cy[1] + [f'J{n}.sa.x()']), cp])};")
+                                     f"{product([(cx[0], cx[1] + [f'say{n}']), (-cy[0], cy[1] + [f'sax{n}']), cp])};")
                     new.append((0, 0, f"e{i}_{s}"))
                 gamma += [(cx[0], cx[1] + [f"gam{r}"]), (cy[0], cy[1] + [f"gam{r + 1}"])]
             self.rows.append((bodies, tuple(new)))
@@ -736,9 +760,9 @@ class Reduced(Kernel):
                  "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
         o.append("  const real *w = model.minv, *mass = model.mass;")
         # a pinned body on its angle alone (rows.hpp's pin units)
-        pinned_w = [f"  const real wr{b} = pin_inverse_inertia(mass + {3 * b}, J{n});  // body {b} on its pin (joint {n})"
+        pinned_w = [f"  const real wr{b} = pin_inverse_inertia(mass + {3 * b}, XY{{sax{n}, say{n}}});  // body {b} on its pin (joint {n})"
                     for b, (n, r) in sorted(self.pinned.items())]
-        pinned_f = [f"  const real fr{b} = pin_force(mass + {3 * b}, J{n}, Q{3 * b}, Q{3 * b + 1}, Q{3 * b + 2});"
+        pinned_f = [f"  const real fr{b} = pin_force(mass + {3 * b}, XY{{sax{n}, say{n}}}, gam{r}, gam{r + 1}, Q{3 * b}, Q{3 * b + 1}, Q{3 * b + 2});"
                     for b, (n, r) in sorted(self.pinned.items())]
         # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
         # the same number as dynamics' floor; the reduced one's are no larger)
@@ -810,8 +834,8 @@ class Reduced(Kernel):
             elif x == 2:
                 pn, r = self.pinned[b]
                 o.append(f"  const real pdd{b} = wr{b} * (fr{b} - ({jt}));")
-                o.append(f"  const Vec2 acc{b} = pin_acceleration(J{pn}, pdd{b});")
-                o.append(f"  const real qx{b} = acc{b}.x(), qy{b} = acc{b}.y();")
+                o.append(f"  const XY acc{b} = pin_acceleration(XY{{sax{pn}, say{pn}}}, gam{r}, gam{r + 1}, pdd{b});")
+                o.append(f"  const real qx{b} = acc{b}.x, qy{b} = acc{b}.y;")
                 o.append(f"  qdd[{n - 2}] = qx{b};")
                 o.append(f"  qdd[{n - 1}] = qy{b};")
                 o.append(f"  qdd[{n}] = pdd{b};")
@@ -867,7 +891,7 @@ class Reduced(Kernel):
         the reduced problem."""
         o = ["  if (projected) {"]
         for b, (n, r) in sorted(self.pinned.items()):
-            o.append(f"    const real ur{b} = pin_rate(mass + {3 * b}, J{n}, wr{b}, V{3 * b}, V{3 * b + 1}, V{3 * b + 2});")
+            o.append(f"    const real ur{b} = pin_rate(mass + {3 * b}, XY{{sax{n}, say{n}}}, wr{b}, V{3 * b}, V{3 * b + 1}, V{3 * b + 2});")
         u = lambda n: f"ur{n // 3}" if n // 3 in self.pinned else f"V{n}"  # noqa: E731
         o += [f"    const real pc{i} = {self.j_expr(i, u, True)};" for i in range(self.m)]
         o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}")]
@@ -880,8 +904,8 @@ class Reduced(Kernel):
             elif x == 2:
                 pn, _ = self.pinned[b]
                 o.append(f"    const real up{b} = ur{b} - wr{b} * ({jt});")
-                o.append(f"    const Vec2 vel{b} = pin_velocity(J{pn}, up{b});")
-                o.append(f"    V{n - 2} = vel{b}.x(), V{n - 1} = vel{b}.y(), V{n} = up{b};")
+                o.append(f"    const XY vel{b} = pin_velocity(XY{{sax{pn}, say{pn}}}, up{b});")
+                o.append(f"    V{n - 2} = vel{b}.x, V{n - 1} = vel{b}.y, V{n} = up{b};")
         o.append("  }")
         return o
 

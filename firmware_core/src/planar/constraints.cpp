@@ -225,9 +225,9 @@ void actuator_length(const Model &model, int a, const VecQ &q, const VecQ &qd, r
                      real &rate, TrigCache *trig) {
   const Actuator &ac = model.act[a];
   const BodyPose c = pose_of(q, qd, ac.cyl, trig), r = pose_of(q, qd, ac.rod, trig);
-  const Vec2 d = r.r - c.r, dd = r.rd - c.rd;
-  length = d.dot(c.u) + ac.offset_m;
-  rate = dd.dot(c.u) + c.w * d.dot(c.n);
+  const XY d = {r.r.x - c.r.x, r.r.y - c.r.y}, dd = {r.rd.x - c.rd.x, r.rd.y - c.rd.y};
+  length = dot(d, c.u) + ac.offset_m;
+  rate = dot(dd, c.u) + c.w * dot(d, c.n);
 }
 
 }  // namespace legsim
