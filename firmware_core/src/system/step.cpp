@@ -130,6 +130,11 @@ inline void stage_advance(Sim &s, bool rk4) {
 constexpr real kNoEvent = real(1e30);
 constexpr real kThetaTol = real(1e-6);  // the root's tolerance, in parts of the (part) step
 constexpr int kLocateIterations = 12;
+// The located function at the real part step's end must be 0 to its slope times this part of
+// the step; else the bracket shrinks to the part step (past the root) or starts there
+// (before it), at most kRefinements times.
+constexpr real kRefineTol = real(1e-7);
+constexpr int kRefinements = 12;
 
 struct EventValues {
   real g[kMaxContacts][2];
@@ -221,22 +226,31 @@ legsim_status event_at(Sim &s, const StepEnd &e, real hs, int k, int j, real th,
 // bracket's late end (g <= 0: the event surely happened there); exact = false when the
 // iterations ran out (the bracket's late end all the same).
 legsim_status event_root(Sim &s, const StepEnd &e, real hs, int k, int j, real g0, real g1, real &theta,
-                         bool &exact) {
+                         bool &exact, real &slope) {
   real a = 0, b = 1, ga = g0, gb = g1;
+  real fa = g0, fb = g1;  // the values at a and b (Illinois halves ga, gb)
   int side = 0;
   exact = false;
+  bool bisect = false;  // the late end's value is not known (its solve failed)
   for (int it = 0; it < kLocateIterations; ++it) {
-    real c = (a * gb - b * ga) / (gb - ga);
+    real c = bisect ? real(0.5) * (a + b) : (a * gb - b * ga) / (gb - ga);
     if (!(c > a && c < b)) c = real(0.5) * (a + b);
     real gc;
     const legsim_status r = event_at(s, e, hs, k, j, c, gc);
-    if (r != LEGSIM_OK) return r;
+    // a mode whose dynamics cannot be solved there (a sliding foot far past its lift-off:
+    // the friction's coupling singular) has surely ended before: the late end, bisected
+    bisect = r != LEGSIM_OK;
+    if (bisect) {
+      b = c;
+      side = 0;
+      continue;
+    }
     if (gc > 0) {
-      a = c, ga = gc;
+      a = c, ga = fa = gc;
       if (side < 0) gb /= 2;
       side = -1;
     } else {
-      b = c, gb = gc;
+      b = c, gb = fb = gc;
       if (side > 0) ga /= 2;
       side = 1;
     }
@@ -246,25 +260,31 @@ legsim_status event_root(Sim &s, const StepEnd &e, real hs, int k, int j, real g
     }
   }
   theta = b;
+  slope = (fb - fa) / (b - a);  // dg / dtheta at the root (< 0)
   return LEGSIM_OK;
 }
 
 // The earliest of the crossing functions (with the start in the sim's state, the end in e):
 // theta, and the events within kThetaTol of it (simultaneous: a level drop lands both feet
 // at once) in ev.
+// first: the earliest function (bit 2k + j), slope: its dg / dtheta there.
 legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues &g0, const EventValues &g1,
-                            uint32_t cross, ContactEvents &ev, real &theta, bool &exact) {
+                            uint32_t cross, ContactEvents &ev, real &theta, bool &exact, int &first,
+                            real &slope) {
   real at[kMaxContacts][2];
   theta = 1;
   exact = true;
+  first = -1;
+  slope = 0;
   for (int k = 0; k < s.model.nc; ++k)
     for (int j = 0; j < 2; ++j) {
       at[k][j] = 2;
       if (!((cross >> (2 * k + j)) & 1u)) continue;
       bool ok;
-      const legsim_status r = event_root(s, e, hs, k, j, g0.g[k][j], g1.g[k][j], at[k][j], ok);
+      real dg;
+      const legsim_status r = event_root(s, e, hs, k, j, g0.g[k][j], g1.g[k][j], at[k][j], ok, dg);
       if (r != LEGSIM_OK) return r;
-      if (at[k][j] < theta) theta = at[k][j];
+      if (at[k][j] < theta || first < 0) theta = at[k][j], first = 2 * k + j, slope = dg;
       exact = exact && ok;
     }
   ev = ContactEvents{0, 0, 0, 0};
@@ -301,7 +321,7 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
   const real h = real(s.opt.step_s);
   const bool contacts = s.model.nc > 0;
   real done = 0;  // the part of the step taken, s
-  int located = 0;
+  int located = 0, advanced = 0;
   std::optional<Snapshot> mid;  // the rest's start, after an event
   const Snapshot *from = &start;
   // the functions a located event put at their boundary (bit 2k + 1: v_t = 0 after a slip
@@ -322,42 +342,67 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
     event_values(s, g1);
     const uint32_t cross = crossings(s, g0, g1) & ~fresh;
     if (!cross) break;
-    if (located == LEGSIM_MAX_EVENTS_PER_STEP) {  // the rest at the step's end, as without location
+    if (located == LEGSIM_MAX_EVENTS_PER_STEP || advanced == LEGSIM_MAX_EVENTS_PER_STEP) {  // the rest at the step's end, as without location
       raise_event(d, LEGSIM_EVENT_EVENTS_DEFERRED);
       break;
     }
-    // the end kept, the start put back: the event located between them
+    // the end kept, the start put back: the event located between them on the dense output,
+    // then the part step to it taken; the located function there must be 0 to 1e-4 h (its
+    // slope times that): past it, located again over the shorter part step (its dense output
+    // is better); before it, that state starts the rest of the step (located again from it)
     StepEnd end;
     end.q = d.q, end.v = d.qd, end.a = d.qdd;
     from->restore(s);
     r = stage_start(s, rk4);
     if (r != LEGSIM_OK) return r;
     ContactEvents ev;
-    real theta;
+    real theta, slope;
     bool exact;
-    r = events_locate(s, end, hs, g0, g1, cross, ev, theta, exact);
-    // the start again (the location's solves wrote the multipliers and the workspace)
-    from->restore(s);
-    const legsim_status r2 = stage_start(s, rk4);
-    if (r2 != LEGSIM_OK) return r2;
-    if (r != LEGSIM_OK) {  // a solve failed on the dense output: the step as without location
-      raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
-      r = stage_integrate(s, rk4, hs);
-      bool st2;
-      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, st2);
-      break;
-    }
+    int first;
+    r = events_locate(s, end, hs, g0, g1, cross, ev, theta, exact, first, slope);
+    if (r != LEGSIM_OK) return r;
     if (!exact) raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
-    const real he = theta * hs;
-    if (!rk4) {  // generalized-alpha restarts its history at a part step (h enters it)
-      d.acc_aux = d.qdd;
-      d.past_steps = 0;
-    }
-    if (he > tiny_step(h)) {
+    // The part step to the root found, taken for real: the located function there must be 0
+    // to its slope times kRefineTol h; else the root is sought on the real part steps (Illinois
+    // on their values, the bracket [0, hs] of the step's own values), at most kRefinements.
+    const real tol = std::abs(slope) * kRefineTol * h / hs;
+    real ra = 0, rb = hs, fa = g0.g[first / 2][first % 2], fb = g1.g[first / 2][first % 2];
+    int side = 0;
+    real he = theta * hs, g_prev = 0, h_prev = 0;
+    for (int refine = 0;; ++refine) {
+      // the start again (the location's solves and the last part step wrote over it)
+      from->restore(s);
+      r = stage_start(s, rk4);
+      if (r != LEGSIM_OK) return r;
+      if (!rk4) {  // generalized-alpha restarts its history at a part step (h enters it)
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      if (!(he > tiny_step(h))) break;
       r = stage_integrate(s, rk4, he);
-      bool st2;
+      bool st2 = false;
       if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, st2);
       if (r != LEGSIM_OK) return r;
+      if (st2) break;  // a stop on the way: the events at its state
+      EventValues ge;
+      event_values(s, ge);
+      const real gf = ge.g[first / 2][first % 2];
+      // the distance to the root, by the slope of the interpolant (first) or of the last two
+      // part steps' values (after)
+      const real slope_now = refine == 0 ? slope / hs : (gf - g_prev) / (he - h_prev);
+      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= std::abs(slope_now) * kRefineTol * h) break;
+      g_prev = gf, h_prev = he;
+      if (refine == kRefinements) {  // the refinements ran out: taken here
+        raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
+        break;
+      }
+      // regula falsi, bisecting when an end is kept twice (a mode far past its event can
+      // make the late end's value huge: the mode's motion leaves its domain there)
+      const bool again = gf > 0 ? side < 0 : side > 0;
+      if (gf > 0) ra = he, fa = gf, side = -1;
+      else rb = he, fb = gf, side = 1;
+      he = again ? real(0.5) * (ra + rb) : (ra * fb - rb * fa) / (fb - fa);
+      if (!(he > ra && he < rb)) he = real(0.5) * (ra + rb);
     }
     done += he;
     ++located;
