@@ -226,6 +226,9 @@ struct Data {
   // Since qdd was last valid, only the forcing changed (commands, loads: commands_changed),
   // not the state, the rows or the options: the restart keeps what depends on the state alone.
   bool forcing_only;
+  // The contact modes were checked at the current state (a step's end): false after a change
+  // from outside (state_refresh), so the next step checks them at its start first.
+  bool modes_checked;
   VecQ q, qd, qdd;
   VecQ acc_aux;  // generalized-alpha auxiliary acceleration
   // Generalized-alpha's predictor and convergence test: the accelerations of the steps

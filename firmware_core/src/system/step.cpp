@@ -21,6 +21,7 @@ namespace legsim {
 // its setpoint every step costs about one Newton iteration a step, not two.
 legsim_status state_refresh(Sim &sim, bool forcing_only) {
   Data &d = sim.data;
+  d.modes_checked = false;  // (a step sets it again at its end)
   // the history is generalized-alpha's alone: RK4 calls leave it (Snapshot), and a change of
   // integrator restarts it (legsim_set_options)
   const bool history = sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
@@ -69,9 +70,10 @@ namespace {
 // allows) is resolved at t, not after the first step.
 inline legsim_status stage_start(Sim &s, bool rk4) {
   Data &d = s.data;
-  if (!(rk4 ? !d.derivative_valid : !d.history_valid)) return LEGSIM_OK;
-  legsim_status r = state_refresh(s, d.forcing_only);
-  if (r != LEGSIM_OK || !s.model.nc) return r;
+  legsim_status r = LEGSIM_OK;
+  if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s, d.forcing_only);
+  if (r != LEGSIM_OK || !s.model.nc || d.modes_checked) return r;
+  d.modes_checked = true;
   bool changed = false;
   r = contact_transitions(s, changed, d.t);
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
@@ -135,6 +137,8 @@ constexpr int kLocateIterations = 12;
 // (before it), at most kRefinements times.
 constexpr real kRefineTol = real(1e-7);
 constexpr int kRefinements = 12;
+constexpr int kHalvings = 4;
+constexpr int kMaxParts = 2 * LEGSIM_MAX_EVENTS_PER_STEP;  // halved part steps a step takes
 
 struct EventValues {
   real g[kMaxContacts][2];
@@ -321,7 +325,8 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
   const real h = real(s.opt.step_s);
   const bool contacts = s.model.nc > 0;
   real done = 0;  // the part of the step taken, s
-  int located = 0, advanced = 0;
+  int located = 0, parts = 0;
+  bool locate = true;  // false once the events are deferred to the step's end
   std::optional<Snapshot> mid;  // the rest's start, after an event
   const Snapshot *from = &start;
   // the functions a located event put at their boundary (bit 2k + 1: v_t = 0 after a slip
@@ -333,18 +338,45 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
     if (r != LEGSIM_OK) return r;
     EventValues g0;
     if (contacts) event_values(s, g0);
-    const real hs = h - done;
+    real hs = h - done;
     r = stage_integrate(s, rk4, hs);
+    // A mode carried far past its event can leave its domain (a sliding foot well past its
+    // lift-off: the Newton iteration or the friction's coupling fails): the part step is
+    // halved (at most kHalvings times) to find a state before that, from which it goes on.
+    for (int halving = 0; r != LEGSIM_OK && contacts && halving < kHalvings && parts < kMaxParts; ++halving) {
+      from->restore(s);
+      r = stage_start(s, rk4);
+      if (r != LEGSIM_OK) return r;
+      if (!rk4) {
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      hs /= 2;
+      r = stage_integrate(s, rk4, hs);
+    }
+    const bool partial = hs < h - done;  // the part step ends before the step
     bool stopped = false;
     if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
-    if (r != LEGSIM_OK || !contacts || stopped) break;
+    if (r != LEGSIM_OK || !contacts || (stopped && !partial)) break;
     EventValues g1;
     event_values(s, g1);
-    const uint32_t cross = crossings(s, g0, g1) & ~fresh;
-    if (!cross) break;
-    if (located == LEGSIM_MAX_EVENTS_PER_STEP || advanced == LEGSIM_MAX_EVENTS_PER_STEP) {  // the rest at the step's end, as without location
+    const uint32_t cross = locate ? crossings(s, g0, g1) & ~fresh : 0u;
+    if (cross && located == LEGSIM_MAX_EVENTS_PER_STEP) {
+      // the rest at the step's end, as without location
       raise_event(d, LEGSIM_EVENT_EVENTS_DEFERRED);
-      break;
+      locate = false;
+    }
+    if (!cross || stopped || !locate) {
+      if (!partial) break;
+      ++parts;
+      done += hs;  // the rest of the step from here
+      mid.emplace(s);
+      from = &*mid;
+      if (!rk4) {
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      continue;
     }
     // the end kept, the start put back: the event located between them on the dense output,
     // then the part step to it taken; the located function there must be 0 to 1e-4 h (its
@@ -382,6 +414,11 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
       r = stage_integrate(s, rk4, he);
       bool st2 = false;
       if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, st2);
+      if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
+        rb = he, side = 1;
+        he = real(0.5) * (ra + rb);
+        continue;
+      }
       if (r != LEGSIM_OK) return r;
       if (st2) break;  // a stop on the way: the events at its state
       EventValues ge;
@@ -435,6 +472,7 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
       legsim_status r = step_with_events(s, rk4, stops, start);
       if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
       if (r != LEGSIM_OK) return r;
+      s.data.modes_checked = true;
       stage_advance(s, rk4);
       return LEGSIM_OK;
     });
