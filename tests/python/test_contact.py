@@ -92,15 +92,16 @@ def test_block_on_slope_sticks_or_slips_exactly_at_tan(integrator, slope, rel):
 
 @pytest.mark.parametrize("slope", [0.3, 0.6])
 def test_block_slides_from_rest_at_g_sin_minus_mu_cos(slope):
-    """Held for the first step (the check is at its end: the event time error is h), then
-    uniformly accelerated: RK4 integrates the quadratic exactly."""
+    """A stuck start that cannot hold slides from t = 0 (the modes are checked at the step's
+    start after an outside change), uniformly accelerated: RK4 integrates the quadratic
+    exactly."""
     mu_s, mu_k, h, n = math.tan(slope) * 0.9, math.tan(slope) * 0.6, 1e-3, 400
     s = block(slope, mu_s, mu_k, step=h)
     s.set_state([0.0, 0.0, 0.0])
     s.set_contact("foot", "stuck")
     s.step(n)
     a = ca.slide_acceleration(mu_k, slope)
-    t = (n - 1) * h
+    t = n * h
     x, v = _along(s, slope)
     err_x, err_v = abs(x - 0.5 * a * t * t), abs(v - a * t)
     print(f"slope {slope}: a = {a:.6f} m/s^2, x = {x:.9f} m, error x {err_x:.2e} m, v {err_v:.2e} m/s")
