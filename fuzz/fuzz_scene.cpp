@@ -1,12 +1,16 @@
 // Fuzz target: the scene loader (firmware_core/host/scene_parse.cpp, scene_toml.hpp), TOML text in.
 //
 // The text is written to a scratch file (load_scene reads a path), read and checked,
-// bound against a compiled-in model, written out resolved, and run on a short horizon (at
-// most kMaxSteps steps, a statics grid of at most kMaxGrid). The model: the two-leg robot
-// (models/robot.toml) for model = "builtin:robot" or a model file whose name says robot (as
-// every robot scene's does: scenes/robot_*.toml), else the leg; the scene's variant if the
-// model has it, else its first. A model file named by the scene is not read (the scratch
-// file has no folder of models), so a robot scene on another ground runs on robot.toml's.
+// bound against its model, written out resolved, and run on a short horizon (at most
+// kMaxSteps steps, a statics grid of at most kMaxGrid). The model, as legsim_cli finds it:
+// a model file the scene names (relative, as written) is read as if the scene were a file
+// of a seed folder (kSeedFolders, absolute: whatever the working directory): scenes/ (the
+// shipped robot scenes' "../models/robot.toml", "models/robot_slope_stand.toml"), then
+// tests/model/fixtures/scenes/ ("../../../../models/robot.toml"); a file that loads is
+// used (a robot's leg files with it, on its own ground), one that fails to load is
+// refused as the CLI refuses it. A model = "builtin:robot", or a file that none of the
+// folders has, binds to a compiled-in model: the two-leg robot (models/robot.toml) when the
+// name says robot, else the leg; the scene's variant if the model has it, else its first.
 // - every input gives true or false with a message, never a crash or undefined behaviour;
 // - a scene that loads is accepted within the documented ranges (step counts, record
 //   interval): the run is streamed sample by sample (the 1e9-step regression);
@@ -18,11 +22,13 @@
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
 #include <sstream>
 #include <string>
 
 #include "legsim/legsim.h"
 #include "legsim/models.h"
+#include "model_toml.hpp"
 #if __has_include("legsim/robot_models.h")
 #include "legsim/robot_models.h"  // compiled in when the build's capacities hold the robot
 #define FUZZ_SCENE_HAS_ROBOT 1
@@ -112,6 +118,31 @@ class CheckingWriter : public legsim_host::ResultWriter {
   int64_t n_ = 0;
 };
 
+// "FOLDER/" of the seed folders a scene's model file is looked up from.
+const char *const kSeedFolders[] = {LEGSIM_FUZZ_SOURCE_DIR "/scenes/",
+                                    LEGSIM_FUZZ_SOURCE_DIR "/tests/model/fixtures/scenes/"};
+
+// The model file a scene names, loaded from the first seed folder that has it: 1 loaded,
+// 0 refused by the loader (the CLI's exit 2), -1 in no folder (or absolute, or builtin).
+int load_model_file(const legsim_host::Scene &scene, legsim_model_desc *out) {
+  if (!scene.builtin.empty() || scene.model.empty() || scene.model[0] == '/') return -1;
+  for (const char *folder : kSeedFolders) {
+    const std::string path = std::string(folder) + scene.model;
+    char msg[512];
+    std::memset(msg, 'x', sizeof msg);  // a message must end inside msg
+    msg[0] = '\0';
+    const legsim_status st = legsim_model_load_toml(path.c_str(), scene.variant.c_str(), out, msg, sizeof msg);
+    if (std::memchr(msg, '\0', sizeof msg) == nullptr) violated("loader message not terminated");
+    if (st == LEGSIM_OK) return 1;
+    if (msg[0] == '\0') violated("the model loader refused without a message");
+    // the file itself unreadable (a leg file of a robot that is: refused, as by the CLI)
+    if (!(st == LEGSIM_ERR_BAD_INPUT && std::strncmp(msg, path.c_str(), path.size()) == 0 &&
+          std::strncmp(msg + path.size(), ": cannot read: ", 15) == 0))
+      return 0;
+  }
+  return -1;
+}
+
 // The compiled-in model a scene stands for (the header says which).
 const legsim_model_desc *model_of(const legsim_host::Scene &scene, bool *robot) {
   const legsim_model_variant *variants = legsim_model_leg_variants;
@@ -152,7 +183,16 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (scene.record_every < 1 || scene.record_every > 10000000) violated("record_every out of range");
 
   bool robot = false;
-  const legsim_model_desc *model = model_of(scene, &robot);
+  static legsim_model_desc loaded;  // the sim reads it by pointer while the run lasts
+  const legsim_model_desc *model = nullptr;
+  switch (load_model_file(scene, &loaded)) {
+    case 1:
+      model = &loaded;
+      robot = loaded.n_contacts > 0;
+      break;
+    case 0: return 0;  // refused with a message, as legsim_cli refuses it
+    default: model = model_of(scene, &robot);
+  }
   if (!legsim_host::bind_scene(scene, *model, err)) {
     if (err.empty()) violated("bind_scene refused without a message");
     return 0;

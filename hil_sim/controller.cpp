@@ -47,6 +47,7 @@ void Controller::solver_fault(legsim_status st, const Request *req) {
 // ---- frames ---------------------------------------------------------------------------
 
 bool Controller::state_allows(const Request &req) const {
+  if (req.kind == Request::Kind::kStart) return true;  // for the next RESET, in any state
   if (req.kind != Request::Kind::kControl)
     return state_ == SimState::kLockstep || state_ == SimState::kRealtime;
   switch (req.control.command) {
@@ -71,6 +72,7 @@ void Controller::on_frame(const Frame &frame, int64_t now_ns) {
       req.kind == Request::Kind::kControl && req.control.command == Command::kReset;
   SeqTrack *track = req.kind == Request::Kind::kControl ? &ctrl_seq_
                     : req.kind == Request::Kind::kAct   ? &act_seq_[req.leg]
+                    : req.kind == Request::Kind::kStart ? &start_seq_
                                                         : &load_seq_[req.leg];
   if (!is_reset && track->have && req.seq <= track->last) {
     f = Fault{};
@@ -98,8 +100,14 @@ void Controller::on_frame(const Frame &frame, int64_t now_ns) {
     case Request::Kind::kControl: handle_control(req, now_ns); break;
     case Request::Kind::kAct: handle_act(req, now_ns); break;
     case Request::Kind::kLoad: handle_load(req); break;
+    case Request::Kind::kStart: handle_start(req); break;
     case Request::Kind::kForeign: break;
   }
+}
+
+void Controller::handle_start(const Request &req) {
+  pending_start_ = req.start;
+  start_seq_ = {true, req.seq};
 }
 
 void Controller::handle_control(const Request &req, int64_t now_ns) {
@@ -109,6 +117,18 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
       ResetParams p = r.reset;
       p.hold_length = r.act_init == 1;
       p.use_lengths = r.use_lengths == 1;
+      // a RESET uses up the START_CMD since the previous one (none: the stance at rest)
+      const StartRequest start = pending_start_;
+      pending_start_ = StartRequest{};
+      start_seq_ = {};
+      p.use_start = start.use == 1;
+      p.start_lift = start.lift;
+      p.start_tilt = start.tilt;
+      p.start_velocity[0] = start.velocity[0];
+      p.start_velocity[1] = start.velocity[1];
+      p.start_spin = start.spin;
+      p.stuck_contacts = start.stuck_contacts;
+      p.sliding_contacts = start.sliding_contacts;
       legsim_status st = session_.reset(p);
       if (st != LEGSIM_OK) {  // the running session (if any) is untouched
         ++rx_rejected_;

@@ -104,6 +104,7 @@ class Controller {
   // The status bits of leg's node; leg = -1: the heartbeat's (any leg's watchdog bits).
   uint32_t status_bits(uint32_t events, int leg) const;
   void publish();
+  void handle_start(const Request &req);
 
   Session &session_;
   FrameSink &sink_;
@@ -114,6 +115,8 @@ class Controller {
   FaultCode last_fault_ = FaultCode::kNone;
   bool fault_since_sample_ = false;
   SeqTrack ctrl_seq_, act_seq_[kMaxLegs], load_seq_[kMaxLegs];  // per leg: its own frame ids
+  SeqTrack start_seq_;
+  StartRequest pending_start_;  // START_CMD accepted since the last RESET (use = 0: none)
 
   // command timeout: the same limit for every leg, a watchdog per leg
   struct Watchdog {

@@ -1,6 +1,7 @@
 // hil_sim: the legsim leg as a CAN FD node (SocketCAN), driven by the bench over can/legsim.dbc.
 #include <cerrno>
 #include <climits>
+#include <cmath>
 #include <csignal>
 #include <cstdio>
 #include <cstdlib>
@@ -48,6 +49,8 @@ const char kUsage[] =
     "                        answers with its own frames (leg 1 at the ids + 0x20), plus the\n"
     "                        feet's contacts (ST_CONTACT) and the box (ST_BOX); leg 0's\n"
     "                        LOAD_CMD index 2, 3 set the box load (box.load, box.moment)\n"
+    "  --ground S,MS,MK      the robot's ground instead of its file's: slope S (rad), mu_static\n"
+    "                        MS, mu_kinetic MK (a scene's [ground]; the bench passes it)\n"
     "  --decimation N        real time: one state sample every N ticks (default 10)\n"
     "  --heartbeat-ms N      HEARTBEAT period, 0 = none (default 100)\n"
     "  --rt-priority N       SCHED_FIFO priority 1-99 and locked memory for real time\n"
@@ -67,7 +70,23 @@ struct Options {
   int rt_priority = 0;
   std::string model_file;  // "" = the compiled-in leg
   bool robot = false;       // --robot: the compiled-in robot
+  bool has_ground = false;  // --ground: slope, mu_static, mu_kinetic
+  double ground[3] = {0, 0, 0};
 };
+
+// "S,MS,MK": three finite numbers
+bool parse_ground(const char *text, double out[3]) {
+  const char *p = text;
+  for (int i = 0; i < 3; ++i) {
+    errno = 0;
+    char *end = nullptr;
+    out[i] = std::strtod(p, &end);
+    if (end == p || errno != 0 || !std::isfinite(out[i])) return false;
+    if (i < 2 && *end != ',') return false;
+    p = end + (i < 2 ? 1 : 0);
+  }
+  return *p == '\0';
+}
 
 bool parse_uint(const char *text, unsigned long max, unsigned long *out) {
   if (text == nullptr || *text == '\0' || *text == '-') return false;
@@ -127,6 +146,11 @@ int parse_options(int argc, char **argv, Options *o) {
       o->model_file = v;
     } else if (arg == "--robot") {
       o->robot = true;
+    } else if (arg == "--ground") {
+      const char *v = need("--ground");
+      if (v == nullptr) return 2;
+      if (!parse_ground(v, o->ground)) return bad("--ground", v, "expected SLOPE,MU_STATIC,MU_KINETIC");
+      o->has_ground = true;
     } else if (arg == "--safe-state") {
       const char *v = need("--safe-state");
       if (v == nullptr) return 2;
@@ -237,6 +261,25 @@ int main(int argc, char **argv) {
     }
     hil::Session::use_models(&file_models[0], &file_models[1]);
     std::fprintf(stderr, "hil_sim: model %s (variants revolute, slot)\n", opt.model_file.c_str());
+  }
+  if (opt.has_ground) {
+    // a scene's [ground]: the robot's ground line through its file's point
+    legsim_model_desc *robot = opt.robot ? &robot_desc
+                               : file_models[0].n_contacts > 0 ? &file_models[0] : nullptr;
+    if (robot == nullptr) {
+      std::fprintf(stderr, "hil_sim: --ground: the model has no ground (a robot's: --robot or --model ROBOT.toml)\n");
+      return 2;
+    }
+    robot->ground.slope_rad = opt.ground[0];
+    robot->ground.mu_static = opt.ground[1];
+    robot->ground.mu_kinetic = opt.ground[2];
+    char msg[512] = "";
+    if (legsim_model_check(robot, msg, sizeof msg) != LEGSIM_OK) {
+      std::fprintf(stderr, "hil_sim: --ground: %s\n", msg);
+      return 2;
+    }
+    std::fprintf(stderr, "hil_sim: ground slope %g rad, mu_static %g, mu_kinetic %g\n", opt.ground[0],
+                 opt.ground[1], opt.ground[2]);
   }
   hil::Session session;
   std::string error;

@@ -101,6 +101,32 @@ bool stroke_ok(const legsim_model_desc *m, int a, float l) {
          l <= static_cast<float>(m->actuator[a].stroke_max_m);
 }
 
+// START_CMD: DBC ranges, finite values, and feet the model has (the robot's: variant 0)
+void validate_start(const Request &req, Checker &c) {
+  const StartRequest &r = req.start;
+  c.range(legsim_can_start_cmd_start_use_is_in_range(r.use), LEGSIM_CAN_START_CMD_START_USE_START_BIT, r.use);
+  c.range(legsim_can_start_cmd_start_stuck_contacts_is_in_range(r.stuck_contacts),
+          LEGSIM_CAN_START_CMD_START_STUCK_CONTACTS_START_BIT, r.stuck_contacts);
+  c.range(legsim_can_start_cmd_start_sliding_contacts_is_in_range(r.sliding_contacts),
+          LEGSIM_CAN_START_CMD_START_SLIDING_CONTACTS_START_BIT, r.sliding_contacts);
+  c.real(r.lift, legsim_can_start_cmd_start_lift_is_in_range(r.lift), LEGSIM_CAN_START_CMD_START_LIFT_START_BIT);
+  c.real(r.tilt, legsim_can_start_cmd_start_tilt_is_in_range(r.tilt), LEGSIM_CAN_START_CMD_START_TILT_START_BIT);
+  c.real(r.velocity[0], legsim_can_start_cmd_start_vx_is_in_range(r.velocity[0]),
+         LEGSIM_CAN_START_CMD_START_VX_START_BIT);
+  c.real(r.velocity[1], legsim_can_start_cmd_start_vy_is_in_range(r.velocity[1]),
+         LEGSIM_CAN_START_CMD_START_VY_START_BIT);
+  c.real(r.spin, legsim_can_start_cmd_start_spin_is_in_range(r.spin), LEGSIM_CAN_START_CMD_START_SPIN_START_BIT);
+  if (!c.ok() || !r.use) return;
+  const legsim_model_desc *m = Session::variant_model(0);
+  const int nk = m ? m->n_contacts : 0;
+  c.model(nk > 0, LEGSIM_CAN_START_CMD_START_USE_START_BIT, r.use);
+  c.model((r.stuck_contacts >> nk) == 0, LEGSIM_CAN_START_CMD_START_STUCK_CONTACTS_START_BIT, r.stuck_contacts);
+  c.model((r.sliding_contacts >> nk) == 0, LEGSIM_CAN_START_CMD_START_SLIDING_CONTACTS_START_BIT,
+          r.sliding_contacts);
+  c.model((r.stuck_contacts & r.sliding_contacts) == 0, LEGSIM_CAN_START_CMD_START_SLIDING_CONTACTS_START_BIT,
+          r.sliding_contacts);
+}
+
 void validate_control(const Request &req, Checker &c) {
   const ControlRequest &r = req.control;
   c.range(legsim_can_control_ctrl_command_is_in_range(static_cast<uint8_t>(r.command)),
@@ -273,6 +299,7 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault, int legs) {
     case LEGSIM_CAN_CONTROL_FRAME_ID: out->kind = Request::Kind::kControl; break;
     case LEGSIM_CAN_ACT_CMD_FRAME_ID: out->kind = Request::Kind::kAct; break;
     case LEGSIM_CAN_LOAD_CMD_FRAME_ID: out->kind = Request::Kind::kLoad; break;
+    case LEGSIM_CAN_START_CMD_FRAME_ID: out->kind = Request::Kind::kStart; break;
     case LEGSIM_CAN_ACT_CMD_L1_FRAME_ID:
     case LEGSIM_CAN_LOAD_CMD_L1_FRAME_ID:
       if (legs < 2) {  // leg 1's commands exist only on the robot's bus
@@ -363,6 +390,21 @@ bool decode_frame(const Frame &frame, Request *out, Fault *fault, int legs) {
         load_from(m, out);
       }
       break;
+    case Request::Kind::kStart: {
+      legsim_can_start_cmd_t m;
+      legsim_can_start_cmd_unpack(&m, frame.data, frame.len);
+      StartRequest &r = out->start;
+      out->seq = m.start_seq;
+      r.use = m.start_use;
+      r.stuck_contacts = m.start_stuck_contacts;
+      r.sliding_contacts = m.start_sliding_contacts;
+      r.lift = m.start_lift;
+      r.tilt = m.start_tilt;
+      r.velocity[0] = m.start_vx;
+      r.velocity[1] = m.start_vy;
+      r.spin = m.start_spin;
+      break;
+    }
     case Request::Kind::kForeign:
       break;
   }
@@ -375,6 +417,7 @@ bool validate_request(const Request &req, const legsim_model_desc *model, Fault 
     case Request::Kind::kControl: validate_control(req, c); break;
     case Request::Kind::kAct: validate_act(req, model, c); break;
     case Request::Kind::kLoad: validate_load(req, model, c); break;
+    case Request::Kind::kStart: validate_start(req, c); break;
     case Request::Kind::kForeign: break;
   }
   return c.ok();

@@ -70,19 +70,24 @@ struct ActRequest {
   ActMode mode[kActuators] = {ActMode::kKeep, ActMode::kKeep};
   float setpoint[kActuators] = {0, 0};
 };
+struct StartRequest {  // START_CMD: a robot's start off the stance for the next RESET
+  uint8_t use = 0, stuck_contacts = 0, sliding_contacts = 0;
+  float lift = 0, tilt = 0, velocity[2] = {0, 0}, spin = 0;
+};
 struct LoadRequest {
   int index = 0;
   float value[2] = {0, 0};
 };
 
 struct Request {
-  enum class Kind { kControl, kAct, kLoad, kForeign } kind = Kind::kForeign;
+  enum class Kind { kControl, kAct, kLoad, kStart, kForeign } kind = Kind::kForeign;
   uint32_t id = 0;
   int leg = 0;  // ACT_CMD / LOAD_CMD: the leg whose frame it is (0, or 1 for the _L1 ids)
   uint32_t seq = 0;
   ControlRequest control;
   ActRequest act;
   LoadRequest load;
+  StartRequest start;
 };
 
 constexpr uint16_t kCmdTimeoutDefault = 0;

@@ -3,10 +3,13 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <string>
 
 #include "legsim/models.h"
+#include "scene_toml.hpp"  // legsim_host::start_apply: a scene's [start], as legsim_cli
 
 namespace hil {
 
@@ -160,9 +163,33 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
     legsim_real mid = 0;
     st = feet_mid(sim, m, &mid);
     if (st == LEGSIM_OK) st = legsim_assemble_on_ground(sim, p.use_lengths ? given : nullptr, mid);
-    // the scene's [[contact]] state = free: that foot's rows lifted at t = 0 (as legsim_cli)
-    for (int k = 0; k < m->n_contacts && st == LEGSIM_OK; ++k)
-      if ((p.free_contacts >> k) & 1u) st = legsim_set_contact_state(sim, k, LEGSIM_CONTACT_FREE);
+    if (st == LEGSIM_OK && p.use_start) {
+      // START_CMD: the scene's [start], as legsim_cli runs it (legsim_host::start_apply)
+      int32_t state[kMaxContacts];
+      for (int k = 0; k < m->n_contacts; ++k) {
+        const uint32_t bits = ((p.free_contacts >> k) & 1u) + ((p.stuck_contacts >> k) & 1u) +
+                              ((p.sliding_contacts >> k) & 1u);
+        if (bits > 1) return LEGSIM_ERR_BAD_INPUT;  // two states for one foot
+        state[k] = ((p.free_contacts >> k) & 1u)    ? LEGSIM_CONTACT_FREE
+                   : ((p.stuck_contacts >> k) & 1u) ? LEGSIM_CONTACT_STUCK
+                   : ((p.sliding_contacts >> k) & 1u) ? LEGSIM_CONTACT_SLIDING
+                                                      : -1;
+      }
+      legsim_host::StartState start;
+      start.given = true;
+      start.lift_m = p.start_lift;
+      start.tilt_rad = p.start_tilt;
+      start.velocity_mps[0] = p.start_velocity[0];
+      start.velocity_mps[1] = p.start_velocity[1];
+      start.spin_radps = p.start_spin;
+      std::string why;
+      st = legsim_host::start_apply(sim, *m, start, state, opt.newton_tol, why);
+      if (st != LEGSIM_OK) std::fprintf(stderr, "hil_sim: RESET: %s\n", why.c_str());
+    } else {
+      // the scene's [[contact]] state = free: that foot's rows lifted at t = 0 (as legsim_cli)
+      for (int k = 0; k < m->n_contacts && st == LEGSIM_OK; ++k)
+        if ((p.free_contacts >> k) & 1u) st = legsim_set_contact_state(sim, k, LEGSIM_CONTACT_FREE);
+    }
     if (st != LEGSIM_OK) return st;
   } else if (p.use_lengths) {
     st = legsim_assemble(sim, given);

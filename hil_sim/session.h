@@ -43,6 +43,11 @@ struct ResetParams {
   double lengths[kMaxActuators] = {0, 0, 0, 0};  // leg 0 upper, lower, then leg 1's
   int contact_law = 0;        // legsim_contact_law (the robot's feet)
   uint32_t free_contacts = 0; // bit k: contact k FREE after the assembly on the ground
+  // START_CMD (a scene's [start]): the stance moved rigidly after the assembly on the ground,
+  // each foot's state given by the bit masks (free: free_contacts) or by where it is
+  bool use_start = false;
+  float start_lift = 0, start_tilt = 0, start_velocity[2] = {0, 0}, start_spin = 0;
+  uint32_t stuck_contacts = 0, sliding_contacts = 0;
 };
 
 struct ContactSample {  // legsim_contact, as sent (plain data: Session::sample zeroes it)

@@ -336,7 +336,9 @@ def _robot_trajectories(rec: dict, ev):
                                               title=scene.name)
     ref = ev.reference_run
     if ref is not None:
-        ref = RobotTrajectory.from_reference(RobotModel.from_toml(scene.model_path), ref,
+        from .verdict.analyses import robot_model
+
+        ref = RobotTrajectory.from_reference(robot_model(scene), ref,
                                              title=f"{scene.name} (reference)")
     return traj, ref
 

@@ -121,7 +121,9 @@ def fault_codes(dbc: str | os.PathLike | None = None) -> dict[str, int]:
 class Schedule:
     """hold (value) | step (before, after, t0: `after` from t0 on) |
     sinusoid (offset + amplitude sin(2 pi frequency t + phase)) | initial (the value at the
-    start of the run, i.e. the assembled length: filled in by the runner)."""
+    start of the run, i.e. the assembled length: filled in by the runner) | switch (before,
+    after: `after` from the step after the one in which foot `contact` raised `event`; the
+    caller says whether it has: Scene.setpoints' `fired`)."""
     kind: str
     value: float = 0.0
     before: float = 0.0
@@ -131,14 +133,18 @@ class Schedule:
     amplitude: float = 0.0
     frequency: float = 0.0
     phase: float = 0.0
+    event: str = ""          # switch: touchdown | liftoff | stick_to_slip | slip_to_stick
+    contact: str = ""        # switch: the foot (a contact of the model)
 
-    def __call__(self, t: float, initial: float | None = None) -> float:
+    def __call__(self, t: float, initial: float | None = None, fired: bool = False) -> float:
         if self.kind == "hold":
             return self.value
         if self.kind == "step":
             return self.after if t >= self.t0 - GRID_TOL_S else self.before
         if self.kind == "sinusoid":
             return self.offset + self.amplitude * math.sin(2 * math.pi * self.frequency * t + self.phase)
+        if self.kind == "switch":
+            return self.after if fired else self.before
         if self.kind == "initial":
             if initial is None:
                 raise ValueError("schedule 'initial' needs the initial value")
@@ -154,6 +160,8 @@ class Schedule:
             return f"{self.value:g} {unit}"
         if self.kind == "step":
             return f"step {self.before:g} -> {self.after:g} {unit} at {self.t0:g} s"
+        if self.kind == "switch":
+            return f"{self.before:g} -> {self.after:g} {unit} after {self.contact}'s {self.event}"
         if self.kind == "sinusoid":
             ph = f" phase {self.phase:g}" if self.phase else ""
             return f"{self.offset:g} + {self.amplitude:g} sin(2pi {self.frequency:g} Hz t{ph}) {unit}"
@@ -162,7 +170,7 @@ class Schedule:
     def extremes(self) -> tuple[float, float] | None:
         if self.kind == "hold":
             return self.value, self.value
-        if self.kind == "step":
+        if self.kind in ("step", "switch"):
             return min(self.before, self.after), max(self.before, self.after)
         if self.kind == "sinusoid":
             return self.offset - abs(self.amplitude), self.offset + abs(self.amplitude)
@@ -215,6 +223,7 @@ class StrokeCheck:
 ROBOT_CHECK_KEYS = {
     "ground_force_n": "per foot the normal and tangential ground force vs RobotModel (N)",
     "growth_rel": "the measured growth rate of the drift vs RobotModel's linearized modes (relative)",
+    "in_stroke_m": "every actuator's length within its stroke widened by this, at every sample (m)",
     "slip_onset_steps": "the first stick_to_slip vs RobotModel's stuck-stuck |T|/N reaching mu_static "
                         "(steps), and which foot the contact law releases",
 }
@@ -250,6 +259,8 @@ class Checks:
     ground_force_n: float | None = None
     growth_rel: float | None = None
     slip_onset_steps: float | None = None
+    in_stroke_m: float | None = None
+    events: bool = False               # a robot: against the event-locating reference (robot_events)
     compare: str = "all"               # "all" | "until_stroke": reference window
     stroke: StrokeCheck | None = None
     slips: tuple[str, ...] | None = None   # a robot: the feet that must go from stuck to sliding
@@ -315,6 +326,9 @@ class Scene:
     statics_rule: str = "equal_friction"          # a robot's statics: legsim_statics_rule
     contact_law: str = "lcp"                      # a robot's dynamics: legsim_contact_law
     box_load: tuple | None = None                 # a robot's box: (Fx, Fy N, M N m)
+    start: dict | None = None                     # a robot's [start]: lift, tilt, velocity, spin
+    ground: dict | None = None                    # a robot's ground as run: point, slope, mu_static, mu_kinetic
+    ground_given: bool = False                    # [ground] in the scene (else the model file's)
     resolved_json: dict = field(default_factory=dict)  # legsim_cli --check's JSON (recordings carry it)
 
     @property
@@ -359,9 +373,13 @@ class Scene:
     def hil_args(self) -> list[str]:
         """hil_sim's options for this scene: --model FILE unless it is the compiled-in leg
         (a robot file: hil_sim runs it as the robot's two nodes)."""
+        ground = []
+        if self.robot and self.ground_given:   # a scene's [ground]: hil_sim --ground
+            g = self.ground
+            ground = ["--ground", ",".join(repr(float(g[k])) for k in ("slope", "mu_static", "mu_kinetic"))]
         if self.robot and self.model == BUILTIN_ROBOT:
-            return ["--robot"]
-        return [] if self.builtin_model else ["--model", str(self.model_path)]
+            return ["--robot", *ground]
+        return ([] if self.builtin_model else ["--model", str(self.model_path)]) + ground
 
     @property
     def step_s(self) -> float:
@@ -397,8 +415,9 @@ class Scene:
     def to_step(self, t: float, what: str = "time") -> int:
         return _on_grid(self._where(), t, self.step_ns, what)
 
-    def setpoints(self, k: int, initial_lengths=None) -> list[tuple[str, float] | None]:
-        """(mode, value) per actuator at step k (None: no command for it)."""
+    def setpoints(self, k: int, initial_lengths=None, fired=frozenset()) -> list[tuple[str, float] | None]:
+        """(mode, value) per actuator at step k (None: no command for it). fired: the
+        (contact, event) pairs raised by the steps before k (a switch's)."""
         t = self.t(k)
         out = []
         for a, c in enumerate(self.commands):
@@ -406,8 +425,14 @@ class Scene:
                 out.append(None)
                 continue
             init = None if initial_lengths is None else float(initial_lengths[a])
-            out.append((c.mode, c.schedule(t, init)))
+            s = c.schedule
+            out.append((c.mode, s(t, init, (s.contact, s.event) in fired)))
         return out
+
+    @property
+    def switches(self) -> bool:
+        """A command switches on a contact event."""
+        return any(c is not None and c.schedule.kind == "switch" for c in self.commands)
 
     def silent(self, k: int) -> bool:
         return any(i.is_silence and i.step <= k < i.step + i.silence_steps for i in self.injections)
@@ -480,6 +505,9 @@ def _schedule(c: dict) -> Schedule:
     if "step" in c:
         s = c["step"]
         return Schedule("step", t0=s["t0"], before=s["before"], after=s["after"])
+    if "switch" in c:
+        s = c["switch"]
+        return Schedule("switch", before=s["before"], after=s["after"], event=s["event"], contact=s["contact"])
     if "sinusoid" in c:
         s = c["sinusoid"]
         return Schedule("sinusoid", offset=s["offset"], amplitude=s["amplitude"], frequency=s["frequency"],
@@ -502,6 +530,8 @@ def _checks(d: dict, info: ModelInfo) -> Checks:
     for key in ("slips", "lifts"):
         if key in ch:
             kw[key] = tuple(ch[key])
+    if ch.get("events"):
+        kw["events"] = True
     return Checks(**kw)
 
 
@@ -551,7 +581,8 @@ def scene_from_resolved(d: dict, path: str | os.PathLike | None = None, source: 
                   pose_name=pose_name, forces=forces, grid=d["grid"], rho_inf=d["rho_inf"],
                   max_newton_iter=d["max_newton_iter"], newton_tol=d["newton_tol"], contacts=dict(d["contacts"]),
                   statics_rule=d["statics_rule"], contact_law=d["contact_law"],
-                  box_load=tuple(d["box_load"]) if d["box_load"] is not None else None, resolved_json=d)
+                  box_load=tuple(d["box_load"]) if d["box_load"] is not None else None, resolved_json=d,
+                  start=d.get("start"), ground=d.get("ground"), ground_given=bool(d.get("ground_given")))
     if not info.robot:
         _bench_can_run_leg(scene, where)
     return scene

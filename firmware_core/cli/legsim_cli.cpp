@@ -154,6 +154,11 @@ int main(int argc, char **argv) {
     std::cerr << "legsim_cli: error: " << err << "\n";
     return 2;
   }
+  // [ground]: the scene's ground in the model it runs (bind_scene checked that it applies)
+  if (!legsim_host::ground_apply(scene, model, err)) {
+    std::cerr << "legsim_cli: error: " << scene_path << ": [ground]: " << err << "\n";
+    return 2;
+  }
 
   if (check_only) {
     legsim_host::write_resolved(std::cout, scene, model);

@@ -11,19 +11,15 @@
 #include "toml_limits.hpp"
 
 #include <algorithm>
-#include <cerrno>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <cstring>
 #include <new>
 #include <string>
 #include <tuple>
 #include <utility>
 #include <vector>
-
-#include <fcntl.h>
-#include <sys/stat.h>
-#include <unistd.h>
 
 #include <toml++/toml.h>
 
@@ -52,6 +48,17 @@ struct Fail {
 std::string g(double x) {  // numbers in messages: C's %g
   char buf[64];
   std::snprintf(buf, sizeof buf, "%g", x);
+  return buf;
+}
+
+// A value refused at a bound: the shortest form that reads back as the same double, so that
+// a value just past the bound is not shown as the bound itself.
+std::string exact(double x) {
+  char buf[64];
+  for (int digits : {6, 15, 16, 17}) {
+    std::snprintf(buf, sizeof buf, "%.*g", digits, x);
+    if (std::strtod(buf, nullptr) == x) break;
+  }
   return buf;
 }
 
@@ -801,40 +808,6 @@ void put_msg(char *msg, size_t msg_len, const std::string &s) {
   msg[k] = '\0';
 }
 
-// Reads a regular file, at most one byte past the TOML size limit: a larger file is
-// refused by the limits check without being read whole. Anything else (a FIFO, a
-// device, a folder) is refused without blocking: it is opened non-blocking and
-// checked before the first read.
-bool read_file(const char *path, std::string &text, std::string &err) {
-  const int fd = ::open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
-  if (fd < 0) {
-    err = std::string(path) + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
-  struct stat st;
-  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
-    ::close(fd);
-    err = std::string(path) + ": cannot read: not a regular file";
-    return false;
-  }
-  text.resize(kTomlMaxBytes + 1);
-  size_t got = 0;
-  while (got < text.size()) {
-    const ssize_t k = ::read(fd, &text[got], text.size() - got);
-    if (k < 0 && errno == EINTR) continue;
-    if (k < 0) {
-      ::close(fd);
-      err = std::string(path) + ": cannot read: " + std::strerror(errno);
-      return false;
-    }
-    if (k == 0) break;
-    got += static_cast<size_t>(k);
-  }
-  ::close(fd);
-  text.resize(got);
-  return true;
-}
-
 // Parses TOML; throws Fail on a syntax error (the library may throw or not), and
 // on input outside the limits the parser is known to fail on (toml_limits.hpp).
 toml::table parse_toml(const std::string &text, const std::string &source) {
@@ -865,7 +838,7 @@ toml::table parse_toml(const std::string &text, const std::string &source) {
 
 // ---- a robot file: a box with leg files placed on it (docs/design/robot-on-ground.md) ----
 constexpr double kMaxFriction = LEGSIM_MAX_FRICTION;
-constexpr double kMaxSlope = 1.5;         // rad: |slope| <= 1.5 (legsim_ground_desc, legsim.h)
+constexpr double kMaxSlope = LEGSIM_MAX_SLOPE_RAD;  // rad, legsim.h
 constexpr double kCongruentTol = 1e-12;   // m: attach points against the leg's frame
 
 bool is_robot(Table doc) { return has(doc, "box") && has(doc, "leg"); }
@@ -886,7 +859,7 @@ std::string dir_name(const std::string &path) {  // the folder part ("" for none
 
 toml::table read_leg_toml(const std::string &path, const std::string &label, const std::string &shown) {
   std::string text, err;
-  if (!read_file(path.c_str(), text, err)) {
+  if (!read_toml_file(path.c_str(), text, err)) {
     const size_t k = err.find(": cannot read: ");
     fail(label, "file " + q(shown) + err.substr(k), LEGSIM_ERR_BAD_INPUT);
   }
@@ -1143,7 +1116,7 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
   const double slope = has(gt, "slope") ? get_real(gt, "slope", "ground") : 0.0;
   if (!(std::abs(slope) <= kMaxSlope))
     fail("ground", "'slope' must be in [" + g(-kMaxSlope) + ", " + g(kMaxSlope) +
-                       "] rad (got " + g(slope) + ")");
+                       "] rad (got " + exact(slope) + ")");
   const double mu_s =
       ranged(get_nonnegative(gt, "mu_static", "ground"), 0.0, kMaxFriction, "mu_static", "ground");
   const double mu_k =
@@ -1279,7 +1252,7 @@ extern "C" legsim_status legsim_model_load_toml(const char *path, const char *va
   }
   try {
     std::string text, err;
-    if (!read_file(path, text, err)) {
+    if (!read_toml_file(path, text, err)) {
       put_msg(msg, msg_len, err);
       return LEGSIM_ERR_BAD_INPUT;
     }
@@ -1299,7 +1272,7 @@ extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*nam
   }
   try {
     std::string text, err;
-    if (!read_file(path, text, err)) {
+    if (!read_toml_file(path, text, err)) {
       put_msg(msg, msg_len, err);
       return LEGSIM_ERR_BAD_INPUT;
     }

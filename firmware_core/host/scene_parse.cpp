@@ -32,6 +32,22 @@ constexpr int64_t kMaxRecordEvery = 10000000;    // the DBC's largest STEP (Ctrl
 // hold (about 1 GB of CSV): n_steps / record_every + 1 <= kMaxSamples.
 constexpr int64_t kMaxSamples = 1000000;
 constexpr double kMaxFrequencyHz = 1e3;          // command sinusoids
+// [start]: the robot's rigid start motion (docs in scenes/README.md, [start])
+constexpr double kMaxLiftM = 10.0;               // m above the stance
+constexpr double kMaxTiltRad = LEGSIM_MAX_SLOPE_RAD;  // as the ground's slope
+constexpr double kMaxStartSpeedMps = 100.0;      // each component of the box's velocity
+constexpr double kMaxStartSpinRadps = 100.0;
+constexpr double kMaxSlopeRad = LEGSIM_MAX_SLOPE_RAD;  // legsim_ground_desc's rule
+
+// The contact events a command can switch on (legsim.h's bits).
+struct EventName {
+  const char *name;
+  uint32_t bit;
+};
+const EventName kSwitchEvents[] = {{"touchdown", LEGSIM_EVENT_TOUCHDOWN},
+                                   {"liftoff", LEGSIM_EVENT_LIFTOFF},
+                                   {"stick_to_slip", LEGSIM_EVENT_STICK_TO_SLIP},
+                                   {"slip_to_stick", LEGSIM_EVENT_SLIP_TO_STICK}};
 
 struct SceneError {
   std::string message;
@@ -105,10 +121,27 @@ Signal parse_signal(Table t, const std::string &where) {
   const bool has_value = t->get("value") != nullptr;
   const bool has_sin = t->get("sinusoid") != nullptr;
   const bool has_step = t->get("step") != nullptr;
-  if (int(has_value) + int(has_sin) + int(has_step) != 1)
-    fail(where + "give exactly one of 'value', 'sinusoid' or 'step'");
+  const bool has_switch = t->get("switch") != nullptr;
+  if (int(has_value) + int(has_sin) + int(has_step) + int(has_switch) != 1)
+    fail(where + "give exactly one of 'value', 'sinusoid', 'step' or 'switch'");
   Signal s;
-  if (has_value) {
+  if (has_switch) {
+    Table st = t->get("switch")->as_table();
+    if (!st) fail(where + "'switch' must be a table {event, contact, before, after}");
+    const std::string w = where + "switch: ";
+    check_keys(st, {"event", "contact", "before", "after"}, w);
+    s.kind = Signal::kSwitch;
+    s.event = get_string(st, "event", w, true);
+    s.contact = get_string(st, "contact", w, true);
+    s.before = get_real(st, "before", w, false, 0);
+    s.after = get_real(st, "after", w, true, 0);
+    std::string names;
+    for (const auto &e : kSwitchEvents) {
+      names += (names.empty() ? "" : ", ") + std::string(e.name);
+      if (s.event == e.name) s.event_bit = e.bit;
+    }
+    if (s.event_bit == 0) fail(w + "'event' must be " + names + " (got " + q(s.event) + ")");
+  } else if (has_value) {
     Node v = t->get("value");
     if (v->is_string() && *v->value<std::string_view>() == "initial") {
       s.kind = Signal::kInitial;  // the assembled length, filled in at run time
@@ -399,7 +432,7 @@ std::string parse_injections(const toml::array &a, const Scene &s) {
 const char *const kTolerances[] = {"position_m",  "angle_rad",       "reaction_n",         "moment_nm",
                                    "actuator_force_n", "residual",   "balance_n",          "balance_nm",
                                    "stays_put_m", "statics_force_n", "statics_reaction_n", "ground_force_n",
-                                   "growth_rel",  "slip_onset_steps"};
+                                   "growth_rel",  "slip_onset_steps", "in_stroke_m"};
 bool is_tolerance(const std::string &k) {
   return std::find_if(std::begin(kTolerances), std::end(kTolerances),
                       [&](const char *t) { return k == t; }) != std::end(kTolerances);
@@ -448,6 +481,10 @@ void parse_checks(Table t, CheckSpec &c) {
     } else if (key == "lifts") {
       c.has_lifts = true;
       c.lifts = names_of(&kv.second, w + "'lifts'");
+    } else if (key == "events") {
+      if (!kv.second.is_boolean() || !*kv.second.value<bool>())
+        fail(w + "'events' must be true (the reference that locates the contact events; leave it out for none)");
+      c.events = true;
     }
     // any other key: refused at bind time, where the keys that apply are known
   }
@@ -459,7 +496,7 @@ std::vector<std::string> checks_for(Analysis a, bool robot) {
     case Analysis::kDynamics:
       if (robot)
         return {"position_m", "angle_rad", "residual", "actuator_force_n", "reaction_n", "ground_force_n",
-                "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps"};
+                "stays_put_m", "growth_rel", "slips", "lifts", "slip_onset_steps", "events", "in_stroke_m"};
       return {"position_m", "angle_rad", "reaction_n", "moment_nm", "actuator_force_n", "residual", "balance_n",
               "balance_nm", "stays_put_m", "statics_force_n", "statics_reaction_n", "compare", "stroke",
               "resolution_ratio"};
@@ -541,7 +578,29 @@ void bind_checks(const Scene &s, const legsim_model_desc &m) {
       fail("[checks]: " + joined(against) +
            " compare with RobotModel's stance on stuck feet, which 'lifts' leaves: leave them out");
   }
-  if (c.n_tolerances == 0 && (robot || (s.n_injections == 0 && c.stroke_actuator.empty())))
+  // a start off the stance (lifted, moving, a foot free or sliding) leaves RobotModel's stuck feet:
+  // its reference is the event-locating one (events = true), with constant commands (or a
+  // switch, compared until its event)
+  bool off_stance = s.start.given;
+  for (const ContactInit &ci : s.contacts) off_stance = off_stance || ci.state != LEGSIM_CONTACT_STUCK;
+  if (c.events) {
+    const std::vector<std::string> against =
+        checks_other_than(c, {"events", "position_m", "angle_rad", "residual", "ground_force_n", "in_stroke_m"});
+    if (!against.empty())
+      fail("[checks]: " + joined(against) + " do not go with 'events' (its reference checks position_m, angle_rad, "
+           "ground_force_n; residual and in_stroke_m need none)");
+    for (const Command &cmd : s.commands)
+      if (cmd.signal.kind == Signal::kSinusoid || cmd.signal.kind == Signal::kStep)
+        fail("[checks] 'events': command " + q(cmd.actuator) +
+             " changes with time; the event-locating reference takes constant commands (or a 'switch')");
+  } else if (off_stance) {
+    const std::vector<std::string> against = checks_other_than(c, {"residual", "in_stroke_m"});
+    if (!against.empty())
+      fail("[checks]: " + joined(against) + " compare with RobotModel's stance on stuck feet, which the start (" +
+           (s.start.given ? "[start]" : "a foot not stuck") + ") leaves: add events = true (the reference that "
+           "locates the contact events)");
+  }
+  if (c.n_tolerances == 0 && !c.events && (robot || (s.n_injections == 0 && c.stroke_actuator.empty())))
     fail("[checks] names nothing to check");
 }
 
@@ -553,7 +612,7 @@ void parse_scene(Table doc, Scene &s) {
                    "newton_tol", "pose", "lengths", "grid", "init", "cmd_timeout_ms", "safe_state",
                    "box_load",
                    "forces", "command", "contact", "inject", "checks", "statics_rule",
-                   "contact_law"},
+                   "contact_law", "start", "ground"},
              "");
   s.description = get_string(doc, "description", "", false);
   s.name = get_string(doc, "name", "", false, stem_of(s.path));
@@ -698,6 +757,59 @@ void parse_scene(Table doc, Scene &s) {
     s.has_box_load = true;
   }
 
+  only("start", dynamics, "dynamics");
+  if (Node sv = doc->get("start")) {
+    Table st = sv->as_table();
+    if (!st) fail("'start' must be a table ([start] lift, tilt, velocity, spin)");
+    const std::string w = "[start] ";
+    check_keys(st, {"lift", "tilt", "velocity", "spin"}, w);
+    StartState &b = s.start;
+    b.given = true;
+    b.lift_m = get_real(st, "lift", w, false, 0);
+    if (!(b.lift_m >= 0 && b.lift_m <= kMaxLiftM))
+      fail(w + "'lift' must be in [0, " + num(kMaxLiftM) + "] m (got " + num(b.lift_m) + ")");
+    b.tilt_rad = get_real(st, "tilt", w, false, 0);
+    if (!(std::fabs(b.tilt_rad) <= kMaxTiltRad))
+      fail(w + "'tilt' must be in [-" + num(kMaxTiltRad) + ", " + num(kMaxTiltRad) + "] rad (got " +
+           num(b.tilt_rad) + ")");
+    if (Node vv = st->get("velocity")) {
+      const toml::array *a = vv->as_array();
+      if (!a || a->size() != 2) fail(w + "'velocity' must be [vx, vy] (m/s, world axes)");
+      for (int i = 0; i < 2; ++i) {
+        b.velocity_mps[i] = real_of(a->get(i), w + "'velocity'");
+        if (!(std::fabs(b.velocity_mps[i]) <= kMaxStartSpeedMps))
+          fail(w + "'velocity' must be within +-" + num(kMaxStartSpeedMps) + " m/s (got " +
+               num(b.velocity_mps[i]) + ")");
+      }
+    }
+    b.spin_radps = get_real(st, "spin", w, false, 0);
+    if (!(std::fabs(b.spin_radps) <= kMaxStartSpinRadps))
+      fail(w + "'spin' must be within +-" + num(kMaxStartSpinRadps) + " rad/s (got " + num(b.spin_radps) + ")");
+  }
+  if (Node gv = doc->get("ground")) {
+    Table gt = gv->as_table();
+    if (!gt) fail("'ground' must be a table ([ground] slope, mu_static, mu_kinetic)");
+    const std::string w = "[ground] ";
+    check_keys(gt, {"slope", "mu_static", "mu_kinetic"}, w);
+    GroundSpec &g = s.ground;
+    g.given = true;
+    g.has_slope = gt->get("slope") != nullptr;
+    g.has_mu_static = gt->get("mu_static") != nullptr;
+    g.has_mu_kinetic = gt->get("mu_kinetic") != nullptr;
+    g.slope_rad = get_real(gt, "slope", w, false, 0);
+    if (!(std::fabs(g.slope_rad) <= kMaxSlopeRad))
+      fail(w + "'slope' must be in [-" + num(kMaxSlopeRad) + ", " + num(kMaxSlopeRad) + "] rad (got " +
+           num(g.slope_rad) + ")");
+    for (const char *key : {"mu_static", "mu_kinetic"}) {
+      const double v = get_real(gt, key, w, false, 0);
+      if (!(v >= 0 && v <= LEGSIM_MAX_FRICTION))
+        fail(w + q(key) + " must be in [0, " + num(LEGSIM_MAX_FRICTION) + "] (got " + num(v) + ")");
+      (std::string(key) == "mu_static" ? g.mu_static : g.mu_kinetic) = v;
+    }
+    if (g.has_mu_static && g.has_mu_kinetic && g.mu_kinetic > g.mu_static)
+      fail(w + "'mu_kinetic' " + num(g.mu_kinetic) + " must be at most 'mu_static' " + num(g.mu_static));
+  }
+
   only("init", dynamics, "dynamics");
   static const char *const kInits[] = {"zero_force", "hold_length"};
   s.init = choice(doc, "init", kInits, 2, "zero_force") == "zero_force" ? ActuatorInit::kZeroForce
@@ -758,7 +870,7 @@ void parse_scene(Table doc, Scene &s) {
       Table ct = e.as_table();
       if (!ct) fail("'command' must be an array of tables ([[command]])");
       const std::string w0 = "command #" + std::to_string(k) + ": ";
-      check_keys(ct, {"actuator", "mode", "value", "sinusoid", "step"}, w0);
+      check_keys(ct, {"actuator", "mode", "value", "sinusoid", "step", "switch"}, w0);
       Command c;
       c.actuator = get_string(ct, "actuator", w0, true);
       const std::string w = "command " + q(c.actuator) + ": ";
@@ -777,6 +889,11 @@ void parse_scene(Table doc, Scene &s) {
       if (c.signal.kind == Signal::kInitial && c.mode != LEGSIM_ACTUATOR_LENGTH)
         fail(w + "value = \"initial\" is for mode = \"length\" (hold the assembled length)");
       if (c.signal.kind == Signal::kStep) on_grid(c.signal.t0, s.step_ns, w + "step t0 =");
+      if (c.signal.kind == Signal::kSwitch && !dynamics)
+        fail(w + "'switch' applies to dynamics only (an event of the run)");
+      if (c.signal.kind == Signal::kSwitch && s.record_every != 1)
+        fail(w + "'switch' needs record_every = 1 (the switch comes the step after the event; the bench "
+                 "sees the events once per sample)");
       s.commands.push_back(c);
     }
   }
@@ -802,28 +919,15 @@ void parse_scene(Table doc, Scene &s) {
         c.state = LEGSIM_CONTACT_STUCK;
       else if (state == "free")
         c.state = LEGSIM_CONTACT_FREE;
+      else if (state == "sliding")
+        c.state = LEGSIM_CONTACT_SLIDING;
       else
-        fail(w + "'state' must be stuck or free (got " + q(state) + ")");
+        fail(w + "'state' must be stuck, free or sliding (got " + q(state) + ")");
+      if (c.state == LEGSIM_CONTACT_SLIDING && !(dynamics && doc->get("start")))
+        fail(w + "a foot starts sliding only in dynamics with a [start] velocity (a foot at rest cannot slide)");
       s.contacts.push_back(c);
     }
   }
-}
-
-bool read_text(const std::string &path, std::string &text, std::string &err) {
-  std::ifstream f(path, std::ios::binary);
-  if (!f) {
-    err = path + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
-  // Read at most one byte past the limit: a larger file is refused without being held.
-  text.resize(kTomlMaxBytes + 1);
-  f.read(text.data(), static_cast<std::streamsize>(text.size()));
-  text.resize(static_cast<size_t>(f.gcount()));
-  if (f.bad()) {
-    err = path + ": cannot read: " + std::strerror(errno);
-    return false;
-  }
-  return true;
 }
 
 }  // namespace
@@ -833,6 +937,7 @@ double Signal::at(double t) const {
   switch (kind) {
     case kSinusoid: return offset + amplitude * std::sin(kTwoPi * frequency_hz * t + phase_rad);
     case kStep: return t < t0 ? before : after;
+    case kSwitch: return before;  // the runner switches to after once the event came
     default: return value;
   }
 }
@@ -849,14 +954,16 @@ double Signal::accel(double t) const {
 double Signal::min() const {
   switch (kind) {
     case kSinusoid: return frequency_hz > 0 ? offset - std::fabs(amplitude) : at(0);
-    case kStep: return std::min(before, after);
+    case kStep:
+    case kSwitch: return std::min(before, after);
     default: return value;
   }
 }
 double Signal::max() const {
   switch (kind) {
     case kSinusoid: return frequency_hz > 0 ? offset + std::fabs(amplitude) : at(0);
-    case kStep: return std::max(before, after);
+    case kStep:
+    case kSwitch: return std::max(before, after);
     default: return value;
   }
 }
@@ -939,7 +1046,7 @@ bool load_scene_text(const std::string &text, const std::string &path, Scene &sc
 
 bool load_scene(const std::string &path, Scene &scene, std::string &err) {
   std::string text;
-  if (!read_text(path, text, err)) return false;
+  if (!read_toml_file(path.c_str(), text, err)) return false;  // a regular file only
   return load_scene_text(text, path, scene, err);
 }
 
@@ -997,6 +1104,25 @@ bool box_load_add(legsim_model_desc &d, const double load[3], std::string &why) 
     f.value[1] = k == 0 ? load[1] : 0;
   }
   d.n_forces += 2;
+  return true;
+}
+
+bool ground_apply(const Scene &s, legsim_model_desc &d, std::string &why) {
+  if (!s.ground.given) return true;
+  if (d.n_contacts < 1) {
+    why = "the model has no ground (no contacts)";
+    return false;
+  }
+  legsim_ground_desc g = d.ground;
+  if (s.ground.has_slope) g.slope_rad = s.ground.slope_rad;
+  if (s.ground.has_mu_static) g.mu_static = s.ground.mu_static;
+  if (s.ground.has_mu_kinetic) g.mu_kinetic = s.ground.mu_kinetic;
+  if (g.mu_kinetic > g.mu_static) {
+    why = "mu_kinetic " + num(g.mu_kinetic) + " must be at most mu_static " + num(g.mu_static) +
+          " (with the model's own for the key left out)";
+    return false;
+  }
+  d.ground = g;
   return true;
 }
 
@@ -1062,6 +1188,15 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
     }
     if (m.n_contacts == 0 && s.statics_rule_given)
       fail("'statics_rule' applies to a model with contacts only (a stance on two feet)");
+    if (m.n_contacts == 0 && s.start.given)
+      fail("[start] applies to a model with contacts only (the robot's box)");
+    if (m.n_contacts == 0 && s.ground.given)
+      fail("[ground] applies to a model with contacts only (the robot's ground)");
+    if (s.ground.given) {
+      std::string why;
+      const auto probe = std::make_unique<legsim_model_desc>(m);
+      if (!ground_apply(s, *probe, why)) fail("[ground]: " + why);
+    }
     if (m.n_contacts == 0 && s.contact_law_given)
       fail("'contact_law' applies to a model with contacts only (a robot's feet)");
     for (size_t c = 0; c < s.contacts.size(); ++c) {
@@ -1092,6 +1227,18 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
       for (size_t o = 0; o < c; ++o)
         if (s.commands[o].index == cmd.index) fail(w + "the actuator is commanded twice");
       const auto &ad = m.actuator[cmd.index];
+      if (cmd.signal.kind == Signal::kSwitch) {
+        Signal &g = cmd.signal;
+        g.contact_index = -1;
+        std::string list;
+        for (int32_t k = 0; k < m.n_contacts; ++k) {
+          list += (k ? ", " : "") + name_of(m.contact[k].name);
+          if (name_of(m.contact[k].name) == g.contact) g.contact_index = k;
+        }
+        if (g.contact_index < 0)
+          fail(w + "switch: 'contact' must be a contact of the model (" + (list.empty() ? "none" : list) +
+               "; got " + q(g.contact) + ")");
+      }
       if (cmd.signal.kind == Signal::kInitial) {
         // the assembled length: in the stroke by construction
       } else if (cmd.mode == LEGSIM_ACTUATOR_LENGTH) {

@@ -33,6 +33,8 @@ struct Storage {
   Storage &operator=(const Storage &) = delete;
 };
 
+std::string q_name(const legsim_model_desc &m, int32_t k) { return q(scene_text::name_of(m.contact[k].name)); }
+
 std::string call_failed(const std::string &what, legsim_status st) {
   return what + ": " + status_enum_name(st) + " (" + legsim_status_str(st) + ")";
 }
@@ -89,6 +91,109 @@ void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_
   }
   legsim_clear_events(sim);
 }
+
+// [start]: the stance moved rigidly (turned by tilt about the box's centre, raised by lift
+// along the ground's normal, every body moving with the box), then each foot's state: on
+// the ground (|gap| <= newton_tol) stuck by default, above it free; a [[contact]] state that
+// the start cannot honour (stuck or sliding off the ground, stuck while moving, a foot below
+// the ground, a foot on the ground and moving without a state) is refused, never adjusted.
+}  // namespace
+
+legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &m, const StartState &b,
+                          const int32_t *given_state, double tol, std::string &error) {
+  const int32_t nq = legsim_n_coords(sim), nk = legsim_n_contacts(sim);
+  std::vector<legsim_real> q(nq), qd(nq, 0);
+  std::vector<legsim_contact> c(nk);
+  legsim_status st = legsim_get_q(sim, q.data());
+  if (st == LEGSIM_OK) st = legsim_contacts(sim, c.data());  // fresh: the assembly on the ground
+  if (st != LEGSIM_OK) {
+    error = call_failed("reading the stance", st);
+    return st;
+  }
+  const legsim_ground_desc &g = m.ground;
+  const double nx = -std::sin(g.slope_rad), ny = std::cos(g.slope_rad);
+  const double ct = std::cos(b.tilt_rad), stt = std::sin(b.tilt_rad);
+  const double cx = q[0], cy = q[1];  // the box: body 0 of a robot
+  // a point of the stance where the start puts it, and its velocity
+  auto moved = [&](double x, double y, double out[2], double vel[2]) {
+    const double rx = ct * (x - cx) - stt * (y - cy), ry = stt * (x - cx) + ct * (y - cy);
+    out[0] = cx + rx + b.lift_m * nx;
+    out[1] = cy + ry + b.lift_m * ny;
+    vel[0] = b.velocity_mps[0] - b.spin_radps * ry;
+    vel[1] = b.velocity_mps[1] + b.spin_radps * rx;
+  };
+  for (int32_t i = 0; i + 2 < nq; i += 3) {
+    double p[2], v[2];
+    moved(q[i], q[i + 1], p, v);
+    q[i] = static_cast<legsim_real>(p[0]);
+    q[i + 1] = static_cast<legsim_real>(p[1]);
+    q[i + 2] = static_cast<legsim_real>(q[i + 2] + b.tilt_rad);
+    qd[i] = static_cast<legsim_real>(v[0]);
+    qd[i + 1] = static_cast<legsim_real>(v[1]);
+    qd[i + 2] = static_cast<legsim_real>(b.spin_radps);
+  }
+  // each foot's start state, decided before anything changes (all or nothing)
+  std::vector<legsim_contact_state> want(nk, LEGSIM_CONTACT_FREE);
+  for (int32_t k = 0; k < nk; ++k) {
+    double p[2], v[2];
+    moved(c[k].position[0], c[k].position[1], p, v);
+    const double gap = nx * (p[0] - g.point[0]) + ny * (p[1] - g.point[1]);
+    const double speed = std::hypot(v[0], v[1]), vn = nx * v[0] + ny * v[1];
+    const std::string name = "contact " + q_name(m, k);
+    const int32_t given = given_state ? given_state[k] : -1;
+    if (gap < -tol) {
+      error = "[start]: " + name + " would start " + num(-gap) + " m below the ground";
+      return LEGSIM_ERR_STATE;
+    }
+    const bool on_ground = gap <= tol;
+    if (given < 0) {
+      if (on_ground && speed > tol) {
+        error = "[start]: " + name + " is on the ground and moving at " + num(speed) +
+                " m/s at t = 0: give its [[contact]] state (free or sliding)";
+        return LEGSIM_ERR_STATE;
+      }
+      want[k] = on_ground ? LEGSIM_CONTACT_STUCK : LEGSIM_CONTACT_FREE;
+      continue;
+    }
+    if (given != LEGSIM_CONTACT_FREE && given != LEGSIM_CONTACT_STUCK && given != LEGSIM_CONTACT_SLIDING) {
+      error = "[start]: " + name + ": no contact state " + std::to_string(given);
+      return LEGSIM_ERR_BAD_INPUT;
+    }
+    want[k] = static_cast<legsim_contact_state>(given);
+    if (given != LEGSIM_CONTACT_FREE && !on_ground) {
+      error = "[start]: " + name + " cannot start " + (given == LEGSIM_CONTACT_STUCK ? "stuck" : "sliding") +
+              ": it is " + num(gap) + " m above the ground";
+      return LEGSIM_ERR_STATE;
+    }
+    if (given == LEGSIM_CONTACT_STUCK && speed > tol) {
+      error = "[start]: " + name + " cannot start stuck: the start moves it at " + num(speed) + " m/s";
+      return LEGSIM_ERR_STATE;
+    }
+    if (given == LEGSIM_CONTACT_SLIDING && std::fabs(vn) > tol) {
+      error = "[start]: " + name + " cannot start sliding: the start moves it off the line at " + num(vn) +
+              " m/s";
+      return LEGSIM_ERR_STATE;
+    }
+  }
+  for (int32_t k = 0; k < nk && st == LEGSIM_OK; ++k) st = legsim_set_contact_state(sim, k, LEGSIM_CONTACT_FREE);
+  if (st == LEGSIM_OK) st = legsim_set_state(sim, q.data(), qd.data(), legsim_time(sim));
+  if (st != LEGSIM_OK) {
+    error = call_failed("[start]: setting the start state", st);
+    return st;
+  }
+  for (int32_t k = 0; k < nk; ++k) {
+    if (want[k] == LEGSIM_CONTACT_FREE) continue;
+    st = legsim_set_contact_state(sim, k, want[k]);
+    if (st != LEGSIM_OK) {
+      error = call_failed("[start]: setting " + q_name(m, k) + (want[k] == LEGSIM_CONTACT_STUCK ? " stuck" : " sliding"),
+                          st);
+      return st;
+    }
+  }
+  return LEGSIM_OK;
+}
+
+namespace {
 
 legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out, Result &res) {
   Storage storage(legsim_sim_size());
@@ -150,7 +255,14 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
                                              : std::string("assembling on the ground"), st);
       return st;
     }
+    if (sc.start.given) {
+      std::vector<int32_t> given(nk, -1);
+      for (const auto &ci : sc.contacts) given[ci.index] = ci.state;
+      st = start_apply(sim, m, sc.start, given.data(), sc.options.newton_tol, res.error);
+      if (st != LEGSIM_OK) return st;
+    }
     for (const auto &ci : sc.contacts) {
+      if (sc.start.given) break;  // start_state set them
       st = legsim_set_contact_state(sim, ci.index, ci.state);
       if (st != LEGSIM_OK) {
         res.error = call_failed("setting contact " + q(ci.name) + " " +
@@ -247,9 +359,12 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
           return st;
         }
       }
+      // a command switched on an event: after from the step after the one that raised it
+      std::vector<char> switched(commands.size(), 0);
       auto apply = [&](double t) -> legsim_status {
-        for (const auto &c : commands) {
-          const legsim_real v = static_cast<legsim_real>(c.signal.at(t));
+        for (size_t i = 0; i < commands.size(); ++i) {
+          const Command &c = commands[i];
+          const legsim_real v = static_cast<legsim_real>(switched[i] ? c.signal.after : c.signal.at(t));
           const legsim_status s2 = c.mode == LEGSIM_ACTUATOR_FORCE ? legsim_command_force(sim, c.index, v)
                                                                   : legsim_command_length(sim, c.index, v);
           if (s2 != LEGSIM_OK) {
@@ -281,6 +396,12 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
           res.failed_at_s = t;
           res.error = call_failed("step from t = " + num(t) + " s", st);
           return st;
+        }
+        // the masks hold the events since the last sample's clear; a switch latches
+        for (size_t i = 0; i < commands.size(); ++i) {
+          const Signal &g = commands[i].signal;
+          if (g.kind == Signal::kSwitch && (legsim_contact_event_mask(sim, g.contact_index) & g.event_bit))
+            switched[i] = 1;
         }
         if (k % sc.record_every == 0 || k == sc.n_steps) emit(legsim_time(sim), nullptr);
       }

@@ -21,11 +21,17 @@ namespace legsim_host {
 
 // A scalar input over time: constant, sinusoid, step, or "initial" (the actuator's
 // assembled length at t = 0, known only once the model is assembled).
+// kSwitch: `before` until the step after the one in which contact `contact` raised `event`
+// (a LEGSIM_EVENT_ contact bit), `after` from then on: its time is the run's, so at() gives
+// `before` and the runner switches (scene_run.cpp).
 struct Signal {
-  enum Kind { kConstant, kSinusoid, kStep, kInitial } kind = kConstant;
+  enum Kind { kConstant, kSinusoid, kStep, kInitial, kSwitch } kind = kConstant;
   double value = 0;                                            // constant (and initial, once known)
   double offset = 0, amplitude = 0, frequency_hz = 0, phase_rad = 0;  // sinusoid
-  double t0 = 0, before = 0, after = 0;                        // step
+  double t0 = 0, before = 0, after = 0;                        // step, switch
+  std::string event, contact;                                  // switch: names as written
+  uint32_t event_bit = 0;                                      // switch: LEGSIM_EVENT_ bit
+  int32_t contact_index = -1;                                  // switch: bound against the model
   double at(double t) const;
   double rate(double t) const;   // d/dt (0 for constants and steps)
   double accel(double t) const;  // d2/dt2
@@ -55,6 +61,23 @@ struct ContactInit {
   legsim_contact_state state = LEGSIM_CONTACT_STUCK;
 };
 
+// [start]: a robot's state at t = 0 as a rigid motion of its stance (dynamics): turned by
+// tilt about the box's centre, raised by lift along the ground's upward normal, every body
+// moving with the box (velocity of the box's centre, spin about it).
+struct StartState {
+  bool given = false;
+  double lift_m = 0, tilt_rad = 0;
+  double velocity_mps[2] = {0, 0};
+  double spin_radps = 0;
+};
+
+// [ground]: the scene's ground instead of the robot file's (any key left out keeps the file's).
+struct GroundSpec {
+  bool given = false;
+  bool has_slope = false, has_mu_static = false, has_mu_kinetic = false;
+  double slope_rad = 0, mu_static = 0, mu_kinetic = 0;
+};
+
 // [checks]: the bench's verdicts. Values are checked at parse time, the keys that apply
 // (which depend on the model: a leg or a robot) and the feet named at bind time.
 struct CheckSpec {
@@ -63,6 +86,7 @@ struct CheckSpec {
   int n_tolerances = 0;             // keys that are tolerances
   std::string stroke_actuator;      // [checks.stroke] actuator ("" without it)
   bool has_slips = false, has_lifts = false;
+  bool events = false;              // events = true: the event-locating reference (robot dynamics)
   std::vector<std::string> slips, lifts;  // feet (a robot's contacts)
 };
 
@@ -107,7 +131,14 @@ struct Scene {
   std::vector<ContactInit> contacts;     // [[contact]] (models with contacts only)
   bool has_box_load = false;             // 'box_load' given (models with contacts only)
   double box_load[3] = {0, 0, 0};        // Fx, Fy N at the box's centre, M N m
+  StartState start;                      // [start] (dynamics of a model with contacts)
+  GroundSpec ground;                     // [ground] (a model with contacts)
 };
+
+// [ground]: the scene's ground written into the model's description (before bind_scene and
+// legsim_init; legsim_cli does it once the model is loaded). False with why when the model
+// has no contacts or the result breaks mu_kinetic <= mu_static. Nothing changes on failure.
+bool ground_apply(const Scene &scene, legsim_model_desc &desc, std::string &why);
 
 // box_load: a robot's box (body 0) gets two force elements, kBoxLoadName (a point force at its
 // centre, [Fx, Fy]) and kBoxMomentName (a torque, M), appended to the description. False
@@ -200,6 +231,16 @@ class CsvWriter : public ResultWriter {
   const Scene &sc_;
   const legsim_model_desc &m_;
 };
+
+// [start] on a robot assembled on the ground (legsim_assemble_on_ground: every contact stuck,
+// the stance's contact positions fresh): moves it rigidly as `start` says and sets each
+// contact's state: given_state[k] (a legsim_contact_state, or -1: stuck on the ground within
+// tol (m), free above it; NULL: none given). Refuses (LEGSIM_ERR_STATE, error says why) a foot
+// below the ground, a given state the start cannot honour (stuck or sliding off the ground,
+// stuck while moving, sliding off the line) and a foot on the ground, moving, with no state:
+// nothing is adjusted. legsim_cli's run and hil_sim's RESET both use it.
+legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &model, const StartState &start,
+                          const int32_t *given_state, double tol, std::string &error);
 
 // Runs a bound scene on the model (which must outlive the call), handing each sample to
 // the writer as it is made. Never throws. Returns the status (also in result.status).

@@ -167,14 +167,35 @@ void write_resolved(std::ostream &o, const Scene &sc, const legsim_model_desc &m
         o << "\"step\": {\"t0\": " << jnum(g.t0) << ", \"before\": " << jnum(g.before)
           << ", \"after\": " << jnum(g.after) << "}";
         break;
+      case Signal::kSwitch:
+        o << "\"switch\": {\"event\": " << jstr(g.event) << ", \"contact\": " << jstr(g.contact)
+          << ", \"before\": " << jnum(g.before) << ", \"after\": " << jnum(g.after) << "}";
+        break;
     }
     o << "}";
   }
   o << "}, \"contacts\": {";
   for (size_t i = 0; i < sc.contacts.size(); ++i)
     o << (i ? ", " : "") << jstr(sc.contacts[i].name) << ": "
-      << jstr(sc.contacts[i].state == LEGSIM_CONTACT_FREE ? "free" : "stuck");
-  o << "}, \"box_load\": ";
+      << jstr(sc.contacts[i].state == LEGSIM_CONTACT_FREE    ? "free"
+              : sc.contacts[i].state == LEGSIM_CONTACT_SLIDING ? "sliding"
+                                                               : "stuck");
+  o << "}, \"start\": ";
+  if (sc.start.given)
+    o << "{\"lift\": " << jnum(sc.start.lift_m) << ", \"tilt\": " << jnum(sc.start.tilt_rad)
+      << ", \"velocity\": [" << jnum(sc.start.velocity_mps[0]) << ", " << jnum(sc.start.velocity_mps[1])
+      << "], \"spin\": " << jnum(sc.start.spin_radps) << "}";
+  else
+    o << "null";
+  // the ground the scene runs on (its [ground] applied to the model's), or null (no contacts)
+  o << ", \"ground_given\": " << (sc.ground.given ? "true" : "false") << ", \"ground\": ";
+  if (m.n_contacts > 0)
+    o << "{\"point\": [" << jnum(m.ground.point[0]) << ", " << jnum(m.ground.point[1])
+      << "], \"slope\": " << jnum(m.ground.slope_rad) << ", \"mu_static\": " << jnum(m.ground.mu_static)
+      << ", \"mu_kinetic\": " << jnum(m.ground.mu_kinetic) << "}";
+  else
+    o << "null";
+  o << ", \"box_load\": ";
   if (sc.has_box_load)
     o << "[" << jnum(sc.box_load[0]) << ", " << jnum(sc.box_load[1]) << ", " << jnum(sc.box_load[2]) << "]";
   else

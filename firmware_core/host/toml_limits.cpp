@@ -3,6 +3,13 @@
 // parser still judges the syntax.
 #include "toml_limits.hpp"
 
+#include <cerrno>
+#include <cstring>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
 namespace {
 
 enum class Mode { Normal, Comment, Basic, Literal, MultiBasic, MultiLiteral };
@@ -155,5 +162,36 @@ bool toml_input_within_limits(std::string_view text, std::string &why) {
     }
     ++i;
   }
+  return true;
+}
+
+bool read_toml_file(const char *path, std::string &text, std::string &err) {
+  const int fd = ::open(path, O_RDONLY | O_NONBLOCK | O_CLOEXEC);
+  if (fd < 0) {
+    err = std::string(path) + ": cannot read: " + std::strerror(errno);
+    return false;
+  }
+  struct stat st;
+  if (::fstat(fd, &st) != 0 || !S_ISREG(st.st_mode)) {
+    ::close(fd);
+    err = std::string(path) + ": cannot read: not a regular file";
+    return false;
+  }
+  text.resize(kTomlMaxBytes + 1);
+  std::size_t got = 0;
+  while (got < text.size()) {
+    const ssize_t k = ::read(fd, &text[got], text.size() - got);
+    if (k < 0 && errno == EINTR) continue;
+    if (k < 0) {
+      const int e = errno;
+      ::close(fd);
+      err = std::string(path) + ": cannot read: " + std::strerror(e);
+      return false;
+    }
+    if (k == 0) break;
+    got += static_cast<std::size_t>(k);
+  }
+  ::close(fd);
+  text.resize(got);
   return true;
 }

@@ -14,7 +14,8 @@
 //   - arrays and inline tables nested at most kTomlMaxNesting deep
 //     (a [[table]] header counts as two).
 // Usage (any loader of TOML text):
-//   std::string why;
+//   std::string text, err, why;
+//   if (!read_toml_file(path, text, err)) fail(err);
 //   if (!toml_input_within_limits(text, why)) fail(path + ": TOML input refused: " + why);
 #pragma once
 
@@ -30,3 +31,10 @@ constexpr int kTomlMaxNesting = 16;
 // reason that names the line, e.g. "a key or table header of more than 16 dotted
 // parts (line 3)". Linear in the text, no allocation besides why.
 bool toml_input_within_limits(std::string_view text, std::string &why);
+
+// Reads the file every TOML reader (models, robots' leg files, scenes) opens: a regular
+// file only, at most kTomlMaxBytes + 1 bytes (a larger file is then refused by the limits
+// without being held whole). Anything else (a FIFO, a device, a folder) is refused without
+// blocking: it is opened non-blocking and checked before the first read. False with err =
+// "PATH: cannot read: REASON" (e.g. "not a regular file", "No such file or directory").
+bool read_toml_file(const char *path, std::string &text, std::string &err);

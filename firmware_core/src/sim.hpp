@@ -28,6 +28,11 @@ constexpr int kMaxContacts = LEGSIM_CONTACT_SLOTS;  // >= 1 slot; the model's co
 constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows +
                           (LEGSIM_MAX_CONTACTS > 2 ? 18 * LEGSIM_MAX_CONTACTS * LEGSIM_MAX_CONTACTS : 0);
 
+// A build for three or more contacts (legs) can factor J W J^T with a body that all the
+// legs share, the box, as a Schur complement (Layout::separator); its rows' coefficients on
+// that body are kept with the factor. A smaller build keeps one slot.
+constexpr int kSeparatorRows = LEGSIM_MAX_CONTACTS >= 3 ? kMaxRows : 1;
+
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
 // row-major: the factorization's inner products run along rows
@@ -118,6 +123,12 @@ struct Layout {
   // factor fewer entries), which keeps the work small.
   uint8_t perm[kMaxRows];
   uint8_t first[kMaxRows];  // by position: the first non-zero column, the envelope
+  // A body (the box of a robot on three or more legs) whose removal splits the rows into
+  // groups that share no other body, or -1. With one, the pairs and the envelope are the
+  // ones of B = J W J^T less the body's share U W_b U^T (U: each row's coefficients on it),
+  // block diagonal by group, each group's rows together; the solves add the body back as a
+  // Schur complement (linear_solve.cpp), so the work grows linearly with the groups.
+  int8_t separator;
   // The rows ordered together (layout_finish): a stance's joint and contact rows (all
   // stuck, nothing else), or 0: the joint rows alone, the other rows after them.
   uint8_t block;
@@ -128,6 +139,11 @@ struct Layout {
   // force mu_k lambda_n along the tangent, which makes the system non-symmetric.
   uint8_t nslide;
   uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
+  // Rows beyond the coordinates (Data::dyn only: max(0, m - nq), stops_layout): that many
+  // rows must depend on the others (e.g. both feet stuck with all four stops: 40 rows on 39
+  // coordinates, the self-stress of the stance), and factor_build drops that many dependent
+  // rows (the basic solution: their multipliers 0); one more vanishing pivot is singular.
+  uint8_t surplus;
   const Kernel *kernel;  // the model's kernel serves rows 0 .. kernel->mj-1 (nullptr: none)
   // The path of each solve on this layout, chosen once when it is built (layout_path): the
   // kernel whose generated solve serves the whole system (its block is all the rows: the
@@ -172,7 +188,18 @@ struct Factor {
   uint8_t perm[kMaxRows];   // row -> position, as in the layout
   uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
   real condition;
+  // The rows the factorization dropped as dependent on the rows before them in its order
+  // (at most Layout::surplus of them, by row index): 1 / D is 0 there, so a solve gives
+  // them a zero multiplier and satisfies their equations through the others'.
+  int nredundant;
+  uint8_t redundant[kMaxRows];
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
+  // Layout::separator's body, or -1; with one, a holds the factor of B and, by position, u
+  // the rows' coefficients on the body, z = B^-1 u, wb its weights and s the factor of
+  // S = W_b^-1 + u^T z (L D L^T, 1 / D on the diagonal): (B + u W_b u^T)^-1 = B^-1 - z S^-1 z^T.
+  int separator;
+  real u[kSeparatorRows][kBodyDof], z[kSeparatorRows][kBodyDof];
+  real wb[kBodyDof], s[kBodyDof][kBodyDof];
   // This is the sim's state's factor exactly, as a fresh factorization would give it (RK4's
   // whole-system end solve left it, the positions not projected after; its reduced end,
   // Kernel::end, keeps none), and untouched since: factor_order

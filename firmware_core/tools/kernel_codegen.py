@@ -141,6 +141,44 @@ def block_order(mj, m, share, rows, pinned):
     return md if fill(md, share) < fill(rcm, share) else rcm
 
 
+SEPARATOR_MIN_ROWS = 12  # layout.cpp's kSeparatorMinRows
+
+
+def separator(rows):
+    """The body whose removal splits the rows into the most groups sharing no other body, at
+    least three, and that more than SEPARATOR_MIN_ROWS rows act on (ties to the lowest
+    body), or None: layout_finish's separator_body. The
+    general path factors such a block with the body as a Schur complement (a robot's box on
+    three or more legs: linear in the legs); the generator has no such kernel, so it leaves
+    the block to the general path rather than factor it in another order."""
+    best, best_groups = None, 2
+    for b in sorted({x for r in rows for x in r[0] if x >= 0}):
+        if any(all(x < 0 or x == b for x in r[0]) or list(r[0]).count(b) > 1 for r in rows):
+            continue  # a row on b alone (or twice) has no pivot in B
+        if sum(b in r[0] for r in rows) <= SEPARATOR_MIN_ROWS:
+            continue  # the clique of its rows costs less than the Schur complement
+        parent = list(range(len(rows)))
+
+        def root(i):
+            while parent[i] != i:
+                i = parent[i]
+            return i
+        first = {}
+        for i, r in enumerate(rows):
+            for x in r[0]:
+                if x < 0 or x == b:
+                    continue
+                if x in first:
+                    a, c = root(first[x]), root(i)
+                    parent[max(a, c)] = min(a, c)
+                else:
+                    first[x] = i
+        groups = len({root(i) for i in range(len(rows))})
+        if groups > best_groups:
+            best, best_groups = b, groups
+    return best
+
+
 def pinned_bodies(joints):
     """Bodies pinned to the frame by one revolute joint (and no other joint to the frame)."""
     to_frame = [j["body"][0] for j in joints if j["kind"] == "revolute_to_frame"]
@@ -934,6 +972,8 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
                 k.fused = ((stance or not model.get("contacts"))
                            and (fused_max_rows is None or k.m <= fused_max_rows))
                 k.reduced = reduced
+                if separator(k.rows) is not None:
+                    continue  # the general path's Schur complement on the box serves it
                 if k.signature() not in seen:
                     seen.add(k.signature())
                     kernels.append((f"kernel_{stem}_{variant}" + ("_stance" if stance else ""), k))

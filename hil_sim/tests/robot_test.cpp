@@ -19,6 +19,8 @@
 #include "test_support.hpp"
 #include "legsim/models.h"
 #include "legsim/robot_models.h"
+#include "scene_toml.hpp"  // legsim_host::start_apply: what a START_CMD makes the RESET do
+
 
 extern "C" {
 #include "legsim_can.h"
@@ -106,7 +108,8 @@ bool same_bits(float a, double b) {
 struct Direct {
   std::vector<unsigned char> storage;
   legsim_sim *sim = nullptr;
-  explicit Direct(legsim_contact_law law = LEGSIM_CONTACT_LCP, uint32_t free_mask = 0)
+  explicit Direct(legsim_contact_law law = LEGSIM_CONTACT_LCP, uint32_t free_mask = 0,
+                  const legsim_host::StartState *start = nullptr)
       : storage(legsim_sim_size() + LEGSIM_STORAGE_ALIGN) {
     void *p = storage.data();
     size_t space = storage.size();
@@ -124,6 +127,8 @@ struct Direct {
     CHECK(legsim_assemble_on_ground(sim, nullptr, mid) == LEGSIM_OK);
     for (int k = 0; k < 2; ++k)
       if ((free_mask >> k) & 1u) CHECK(legsim_set_contact_state(sim, k, LEGSIM_CONTACT_FREE) == LEGSIM_OK);
+    std::string why;
+    if (start) CHECK(legsim_host::start_apply(sim, legsim_model_robot_revolute, *start, nullptr, 1e-10, why) == LEGSIM_OK);
     legsim_real len[4], rate[4];
     CHECK(legsim_actuator_lengths(sim, len, rate) == LEGSIM_OK);
     for (int a = 0; a < 4; ++a) CHECK(legsim_command_length(sim, a, len[a]) == LEGSIM_OK);
@@ -484,6 +489,66 @@ void test_contact_events_and_reset_options() {
         fault_of(out).fault_detail == LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT);
 }
 
+// START_CMD then RESET (a scene's [start]): the same sim as the C API given
+// legsim_host::start_apply with the float32 values sent, the feet in the state the masks give
+// (stuck on the ground, free above it otherwise); bit for bit at the RESET and after 50 steps
+// through the touchdown. A bad START_CMD is refused on arrival and the RESET then starts at rest.
+hil::Frame start_cmd(uint32_t seq, float lift, float vx, float vy, uint8_t stuck = 0, uint8_t sliding = 0) {
+  legsim_can_start_cmd_t m;
+  std::memset(&m, 0, sizeof m);
+  m.start_seq = seq;
+  m.start_use = 1;
+  m.start_lift = lift;
+  m.start_vx = vx;
+  m.start_vy = vy;
+  m.start_stuck_contacts = stuck;
+  m.start_sliding_contacts = sliding;
+  hil::Frame f = fd_frame(LEGSIM_CAN_START_CMD_FRAME_ID);
+  legsim_can_start_cmd_pack(f.data, &m, 64);
+  return f;
+}
+
+void test_start_off_the_stance() {
+  legsim_host::StartState start;
+  start.given = true;
+  start.lift_m = static_cast<double>(0.01f);
+  start.velocity_mps[0] = static_cast<double>(0.3f);
+  start.velocity_mps[1] = static_cast<double>(-0.1f);
+  Direct d(LEGSIM_CONTACT_LCP, 0, &start);
+  CHECK(legsim_clear_events(d.sim) == LEGSIM_OK);
+  Rig r;
+  CHECK(r.feed(start_cmd(1, 0.01f, 0.3f, -0.1f)).empty());   // accepted, not answered
+  auto out = r.feed(pack(reset_feet(1, 0, 0)));
+  check_sample(out, d.sim);
+  legsim_contact c[2];
+  CHECK(legsim_contacts(d.sim, c) == LEGSIM_OK);
+  CHECK(c[0].state == LEGSIM_CONTACT_FREE && c[1].state == LEGSIM_CONTACT_FREE);
+  CHECK(legsim_step(d.sim, 50) == LEGSIM_OK);
+  out = r.feed(step(2, 50), 7);
+  check_sample(out, d.sim);
+  CHECK((ct_events(out, 0) & 0x2u) != 0 && (ct_events(out, 1) & 0x2u) != 0);   // both touched down
+  // the next RESET has no START_CMD: the stance at rest, both feet stuck
+  out = r.feed(pack(reset_feet(3, 0, 0)));
+  Direct rest;
+  check_sample(out, rest.sim);
+  // refused on arrival, naming the signal: not finite, out of range, a foot in both masks,
+  // a foot the robot does not have; a start the robot cannot take fails the RESET (SOLVER)
+  out = r.feed(start_cmd(5, std::nanf(""), 0, 0));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 3 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_START_CMD_START_LIFT_START_BIT);
+  out = r.feed(start_cmd(6, 0.01f, 101.0f, 0));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_START_CMD_START_VX_START_BIT);
+  out = r.feed(start_cmd(7, 0.0f, 0, 0, 1, 1));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4 &&
+        fault_of(out).fault_detail == LEGSIM_CAN_START_CMD_START_SLIDING_CONTACTS_START_BIT);
+  out = r.feed(start_cmd(8, 0.0f, 0, 0, 4, 0));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 4);
+  CHECK(r.feed(start_cmd(9, 0.1f, 0, 0, 1, 0)).empty());   // right foot stuck, 0.1 m up: cannot
+  out = r.feed(pack(reset_feet(4, 0, 0)));
+  CHECK(out.size() == 1 && fault_of(out).fault_code == 8);
+}
+
 // The one-leg hil_sim: leg-1 commands are unknown ids; leg-1 state frames (another sim's)
 // are ignored; the one leg's sample stays six frames.
 void test_one_leg_refuses_leg1_frames() {
@@ -647,6 +712,7 @@ int main() {
   test_reset_with_lengths();
   test_contact_events_and_reset_options();
   test_watchdog_per_leg();
+  test_start_off_the_stance();
   test_one_leg_refuses_leg1_frames();  // last: it switches to the one leg
   return report();
 }

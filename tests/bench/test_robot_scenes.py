@@ -77,7 +77,7 @@ def test_robot_keys_are_refused_or_checked_by_the_reader():
                         ("[[command]]\nactuator = \"upper\"\nmode = \"force\"\nvalue = 1.0\n",
                          "command 'upper': the model has no actuator 'upper'"),
                         ("[[contact]]\nname = \"right.foot\"\nstate = \"sliding\"\n",
-                         "'state' must be stuck or free (got 'sliding')")]:
+                         "a foot starts sliding only in dynamics with a")]:
         with pytest.raises(SceneError, match=words.replace("(", r"\(").replace(")", r"\)")):
             parse_scene(base + text, name="t", root=ROOT)
     with pytest.raises(SceneError, match="statics_sweep of a model with contacts is not in this core yet"):
@@ -349,3 +349,126 @@ def test_sliding_configuration_slides_the_law_s_foot(name, law, foot):
     other = load_scene("robot_sliding_paper" if law == "lcp" else "robot_sliding", ROOT)
     o2 = robot_slip_onset(other, d, ROOT)
     assert o2["expected"] not in o["released"]
+
+
+# ---- scenes that start off the stance, set their ground, switch on an event (issue 22 section 3) ----
+# Each is checked against what it SHOULD meet; where the core cannot yet, the test is xfail (strict:
+# it turns green, and must be unmarked, when the fix merges), naming the bug.
+TOUCHDOWN_AT_STEP_END = ("issue 22 section 1 (branch events): the touchdown is taken at the end of the step "
+                         "that crossed it, 3.0e-4 rad off the event-locating reference after a 1 cm drop")
+EVENT_SCENES = {
+    "robot_drop_1cm": TOUCHDOWN_AT_STEP_END,
+    "robot_throw": TOUCHDOWN_AT_STEP_END,
+    "robot_land_switch": TOUCHDOWN_AT_STEP_END,
+    "robot_slope_steep": "issue 22 section 1 (branch events): a starting contact state that cannot hold is "
+                         "resolved after the first step, not at t = 0",
+    "robot_drop_high": "issue 22 section 2 (branch impacts): stops are not checked after a touchdown's "
+                       "projection, the uppers end 2.8 mm past their minima at 0.080 s",
+    "robot_stops_stuck": "issue 22 section 2 (branch impacts): 40 rows on 39 coordinates drop the stroke stops "
+                         "(0.3999 m at 4 ms), the step fails UNREACHABLE at 0.271 s",
+    "robot_crouch": "issue 22 section 2 (branch impacts): the crouch returns SINGULAR at step 298",
+}
+
+
+@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=r))
+                                  for n, r in EVENT_SCENES.items()])
+def test_event_scenes_meet_their_checks_in_legsim_cli(name):
+    sc, out, ev = _bench(name)
+    assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]
+
+
+@pytest.mark.parametrize("name, events", [
+    ("robot_drop_1cm", [("right.foot", "touchdown", 0.045152364), ("left.foot", "touchdown", 0.045152364)]),
+    ("robot_throw", [("right.foot", "touchdown", 0.164068), ("left.foot", "touchdown", 0.164068),
+                     ("left.foot", "stick_to_slip", 0.275231)])])
+def test_drops_and_throws_take_each_event_in_the_step_that_holds_it(name, events):
+    """What holds today: the start is the reference's (lifted, moving, feet free), every contact
+    state and event agrees with the event-locating reference sample by sample, each event in the
+    step that holds its exact time (a 1 cm drop lands at sqrt(2 d / g) = 45.152 ms)."""
+    from legsim_bench.verdict.analyses import robot_events_reference
+    sc, out, ev = _bench(name)
+    by = {r.name: r for r in ev.results}
+    assert by["contact states vs the event-locating reference, every sample"].passed
+    assert by["contact events in the step that holds the reference's"].passed
+    d = robot_arrays(out)
+    _, r, _ = robot_events_reference(sc, d["t"])
+    got = [(sc.model_info.contacts[e.foot], e.kind, e.t) for e in r.events]
+    assert [g[:2] for g in got] == [e[:2] for e in events]
+    assert [g[2] for g in got] == pytest.approx([e[2] for e in events], abs=1e-6)
+    # the start: the stance lifted by [start] lift, both feet free, moving with the box
+    assert d["q"][0, 1] - 1.0 == pytest.approx(sc.start["lift"], abs=1e-9)
+    assert list(d["state"][0]) == ["free", "free"]
+    assert np.max(np.abs(d["q"][0] - r.q[0])) < 1e-9
+
+
+def test_a_switch_on_a_touchdown_is_the_step_at_its_step(tmp_path):
+    """robot_land_switch switches the right upper's set-point when the right foot lands: the
+    same run as a step signal at the end of the step whose events hold the touchdown (the switch
+    applies from the next step on), to the last bit."""
+    out = _run("robot_land_switch")
+    d = robot_arrays(out)
+    i = next(i for i, e in enumerate(d["events"]) if "touchdown" in e)
+    t_td = float(d["t"][i])
+    assert t_td == pytest.approx(0.046, abs=1e-12)
+    text = (ROOT / "scenes" / "robot_land_switch.toml").read_text()
+    text = text.replace('switch = { event = "touchdown", contact = "right.foot", before',
+                        f'step = {{ t0 = {t_td!r}, before')
+    text = text.split("[checks]")[0] + "[checks]\nresidual = 1e-8\n"
+    text = text.replace('model = "../models/robot.toml"', f'model = "{ROOT / "models" / "robot.toml"}"')
+    p = tmp_path / "step.toml"
+    p.write_text(text)
+    r = subprocess.run([str(_cli()), str(p)], capture_output=True, text=True, timeout=600)
+    assert r.returncode == 0, r.stderr
+    step = robot_arrays(json.loads(r.stdout))
+    assert np.array_equal(step["q"], d["q"]) and np.array_equal(step["lengths"], d["lengths"])
+    # the switch changed the run from the next step on: robot_drop_1cm is the same drop without it
+    drop = robot_arrays(_run("robot_drop_1cm"))
+    # (its servo holds the assembled length, the switch's 'before' is that length as written: 1e-11 apart)
+    assert np.max(np.abs(drop["q"][:i + 1] - d["q"][:i + 1])) < 1e-9
+    assert d["lengths"][-1, 0] - drop["lengths"][-1, 0] > 2e-3
+
+
+@pytest.mark.parametrize("start, message", [
+    ("tilt = 0.2\n", "[start]: contact 'left.foot' would start 0.1058"),
+    ("lift = 0.1\n[[contact]]\nname = \"right.foot\"\nstate = \"stuck\"\n",
+     "[start]: contact 'right.foot' cannot start stuck: it is 0.1 m above the ground"),
+    ("velocity = [0.5, 0.0]\n", "[start]: contact 'right.foot' is on the ground and moving at 0.5 m/s at t = 0: "
+                                "give its [[contact]] state (free or sliding)"),
+    ("velocity = [0.5, 0.0]\n[[contact]]\nname = \"right.foot\"\nstate = \"stuck\"\n",
+     "[start]: contact 'right.foot' cannot start stuck: the start moves it at 0.5 m/s"),
+    ("velocity = [0.0, 0.5]\n[[contact]]\nname = \"right.foot\"\nstate = \"sliding\"\n",
+     "[start]: contact 'right.foot' cannot start sliding: the start moves it off the line at 0.5 m/s"),
+])
+def test_a_start_that_cannot_be_honoured_is_refused_not_adjusted(tmp_path, start, message):
+    p = tmp_path / "s.toml"
+    p.write_text('model = "builtin:robot"\nduration = 0.01\ninit = "hold_length"\n[start]\n' + start)
+    r = subprocess.run([str(_cli()), str(p)], capture_output=True, text=True, timeout=60)
+    assert r.returncode == 1 and message in r.stderr, r.stderr
+
+
+def test_feet_start_sliding_along_the_ground_with_the_box():
+    """Both feet sliding at t = 0, the robot moving 0.5 m/s along the level ground: the feet
+    slide against the motion (|T| = mu_kinetic N) and stick again as it stops."""
+    text = ('model = "builtin:robot"\nduration = 0.05\nrecord_every = 1\ninit = "hold_length"\n'
+            '[start]\nvelocity = [0.5, 0.0]\n[[contact]]\nname = "right.foot"\nstate = "sliding"\n'
+            '[[contact]]\nname = "left.foot"\nstate = "sliding"\n[checks]\nresidual = 1e-8\n')
+    r = subprocess.run([str(_cli()), "-", "--as", str(ROOT / "scenes" / "t.toml")], input=text,
+                       capture_output=True, text=True, timeout=60)
+    assert r.returncode == 0, r.stderr
+    out = json.loads(r.stdout)
+    d = robot_arrays(out)
+    assert list(d["state"][0]) == ["sliding", "sliding"] and list(d["state"][-1]) == ["stuck", "stuck"]
+    slide = (d["state"] == "sliding")
+    slide[0] = False   # the first sample's forces are not solved yet
+    assert np.abs(d["tangential"][slide]) == pytest.approx(0.5 * d["normal"][slide], rel=1e-9)
+    assert np.all(d["tangential"][slide] < 0)   # against the forward slip
+
+
+def test_a_scene_s_ground_replaces_the_robot_file_s():
+    out = _run("robot_slope_steep")
+    assert out["ground"] == {"point": [0, 0], "slope": 0.3, "mu_static": 0.2, "mu_kinetic": 0.15}
+    sc = load_scene("robot_slope_steep", ROOT)
+    assert sc.ground_given and sc.hil_args()[-2:] == ["--ground", "0.3,0.2,0.15"]
+    d = robot_arrays(out)
+    assert d["q"][0, 2] == pytest.approx(0.3, abs=1e-9) or abs(d["q"][0, 2]) < 1.0   # the stance on the slope
+    assert np.all(d["state"][-1] != "free")

@@ -78,6 +78,9 @@ def test_every_shipped_scene_parses_and_one_is_the_demo():
         # it checks the constraints and the slips
         if s.checks.slips is not None:
             assert s.robot and s.checks.slips and s.checks.residual, s.name
+        elif s.robot and s.analysis == "dynamics" and not s.checks.events and s.checks.position_m is None:
+            # the stops and the crouch: the run's own invariants (no reference holds them)
+            assert s.checks.in_stroke_m and s.checks.residual, s.name
         elif s.analysis != "statics_sweep":
             assert s.checks.position_m and s.checks.residual, s.name
     assert {s.analysis for s in scenes} == {"dynamics", "statics", "statics_sweep", "inverse_dynamics",
@@ -188,6 +191,96 @@ expect = "CMD_TIMEOUT"
 def test_bad_scenes_are_refused_with_the_key(change, message):
     with pytest.raises(SceneError, match=message):
         scene(BASE.replace(*change, 1))
+
+
+ROBOT = 'model = "builtin:robot"\nduration = 0.1\nrecord_every = 1\n'
+
+
+@pytest.mark.parametrize("text, message", [
+    # [start]: every number in its documented range (scenes/README.md), its keys, where it applies
+    ("[start]\nlift = -0.01\n", "[start] 'lift' must be in [0, 10] m (got -0.01)"),
+    ("[start]\nlift = 10.5\n", "[start] 'lift' must be in [0, 10] m (got 10.5)"),
+    ("[start]\ntilt = 1.6\n", "[start] 'tilt' must be in [-1.5, 1.5] rad (got 1.6)"),
+    ("[start]\ntilt = nan\n", "[start] 'tilt' is not finite"),
+    ("[start]\nvelocity = [0.0, 101.0]\n", "[start] 'velocity' must be within +-100 m/s (got 101)"),
+    ("[start]\nvelocity = [1.0]\n", "[start] 'velocity' must be [vx, vy] (m/s, world axes)"),
+    ("[start]\nspin = -100.5\n", "[start] 'spin' must be within +-100 rad/s (got -100.5)"),
+    ("[start]\nheight = 1.0\n", "[start] unknown key 'height' (allowed: lift, spin, tilt, velocity)"),
+    ("start = 1.0\n", "'start' must be a table ([start] lift, tilt, velocity, spin)"),
+    ('analysis = "inverse_dynamics"\n[start]\nlift = 0.1\n', "'start' applies to dynamics only"),
+    # [ground]
+    ("[ground]\nslope = 1.51\n", "[ground] 'slope' must be in [-1.5, 1.5] rad (got 1.51)"),
+    ("[ground]\nmu_static = -0.1\n", "[ground] 'mu_static' must be in [0, 10] (got -0.1)"),
+    ("[ground]\nmu_kinetic = 10.5\n", "[ground] 'mu_kinetic' must be in [0, 10] (got 10.5)"),
+    ("[ground]\nmu_static = 0.3\nmu_kinetic = 0.4\n", "[ground] 'mu_kinetic' 0.4 must be at most 'mu_static' 0.3"),
+    ("[ground]\nmu_kinetic = 0.7\n", "[ground]: mu_kinetic 0.7 must be at most mu_static 0.6 (with the model's own"),
+    ("[ground]\npoint = [0.0, 1.0]\n", "[ground] unknown key 'point' (allowed: mu_kinetic, mu_static, slope)"),
+    # a switch on a contact event
+    ('[[command]]\nactuator = "right.upper"\nmode = "force"\n'
+     'switch = { event = "landing", contact = "right.foot", after = 1.0 }\n',
+     "switch: 'event' must be touchdown, liftoff, stick_to_slip, slip_to_stick (got 'landing')"),
+    ('[[command]]\nactuator = "right.upper"\nmode = "force"\n'
+     'switch = { event = "touchdown", contact = "middle.foot", after = 1.0 }\n',
+     "switch: 'contact' must be a contact of the model (right.foot, left.foot; got 'middle.foot')"),
+    ('[[command]]\nactuator = "right.upper"\nmode = "force"\n'
+     'switch = { event = "touchdown", contact = "right.foot", after = 2000.0 }\n', "exceed max_force 1500 N"),
+    ('[[command]]\nactuator = "right.upper"\nmode = "length"\n'
+     'switch = { event = "touchdown", contact = "right.foot", before = 0.6, after = 0.3 }\n', "leave the stroke"),
+    ('[[command]]\nactuator = "right.upper"\nmode = "force"\n'
+     'switch = { event = "touchdown", contact = "right.foot", at = 0.1, after = 1.0 }\n', "switch: unknown key 'at'"),
+    ('#\n[[command]]\nactuator = "right.upper"\nmode = "force"\n'
+     'switch = { event = "touchdown", contact = "right.foot", after = 1.0 }\n', "'switch' needs record_every = 1"),
+    ('[[command]]\nactuator = "right.upper"\nmode = "force"\nvalue = 1.0\n'
+     'switch = { event = "touchdown", contact = "right.foot", after = 1.0 }\n',
+     "give exactly one of 'value', 'sinusoid', 'step' or 'switch'"),
+    # a foot that starts sliding, the checks of a start off the stance
+    ('[[contact]]\nname = "right.foot"\nstate = "sliding"\n', "a foot starts sliding only in dynamics with a [start]"),
+    ('[[contact]]\nname = "right.foot"\nstate = "rolling"\n', "'state' must be stuck, free or sliding (got 'rolling')"),
+    ("[start]\nlift = 0.1\n[checks]\nposition_m = 1e-6\n", "add events = true"),
+    ("[checks]\nevents = false\nresidual = 1e-8\n", "[checks] 'events' must be true"),
+    ("[checks]\nevents = true\nslips = [\"left.foot\"]\n", "events compare with RobotModel's stance on stuck feet, which 'slips' leaves"),
+    ("[checks]\nevents = true\nstays_put_m = 1e-3\n", "stays_put_m do not go with 'events'"),
+    ('[[command]]\nactuator = "right.upper"\nmode = "force"\nstep = { t0 = 0.05, after = 1.0 }\n'
+     "[checks]\nevents = true\n", "changes with time; the event-locating reference takes constant commands"),
+    ("[checks]\nin_stroke_m = 0.0\n", "[checks] 'in_stroke_m' must be > 0 (got 0)"),
+])
+def test_robot_start_ground_and_switch_keys_are_refused_with_their_range(text, message):
+    """The keys of a robot scene's start, ground and event switches: every value out of its
+    documented range refused by the one reader (legsim_cli), the message naming key, value
+    and range."""
+    with pytest.raises(SceneError) as e:
+        scene((ROBOT + text).replace("record_every = 1\n#\n", "record_every = 2\n"))   # '#': every 2 steps
+    assert message in str(e.value)
+
+
+@pytest.mark.parametrize("text, message", [
+    ("[start]\nlift = 0.1\n", "[start] applies to a model with contacts only (the robot's box)"),
+    ("[ground]\nslope = 0.1\n", "[ground] applies to a model with contacts only (the robot's ground)"),
+])
+def test_start_and_ground_are_the_robot_s(text, message):
+    with pytest.raises(SceneError) as e:
+        scene(BASE.replace("[[command]]", text + "[[command]]", 1).replace("[checks]\nposition_m = 1e-5", ""))
+    assert message in str(e.value)
+
+
+def test_start_ground_and_switch_reach_the_bench_as_written():
+    sc = scene(ROBOT + "[start]\nlift = 0.02\ntilt = 0.1\nvelocity = [1.0, -0.5]\nspin = 2.0\n"
+               "[ground]\nslope = 0.2\nmu_static = 0.7\n"
+               '[[contact]]\nname = "left.foot"\nstate = "free"\n'
+               '[[command]]\nactuator = "right.upper"\nmode = "force"\n'
+               'switch = { event = "touchdown", contact = "right.foot", before = 5.0, after = 50.0 }\n'
+               "[checks]\nevents = true\nin_stroke_m = 1e-9\n")
+    assert sc.start == {"lift": 0.02, "tilt": 0.1, "velocity": [1.0, -0.5], "spin": 2.0}
+    assert sc.ground == {"point": [0, 0], "slope": 0.2, "mu_static": 0.7, "mu_kinetic": 0.5} and sc.ground_given
+    assert sc.hil_args() == ["--robot", "--ground", "0.2,0.7,0.5"]
+    assert sc.contacts == {"left.foot": "free"} and sc.checks.events and sc.checks.in_stroke_m == 1e-9
+    c = sc.commands[0]
+    assert (c.schedule.kind, c.schedule.event, c.schedule.contact) == ("switch", "touchdown", "right.foot")
+    assert sc.setpoints(3)[0] == ("force", 5.0)
+    assert sc.setpoints(3, fired={("right.foot", "touchdown")})[0] == ("force", 50.0)
+    assert sc.setpoints(3, fired={("left.foot", "touchdown")})[0] == ("force", 5.0)
+    plain = scene(ROBOT)
+    assert plain.start is None and not plain.ground_given and plain.hil_args() == ["--robot"]
 
 
 def test_a_second_command_for_an_actuator_is_refused():

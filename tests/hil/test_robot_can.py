@@ -2,11 +2,13 @@
 (tests/hil_scenes, every scenes/robot_*.toml dynamics scene over CAN) do not cover: bad frames
 to either leg's node get a FAULT, change nothing and the heartbeat goes on; the feet's events
 (Ct_Events) arrive decoded, each on its own foot, none lost between samples; the RESET's feet
-options (Ctrl_FreeContacts); a one-leg hil_sim refuses leg-1 commands.
+options (Ctrl_FreeContacts); a one-leg hil_sim refuses leg-1 commands; each leg node has its
+own command watchdog (a silent leg trips alone, in lockstep and in real time).
 """
 from __future__ import annotations
 
 import math
+import time
 
 import numpy as np
 import pytest
@@ -91,3 +93,74 @@ def test_one_leg_hil_sim_refuses_leg1_commands_and_the_feet_options(start_hil):
     with pytest.raises(cl.HilFault) as e:
         hil.reset(contact_law="paper")
     assert e.value.fault.code == cl.FaultCode.OUT_OF_RANGE and e.value.fault.signal == "Ctrl_ContactLaw"
+
+
+def _hold_command(hil, s, leg):
+    """Leg's two servos hold the lengths of sample s; returns the ACT_CMD's counter."""
+    return hil.command((cl.ActMode.LENGTH, float(s.lengths[2 * leg])),
+                       (cl.ActMode.LENGTH, float(s.lengths[2 * leg + 1])), leg=leg)
+
+
+def test_each_leg_node_has_its_own_command_watchdog_in_lockstep(start_hil):
+    """hil_sim's default timeout (100 ms = 100 steps of 1 ms), zero force. Leg 0 is commanded
+    every 50 steps, leg 1 once at step 0: leg 1 trips alone at step 100 (FAULT CMD_TIMEOUT
+    naming ACT_CMD_L1 and its counter, SAFE_STATE in its own ST_STATUS, its actuators at zero
+    force) while leg 0 keeps its servo command and its armed watchdog; the heartbeat goes on
+    (its bits: any leg's). Leg 0, silent in turn, trips at its own time; leg 1's next command
+    leaves its safe state."""
+    S = cl.Status
+    hil = start_hil("--robot").link
+    s0 = hil.reset(integrator="rk4", hold_length=True)
+    _hold_command(hil, s0, 0)
+    seq1 = _hold_command(hil, s0, 1)
+    s = hil.step(50)
+    assert not s.faults and all(S.CMD_WATCHDOG in st for st in s.statuses)
+    _hold_command(hil, s0, 0)
+    s = hil.step(50)                         # step 100: exactly leg 1's timeout, still fine
+    assert not s.faults and not any(S.SAFE_STATE in st for st in s.statuses)
+    seq0 = _hold_command(hil, s0, 0)
+    hb0 = hil.heartbeat()
+    s = hil.step(50)                         # step 150
+    assert [(f.code, f.frame_id, f.seq, f.step_count, f.detail) for f in s.faults] == \
+        [(cl.FaultCode.CMD_TIMEOUT, cl.ACT_CMD_L1, seq1, 100, 100)]
+    assert S.SAFE_STATE in s.statuses[1] and S.CMD_WATCHDOG not in s.statuses[1]
+    assert S.SAFE_STATE not in s.statuses[0] and S.CMD_WATCHDOG in s.statuses[0]
+    assert np.all(s.forces[2:] == 0.0)        # leg 1 at zero force
+    assert np.all(np.abs(s.forces[:2]) > 1.0)  # leg 0's servos still hold (the robot's weight)
+    hb = hil.heartbeat()
+    assert hb.counter > hb0.counter and hb.state == cl.SimState.LOCKSTEP
+    assert S.SAFE_STATE in hb.status and S.CMD_WATCHDOG in hb.status
+    s = hil.step(100)                         # leg 0 silent since step 100: trips at 200
+    assert [(f.code, f.frame_id, f.seq, f.step_count) for f in s.faults] == \
+        [(cl.FaultCode.CMD_TIMEOUT, cl.ACT_CMD, seq0, 200)]
+    assert all(S.SAFE_STATE in st for st in s.statuses)
+    _hold_command(hil, s0, 1)                 # leg 1 commanded again: out of its safe state
+    s = hil.step(1)
+    assert not s.faults
+    assert S.SAFE_STATE not in s.statuses[1] and S.CMD_WATCHDOG in s.statuses[1]
+    assert S.SAFE_STATE in s.statuses[0]
+
+
+def test_each_leg_node_has_its_own_command_watchdog_in_real_time(start_hil):
+    """Real time at 1 kHz, timeout 100 ms: the bench keeps leg 0 alive (an ACT_CMD every
+    10 ms) while leg 1, commanded once, stays silent: leg 1's watchdog trips, on hil_sim's own
+    clock past its 100 ms (and within half a second: an emulated VM stalls); the heartbeat
+    goes on with SAFE_STATE set. The bench's clock only paces the keep-alives."""
+    S = cl.Status
+    hil = start_hil("--robot").link
+    s0 = hil.reset(integrator="rk4", hold_length=True, cmd_timeout_ms=100)
+    hil.start_realtime(decimation=20)
+    _hold_command(hil, s0, 0)
+    seq1 = _hold_command(hil, s0, 1)
+    tripped, end = [], time.monotonic() + 20.0
+    leg1 = None
+    while leg1 is None and time.monotonic() < end:
+        hil.keepalive()                        # leg 0's ACT_CMD (modes KEEP)
+        hil.poll(0.01)
+        tripped += [f for f in hil.faults() if f.code == cl.FaultCode.CMD_TIMEOUT]
+        leg1 = next((f for f in tripped if f.frame_id == cl.ACT_CMD_L1), None)
+    hb = hil.heartbeat(timeout=5)
+    hil.stop_realtime()
+    assert leg1 is not None, f"leg 1's watchdog never tripped (timeouts seen: {tripped})"
+    assert leg1.seq == seq1 and leg1.detail == 100 and 100.0 <= leg1.value < 600.0, str(leg1)
+    assert hb.state == cl.SimState.REALTIME and S.SAFE_STATE in hb.status

@@ -23,6 +23,10 @@ def pair():
     sim.shutdown()
 
 
+# leg 0's watchdog armed, leg 1's tripped (each leg node's own St_Status)
+LEG_STATUS = (cl.Status.ASSEMBLED | cl.Status.CMD_WATCHDOG, cl.Status.ASSEMBLED | cl.Status.SAFE_STATE)
+
+
 def _send(link, sim, name, values):
     sim.send(link.encode(name, values))
 
@@ -54,7 +58,8 @@ def _robot_sample(link, sim, tick, rng, order=None):
                    (f"ST_REACT_A{sfx}", ra), (f"ST_REACT_B{sfx}", rb), (f"ST_CONTACT{sfx}", ct)]
         statuses.append((f"ST_STATUS{sfx}", {"St_Tick": tick, "St_StepCount": tick, "St_Time": tick * 1e-3,
                                              "St_State": 1, "St_ActSeq": 3 + k, "St_CtrlSeq": 7,
-                                             "St_StrokeMask": k + 1}))
+                                             "St_StrokeMask": k + 1,
+                                             "St_Status": int(LEG_STATUS[k])}))
     for name, values in frames + statuses:
         _send(link, sim, name, values)
     return q, qd, lengths, forces, reactions
@@ -71,6 +76,8 @@ def test_a_robot_sample_in_the_cores_order(pair):
     assert np.array_equal(s.lengths, lengths) and np.array_equal(s.forces, forces)
     assert np.array_equal(s.reactions, reactions)
     assert s.act_seqs == (3, 4) and s.stroke_mask == 1 | (2 << 2)
+    # each leg node's own status bits (leg 1's watchdog tripped, leg 0's not)
+    assert s.statuses == LEG_STATUS and s.status == LEG_STATUS[0]
     assert [c.state for c in s.contacts] == [cl.ContactState.STUCK] * 2
     assert [c.normal for c in s.contacts] == [150.0, 151.0]
     assert [c.tangential for c in s.contacts] == [-20.0, -19.0]

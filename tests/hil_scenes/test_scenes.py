@@ -39,8 +39,36 @@ CHANNEL = os.environ.get("LEGSIM_HIL_CHANNEL", "vcan0")
 REQUIRE = os.environ.get("LEGSIM_HIL_REQUIRE") == "1"
 FIXTURES = Path(__file__).resolve().parent / "fixtures"
 SCENES = [p.stem for p in shipped_scenes(ROOT)]
-# heavy_shank_free_fall names models/heavy_shank.toml (shank + 2 kg); robot_box_load pushes the box.
-FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml"]
+# heavy_shank_free_fall names models/heavy_shank.toml (shank + 2 kg); robot_box_load pushes the box;
+# robot_slide_start starts both feet sliding (START_CMD's Start_SlidingContacts).
+FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml", "robot_slide_start.toml"]
+
+# Scenes that show a bug of the core another branch fixes (issue 22): each is shipped with the
+# checks it should meet and marked xfail (strict: it turns green, and must be unmarked, when the
+# fix merges). XFAIL_RUN: the run itself fails (hil_sim HALTED); XFAIL_VERDICT: its verdict
+# (tests/hil_verdicts) fails.
+TOUCHDOWN_AT_STEP_END = ("issue 22 section 1 (branch events): the touchdown is taken at the end of the step "
+                         "that crossed it, 3.0e-4 rad off the event-locating reference after a 1 cm drop")
+XFAIL_RUN = {
+    "robot_stops_stuck": "issue 22 section 2 (branch impacts): 40 rows on 39 coordinates drop the stroke stops, "
+                         "the step fails UNREACHABLE at 0.271 s (hil_sim HALTED)",
+    "robot_crouch": "issue 22 section 2 (branch impacts): the crouch returns SINGULAR at step 298 (hil_sim HALTED)",
+}
+XFAIL_VERDICT = {
+    **XFAIL_RUN,
+    "robot_drop_1cm": TOUCHDOWN_AT_STEP_END,
+    "robot_throw": TOUCHDOWN_AT_STEP_END,
+    "robot_land_switch": TOUCHDOWN_AT_STEP_END,
+    "robot_slope_steep": "issue 22 section 1 (branch events): a starting contact state that cannot hold is "
+                         "resolved after the first step, not at t = 0",
+    "robot_drop_high": "issue 22 section 2 (branch impacts): stops are not checked after a touchdown's "
+                       "projection, the uppers end 2.8 mm past their minima at 0.080 s",
+}
+
+
+def xfail(names, reasons):
+    return [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=reasons[n])) if n in reasons else n
+            for n in names]
 
 
 def _skip_or_fail(reason: str):
@@ -123,7 +151,7 @@ def _record(spec, hil, out_dir):
     assert rec["complete"], f"{sc.name}: run did not complete: {rec['errors']}"
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", xfail(SCENES, XFAIL_RUN))
 def test_scene(name, hil, out_dir):
     _record(name, hil, out_dir)
 

@@ -29,7 +29,7 @@ from legsim_bench.cli import main as bench_main  # noqa: E402
 from legsim_bench.hil.runner import hil_sim_path  # noqa: E402
 from legsim_bench.recording import load_recording  # noqa: E402
 from legsim_bench.scene import cli_path, shipped_scenes  # noqa: E402
-from test_scenes import FIXTURE_SCENES  # noqa: E402
+from test_scenes import FIXTURE_SCENES, XFAIL_VERDICT, xfail  # noqa: E402
 
 OUT = Path(os.environ.get("LEGSIM_SCENES_OUT", ROOT / "out" / "hil_scenes"))
 SCENES = [p.stem for p in shipped_scenes(ROOT)] + [Path(f).stem for f in FIXTURE_SCENES]
@@ -46,7 +46,7 @@ def _recording_path(name: str) -> Path:
     return path
 
 
-@pytest.mark.parametrize("name", SCENES)
+@pytest.mark.parametrize("name", xfail(SCENES, XFAIL_VERDICT))
 def test_recorded_scene_passes_its_checks(name, capsys):
     rc = bench_main(["check", str(_recording_path(name)), "--no-plots"])
     assert rc == 0, capsys.readouterr().out
@@ -77,3 +77,33 @@ def test_a_robot_scene_with_a_box_load_moves_the_box_as_pushed():
     assert [x["name"] for x in rec["loads"] if x.get("box")] == ["box.load", "box.moment"]
     q = np.array([s["q"] for s in rec["samples"]])
     assert q[-1, 0] - q[0, 0] > 1e-4 and q[-1, 1] - q[0, 1] < -1e-5
+
+
+def test_a_start_off_the_stance_reaches_hil_sim():
+    """START_CMD: hil_sim's RESET starts the robot where legsim_cli does: robot_drop_1cm's stance
+    lifted 1 cm with both feet free, robot_throw's moving at (1, 0.5) m/s (float32), and
+    robot_slope_steep on the scene's ground (hil_sim --ground) with its feet stuck."""
+    drop = load_recording(_recording_path("robot_drop_1cm"))["samples"][0]
+    assert [c["state"] for c in drop["contacts"]] == ["free", "free"]
+    assert drop["q"][1] == pytest.approx(1.01, abs=1e-6)
+    throw = load_recording(_recording_path("robot_throw"))["samples"][0]
+    qd = np.array(throw["qd"]).reshape(-1, 3)
+    assert qd[:, 0] == pytest.approx(1.0, abs=1e-6) and qd[:, 1] == pytest.approx(0.5, abs=1e-6)
+    slope = load_recording(_recording_path("robot_slope_steep"))["samples"][0]
+    assert slope["q"][2] == pytest.approx(0.3, abs=1e-6)   # the stance parallel to the 0.3 rad line
+    (xr, yr), (xl, yl) = [(c["x"], c["y"]) for c in slope["contacts"]]
+    assert (yr - yl) / (xr - xl) == pytest.approx(np.tan(0.3), abs=1e-6)
+    slide = load_recording(_recording_path("robot_slide_start"))["samples"]
+    assert [c["state"] for c in slide[0]["contacts"]] == ["sliding", "sliding"]
+
+
+def test_a_command_switches_in_the_exchange_after_its_foot_lands():
+    """robot_land_switch over CAN: the bench sends the right upper's new set-point in the exchange
+    right after the sample whose Ct_Events hold the right foot's touchdown, never before."""
+    rec = load_recording(_recording_path("robot_land_switch"))
+    td = next(s["step"] for s in rec["samples"] if "touchdown" in s["contacts"][0]["events"])
+    sent = [(c["step"], c["right.upper"][1]) for c in rec["commands"] if "right.upper" in c]
+    before = {v for k, v in sent if k < td}
+    after = {v for k, v in sent if k >= td}
+    assert td == 46 and len(before) == 1 and len(after) == 1
+    assert after.pop() - before.pop() == pytest.approx(0.02, abs=1e-6)

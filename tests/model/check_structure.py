@@ -74,6 +74,22 @@ def main():
         foot = leg_doc["foot"]["body"] - 1
         if [c["body"] for c in model["contacts"]] != [1 + k * nb + foot for k in range(len(robot["leg"]))]:
             failures.append(f"robot contacts: {model['contacts']}")
+        # the generator's separator (layout.cpp's rule): the box of four and six legs, none for
+        # the leg (six rows on its upper rod) or two legs (twelve hip rows); generate() leaves
+        # the separated ones to the general path
+        spec = importlib.util.spec_from_file_location("kernel_codegen", "firmware_core/tools/kernel_codegen.py")
+        kc = importlib.util.module_from_spec(spec)
+        spec.loader.exec_module(kc)
+        for path, want in (("models/leg.toml", None), ("models/robot.toml", None),
+                           ("models/robot4.toml", 0), ("models/robot6.toml", 0)):
+            js = os.path.join(tmp, "sep.json")
+            (_, model), *_ = structure(tool, path, js)
+            for stance in (False, True):
+                got_sep = kc.separator(kc.Kernel("x", model, stance).rows)
+                if got_sep != want:
+                    failures.append(f"{path}: separator {got_sep} != {want} (stance {stance})")
+            if want is not None and "kernel_" in kc.generate([js]).split("kKernels[] = {")[1].split("nullptr")[0]:
+                failures.append(f"{path}: a kernel generated for a separated block")
         # a bad model: no structure, the loader's message
         r = subprocess.run([tool, "tests/model/fixtures/joint_body_zero.toml", "--emit-structure"],
                            capture_output=True, text=True)
@@ -81,7 +97,7 @@ def main():
             failures.append(f"bad model: exit {r.returncode}, {r.stderr!r}")
     for f in failures:
         print("FAIL", f)
-    print(f"{'FAILED' if failures else 'OK'}: structure of leg.toml, good_mini.toml, robot.toml")
+    print(f"{'FAILED' if failures else 'OK'}: structure of leg.toml, good_mini.toml, robot.toml; separators")
     return 1 if failures else 0
 
 

@@ -651,9 +651,10 @@ static void test_non_regular_files_are_refused_without_blocking(void) {
   fs::remove_all(dir);
 }
 
-// ---- the ground's slope: one rule, stated in legsim.h -------------------------------------
-// legsim.h's legsim_ground_desc states the bound ("|slope_rad| <= B"); the loader and the
-// core's check both take a slope of B and refuse the next double past it.
+// ---- the ground's slope: one rule, one constant of legsim.h ------------------------------
+// LEGSIM_MAX_SLOPE_RAD is the bound; legsim_ground_desc's documentation states it by name
+// ("|slope_rad| <= LEGSIM_MAX_SLOPE_RAD = B rad" with B its value, below pi/2); the loader and
+// the core's check both take a slope of B and refuse the next double past it.
 static void test_slope_rule_is_the_headers(void) {
   std::ifstream f("firmware_core/include/legsim/legsim.h");
   std::stringstream ss;
@@ -662,11 +663,12 @@ static void test_slope_rule_is_the_headers(void) {
   const size_t end = h.find("typedef struct legsim_ground_desc");
   TEST_ASSERT_TRUE(end != std::string::npos);
   const std::string doc = h.substr(h.rfind("/*", end), end - h.rfind("/*", end));
-  const std::string rule = "|slope_rad| <= ";
+  const std::string rule = "|slope_rad| <= LEGSIM_MAX_SLOPE_RAD = ";
   const size_t at = doc.find(rule);
-  TEST_ASSERT_TRUE_MESSAGE(at != std::string::npos, ("legsim.h states no \"|slope_rad| <= B\": " + doc).c_str());
-  const double bound = std::strtod(doc.c_str() + at + rule.size(), nullptr);
-  TEST_ASSERT_TRUE(bound > 1.0 && bound < 1.5708);
+  TEST_ASSERT_TRUE_MESSAGE(at != std::string::npos, ("legsim.h states no \"" + rule + "B\": " + doc).c_str());
+  const double bound = LEGSIM_MAX_SLOPE_RAD;
+  TEST_ASSERT_EQUAL_DOUBLE(bound, std::strtod(doc.c_str() + at + rule.size(), nullptr));
+  TEST_ASSERT_TRUE(bound > 1.0 && bound < std::acos(-1.0) / 2);
   const double past = std::nextafter(bound, 2.0);
 #if LEGSIM_MAX_CONTACTS >= 2 && LEGSIM_MAX_BODIES >= 13
   char buf[32];

@@ -7,6 +7,7 @@ the argument, its value and its range.
 """
 from __future__ import annotations
 
+import ctypes
 import re
 
 import numpy as np
@@ -73,6 +74,50 @@ def test_refused_assemble_on_ground_changes_nothing(moving_robot, kwargs, error)
     moving_robot.step(5)
     twin.step(5)
     assert np.array_equal(moving_robot.q, twin.q)
+
+
+def _storage(s: legsim.Sim) -> bytes:
+    """The whole sim: every byte of its storage (the sim keeps nothing outside it)."""
+    return ctypes.string_at(s.handle.value, s.library.sim_size)
+
+
+def _everything(s: legsim.Sim) -> dict:
+    """Everything the sim tells through its public calls (raw bytes where it has them)."""
+    out = {"state": s.state_bytes(), "qdd": s.qdd.tobytes(), "time": s.time,
+           "steps": s.step_count, "report": repr(s.report()), "stroke": s.stroke_event_mask(),
+           "constraints": s.constraints()[0].tobytes(),
+           "lengths": b"".join(a.tobytes() for a in s.actuator_lengths()),
+           "forces": s.actuator_forces().tobytes(), "multipliers": s.multipliers().tobytes(),
+           "reactions": s.reactions().tobytes(), "contacts": s.contacts().tobytes(),
+           "options": s.options}
+    return out
+
+
+# Each refusal at its own stage: the argument check before any C call, the pose's assembly
+# (pose is applied first), the stance's range check, the stance's solve. A refused call at
+# the stance's stages has already run the pose's assembly (q moved, feet made free) inside.
+@pytest.mark.parametrize("kwargs, error", [
+    ({"lengths": [0.66, 0.62]}, ValueError),
+    ({"pose": "no_such_pose"}, ValueError),
+    ({"feet_mid": 1e9}, legsim.BadInputError),
+    ({"feet_mid": float("nan")}, legsim.BadInputError),
+    ({"lengths": [0.30, 0.30, 0.30, 0.30]}, legsim.OutOfStrokeError),
+    ({"lengths": [0.30, 0.30, 0.30, 0.30], "pose": None}, legsim.OutOfStrokeError),
+])
+def test_refused_assemble_on_ground_leaves_the_whole_state(moving_robot, kwargs, error):
+    """The full state, not a few fields: every byte of the sim's storage and every public
+    output are the same after the refused call as before it (and the storage is compared
+    before any public read after the call)."""
+    moving_robot.command_length("left.upper", 0.62)  # a command of each kind in the state
+    moving_robot.step(1)
+    seen = _everything(moving_robot)
+    storage = _storage(moving_robot)  # after the reads: legsim_constraints uses scratch in it
+    with pytest.raises(error):
+        moving_robot.assemble_on_ground(**kwargs)
+    assert _storage(moving_robot) == storage
+    after = _everything(moving_robot)
+    for key in seen:
+        assert after[key] == seen[key], key
 
 
 def test_assemble_on_ground_bad_feet_mid_is_named(moving_robot):

@@ -92,6 +92,7 @@ def leg_frame(name: str, leg: int) -> str:
     return f"{name}_L{leg}" if leg else name
 
 CONTROL, ACT_CMD, LOAD_CMD = 0x080, 0x100, 0x110
+START_CMD = 0x081    # a robot's start off the stance, for the next RESET
 FAULT, HEARTBEAT = 0x020, 0x700
 ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS = range(0x200, 0x206)
 STATE_IDS = (ST_POS, ST_VEL, ST_ACT, ST_REACT_A, ST_REACT_B, ST_STATUS)
@@ -285,6 +286,7 @@ class State:
     legs: int = 1              # 2: the robot (box first in q, contacts, per-leg counters)
     contacts: list[Contact] = field(default_factory=list)   # robot: one per foot, leg order
     act_seqs: tuple[int, ...] = ()   # robot: each leg's St_ActSeq (act_seq is leg 0's)
+    statuses: tuple[Status, ...] = ()   # robot: each leg node's St_Status (status is leg 0's)
 
     @property
     def status_names(self) -> list[str]:
@@ -417,7 +419,7 @@ class HilLink:
         #: replayed trace's own (trace.TraceBus.clock)
         self.clock: Callable[[], float] = getattr(bus, "clock", time.monotonic)
         self._trace = None   # a trace.TraceWriter while a session is logged
-        self._seq = {CONTROL: 0, **{fid + LEG_OFFSET * k: 0 for k in range(ROBOT_LEGS)
+        self._seq = {CONTROL: 0, START_CMD: 0, **{fid + LEG_OFFSET * k: 0 for k in range(ROBOT_LEGS)
                                     for fid in (ACT_CMD, LOAD_CMD)}}
         self._partial: dict[int, dict[int, dict]] = {}   # tick -> frame id -> signals
         self._states: Deque[State] = collections.deque()
@@ -591,6 +593,7 @@ class HilLink:
         s.reactions = np.concatenate([leg.reactions for leg in legs])
         s.stroke_mask = sum(leg.stroke_mask << (2 * k) for k, leg in enumerate(legs))
         s.act_seqs = tuple(leg.act_seq for leg in legs)
+        s.statuses = tuple(leg.status for leg in legs)
         s.legs = ROBOT_LEGS
         s.contacts = []
         for k in range(ROBOT_LEGS):
@@ -656,12 +659,15 @@ class HilLink:
     def reset(self, variant: str | int = "revolute", integrator: str | int = "rk4",
               step_s: float = 1e-3, pose: int = 0, *, lengths=None, hold_length: bool = False,
               disable: int = 0, cmd_timeout_ms: int | None = None, contact_law: str | int = 0,
-              free_contacts: int = 0) -> State:
+              free_contacts: int = 0, start: dict | None = None) -> State:
         """New session: builds the sim, assembles the pose (then the actuator lengths, if
         given) and sets every actuator to zero force (or, hold_length, to hold its assembled
         length); lockstep mode. cmd_timeout_ms: None = hil_sim's default, 0 = no timeout.
         The robot: contact_law ("lcp" 0, "paper" 1) and free_contacts (bit k: foot k free
-        after the assembly on the ground). Returns the assembled state (step 0)."""
+        after the assembly on the ground); start (a scene's [start]: lift, tilt, velocity, spin,
+        and the feet given stuck_contacts, sliding_contacts as bit masks) goes first, in a
+        START_CMD that this RESET uses (a refused one raises its HilFault). Returns the
+        assembled state (step 0)."""
         step_ns = round(step_s * 1e9)
         timeout = CMD_TIMEOUT_DEFAULT if cmd_timeout_ms is None else \
             (CMD_TIMEOUT_NONE if cmd_timeout_ms == 0 else int(cmd_timeout_ms))
@@ -675,7 +681,27 @@ class HilLink:
                 leg, a = divmod(i, len(ACTUATORS))
                 sig[leg_frame(f"Ctrl_Length_{ACTUATORS[a]}", leg)] = float(v)
         self._states.clear()
-        return self._control(Command.RESET, **sig)
+        if start is not None:
+            self.send_start(**start)
+        state = self._control(Command.RESET, **sig)
+        if start is not None:   # hil_sim answers frames in order: a START_CMD's FAULT came first
+            for f in list(self._faults):
+                if f.frame_id == START_CMD:
+                    self._faults.remove(f)
+                    raise HilFault(f)
+        return state
+
+    def send_start(self, lift: float = 0.0, tilt: float = 0.0, velocity=(0.0, 0.0), spin: float = 0.0,
+                   stuck_contacts: int = 0, sliding_contacts: int = 0, use: bool = True) -> int:
+        """One START_CMD: the next RESET moves the robot's stance rigidly (float32 values, as
+        the DBC carries them). Returns its counter."""
+        seq = self.next_seq(START_CMD)
+        self._send(self.encode("START_CMD", {
+            "Start_Seq": seq, "Start_Use": 1 if use else 0, "Start_StuckContacts": int(stuck_contacts),
+            "Start_SlidingContacts": int(sliding_contacts), "Start_Lift": float(lift),
+            "Start_Tilt": float(tilt), "Start_Vx": float(velocity[0]), "Start_Vy": float(velocity[1]),
+            "Start_Spin": float(spin)}))
+        return seq
 
     def step(self, n: int = 1, timeout: float | None = None) -> State:
         """Lockstep: exactly n fixed steps, then the state after them."""

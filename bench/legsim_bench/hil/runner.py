@@ -142,9 +142,14 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
     silent_until = -1
     bar = None
     feet = {}
-    if scene.robot:   # the feet's RESET options (Ctrl_ContactLaw, Ctrl_FreeContacts)
-        free = sum(1 << scene.model_info.contacts.index(c) for c, v in scene.contacts.items() if v == "free")
-        feet = {"contact_law": scene.contact_law, "free_contacts": free}
+    if scene.robot:   # the feet's RESET options (Ctrl_ContactLaw, Ctrl_FreeContacts; START_CMD)
+        def mask(state):
+            return sum(1 << scene.model_info.contacts.index(c) for c, v in scene.contacts.items() if v == state)
+        feet = {"contact_law": scene.contact_law, "free_contacts": mask("free")}
+        if scene.start is not None:
+            feet["start"] = {**{k: scene.start[k] for k in ("lift", "tilt", "velocity", "spin")},
+                             "stuck_contacts": mask("stuck"), "sliding_contacts": mask("sliding")}
+    fired: set = set()   # (contact, event) raised so far: a switch's
     try:
         s0 = link.reset(variant=scene.variant, integrator=scene.integrator, step_s=scene.step_s,
                         pose=scene.pose, lengths=scene.lengths,
@@ -190,7 +195,7 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                 if inj.is_silence:
                     silent_until = max(silent_until, k + inj.silence_steps)
             if k >= silent_until and any(c is not None for c in scene.commands):
-                sp = scene.setpoints(k, rec["initial_lengths"])
+                sp = scene.setpoints(k, rec["initial_lengths"], fired)
                 args, logged = [], {}
                 names = scene.actuator_names if scene.robot else ACTUATORS
                 for a, v in enumerate(sp):
@@ -222,6 +227,8 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                                       "fault": _fault_dict(e.fault)})
                 break
             rec["samples"].append(_state_dict(s, t_wall0))
+            for f, c in zip(scene.model_info.contacts if scene.robot else (), rec["samples"][-1].get("contacts", [])):
+                fired.update((f, e) for e in c["events"])
             link.faults()  # the same faults are in s.faults: keep the link's queue empty
             last_ok["CONTROL"] = s.ctrl_seq
             if bar is not None:

@@ -15,12 +15,15 @@ from scipy.optimize import curve_fit
 
 from ..reference import ForceCommand, LegModel, LengthCommand
 from ..reference.commands import Sinusoid, Staircase, Step
+from ..reference.model_file import read_model_file
 from ..reference.robot import RobotModel
+from ..reference.robot_events import simulate_events
 from ..scene import ACTUATORS, Scene, find_root
 from .leg import Leg, constraint_residual, slot_s, static_balance
 from .result import CheckResult, Evaluation
 
-__all__ = ["evaluate_analysis", "evaluate_robot", "robot_reference",
+__all__ = ["evaluate_analysis", "evaluate_robot", "robot_reference", "robot_model", "robot_events_reference",
+           "off_stance", "needs_stance_reference",
            "robot_arrays", "robot_growth", "robot_statics_reference", "robot_inverse_reference", "robot_slip_starts", "robot_table2", "robot_slip_onset",
            "EVENT_NAMES",
            "CONTACT_EVENTS"]
@@ -225,7 +228,7 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
     (ValueError)."""
     if any(v != "stuck" for v in scene.contacts.values()):
         raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
-    model = RobotModel.from_toml(scene.model_path)
+    model = robot_model(scene)
     start = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
     cmds = []
     for a in range(model.na):
@@ -241,6 +244,159 @@ def robot_reference(scene: Scene, times, root: Path | None = None):
     r = model.simulate(float(t[-1]), t_eval=t, actuators=cmds, start=start,
                        gravity="gravity" not in scene.disable, box_load=scene.box_load or (0.0, 0.0, 0.0))
     return model, r
+
+
+def robot_model(scene: Scene) -> RobotModel:
+    """RobotModel of the scene's robot file on the scene's ground (its [ground], if any)."""
+    path = Path(scene.model_path)
+    if not scene.ground_given:
+        return RobotModel.from_toml(path)
+    data = read_model_file(path)
+    data["ground"] = {**data.get("ground", {}), **{k: float(scene.ground[k])
+                                                  for k in ("slope", "mu_static", "mu_kinetic")}}
+    return RobotModel(data, path.parent)
+
+
+def off_stance(scene: Scene) -> bool:
+    """The scene starts off RobotModel's stance on stuck feet ([start], or a foot not stuck)."""
+    return scene.start is not None or any(v != "stuck" for v in scene.contacts.values())
+
+
+def needs_stance_reference(scene: Scene) -> bool:
+    """Its [checks] compare with RobotModel's stance (else: the run's own invariants only)."""
+    ch = scene.checks
+    return ch.slips is not None or ch.lifts is not None or any(
+        getattr(ch, k) is not None for k in ("position_m", "angle_rad", "actuator_force_n", "reaction_n",
+                                             "ground_force_n", "stays_put_m", "growth_rel"))
+
+
+def _f32(x):
+    return np.asarray(x, float).astype(np.float32).astype(float)
+
+
+def robot_events_reference(scene: Scene, times, sent: bool = False):
+    """(model, EventResult, t_switch) of a robot dynamics scene through its contact events
+    (robot_events.simulate_events) at `times`: the scene's stance (at `lengths`) moved as its
+    [start] says, each foot's state as the scene gives it (else stuck on the ground, free above
+    it, sliding along its velocity), its constant commands; a switch holds `before` and
+    t_switch is the reference's time of its event (inf: none; the reference is the run's
+    until then). sent: the float32 values the DBC carried (lengths, start, setpoints)."""
+    rnd = _f32 if sent else (lambda x: np.asarray(x, float))
+    model = robot_model(scene)
+    asm = model.assemble(None if scene.lengths is None else rnd(scene.lengths))
+    z0, zd0 = asm.z.copy(), np.zeros(7)
+    g = model.ground
+    n = np.array([-math.sin(g.slope), math.cos(g.slope)])
+    tg = np.array([math.cos(g.slope), math.sin(g.slope)])
+    if scene.start is not None:
+        s = scene.start
+        lift, tilt, spin = (float(rnd(s[k])) for k in ("lift", "tilt", "spin"))
+        z0[:2] += lift * n
+        z0[2] += tilt
+        zd0[:2] = rnd(s["velocity"])
+        zd0[2] = spin
+    K = model.kinematics(z0, zd0)
+    states, signs = [], []
+    for k, foot in enumerate(scene.model_info.contacts):
+        gap = float(n @ (K.foot[k] - np.asarray(g.point, float)))
+        vt = float(tg @ (K.footJ[k] @ zd0))
+        st = scene.contacts.get(foot, "stuck" if abs(gap) <= scene.newton_tol else "free")
+        states.append(st)
+        signs.append((1 if vt > 0 else -1) if st == "sliding" else 0)
+    cmds = []
+    for a in range(model.na):
+        c = scene.commands[a]
+        if c is None:
+            cmds.append(LengthCommand(float(asm.lengths[a])) if scene.init == "hold_length" else ForceCommand(0.0))
+            continue
+        v = {"hold": c.schedule.value, "switch": c.schedule.before,
+             "initial": float(asm.lengths[a])}.get(c.schedule.kind)
+        if v is None:
+            raise ValueError(f"{c.name}: the event-locating reference takes constant commands "
+                             f"(got {c.schedule.kind})")
+        v = float(rnd(v)) if c.schedule.kind != "initial" else v
+        cmds.append(ForceCommand(v) if c.mode == "force" else LengthCommand(v))
+    t = np.round(np.asarray(times, float) / scene.step_s) * scene.step_s
+    r = simulate_events(model, float(t[-1]), t, z0, zd0, tuple(states), tuple(signs), actuators=cmds,
+                        box_load=tuple(rnd(scene.box_load)) if scene.box_load else (0.0, 0.0, 0.0),
+                        gravity="gravity" not in scene.disable)
+    feet = scene.model_info.contacts
+    t_switch = min([e.t for c in scene.commands if c is not None and c.schedule.kind == "switch"
+                    for e in r.events if e.kind == c.schedule.event and feet[e.foot] == c.schedule.contact],
+                   default=math.inf)
+    return model, r, t_switch
+
+
+def robot_stroke_check(scene: Scene, d: dict, tol_check, where_t):
+    """[checks] in_stroke_m: every actuator's length inside its stroke (the stops hold)."""
+    lo = np.array([a[1][0] for a in scene.model_info.actuators])
+    hi = np.array([a[1][1] for a in scene.model_info.actuators])
+    L = d["lengths"]
+    out = np.maximum(np.maximum(lo - L, L - hi), 0.0)
+    acts = scene.actuator_names
+    tol_check("actuator lengths inside their strokes", "in_stroke_m", out, "m",
+              lambda r, c: f"{where_t(r)} {acts[c]}",
+              f"shortest {', '.join(f'{x:.5f}' for x in L.min(axis=0))} m "
+              f"(minima {', '.join(f'{x:g}' for x in lo)})")
+
+
+def robot_events_checks(ev, scene: Scene, d: dict, feet, bodies, tol_check, where_t, per_foot: bool,
+                        sent: bool = False):
+    """[checks] events: the run against robot_events_reference, until a switch's event: the
+    contact states at every sample, every reference event in the sample whose step holds it
+    (its foot's own events per_foot, else the sample's), no other contact event, positions,
+    angles and ground forces."""
+    results, t, h = ev.results, d["t"], scene.step_s
+    try:
+        model, r, t_sw = robot_events_reference(scene, t, sent)
+    except Exception as e:  # noqa: BLE001 - the reference's refusal is the verdict's failure
+        results.append(CheckResult("reference: robot_events (contact events located)", False, None, None, "", "",
+                                   str(e)))
+        return ev
+    ev.reference_run = r
+    upto = t <= t_sw + h + 1e-12            # the samples the reference is the run's (a switch's event)
+    n = int(np.sum(upto))
+    kinds = ("touchdown", "liftoff", "stick_to_slip", "slip_to_stick")
+
+    def got(i, k):
+        e = d["foot_events"][i][k] if per_foot else d["events"][i]
+        return set(e) & set(kinds)
+
+    bad_states = [f"{feet[k]} {d['state'][i, k]} (reference {r.states[i, k]}) at t = {t[i]:g} s"
+                  for i in range(n) for k in range(len(feet)) if str(d["state"][i, k]) != str(r.states[i, k])]
+    results.append(CheckResult("contact states vs the event-locating reference, every sample", not bad_states,
+                               float(len(bad_states)), None, "samples", "",
+                               "; ".join(bad_states[:4]) or f"{n} samples agree"))
+    missing, extra, found = [], [], []
+    ref_ev = [e for e in r.events if 1e-12 < e.t <= t[n - 1] + 1e-12 and e.t <= t_sw]
+    for e in ref_ev:
+        i = int(np.searchsorted(t, e.t - 1e-12))
+        if i >= len(t) or e.kind not in got(i, e.foot):
+            missing.append(f"{feet[e.foot]} {e.kind} at {e.t:.6f} s not in the sample at "
+                           f"{t[min(i, len(t) - 1)]:g} s")
+        else:
+            found.append(f"{feet[e.foot]} {e.kind} {e.t:.6f} s")
+    for i in range(1, n):
+        for k in range(len(feet) if per_foot else 1):
+            for kind in got(i, k):
+                if not any(e.kind == kind and (not per_foot or e.foot == k) and t[i - 1] < e.t + 1e-12 <= t[i] + 2e-12
+                           for e in ref_ev):
+                    extra.append(f"{feet[k] if per_foot else 'a foot'} {kind} at t = {t[i]:g} s")
+    results.append(CheckResult("contact events in the step that holds the reference's", not missing and not extra,
+                               float(len(missing) + len(extra)), None, "events", "",
+                               "; ".join(missing + [x + " (not in the reference)" for x in extra]) or
+                               "; ".join(found) or "no event"))
+    dq = d["q"][:n] - r.q[:n]
+    dq[:, 2::3] = _wrap(dq[:, 2::3])
+    tol_check("positions x, y vs the event-locating reference", "position_m", np.delete(dq, np.s_[2::3], axis=1),
+              "m", lambda r_, c: f"{where_t(r_)} {bodies[c // 2]}.{'xy'[c % 2]}",
+              f"until {'the switch at ' + format(t_sw, '.6f') + ' s' if math.isfinite(t_sw) else 'the end'}")
+    tol_check("angles vs the event-locating reference", "angle_rad", dq[:, 2::3], "rad",
+              lambda r_, c: f"{where_t(r_)} {bodies[c]}.phi")
+    g = np.concatenate([d["normal"][1:n] - r.normal[1:n], d["tangential"][1:n] - r.tangential[1:n]], axis=1)
+    tol_check("ground forces N, T per foot vs the event-locating reference", "ground_force_n", g, "N",
+              lambda r_, c: f"{where_t(r_ + 1)} {feet[c % len(feet)]}.{'NT'[c // len(feet)]}")
+    return ev
 
 
 def robot_arrays(out: dict) -> dict:
@@ -307,7 +463,7 @@ def robot_statics_reference(scene: Scene):
     if any(any(x != 0 for x in v) for v in scene.forces.values()):
         raise ValueError("RobotModel's statics has no leg force elements; this scene sets "
                          + ", ".join(scene.forces))
-    model = RobotModel.from_toml(scene.model_path)
+    model = robot_model(scene)
     st = model.statics(None if scene.lengths is None else np.asarray(scene.lengths, float),
                        gravity="gravity" not in scene.disable, rule=scene.statics_rule,
                        box_load=scene.box_load or (0.0, 0.0, 0.0))
@@ -321,7 +477,7 @@ def robot_inverse_reference(scene: Scene, times) -> list:
     statics_rule and box_load. ValueError unless exactly one actuator is uncommanded."""
     if any(any(x != 0 for x in v) for v in scene.forces.values()):
         raise ValueError("RobotModel has no leg force elements; this scene sets " + ", ".join(scene.forces))
-    model = RobotModel.from_toml(scene.model_path)
+    model = robot_model(scene)
     start = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
     follow = [a for a in range(model.na) if scene.commands[a] is None]
     if len(follow) != 1:
@@ -657,7 +813,7 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
                   lambda r, c: where_t(r))
 
     if scene.analysis == "assembly":
-        model = RobotModel.from_toml(scene.model_path)
+        model = robot_model(scene)
         a = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
         pose_checks(a.q[None], f"box ({a.q[0]:.6f}, {a.q[1]:.6f}, {a.q[2]:.6f})")
         return ev
@@ -665,6 +821,16 @@ def evaluate_robot(rec: dict, scene: Scene, root: Path | None = None):
         return _robot_statics_checks(ev, scene, d, out, tol_check, pose_checks)
     if scene.analysis == "inverse_dynamics":
         return _robot_inverse_checks(ev, scene, d, out, tol_check, pose_checks)
+    robot_stroke_check(scene, d, tol_check, where_t)
+    if ch.events or off_stance(scene) or not needs_stance_reference(scene):
+        # the run's own invariants, and with events = true the event-locating reference
+        tol_check("constraint residual |Phi(q)| (legsim's)", "residual", d["residual"], "m|rad",
+                  lambda r, c: where_t(r))
+        if ch.events:
+            robot_events_checks(ev, scene, d, feet, bodies, tol_check, where_t, per_foot=False)
+        else:
+            _robot_sequence_check(ev, d, feet)
+        return ev
     if ch.lifts is not None:
         return _robot_lift_checks(ev, scene, d, feet, bodies, float(out["ground"]["mu_static"]), root,
                                   tol_check)

@@ -89,7 +89,7 @@ def can_reference(scene, rec: dict, times, root: Path | None = None):
     both feet stuck: a scene with a free foot is refused (ValueError)."""
     if any(v != "stuck" for v in scene.contacts.values()):
         raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
-    model = RobotModel.from_toml(scene.model_path)
+    model = an.robot_model(scene)
     lengths = None if scene.lengths is None else np.float32(np.asarray(scene.lengths, float)).astype(float)
     start = model.assemble(lengths)
     names = rec.get("actuators") or list(scene.actuator_names)
@@ -138,6 +138,23 @@ def _sequence_check(ev, d: dict, feet) -> list[str]:
     return seq
 
 
+def _switch_check(ev, scene, rec: dict, d: dict, feet):
+    """A command switched on an event: its first setpoint `after` goes in the exchange right
+    after the sample in which its foot raised the event (Ct_Events), never before."""
+    for c in scene.commands:
+        if c is None or c.schedule.kind != "switch":
+            continue
+        s = c.schedule
+        k = feet.index(s.contact)
+        hit = [int(d["step"][i]) for i in range(len(d["t"])) if s.event in d["foot_events"][i][k]]
+        sent = [x["step"] for x in rec["commands"] if c.name in x and x[c.name][1] == np.float32(s.after)]
+        want = hit[0] if hit else None
+        ok = (sent[0] if sent else None) == want
+        ev.results.append(CheckResult(f"{c.name} switched at {s.contact}'s {s.event}", ok, None, None, "", "",
+                                      f"event in the sample at step {want}, 'after' sent from step "
+                                      f"{sent[0] if sent else None}"))
+
+
 def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
     """The checks of a robot scene run on hil_sim over CAN (an Evaluation)."""
 
@@ -178,7 +195,8 @@ def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
              "actuator_force_n": float32_allowance(d["forces"]),
              "ground_force_n": float32_allowance(np.concatenate([d["normal"], d["tangential"]], axis=1)),
              "reaction_n": float32_allowance(d["reactions"][..., 0:2]),
-             "stays_put_m": 2 * float32_allowance(xy), "residual": float32_allowance(d["residual"])}
+             "stays_put_m": 2 * float32_allowance(xy), "residual": float32_allowance(d["residual"]),
+             "in_stroke_m": float32_allowance(d["lengths"])}
     where_t = lambda r: f"t={t[r]:.4f}s"  # noqa: E731
 
     def tol_check(name, key, err, unit, label, detail=""):
@@ -202,9 +220,16 @@ def evaluate_robot_can(rec: dict, scene, root: Path | None = None):
     tol_check("constraint residual |Phi(q)| (legsim's, St_Residual)", "residual", d["residual"], "m|rad",
               lambda r, c: where_t(r))
     seq = _sequence_check(ev, d, feet)
+    an.robot_stroke_check(scene, d, tol_check, where_t)
+    if scene.switches:
+        _switch_check(ev, scene, rec, d, feet)
+    if ch.events:   # the event-locating reference, of what was sent (float32)
+        return an.robot_events_checks(ev, scene, d, feet, bodies, tol_check, where_t, per_foot=True, sent=True)
+    if an.off_stance(scene) or not an.needs_stance_reference(scene):
+        return ev
     reference = lambda sc, times, rt: can_reference(sc, rec, times, rt)  # noqa: E731
     if getattr(ch, "lifts", None) is not None:   # a swing: lift-off, touchdown (analyses' checks)
-        mu_s = RobotModel.from_toml(scene.model_path).ground.mu_static
+        mu_s = an.robot_model(scene).ground.mu_static
         return an._robot_lift_checks(ev, scene, d, feet, bodies, float(mu_s), root, tol_check,
                                      reference=reference)
     if ch.slips is not None:

@@ -68,6 +68,7 @@ typedef double legsim_real;
 #define LEGSIM_MAX_ACCEL_MPS2 1e6     /* driven actuator length accelerations */
 #define LEGSIM_MAX_GRID 1000          /* legsim_statics_sweep: n_grid in [2, MAX] */
 #define LEGSIM_MAX_FRICTION 10.0      /* ground friction coefficients: 0 <= mu_kinetic <= mu_static <= MAX */
+#define LEGSIM_MAX_SLOPE_RAD 1.5      /* ground slope_rad: |slope| <= MAX (about 86 degrees) */
 
 /* ---- status ------------------------------------------------------------ */
 typedef enum legsim_status {
@@ -167,8 +168,8 @@ typedef struct legsim_contact_desc {
 /* The ground: the line through point at angle slope_rad (counter-clockwise), tangent
  * t = (cos, sin), upward normal n = (-sin, cos); Coulomb friction with
  * 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. |point| <= LEGSIM_MAX_COORD,
- * |slope_rad| <= 1.5 (about 86 degrees; legsim_model_check and the model file loader
- * refuse a steeper one). Unused (all zero) in a model without contacts. */
+ * |slope_rad| <= LEGSIM_MAX_SLOPE_RAD = 1.5 rad (about 86 degrees; legsim_model_check and
+ * the model file loader refuse a steeper one). Unused (all zero) in a model without contacts. */
 typedef struct legsim_ground_desc {
   double point[2];
   double slope_rad;

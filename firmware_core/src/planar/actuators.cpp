@@ -21,6 +21,8 @@ legsim_status stops_layout(Sim &sim) {
   legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn, contacts);
   if (s == LEGSIM_OK) s = layout_finish(d.dyn, d.stop_drivers);
   d.dyn.stops = true;
+  // more rows than coordinates: the surplus are dependent (factor_build drops them)
+  d.dyn.surplus = uint8_t(d.dyn.m > sim.model.nq ? d.dyn.m - sim.model.nq : 0);
   contact_slides_mark(sim.model, d, d.dyn);
   return s;
 }
@@ -71,7 +73,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
     if (s == LEGSIM_OK) s = velocity_solve(sim, d.dyn, d.qd);
     // velocity_solve left the factor of the system with the stop: a stop that
     // nearly locks a dead centre would make every later solve ill-conditioned
-    if (s == LEGSIM_OK && factor_condition(d.factor) > real(LEGSIM_COND_WARN)) s = LEGSIM_ERR_SINGULAR;
+    if (s == LEGSIM_OK && factor_condition(d.factor) > real(LEGSIM_COND_SINGULAR)) s = LEGSIM_ERR_SINGULAR;
     if (s == LEGSIM_ERR_SINGULAR) {
       // A stroke end that is also a dead centre (the leg's lower stroke ends
       // where the knee is straight, as far as the geometry reaches): no stop can

@@ -183,8 +183,8 @@ legsim_status model_check(const legsim_model_desc *d, char *msg, size_t len) {
         return fail(msg, len, bad, "contact '", Name{c.name}, "': its body has a contact already");
   }
   const legsim_ground_desc &gd = d->ground;
-  if (!coord2(gd.point) || !in(gd.slope_rad, -1.5, 1.5))
-    return fail(msg, len, bad, "ground: point outside +-LEGSIM_MAX_COORD or |slope| > 1.5 rad (or not finite)");
+  if (!coord2(gd.point) || !in(gd.slope_rad, -LEGSIM_MAX_SLOPE_RAD, LEGSIM_MAX_SLOPE_RAD))
+    return fail(msg, len, bad, "ground: point outside +-LEGSIM_MAX_COORD or |slope| > LEGSIM_MAX_SLOPE_RAD (or not finite)");
   if (!in(gd.mu_kinetic, 0, LEGSIM_MAX_FRICTION) || !in(gd.mu_static, gd.mu_kinetic, LEGSIM_MAX_FRICTION))
     return fail(msg, len, bad, "ground: need 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION");
   if (msg && len > 0) msg[0] = '\0';

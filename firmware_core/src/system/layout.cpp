@@ -8,6 +8,70 @@ namespace legsim {
 
 namespace {
 legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first);
+
+// The group of each row once body `sep` is taken out (rows that share another body, directly
+// or through other rows, are in one group; numbered in the order of their lowest row), and
+// the number of groups; or -1 where a row has no body but sep (it would have no pivot
+// without it) or sep twice.
+int separated_groups(const Layout &out, int m, int sep, int *group) {
+  int parent[kMaxRows], body_row[kMaxBodies];
+  for (int b = 0; b < kMaxBodies; ++b) body_row[b] = -1;
+  auto root = [&](int i) {
+    while (parent[i] != i) i = parent[i] = parent[parent[i]];
+    return i;
+  };
+  for (int i = 0; i < m; ++i) {
+    parent[i] = i;
+    int others = 0;
+    for (int s = 0; s < 2; ++s) {
+      const int b = out.body[i][s];
+      if (b < 0 || b == sep) continue;
+      ++others;
+      if (body_row[b] < 0) {
+        body_row[b] = i;
+      } else {
+        const int a = root(body_row[b]), c = root(i);
+        if (a != c) parent[a < c ? c : a] = a < c ? a : c;  // the lower row is the root
+      }
+    }
+    if (others == 0) return -1;
+  }
+  int n = 0, number[kMaxRows];
+  for (int i = 0; i < m; ++i) {
+    const int r = root(i);
+    group[i] = r == i ? (number[i] = n++) : number[r];
+  }
+  return n;
+}
+
+// The body, if any, whose removal leaves the most groups, at least three, and that more than
+// kSeparatorMinRows rows act on (ties to the lowest body). Those rows are a clique of J W J^T
+// in any order, and the Schur complement costs three solves with B a factorization instead:
+// with the twelve hip rows of two legs the clique is the cheaper (measured: the general path
+// 3 % more a step with the box as the separator, firmware_core/benchmarks/results.md), so
+// the two-leg robot, and the leg (six rows on its upper rod), keep the order their generated
+// kernels share with this path (kernel_codegen.py's separator: the same rule).
+constexpr int kSeparatorMinRows = 12;
+int separator_body(const Layout &out, int m, int *group) {
+  if (kSeparatorRows < kMaxRows) return -1;  // a build for fewer legs keeps no room for it
+  bool seen[kMaxBodies] = {};
+  int best = -1, best_groups = 2, g[kMaxRows];
+  for (int i = 0; i < m; ++i)
+    for (int s = 0; s < 2; ++s) {
+      const int b = out.body[i][s];
+      if (b < 0 || seen[b]) continue;
+      seen[b] = true;
+      int on_b = 0;
+      for (int r = 0; r < m; ++r) on_b += out.body[r][0] == b || out.body[r][1] == b;
+      if (on_b <= kSeparatorMinRows) continue;
+      const int n = separated_groups(out, m, b, g);
+      if (n > best_groups || (n == best_groups && best >= 0 && b < best)) {
+        best = b, best_groups = n;
+        for (int r = 0; r < m; ++r) group[r] = g[r];
+      }
+    }
+  return best;
+}
 }  // namespace
 
 // The coordinate drivers' bodies are known once their values are: finish the
@@ -170,10 +234,12 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   const int m = out.m;
   for (int i = 0; i < m; ++i)
     if (out.src[i].kind == RowKind::Coordinate) out.body[i][0] = int8_t(dv.coord[out.src[i].index].body);
+  out.separator = -1;
+  int sep = -1;
   auto share_body = [&](int i, int j) {
     for (int si = 0; si < 2; ++si)
       for (int sj = 0; sj < 2; ++sj)
-        if (out.body[i][si] >= 0 && out.body[i][si] == out.body[j][sj]) return true;
+        if (out.body[i][si] >= 0 && out.body[i][si] != sep && out.body[i][si] == out.body[j][sj]) return true;
     return false;
   };
   const Kernel *k = out.kernel;
@@ -189,6 +255,12 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   int mj = 0;
   while (mj < m && out.src[mj].kind == RowKind::Joint) ++mj;
   const int nb = LEGSIM_MAX_CONTACTS > 0 && out.block > mj ? int(out.block) : mj;
+  // Every row in the block and a body shared by three or more groups of them: the rows
+  // are ordered (and the envelope built) on B, the system less that body's share, whose
+  // groups share nothing, each group's rows together; the solves add the body back
+  // (linear_solve.cpp).
+  int group[kMaxRows];
+  if (nb == m && m > 0) sep = separator_body(out, m, group);
   // reverse Cuthill-McKee over the joint rows (which keeps the envelope small), the
   // contact rows after them
   int rcm[kMaxRows];
@@ -215,6 +287,16 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
     if (fill(share, md, nb) < fill(share, rcm, nb))
       for (int p = 0; p < nb; ++p) rcm[p] = md[p];
   }
+  if (sep >= 0) {
+    // each group's rows together, in the order above (B is block diagonal by group: the
+    // same fill, and no envelope across groups)
+    int by_group[kMaxRows], k2 = 0;
+    for (int g = 0; k2 < nb; ++g)
+      for (int p = 0; p < nb; ++p)
+        if (group[rcm[p]] == g) by_group[k2++] = rcm[p];
+    for (int p = 0; p < nb; ++p) rcm[p] = by_group[p];
+    out.separator = int8_t(sep);
+  }
   for (int p = 0; p < nb; ++p) out.perm[rcm[p]] = uint8_t(p);
   for (int i = nb; i < m; ++i) out.perm[i] = uint8_t(i);
   return layout_pairs(out, 0, nullptr);
@@ -235,6 +317,7 @@ legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
           if (pj > pi || (i == j && sj < si)) continue;  // each lower entry (and diagonal pair) once
           if (pi < p0) continue;                          // the kernel's own
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
+          if (out.body[i][si] == out.separator) continue;  // B's entries only
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
           out.pair[np++] = {uint16_t(kBodyDof * (2 * i + si)), uint16_t(kBodyDof * (2 * j + sj)),
                             uint16_t(pi * kMaxRows + pj)};

@@ -13,16 +13,125 @@ namespace legsim {
 
 void factor_order(const Layout &layout, Factor &f) {
   f.of_state = false;  // about to be written
+  f.nredundant = 0;
   f.m = layout.m;
   f.kernel = layout.kernel;
+  f.separator = -1;  // factor_build sets it once B is factored
   std::memcpy(f.perm, layout.perm, sizeof f.perm);
   std::memcpy(f.first, layout.first, sizeof f.first);
 }
+
+namespace {
+// L D L^T of the assembled lower triangle of f.a in place, positions mk .. m-1 (those before:
+// the kernel's block, already factored), its pivots' range into pmin, pmax; false at a
+// pivot at or below the floor.
+bool eliminate(Factor &f, int mk, int surplus, real max_diag, real &pmin, real &pmax) {
+  const int m = f.m;
+  for (int i = mk; i < m; ++i) {
+    const int fi = f.first[i];
+    real *ai = &f.a(i, 0);
+    int j0 = fi;
+    if (fi < mk) {
+      // its columns in the kernel's block: L11 t = a by the kernel's sparse forward solve
+      // (the same products in the same order as the loop below, less the zero ones)
+      for (int j = 0; j < fi; ++j) ai[j] = 0;
+      f.kernel->forward(f.a.data(), ai, fi);
+      j0 = mk;
+    }
+    // row i as t_ij = L_ij D_j first (each from the ones before it), then L_ij = t_ij / D_j
+    for (int j = j0; j < i; ++j) {
+      const real *aj = &f.a(j, 0);
+      const int k0 = fi > f.first[j] ? fi : f.first[j];
+      real s = ai[j];
+      for (int k = k0; k < j; ++k) s -= ai[k] * aj[k];
+      ai[j] = s;
+    }
+    real d = ai[i];
+    for (int k = fi; k < i; ++k) {
+      const real t = ai[k];
+      ai[k] = t * f.a(k, k);
+      d -= t * ai[k];
+    }
+    if (!(d > kPivotFloor * max_diag)) {
+      if (f.nredundant < surplus && d == d) {
+        // a row that depends on the ones before it: dropped (1 / D = 0 zeroes its
+        // column of L in the rows after it and its multiplier in every solve)
+        for (int r = 0; r < m; ++r)
+          if (f.perm[r] == i) f.redundant[f.nredundant++] = uint8_t(r);
+        ai[i] = 0;
+        continue;
+      }
+      return false;
+    }
+    pmin = d < pmin ? d : pmin;
+    pmax = d > pmax ? d : pmax;
+    ai[i] = 1 / d;
+  }
+  return true;
+}
+
+// The envelope's solve: L D L^T y = y in the factor's own (permuted) order, without the
+// separator's correction.
+void solve_envelope(const Factor &f, real *y);
+
+// Layout::separator's part of a factor: u (the rows' coefficients on the body, by
+// position) and wb, read before B is factored.
+void separator_coefficients(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
+  const int b = layout.separator;
+  for (int e = 0; e < kBodyDof; ++e) f.wb[e] = Bodies::mass_inverse_times(w, kBodyDof * b + e, real(1));
+  for (int i = 0; i < layout.m; ++i) {
+    real *u = f.u[layout.perm[i]];
+    for (int e = 0; e < kBodyDof; ++e) u[e] = 0;
+    for (int s = 0; s < 2; ++s)
+      if (layout.body[i][s] == b)
+        for (int e = 0; e < kBodyDof; ++e) u[e] = rows.coef[i][s][e];
+  }
+}
+
+// With B factored: z = B^-1 u and the factor of S = W_b^-1 + u^T z; false when S has a
+// pivot at or below the floor (relative to its largest diagonal).
+bool separator_complement(Factor &f) {
+  const int m = f.m;
+  real y[kMaxRows];
+  for (int c = 0; c < kBodyDof; ++c) {
+    for (int p = 0; p < m; ++p) y[p] = f.u[p][c];
+    solve_envelope(f, y);
+    for (int p = 0; p < m; ++p) f.z[p][c] = y[p];
+  }
+  real smax = 0;
+  for (int r = 0; r < kBodyDof; ++r)
+    for (int c = 0; c <= r; ++c) {
+      real v = r == c ? 1 / f.wb[r] : real(0);
+      for (int p = 0; p < m; ++p) v += f.u[p][r] * f.z[p][c];
+      f.s[r][c] = v;
+      if (r == c) smax = v > smax ? v : smax;
+    }
+  for (int r = 0; r < kBodyDof; ++r) {  // L D L^T of the 3 x 3, as eliminate's loop
+    for (int c = 0; c < r; ++c) {
+      real t = f.s[r][c];
+      for (int k = 0; k < c; ++k) t -= f.s[r][k] * f.s[c][k];
+      f.s[r][c] = t;
+    }
+    real d = f.s[r][r];
+    for (int k = 0; k < r; ++k) {
+      const real t = f.s[r][k];
+      f.s[r][k] = t * f.s[k][k];
+      d -= t * f.s[r][k];
+    }
+    if (!(d > kPivotFloor * smax) || !std::isfinite(d)) return false;
+    f.s[r][r] = 1 / d;
+  }
+  return true;
+}
+}  // namespace
 
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
   const int m = layout.m;
   const Kernel *kern = layout.kernel;
   const int mk = kern ? kern->mj : 0;  // positions 0 .. mk-1: the kernel's block
+  // dependent rows that may be dropped: only the dynamics' layout with more rows than
+  // coordinates has them, and only that many (Layout::surplus)
+  const int surplus = layout.stops ? layout.surplus : 0;
   factor_order(layout, f);
   for (int i = mk; i < m; ++i)
     for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
@@ -46,6 +155,15 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   }
   real max_diag = 0;
   for (int i = mk; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
+  if (layout.separator >= 0) {
+    // the pivot floor is relative to J W J^T's diagonal, B's plus the separator's share
+    separator_coefficients(layout, rows, w, f);
+    for (int i = 0; i < m; ++i) {
+      real d = f.a(i, i);
+      for (int e = 0; e < kBodyDof; ++e) d += f.u[i][e] * f.wb[e] * f.u[i][e];
+      max_diag = d > max_diag ? d : max_diag;
+    }
+  }
   real pmin, pmax;
   if (kern) {
     // the block assembled and factored by the kernel, the largest diagonal of all found
@@ -62,38 +180,36 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     pmin = max_diag;
     pmax = 0;
   }
-  for (int i = mk; i < m; ++i) {
-    const int fi = f.first[i];
-    real *ai = &f.a(i, 0);
-    int j0 = fi;
-    if (fi < mk) {
-      // its columns in the kernel's block: L11 t = a by the kernel's sparse forward solve
-      // (the same products in the same order as the loop below, less the zero ones)
-      for (int j = 0; j < fi; ++j) ai[j] = 0;
-      kern->forward(f.a.data(), ai, fi);
-      j0 = mk;
+  bool ok = eliminate(f, mk, surplus, max_diag, pmin, pmax);
+  if (!ok && layout.separator >= 0) {
+    // B singular (a group whose rows fix its bodies with the separator held, e.g. a leg
+    // stretched straight) says nothing of J W J^T: factor the whole of it, dense
+    for (int i = 0; i < m; ++i) {
+      f.first[i] = 0;
+      for (int j = 0; j <= i; ++j) f.a(i, j) = 0;
     }
-    // row i as t_ij = L_ij D_j first (each from the ones before it), then L_ij = t_ij / D_j
-    for (int j = j0; j < i; ++j) {
-      const real *aj = &f.a(j, 0);
-      const int k0 = fi > f.first[j] ? fi : f.first[j];
-      real s = ai[j];
-      for (int k = k0; k < j; ++k) s -= ai[k] * aj[k];
-      ai[j] = s;
+    for (int k = 0; k < layout.npairs; ++k) {
+      const Pair &p = layout.pair[k];
+      const real *ci = wflat + p.ci, *cj = cflat + p.cj;
+      real dot = ci[0] * cj[0];
+      for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
+      aflat[p.aij] += dot;
     }
-    real d = ai[i];
-    for (int k = fi; k < i; ++k) {
-      const real t = ai[k];
-      ai[k] = t * f.a(k, k);
-      d -= t * ai[k];
-    }
-    if (!(d > kPivotFloor * max_diag)) {
-      f.condition = real(INFINITY);
-      return LEGSIM_ERR_SINGULAR;
-    }
-    pmin = d < pmin ? d : pmin;
-    pmax = d > pmax ? d : pmax;
-    ai[i] = 1 / d;
+    for (int i = 0; i < m; ++i)
+      for (int j = 0; j <= i; ++j)
+        for (int e = 0; e < kBodyDof; ++e) f.a(i, j) += f.u[i][e] * f.wb[e] * f.u[j][e];
+    pmin = max_diag;
+    pmax = 0;
+    f.nredundant = 0;
+    ok = eliminate(f, mk, surplus, max_diag, pmin, pmax);
+  } else if (ok && layout.separator >= 0) {
+    f.separator = layout.separator;
+    ok = separator_complement(f);
+    if (!ok) f.separator = -1;
+  }
+  if (!ok) {
+    f.condition = real(INFINITY);
+    return LEGSIM_ERR_SINGULAR;
   }
   // cond(J W^1/2) ~ sqrt of the pivot spread of J W J^T: an estimate, cheap and monotone.
   f.condition = std::sqrt(pmax / pmin);
@@ -101,8 +217,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
 }
 
 namespace {
-// L D L^T y = y in the factor's own (permuted) order.
-void solve_in_place(const Factor &f, real *y) {
+void solve_envelope(const Factor &f, real *y) {
   const int m = f.m, mk = f.kernel ? f.kernel->mj : 0;
   if (mk) f.kernel->forward(f.a.data(), y, 0);
   for (int i = mk; i < m; ++i) {
@@ -120,6 +235,26 @@ void solve_in_place(const Factor &f, real *y) {
   if (mk) f.kernel->backward(f.a.data(), y);
 }
 
+// (J W J^T)^-1 y in place in the factor's own (permuted) order: the envelope's solve, with a
+// separator B^-1 y less z S^-1 u^T B^-1 y.
+void solve_in_place(const Factor &f, real *y) {
+  solve_envelope(f, y);
+  if (f.separator < 0) return;
+  real t[kBodyDof];
+  for (int c = 0; c < kBodyDof; ++c) {
+    real v = 0;
+    for (int p = 0; p < f.m; ++p) v += f.u[p][c] * y[p];
+    t[c] = v;
+  }
+  for (int r = 0; r < kBodyDof; ++r)
+    for (int c = 0; c < r; ++c) t[r] -= f.s[r][c] * t[c];
+  for (int r = 0; r < kBodyDof; ++r) t[r] *= f.s[r][r];
+  for (int r = kBodyDof - 1; r >= 0; --r)
+    for (int c = r + 1; c < kBodyDof; ++c) t[r] -= f.s[c][r] * t[c];
+  for (int p = 0; p < f.m; ++p)
+    for (int c = 0; c < kBodyDof; ++c) y[p] -= f.z[p][c] * t[c];
+}
+
 // y = L D L^T x in the factor's order.
 void multiply(const Factor &f, const real *x, real *y) {
   const int m = f.m;
@@ -129,11 +264,18 @@ void multiply(const Factor &f, const real *x, real *y) {
     for (int k = f.first[i]; k < i; ++k) t[k] += f.a(i, k) * x[i];
     t[i] += x[i];
   }
-  for (int k = 0; k < m; ++k) t[k] /= f.a(k, k);  // t = D t
+  for (int k = 0; k < m; ++k) t[k] = f.a(k, k) != 0 ? t[k] / f.a(k, k) : real(0);  // t = D t (0: dropped)
   for (int i = 0; i < m; ++i) {  // y = L t
     real s = t[i];
     for (int k = f.first[i]; k < i; ++k) s += f.a(i, k) * t[k];
     y[i] = s;
+  }
+  if (f.separator < 0) return;
+  for (int c = 0; c < kBodyDof; ++c) {  // y += u W_b u^T x
+    real v = 0;
+    for (int p = 0; p < m; ++p) v += f.u[p][c] * x[p];
+    v *= f.wb[c];
+    for (int p = 0; p < m; ++p) y[p] += f.u[p][c] * v;
   }
 }
 

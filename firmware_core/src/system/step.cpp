@@ -95,11 +95,18 @@ inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stop
 }
 
 // Touchdown, lift-off, stick and slip (contact.cpp) at time `at`, the located ones first; a
-// change solves the derivative anew (and restarts generalized-alpha's history).
-inline legsim_status stage_contacts(Sim &s, double at, const ContactEvents *located = nullptr) {
+// change solves the derivative anew (and restarts generalized-alpha's history). A touchdown
+// projects the state onto the feet's rows, which can push an actuator past a stroke end: the
+// stops are checked after it as after the integrator's projection.
+inline legsim_status stage_contacts(Sim &s, bool stops, double at,
+                                    const ContactEvents *located = nullptr) {
   if (!s.model.nc) return LEGSIM_OK;
   bool changed = false;
-  const legsim_status r = contact_transitions(s, changed, at, located);
+  legsim_status r = contact_transitions(s, changed, at, located);
+  if (r == LEGSIM_OK && changed && stops) {
+    bool stopped = false;
+    r = stroke_limits_enforce(s, stopped);
+  }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
@@ -443,10 +450,10 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
     }
     done += he;
     ++located;
-    r = stage_contacts(s, d.t + double(done), &ev);
+    r = stage_contacts(s, stops, d.t + double(done), &ev);
     if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
     if (r != LEGSIM_OK) return r;
-    if (!(h - done > tiny_step(h))) return stage_contacts(s, d.t + double(h));  // the event ends the step
+    if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
     for (int k = 0; k < s.model.nc; ++k)
       if (((ev.touchdown | ev.slip | ev.stick) >> k) & 1u) fresh |= 1u << (2 * k + 1);
     mid.emplace(s);
@@ -457,7 +464,7 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
     }
   }
   if (r != LEGSIM_OK) return r;
-  return stage_contacts(s, d.t + double(h));
+  return stage_contacts(s, stops, d.t + double(h));
 }
 
 }  // namespace
