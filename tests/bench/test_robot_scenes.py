@@ -362,11 +362,6 @@ EVENT_SCENES = {
     "robot_land_switch": TOUCHDOWN_AT_STEP_END,
     "robot_slope_steep": "issue 22 section 1 (branch events): a starting contact state that cannot hold is "
                          "resolved after the first step, not at t = 0",
-    "robot_drop_high": "issue 22 section 2 (branch impacts): stops are not checked after a touchdown's "
-                       "projection, the uppers end 2.8 mm past their minima at 0.080 s",
-    "robot_stops_stuck": "issue 22 section 2 (branch impacts): 40 rows on 39 coordinates drop the stroke stops "
-                         "(0.3999 m at 4 ms), the step fails UNREACHABLE at 0.271 s",
-    "robot_crouch": "issue 22 section 2 (branch impacts): the crouch returns SINGULAR at step 298",
 }
 
 

@@ -21,7 +21,7 @@ import pytest
 
 import legsim
 
-from conftest import ROOT
+from conftest import ROOT, robot_sim as _robot_sim
 
 try:
     import legsim_bench.reference  # noqa: F401
@@ -33,13 +33,6 @@ from legsim_bench.scene import load_scene  # noqa: E402
 
 ROBOT = ROOT / "models" / "robot.toml"
 FEET = ("right.foot", "left.foot")
-
-
-def _robot_sim(**kw) -> legsim.Sim:
-    lib = legsim.load_library("double")
-    if lib.config["LEGSIM_MAX_BODIES"] < 13 or lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
-        pytest.skip(f"{lib.path} is built without room for the robot")
-    return legsim.Sim(str(ROBOT), **kw)
 
 
 def test_contact_law_option_is_checked():
