@@ -352,21 +352,7 @@ def test_sliding_configuration_slides_the_law_s_foot(name, law, foot):
 
 
 # ---- scenes that start off the stance, set their ground, switch on an event (issue 22 section 3) ----
-# Each is checked against what it SHOULD meet; where the core cannot yet, the test is xfail (strict:
-# it turns green, and must be unmarked, when the fix merges), naming the bug.
-TOUCHDOWN_AT_STEP_END = ("issue 22 section 1 (branch events): the touchdown is taken at the end of the step "
-                         "that crossed it, 3.0e-4 rad off the event-locating reference after a 1 cm drop")
-EVENT_SCENES = {
-    "robot_drop_1cm": TOUCHDOWN_AT_STEP_END,
-    "robot_throw": TOUCHDOWN_AT_STEP_END,
-    "robot_land_switch": TOUCHDOWN_AT_STEP_END,
-    "robot_slope_steep": "issue 22 section 1 (branch events): a starting contact state that cannot hold is "
-                         "resolved after the first step, not at t = 0",
-}
-
-
-@pytest.mark.parametrize("name", [pytest.param(n, marks=pytest.mark.xfail(strict=True, reason=r))
-                                  for n, r in EVENT_SCENES.items()])
+@pytest.mark.parametrize("name", ["robot_drop_1cm", "robot_throw", "robot_land_switch", "robot_slope_steep"])
 def test_event_scenes_meet_their_checks_in_legsim_cli(name):
     sc, out, ev = _bench(name)
     assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]

@@ -107,6 +107,19 @@ def test_block_slides_from_rest_at_g_sin_minus_mu_cos(slope):
     print(f"slope {slope}: a = {a:.6f} m/s^2, x = {x:.9f} m, error x {err_x:.2e} m, v {err_v:.2e} m/s")
     assert err_x < 1e-13 and err_v < 1e-12
     assert s.events() == ["stick_to_slip"]
+    assert s.contact_event_time(0) == 0.0
+    # legsim_contacts_check: the same change at t = 0 before any step, and once only
+    s2 = block(slope, mu_s, mu_k, step=h)
+    s2.set_state([0.0, 0.0, 0.0])
+    s2.set_contact("foot", "stuck")
+    s2.contacts_check()
+    c = s2.contacts()[0]
+    assert s2.events() == ["stick_to_slip"] and c["state"] == "sliding" and s2.time == 0.0
+    assert abs(c["tangential"] - mu_k * MASS * G * math.cos(slope)) < 1e-9   # mu_k N, uphill
+    s2.clear_events()
+    s2.contacts_check()
+    s2.step(n)
+    assert s2.events() == [] and np.max(np.abs(s2.q - s.q)) < 1e-15
 
 
 @pytest.mark.parametrize("integrator", ["rk4", "galpha"])

@@ -31,9 +31,10 @@ __all__ = ["evaluate_analysis", "evaluate_robot", "robot_reference", "robot_mode
 # legsim.h's event bits as legsim_cli names them in a sample's "events" (JSON) and the CSV's
 # ';'-separated `events` column ("none" if none; scene_write.cpp: kEventNames), in bit order.
 EVENT_NAMES = ("stroke_min", "stroke_max", "force_saturated", "near_singular", "liftoff", "touchdown",
-               "stick_to_slip", "slip_to_stick", "contact_inconsistent", "contact_ambiguous")
+               "stick_to_slip", "slip_to_stick", "contact_inconsistent", "contact_ambiguous",
+               "events_deferred", "event_inexact")
 # the contact transitions of a robot (docs/design/robot-on-ground.md section 8)
-CONTACT_EVENTS = EVENT_NAMES[4:]
+CONTACT_EVENTS = EVENT_NAMES[4:10]
 
 
 # ---- checks -------------------------------------------------------------------------------

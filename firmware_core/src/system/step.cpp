@@ -483,6 +483,11 @@ legsim_status step_whole(Sim &s, bool rk4, bool stops) {
 
 }  // namespace
 
+legsim_status contact_modes_check(Sim &s) {
+  const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
+  return all_or_nothing(s, [&] { return stage_start(s, rk4); });
+}
+
 legsim_status steps_run(Sim &s, int32_t n_steps) {
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
