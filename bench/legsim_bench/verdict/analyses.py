@@ -571,11 +571,13 @@ def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_
 def robot_slip_starts(d: dict, k: int, per_foot: bool = False) -> list[float]:
     """The times of the samples at which contact k went from stuck to sliding with the
     core's stick_to_slip event among the sample's events (robot_arrays' d) or, per_foot,
-    among contact k's own events (robot_can_arrays' foot_events, Ct_Events over CAN)."""
+    among contact k's own events (robot_can_arrays' foot_events, Ct_Events over CAN). The
+    first sample counts when it is sliding with the event: a foot started stuck whose cone
+    cannot hold slips at t = 0 (legsim_contacts_check), before any step."""
     st = d["state"][:, k]
     events = (lambda i: d["foot_events"][i][k]) if per_foot else (lambda i: d["events"][i])
-    return [float(d["t"][i]) for i in range(1, len(st))
-            if st[i - 1] == "stuck" and st[i] == "sliding" and "stick_to_slip" in events(i)]
+    return [float(d["t"][i]) for i in range(len(st))
+            if (i == 0 or st[i - 1] == "stuck") and st[i] == "sliding" and "stick_to_slip" in events(i)]
 
 
 def _robot_slip_checks(ev, slips, d: dict, feet, per_foot: bool = False):
