@@ -65,7 +65,7 @@ void contact_forces_update(Sim &sim) {
 
 void contacts_free(Sim &sim) {
   Data &d = sim.data;
-  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}, 0};
+  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}, 0, 0};
 }
 
 void contact_forces_of_layout(const Model &model, const Layout &layout, const VecR &lambda,
@@ -387,7 +387,7 @@ bool all_closed(const Model &m, const Data &d) {
 // rules above decide.
 // Each pass applies every change at once and solves the dynamics of the new modes; a mode
 // that keeps changing raises CONTACT_INCONSISTENT and keeps the last one.
-legsim_status contact_transitions(Sim &sim, bool &changed) {
+legsim_status contact_transitions(Sim &sim, bool &changed, double at, const ContactEvents *located) {
   changed = false;
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -397,6 +397,22 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   uint32_t changing = 0;                  // the contacts the last pass changed
   const real tol = real(sim.opt.newton_tol);
   bool enumerated = false;  // the modes enumerated once per check; after that, one by one
+  // The located events switch their contacts in the first pass; a contact switched so sits
+  // on its new mode's boundary (N = 0, |T| = mu_s N, v_t = 0 to round-off), where the rules
+  // below would switch it back: the rest of this check leaves it (the step locates its next
+  // event like any other).
+  ContactEvents ev = located ? *located : ContactEvents{0, 0, 0, 0};
+  const uint32_t settled = ev.liftoff | ev.slip | ev.stick;
+  ContactData before[kMaxContacts];
+  for (int k = 0; k < m.nc; ++k) before[k] = d.contact[k];
+  const uint32_t applied = ev.touchdown | settled;
+  const auto stamp = [&]() {  // the time of each contact's events of this check
+    for (int k = 0; k < m.nc; ++k) {
+      const ContactData &c = d.contact[k], &b = before[k];
+      if (c.events != b.events || c.state != b.state || c.slip_dir != b.slip_dir || ((applied >> k) & 1u))
+        d.contact[k].event_time = at;
+    }
+  };
   for (int pass = 0; pass < 3 * kMaxContacts + 2; ++pass) {
     uint32_t touch = 0, to_stick = 0, fails = 0;
     changing = 0;
@@ -410,11 +426,31 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
     const bool enumerate = !paper && !enumerated;
     for (int k = 0; k < m.nc; ++k) {
       ContactData &c = d.contact[k];
+      const uint32_t bit = 1u << k;
+      if ((settled & bit) && pass > 0) continue;
       Vec2 p, v;
       contact_point(m, k, d.q, d.qd, p, v);
       const real vt = m.ground_t.dot(v);
-      if (c.state == LEGSIM_CONTACT_FREE) {
-        if (!(m.ground_n.dot(p - m.ground_point) < -tol)) continue;
+      if (c.state != LEGSIM_CONTACT_FREE && (ev.liftoff & bit)) {  // located: N reached 0
+        c.state = LEGSIM_CONTACT_FREE;
+        c.normal = c.tangential = 0;
+        c.events |= LEGSIM_EVENT_LIFTOFF;
+        raise_event(d, LEGSIM_EVENT_LIFTOFF);
+      } else if (c.state == LEGSIM_CONTACT_STUCK && (ev.slip & bit)) {  // located: |T| reached mu_s N
+        c.state = LEGSIM_CONTACT_SLIDING;
+        c.slip_dir = int8_t(-sign_of(c.tangential));
+        slipped |= bit;
+        c.events |= LEGSIM_EVENT_STICK_TO_SLIP;
+        raise_event(d, LEGSIM_EVENT_STICK_TO_SLIP);
+      } else if (c.state == LEGSIM_CONTACT_SLIDING && (ev.stick & bit)) {  // located: v_t reached 0
+        c.state = LEGSIM_CONTACT_STUCK;
+        d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
+        to_stick |= bit;
+        stuck_again |= bit;
+        c.events |= LEGSIM_EVENT_SLIP_TO_STICK;
+        raise_event(d, LEGSIM_EVENT_SLIP_TO_STICK);
+      } else if (c.state == LEGSIM_CONTACT_FREE) {
+        if (!(m.ground_n.dot(p - m.ground_point) < -tol) && !(ev.touchdown & bit)) continue;
         touch |= 1u << k;
         c.state = LEGSIM_CONTACT_STUCK;  // first as stuck: the impulse decides
         d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
@@ -454,13 +490,17 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       any = true;
       changing |= 1u << k;
     }
+    ev = ContactEvents{0, 0, 0, 0};  // the located events are applied
     if (!any && fails) {  // no impulse this pass: the enumeration decides the closed contacts
       enumerated = true;
       bool found = false;
       uint32_t chosen = 0;
       legsim_status s = contact_modes_choose(sim, found, chosen, slipped);
       if (s != LEGSIM_OK) return s;
-      if (found && !chosen) return LEGSIM_OK;  // the current modes hold after all (round-off)
+      if (found && !chosen) {  // the current modes hold after all (round-off)
+        stamp();
+        return LEGSIM_OK;
+      }
       if (!found) {  // no consistent mode: reported, then the one-by-one rules of this pass
         for (int k = 0; k < m.nc; ++k)
           if ((fails >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
@@ -470,14 +510,22 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       changing = chosen;
       continue;
     }
-    if (!any) return LEGSIM_OK;
+    if (!any) {
+      stamp();
+      return LEGSIM_OK;
+    }
     changed = true;
     legsim_status s = stops_layout(sim);
     if (s != LEGSIM_OK) return s;
+    // every closed contact takes a share of an impact and reports it (a foot stuck before
+    // it reports its own, not its old touchdown's)
+    uint32_t closed = 0;
+    for (int k = 0; k < m.nc; ++k)
+      if (d.contact[k].state != LEGSIM_CONTACT_FREE) closed |= 1u << k;
     if (touch) {  // onto the line, then the impact
       s = assemble(sim, d.dyn, d.stop_drivers, d.q, m.minv, AssemblyMode::Project);
       const VecQ approach = d.qd;
-      if (s == LEGSIM_OK) s = impact(sim, touch);
+      if (s == LEGSIM_OK) s = impact(sim, touch | closed);
       if (s != LEGSIM_OK) return s;
       bool slides = false;
       for (int k = 0; k < m.nc; ++k) {
@@ -489,12 +537,12 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       if (slides) {  // again from the approach velocity, the friction impulse against the slip
         d.qd = approach;
         s = stops_layout(sim);
-        if (s == LEGSIM_OK) s = impact(sim, touch);
+        if (s == LEGSIM_OK) s = impact(sim, touch | closed);
         if (s != LEGSIM_OK) return s;
       }
     }
     if (to_stick) {
-      s = impact(sim, to_stick);  // the tangential velocity removed
+      s = impact(sim, to_stick | closed);  // the tangential velocity removed
       if (s != LEGSIM_OK) return s;
     }
     s = dynamics_state_update(sim);  // forces of the new modes
@@ -503,6 +551,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   for (int k = 0; k < m.nc; ++k)  // the contacts still changing carry it
     if ((changing >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
   raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
+  stamp();
   return LEGSIM_OK;
 }
 
