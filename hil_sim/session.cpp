@@ -205,6 +205,9 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
                        : legsim_command_force(sim, a, 0);
   if (st != LEGSIM_OK) return st;
   st = legsim_clear_events(sim);
+  // the contact modes at t = 0, as legsim_cli checks them before its first sample: a start
+  // that cannot hold changes mode here, its event in the first state frames
+  if (st == LEGSIM_OK && m->n_contacts > 0) st = legsim_contacts_check(sim);
   if (st != LEGSIM_OK) return st;
   *out = sim;
   return LEGSIM_OK;
