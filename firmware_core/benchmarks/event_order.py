@@ -6,7 +6,7 @@ generalized-alpha over h = 2e-3 ... 1.25e-4 s, against the bench's event-locatin
 touchdown to 1e-13 s of sqrt(2 d / g)).
 
     LEGSIM_ROOT=$PWD PYTHONPATH=$PWD/python:$PWD/bench python firmware_core/benchmarks/event_order.py
-        [--cases touchdown,liftoff,slip,none] [--integrators rk4,galpha]
+        [--cases touchdown,liftoff,slip,none] [--integrators rk4,galpha] [--steps 2e-3,1e-3,...]
 
 Per case, integrator and h it prints: the error at the case's fixed time after the event
 (max over the 39 coordinates, m and rad), the whole run's max error on the 2 ms grid, the
@@ -174,6 +174,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", default="touchdown,liftoff,slip,none")
     ap.add_argument("--integrators", default="rk4,galpha")
+    ap.add_argument("--steps", default=",".join(f"{h:g}" for h in STEPS),
+                    help="step sizes (s), largest first")
     a = ap.parse_args()
     all_cases = cases()
     rows, energy, ref_table = [], [], []
@@ -185,7 +187,7 @@ def main():
         print(f"{name}: reference events {ref_events}", file=sys.stderr)
         for integ in a.integrators.split(","):
             prev = None
-            for h in STEPS:
+            for h in (float(x) for x in a.steps.split(",")):
                 e_end, e_max, events, lost = run_core(case, integ, h, ref)
                 order = "" if prev is None else f"{math.log2(prev / e_end):.2f}"
                 prev = e_end
