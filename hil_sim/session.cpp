@@ -156,7 +156,7 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
   const legsim_model_desc *m = variant_model(p.variant);
   const int na = m->n_actuators;
   legsim_real given[kMaxActuators];
-  // the RESET's lengths: exact (integer nm), inside the stroke by legsim_cli's rule (protocol)
+  // the RESET's lengths: float64 as sent, inside the stroke by legsim_cli's rule (protocol)
   for (int a = 0; a < na && p.use_lengths; ++a) given[a] = static_cast<legsim_real>(p.lengths[a]);
   if (m->n_contacts > 0) {
     // the robot: onto the ground, both feet stuck, their midpoint where the pose put it

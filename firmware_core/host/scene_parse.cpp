@@ -1153,15 +1153,10 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
              std::to_string(s.lengths.size()) + ")");
       for (int32_t a = 0; a < m.n_actuators; ++a) {
         const auto &ad = m.actuator[a];
-        const StartLength rule = start_length_check(m, a, s.lengths[a]);
-        if (rule == StartLength::kOutOfStroke)
+        if (!start_length_in_stroke(m, a, s.lengths[a]))
           fail("lengths[" + std::to_string(a) + "] = " + num(s.lengths[a]) +
                " m is outside the stroke of actuator " + q(name_of(ad.name)) + " [" +
                num(ad.stroke_min_m) + ", " + num(ad.stroke_max_m) + "]");
-        if (rule == StartLength::kOffGrid)
-          fail("lengths[" + std::to_string(a) + "] = " + num(s.lengths[a]) +
-               " m is not a whole number of nanometres (a start length is given to 1 nm, at most "
-               "9 decimal places, as CAN carries it)");
       }
     }
     if (s.analysis == Analysis::kStaticsSweep && m.n_actuators < 2)

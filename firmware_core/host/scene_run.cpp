@@ -99,13 +99,9 @@ void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_
 // the ground, a foot on the ground and moving without a state) is refused, never adjusted.
 }  // namespace
 
-StartLength start_length_check(const legsim_model_desc &m, int32_t a, double l) {
+bool start_length_in_stroke(const legsim_model_desc &m, int32_t a, double l) {
   const legsim_actuator_desc &ad = m.actuator[a];
-  if (!(l >= ad.stroke_min_m && l <= ad.stroke_max_m)) return StartLength::kOutOfStroke;  // NaN too
-  const double nm = std::nearbyint(l * 1e9);
-  if (!(nm >= 0 && nm <= 4294967295.0) || start_length_from_nm(static_cast<uint32_t>(nm)) != l)
-    return StartLength::kOffGrid;
-  return StartLength::kOk;
+  return l >= ad.stroke_min_m && l <= ad.stroke_max_m;  // false for NaN
 }
 
 legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &m, const StartState &b,

@@ -232,17 +232,12 @@ class CsvWriter : public ResultWriter {
   const legsim_model_desc &m_;
 };
 
-// The rule for a start length (m) of actuator a: a scene's `lengths`, a RESET's
-// Ctrl_Length_* (can/legsim.dbc: integer nanometres). It must lie inside the actuator's stroke
-// [stroke_min_m, stroke_max_m], ends included, compared in double with no tolerance and never
-// clamped, and be a whole number of nanometres from 0 to 4294967295 nm (the double nearest
-// n / 1e9 m, as a TOML decimal with at most 9 places gives it): then the RESET carries it
-// exactly. legsim_cli's scene check and hil_sim's RESET both use this one function, so a
-// start one refuses the other refuses, and a start both take is the same double in both.
-enum class StartLength { kOk, kOutOfStroke, kOffGrid };
-StartLength start_length_check(const legsim_model_desc &model, int32_t a, double length_m);
-// A RESET's Ctrl_Length_* (nm) as metres: correctly rounded, 350000000 -> 0.35 exactly.
-inline double start_length_from_nm(uint32_t nm) { return static_cast<double>(nm) / 1e9; }
+// The rule for a start length (m) of actuator a, a scene's `lengths` and a RESET's
+// Ctrl_Length_* alike: finite and inside the stroke [stroke_min_m, stroke_max_m], ends
+// included, compared in double with no tolerance and never clamped. legsim_cli's scene check
+// and hil_sim's RESET both use it on the same double (CAN carries it as float64), so a start
+// one refuses the other refuses, and one both take is the same start. Allocation-free.
+bool start_length_in_stroke(const legsim_model_desc &model, int32_t a, double length_m);
 
 // [start] on a robot assembled on the ground (legsim_assemble_on_ground: every contact stuck,
 // the stance's contact positions fresh): moves it rigidly as `start` says and sets each
