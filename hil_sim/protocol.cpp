@@ -4,6 +4,8 @@
 #include <cmath>
 #include <cstring>
 
+#include "scene_toml.hpp"  // legsim_host::start_length_in_stroke: legsim_cli's rule for a start length
+
 extern "C" {
 #include "legsim_can.h"
 #include "legsim_can_layout.h"
@@ -58,8 +60,8 @@ class Checker {
   void range(bool in_range, unsigned start_bit, double value) {
     if (ok_ && !in_range) fail(FaultCode::kOutOfRange, start_bit, value);
   }
-  // a float signal: finite, then its DBC range
-  void real(float value, bool in_range, unsigned start_bit) {
+  // a float signal (float32, float64): finite, then its DBC range
+  void real(double value, bool in_range, unsigned start_bit) {
     if (!ok_) return;
     if (!std::isfinite(value))
       fail(FaultCode::kNotFinite, start_bit, value);
@@ -94,8 +96,9 @@ void reject_frame(const Frame &frame, FaultCode code, uint32_t detail, Fault *fa
   fault->detail = detail;
 }
 
-// A float32 length is inside the stroke when it is inside the stroke's ends rounded to
-// float32 (0.8f is 0.800000012): the session then clamps it onto the exact stroke.
+// An ACT_CMD servo set-point (float32) is inside the stroke when it is inside the stroke's
+// ends rounded to float32 (0.8f is 0.800000012): the session then clamps it onto the exact
+// stroke. (A RESET's start lengths travel as float64 and follow legsim_cli's rule instead.)
 bool stroke_ok(const legsim_model_desc *m, int a, float l) {
   return l >= static_cast<float>(m->actuator[a].stroke_min_m) &&
          l <= static_cast<float>(m->actuator[a].stroke_max_m);
@@ -164,9 +167,9 @@ void validate_control(const Request &req, Checker &c) {
       c.model((r.free_contacts >> m->n_contacts) == 0, LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT,
               r.free_contacts);
       if (p.use_lengths) {
-        // leg 0's lengths, then (robot) leg 1's
-        float l[kMaxActuators];
-        for (int a = 0; a < kMaxActuators; ++a) l[a] = static_cast<float>(p.lengths[a]);
+        // leg 0's lengths, then (robot) leg 1's: float64 on the bus, the bench's double as
+        // sent; finite, the DBC's range, then legsim_cli's rule
+        const double *l = p.lengths;
         const unsigned bit[kMaxActuators] = {LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_START_BIT,
                                              LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_START_BIT,
                                              LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_L1_START_BIT,
@@ -178,7 +181,8 @@ void validate_control(const Request &req, Checker &c) {
             legsim_can_control_ctrl_length_lower_l1_is_in_range(l[3])};
         const int na = m->n_actuators;
         for (int a = 0; a < na; ++a) c.real(l[a], in_range[a], bit[a]);
-        for (int a = 0; a < na; ++a) c.model(stroke_ok(m, a, l[a]), bit[a], l[a]);
+        for (int a = 0; a < na; ++a)
+          c.model(legsim_host::start_length_in_stroke(*m, a, l[a]), bit[a], l[a]);
       }
       break;
     }

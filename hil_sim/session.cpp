@@ -15,8 +15,8 @@ namespace hil {
 
 namespace {
 
-// Lengths arrive as float32 and were checked against the stroke rounded to float32; the
-// core gets them on the exact stroke (a move of at most one float32 ulp).
+// ACT_CMD set-points arrive as float32 and were checked against the stroke rounded to
+// float32; the core gets them on the exact stroke (a move of at most one float32 ulp).
 legsim_real on_stroke(const legsim_model_desc *m, int a, double l) {
   return static_cast<legsim_real>(
       std::clamp(l, m->actuator[a].stroke_min_m, m->actuator[a].stroke_max_m));
@@ -156,7 +156,8 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
   const legsim_model_desc *m = variant_model(p.variant);
   const int na = m->n_actuators;
   legsim_real given[kMaxActuators];
-  for (int a = 0; a < na && p.use_lengths; ++a) given[a] = on_stroke(m, a, p.lengths[a]);
+  // the RESET's lengths: float64 as sent, inside the stroke by legsim_cli's rule (protocol)
+  for (int a = 0; a < na && p.use_lengths; ++a) given[a] = static_cast<legsim_real>(p.lengths[a]);
   if (m->n_contacts > 0) {
     // the robot: onto the ground, both feet stuck, their midpoint where the pose put it
     // (the pose's guess has the feet on the line already); the box pose follows

@@ -99,6 +99,11 @@ void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_
 // the ground, a foot on the ground and moving without a state) is refused, never adjusted.
 }  // namespace
 
+bool start_length_in_stroke(const legsim_model_desc &m, int32_t a, double l) {
+  const legsim_actuator_desc &ad = m.actuator[a];
+  return l >= ad.stroke_min_m && l <= ad.stroke_max_m;  // false for NaN
+}
+
 legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &m, const StartState &b,
                           const int32_t *given_state, double tol, std::string &error) {
   const int32_t nq = legsim_n_coords(sim), nk = legsim_n_contacts(sim);

@@ -299,8 +299,8 @@ void test_solver_failures() {
   // assembly, the running session goes on untouched
   legsim_can_control_t m = control(3, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
   m.ctrl_use_lengths = 1;
-  m.ctrl_length_upper = 0.80f;
-  m.ctrl_length_lower = 0.35f;
+  m.ctrl_length_upper = 0.80;  // float64 on the bus (0.80f would be 1.2e-8 m past the stroke)
+  m.ctrl_length_lower = 0.35;
   auto out = r.feed(pack(m));
   auto f = fault_of(out);
   CHECK(out.size() == 1 && f.fault_code == 8 && f.fault_detail == LEGSIM_ERR_UNREACHABLE);

@@ -47,11 +47,7 @@ FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml", "robot_sl
 # checks it should meet and marked xfail (strict: it turns green, and must be unmarked, when the
 # fix merges). XFAIL_RUN: the run itself fails (hil_sim HALTED); XFAIL_VERDICT: its verdict
 # (tests/hil_verdicts) fails.
-XFAIL_RUN = {
-    "robot_stops_stuck": "the lengths at the stroke minima travel as float32: 0.35 arrives as 0.3499999940 m, "
-                         "below the lower actuators' 0.35 m minimum, and hil_sim HALTS with NOT_CONVERGED at "
-                         "step 0 where legsim_cli refuses such a length with a message (CLI run passes)",
-}
+XFAIL_RUN: dict[str, str] = {}
 XFAIL_VERDICT = {
     **XFAIL_RUN,
     "robot_slope_steep": "over CAN the t = 0 sample is the RESET's answer, before the scene's t = 0 servo "

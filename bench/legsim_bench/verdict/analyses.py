@@ -281,10 +281,11 @@ def robot_events_reference(scene: Scene, times, sent: bool = False):
     [start] says, each foot's state as the scene gives it (else stuck on the ground, free above
     it, sliding along its velocity), its constant commands; a switch holds `before` and
     t_switch is the reference's time of its event (inf: none; the reference is the run's
-    until then). sent: the float32 values the DBC carried (lengths, start, setpoints)."""
+    until then). sent: the values the DBC carried (float32 start and setpoints; the lengths are
+    float64 on the bus, the scene's exactly)."""
     rnd = _f32 if sent else (lambda x: np.asarray(x, float))
     model = robot_model(scene)
-    asm = model.assemble(None if scene.lengths is None else rnd(scene.lengths))
+    asm = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
     z0, zd0 = asm.z.copy(), np.zeros(7)
     g = model.ground
     n = np.array([-math.sin(g.slope), math.cos(g.slope)])
