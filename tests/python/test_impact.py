@@ -168,3 +168,49 @@ def test_compass_landing_on_one_foot_leaves_the_rising_foot_free(integrator, vx,
     assert footB_y @ v_plus > 0
     # one step of 1 us after it: the velocity within the stance's accelerations times h
     assert np.max(np.abs(s.qd - v_plus)) < 100 * G * h
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+def test_robot_impacts_keep_the_complementarity(integrator):
+    """The robot with both feet 5 mm under the line and random box velocities (seeded; the
+    legs' actuators at 0 N): the impact at t = 0 must solve its LCP. After it (one step of
+    1 us), per foot: the normal impulse >= 0; a foot that stayed closed has no normal
+    velocity, one that left separates (v_n >= 0, impulse 0). The velocities after 1 us are
+    the impact's to the stance's accelerations times h."""
+    lib = legsim.load_library("double")
+    if lib.config["LEGSIM_MAX_BODIES"] < 13 or lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
+        pytest.skip("built without room for the robot")
+    rng = np.random.default_rng(22)
+    h = 1e-6
+    left_seen = closed_seen = 0
+    for trial in range(10):
+        s = legsim.Sim(str(ROOT / "models" / "robot.toml"), integrator=integrator, step=h)
+        q = s.assemble_on_ground().reshape(-1, 3)
+        for a in range(s.n_actuators):
+            s.command_force(a, 0.0)
+        q[:, 1] -= 0.005
+        vx, vy, w = rng.uniform(-1.0, 1.0), rng.uniform(-1.5, 0.5), rng.uniform(-4.0, 4.0)
+        c0 = q[0, :2].copy()
+        v = np.zeros_like(q)
+        for b in range(len(q)):  # a rigid motion of the whole robot about the box's centre
+            r = q[b, :2] - c0
+            v[b] = [vx - w * r[1], vy + w * r[0], w]
+        s.set_state(q.reshape(-1), v.reshape(-1))
+        s.step(1)
+        c = s.contacts()
+        assert "touchdown" in s.events(), s.events()
+        qa, va = s.q.reshape(-1, 3), s.qd.reshape(-1, 3)
+        for k in range(2):
+            pn = c["impulse"][k][0]
+            assert pn >= -1e-12, (trial, k, c)
+            b = s.model.desc.contact[k].body
+            r = c["position"][k] - qa[b, :2]
+            vn = va[b, 1] + va[b, 2] * r[0]   # the foot's velocity, y: level ground's normal
+            if c["state"][k] == "free":
+                left_seen += 1
+                assert pn == 0 and vn >= -G * h * 10, (trial, k, c)
+            else:
+                closed_seen += 1
+                assert abs(vn) < 100 * G * h, (trial, k, c)
+    print(f"{integrator}: {closed_seen} feet stayed, {left_seen} left")
+    assert left_seen > 0 and closed_seen > 0   # both sides of the complementarity were met
