@@ -376,6 +376,12 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
         return LEGSIM_OK;
       };
       st = apply(0.0);
+      // the contact modes at t = 0, as the first step's start finds them: a start that cannot
+      // hold changes mode here and the first sample shows it
+      if (st == LEGSIM_OK && nk > 0) {
+        st = legsim_contacts_check(sim);
+        if (st != LEGSIM_OK) res.error = call_failed("checking the contact modes at t = 0", st);
+      }
       if (st != LEGSIM_OK) return st;
       // A robot's first sample: the assembly's multipliers are not the dynamics' forces
       // (the first step solves those), so its reactions and ground forces are null, as the

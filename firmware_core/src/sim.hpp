@@ -372,6 +372,8 @@ bool state_finite(const VecQ &q, const VecQ &qd, int n);
 // ---- system/step.cpp: the step's stages ----
 // n_steps steps, each all-or-nothing; the sim is assembled, its state finite.
 legsim_status steps_run(Sim &sim, int32_t n_steps);
+// The step's first stage alone, all or nothing: the contact modes checked at the current state.
+legsim_status contact_modes_check(Sim &sim);
 // After the state changed outside a step: accelerations, multipliers and reactions at the
 // new state, and a fresh start of generalized-alpha's history. forcing_only: only a command
 // or a load changed (the state, its rows and the options as they were).

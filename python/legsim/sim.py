@@ -386,6 +386,11 @@ class Sim:
     def clear_events(self) -> None:
         self._check(self.library.cdll.legsim_clear_events(self.handle), "legsim_clear_events")
 
+    def contacts_check(self) -> None:
+        """Checks the contact modes now, as the next step would at its start (a start that
+        cannot hold changes mode at the current time)."""
+        self._check(self.library.cdll.legsim_contacts_check(self.handle), "legsim_contacts_check")
+
     def contact_event_time(self, k: int) -> float:
         """The time (s) of contact k's last contact event, located inside its step."""
         t = C.c_double()

@@ -33,7 +33,8 @@ def test_every_frame_is_64_byte_fd_with_an_11_bit_id(db):
     per_leg = ("ACT_CMD", "LOAD_CMD", "ST_POS", "ST_VEL", "ST_ACT", "ST_REACT_A", "ST_REACT_B",
                "ST_STATUS")
     robot = {f"{n}_L1": leg[n] + 0x20 for n in per_leg}
-    robot.update(ST_CONTACT=cl.ST_CONTACT, ST_CONTACT_L1=cl.ST_CONTACT + 0x20, ST_BOX=cl.ST_BOX)
+    robot.update(ST_CONTACT=cl.ST_CONTACT, ST_CONTACT_L1=cl.ST_CONTACT + 0x20, ST_BOX=cl.ST_BOX,
+                  START_CMD=cl.START_CMD)
     assert names == {**leg, **robot}
     for n in per_leg:   # the same signals at the same places
         a, b = db.get_message_by_name(n), db.get_message_by_name(n + "_L1")

@@ -216,6 +216,10 @@ def parse_report(text):
     return rep
 
 
+# largest share of the stack the high-water mark may reach
+STACK_LIMIT = 0.90
+
+
 def close(a, b, tol):
     return all(abs(x - y) <= tol for x, y in zip(a, b))
 
@@ -266,6 +270,15 @@ def cmd_qemu(args):
         failures.append(f"report status {mcu.get('done')} (0 expected)")
     if mcu.get("stand_status") != 0:
         failures.append("stand pose not assembled")
+    # the high-water mark is found by painting the stack: a mark at (or near) the
+    # whole stack means the painted margin was used up, i.e. a likely overflow
+    stack = mcu.get("stack")
+    if stack is None:
+        failures.append("stack: the image printed no 'stack used N of M' line")
+    elif stack[0] >= STACK_LIMIT * stack[1]:
+        failures.append(f"stack: high-water mark {stack[0]} of {stack[1]} bytes "
+                        f"(>= {STACK_LIMIT:.0%}: likely overflow; shrink the frames or "
+                        "raise the stack size)")
 
     def check(what, got, want, tol):
         if got is None:

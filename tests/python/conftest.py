@@ -20,6 +20,17 @@ if importlib.util.find_spec("legsim") is None:  # not installed: the package of 
 import legsim  # noqa: E402
 
 
+ROBOT = ROOT / "models" / "robot.toml"
+
+
+def robot_sim(**kw) -> legsim.Sim:
+    """The two-leg robot of models/robot.toml (skipped where the library has no room for it)."""
+    lib = legsim.load_library("double")
+    if lib.config["LEGSIM_MAX_BODIES"] < 13 or lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
+        pytest.skip(f"{lib.path} is built without room for the robot")
+    return legsim.Sim(str(ROBOT), **kw)
+
+
 def _need(precision: str) -> None:
     if not legsim.library_available(precision):
         pytest.skip(f"{legsim.LIB_NAMES[precision]} is not built (cmake --build build/host, "

@@ -15,7 +15,7 @@ import pytest
 
 import legsim
 
-from conftest import ROOT
+from conftest import ROOT, robot_sim as _robot_sim
 
 try:
     import legsim_bench.reference  # noqa: F401
@@ -24,13 +24,6 @@ except ImportError:  # the bench is not installed: its source tree
 from legsim_bench.reference.robot import RobotModel  # noqa: E402
 
 ROBOT = ROOT / "models" / "robot.toml"
-
-
-def _robot_sim(**kw) -> legsim.Sim:
-    lib = legsim.load_library("double")
-    if lib.config["LEGSIM_MAX_BODIES"] < 13 or lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
-        pytest.skip(f"{lib.path} is built without room for the robot")
-    return legsim.Sim(str(ROBOT), **kw)
 
 
 @pytest.fixture(scope="module")

@@ -16,7 +16,7 @@ import pytest
 
 import legsim
 
-from conftest import ROOT
+from conftest import ROOT, robot_sim as _robot_sim
 
 try:
     import legsim_bench.reference  # noqa: F401
@@ -26,13 +26,6 @@ from legsim_bench.reference.robot import RobotModel  # noqa: E402
 
 ROBOT = ROOT / "models" / "robot.toml"
 LMIN = np.array([0.40, 0.35, 0.40, 0.35])  # the strokes' minima (m): upper, lower per leg
-
-
-def _robot_sim(**kw) -> legsim.Sim:
-    lib = legsim.load_library("double")
-    if lib.config["LEGSIM_MAX_BODIES"] < 13 or lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
-        pytest.skip(f"{lib.path} is built without room for the robot")
-    return legsim.Sim(str(ROBOT), **kw)
 
 
 @pytest.fixture(scope="module")

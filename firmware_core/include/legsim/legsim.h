@@ -450,6 +450,13 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
  * (and report) of the last good step (legsim_step_count tells how many were made). */
 legsim_status legsim_step(legsim_sim *sim, int32_t n_steps);
 
+/* Checks the contact modes at the current state, time and commands now, as the next step
+ * would at its start after a change from outside (a state, contact state or command set): a
+ * start that cannot hold (feet set stuck on a slope steeper than their friction allows)
+ * changes mode here, at the current time, with its event; a state whose modes were already
+ * checked is left as it is. All or nothing; LEGSIM_ERR_STATE before an assembly. */
+legsim_status legsim_contacts_check(legsim_sim *sim);
+
 /* ---- 6. reactions ---------------------------------------------------------- */
 typedef struct legsim_reaction {
   legsim_real force_n[2];  /* force the joint applies to its first-listed body, world axes */

@@ -125,6 +125,20 @@ bool separator_complement(Factor &f) {
 }
 }  // namespace
 
+namespace {
+// J W J^T's entries that can be non-zero (Layout::pair), added into the factor's storage
+// from the rows' coefficients weighted (wflat) and not (cflat).
+void pairs_add(const Layout &layout, const real *wflat, const real *cflat, real *aflat) {
+  for (int k = 0; k < layout.npairs; ++k) {
+    const Pair &p = layout.pair[k];
+    const real *ci = wflat + p.ci, *cj = cflat + p.cj;
+    real dot = ci[0] * cj[0];
+    for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
+    aflat[p.aij] += dot;
+  }
+}
+}  // namespace
+
 legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w, Factor &f) {
   const int m = layout.m;
   const Kernel *kern = layout.kernel;
@@ -146,13 +160,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     }
   const real *wflat = &wc[0][0][0], *cflat = &rows.coef[0][0][0];
   real *aflat = f.a.data();
-  for (int k = 0; k < layout.npairs; ++k) {
-    const Pair &p = layout.pair[k];
-    const real *ci = wflat + p.ci, *cj = cflat + p.cj;
-    real dot = ci[0] * cj[0];
-    for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
-    aflat[p.aij] += dot;
-  }
+  pairs_add(layout, wflat, cflat, aflat);
   real max_diag = 0;
   for (int i = mk; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
   if (layout.separator >= 0) {
@@ -188,13 +196,7 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
       f.first[i] = 0;
       for (int j = 0; j <= i; ++j) f.a(i, j) = 0;
     }
-    for (int k = 0; k < layout.npairs; ++k) {
-      const Pair &p = layout.pair[k];
-      const real *ci = wflat + p.ci, *cj = cflat + p.cj;
-      real dot = ci[0] * cj[0];
-      for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
-      aflat[p.aij] += dot;
-    }
+    pairs_add(layout, wflat, cflat, aflat);
     for (int i = 0; i < m; ++i)
       for (int j = 0; j <= i; ++j)
         for (int e = 0; e < kBodyDof; ++e) f.a(i, j) += f.u[i][e] * f.wb[e] * f.u[j][e];

@@ -131,6 +131,7 @@ inline void stage_advance(Sim &s, bool rk4) {
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
 }
 
+#if LEGSIM_WITH_CONTACT  // a build whose models have no contacts has no events to locate
 // ---- contact events located inside the step (docs/design/events.md) ----
 // Per contact two event functions of its mode, each > 0 while the mode holds:
 // [0] free: the gap n . (p - p0) (touchdown); stuck or sliding: N (lift-off);
@@ -327,7 +328,7 @@ inline real tiny_step(real h) { return kThetaTol * h; }
 // LEGSIM_EVENT_EVENTS_DEFERRED). start: the state the step started from (all_or_nothing's).
 // Stroke stops are taken at the end of the (part) step that crossed them, as a part step
 // with a stop impact is not located further.
-legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
+[[gnu::noinline]] legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
   Data &d = s.data;
   const real h = real(s.opt.step_s);
   const bool contacts = s.model.nc > 0;
@@ -467,16 +468,41 @@ legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &sta
   return stage_contacts(s, stops, d.t + double(h));
 }
 
+#endif
+
+// One whole step of a model without contacts (the leg): it has no event to locate, and
+// none of step_with_events' snapshots and dense output on its stack (a Cortex-M4F leg image
+// has 3 KB of stack).
+legsim_status step_whole(Sim &s, bool rk4, bool stops) {
+  legsim_status r = stage_start(s, rk4);
+  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, real(s.opt.step_s));
+  bool stopped = false;
+  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
+  return r;
+}
+
 }  // namespace
+
+legsim_status contact_modes_check(Sim &s) {
+  const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
+  return all_or_nothing(s, [&] { return stage_start(s, rk4); });
+}
 
 legsim_status steps_run(Sim &s, int32_t n_steps) {
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
+  const bool events = s.model.nc > 0;  // a model with contacts has events to locate
   for (int32_t i = 0; i < n_steps; ++i) {
     // a failed step leaves the state of the last good one (all_or_nothing also
     // refuses a step whose state, accelerations, multipliers or report are not finite)
     const legsim_status st = all_or_nothing(s, [&](const Snapshot &start) {
-      legsim_status r = step_with_events(s, rk4, stops, start);
+#if LEGSIM_WITH_CONTACT
+      legsim_status r = events ? step_with_events(s, rk4, stops, start) : step_whole(s, rk4, stops);
+#else
+      (void)start;
+      (void)events;
+      legsim_status r = step_whole(s, rk4, stops);
+#endif
       if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
       if (r != LEGSIM_OK) return r;
       s.data.modes_checked = true;
