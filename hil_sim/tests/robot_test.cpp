@@ -132,6 +132,7 @@ struct Direct {
     legsim_real len[4], rate[4];
     CHECK(legsim_actuator_lengths(sim, len, rate) == LEGSIM_OK);
     for (int a = 0; a < 4; ++a) CHECK(legsim_command_length(sim, a, len[a]) == LEGSIM_OK);
+    CHECK(legsim_contacts_check(sim) == LEGSIM_OK);  // as hil_sim's RESET ends
   }
 };
 
@@ -747,6 +748,7 @@ void test_start_lengths_at_the_stroke_ends() {
   CHECK(legsim_assemble_on_ground(sim, given, (c[0].position[0] + c[1].position[0]) / 2) == LEGSIM_OK);
   for (int a = 0; a < 4; ++a) CHECK(legsim_command_force(sim, a, 0) == LEGSIM_OK);
   CHECK(legsim_clear_events(sim) == LEGSIM_OK);
+  CHECK(legsim_contacts_check(sim) == LEGSIM_OK);  // as hil_sim's RESET ends
 
   Rig r;
   auto out = r.feed(pack(reset_at(1, minima)));
