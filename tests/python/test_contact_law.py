@@ -21,7 +21,7 @@ import pytest
 
 import legsim
 
-from conftest import ROOT, robot_sim as _robot_sim
+from conftest import ROOT, compass_desc, robot_sim as _robot_sim
 
 try:
     import legsim_bench.reference  # noqa: F401
@@ -250,29 +250,7 @@ def _compass(mu, a, wB, **kw):
     line, each leaning a from the vertical (A to -x, B to +x); B's foot stuck, the compass
     turning about it at wB, so A's foot slides along the line. mu_s = mu_k = mu."""
     lib = legsim.load_library("double")
-    if lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
-        pytest.skip(f"{lib.path} is built without two contacts")
-    d = lib.ModelDesc()
-    d.name = b"compass"
-    d.gravity_mps2[1] = -9.81
-    d.n_bodies = 2
-    for i, nm in enumerate((b"A", b"B")):
-        d.body[i].name = nm
-        d.body[i].length_m = 1.0
-        d.body[i].mass_kg = 1.0
-        d.body[i].inertia_kgm2 = 1.0 / 12.0
-        d.contact[i].name = b"foot" + nm
-        d.contact[i].body = i
-        d.contact[i].point[0], d.contact[i].point[1] = 0.5, 0.0
-    d.n_joints = 1
-    d.joint[0].name = b"hinge"
-    d.joint[0].kind = 1  # LEGSIM_JOINT_REVOLUTE: point on body 0 = point on body 1
-    d.joint[0].body[0], d.joint[0].body[1] = 0, 1
-    d.joint[0].point[0][0] = d.joint[0].point[1][0] = -0.5
-    d.foot_body = -1
-    d.n_contacts = 2
-    d.ground.mu_static = mu
-    d.ground.mu_kinetic = mu
+    d = compass_desc(lib, mu)
 
     def perp(r):
         return np.array([-r[1], r[0]])

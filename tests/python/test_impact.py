@@ -17,7 +17,7 @@ import pytest
 
 import legsim
 
-from conftest import ROOT
+from conftest import ROOT, compass_desc
 
 try:
     import legsim_bench.reference  # noqa: F401
@@ -104,27 +104,7 @@ def _compass(omega: float, vx: float, mu: float, integrator: str, h: float):
     the vertical), feet 0.1 mm under the line; the compass falls at 0.5 m/s and turns
     rigidly at omega about the feet's midpoint (B's foot rising), sliding at vx."""
     lib = _lib(2)
-    d = lib.ModelDesc()
-    d.name = b"compass"
-    d.gravity_mps2[1] = -G
-    d.n_bodies = 2
-    for i, nm in enumerate((b"A", b"B")):
-        d.body[i].name = nm
-        d.body[i].length_m = 1.0
-        d.body[i].mass_kg = 1.0
-        d.body[i].inertia_kgm2 = 1.0 / 12.0
-        d.contact[i].name = b"foot" + nm
-        d.contact[i].body = i
-        d.contact[i].point[0], d.contact[i].point[1] = 0.5, 0.0
-    d.n_joints = 1
-    d.joint[0].name = b"hinge"
-    d.joint[0].kind = 1  # LEGSIM_JOINT_REVOLUTE: point on body 0 = point on body 1
-    d.joint[0].body[0], d.joint[0].body[1] = 0, 1
-    d.joint[0].point[0][0] = d.joint[0].point[1][0] = -0.5
-    d.foot_body = -1
-    d.n_contacts = 2
-    d.ground.mu_static = mu
-    d.ground.mu_kinetic = mu
+    d = compass_desc(lib, mu, G)
     s = legsim.Sim(legsim.Model(d, lib, "revolute", "compass"), integrator=integrator, step=h)
     _, (cA, cB), _ = _compass_geometry()
     V = np.array([vx, -0.5])
