@@ -229,6 +229,10 @@ legsim_status Session::reset(const ResetParams &params) {
 
 legsim_status Session::step(int32_t n) { return legsim_step(sim_, n); }
 
+legsim_status Session::contacts_check() {
+  return model()->n_contacts > 0 ? legsim_contacts_check(sim_) : LEGSIM_OK;
+}
+
 legsim_status Session::command(int actuator, ActMode mode, double value) {
   switch (mode) {
     case ActMode::kForce:

@@ -50,10 +50,6 @@ FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml", "robot_sl
 XFAIL_RUN: dict[str, str] = {}
 XFAIL_VERDICT = {
     **XFAIL_RUN,
-    "robot_slope_steep": "over CAN the t = 0 sample is the RESET's answer, before the scene's t = 0 servo "
-                         "commands reach hil_sim (legsim_cli samples after them): the slip those commands "
-                         "cause is found at the first step's start (t = 0) and reported with that step's "
-                         "sample, where the reference has it at t = 0 (needs a state request at t = 0)",
 }
 
 
