@@ -1,6 +1,8 @@
 // Frames <-> requests, samples, faults and heartbeats through the generated pack/unpack code.
 #include "protocol.h"
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
 
@@ -81,7 +83,10 @@ class Checker {
     fault_->frame_len = kFdPayload;
     fault_->seq = req_.seq;
     fault_->detail = start_bit;
-    fault_->value = static_cast<float>(value);
+    // Fault_Value is float32: a finite float64 beyond it (a CONTROL length of 1e300) is
+    // reported as +-FLT_MAX, the DBC's range; NaN/Inf stay as they are (NOT_FINITE).
+    fault_->value = std::isfinite(value) ? static_cast<float>(std::clamp(value, -double{FLT_MAX}, double{FLT_MAX}))
+                                         : static_cast<float>(value);
   }
   const Request &req_;
   Fault *fault_;
