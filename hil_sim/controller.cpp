@@ -151,8 +151,18 @@ void Controller::handle_control(const Request &req, int64_t now_ns) {
     }
     case Command::kStep:  // worked by work(), answered when done
       ctrl_seq_ = {true, req.seq};
+      if (r.n_steps == 0) {
+        // no step: the contact modes checked at the current state and commands (as a step's
+        // start would), answered with the state there (a scene's t = 0 after its commands)
+        const legsim_status st = session_.contacts_check();
+        if (st != LEGSIM_OK) {
+          state_ = SimState::kHalted;
+          solver_fault(st, &req);
+        }
+        break;
+      }
       step_req_ = req;
-      step_total_ = step_left_ = r.n_steps;  // validated: >= 1
+      step_total_ = step_left_ = r.n_steps;  // validated: <= 1e7
       return;
     case Command::kStartRt:
       ctrl_seq_ = {true, req.seq};

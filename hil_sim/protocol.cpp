@@ -1,8 +1,12 @@
 // Frames <-> requests, samples, faults and heartbeats through the generated pack/unpack code.
 #include "protocol.h"
 
+#include <algorithm>
+#include <cfloat>
 #include <cmath>
 #include <cstring>
+
+#include "scene_toml.hpp"  // legsim_host::start_length_in_stroke: legsim_cli's rule for a start length
 
 extern "C" {
 #include "legsim_can.h"
@@ -58,8 +62,8 @@ class Checker {
   void range(bool in_range, unsigned start_bit, double value) {
     if (ok_ && !in_range) fail(FaultCode::kOutOfRange, start_bit, value);
   }
-  // a float signal: finite, then its DBC range
-  void real(float value, bool in_range, unsigned start_bit) {
+  // a float signal (float32, float64): finite, then its DBC range
+  void real(double value, bool in_range, unsigned start_bit) {
     if (!ok_) return;
     if (!std::isfinite(value))
       fail(FaultCode::kNotFinite, start_bit, value);
@@ -79,7 +83,10 @@ class Checker {
     fault_->frame_len = kFdPayload;
     fault_->seq = req_.seq;
     fault_->detail = start_bit;
-    fault_->value = static_cast<float>(value);
+    // Fault_Value is float32: a finite float64 beyond it (a CONTROL length of 1e300) is
+    // reported as +-FLT_MAX, the DBC's range; NaN/Inf stay as they are (NOT_FINITE).
+    fault_->value = std::isfinite(value) ? static_cast<float>(std::clamp(value, -double{FLT_MAX}, double{FLT_MAX}))
+                                         : static_cast<float>(value);
   }
   const Request &req_;
   Fault *fault_;
@@ -94,8 +101,9 @@ void reject_frame(const Frame &frame, FaultCode code, uint32_t detail, Fault *fa
   fault->detail = detail;
 }
 
-// A float32 length is inside the stroke when it is inside the stroke's ends rounded to
-// float32 (0.8f is 0.800000012): the session then clamps it onto the exact stroke.
+// An ACT_CMD servo set-point (float32) is inside the stroke when it is inside the stroke's
+// ends rounded to float32 (0.8f is 0.800000012): the session then clamps it onto the exact
+// stroke. (A RESET's start lengths travel as float64 and follow legsim_cli's rule instead.)
 bool stroke_ok(const legsim_model_desc *m, int a, float l) {
   return l >= static_cast<float>(m->actuator[a].stroke_min_m) &&
          l <= static_cast<float>(m->actuator[a].stroke_max_m);
@@ -164,9 +172,9 @@ void validate_control(const Request &req, Checker &c) {
       c.model((r.free_contacts >> m->n_contacts) == 0, LEGSIM_CAN_CONTROL_CTRL_FREE_CONTACTS_START_BIT,
               r.free_contacts);
       if (p.use_lengths) {
-        // leg 0's lengths, then (robot) leg 1's
-        float l[kMaxActuators];
-        for (int a = 0; a < kMaxActuators; ++a) l[a] = static_cast<float>(p.lengths[a]);
+        // leg 0's lengths, then (robot) leg 1's: float64 on the bus, the bench's double as
+        // sent; finite, the DBC's range, then legsim_cli's rule
+        const double *l = p.lengths;
         const unsigned bit[kMaxActuators] = {LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_START_BIT,
                                              LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_START_BIT,
                                              LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_L1_START_BIT,
@@ -178,7 +186,8 @@ void validate_control(const Request &req, Checker &c) {
             legsim_can_control_ctrl_length_lower_l1_is_in_range(l[3])};
         const int na = m->n_actuators;
         for (int a = 0; a < na; ++a) c.real(l[a], in_range[a], bit[a]);
-        for (int a = 0; a < na; ++a) c.model(stroke_ok(m, a, l[a]), bit[a], l[a]);
+        for (int a = 0; a < na; ++a)
+          c.model(legsim_host::start_length_in_stroke(*m, a, l[a]), bit[a], l[a]);
       }
       break;
     }

@@ -15,8 +15,8 @@ namespace hil {
 
 namespace {
 
-// Lengths arrive as float32 and were checked against the stroke rounded to float32; the
-// core gets them on the exact stroke (a move of at most one float32 ulp).
+// ACT_CMD set-points arrive as float32 and were checked against the stroke rounded to
+// float32; the core gets them on the exact stroke (a move of at most one float32 ulp).
 legsim_real on_stroke(const legsim_model_desc *m, int a, double l) {
   return static_cast<legsim_real>(
       std::clamp(l, m->actuator[a].stroke_min_m, m->actuator[a].stroke_max_m));
@@ -156,7 +156,8 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
   const legsim_model_desc *m = variant_model(p.variant);
   const int na = m->n_actuators;
   legsim_real given[kMaxActuators];
-  for (int a = 0; a < na && p.use_lengths; ++a) given[a] = on_stroke(m, a, p.lengths[a]);
+  // the RESET's lengths: float64 as sent, inside the stroke by legsim_cli's rule (protocol)
+  for (int a = 0; a < na && p.use_lengths; ++a) given[a] = static_cast<legsim_real>(p.lengths[a]);
   if (m->n_contacts > 0) {
     // the robot: onto the ground, both feet stuck, their midpoint where the pose put it
     // (the pose's guess has the feet on the line already); the box pose follows
@@ -205,6 +206,9 @@ legsim_status Session::build(void *storage, const ResetParams &p, legsim_sim **o
                        : legsim_command_force(sim, a, 0);
   if (st != LEGSIM_OK) return st;
   st = legsim_clear_events(sim);
+  // the contact modes at t = 0, as legsim_cli checks them before its first sample: a start
+  // that cannot hold changes mode here, its event in the first state frames
+  if (st == LEGSIM_OK && m->n_contacts > 0) st = legsim_contacts_check(sim);
   if (st != LEGSIM_OK) return st;
   *out = sim;
   return LEGSIM_OK;
@@ -224,6 +228,10 @@ legsim_status Session::reset(const ResetParams &params) {
 }
 
 legsim_status Session::step(int32_t n) { return legsim_step(sim_, n); }
+
+legsim_status Session::contacts_check() {
+  return model()->n_contacts > 0 ? legsim_contacts_check(sim_) : LEGSIM_OK;
+}
 
 legsim_status Session::command(int actuator, ActMode mode, double value) {
   switch (mode) {

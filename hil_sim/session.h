@@ -105,6 +105,8 @@ class Session {
   const ResetParams &params() const { return params_; }
 
   legsim_status step(int32_t n);
+  // The contact modes checked now (legsim_contacts_check): a model without contacts has none.
+  legsim_status contacts_check();
   // Mode kKeep is a no-op. Values were checked against the model by the protocol.
   legsim_status command(int actuator, ActMode mode, double value);
   legsim_status set_load(int force, const double value[2]);  // the model's force index

@@ -333,7 +333,7 @@ def _robot_trajectories(rec: dict, ev):
         import legsim
 
         traj = RobotTrajectory.from_recording(rec, legsim.Model.from_toml(scene.model_path), box,
-                                              title=scene.name)
+                                              title=scene.name, ground=scene.ground)
     ref = ev.reference_run
     if ref is not None:
         from .verdict.analyses import robot_model

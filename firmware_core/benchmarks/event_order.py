@@ -6,7 +6,7 @@ generalized-alpha over h = 2e-3 ... 1.25e-4 s, against the bench's event-locatin
 touchdown to 1e-13 s of sqrt(2 d / g)).
 
     LEGSIM_ROOT=$PWD PYTHONPATH=$PWD/python:$PWD/bench python firmware_core/benchmarks/event_order.py
-        [--cases touchdown,liftoff,slip,none] [--integrators rk4,galpha]
+        [--cases touchdown,liftoff,slip,none] [--integrators rk4,galpha] [--steps 2e-3,1e-3,...]
 
 Per case, integrator and h it prints: the error at the case's fixed time after the event
 (max over the 39 coordinates, m and rad), the whole run's max error on the 2 ms grid, the
@@ -149,15 +149,20 @@ def run_core(case, integrator, h, ref):
         s.step(1)
         ev = [e for e in s.events() if e in ("touchdown", "liftoff", "stick_to_slip", "slip_to_stick")]
         if ev:
-            events.append((k * h, ev))
+            # the core's event time (legsim_contact_event_time): the earliest of this step's
+            times = [s.contact_event_time(c) for c in range(2)]
+            times = [t for t in times if (k - 1) * h - 1e-12 <= t <= k * h + 1e-12]
+            events.append((min(times) if times else k * h, ev))
             if "touchdown" in ev and lost is None:
-                # the fall is rigid (every body at one velocity, no spin): the core's
-                # pre-impact velocity at the step's end is the step start's + g h
+                # the fall is rigid (every body at one velocity, no spin), so the feet
+                # approach at g t_e (t_e: the core's touchdown time) and stop: by Carnot's
+                # theorem the impulse takes 1/2 sum_k P_n,k g t_e (the impulses the core
+                # reports, legsim_contact.impulse_ns)
                 v = qd_before.reshape(-1, 3)
                 rigid = np.max(np.abs(v - v[0])) < 1e-9 and np.max(np.abs(v[:, 2])) < 1e-9
-                vm = v.copy()
-                vm[:, 1] -= G * h
-                lost = {"rigid": rigid, "impulse": kinetic(s, vm.reshape(-1)) - kinetic(s, s.qd),
+                t_e = events[-1][0]
+                pn = sum(float(c["impulse"][0]) for c in s.contacts())
+                lost = {"rigid": rigid, "impulse": 0.5 * pn * G * t_e,
                         "balance": e0 - kinetic(s, s.qd) - potential(s, s.q)}
         s.clear_events()
         if k % every == 0:
@@ -169,6 +174,8 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", default="touchdown,liftoff,slip,none")
     ap.add_argument("--integrators", default="rk4,galpha")
+    ap.add_argument("--steps", default=",".join(f"{h:g}" for h in STEPS),
+                    help="step sizes (s), largest first")
     a = ap.parse_args()
     all_cases = cases()
     rows, energy, ref_table = [], [], []
@@ -180,16 +187,16 @@ def main():
         print(f"{name}: reference events {ref_events}", file=sys.stderr)
         for integ in a.integrators.split(","):
             prev = None
-            for h in STEPS:
+            for h in (float(x) for x in a.steps.split(",")):
                 e_end, e_max, events, lost = run_core(case, integ, h, ref)
                 order = "" if prev is None else f"{math.log2(prev / e_end):.2f}"
                 prev = e_end
                 first = events[0] if events else None
                 dt = None if not (first and ref.events) else first[0] - ref.events[0].t
-                delay = "" if dt is None else f"{dt:.3e}"
+                delay = "" if dt is None else f"{dt:.3e} ({dt / h:+.1e} h)"
                 ratio = "" if not dt else f"{e_end / dt:.3g} | {e_end / dt ** 2:.3g}"
                 ratio = ratio or " | "
-                core_ev = "; ".join(f"{t * 1e3:.4g} ms {'+'.join(ev)}" for t, ev in events[:3]) or "none"
+                core_ev = "; ".join(f"{t * 1e3:.7f} ms {'+'.join(ev)}" for t, ev in events[:3]) or "none"
                 if len(events) > 3:
                     core_ev += f"; ... ({len(events)} steps with events)"
                 rows.append((name, integ, h, e_end, e_max, order, core_ev, delay, ratio))

@@ -1153,7 +1153,7 @@ bool bind_scene(Scene &s, const legsim_model_desc &m, std::string &err) {
              std::to_string(s.lengths.size()) + ")");
       for (int32_t a = 0; a < m.n_actuators; ++a) {
         const auto &ad = m.actuator[a];
-        if (s.lengths[a] < ad.stroke_min_m || s.lengths[a] > ad.stroke_max_m)
+        if (!start_length_in_stroke(m, a, s.lengths[a]))
           fail("lengths[" + std::to_string(a) + "] = " + num(s.lengths[a]) +
                " m is outside the stroke of actuator " + q(name_of(ad.name)) + " [" +
                num(ad.stroke_min_m) + ", " + num(ad.stroke_max_m) + "]");

@@ -99,6 +99,11 @@ void record(legsim_sim *sim, const legsim_model_desc &m, double t, const legsim_
 // the ground, a foot on the ground and moving without a state) is refused, never adjusted.
 }  // namespace
 
+bool start_length_in_stroke(const legsim_model_desc &m, int32_t a, double l) {
+  const legsim_actuator_desc &ad = m.actuator[a];
+  return l >= ad.stroke_min_m && l <= ad.stroke_max_m;  // false for NaN
+}
+
 legsim_status start_apply(legsim_sim *sim, const legsim_model_desc &m, const StartState &b,
                           const int32_t *given_state, double tol, std::string &error) {
   const int32_t nq = legsim_n_coords(sim), nk = legsim_n_contacts(sim);
@@ -376,6 +381,12 @@ legsim_status run(const Scene &sc, const legsim_model_desc &m, ResultWriter &out
         return LEGSIM_OK;
       };
       st = apply(0.0);
+      // the contact modes at t = 0, as the first step's start finds them: a start that cannot
+      // hold changes mode here and the first sample shows it
+      if (st == LEGSIM_OK && nk > 0) {
+        st = legsim_contacts_check(sim);
+        if (st != LEGSIM_OK) res.error = call_failed("checking the contact modes at t = 0", st);
+      }
       if (st != LEGSIM_OK) return st;
       // A robot's first sample: the assembly's multipliers are not the dynamics' forces
       // (the first step solves those), so its reactions and ground forces are null, as the

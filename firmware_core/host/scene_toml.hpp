@@ -232,6 +232,13 @@ class CsvWriter : public ResultWriter {
   const legsim_model_desc &m_;
 };
 
+// The rule for a start length (m) of actuator a, a scene's `lengths` and a RESET's
+// Ctrl_Length_* alike: finite and inside the stroke [stroke_min_m, stroke_max_m], ends
+// included, compared in double with no tolerance and never clamped. legsim_cli's scene check
+// and hil_sim's RESET both use it on the same double (CAN carries it as float64), so a start
+// one refuses the other refuses, and one both take is the same start. Allocation-free.
+bool start_length_in_stroke(const legsim_model_desc &model, int32_t a, double length_m);
+
 // [start] on a robot assembled on the ground (legsim_assemble_on_ground: every contact stuck,
 // the stance's contact positions fresh): moves it rigidly as `start` says and sets each
 // contact's state: given_state[k] (a legsim_contact_state, or -1: stuck on the ground within

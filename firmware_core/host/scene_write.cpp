@@ -64,6 +64,8 @@ const EventName kEventNames[] = {
     {LEGSIM_EVENT_SLIP_TO_STICK, "slip_to_stick"},
     {LEGSIM_EVENT_CONTACT_INCONSISTENT, "contact_inconsistent"},
     {LEGSIM_EVENT_CONTACT_AMBIGUOUS, "contact_ambiguous"},
+    {LEGSIM_EVENT_EVENTS_DEFERRED, "events_deferred"},
+    {LEGSIM_EVENT_EVENT_INEXACT, "event_inexact"},
 };
 
 std::vector<std::string> event_names(uint32_t e) {

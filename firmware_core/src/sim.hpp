@@ -3,6 +3,8 @@
 // is fixed-size; the capacities come from legsim/config.h.
 #pragma once
 
+#include <type_traits>
+
 #include <Eigen/Core>
 #include <cstdint>
 
@@ -221,6 +223,15 @@ struct ContactData {
   real normal, tangential;  // N, T of the last solve (0 when free)
   real impulse[2];   // the last impact's (normal, tangential) impulse on the foot, N s
   uint32_t events;   // the contact legsim_event bits this contact raised since legsim_clear_events
+  double event_time; // s: the time of its last contact event (located inside the step, or the
+                     // step's end for one taken there); 0 before any
+};
+
+// Contact events a step located inside itself (bit k: contact k), applied at their time by
+// contact_transitions: touchdown (a free foot), lift-off (a closed one), stick to slip (a
+// stuck one, against its T), slip to stick (a sliding one).
+struct ContactEvents {
+  uint32_t touchdown, liftoff, slip, stick;
 };
 
 // Generalized-alpha's predictor: the polynomial order of its extrapolation of the
@@ -242,6 +253,9 @@ struct Data {
   // Since qdd was last valid, only the forcing changed (commands, loads: commands_changed),
   // not the state, the rows or the options: the restart keeps what depends on the state alone.
   bool forcing_only;
+  // The contact modes were checked at the current state (a step's end): false after a change
+  // from outside (state_refresh), so the next step checks them at its start first.
+  bool modes_checked;
   VecQ q, qd, qdd;
   VecQ acc_aux;  // generalized-alpha auxiliary acceleration
   // Generalized-alpha's predictor and convergence test: the accelerations of the steps
@@ -337,7 +351,11 @@ legsim_status outputs_check(const Sim &sim);
 template <typename F>
 legsim_status all_or_nothing(Sim &sim, F &&call) {
   const Snapshot before(sim);
-  legsim_status s = call();
+  legsim_status s;
+  if constexpr (std::is_invocable_v<F, const Snapshot &>)
+    s = call(before);  // a call that goes back to its start part-way (a step cut at an event)
+  else
+    s = call();
   if (s == LEGSIM_OK) s = outputs_check(sim);
   if (s != LEGSIM_OK) {
     sim.data.failure = sim.data.report;  // where the solver stopped, kept apart
@@ -354,6 +372,8 @@ bool state_finite(const VecQ &q, const VecQ &qd, int n);
 // ---- system/step.cpp: the step's stages ----
 // n_steps steps, each all-or-nothing; the sim is assembled, its state finite.
 legsim_status steps_run(Sim &sim, int32_t n_steps);
+// The step's first stage alone, all or nothing: the contact modes checked at the current state.
+legsim_status contact_modes_check(Sim &sim);
 // After the state changed outside a step: accelerations, multipliers and reactions at the
 // new state, and a fresh start of generalized-alpha's history. forcing_only: only a command
 // or a load changed (the state, its rows and the options as they were).
@@ -462,7 +482,9 @@ void contact_slides_mark(const Model &model, const Data &d, Layout &layout);
 void contact_forces_update(Sim &sim);
 // After a step: touchdown, lift-off, stick to slip, slip to stick (docs/design/robot-on-ground.md
 // section 2), each raised as an event; changed: the contact modes or the state changed.
-legsim_status contact_transitions(Sim &sim, bool &changed);
+// located: the events found inside the step, applied first whatever the tolerances say;
+// at: the time the transitions take place (s), kept as each changed contact's event_time.
+legsim_status contact_transitions(Sim &sim, bool &changed, double at, const ContactEvents *located = nullptr);
 // Every contact free (a state set or assembled from outside).
 void contacts_free(Sim &sim);
 // N and T of each contact with rows in layout, from the multipliers lambda (0 for the others).
@@ -533,8 +555,9 @@ void reactions_from_multipliers(const Model &model, const Rows &rows, const VecR
                                 legsim_reaction *out);
 
 // ---- integrators ----
-legsim_status rk4_step(Sim &sim);
-legsim_status generalized_alpha_step(Sim &sim);
+// One step of h seconds (the options' step_s, or a part of it: a step cut at an event).
+legsim_status rk4_step(Sim &sim, real h);
+legsim_status generalized_alpha_step(Sim &sim, real h);
 legsim_status generalized_alpha_reactions(Sim &sim);
 
 // ---- statics.cpp / inverse_dynamics.cpp ----

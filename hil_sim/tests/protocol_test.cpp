@@ -122,8 +122,6 @@ void test_bad_frames_fault_and_change_nothing() {
   ext.extended = true;
   const float nan = std::numeric_limits<float>::quiet_NaN();
   const float inf = std::numeric_limits<float>::infinity();
-  legsim_can_control_t zero_steps = control(2, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STEP_CHOICE);
-  zero_steps.ctrl_n_steps = 0;
   legsim_can_control_t bad_cmd = control(2, 9);
   Case cases[] = {
       {"unknown id", unknown, 1, 0},
@@ -139,7 +137,6 @@ void test_bad_frames_fault_and_change_nothing() {
       {"mode 3", act(2, 3, 0.0f), 4, LEGSIM_CAN_ACT_CMD_ACT_MODE_UPPER_START_BIT},
       {"stale ACT_CMD counter", act(1, 2, 0.70f), 5, 1},
       {"stale CONTROL counter", step(1, 5), 5, 1},
-      {"STEP of 0 steps", pack(zero_steps), 4, LEGSIM_CAN_CONTROL_CTRL_N_STEPS_START_BIT},
       {"command 9", pack(bad_cmd), 4, LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_BIT},
   };
   for (const Case &c : cases) {
@@ -167,6 +164,11 @@ void test_bad_frames_fault_and_change_nothing() {
   CHECK(sb.st_last_fault != 0);
   CHECK(sb.st_status & hil::kStatusFault);
   CHECK(status_of(bad.feed(step(3, 1))).st_status == status_of(good.feed(step(3, 1))).st_status);
+  // STEP 0: no step; the state answered as it is (the leg has no contact modes to check)
+  auto z = good.feed(step(4, 0));
+  CHECK(fault_of(z).fault_code == 0 && !physics(z).empty());
+  CHECK(status_of(z).st_step_count == 41);
+  CHECK(physics(z) == physics(good.feed(step(5, 0))));
 }
 
 void test_state_rules() {
@@ -299,8 +301,8 @@ void test_solver_failures() {
   // assembly, the running session goes on untouched
   legsim_can_control_t m = control(3, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
   m.ctrl_use_lengths = 1;
-  m.ctrl_length_upper = 0.80f;
-  m.ctrl_length_lower = 0.35f;
+  m.ctrl_length_upper = 0.80;  // float64 on the bus (0.80f would be 1.2e-8 m past the stroke)
+  m.ctrl_length_lower = 0.35;
   auto out = r.feed(pack(m));
   auto f = fault_of(out);
   CHECK(out.size() == 1 && f.fault_code == 8 && f.fault_detail == LEGSIM_ERR_UNREACHABLE);

@@ -132,6 +132,7 @@ struct Direct {
     legsim_real len[4], rate[4];
     CHECK(legsim_actuator_lengths(sim, len, rate) == LEGSIM_OK);
     for (int a = 0; a < 4; ++a) CHECK(legsim_command_length(sim, a, len[a]) == LEGSIM_OK);
+    CHECK(legsim_contacts_check(sim) == LEGSIM_OK);  // as hil_sim's RESET ends
   }
 };
 
@@ -702,10 +703,111 @@ void test_watchdog_per_leg() {
   CHECK(!(status0(out).st_status & hil::kStatusSafeState) && (status1(out).st_status & hil::kStatusSafeState));
 }
 
+// A RESET at start lengths (Ctrl_Length_*, float64 on the bus) follows legsim_cli's rule for
+// a scene's `lengths` (legsim_host::start_length_in_stroke): a length at a stroke end is that
+// end, bit for bit, and runs as the C API given the scene's doubles
+// (scenes/robot_stops_stuck: both feet stuck, the four lengths at their minima 0.40, 0.35 m,
+// zero force, RK4 at 1 ms, 0.3 s); one double below a minimum, 1 mm out of a stroke or NaN
+// is refused where the CLI refuses it, with a FAULT naming the signal, and the running
+// session steps on (never HALTED for bad input).
+legsim_can_control_t reset_at(uint32_t seq, const double len[4]) {
+  legsim_can_control_t m = untimed(control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE));
+  m.ctrl_act_init = 0;  // zero force (a scene's init = "zero_force")
+  m.ctrl_use_lengths = 1;
+  m.ctrl_length_upper = len[0];
+  m.ctrl_length_lower = len[1];
+  m.ctrl_length_upper_l1 = len[2];
+  m.ctrl_length_lower_l1 = len[3];
+  return m;
+}
+
+void test_start_lengths_at_the_stroke_ends() {
+  using legsim_host::start_length_in_stroke;
+  const legsim_model_desc &rm = legsim_model_robot_revolute;
+  const double minima[4] = {rm.actuator[0].stroke_min_m, rm.actuator[1].stroke_min_m,
+                            rm.actuator[2].stroke_min_m, rm.actuator[3].stroke_min_m};
+  // the scene's values are the model's minima (models/robot.toml); float32 cannot hold them:
+  // 0.35f is below the stroke, 0.40f 6e-9 m inside it (the core's step 0 failed from there)
+  CHECK(minima[0] == 0.40 && minima[1] == 0.35 && minima[2] == 0.40 && minima[3] == 0.35);
+  CHECK(static_cast<double>(0.35f) < 0.35 && static_cast<double>(0.40f) > 0.40);
+  CHECK(!start_length_in_stroke(rm, 1, static_cast<double>(0.35f)));
+  CHECK(start_length_in_stroke(rm, 1, 0.35) && start_length_in_stroke(rm, 0, 0.40));
+  // the C API given the scene's doubles, as legsim_cli runs it
+  std::vector<unsigned char> storage(legsim_sim_size() + LEGSIM_STORAGE_ALIGN);
+  void *p = storage.data();
+  size_t space = storage.size();
+  void *aligned = std::align(LEGSIM_STORAGE_ALIGN, legsim_sim_size(), p, space);
+  legsim_options opt = legsim_default_options();
+  opt.step_s = 0.001;
+  legsim_sim *sim = nullptr;
+  CHECK(legsim_init(aligned, space, &rm, &opt, &sim) == LEGSIM_OK);
+  CHECK(legsim_assemble_pose(sim, 0) == LEGSIM_OK);
+  legsim_contact c[2];
+  CHECK(legsim_contacts(sim, c) == LEGSIM_OK);
+  legsim_real given[4] = {minima[0], minima[1], minima[2], minima[3]};
+  CHECK(legsim_assemble_on_ground(sim, given, (c[0].position[0] + c[1].position[0]) / 2) == LEGSIM_OK);
+  for (int a = 0; a < 4; ++a) CHECK(legsim_command_force(sim, a, 0) == LEGSIM_OK);
+  CHECK(legsim_clear_events(sim) == LEGSIM_OK);
+  CHECK(legsim_contacts_check(sim) == LEGSIM_OK);  // as hil_sim's RESET ends
+
+  Rig r;
+  auto out = r.feed(pack(reset_at(1, minima)));
+  // the frame carries the scene's doubles bit for bit
+  legsim_can_control_t sent;
+  legsim_can_control_unpack(&sent, pack(reset_at(1, minima)).data, 64);
+  CHECK(sent.ctrl_length_upper == 0.40 && sent.ctrl_length_lower == 0.35 &&
+        sent.ctrl_length_upper_l1 == 0.40 && sent.ctrl_length_lower_l1 == 0.35);
+  CHECK(out.size() == hil::kMaxSampleFrames && fault_of(out).fault_code == 0);
+  check_sample(out, sim);
+  CHECK(status0(out).st_state == LEGSIM_CAN_ST_STATUS_ST_STATE_LOCKSTEP_CHOICE);
+  CHECK(legsim_step(sim, 300) == LEGSIM_OK);
+  out = r.feed(step(2, 300), 64);
+  CHECK(fault_of(out).fault_code == 0);
+  CHECK(status0(out).st_state == LEGSIM_CAN_ST_STATUS_ST_STATE_LOCKSTEP_CHOICE);
+  CHECK(status0(out).st_step_count == 300);
+  check_sample(out, sim);
+
+  // refused where legsim_cli refuses: the same rule on the same double
+  struct Bad {
+    int actuator;
+    double length;
+    unsigned code, bit;
+  };
+  const Bad bad[] = {
+      {1, std::nextafter(0.35, 0.0), 4, LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_START_BIT},  // 1 ulp short
+      {1, 0.35 - 1e-3, 4, LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_START_BIT},                // 1 mm short
+      {2, rm.actuator[2].stroke_max_m + 1e-3, 4, LEGSIM_CAN_CONTROL_CTRL_LENGTH_UPPER_L1_START_BIT},
+      {3, std::nan(""), 3, LEGSIM_CAN_CONTROL_CTRL_LENGTH_LOWER_L1_START_BIT},            // NOT_FINITE
+  };
+  uint32_t seq = 3;
+  for (const Bad &b : bad) {
+    CHECK(!start_length_in_stroke(rm, b.actuator, b.length));  // legsim_cli refuses it too
+    double len[4] = {minima[0], minima[1], minima[2], minima[3]};
+    len[b.actuator] = b.length;
+    out = r.feed(pack(reset_at(seq++, len)));
+    const legsim_can_fault_t f = fault_of(out);
+    CHECK(out.size() == 1 && f.fault_code == b.code && f.fault_detail == b.bit);
+    CHECK(f.fault_frame_id == LEGSIM_CAN_CONTROL_FRAME_ID);
+    CHECK(std::isnan(b.length) ? std::isnan(f.fault_value) : f.fault_value == static_cast<float>(b.length));
+    // the running session is untouched and steps on
+    CHECK(legsim_step(sim, 1) == LEGSIM_OK);
+    out = r.feed(step(seq++, 1));
+    CHECK(fault_of(out).fault_code == 0);
+    CHECK(status0(out).st_state == LEGSIM_CAN_ST_STATUS_ST_STATE_LOCKSTEP_CHOICE);
+    check_sample(out, sim);
+  }
+  // the stroke's other ends are in too (ends included): at most the core's call, never OUT_OF_RANGE
+  const double ends[4] = {rm.actuator[0].stroke_max_m, minima[1], minima[2], rm.actuator[3].stroke_max_m};
+  for (int a = 0; a < 4; ++a) CHECK(start_length_in_stroke(rm, a, ends[a]));
+  out = r.feed(pack(reset_at(seq++, ends)));
+  CHECK(fault_of(out).fault_code != 4);
+}
+
 }  // namespace
 
 int main() {
   hil::Session::use_robot(&legsim_model_robot_revolute);
+  test_start_lengths_at_the_stroke_ends();
   test_frames_and_ids();
   test_lockstep_matches_the_c_api();
   test_bad_leg1_frames();

@@ -55,6 +55,8 @@ EVENTS = {
     "slip_to_stick": 1 << 7,          # a sliding foot's velocity changed sign
     "contact_inconsistent": 1 << 8,   # no consistent contact mode: the last one kept
     "contact_ambiguous": 1 << 9,      # several consistent modes: the priority picked one
+    "events_deferred": 1 << 10,       # more contact events in a step than it locates
+    "event_inexact": 1 << 11,         # an event's root finding ran out of iterations
 }
 """Event bits of legsim.h (``enum legsim_event``) by name."""
 
@@ -383,6 +385,18 @@ class Sim:
 
     def clear_events(self) -> None:
         self._check(self.library.cdll.legsim_clear_events(self.handle), "legsim_clear_events")
+
+    def contacts_check(self) -> None:
+        """Checks the contact modes now, as the next step would at its start (a start that
+        cannot hold changes mode at the current time)."""
+        self._check(self.library.cdll.legsim_contacts_check(self.handle), "legsim_contacts_check")
+
+    def contact_event_time(self, k: int) -> float:
+        """The time (s) of contact k's last contact event, located inside its step."""
+        t = C.c_double()
+        self._check(self.library.cdll.legsim_contact_event_time(self.handle, int(k), C.byref(t)),
+                    "legsim_contact_event_time")
+        return float(t.value)
 
     def stroke_event_mask(self) -> int:
         """Which actuators raised a stroke event (bit a = actuator a)."""

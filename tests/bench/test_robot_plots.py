@@ -69,6 +69,13 @@ def test_a_can_recording_draws_as_the_run_it_carries(robot, run, traj):
     assert np.allclose(got.body_lengths[legs], traj.body_lengths[legs], rtol=0, atol=1e-15)
     assert np.array_equal(got.feet, traj.feet) and np.array_equal(got.normal, traj.normal)
     assert (got.contact == rp.STUCK).all() and got.ground_slope == traj.ground_slope
+    # a scene's [ground] (hil_sim --ground) is the one drawn, not the model file's
+    steep = {"point": [0.0, -0.5], "slope": 0.3, "mu_static": 0.2, "mu_kinetic": 0.15}
+    g2 = rp.RobotTrajectory.from_recording(rec, legsim.Model.from_toml(ROBOT), robot.box_size, "can",
+                                           ground=steep)
+    assert (g2.ground_slope, g2.mu_static, g2.mu_kinetic) == (0.3, 0.2, 0.15) != (got.ground_slope, got.mu_static,
+                                                                                  got.mu_kinetic)
+    assert np.array_equal(g2.ground_point, steep["point"])
     with pytest.raises(ValueError, match="ST_CONTACT"):
         rp.RobotTrajectory.from_recording(dict(rec, samples=[dict(samples[0], contacts=[])]),
                                           legsim.Model.from_toml(ROBOT), robot.box_size)

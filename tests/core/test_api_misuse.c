@@ -21,6 +21,7 @@ static void test_storage_and_null_checks(void) {
   /* nothing assembled yet: the analyses say so */
   legsim_real f[NA];
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STATE, legsim_step(sim, 1));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STATE, legsim_contacts_check(sim));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STATE, legsim_statics(sim, f));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_get_q(sim, NULL));
   TEST_ASSERT_EQUAL_STRING("ok", legsim_status_str(LEGSIM_OK));

@@ -374,6 +374,7 @@ static void check_refused_everywhere(legsim_sim *s) {
   TEST_ASSERT_EQUAL_INT(want, legsim_get_report(s, &r));
   TEST_ASSERT_EQUAL_INT(want, legsim_failure_report(s, &r));
   TEST_ASSERT_EQUAL_INT(want, legsim_clear_events(s));
+  TEST_ASSERT_EQUAL_INT(want, legsim_contacts_check(s));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_q(s, v));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_qd(s, v));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_qdd(s, v));
@@ -414,6 +415,7 @@ static void test_storage_never_initialised_is_refused_everywhere(void) {
   }
   check_refused_everywhere((legsim_sim *)(st_a.bytes + 4)); /* misaligned */
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_step(NULL, 1));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_contacts_check(NULL));
   /* a refused init leaves a sim already in the storage alive; a sim works after all this */
   legsim_sim *s = stand(&st_a, &legsim_model_leg_revolute, LEGSIM_INTEGRATOR_RK4);
   legsim_model_desc bad = legsim_model_leg_revolute;

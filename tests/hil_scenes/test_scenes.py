@@ -47,20 +47,9 @@ FIXTURE_SCENES = ["heavy_shank_free_fall.toml", "robot_box_load.toml", "robot_sl
 # checks it should meet and marked xfail (strict: it turns green, and must be unmarked, when the
 # fix merges). XFAIL_RUN: the run itself fails (hil_sim HALTED); XFAIL_VERDICT: its verdict
 # (tests/hil_verdicts) fails.
-TOUCHDOWN_AT_STEP_END = ("issue 22 section 1 (branch events): the touchdown is taken at the end of the step "
-                         "that crossed it, 3.0e-4 rad off the event-locating reference after a 1 cm drop")
-XFAIL_RUN = {
-    "robot_stops_stuck": "the lengths at the stroke minima travel as float32: 0.35 arrives as 0.3499999940 m, "
-                         "below the lower actuators' 0.35 m minimum, and hil_sim HALTS with NOT_CONVERGED at "
-                         "step 0 where legsim_cli refuses such a length with a message (CLI run passes)",
-}
+XFAIL_RUN: dict[str, str] = {}
 XFAIL_VERDICT = {
     **XFAIL_RUN,
-    "robot_drop_1cm": TOUCHDOWN_AT_STEP_END,
-    "robot_throw": TOUCHDOWN_AT_STEP_END,
-    "robot_land_switch": TOUCHDOWN_AT_STEP_END,
-    "robot_slope_steep": "issue 22 section 1 (branch events): a starting contact state that cannot hold is "
-                         "resolved after the first step, not at t = 0",
 }
 
 

@@ -31,6 +31,36 @@ def robot_sim(**kw) -> legsim.Sim:
     return legsim.Sim(str(ROBOT), **kw)
 
 
+def compass_desc(lib, mu: float, g: float = 9.81):
+    """A compass: two 1 kg, 1 m rods A and B (inertia 1/12 kg m^2) hinged at their tops
+    (point -0.5 m on each), a foot at each rod's other end (+0.5 m), mu_s = mu_k = mu; the
+    ModelDesc of `lib` (skipped where the library has no room for two contacts)."""
+    if lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
+        pytest.skip(f"{lib.path} is built without two contacts")
+    d = lib.ModelDesc()
+    d.name = b"compass"
+    d.gravity_mps2[1] = -g
+    d.n_bodies = 2
+    for i, nm in enumerate((b"A", b"B")):
+        d.body[i].name = nm
+        d.body[i].length_m = 1.0
+        d.body[i].mass_kg = 1.0
+        d.body[i].inertia_kgm2 = 1.0 / 12.0
+        d.contact[i].name = b"foot" + nm
+        d.contact[i].body = i
+        d.contact[i].point[0], d.contact[i].point[1] = 0.5, 0.0
+    d.n_joints = 1
+    d.joint[0].name = b"hinge"
+    d.joint[0].kind = 1  # LEGSIM_JOINT_REVOLUTE: point on body 0 = point on body 1
+    d.joint[0].body[0], d.joint[0].body[1] = 0, 1
+    d.joint[0].point[0][0] = d.joint[0].point[1][0] = -0.5
+    d.foot_body = -1
+    d.n_contacts = 2
+    d.ground.mu_static = mu
+    d.ground.mu_kinetic = mu
+    return d
+
+
 def _need(precision: str) -> None:
     if not legsim.library_available(precision):
         pytest.skip(f"{legsim.LIB_NAMES[precision]} is not built (cmake --build build/host, "

@@ -92,20 +92,34 @@ def test_block_on_slope_sticks_or_slips_exactly_at_tan(integrator, slope, rel):
 
 @pytest.mark.parametrize("slope", [0.3, 0.6])
 def test_block_slides_from_rest_at_g_sin_minus_mu_cos(slope):
-    """Held for the first step (the check is at its end: the event time error is h), then
-    uniformly accelerated: RK4 integrates the quadratic exactly."""
+    """A stuck start that cannot hold slides from t = 0 (the modes are checked at the step's
+    start after an outside change), uniformly accelerated: RK4 integrates the quadratic
+    exactly."""
     mu_s, mu_k, h, n = math.tan(slope) * 0.9, math.tan(slope) * 0.6, 1e-3, 400
     s = block(slope, mu_s, mu_k, step=h)
     s.set_state([0.0, 0.0, 0.0])
     s.set_contact("foot", "stuck")
     s.step(n)
     a = ca.slide_acceleration(mu_k, slope)
-    t = (n - 1) * h
+    t = n * h
     x, v = _along(s, slope)
     err_x, err_v = abs(x - 0.5 * a * t * t), abs(v - a * t)
     print(f"slope {slope}: a = {a:.6f} m/s^2, x = {x:.9f} m, error x {err_x:.2e} m, v {err_v:.2e} m/s")
     assert err_x < 1e-13 and err_v < 1e-12
     assert s.events() == ["stick_to_slip"]
+    assert s.contact_event_time(0) == 0.0
+    # legsim_contacts_check: the same change at t = 0 before any step, and once only
+    s2 = block(slope, mu_s, mu_k, step=h)
+    s2.set_state([0.0, 0.0, 0.0])
+    s2.set_contact("foot", "stuck")
+    s2.contacts_check()
+    c = s2.contacts()[0]
+    assert s2.events() == ["stick_to_slip"] and c["state"] == "sliding" and s2.time == 0.0
+    assert abs(c["tangential"] - mu_k * MASS * G * math.cos(slope)) < 1e-9   # mu_k N, uphill
+    s2.clear_events()
+    s2.contacts_check()
+    s2.step(n)
+    assert s2.events() == [] and np.max(np.abs(s2.q - s.q)) < 1e-15
 
 
 @pytest.mark.parametrize("integrator", ["rk4", "galpha"])
@@ -154,42 +168,52 @@ def test_slider_decelerates_stops_and_loses_the_friction_work(integrator):
 @pytest.mark.parametrize("mu_s, stuck", [(2.0, True), (0.1, False)])
 def test_touchdown_loses_carnots_energy(mu_s, stuck):
     """A spinning block (contact 0.05 m off its centre) falls onto the ground: in flight
-    its velocity is v0 + g t (RK4 is exact for it), so the approach velocity v- is known;
+    q(t) = q0 + v0 t + g t^2 / 2 exactly, so the touchdown time t_e (the foot's height 0),
+    the pose there and the approach velocity v- = v0 + g t_e are known in closed form;
     the impulse sticks the foot (inside the cone) and the energy lost is exactly Carnot's
-    1/2 (G v-)^T W^-1 (G v-); outside the cone it slides, losing less."""
+    1/2 (G v-)^T W^-1 (G v-) (after it, the stuck block keeps its energy: the rest of the
+    step is conservative); outside the cone it slides, losing less."""
     pt = (0.03, -0.04)
     s = block(0.0, mu_s, 0.8 * mu_s, point=pt)
-    q0 = np.array([0.0, 0.0404, 0.1])
-    s.set_state(q0, [0.4, -1.2, 0.3])
-    k = 0
+    q0, qd0 = np.array([0.0, 0.0404, 0.1]), np.array([0.4, -1.2, 0.3])
+    s.set_state(q0, qd0)
+    M = np.diag([MASS, MASS, INERTIA])
+
+    def energy(q, v):
+        return 0.5 * v @ M @ v + MASS * G * q[1]
+
+    def foot_offset(phi):   # the contact point's offset from the centre of mass at angle phi
+        u, n = np.array([math.sin(phi), -math.cos(phi)]), np.array([math.cos(phi), math.sin(phi)])
+        return pt[0] * u + pt[1] * n
+
+    e0 = energy(q0, qd0)
     while "touchdown" not in s.events():
         s.step(1)
-        k += 1
-    v0 = np.array([0.4, -1.2 - G * k * s.step_size, 0.3])   # the approach velocity
-    ke0 = 0.5 * (MASS * v0[:2] @ v0[:2] + INERTIA * v0[2] ** 2)
+    t_e = s.contact_event_time(0)
+    gravity = np.array([0.0, -G, 0.0])
+    q_e = q0 + qd0 * t_e + 0.5 * gravity * t_e ** 2
+    v_minus = qd0 + gravity * t_e
+    sp = foot_offset(q_e[2])
+    assert abs(q_e[1] + sp[1]) < 1e-9        # the located time puts the foot on the ground
+    Gp = np.array([[1.0, 0.0, -sp[1]], [0.0, 1.0, sp[0]]])   # the foot's Jacobian at q_e
+    v_plus, impulse, lost = ca.inelastic_impact(M, Gp, v_minus)
     c = s.contacts()[0]
     q, v = s.q, s.qd
-    phi = q[2]
-    u, n = np.array([math.sin(phi), -math.cos(phi)]), np.array([math.cos(phi), math.sin(phi)])
-    sp = pt[0] * u + pt[1] * n
-    Gp = np.array([[1.0, 0.0, -sp[1]], [0.0, 1.0, sp[0]]])   # the foot's Jacobian at q
-    M = np.diag([MASS, MASS, INERTIA])
-    ke = 0.5 * (MASS * v[:2] @ v[:2] + INERTIA * v[2] ** 2)
-    v_plus, impulse, lost = ca.inelastic_impact(M, Gp, v0)
-    print(f"mu_s {mu_s}: state {c['state']}, impulse {c['impulse']}, lost {ke0 - ke:.12f} J, "
-          f"Carnot {lost:.12f} J")
+    e = energy(q, v)
+    print(f"mu_s {mu_s}: t_e {t_e:.12f} s, state {c['state']}, impulse {c['impulse']}, "
+          f"lost {e0 - e:.12f} J, Carnot {lost:.12f} J")
     assert abs(c["position"][1]) < 1e-12 and s.events() == ["touchdown"]
     if stuck:
         assert c["state"] == "stuck"
-        assert abs((ke0 - ke) - lost) < 1e-12
-        assert np.max(np.abs(v - v_plus)) < 1e-12
+        assert abs((e0 - e) - lost) < 1e-9 * lost
         # level ground: the world impulse (x, y) is (T, N)
-        assert np.max(np.abs(np.asarray(c["impulse"])[::-1] - impulse)) < 1e-12
+        assert np.max(np.abs(np.asarray(c["impulse"])[::-1] - impulse)) < 1e-9
     else:
         assert c["state"] == "sliding"
         assert abs(c["impulse"][1]) == pytest.approx(0.8 * mu_s * c["impulse"][0], rel=1e-12)
-        assert 0 < ke0 - ke < lost
-        assert abs(Gp[1] @ v) < 1e-12          # the normal approach removed
+        assert 0 < e0 - e < lost
+        sp = foot_offset(q[2])
+        assert abs(v[1] + sp[0] * v[2]) < 1e-12   # the foot's normal velocity stays 0
         assert c["slip"] * c["impulse"][1] < 0  # friction against the slip
 
 

@@ -21,7 +21,7 @@ import pytest
 
 import legsim
 
-from conftest import ROOT, robot_sim as _robot_sim
+from conftest import ROOT, compass_desc, robot_sim as _robot_sim
 
 try:
     import legsim_bench.reference  # noqa: F401
@@ -182,8 +182,8 @@ def _rod(mu: float, omega: float, **kw) -> legsim.Sim:
 def test_painleve_rod_is_reported_never_nan(mu, omega, inconsistent):
     """Beyond the critical friction (1.347 at 60 deg) a rod sliding on its end has no
     consistent mode when not spinning (the reference's contact_modes finds none): the step
-    raises contact_inconsistent (its end let go, as the one-by-one rule does) and goes on
-    finite; spinning fast, sliding on is consistent (one of its two solutions): no event;
+    raises contact_inconsistent (its end let go, as the one-by-one rule does, and lands stuck)
+    and goes on finite; spinning fast, sliding on is consistent (one of its two solutions): no event;
     below the critical friction, sliding holds."""
     # the bench's enumeration on the same rod (test_robot_reference.py's W and b)
     m_, l, th = 1.0, 0.5, math.radians(60)
@@ -201,7 +201,12 @@ def test_painleve_rod_is_reported_never_nan(mu, omega, inconsistent):
     assert ("contact_inconsistent" in ev) == inconsistent, ev
     assert np.all(np.isfinite(s.q)) and np.all(np.isfinite(s.qd))
     if inconsistent:
-        assert s.contacts()["state"][0] == "free"
+        # let go, its end (at the ground, accelerating into it) lands again in the same step,
+        # stuck: the impulse inside the cone, pushing
+        c = s.contacts()
+        assert "liftoff" in ev and "touchdown" in ev and c["state"][0] == "stuck"
+        N, T = c["impulse"][0]
+        assert N > 0 and abs(T) <= mu * N
     else:
         assert s.contacts()["state"][0] == "sliding" and s.contacts()["normal"][0] > 0
 
@@ -245,29 +250,7 @@ def _compass(mu, a, wB, **kw):
     line, each leaning a from the vertical (A to -x, B to +x); B's foot stuck, the compass
     turning about it at wB, so A's foot slides along the line. mu_s = mu_k = mu."""
     lib = legsim.load_library("double")
-    if lib.config.get("LEGSIM_MAX_CONTACTS", 0) < 2:
-        pytest.skip(f"{lib.path} is built without two contacts")
-    d = lib.ModelDesc()
-    d.name = b"compass"
-    d.gravity_mps2[1] = -9.81
-    d.n_bodies = 2
-    for i, nm in enumerate((b"A", b"B")):
-        d.body[i].name = nm
-        d.body[i].length_m = 1.0
-        d.body[i].mass_kg = 1.0
-        d.body[i].inertia_kgm2 = 1.0 / 12.0
-        d.contact[i].name = b"foot" + nm
-        d.contact[i].body = i
-        d.contact[i].point[0], d.contact[i].point[1] = 0.5, 0.0
-    d.n_joints = 1
-    d.joint[0].name = b"hinge"
-    d.joint[0].kind = 1  # LEGSIM_JOINT_REVOLUTE: point on body 0 = point on body 1
-    d.joint[0].body[0], d.joint[0].body[1] = 0, 1
-    d.joint[0].point[0][0] = d.joint[0].point[1][0] = -0.5
-    d.foot_body = -1
-    d.n_contacts = 2
-    d.ground.mu_static = mu
-    d.ground.mu_kinetic = mu
+    d = compass_desc(lib, mu)
 
     def perp(r):
         return np.array([-r[1], r[0]])

@@ -120,3 +120,35 @@ def test_stops_are_checked_after_a_touchdown_s_projection(tmp_path, integrator, 
         worst = max(worst, np.max(LMIN - L), np.max(L - lmax))
     assert "touchdown" in s.events() and "stroke_min" in s.events()
     assert worst <= 1e-9, worst
+
+
+@pytest.mark.parametrize("above", [1e-9, 1e-6])
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+def test_stops_reached_together_on_stuck_feet_hold(integrator, above):
+    """The upper actuators started `above` their minima, the lower ones at theirs, zero force:
+    all four cross in the first step, and the four stops together do not agree (the stance
+    with both feet stuck leaves the lengths one relation: the fourth follows from the other
+    three). Three stops hold, the fourth actuator stays within its stroke; every step OK, no
+    energy made (the robot settles)."""
+    s = _robot_sim(integrator=integrator)
+    start = LMIN + np.array([above, 0.0, above, 0.0])
+    s.assemble_on_ground(start)
+    for a in range(4):
+        s.command_force(a, 0.0)
+    m = np.repeat(s.model.masses, 3)
+    m[2::3] = s.model.inertias
+
+    def energy():
+        return 0.5 * float(m @ (s.qd * s.qd)) + 9.81 * float(s.model.masses @ s.q[1::3])
+
+    e0 = energy()
+    shortest = np.full(4, np.inf)
+    for _ in range(300):
+        s.step(1)
+        L = s.actuator_lengths()[0]
+        shortest = np.minimum(shortest, L)
+        assert energy() <= e0 + 1e-9
+    L = s.actuator_lengths()[0]
+    assert np.all(shortest >= LMIN - 1e-9), shortest - LMIN
+    assert np.sum(np.abs(L - LMIN) < 1e-9) >= 3
+    assert list(s.contacts()["state"]) == ["stuck", "stuck"]

@@ -704,7 +704,8 @@ class HilLink:
         return seq
 
     def step(self, n: int = 1, timeout: float | None = None) -> State:
-        """Lockstep: exactly n fixed steps, then the state after them."""
+        """Lockstep: exactly n fixed steps, then the state after them (n = 0: no step, the
+        contact modes checked at the current state and commands, and the state there)."""
         return self._control(Command.STEP, timeout if timeout is not None else self.timeout + 2e-3 * n,
                              Ctrl_NSteps=int(n))
 

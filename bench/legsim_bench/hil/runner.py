@@ -216,6 +216,14 @@ def record(scene: Scene, link, *, progress: bool | None = None, log=None) -> dic
                     seq = link.command(*args)
                 last_ok["ACT_CMD"] = seq
                 rec["commands"].append({"step": k, "t": scene.t(k), "seq": seq, **logged})
+            if k == 0 and scene.robot:
+                # the state at t = 0 after the scene's t = 0 commands, the contact modes checked
+                # there (STEP 0), as legsim_cli's first sample: it replaces the RESET's answer
+                s = link.step(0)
+                rec["samples"][0] = _state_dict(s, t_wall0)
+                for f, c in zip(scene.model_info.contacts, rec["samples"][0].get("contacts", [])):
+                    fired.update((f, e) for e in c["events"])
+                last_ok["CONTROL"] = s.ctrl_seq
             for inj in inj_at.get(k, []):
                 rec["injections"].append(_inject(link, scene, inj, k, last_ok,
                                                  ids={"CONTROL": CONTROL, "ACT_CMD": ACT_CMD,

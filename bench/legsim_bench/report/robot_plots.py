@@ -198,12 +198,14 @@ class RobotTrajectory:
                    mu_static=g.mu_static, mu_kinetic=g.mu_kinetic, box=0, title=title)
 
     @classmethod
-    def from_recording(cls, rec: dict, model, box_size, title: str = "") -> "RobotTrajectory":
+    def from_recording(cls, rec: dict, model, box_size, title: str = "",
+                       ground: dict | None = None) -> "RobotTrajectory":
         """From a robot scene recorded over CAN (the bench's recording: per sample the flat
         q of every body and per foot its ST_CONTACT state, N, T and x, y). ``model``: the
         scene's ``legsim.Model`` (body names and lengths, feet, ground); ``box_size`` (w, h) m
-        as for from_cli_json."""
-        feet, g, nb = model.contact_names, model.ground, len(model.body_names)
+        as for from_cli_json; ``ground``: the ground the run had (point, slope, mu_static,
+        mu_kinetic: a scene's [ground]), else the model's."""
+        feet, g, nb = model.contact_names, ground or model.ground, len(model.body_names)
         # The RESET's sample (step 0) is left out, as legsim_cli leaves out its first sample's
         # forces: its ground forces are the assembly's multipliers (32.6 N per foot for the
         # stand), not the dynamics' forces, which the first step solves (159-180 N).

@@ -31,9 +31,10 @@ __all__ = ["evaluate_analysis", "evaluate_robot", "robot_reference", "robot_mode
 # legsim.h's event bits as legsim_cli names them in a sample's "events" (JSON) and the CSV's
 # ';'-separated `events` column ("none" if none; scene_write.cpp: kEventNames), in bit order.
 EVENT_NAMES = ("stroke_min", "stroke_max", "force_saturated", "near_singular", "liftoff", "touchdown",
-               "stick_to_slip", "slip_to_stick", "contact_inconsistent", "contact_ambiguous")
+               "stick_to_slip", "slip_to_stick", "contact_inconsistent", "contact_ambiguous",
+               "events_deferred", "event_inexact")
 # the contact transitions of a robot (docs/design/robot-on-ground.md section 8)
-CONTACT_EVENTS = EVENT_NAMES[4:]
+CONTACT_EVENTS = EVENT_NAMES[4:10]
 
 
 # ---- checks -------------------------------------------------------------------------------
@@ -280,10 +281,11 @@ def robot_events_reference(scene: Scene, times, sent: bool = False):
     [start] says, each foot's state as the scene gives it (else stuck on the ground, free above
     it, sliding along its velocity), its constant commands; a switch holds `before` and
     t_switch is the reference's time of its event (inf: none; the reference is the run's
-    until then). sent: the float32 values the DBC carried (lengths, start, setpoints)."""
+    until then). sent: the values the DBC carried (float32 start and setpoints; the lengths are
+    float64 on the bus, the scene's exactly)."""
     rnd = _f32 if sent else (lambda x: np.asarray(x, float))
     model = robot_model(scene)
-    asm = model.assemble(None if scene.lengths is None else rnd(scene.lengths))
+    asm = model.assemble(None if scene.lengths is None else np.asarray(scene.lengths, float))
     z0, zd0 = asm.z.copy(), np.zeros(7)
     g = model.ground
     n = np.array([-math.sin(g.slope), math.cos(g.slope)])
@@ -570,11 +572,13 @@ def _robot_statics_checks(ev, scene: Scene, d: dict, out: dict, tol_check, pose_
 def robot_slip_starts(d: dict, k: int, per_foot: bool = False) -> list[float]:
     """The times of the samples at which contact k went from stuck to sliding with the
     core's stick_to_slip event among the sample's events (robot_arrays' d) or, per_foot,
-    among contact k's own events (robot_can_arrays' foot_events, Ct_Events over CAN)."""
+    among contact k's own events (robot_can_arrays' foot_events, Ct_Events over CAN). The
+    first sample counts when it is sliding with the event: a foot started stuck whose cone
+    cannot hold slips at t = 0 (legsim_contacts_check), before any step."""
     st = d["state"][:, k]
     events = (lambda i: d["foot_events"][i][k]) if per_foot else (lambda i: d["events"][i])
-    return [float(d["t"][i]) for i in range(1, len(st))
-            if st[i - 1] == "stuck" and st[i] == "sliding" and "stick_to_slip" in events(i)]
+    return [float(d["t"][i]) for i in range(len(st))
+            if (i == 0 or st[i - 1] == "stuck") and st[i] == "sliding" and "stick_to_slip" in events(i)]
 
 
 def _robot_slip_checks(ev, slips, d: dict, feet, per_foot: bool = False):

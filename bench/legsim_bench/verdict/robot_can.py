@@ -83,14 +83,14 @@ def robot_can_arrays(rec: dict) -> dict:
 
 def can_reference(scene, rec: dict, times, root: Path | None = None):
     """(RobotModel, RobotResult) of what hil_sim was sent, at `times`: the stand assembled at the
-    RESET's float32 lengths (the scene's, else the pose's), both feet stuck, each commanded
+    RESET's lengths (the scene's, float64 on the bus: exact; else the pose's), both feet stuck, each commanded
     actuator on the staircase of its sent setpoints, the others as `init` says, the box load
     as sent (leg 0's LOAD_CMD 2 and 3). RobotModel has
     both feet stuck: a scene with a free foot is refused (ValueError)."""
     if any(v != "stuck" for v in scene.contacts.values()):
         raise ValueError("RobotModel has both feet stuck; this scene frees a foot")
     model = an.robot_model(scene)
-    lengths = None if scene.lengths is None else np.float32(np.asarray(scene.lengths, float)).astype(float)
+    lengths = None if scene.lengths is None else np.asarray(scene.lengths, float)   # Ctrl_Length_*: float64
     start = model.assemble(lengths)
     names = rec.get("actuators") or list(scene.actuator_names)
     h = scene.step_s

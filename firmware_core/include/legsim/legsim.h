@@ -313,9 +313,20 @@ enum legsim_event {
                                              found none, or the modes still changed after the
                                              passes of one check): decided one by one, or the
                                              last one is kept */
-  LEGSIM_EVENT_CONTACT_AMBIGUOUS = 1u << 9 /* several consistent modes: the priority rule picked
+  LEGSIM_EVENT_CONTACT_AMBIGUOUS = 1u << 9, /* several consistent modes: the priority rule picked
                                              one (docs/design/robot-on-ground.md section 8) */
+  LEGSIM_EVENT_EVENTS_DEFERRED = 1u << 10,  /* a step had more contact events than
+                                             LEGSIM_MAX_EVENTS_PER_STEP: the rest were taken at
+                                             its end (docs/design/events.md) */
+  LEGSIM_EVENT_EVENT_INEXACT = 1u << 11     /* a contact event's root finding ran out of its
+                                             iterations (or a solve inside it failed): taken at
+                                             the bracket's late end (or the step's end) */
 };
+/* Contact events are located inside the step (on its dense output, to 1e-6 of the step) and
+ * taken at their time: a step is cut there and finished from the event. One step locates at
+ * most this many; the rest are taken at its end (LEGSIM_EVENT_EVENTS_DEFERRED). Each costs
+ * at most 12 dynamics solves and two part steps. */
+#define LEGSIM_MAX_EVENTS_PER_STEP 4
 /* Condition estimates: above WARN an event is raised; an assembly that lands
  * above SINGULAR is refused as a dead centre (LEGSIM_ERR_SINGULAR). */
 #define LEGSIM_COND_WARN 1e3
@@ -336,6 +347,12 @@ uint32_t legsim_stroke_event_mask(const legsim_sim *sim);
  * legsim_clear_events (CONTACT_INCONSISTENT: the contacts whose mode was still changing);
  * 0 for a bad handle or k outside 0 .. n_contacts - 1. */
 uint32_t legsim_contact_event_mask(const legsim_sim *sim, int32_t k);
+/* The time (s) of contact k's last contact event: located inside its step (to 1e-6 of the
+ * step), or the step's end for one taken there (beyond LEGSIM_MAX_EVENTS_PER_STEP, and the
+ * modes resolved at the end of a step); the step's start time for a mode resolved before a
+ * step (a starting state that cannot hold). 0 before any event. LEGSIM_ERR_BAD_INPUT for k
+ * outside 0 .. n_contacts - 1. */
+legsim_status legsim_contact_event_time(const legsim_sim *sim, int32_t k, double *t_s);
 
 double legsim_time(const legsim_sim *sim);
 uint64_t legsim_step_count(const legsim_sim *sim);
@@ -432,6 +449,13 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
  * the call stops at the first failing step and returns its status, with the state
  * (and report) of the last good step (legsim_step_count tells how many were made). */
 legsim_status legsim_step(legsim_sim *sim, int32_t n_steps);
+
+/* Checks the contact modes at the current state, time and commands now, as the next step
+ * would at its start after a change from outside (a state, contact state or command set): a
+ * start that cannot hold (feet set stuck on a slope steeper than their friction allows)
+ * changes mode here, at the current time, with its event; a state whose modes were already
+ * checked is left as it is. All or nothing; LEGSIM_ERR_STATE before an assembly. */
+legsim_status legsim_contacts_check(legsim_sim *sim);
 
 /* ---- 6. reactions ---------------------------------------------------------- */
 typedef struct legsim_reaction {

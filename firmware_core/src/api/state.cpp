@@ -41,6 +41,14 @@ uint32_t legsim_contact_event_mask(const legsim_sim *sim, int32_t k) {
   return as_sim(sim)->data.contact[k].events;
 }
 
+legsim_status legsim_contact_event_time(const legsim_sim *sim, int32_t k, double *t_s) {
+  CHECK_SIM(sim);
+  if (!t_s) return LEGSIM_ERR_NULL;
+  if (k < 0 || k >= as_sim(sim)->model.nc) return LEGSIM_ERR_BAD_INPUT;
+  *t_s = as_sim(sim)->data.contact[k].event_time;
+  return LEGSIM_OK;
+}
+
 double legsim_time(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.t : 0.0; }
 
 uint64_t legsim_step_count(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.steps : 0; }

@@ -17,6 +17,13 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
   return steps_run(s, n_steps);  // system/step.cpp: the step's stages
 }
 
+legsim_status legsim_contacts_check(legsim_sim *sim) {
+  CHECK_SIM(sim);
+  Sim &s = *as_sim(sim);
+  if (!s.data.assembled || !state_finite(s.data.q, s.data.qd, s.model.nq)) return LEGSIM_ERR_STATE;
+  return contact_modes_check(s);  // system/step.cpp: the step's first stage
+}
+
 legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n) {
   CHECK_SIM(sim);
   Sim &s = *as_sim(sim);

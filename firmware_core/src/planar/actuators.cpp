@@ -68,9 +68,39 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
     const VecQ q0 = d.q, qd0 = d.qd;
     const legsim_report report0 = d.report;
     d.stop_mask |= added;
-    legsim_status s = stops_layout(sim);
-    if (s == LEGSIM_OK) s = assemble(sim, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
-    if (s == LEGSIM_OK) s = velocity_solve(sim, d.dyn, d.qd);
+    auto project_onto_stops = [&]() {
+      legsim_status r = stops_layout(sim);
+      if (r == LEGSIM_OK) r = assemble(sim, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
+      if (r == LEGSIM_OK) r = velocity_solve(sim, d.dyn, d.qd);
+      return r;
+    };
+    legsim_status s = project_onto_stops();
+    const uint32_t all = before | added;
+    if (s == LEGSIM_ERR_NOT_CONVERGED && (all & (all - 1))) {
+      // The stops over-determine the mechanism and do not agree: both feet stuck and all four
+      // actuators crossing their minima in one step is 40 rows on 39 coordinates, the four
+      // lengths tied by one relation, so the fourth follows from the other three and lies a
+      // round-off past its end. One stop lets go, the first whose actuator then stays within
+      // its stroke (to the assembly's tolerance), as if it had been reached last.
+      const real tol = real(sim.opt.newton_tol);
+      for (int b = 0; b < m.na && s != LEGSIM_OK; ++b) {
+        if (!(all & (1u << b))) continue;
+        d.q = q0;
+        d.qd = qd0;
+        d.stop_mask = all & ~(1u << b);
+        s = project_onto_stops();
+        if (s != LEGSIM_OK) continue;
+        const real len = stroke_length(m, b, d.q, &d.trig);
+        if (len < m.act[b].lmin - tol || len > m.act[b].lmax + tol) s = LEGSIM_ERR_NOT_CONVERGED;
+        else d.act[b].stop_force = 0;
+      }
+      if (s != LEGSIM_OK) {  // no such choice: the stops together, and their failure
+        d.q = q0;
+        d.qd = qd0;
+        d.stop_mask = all;
+        s = project_onto_stops();
+      }
+    }
     // velocity_solve left the factor of the system with the stop: a stop that
     // nearly locks a dead centre would make every later solve ill-conditioned
     if (s == LEGSIM_OK && factor_condition(d.factor) > real(LEGSIM_COND_SINGULAR)) s = LEGSIM_ERR_SINGULAR;

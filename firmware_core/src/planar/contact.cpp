@@ -65,7 +65,7 @@ void contact_forces_update(Sim &sim) {
 
 void contacts_free(Sim &sim) {
   Data &d = sim.data;
-  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}, 0};
+  for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}, 0, 0};
 }
 
 void contact_forces_of_layout(const Model &model, const Layout &layout, const VecR &lambda,
@@ -111,6 +111,120 @@ legsim_status impact(Sim &sim, const uint32_t hit) {
 }
 
 real sign_of(real x) { return x > 0 ? real(1) : real(-1); }
+
+// One candidate of the impact problem: the contacts in `leave` free, the others of `hit`
+// closed in the modes they came with (a landing foot first stuck), the impact from the
+// approach velocity; a landing foot whose impulse falls outside the static cone
+// (|P_t| > mu_s P_n) slides with mu_k against its approach's tangential velocity, and the
+// impact is taken again from the approach. Leaves d.qd, the modes and the impulses of it.
+legsim_status impact_candidate(Sim &sim, uint32_t hit, uint32_t touch, uint32_t leave, const VecQ &approach,
+                               const ContactData *start) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  for (int k = 0; k < m.nc; ++k) {
+    if (!((hit >> k) & 1u)) continue;
+    d.contact[k] = start[k];
+    if ((leave >> k) & 1u) d.contact[k].state = LEGSIM_CONTACT_FREE;
+    d.contact[k].impulse[0] = d.contact[k].impulse[1] = 0;
+  }
+  d.qd = approach;
+  legsim_status s = stops_layout(sim);
+  if (s != LEGSIM_OK || !(hit & ~leave)) return s;  // nothing closed: no impulse
+  s = impact(sim, hit & ~leave);
+  if (s != LEGSIM_OK) return s;
+  bool slides = false;
+  for (int k = 0; k < m.nc; ++k) {
+    ContactData &c = d.contact[k];
+    if (!(((touch & ~leave) >> k) & 1u) || std::abs(c.impulse[1]) <= m.mu_s * c.impulse[0]) continue;
+    c.state = LEGSIM_CONTACT_SLIDING;  // outside the cone: a sliding impact with mu_k
+    slides = true;
+  }
+  if (!slides) return LEGSIM_OK;
+  d.qd = approach;
+  s = stops_layout(sim);
+  return s == LEGSIM_OK ? impact(sim, hit & ~leave) : s;
+}
+
+// The inelastic impact of the closed contacts `hit` (the landing ones `touch` among them,
+// already on the line) as the linear complementarity problem of its normal impulses:
+// P_n >= 0, the post-impact normal velocity v_n >= 0, P_n v_n = 0 per contact. Solved
+// exactly by enumerating its active sets (which contacts leave: 2^n candidates, n <= the
+// contact slots): a candidate holds when every closed contact's P_n >= 0 and every leaving
+// one separates (v_n >= 0), to round-off. A contact that leaves goes free with no impulse
+// (LEGSIM_EVENT_LIFTOFF). The tangential impulse keeps its rule (impact_candidate). With
+// stuck feet the problem's matrix is positive definite and one candidate holds; a sliding
+// impact's non-symmetric coupling (large mu_k) can make several hold: then the one closest
+// to the approach wins (the candidates in the order of how many contacts differ from
+// "the contacts separating before the impact leave, the others stay"), with
+// CONTACT_AMBIGUOUS. None holds: CONTACT_INCONSISTENT, and the first candidate in that
+// order whose impulses do not pull (all leaving always qualifies). So an impulse never
+// pulls, and the solve is bounded: 2^n candidates, at most two impact solves each, and
+// one more for the chosen one.
+legsim_status impact_lcp(Sim &sim, uint32_t hit, uint32_t touch) {
+  const Model &m = sim.model;
+  Data &d = sim.data;
+  const VecQ approach = d.qd;
+  ContactData start[kMaxContacts];
+  real vmax = 0, vn[kMaxContacts];
+  for (int k = 0; k < m.nc; ++k) {
+    start[k] = d.contact[k];
+    Vec2 p, v;
+    contact_point(m, k, d.q, approach, p, v);
+    vn[k] = m.ground_n.dot(v);
+    if ((hit >> k) & 1u) vmax = std::max(vmax, std::abs(vn[k]));
+  }
+  const real eps = real(1e4) * std::numeric_limits<real>::epsilon();
+  const real tol_v = eps * (1 + vmax);
+  uint32_t guess = 0;  // the contacts separating before the impact
+  for (int k = 0; k < m.nc; ++k)
+    if (((hit >> k) & 1u) && vn[k] > tol_v) guess |= 1u << k;
+  int found = 0;
+  uint32_t chosen = hit, fallback = hit;
+  bool have_fallback = false;
+  for (int ndiff = 0; ndiff <= m.nc; ++ndiff) {
+    for (uint32_t leave = 0; leave < (1u << m.nc); ++leave) {
+      if ((leave & ~hit) || __builtin_popcount(leave ^ guess) != ndiff) continue;
+      legsim_status s = impact_candidate(sim, hit, touch, leave, approach, start);
+      if (s != LEGSIM_OK) continue;  // a singular candidate is no solution
+      real pmax = 0;
+      for (int k = 0; k < m.nc; ++k)
+        if ((hit >> k) & 1u) pmax = std::max(pmax, std::abs(d.contact[k].impulse[0]));
+      const real tol_p = eps * (1 + pmax);
+      bool pulls = false, sinks = false;
+      for (int k = 0; k < m.nc; ++k) {
+        if (!((hit >> k) & 1u)) continue;
+        if ((leave >> k) & 1u) {
+          Vec2 p, v;
+          contact_point(m, k, d.q, d.qd, p, v);
+          if (m.ground_n.dot(v) < -tol_v) sinks = true;
+        } else if (!(d.contact[k].impulse[0] >= -tol_p)) {
+          pulls = true;
+        }
+      }
+      if (!pulls && !have_fallback) fallback = leave, have_fallback = true;
+      if (pulls || sinks) continue;
+      if (found++ == 0) chosen = leave;
+    }
+  }
+  if (found > 1) raise_event(d, LEGSIM_EVENT_CONTACT_AMBIGUOUS);
+  if (!found) {
+    raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
+    chosen = fallback;
+  }
+  legsim_status s = impact_candidate(sim, hit, touch, chosen, approach, start);
+  if (s != LEGSIM_OK) return s;
+  for (int k = 0; k < m.nc; ++k) {
+    if (!((hit >> k) & 1u)) continue;
+    ContactData &c = d.contact[k];
+    if (found > 1) c.events |= LEGSIM_EVENT_CONTACT_AMBIGUOUS;
+    if (!found) c.events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
+    if (!((chosen >> k) & 1u)) continue;
+    c.normal = c.tangential = 0;
+    c.events |= LEGSIM_EVENT_LIFTOFF;
+    raise_event(d, LEGSIM_EVENT_LIFTOFF);
+  }
+  return LEGSIM_OK;
+}
 
 // The paper's rule (contact_law PAPER, design section 2) while every contact is closed
 // (stuck or sliding) and there are at least two: with all of them stuck, the stuck-stuck
@@ -387,7 +501,7 @@ bool all_closed(const Model &m, const Data &d) {
 // rules above decide.
 // Each pass applies every change at once and solves the dynamics of the new modes; a mode
 // that keeps changing raises CONTACT_INCONSISTENT and keeps the last one.
-legsim_status contact_transitions(Sim &sim, bool &changed) {
+legsim_status contact_transitions(Sim &sim, bool &changed, double at, const ContactEvents *located) {
   changed = false;
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -397,6 +511,22 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   uint32_t changing = 0;                  // the contacts the last pass changed
   const real tol = real(sim.opt.newton_tol);
   bool enumerated = false;  // the modes enumerated once per check; after that, one by one
+  // The located events switch their contacts in the first pass; a contact switched so sits
+  // on its new mode's boundary (N = 0, |T| = mu_s N, v_t = 0 to round-off), where the rules
+  // below would switch it back: the rest of this check leaves it (the step locates its next
+  // event like any other).
+  ContactEvents ev = located ? *located : ContactEvents{0, 0, 0, 0};
+  const uint32_t settled = ev.liftoff | ev.slip | ev.stick;
+  ContactData before[kMaxContacts];
+  for (int k = 0; k < m.nc; ++k) before[k] = d.contact[k];
+  const uint32_t applied = ev.touchdown | settled;
+  const auto stamp = [&]() {  // the time of each contact's events of this check
+    for (int k = 0; k < m.nc; ++k) {
+      const ContactData &c = d.contact[k], &b = before[k];
+      if (c.events != b.events || c.state != b.state || c.slip_dir != b.slip_dir || ((applied >> k) & 1u))
+        d.contact[k].event_time = at;
+    }
+  };
   for (int pass = 0; pass < 3 * kMaxContacts + 2; ++pass) {
     uint32_t touch = 0, to_stick = 0, fails = 0;
     changing = 0;
@@ -410,11 +540,31 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
     const bool enumerate = !paper && !enumerated;
     for (int k = 0; k < m.nc; ++k) {
       ContactData &c = d.contact[k];
+      const uint32_t bit = 1u << k;
+      if ((settled & bit) && pass > 0) continue;
       Vec2 p, v;
       contact_point(m, k, d.q, d.qd, p, v);
       const real vt = m.ground_t.dot(v);
-      if (c.state == LEGSIM_CONTACT_FREE) {
-        if (!(m.ground_n.dot(p - m.ground_point) < -tol)) continue;
+      if (c.state != LEGSIM_CONTACT_FREE && (ev.liftoff & bit)) {  // located: N reached 0
+        c.state = LEGSIM_CONTACT_FREE;
+        c.normal = c.tangential = 0;
+        c.events |= LEGSIM_EVENT_LIFTOFF;
+        raise_event(d, LEGSIM_EVENT_LIFTOFF);
+      } else if (c.state == LEGSIM_CONTACT_STUCK && (ev.slip & bit)) {  // located: |T| reached mu_s N
+        c.state = LEGSIM_CONTACT_SLIDING;
+        c.slip_dir = int8_t(-sign_of(c.tangential));
+        slipped |= bit;
+        c.events |= LEGSIM_EVENT_STICK_TO_SLIP;
+        raise_event(d, LEGSIM_EVENT_STICK_TO_SLIP);
+      } else if (c.state == LEGSIM_CONTACT_SLIDING && (ev.stick & bit)) {  // located: v_t reached 0
+        c.state = LEGSIM_CONTACT_STUCK;
+        d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
+        to_stick |= bit;
+        stuck_again |= bit;
+        c.events |= LEGSIM_EVENT_SLIP_TO_STICK;
+        raise_event(d, LEGSIM_EVENT_SLIP_TO_STICK);
+      } else if (c.state == LEGSIM_CONTACT_FREE) {
+        if (!(m.ground_n.dot(p - m.ground_point) < -tol) && !(ev.touchdown & bit)) continue;
         touch |= 1u << k;
         c.state = LEGSIM_CONTACT_STUCK;  // first as stuck: the impulse decides
         d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
@@ -454,13 +604,17 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       any = true;
       changing |= 1u << k;
     }
+    ev = ContactEvents{0, 0, 0, 0};  // the located events are applied
     if (!any && fails) {  // no impulse this pass: the enumeration decides the closed contacts
       enumerated = true;
       bool found = false;
       uint32_t chosen = 0;
       legsim_status s = contact_modes_choose(sim, found, chosen, slipped);
       if (s != LEGSIM_OK) return s;
-      if (found && !chosen) return LEGSIM_OK;  // the current modes hold after all (round-off)
+      if (found && !chosen) {  // the current modes hold after all (round-off)
+        stamp();
+        return LEGSIM_OK;
+      }
       if (!found) {  // no consistent mode: reported, then the one-by-one rules of this pass
         for (int k = 0; k < m.nc; ++k)
           if ((fails >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
@@ -470,31 +624,28 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
       changing = chosen;
       continue;
     }
-    if (!any) return LEGSIM_OK;
+    if (!any) {
+      stamp();
+      return LEGSIM_OK;
+    }
     changed = true;
     legsim_status s = stops_layout(sim);
     if (s != LEGSIM_OK) return s;
-    if (touch) {  // onto the line, then the impact
+    // every closed contact takes a share of an impact and reports it (a foot stuck before
+    // it reports its own, not its old touchdown's)
+    uint32_t closed = 0;
+    for (int k = 0; k < m.nc; ++k)
+      if (d.contact[k].state != LEGSIM_CONTACT_FREE) closed |= 1u << k;
+    if (touch) {  // onto the line, then the impact (its LCP: a foot that would pull leaves)
       s = assemble(sim, d.dyn, d.stop_drivers, d.q, m.minv, AssemblyMode::Project);
-      const VecQ approach = d.qd;
-      if (s == LEGSIM_OK) s = impact(sim, touch);
+      if (s == LEGSIM_OK) s = impact_lcp(sim, touch | closed, touch);
       if (s != LEGSIM_OK) return s;
-      bool slides = false;
-      for (int k = 0; k < m.nc; ++k) {
-        ContactData &c = d.contact[k];
-        if (!((touch >> k) & 1u) || std::abs(c.impulse[1]) <= m.mu_s * c.impulse[0]) continue;
-        c.state = LEGSIM_CONTACT_SLIDING;  // outside the cone: a sliding impact with mu_k
-        slides = true;
-      }
-      if (slides) {  // again from the approach velocity, the friction impulse against the slip
-        d.qd = approach;
-        s = stops_layout(sim);
-        if (s == LEGSIM_OK) s = impact(sim, touch);
-        if (s != LEGSIM_OK) return s;
-      }
     }
-    if (to_stick) {
-      s = impact(sim, to_stick);  // the tangential velocity removed
+    if (to_stick) {  // the tangential velocity removed, by the same LCP
+      uint32_t still = 0;
+      for (int k = 0; k < m.nc; ++k)
+        if (d.contact[k].state != LEGSIM_CONTACT_FREE) still |= 1u << k;
+      if (to_stick & still) s = impact_lcp(sim, still, 0);
       if (s != LEGSIM_OK) return s;
     }
     s = dynamics_state_update(sim);  // forces of the new modes
@@ -503,6 +654,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed) {
   for (int k = 0; k < m.nc; ++k)  // the contacts still changing carry it
     if ((changing >> k) & 1u) d.contact[k].events |= LEGSIM_EVENT_CONTACT_INCONSISTENT;
   raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
+  stamp();
   return LEGSIM_OK;
 }
 

@@ -82,7 +82,7 @@ LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd,
 constexpr real kEtaMin = real(0.01);
 }  // namespace
 
-legsim_status generalized_alpha_step(Sim &sim) {
+legsim_status generalized_alpha_step(Sim &sim, real h) {
   const Model &m = sim.model;
   Data &d = sim.data;
   const int n = m.nq;
@@ -90,7 +90,6 @@ legsim_status generalized_alpha_step(Sim &sim) {
   const real am = (2 * rho - 1) / (rho + 1), af = rho / (rho + 1);
   const real gam = real(0.5) + af - am;
   const real beta = real(0.25) * (gam + real(0.5)) * (gam + real(0.5));
-  const real h = real(sim.opt.step_s);
   const real bprime = (1 - am) / (h * h * beta * (1 - af));
   const real gprime = gam / (h * beta);  // dv1 / dq1
   const real tol = real(sim.opt.newton_tol);
@@ -194,7 +193,7 @@ legsim_status generalized_alpha_reactions(Sim &sim) {
   return s;
 }
 #else
-legsim_status generalized_alpha_step(Sim &) { return LEGSIM_ERR_DISABLED; }
+legsim_status generalized_alpha_step(Sim &, real) { return LEGSIM_ERR_DISABLED; }
 legsim_status generalized_alpha_reactions(Sim &) { return LEGSIM_ERR_DISABLED; }
 #endif
 

@@ -78,11 +78,11 @@ legsim_status rk4_finish(Sim &sim, bool factor_kept = true) {
 }
 }  // namespace
 
-legsim_status rk4_step(Sim &sim) {
+legsim_status rk4_step(Sim &sim, real h) {
   const Model &m = sim.model;
   Data &d = sim.data;
   const int n = m.nq;
-  const real h = real(sim.opt.step_s), h2 = h / 2, h6 = h / 6;
+  const real h2 = h / 2, h6 = h / 6;
   VecQ &qs = d.tq[0], &vs = d.tq[1], &sum_v = d.tq[2], &sum_a = d.tq[3];
   VecQ &a = d.tv[0];
   // stage 1: (v0, a0) at the start
@@ -174,7 +174,7 @@ legsim_status rk4_step(Sim &sim) {
 }
 
 #else
-legsim_status rk4_step(Sim &) { return LEGSIM_ERR_DISABLED; }
+legsim_status rk4_step(Sim &, real) { return LEGSIM_ERR_DISABLED; }
 #endif
 
 }  // namespace legsim

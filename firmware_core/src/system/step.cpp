@@ -3,6 +3,8 @@
 // contacts' transitions, the stops let go; then time advances. The whole step is one
 // all-or-nothing call: a failed stage leaves the state of the last good step.
 // Dimension-free: the stages call the integrators and the element module's event handlers.
+#include <optional>
+
 #include "sim.hpp"
 
 namespace legsim {
@@ -19,6 +21,7 @@ namespace legsim {
 // its setpoint every step costs about one Newton iteration a step, not two.
 legsim_status state_refresh(Sim &sim, bool forcing_only) {
   Data &d = sim.data;
+  d.modes_checked = false;  // (a step sets it again at its end)
   // the history is generalized-alpha's alone: RK4 calls leave it (Snapshot), and a change of
   // integrator restarts it (legsim_set_options)
   const bool history = sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
@@ -61,33 +64,45 @@ namespace {
 
 // A stage's status passes on; LEGSIM_OK lets the next stage run.
 // The derivative the integrator starts from: the accelerations at the current state and
-// commands (RK4), or generalized-alpha's history.
+// commands (RK4), or generalized-alpha's history. After a change from outside (a state, a
+// contact mode or a command set) the contact modes are checked at once, at the step's start
+// time: a starting state that cannot hold (stuck feet on a slope steeper than the friction
+// allows) is resolved at t, not after the first step.
 inline legsim_status stage_start(Sim &s, bool rk4) {
   Data &d = s.data;
-  if (rk4 ? !d.derivative_valid : !d.history_valid) return state_refresh(s, d.forcing_only);
-  return LEGSIM_OK;
+  legsim_status r = LEGSIM_OK;
+  if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s, d.forcing_only);
+  if (r != LEGSIM_OK || !s.model.nc || d.modes_checked) return r;
+  d.modes_checked = true;
+  bool changed = false;
+  r = contact_transitions(s, changed, d.t);
+  return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
-inline legsim_status stage_integrate(Sim &s, bool rk4) { return rk4 ? rk4_step(s) : generalized_alpha_step(s); }
+inline legsim_status stage_integrate(Sim &s, bool rk4, real h) {
+  return rk4 ? rk4_step(s, h) : generalized_alpha_step(s, h);
+}
 
 // An actuator past an end of its stroke is put on its stop (an impact that changes q and
 // qd: the derivative and reactions anew); else generalized-alpha's reactions at its end
 // (RK4 leaves its end derivative and reactions itself).
-inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops) {
-  bool stopped = false;
+inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stopped) {
+  stopped = false;
   legsim_status r = stops ? stroke_limits_enforce(s, stopped) : LEGSIM_OK;
   if (r != LEGSIM_OK) return r;
   if (stopped) return state_refresh(s);
   return rk4 ? LEGSIM_OK : generalized_alpha_reactions(s);
 }
 
-// Touchdown, lift-off, stick and slip (contact.cpp); a change solves the derivative anew.
-// A touchdown projects the state onto the feet's rows, which can push an actuator past a
-// stroke end: the stops are checked after it as after the integrator's projection.
-inline legsim_status stage_contacts(Sim &s, bool stops) {
+// Touchdown, lift-off, stick and slip (contact.cpp) at time `at`, the located ones first; a
+// change solves the derivative anew (and restarts generalized-alpha's history). A touchdown
+// projects the state onto the feet's rows, which can push an actuator past a stroke end: the
+// stops are checked after it as after the integrator's projection.
+inline legsim_status stage_contacts(Sim &s, bool stops, double at,
+                                    const ContactEvents *located = nullptr) {
   if (!s.model.nc) return LEGSIM_OK;
   bool changed = false;
-  legsim_status r = contact_transitions(s, changed);
+  legsim_status r = contact_transitions(s, changed, at, located);
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
     r = stroke_limits_enforce(s, stopped);
@@ -116,21 +131,381 @@ inline void stage_advance(Sim &s, bool rk4) {
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
 }
 
+#if LEGSIM_WITH_CONTACT  // a build whose models have no contacts has no events to locate
+// ---- contact events located inside the step (docs/design/events.md) ----
+// Per contact two event functions of its mode, each > 0 while the mode holds:
+// [0] free: the gap n . (p - p0) (touchdown); stuck or sliding: N (lift-off);
+// [1] stuck: mu_s N - |T| (stick to slip); sliding: dir v_t (slip to stick); free: none.
+// A function counts when it is > 0 at the (part) step's start and < 0 at its end.
+constexpr real kNoEvent = real(1e30);
+constexpr real kThetaTol = real(1e-6);  // the root's tolerance, in parts of the (part) step
+constexpr int kLocateIterations = 12;
+// The located function at the real part step's end must be 0 to its slope times this part of
+// the step; else the bracket shrinks to the part step (past the root) or starts there
+// (before it), at most kRefinements times.
+constexpr real kRefineTol = real(1e-7);
+constexpr int kRefinements = 12;
+constexpr int kHalvings = 4;
+constexpr int kMaxParts = 2 * LEGSIM_MAX_EVENTS_PER_STEP;  // halved part steps a step takes
+
+struct EventValues {
+  real g[kMaxContacts][2];
+};
+
+// Whether function j of contact k in its current mode needs the ground forces (a solve).
+inline bool needs_forces(const ContactData &c, int j) {
+  return c.state != LEGSIM_CONTACT_FREE && (j == 0 || c.state == LEGSIM_CONTACT_STUCK);
+}
+
+// Function j of contact k at (q, v) with ground forces N, T (those of its mode).
+real event_value(const Sim &s, int k, int j, const VecQ &q, const VecQ &v, real n_force, real t_force) {
+  const Model &m = s.model;
+  const ContactData &c = s.data.contact[k];
+  if (c.state == LEGSIM_CONTACT_FREE && j == 1) return kNoEvent;
+  if (needs_forces(c, j)) return j == 0 ? n_force : m.mu_s * n_force - std::abs(t_force);
+  Vec2 p, pv;
+  contact_point(m, k, q, v, p, pv);
+  return j == 0 ? m.ground_n.dot(p - m.ground_point) : real(c.slip_dir) * m.ground_t.dot(pv);
+}
+
+// The functions at the sim's state, with the forces of its last solve. The contact law
+// PAPER decides stick to slip by its own rule (not one contact at a time): not located.
+void event_values(const Sim &s, EventValues &e) {
+  const Data &d = s.data;
+  const bool cone = s.opt.contact_law != LEGSIM_CONTACT_PAPER;
+  for (int k = 0; k < s.model.nc; ++k) {
+    const ContactData &c = d.contact[k];
+    for (int j = 0; j < 2; ++j)
+      e.g[k][j] = (j == 1 && c.state == LEGSIM_CONTACT_STUCK && !cone)
+                      ? kNoEvent
+                      : event_value(s, k, j, d.q, d.qd, c.normal, c.tangential);
+  }
+}
+
+// The functions that changed sign over the (part) step (bit 2k + j).
+uint32_t crossings(const Sim &s, const EventValues &start, const EventValues &end) {
+  uint32_t cross = 0;
+  for (int k = 0; k < s.model.nc; ++k)
+    for (int j = 0; j < 2; ++j)
+      if (start.g[k][j] > 0 && end.g[k][j] < 0 && start.g[k][j] < kNoEvent) cross |= 1u << (2 * k + j);
+  return cross;
+}
+
+// The (part) step's end, kept while the state is put back to its start to locate an event.
+struct StepEnd {
+  VecQ q, v, a;
+};
+
+// The step's dense output at theta in [0, 1]: the quintic Hermite interpolant of the start
+// (sim's state: q0, v0, a0) and end (q1, v1, a1) over hs seconds (local error O(hs^6) for
+// RK4's values, consistent to generalized-alpha's order for its), and its derivative.
+void dense_output(const Sim &s, const StepEnd &e, real hs, real th, VecQ &q, VecQ &v) {
+  const Data &d = s.data;
+  const real t2 = th * th, t3 = t2 * th, t4 = t3 * th, t5 = t4 * th;
+  const real h0 = 1 - 10 * t3 + 15 * t4 - 6 * t5, h1 = th - 6 * t3 + 8 * t4 - 3 * t5;
+  const real h2 = real(0.5) * (t2 - 3 * t3 + 3 * t4 - t5), h3 = 10 * t3 - 15 * t4 + 6 * t5;
+  const real h4 = -4 * t3 + 7 * t4 - 3 * t5, h5 = real(0.5) * (t3 - 2 * t4 + t5);
+  const real d0 = -30 * t2 + 60 * t3 - 30 * t4, d1 = 1 - 18 * t2 + 32 * t3 - 15 * t4;
+  const real d2 = real(0.5) * (2 * th - 9 * t2 + 12 * t3 - 5 * t4), d3 = -d0;
+  const real d4 = -12 * t2 + 28 * t3 - 15 * t4, d5 = real(0.5) * (3 * t2 - 8 * t3 + 5 * t4);
+  const real hh = hs * hs;
+  for (int i = 0; i < s.model.nq; ++i) {
+    q[i] = h0 * d.q[i] + h3 * e.q[i] + hs * (h1 * d.qd[i] + h4 * e.v[i]) + hh * (h2 * d.qdd[i] + h5 * e.a[i]);
+    v[i] = (d0 * d.q[i] + d3 * e.q[i]) / hs + d1 * d.qd[i] + d4 * e.v[i] + hs * (d2 * d.qdd[i] + d5 * e.a[i]);
+  }
+}
+
+// Function j of contact k at theta on the dense output; a function of the forces solves the
+// dynamics of the current modes there (its multipliers give N and T).
+legsim_status event_at(Sim &s, const StepEnd &e, real hs, int k, int j, real th, real &g) {
+  VecQ q, v, a;
+  dense_output(s, e, hs, th, q, v);
+  real n_force = 0, t_force = 0;
+  if (needs_forces(s.data.contact[k], j)) {
+    const legsim_status r = dynamics_solve(s, s.data.dyn, q, v, a, false, false, nullptr);
+    if (r != LEGSIM_OK) return r;
+    real normal[kMaxContacts], tangential[kMaxContacts];
+    contact_forces_of_layout(s.model, s.data.dyn, s.data.lambda, normal, tangential);
+    n_force = normal[k];
+    t_force = tangential[k];
+  }
+  g = event_value(s, k, j, q, v, n_force, t_force);
+  return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+}
+
+// The root of function j of contact k on [0, 1] (g(0) = g0 > 0 > g(1) = g1) by the Illinois
+// variant of regula falsi, to kThetaTol in at most kLocateIterations evaluations. theta: the
+// bracket's late end (g <= 0: the event surely happened there); exact = false when the
+// iterations ran out (the bracket's late end all the same).
+legsim_status event_root(Sim &s, const StepEnd &e, real hs, int k, int j, real g0, real g1, real &theta,
+                         bool &exact, real &slope) {
+  real a = 0, b = 1, ga = g0, gb = g1;
+  real fa = g0, fb = g1;  // the values at a and b (Illinois halves ga, gb)
+  int side = 0;
+  exact = false;
+  bool bisect = false;  // the late end's value is not known (its solve failed)
+  for (int it = 0; it < kLocateIterations; ++it) {
+    real c = bisect ? real(0.5) * (a + b) : (a * gb - b * ga) / (gb - ga);
+    if (!(c > a && c < b)) c = real(0.5) * (a + b);
+    real gc;
+    const legsim_status r = event_at(s, e, hs, k, j, c, gc);
+    // a mode whose dynamics cannot be solved there (a sliding foot far past its lift-off:
+    // the friction's coupling singular) has surely ended before: the late end, bisected
+    bisect = r != LEGSIM_OK;
+    if (bisect) {
+      b = c;
+      side = 0;
+      continue;
+    }
+    if (gc > 0) {
+      a = c, ga = fa = gc;
+      if (side < 0) gb /= 2;
+      side = -1;
+    } else {
+      b = c, gb = fb = gc;
+      if (side > 0) ga /= 2;
+      side = 1;
+    }
+    if (b - a <= kThetaTol || gc == 0) {
+      exact = true;
+      break;
+    }
+  }
+  theta = b;
+  slope = (fb - fa) / (b - a);  // dg / dtheta at the root (< 0)
+  return LEGSIM_OK;
+}
+
+// The earliest of the crossing functions (with the start in the sim's state, the end in e):
+// theta, and the events within kThetaTol of it (simultaneous: a level drop lands both feet
+// at once) in ev.
+// first: the earliest function (bit 2k + j), slope: its dg / dtheta there.
+legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues &g0, const EventValues &g1,
+                            uint32_t cross, ContactEvents &ev, real &theta, bool &exact, int &first,
+                            real &slope) {
+  real at[kMaxContacts][2];
+  theta = 1;
+  exact = true;
+  first = -1;
+  slope = 0;
+  for (int k = 0; k < s.model.nc; ++k)
+    for (int j = 0; j < 2; ++j) {
+      at[k][j] = 2;
+      if (!((cross >> (2 * k + j)) & 1u)) continue;
+      bool ok;
+      real dg;
+      const legsim_status r = event_root(s, e, hs, k, j, g0.g[k][j], g1.g[k][j], at[k][j], ok, dg);
+      if (r != LEGSIM_OK) return r;
+      if (at[k][j] < theta || first < 0) theta = at[k][j], first = 2 * k + j, slope = dg;
+      exact = exact && ok;
+    }
+  ev = ContactEvents{0, 0, 0, 0};
+  for (int k = 0; k < s.model.nc; ++k) {
+    const ContactData &c = s.data.contact[k];
+    for (int j = 0; j < 2; ++j) {
+      if (!(at[k][j] <= theta + kThetaTol)) continue;
+      const uint32_t bit = 1u << k;
+      if (c.state == LEGSIM_CONTACT_FREE) ev.touchdown |= bit;
+      else if (j == 0) ev.liftoff |= bit;
+      else if (c.state == LEGSIM_CONTACT_STUCK) ev.slip |= bit;
+      else ev.stick |= bit;
+    }
+  }
+  // a contact that lifts off does not also slip or stick
+  ev.slip &= ~ev.liftoff;
+  ev.stick &= ~ev.liftoff;
+  return LEGSIM_OK;
+}
+
+// A part step shorter than this is not taken (its change is within the location's tolerance).
+inline real tiny_step(real h) { return kThetaTol * h; }
+
+// One step of h = opt.step_s with its contact events located inside it: the step taken
+// whole; when an event function of the current modes changed sign over it, the earliest
+// root is located on the step's dense output, the step taken again to the event, the event
+// applied there, and the rest of the step taken from it (located again, up to
+// LEGSIM_MAX_EVENTS_PER_STEP events; beyond, the rest are taken at the step's end with
+// LEGSIM_EVENT_EVENTS_DEFERRED). start: the state the step started from (all_or_nothing's).
+// Stroke stops are taken at the end of the (part) step that crossed them, as a part step
+// with a stop impact is not located further.
+[[gnu::noinline]] legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
+  Data &d = s.data;
+  const real h = real(s.opt.step_s);
+  const bool contacts = s.model.nc > 0;
+  real done = 0;  // the part of the step taken, s
+  int located = 0, parts = 0;
+  bool locate = true;  // false once the events are deferred to the step's end
+  std::optional<Snapshot> mid;  // the rest's start, after an event
+  const Snapshot *from = &start;
+  // the functions a located event put at their boundary (bit 2k + 1: v_t = 0 after a slip
+  // onset, |T| = mu_s N after a slip to stick or a landing): not located again in this step
+  // (they would be found at once, at round-off), their sign change is taken at its end
+  uint32_t fresh = 0;
+  legsim_status r = stage_start(s, rk4);
+  for (;;) {
+    if (r != LEGSIM_OK) return r;
+    EventValues g0;
+    if (contacts) event_values(s, g0);
+    real hs = h - done;
+    r = stage_integrate(s, rk4, hs);
+    // A mode carried far past its event can leave its domain (a sliding foot well past its
+    // lift-off: the Newton iteration or the friction's coupling fails): the part step is
+    // halved (at most kHalvings times) to find a state before that, from which it goes on.
+    for (int halving = 0; r != LEGSIM_OK && contacts && halving < kHalvings && parts < kMaxParts; ++halving) {
+      from->restore(s);
+      r = stage_start(s, rk4);
+      if (r != LEGSIM_OK) return r;
+      if (!rk4) {
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      hs /= 2;
+      r = stage_integrate(s, rk4, hs);
+    }
+    const bool partial = hs < h - done;  // the part step ends before the step
+    bool stopped = false;
+    if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
+    if (r != LEGSIM_OK || !contacts || (stopped && !partial)) break;
+    EventValues g1;
+    event_values(s, g1);
+    const uint32_t cross = locate ? crossings(s, g0, g1) & ~fresh : 0u;
+    if (cross && located == LEGSIM_MAX_EVENTS_PER_STEP) {
+      // the rest at the step's end, as without location
+      raise_event(d, LEGSIM_EVENT_EVENTS_DEFERRED);
+      locate = false;
+    }
+    if (!cross || stopped || !locate) {
+      if (!partial) break;
+      ++parts;
+      done += hs;  // the rest of the step from here
+      mid.emplace(s);
+      from = &*mid;
+      if (!rk4) {
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      continue;
+    }
+    // the end kept, the start put back: the event located between them on the dense output,
+    // then the part step to it taken; the located function there must be 0 to 1e-4 h (its
+    // slope times that): past it, located again over the shorter part step (its dense output
+    // is better); before it, that state starts the rest of the step (located again from it)
+    StepEnd end;
+    end.q = d.q, end.v = d.qd, end.a = d.qdd;
+    from->restore(s);
+    r = stage_start(s, rk4);
+    if (r != LEGSIM_OK) return r;
+    ContactEvents ev;
+    real theta, slope;
+    bool exact;
+    int first;
+    r = events_locate(s, end, hs, g0, g1, cross, ev, theta, exact, first, slope);
+    if (r != LEGSIM_OK) return r;
+    if (!exact) raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
+    // The part step to the root found, taken for real: the located function there must be 0
+    // to its slope times kRefineTol h; else the root is sought on the real part steps (Illinois
+    // on their values, the bracket [0, hs] of the step's own values), at most kRefinements.
+    const real tol = std::abs(slope) * kRefineTol * h / hs;
+    real ra = 0, rb = hs, fa = g0.g[first / 2][first % 2], fb = g1.g[first / 2][first % 2];
+    int side = 0;
+    real he = theta * hs, g_prev = 0, h_prev = 0;
+    for (int refine = 0;; ++refine) {
+      // the start again (the location's solves and the last part step wrote over it)
+      from->restore(s);
+      r = stage_start(s, rk4);
+      if (r != LEGSIM_OK) return r;
+      if (!rk4) {  // generalized-alpha restarts its history at a part step (h enters it)
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      if (!(he > tiny_step(h))) break;
+      r = stage_integrate(s, rk4, he);
+      bool st2 = false;
+      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, st2);
+      if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
+        rb = he, side = 1;
+        he = real(0.5) * (ra + rb);
+        continue;
+      }
+      if (r != LEGSIM_OK) return r;
+      if (st2) break;  // a stop on the way: the events at its state
+      EventValues ge;
+      event_values(s, ge);
+      const real gf = ge.g[first / 2][first % 2];
+      // the distance to the root, by the slope of the interpolant (first) or of the last two
+      // part steps' values (after)
+      const real slope_now = refine == 0 ? slope / hs : (gf - g_prev) / (he - h_prev);
+      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= std::abs(slope_now) * kRefineTol * h) break;
+      g_prev = gf, h_prev = he;
+      if (refine == kRefinements) {  // the refinements ran out: taken here
+        raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
+        break;
+      }
+      // regula falsi, bisecting when an end is kept twice (a mode far past its event can
+      // make the late end's value huge: the mode's motion leaves its domain there)
+      const bool again = gf > 0 ? side < 0 : side > 0;
+      if (gf > 0) ra = he, fa = gf, side = -1;
+      else rb = he, fb = gf, side = 1;
+      he = again ? real(0.5) * (ra + rb) : (ra * fb - rb * fa) / (fb - fa);
+      if (!(he > ra && he < rb)) he = real(0.5) * (ra + rb);
+    }
+    done += he;
+    ++located;
+    r = stage_contacts(s, stops, d.t + double(done), &ev);
+    if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+    if (r != LEGSIM_OK) return r;
+    if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
+    for (int k = 0; k < s.model.nc; ++k)
+      if (((ev.touchdown | ev.slip | ev.stick) >> k) & 1u) fresh |= 1u << (2 * k + 1);
+    mid.emplace(s);
+    from = &*mid;
+    if (!rk4) {  // the rest is a part step too
+      d.acc_aux = d.qdd;
+      d.past_steps = 0;
+    }
+  }
+  if (r != LEGSIM_OK) return r;
+  return stage_contacts(s, stops, d.t + double(h));
+}
+
+#endif
+
+// One whole step of a model without contacts (the leg): it has no event to locate, and
+// none of step_with_events' snapshots and dense output on its stack (a Cortex-M4F leg image
+// has 3 KB of stack).
+legsim_status step_whole(Sim &s, bool rk4, bool stops) {
+  legsim_status r = stage_start(s, rk4);
+  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, real(s.opt.step_s));
+  bool stopped = false;
+  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
+  return r;
+}
+
 }  // namespace
+
+legsim_status contact_modes_check(Sim &s) {
+  const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
+  return all_or_nothing(s, [&] { return stage_start(s, rk4); });
+}
 
 legsim_status steps_run(Sim &s, int32_t n_steps) {
   const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
+  const bool events = s.model.nc > 0;  // a model with contacts has events to locate
   for (int32_t i = 0; i < n_steps; ++i) {
     // a failed step leaves the state of the last good one (all_or_nothing also
     // refuses a step whose state, accelerations, multipliers or report are not finite)
-    const legsim_status st = all_or_nothing(s, [&] {
-      legsim_status r = stage_start(s, rk4);
-      if (r == LEGSIM_OK) r = stage_integrate(s, rk4);
-      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops);
-      if (r == LEGSIM_OK) r = stage_contacts(s, stops);
+    const legsim_status st = all_or_nothing(s, [&](const Snapshot &start) {
+#if LEGSIM_WITH_CONTACT
+      legsim_status r = events ? step_with_events(s, rk4, stops, start) : step_whole(s, rk4, stops);
+#else
+      (void)start;
+      (void)events;
+      legsim_status r = step_whole(s, rk4, stops);
+#endif
       if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
       if (r != LEGSIM_OK) return r;
+      s.data.modes_checked = true;
       stage_advance(s, rk4);
       return LEGSIM_OK;
     });
