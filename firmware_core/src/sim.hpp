@@ -215,6 +215,8 @@ struct ActuatorState {
   real setpoint;    // N or m
   real force;       // axial force it applies in the current state, N
   real stop_force;  // axial force of the stroke stop it rests on (0 when free), N
+  double stop_time; // s: when it last arrived on a stroke stop (located inside the step, or
+                    // the (part) step's end for one taken there); 0 before any
 };
 
 struct ContactData {
@@ -331,6 +333,7 @@ struct Snapshot {
   VecR lambda;
   legsim_reaction reaction[kMaxJoints];
   real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
+  double stop_time[kMaxActuators];
   ContactData contact[kMaxContacts];
   real stick[kMaxContacts];
   legsim_report report;
@@ -460,14 +463,17 @@ inline real actuator_force(const Actuator &ac, ActuatorState &st, Data &d, real 
 void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
                             const VecQ &qd);
 // ---- actuators.cpp ----
-// Stroke stops after a step: an actuator past an end is put on it (inelastic
-// impact) and held there by a length row in the dynamics; one whose stop would
-// have to pull is let go. changed: the active set changed (derivative anew).
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed);
+// Stroke stops: an actuator past an end (or in `arriving`: located on it, to the location's
+// tolerance) is put on it at time `at` (s) (inelastic impact) and held there by a length row
+// in the dynamics; one whose stop would have to pull is let go. changed: the active set
+// changed (derivative anew).
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed, double at, uint32_t arriving = 0);
 legsim_status stroke_stops_release(Sim &sim, bool &changed);
 // Data::work for the joints plus length drivers of the actuators in mask (built
 // once per set: analyses called along a motion do not rebuild it).
 legsim_status work_layout(Sim &sim, uint32_t mask);
+// Actuator a's length at q (m), for the stroke checks and their event functions.
+real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig);
 // Rebuilds Data::dyn for Data::stop_mask and the contacts' states.
 legsim_status stops_layout(Sim &sim);
 

@@ -66,7 +66,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   std::memset(&d.failure, 0, sizeof d.failure);
   std::memset(&d.drivers, 0, sizeof d.drivers);
   d.stroke_mask = 0;
-  for (int a = 0; a < kMaxActuators; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
+  for (int a = 0; a < kMaxActuators; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0, 0.0};
   std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
   d.stop_mask = 0;
   d.work_mask = -1;
