@@ -320,6 +320,46 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
 // A part step shorter than this is not taken (its change is within the location's tolerance).
 inline real tiny_step(real h) { return kThetaTol * h; }
 
+// An RK4 part step inside an event's step, split into equal sub-steps until halving them
+// changes the positions by at most kPartTol (m, rad; step doubling): a mode between two
+// events of one step can be far faster than the step (a sliding foot whose normal force
+// falls to zero within 23 us of its slip onset, the friction's share of its motion growing
+// without bound): one RK4 step over it leaves an error that no smaller h removes. split:
+// the sub-steps to start from (the last part's), at most kPartMaxSplit; it returns with the
+// finer of the last two tries taken. Generalized-alpha takes the part step whole (its
+// history restarts at every part step; a split would restart it at each sub-step).
+constexpr real kPartTol = real(1e-12);
+constexpr int kPartMaxSplit = 16;
+
+legsim_status part_steps(Sim &s, real dt, int n) {
+  legsim_status r = LEGSIM_OK;
+  for (int i = 0; i < n && r == LEGSIM_OK; ++i) r = stage_integrate(s, true, dt / real(n));
+  return r;
+}
+
+legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, int &split) {
+  if (!rk4) return stage_integrate(s, false, dt);
+  Data &d = s.data;
+  const int nq = s.model.nq;
+  legsim_status r = part_steps(s, dt, split);
+  while (r == LEGSIM_OK && split < kPartMaxSplit) {
+    const VecQ coarse = d.q;
+    from.restore(s);
+    r = stage_start(s, true);
+    if (r == LEGSIM_OK) r = part_steps(s, dt, 2 * split);
+    if (r != LEGSIM_OK) {  // the finer try fails (a mode carried past its domain): the coarse
+      from.restore(s);
+      r = stage_start(s, true);
+      return r == LEGSIM_OK ? part_steps(s, dt, split) : r;
+    }
+    split *= 2;
+    real change = 0;
+    for (int i = 0; i < nq; ++i) change = std::max(change, std::abs(d.q[i] - coarse[i]));
+    if (!(change > kPartTol)) break;  // a NaN splits no further: the guard refuses it
+  }
+  return r;
+}
+
 // One step of h = opt.step_s with its contact events located inside it: the step taken
 // whole; when an event function of the current modes changed sign over it, the earliest
 // root is located on the step's dense output, the step taken again to the event, the event
@@ -409,6 +449,7 @@ inline real tiny_step(real h) { return kThetaTol * h; }
     real ra = 0, rb = hs, fa = g0.g[first / 2][first % 2], fb = g1.g[first / 2][first % 2];
     int side = 0;
     real he = theta * hs, g_prev = 0, h_prev = 0;
+    int split = 1;  // the part step to the event's sub-steps (part_integrate)
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
       from->restore(s);
@@ -419,7 +460,7 @@ inline real tiny_step(real h) { return kThetaTol * h; }
         d.past_steps = 0;
       }
       if (!(he > tiny_step(h))) break;
-      r = stage_integrate(s, rk4, he);
+      r = part_integrate(s, rk4, he, *from, split);
       bool st2 = false;
       if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, st2);
       if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
@@ -433,9 +474,12 @@ inline real tiny_step(real h) { return kThetaTol * h; }
       event_values(s, ge);
       const real gf = ge.g[first / 2][first % 2];
       // the distance to the root, by the slope of the interpolant (first) or of the last two
-      // part steps' values (after)
-      const real slope_now = refine == 0 ? slope / hs : (gf - g_prev) / (he - h_prev);
-      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= std::abs(slope_now) * kRefineTol * h) break;
+      // part steps' values (after), never steeper than the interpolant's: past its event a
+      // mode's values can blow up, and a secant through them would take a point far from
+      // the root for one within the tolerance
+      const real slope_now = refine == 0 ? slope / hs
+                                         : std::min(std::abs((gf - g_prev) / (he - h_prev)), std::abs(slope / hs));
+      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= slope_now * kRefineTol * h) break;
       g_prev = gf, h_prev = he;
       if (refine == kRefinements) {  // the refinements ran out: taken here
         raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
