@@ -315,6 +315,7 @@ struct Sim {
   uint32_t magic;
   Model model;
   legsim_options opt;
+  real step_h;  // opt.step_s as real, set with opt: no conversion in every step (soft-float on a Cortex-M4F)
   Data data;
 };
 

@@ -121,11 +121,6 @@ inline legsim_status stage_stops_release(Sim &s, bool stops) {
 inline void stage_advance(Sim &s, bool rk4) {
   Data &d = s.data;
   if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
-  if (s.opt.step_s != d.origin_step_s) {  // a new step size: the time line starts here
-    d.origin_t = d.t;
-    d.origin_steps = d.steps;
-    d.origin_step_s = s.opt.step_s;
-  }
   ++d.steps;
   d.t = d.origin_t + static_cast<double>(d.steps - d.origin_steps) * d.origin_step_s;
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
@@ -370,7 +365,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
 // with a stop impact is not located further.
 [[gnu::noinline]] legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
   Data &d = s.data;
-  const real h = real(s.opt.step_s);
+  const real h = s.step_h;
   const bool contacts = s.model.nc > 0;
   real done = 0;  // the part of the step taken, s
   int located = 0, parts = 0;
@@ -519,7 +514,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
 // has 3 KB of stack).
 legsim_status step_whole(Sim &s, bool rk4, bool stops) {
   legsim_status r = stage_start(s, rk4);
-  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, real(s.opt.step_s));
+  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, s.step_h);
   bool stopped = false;
   if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
   return r;
