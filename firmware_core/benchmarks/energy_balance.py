@@ -93,6 +93,12 @@ class StepBalance:
     def creates(self) -> bool:
         return self.dH > self.tol
 
+    def pulling(self, force_scale: float) -> list[int]:
+        """The closed feet (stuck or sliding) whose normal force pulls at the step's end
+        (below -1e-9 of force_scale, N): a foot that would pull must have lifted off."""
+        return [k for k, (st, n) in enumerate(zip(self.states_after, self.normals))
+                if st != "free" and n < -1e-9 * force_scale]
+
 
 class Robot:
     """The robot's sim with the balance's terms read through the public API."""
@@ -123,12 +129,15 @@ class Robot:
                 self.sim.command_force(a, f)
                 self.forces[a] = f
 
+    def force_scale(self) -> float:
+        """N: the loads' and actuator forces' sizes and the weight."""
+        return float(np.sum(np.linalg.norm(self.loads, axis=1)) + np.sum(np.abs(self.forces)) +
+                     np.sum(self.masses) * np.linalg.norm(self.gravity))
+
     def projection_slack(self) -> float:
         """J: the most the forces can do through a projection held to newton_tol (positions
         are on Phi = 0 only to that): newton_tol (sum |F_k| + sum |F_a| + weight)."""
-        f = np.sum(np.linalg.norm(self.loads, axis=1)) + np.sum(np.abs(self.forces)) + \
-            np.sum(self.masses) * np.linalg.norm(self.gravity)
-        return self.newton_tol * float(f)
+        return self.newton_tol * self.force_scale()
 
     def terms(self) -> np.ndarray:
         """(T, V_g, -sum F_k . p_k, -sum F_a L_a) in J at the current state."""
@@ -300,8 +309,9 @@ def classify(gains: list[float], integrator: str, tol: float) -> str:
 
 
 def campaign(runs: int, seed0: int, integrators, hs, steps: int, verbose=False):
+    """Runs the cases of seeds seed0 .. seed0 + runs - 1."""
     """All the cases' OK steps that create energy, with counts."""
-    found, n_ok, n_fail, n_refused = [], 0, 0, 0
+    found, pulling, n_ok, n_fail, n_refused = [], [], 0, 0, 0
     for r in range(runs):
         for integ in integrators:
             for h in hs:
@@ -309,6 +319,8 @@ def campaign(runs: int, seed0: int, integrators, hs, steps: int, verbose=False):
                 kept = []
 
                 def on_step(rb, b, before):
+                    if b.pulling(rb.force_scale()):
+                        pulling.append(b)
                     if b.creates:
                         b.gains = refine(rb, before, b.case.h)
                         b.kind = classify(b.gains, b.case.integrator, b.tol)
@@ -324,20 +336,25 @@ def campaign(runs: int, seed0: int, integrators, hs, steps: int, verbose=False):
                         found.append(b)
                         if verbose:
                             print(describe(b))
-    return found, dict(ok_steps=n_ok, failed_runs=n_fail, refused_starts=n_refused)
+    for b in pulling:
+        print("a closed foot pulls:", describe(b))
+    return found, dict(ok_steps=n_ok, failed_runs=n_fail, refused_starts=n_refused,
+                       steps_with_a_pulling_closed_foot=len(pulling))
 
 
-def order_table(runs: int, seed0: int, integrators, hs, duration: float, scales=(1.0, 0.1)) -> str:
-    """The worst per-step gain (J, and relative to the energy moved) over the same cases at
-    each h (each case run for `duration` s), and the order it shrinks with, log2 of the ratio
-    from the step size before: a Markdown table."""
-    lines = ["| cases | integrator | h (s) | OK steps | worst gain (J) | order | worst gain / moved | order |",
-             "|---|---|---|---|---|---|---|---|"]
+def order_table(runs: int, seed0: int, integrators, hs, duration: float, scales=(1.0, 0.3, 0.1)) -> str:
+    """The worst per-step gain (J) over the same cases at each h (each case run for `duration`
+    s), apart for the steps without a contact or stroke event and those with one, and the
+    order it shrinks with (log2 of the ratio from the step size before): a Markdown table."""
+    lines = ["| cases | integrator | h (s) | OK steps | worst gain, no event (J) | order | "
+             "worst gain / moved | worst gain, event steps (J) | order |",
+             "|---|---|---|---|---|---|---|---|---|"]
     for scale in scales:
         for integ in integrators:
             prev = None
             for h in hs:
-                worst, worst_rel, n = 0.0, 0.0, 0
+                w = [0.0, 0.0, 0.0]   # no event (J), its relative, event steps (J)
+                n = 0
                 for r in range(runs):
                     c = random_case(seed0 + r, integ, h, scale=scale)
                     c.steps = int(round(duration / h))
@@ -346,13 +363,18 @@ def order_table(runs: int, seed0: int, integrators, hs, duration: float, scales=
                     bal, _ = run_case(c)
                     n += len(bal)
                     for b in bal:
-                        worst = max(worst, b.dH)
-                        worst_rel = max(worst_rel, b.dH / max(b.moved, 1e-300))
-                orders = ("", "") if prev is None else tuple(
-                    f"{math.log2(a / b):.2f}" if a > 0 and b > 0 else "-" for a, b in zip(prev, (worst, worst_rel)))
-                label = f"scale {scale:g}: loads <= {MAX_LOAD_N * scale ** 3:.0e} N"
-                lines.append(f"| {label} | {integ} | {h:g} | {n} | {worst:.3e} | {orders[0]} | {worst_rel:.3e} | {orders[1]} |")
-                prev = (worst, worst_rel)
+                        ev = [e for e in b.events if e not in ("contact_ambiguous", "force_saturated")]
+                        if ev:
+                            w[2] = max(w[2], b.dH)
+                        else:
+                            w[0] = max(w[0], b.dH)
+                            w[1] = max(w[1], b.dH / max(b.moved, 1e-300))
+                order = ["", ""] if prev is None else [
+                    f"{math.log2(a / b):.2f}" if a > 0 and b > 0 else "-" for a, b in ((prev[0], w[0]), (prev[2], w[2]))]
+                label = f"loads <= {MAX_LOAD_N * scale ** 3:.0e} N, speeds x {scale:g}"
+                lines.append(f"| {label} | {integ} | {h:g} | {n} | {w[0]:.2e} | {order[0]} | {w[1]:.2e} | "
+                             f"{w[2]:.2e} | {order[1]} |")
+                prev = w
     return "\n".join(lines)
 
 
@@ -389,9 +411,14 @@ def main(argv=None) -> int:
         kinds[key] = kinds.get(key, 0) + 1
     for key, n in sorted(kinds.items()):
         print(f"  {n:5d} {key}")
-    for b in sorted(found, key=lambda b: -b.dH / max(b.moved, 1e-300))[:40]:
-        print(describe(b))
-    return 0 if not found else 1
+    # every gain that does not shrink with h, then the largest others
+    for b in found:
+        if b.kind in ("law", "failed-refinement"):
+            print(describe(b))
+    for b in sorted(found, key=lambda b: -b.dH / max(b.moved, 1e-300))[:20]:
+        if b.kind not in ("law", "failed-refinement"):
+            print(describe(b))
+    return 0 if not any(b.kind == "law" for b in found) and not counts["steps_with_a_pulling_closed_foot"] else 1
 
 
 if __name__ == "__main__":

@@ -16,6 +16,10 @@ hostile campaign (both integrators, h = 2 ms and 1 ms), and pins the case that m
   ground, landed it at once and its impact and projection made +4.99 J in one step (h = 2 ms),
   a gain that stayed +2.76 J however finely the step was cut. Its velocities are now
   projected onto J v = nu at each step's end.
+- a stroke stop let go at a step's end changed the ground forces after the contacts were
+  checked: a sliding foot went into the next steps with N < 0, which no event function finds
+  (N must start positive), its friction pushing along the slip (+0.25 .. +3.4 J a step, not
+  shrinking with h). The contacts are now checked again after a stop lets go.
 
 The long campaign (400 seeds, h = 2e-3 ... 2.5e-4 s) is the benchmark's:
 `python firmware_core/benchmarks/energy_balance.py --runs 400`.
@@ -84,18 +88,56 @@ def test_sliding_liftoff_creates_no_energy(integrator, h):
     assert max(drift) <= 1e-9
 
 
+def _stop_release_case(integrator: str) -> eb.Case:
+    """Seed 132 of the campaign: the robot thrown (27 m/s, -30 m/s, 10 rad/s from 0.62 m) onto
+    level ground with mu = 8.8 / 5.4, the actuators at fixed forces. At t = 42 ms the right
+    foot lands sliding while both right actuators reach their stroke minima; at each step's end
+    the stops let go, which turns the foot's normal force negative."""
+    return eb.Case(seed=132, integrator=integrator, h=2e-3, slope=0.0, mu_s=8.823715643049713,
+                   mu_k=5.381495115710391, start="throw", lengths=None, feet_mid=0.5759601893742359,
+                   velocity=(27.0495924583278, -29.64771388015518, 10.35682282196463),
+                   lift=0.617790407017001,
+                   loads=((-55.40962592251268, 4.607120239493253), (-17.31715082573452, 1.44286687633898)),
+                   forces=(288.2626521980005, -886.6767604548344, 776.1134589414514, -887.4411336203124),
+                   steps=30)
+
+
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+def test_stop_released_at_a_step_end_lets_a_pulling_foot_lift_off(integrator):
+    """The stops' release at a step's end changes the ground forces: a sliding foot that would
+    then pull lifts off there. Else it slid into the next steps with N < 0 (-114 .. -207 N),
+    where no event function starts positive, its friction pushing along the slip: +0.25 ..
+    +3.4 J a step (RK4, h = 2 ms), the same however finely the step was cut."""
+    bad = []
+
+    def on_step(rb, b, before):
+        if b.step >= 18 and (b.pulling(rb.force_scale()) or b.creates):
+            bad.append(eb.describe(b))
+
+    bal, err = eb.run_case(_stop_release_case(integrator), on_step)
+    assert err is None and len(bal) == 30
+    events = set().union(*(b.events for b in bal[18:]))
+    assert {"stroke_min", "touchdown", "liftoff"} <= events
+    assert not bad, "\n".join(bad)
+
+
 def _campaign(seeds, hs):
-    found = []
+    """The campaign's OK steps that create energy; asserts on the way that no closed foot ends
+    a step pulling (a foot that would pull lifts off)."""
+    found, pulling = [], []
     for seed in seeds:
         for integ in ("rk4", "galpha"):
             for h in hs:
                 c = eb.random_case(seed, integ, h)
 
                 def on_step(rb, b, before):
+                    if b.pulling(rb.force_scale()):
+                        pulling.append(eb.describe(b))
                     if b.creates:
                         b.gains = eb.refine(rb, before, h, (1, 4, 16, 64))
                         found.append(b)
                 eb.run_case(c, on_step)
+    assert not pulling, "closed feet pulling at a step's end:\n" + "\n".join(pulling)
     return found
 
 
@@ -113,5 +155,8 @@ def _assert_truncation_only(found):
 
 
 def test_hostile_campaign_short():
-    """Seeds 1-12, both integrators, h = 2 ms and 1 ms, 40 steps each (about 30 s)."""
-    _assert_truncation_only(_campaign(range(1, 13), (2e-3, 1e-3)))
+    """Seeds 1-26, both integrators, h = 2 ms and 1 ms, 40 steps each (about 5 s). Seed 27
+    (RK4, h = 1 ms) is the first that meets an open finding (docs/design/energy.md): on
+    frictionless ground a sliding foot's slip to stick and back gains up to 0.07 J in a step,
+    not shrinking with h."""
+    _assert_truncation_only(_campaign(range(1, 27), (2e-3, 1e-3)))
