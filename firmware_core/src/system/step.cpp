@@ -106,6 +106,11 @@ inline legsim_status stage_contacts(Sim &s, bool stops, double at,
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
     r = stroke_limits_enforce(s, stopped);
+    // a stop put on changes the ground forces: the contacts checked once more (a closed foot
+    // that would now pull lifts off)
+    if (r == LEGSIM_OK && stopped) r = state_refresh(s);
+    bool again = false;
+    if (r == LEGSIM_OK && stopped) r = contact_transitions(s, again, at);
   }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
