@@ -121,6 +121,25 @@ def test_stop_released_at_a_step_end_lets_a_pulling_foot_lift_off(integrator):
     assert not bad, "\n".join(bad)
 
 
+@pytest.mark.parametrize("seed,integrator,h", [(189, "rk4", 1e-3), (189, "galpha", 1e-3),
+                                               (330, "rk4", 2e-3)])
+def test_stop_put_on_after_a_touchdown_lets_a_pulling_foot_lift_off(seed, integrator, h):
+    """A touchdown's projection can put an actuator on its stroke stop at a step's end, and
+    the stop's force changes the ground forces after the contacts were checked: a foot closed
+    there ended the step pulling (seed 189: sliding with N = -20 kN; seed 330: stuck with
+    N = -2.6 N and -29 N). The contacts are checked again after a stop is put on."""
+    pulling = []
+
+    def on_step(rb, b, before):
+        if b.pulling(rb.force_scale()):
+            pulling.append(eb.describe(b))
+
+    bal, err = eb.run_case(eb.random_case(seed, integrator, h), on_step)
+    assert err is None and len(bal) == 40
+    assert "stroke_min" in set().union(*(b.events for b in bal))
+    assert not pulling, "\n".join(pulling)
+
+
 def _campaign(seeds, hs):
     """The campaign's OK steps that create energy; asserts on the way that no closed foot ends
     a step pulling (a foot that would pull lifts off)."""
