@@ -106,16 +106,26 @@ inline legsim_status stage_contacts(Sim &s, bool stops, double at,
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
     r = stroke_limits_enforce(s, stopped);
+    // a stop put on changes the ground forces: the contacts checked once more (a closed foot
+    // that would now pull lifts off)
+    if (r == LEGSIM_OK && stopped) r = state_refresh(s);
+    bool again = false;
+    if (r == LEGSIM_OK && stopped) r = contact_transitions(s, again, at);
   }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
-// A stop that would have to pull lets go.
-inline legsim_status stage_stops_release(Sim &s, bool stops) {
+// A stop that would have to pull lets go. The ground forces change with it: the contacts are
+// checked again at `at` (a foot that the stop's force held on the ground would pull now: it
+// lifts off, rather than slide into the next step with N < 0, its friction pushing along the
+// slip, where no event function starts positive to find it).
+inline legsim_status stage_stops_release(Sim &s, bool stops, double at) {
   if (!stops) return LEGSIM_OK;
   bool released = false;
-  const legsim_status r = stroke_stops_release(s, released);
-  return r == LEGSIM_OK && released ? state_refresh(s) : r;
+  legsim_status r = stroke_stops_release(s, released);
+  if (r != LEGSIM_OK || !released) return r;
+  r = state_refresh(s);
+  return r == LEGSIM_OK ? stage_contacts(s, stops, at) : r;
 }
 
 inline void stage_advance(Sim &s, bool rk4) {
@@ -491,7 +501,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     done += he;
     ++located;
     r = stage_contacts(s, stops, d.t + double(done), &ev);
-    if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+    if (r == LEGSIM_OK) r = stage_stops_release(s, stops, d.t + double(done));
     if (r != LEGSIM_OK) return r;
     if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
     for (int k = 0; k < s.model.nc; ++k)
@@ -542,7 +552,7 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
       (void)events;
       legsim_status r = step_whole(s, rk4, stops);
 #endif
-      if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+      if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.data.t + double(s.opt.step_s));
       if (r != LEGSIM_OK) return r;
       s.data.modes_checked = true;
       stage_advance(s, rk4);
