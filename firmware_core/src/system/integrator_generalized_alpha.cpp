@@ -163,7 +163,8 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // only takes kinetic energy out. Without it a step restarted from such a velocity (after a
   // contact event, at a part step) turns the drift into a velocity jump that does not shrink
   // with the part step, and an event located on its rows acts on a foot moving off them.
-  if (!(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
+  // A model without contacts has no such restart: it keeps its cost (the Cortex-M4F leg).
+  if (LEGSIM_WITH_CONTACT && m.nc > 0 && !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
     rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
     j_times(lay, d.rows, v1, d.rhs);
     real drift = 0;
