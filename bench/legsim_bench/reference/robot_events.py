@@ -57,7 +57,7 @@ from .model import ReferenceError, command_breakpoints
 from .robot import RobotModel
 
 __all__ = ["ContactEvent", "EventResult", "simulate_events", "impact", "impact_with_stops",
-           "modes_from"]
+           "modes_from", "AT_MIN", "AT_MAX", "EVENT_KINDS", "STOP_KINDS"]
 
 FREE, STUCK, SLIDING = "free", "stuck", "sliding"
 EVENT_KINDS = ("touchdown", "liftoff", "stick_to_slip", "slip_to_stick")
