@@ -549,6 +549,9 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drive
 
 // ---- kinematics.cpp ----
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
+// The largest |J v| of the rows, J v in jv: the velocities' distance from J v = nu for the rows
+// of forward dynamics, whose rates nu are 0 (joints, stops, closed contacts).
+real velocity_drift(const Layout &layout, const Rows &rows, const VecQ &v, VecR &jv);
 legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
 
 // ---- reactions.cpp ----

@@ -166,13 +166,7 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // A model without contacts has no such restart: it keeps its cost (the Cortex-M4F leg).
   if (LEGSIM_WITH_CONTACT && m.nc > 0 && !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
     rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
-    j_times(lay, d.rows, v1, d.rhs);
-    real drift = 0;
-    for (int i = 0; i < lay.m; ++i) {
-      const real e = std::abs(d.rhs[i] - d.rows.nu[i]);
-      drift = e > drift ? e : drift;
-    }
-    if (drift > tol) {
+    if (velocity_drift(lay, d.rows, v1, d.rhs) > tol) {
       const legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
       d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;

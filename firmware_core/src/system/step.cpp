@@ -106,26 +106,29 @@ inline legsim_status stage_contacts(Sim &s, bool stops, double at,
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
     r = stroke_limits_enforce(s, stopped);
-    // a stop put on changes the ground forces: the contacts checked once more (a closed foot
-    // that would now pull lifts off)
-    if (r == LEGSIM_OK && stopped) r = state_refresh(s);
-    bool again = false;
-    if (r == LEGSIM_OK && stopped) r = contact_transitions(s, again, at);
+    if (r == LEGSIM_OK && stopped) {
+      // a stop put on changes the ground forces: the contacts checked once more (a closed
+      // foot that would now pull lifts off); the state refreshed again only if one changes
+      r = state_refresh(s);
+      bool again = false;
+      if (r == LEGSIM_OK) r = contact_transitions(s, again, at);
+      if (r != LEGSIM_OK || !again) return r;
+    }
   }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
 // A stop that would have to pull lets go. The ground forces change with it: the contacts are
-// checked again at `at` (a foot that the stop's force held on the ground would pull now: it
-// lifts off, rather than slide into the next step with N < 0, its friction pushing along the
-// slip, where no event function starts positive to find it).
-inline legsim_status stage_stops_release(Sim &s, bool stops, double at) {
+// checked again at the step's time plus `done` (a foot that the stop's force held on the
+// ground would pull now: it lifts off, rather than slide into the next step with N < 0, its
+// friction pushing along the slip, where no event function starts positive to find it).
+inline legsim_status stage_stops_release(Sim &s, bool stops, real done) {
   if (!stops) return LEGSIM_OK;
   bool released = false;
   legsim_status r = stroke_stops_release(s, released);
   if (r != LEGSIM_OK || !released) return r;
   r = state_refresh(s);
-  return r == LEGSIM_OK ? stage_contacts(s, stops, at) : r;
+  return r == LEGSIM_OK ? stage_contacts(s, stops, s.data.t + double(done)) : r;
 }
 
 inline void stage_advance(Sim &s, bool rk4) {
@@ -325,6 +328,18 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
 // A part step shorter than this is not taken (its change is within the location's tolerance).
 inline real tiny_step(real h) { return kThetaTol * h; }
 
+// A part step's start again: the snapshot, the derivative, and generalized-alpha's history
+// restarted (h enters it, and a part step's h is its own).
+legsim_status part_restart(Sim &s, bool rk4, const Snapshot &from) {
+  from.restore(s);
+  const legsim_status r = stage_start(s, rk4);
+  if (!rk4) {
+    s.data.acc_aux = s.data.qdd;
+    s.data.past_steps = 0;
+  }
+  return r;
+}
+
 // An RK4 part step inside an event's step, split into equal sub-steps until halving them
 // changes the positions by at most kPartTol (m, rad; step doubling): a mode between two
 // events of one step can be far faster than the step (a sliding foot whose normal force
@@ -349,12 +364,10 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
   legsim_status r = part_steps(s, dt, split);
   while (r == LEGSIM_OK && split < kPartMaxSplit) {
     const VecQ coarse = d.q;
-    from.restore(s);
-    r = stage_start(s, true);
+    r = part_restart(s, true, from);
     if (r == LEGSIM_OK) r = part_steps(s, dt, 2 * split);
     if (r != LEGSIM_OK) {  // the finer try fails (a mode carried past its domain): the coarse
-      from.restore(s);
-      r = stage_start(s, true);
+      r = part_restart(s, true, from);
       return r == LEGSIM_OK ? part_steps(s, dt, split) : r;
     }
     split *= 2;
@@ -397,13 +410,8 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     // lift-off: the Newton iteration or the friction's coupling fails): the part step is
     // halved (at most kHalvings times) to find a state before that, from which it goes on.
     for (int halving = 0; r != LEGSIM_OK && contacts && halving < kHalvings && parts < kMaxParts; ++halving) {
-      from->restore(s);
-      r = stage_start(s, rk4);
+      r = part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
-      if (!rk4) {
-        d.acc_aux = d.qdd;
-        d.past_steps = 0;
-      }
       hs /= 2;
       r = stage_integrate(s, rk4, hs);
     }
@@ -457,13 +465,8 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     int split = 1;  // the part step to the event's sub-steps (part_integrate)
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
-      from->restore(s);
-      r = stage_start(s, rk4);
+      r = part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
-      if (!rk4) {  // generalized-alpha restarts its history at a part step (h enters it)
-        d.acc_aux = d.qdd;
-        d.past_steps = 0;
-      }
       if (!(he > tiny_step(h))) break;
       r = part_integrate(s, rk4, he, *from, split);
       bool st2 = false;
@@ -501,7 +504,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     done += he;
     ++located;
     r = stage_contacts(s, stops, d.t + double(done), &ev);
-    if (r == LEGSIM_OK) r = stage_stops_release(s, stops, d.t + double(done));
+    if (r == LEGSIM_OK) r = stage_stops_release(s, stops, done);
     if (r != LEGSIM_OK) return r;
     if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
     for (int k = 0; k < s.model.nc; ++k)
@@ -552,7 +555,7 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
       (void)events;
       legsim_status r = step_whole(s, rk4, stops);
 #endif
-      if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.data.t + double(s.opt.step_s));
+      if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.step_h);
       if (r != LEGSIM_OK) return r;
       s.data.modes_checked = true;
       stage_advance(s, rk4);
