@@ -317,6 +317,7 @@ struct Sim {
   uint32_t magic;
   Model model;
   legsim_options opt;
+  real step_h;  // opt.step_s as real, set with opt: no conversion in every step (soft-float on a Cortex-M4F)
   Data data;
 };
 
@@ -554,6 +555,9 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drive
 
 // ---- kinematics.cpp ----
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
+// The largest |J v| of the rows, J v in jv: the velocities' distance from J v = nu for the rows
+// of forward dynamics, whose rates nu are 0 (joints, stops, closed contacts).
+real velocity_drift(const Layout &layout, const Rows &rows, const VecQ &v, VecR &jv);
 legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
 
 // ---- reactions.cpp ----

@@ -107,26 +107,34 @@ inline legsim_status stage_contacts(Sim &s, bool stops, double at,
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
     r = stroke_limits_enforce(s, stopped, at);
+    if (r == LEGSIM_OK && stopped) {
+      // a stop put on changes the ground forces: the contacts checked once more (a closed
+      // foot that would now pull lifts off); the state refreshed again only if one changes
+      r = state_refresh(s);
+      bool again = false;
+      if (r == LEGSIM_OK) r = contact_transitions(s, again, at);
+      if (r != LEGSIM_OK || !again) return r;
+    }
   }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
-// A stop that would have to pull lets go.
-inline legsim_status stage_stops_release(Sim &s, bool stops) {
+// A stop that would have to pull lets go. The ground forces change with it: the contacts are
+// checked again at the step's time plus `done` (a foot that the stop's force held on the
+// ground would pull now: it lifts off, rather than slide into the next step with N < 0, its
+// friction pushing along the slip, where no event function starts positive to find it).
+inline legsim_status stage_stops_release(Sim &s, bool stops, real done) {
   if (!stops) return LEGSIM_OK;
   bool released = false;
-  const legsim_status r = stroke_stops_release(s, released);
-  return r == LEGSIM_OK && released ? state_refresh(s) : r;
+  legsim_status r = stroke_stops_release(s, released);
+  if (r != LEGSIM_OK || !released) return r;
+  r = state_refresh(s);
+  return r == LEGSIM_OK ? stage_contacts(s, stops, s.data.t + double(done)) : r;
 }
 
 inline void stage_advance(Sim &s, bool rk4) {
   Data &d = s.data;
   if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
-  if (s.opt.step_s != d.origin_step_s) {  // a new step size: the time line starts here
-    d.origin_t = d.t;
-    d.origin_steps = d.steps;
-    d.origin_step_s = s.opt.step_s;
-  }
   ++d.steps;
   d.t = d.origin_t + static_cast<double>(d.steps - d.origin_steps) * d.origin_step_s;
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
@@ -348,6 +356,56 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
 // A part step shorter than this is not taken (its change is within the location's tolerance).
 inline real tiny_step(real h) { return kThetaTol * h; }
 
+// A part step's start again: the snapshot, the derivative, and generalized-alpha's history
+// restarted (h enters it, and a part step's h is its own).
+legsim_status part_restart(Sim &s, bool rk4, const Snapshot &from) {
+  from.restore(s);
+  const legsim_status r = stage_start(s, rk4);
+  if (!rk4) {
+    s.data.acc_aux = s.data.qdd;
+    s.data.past_steps = 0;
+  }
+  return r;
+}
+
+// An RK4 part step inside an event's step, split into equal sub-steps until halving them
+// changes the positions by at most kPartTol (m, rad; step doubling): a mode between two
+// events of one step can be far faster than the step (a sliding foot whose normal force
+// falls to zero within 23 us of its slip onset, the friction's share of its motion growing
+// without bound): one RK4 step over it leaves an error that no smaller h removes. split:
+// the sub-steps to start from (the last part's), at most kPartMaxSplit; it returns with the
+// finer of the last two tries taken. Generalized-alpha takes the part step whole (its
+// history restarts at every part step; a split would restart it at each sub-step).
+constexpr real kPartTol = real(1e-12);
+constexpr int kPartMaxSplit = 16;
+
+legsim_status part_steps(Sim &s, real dt, int n) {
+  legsim_status r = LEGSIM_OK;
+  for (int i = 0; i < n && r == LEGSIM_OK; ++i) r = stage_integrate(s, true, dt / real(n));
+  return r;
+}
+
+legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, int &split) {
+  if (!rk4) return stage_integrate(s, false, dt);
+  Data &d = s.data;
+  const int nq = s.model.nq;
+  legsim_status r = part_steps(s, dt, split);
+  while (r == LEGSIM_OK && split < kPartMaxSplit) {
+    const VecQ coarse = d.q;
+    r = part_restart(s, true, from);
+    if (r == LEGSIM_OK) r = part_steps(s, dt, 2 * split);
+    if (r != LEGSIM_OK) {  // the finer try fails (a mode carried past its domain): the coarse
+      r = part_restart(s, true, from);
+      return r == LEGSIM_OK ? part_steps(s, dt, split) : r;
+    }
+    split *= 2;
+    real change = 0;
+    for (int i = 0; i < nq; ++i) change = std::max(change, std::abs(d.q[i] - coarse[i]));
+    if (!(change > kPartTol)) break;  // a NaN splits no further: the guard refuses it
+  }
+  return r;
+}
+
 // One step of h = opt.step_s with its events (contacts, stroke stop arrivals) located inside
 // it: the step taken whole; when an event function of the current modes changed sign over
 // it, the earliest root is located on the step's dense output, the step taken again to the
@@ -357,7 +415,7 @@ inline real tiny_step(real h) { return kThetaTol * h; }
 // A stop's release (its force would pull) is taken at the end of the (part) step.
 [[gnu::noinline]] legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
   Data &d = s.data;
-  const real h = real(s.opt.step_s);
+  const real h = s.step_h;
   const bool contacts = s.model.nc > 0;
   real done = 0;  // the part of the step taken, s
   int located = 0, parts = 0;
@@ -381,13 +439,8 @@ inline real tiny_step(real h) { return kThetaTol * h; }
     // lift-off: the Newton iteration or the friction's coupling fails): the part step is
     // halved (at most kHalvings times) to find a state before that, from which it goes on.
     for (int halving = 0; r != LEGSIM_OK && contacts && halving < kHalvings && parts < kMaxParts; ++halving) {
-      from->restore(s);
-      r = stage_start(s, rk4);
+      r = part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
-      if (!rk4) {
-        d.acc_aux = d.qdd;
-        d.past_steps = 0;
-      }
       hs /= 2;
       r = stage_integrate(s, rk4, hs);
     }
@@ -441,18 +494,14 @@ inline real tiny_step(real h) { return kThetaTol * h; }
     real ra = 0, rb = hs, fa = g0.g[first], fb = g1.g[first];
     int side = 0;
     real he = theta * hs, g_prev = 0, h_prev = 0;
+    int split = 1;  // the part step to the event's sub-steps (part_integrate)
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
-      from->restore(s);
-      r = stage_start(s, rk4);
+      r = part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
-      if (!rk4) {  // generalized-alpha restarts its history at a part step (h enters it)
-        d.acc_aux = d.qdd;
-        d.past_steps = 0;
-      }
       if (!(he > tiny_step(h))) break;
-      r = stage_integrate(s, rk4, he);
-      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);
+      r = part_integrate(s, rk4, he, *from, split);
+      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
       if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
         rb = he, side = 1;
         he = real(0.5) * (ra + rb);
@@ -463,9 +512,12 @@ inline real tiny_step(real h) { return kThetaTol * h; }
       event_values(s, stops, ge);
       const real gf = ge.g[first];
       // the distance to the root, by the slope of the interpolant (first) or of the last two
-      // part steps' values (after)
-      const real slope_now = refine == 0 ? slope / hs : (gf - g_prev) / (he - h_prev);
-      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= std::abs(slope_now) * kRefineTol * h) break;
+      // part steps' values (after), never steeper than the interpolant's: past its event a
+      // mode's values can blow up, and a secant through them would take a point far from
+      // the root for one within the tolerance
+      const real slope_now = refine == 0 ? slope / hs
+                                         : std::min(std::abs((gf - g_prev) / (he - h_prev)), std::abs(slope / hs));
+      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= slope_now * kRefineTol * h) break;
       g_prev = gf, h_prev = he;
       if (refine == kRefinements) {  // the refinements ran out: taken here
         raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
@@ -489,7 +541,7 @@ inline real tiny_step(real h) { return kThetaTol * h; }
       if (r == LEGSIM_OK && stopped) r = state_refresh(s);
     }
     if (r == LEGSIM_OK) r = stage_contacts(s, stops, t_event, &ev);
-    if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+    if (r == LEGSIM_OK) r = stage_stops_release(s, stops, done);
     if (r != LEGSIM_OK) return r;
     if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
     for (int k = 0; k < s.model.nc; ++k)
@@ -514,7 +566,7 @@ inline real tiny_step(real h) { return kThetaTol * h; }
 // has 3 KB of stack).
 legsim_status step_whole(Sim &s, bool rk4, bool stops) {
   legsim_status r = stage_start(s, rk4);
-  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, real(s.opt.step_s));
+  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, s.step_h);
   bool stopped = false;
   if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped, s.data.t + s.opt.step_s);
   return r;
@@ -542,7 +594,7 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
       (void)events;
       legsim_status r = step_whole(s, rk4, stops);
 #endif
-      if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+      if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.step_h);
       if (r != LEGSIM_OK) return r;
       s.data.modes_checked = true;
       stage_advance(s, rk4);
