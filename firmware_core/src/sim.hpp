@@ -465,10 +465,10 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
                             const VecQ &qd);
 // ---- actuators.cpp ----
 // Stroke stops: an actuator past an end (or in `arriving`: located on it, to the location's
-// tolerance) is put on it at time `at` (s) (inelastic impact) and held there by a length row
+// tolerance) is put on it `into` s after the step's start d.t (inelastic impact) and held there by a length row
 // in the dynamics; one whose stop would have to pull is let go. changed: the active set
 // changed (derivative anew).
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed, double at, uint32_t arriving = 0);
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t arriving = 0);
 legsim_status stroke_stops_release(Sim &sim, bool &changed);
 // Data::work for the joints plus length drivers of the actuators in mask (built
 // once per set: analyses called along a motion do not rebuild it).

@@ -107,12 +107,18 @@ def test_stop_released_at_a_step_end_lets_a_pulling_foot_lift_off(integrator):
     """The stops' release at a step's end changes the ground forces: a sliding foot that would
     then pull lifts off there. Else it slid into the next steps with N < 0 (-114 .. -207 N),
     where no event function starts positive, its friction pushing along the slip: +0.25 ..
-    +3.4 J a step (RK4, h = 2 ms), the same however finely the step was cut."""
+    +3.4 J a step (RK4, h = 2 ms), the same however finely the step was cut. No closed foot
+    ends a step pulling, and no step gains energy that the same step cut finer keeps (a gain
+    that shrinks at the integrator's order is its truncation error: at 27 m/s and h = 2 ms,
+    up to 5e-4 of the energy moved)."""
     bad = []
 
     def on_step(rb, b, before):
-        if b.step >= 18 and (b.pulling(rb.force_scale()) or b.creates):
-            bad.append(eb.describe(b))
+        if b.step < 18:
+            return
+        kind = eb.classify(eb.refine(rb, before, b.case.h), integrator, b.tol) if b.creates else None
+        if b.pulling(rb.force_scale()) or kind not in (None, "truncation"):
+            bad.append(f"{eb.describe(b)} ({kind})")
 
     bal, err = eb.run_case(_stop_release_case(integrator), on_step)
     assert err is None and len(bal) == 30

@@ -45,7 +45,7 @@ real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig) {
 // row takes its share of the impulse. From then on a length row holds it in the dynamics,
 // and its multiplier is the stop's force. Raised as an event, never silent. Putting one
 // actuator on its stop can push another past its end, so the check repeats.
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed, double at, uint32_t arriving) {
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t arriving) {
   changed = false;
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -60,7 +60,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed, double at, uint32_t
       if (!arrived && len >= ac.lmin && len <= ac.lmax) continue;
       const bool low = arrived ? len - ac.lmin < ac.lmax - len : len < ac.lmin;
       added |= 1u << a;
-      d.act[a].stop_time = at;
+      d.act[a].stop_time = d.t + double(into);  // (the step starts at d.t)
       raise_event(d, low ? LEGSIM_EVENT_STROKE_MIN : LEGSIM_EVENT_STROKE_MAX);
       dv.length[a] = low ? ac.lmin : ac.lmax;
       dv.rate[a] = dv.accel[a] = 0;

@@ -83,13 +83,13 @@ inline legsim_status stage_integrate(Sim &s, bool rk4, real h) {
   return rk4 ? rk4_step(s, h) : generalized_alpha_step(s, h);
 }
 
-// An actuator past an end of its stroke is put on its stop at time `at` (an impact that
-// changes q and qd: the derivative and reactions anew); else generalized-alpha's reactions
-// at its end (RK4 leaves its end derivative and reactions itself). stops = false: the
-// reactions alone (a part step whose stop arrivals are located).
-inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stopped, double at) {
+// An actuator past an end of its stroke is put on its stop `into` s after the step's start
+// (an impact that changes q and qd: the derivative and reactions anew); else
+// generalized-alpha's reactions at its end (RK4 leaves its end derivative and reactions
+// itself). stops = false: the reactions alone (a part step whose stop arrivals are located).
+inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stopped, real into) {
   stopped = false;
-  legsim_status r = stops ? stroke_limits_enforce(s, stopped, at) : LEGSIM_OK;
+  legsim_status r = stops ? stroke_limits_enforce(s, stopped, into) : LEGSIM_OK;
   if (r != LEGSIM_OK) return r;
   if (stopped) return state_refresh(s);
   return rk4 ? LEGSIM_OK : generalized_alpha_reactions(s);
@@ -106,7 +106,7 @@ inline legsim_status stage_contacts(Sim &s, bool stops, double at,
   legsim_status r = contact_transitions(s, changed, at, located);
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
-    r = stroke_limits_enforce(s, stopped, at);
+    r = stroke_limits_enforce(s, stopped, real(at - s.data.t));
     if (r == LEGSIM_OK && stopped) {
       // a stop put on changes the ground forces: the contacts checked once more (a closed
       // foot that would now pull lifts off); the state refreshed again only if one changes
@@ -457,7 +457,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     }
     if (!cross || !locate) {
       // a stop not located (deferred, or started on its end) is taken at this end
-      if (stops) r = stroke_limits_enforce(s, stopped, d.t + double(done + hs));
+      if (stops) r = stroke_limits_enforce(s, stopped, done + hs);
       if (r == LEGSIM_OK && stopped) r = state_refresh(s);
       if (r != LEGSIM_OK || !partial) break;
       ++parts;
@@ -537,7 +537,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     // the stops first (the arriving ones, and any other past its end), then the contacts'
     // events and checks with the forces of the state on its stops
     if (stops) {
-      r = stroke_limits_enforce(s, stopped, t_event, arriving);
+      r = stroke_limits_enforce(s, stopped, done, arriving);
       if (r == LEGSIM_OK && stopped) r = state_refresh(s);
     }
     if (r == LEGSIM_OK) r = stage_contacts(s, stops, t_event, &ev);
@@ -568,7 +568,7 @@ legsim_status step_whole(Sim &s, bool rk4, bool stops) {
   legsim_status r = stage_start(s, rk4);
   if (r == LEGSIM_OK) r = stage_integrate(s, rk4, s.step_h);
   bool stopped = false;
-  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped, s.data.t + s.opt.step_s);
+  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped, s.step_h);
   return r;
 }
 
