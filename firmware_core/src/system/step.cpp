@@ -186,10 +186,11 @@ real event_value(const Sim &s, int k, int j, const VecQ &q, const VecQ &v, real 
   return j == 0 ? m.ground_n.dot(p - m.ground_point) : real(c.slip_dir) * m.ground_t.dot(pv);
 }
 
-// Stop function j of actuator a at q (m).
-inline real stop_value(const Model &m, int a, int j, const VecQ &q, TrigCache *trig) {
+// Actuator a's two stop functions at q (m): g[0] = L - L_min, g[1] = L_max - L.
+inline void stop_values(const Model &m, int a, const VecQ &q, TrigCache *trig, real *g) {
   const real len = stroke_length(m, a, q, trig);
-  return j == 0 ? len - m.act[a].lmin : m.act[a].lmax - len;
+  g[0] = len - m.act[a].lmin;
+  g[1] = m.act[a].lmax - len;
 }
 
 // The functions at the sim's state, with the forces of its last solve. The contact law
@@ -208,8 +209,7 @@ void event_values(Sim &s, bool stops, EventValues &e) {
   }
   if (!stops) return;
   for (int a = 0; a < s.model.na; ++a)
-    if (!((d.stop_mask >> a) & 1u))
-      for (int j = 0; j < 2; ++j) e.g[kActBase + 2 * a + j] = stop_value(s.model, a, j, d.q, &d.trig);
+    if (!((d.stop_mask >> a) & 1u)) stop_values(s.model, a, d.q, &d.trig, &e.g[kActBase + 2 * a]);
 }
 
 // The functions that changed sign over the (part) step (bit f).
@@ -250,7 +250,9 @@ legsim_status event_at(Sim &s, const StepEnd &e, real hs, int f, real th, real &
   VecQ q, v, a;
   dense_output(s, e, hs, th, q, v);
   if (is_stop(f)) {
-    g = stop_value(s.model, stop_actuator(f), f % 2, q, nullptr);
+    real pair[2];
+    stop_values(s.model, stop_actuator(f), q, nullptr, pair);
+    g = pair[f % 2];
     return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
   }
   const int k = f / 2, j = f % 2;
