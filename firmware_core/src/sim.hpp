@@ -215,6 +215,8 @@ struct ActuatorState {
   real setpoint;    // N or m
   real force;       // axial force it applies in the current state, N
   real stop_force;  // axial force of the stroke stop it rests on (0 when free), N
+  double stop_time; // s: when it last arrived on a stroke stop (located inside the step, or
+                    // the (part) step's end for one taken there); 0 before any
 };
 
 struct ContactData {
@@ -315,6 +317,7 @@ struct Sim {
   uint32_t magic;
   Model model;
   legsim_options opt;
+  real step_h;  // opt.step_s as real, set with opt: no conversion in every step (soft-float on a Cortex-M4F)
   Data data;
 };
 
@@ -331,6 +334,7 @@ struct Snapshot {
   VecR lambda;
   legsim_reaction reaction[kMaxJoints];
   real act_force[kMaxActuators], stop_force[kMaxActuators], stop_length[kMaxActuators];
+  double stop_time[kMaxActuators];
   ContactData contact[kMaxContacts];
   real stick[kMaxContacts];
   legsim_report report;
@@ -460,14 +464,17 @@ inline real actuator_force(const Actuator &ac, ActuatorState &st, Data &d, real 
 void actuator_forces_update(const Model &model, const legsim_options &opt, Data &d, const VecQ &q,
                             const VecQ &qd);
 // ---- actuators.cpp ----
-// Stroke stops after a step: an actuator past an end is put on it (inelastic
-// impact) and held there by a length row in the dynamics; one whose stop would
-// have to pull is let go. changed: the active set changed (derivative anew).
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed);
+// Stroke stops: an actuator past an end (or in `arriving`: located on it, to the location's
+// tolerance) is put on it `into` s after the step's start d.t (inelastic impact) and held there by a length row
+// in the dynamics; one whose stop would have to pull is let go. changed: the active set
+// changed (derivative anew).
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t arriving = 0);
 legsim_status stroke_stops_release(Sim &sim, bool &changed);
 // Data::work for the joints plus length drivers of the actuators in mask (built
 // once per set: analyses called along a motion do not rebuild it).
 legsim_status work_layout(Sim &sim, uint32_t mask);
+// Actuator a's length at q (m), for the stroke checks and their event functions.
+real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig);
 // Rebuilds Data::dyn for Data::stop_mask and the contacts' states.
 legsim_status stops_layout(Sim &sim);
 
@@ -548,6 +555,9 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drive
 
 // ---- kinematics.cpp ----
 legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
+// The largest |J v| of the rows, J v in jv: the velocities' distance from J v = nu for the rows
+// of forward dynamics, whose rates nu are 0 (joints, stops, closed contacts).
+real velocity_drift(const Layout &layout, const Rows &rows, const VecQ &v, VecR &jv);
 legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
 
 // ---- reactions.cpp ----

@@ -310,6 +310,7 @@ class Library:
             "legsim_clear_events": (st, [P]),
             "legsim_stroke_event_mask": (C.c_uint32, [P]),
             "legsim_contact_event_time": (st, [P, C.c_int32, C.POINTER(C.c_double)]),
+            "legsim_stroke_event_time": (st, [P, C.c_int32, C.POINTER(C.c_double)]),
             "legsim_contacts_check": (st, [P]),
             "legsim_time": (C.c_double, [P]),
             "legsim_step_count": (C.c_uint64, [P]),

@@ -398,6 +398,13 @@ class Sim:
                     "legsim_contact_event_time")
         return float(t.value)
 
+    def stroke_event_time(self, a: int) -> float:
+        """The time (s) actuator a last arrived on a stroke stop, located inside its step."""
+        t = C.c_double()
+        self._check(self.library.cdll.legsim_stroke_event_time(self.handle, int(a), C.byref(t)),
+                    "legsim_stroke_event_time")
+        return float(t.value)
+
     def stroke_event_mask(self) -> int:
         """Which actuators raised a stroke event (bit a = actuator a)."""
         return int(self.library.cdll.legsim_stroke_event_mask(self.handle))

@@ -22,6 +22,7 @@ from __future__ import annotations
 import os
 import socket
 import sys
+import time
 from pathlib import Path
 
 import pytest
@@ -95,13 +96,23 @@ class Hil:
             if not binary.is_file():
                 _skip_or_fail(f"{binary} not built (cmake --preset host && cmake --build --preset host)")
             self.close_proc()
+            # the old process's last frames, still in the link's socket, are not the new one's:
+            # a stale HEARTBEAT taken for it sent the first RESET before the new one listened
+            if self.link is not None:
+                self.link.drain()
+            started = time.monotonic()
             self.proc = HilProcess.for_scene(sc, CHANNEL, binary, self.out_dir / "hil_sim.log").__enter__()
             self.args = sc.hil_args()
             if self.link is None:
                 self.link = HilLink(interface="socketcan", channel=CHANNEL, dbc=ROOT / "can" / "legsim.dbc",
                                     timeout=10.0).__enter__()
             try:
-                self.link.heartbeat(timeout=10.0)
+                while True:  # a HEARTBEAT of this process: its uptime within its age
+                    hb = self.link.heartbeat(timeout=10.0)
+                    if hb.uptime_ms <= (time.monotonic() - started) * 1e3 + 100:
+                        break
+                    if time.monotonic() - started > 10.0:
+                        raise RuntimeError(f"only HEARTBEATs of an older hil_sim (uptime {hb.uptime_ms} ms)")
             except Exception as e:  # noqa: BLE001
                 pytest.fail(f"hil_sim {' '.join(self.args)} did not come up on {CHANNEL}: {e}\n{self.proc.log()}")
         return self.link

@@ -321,10 +321,12 @@ def robot_events_reference(scene: Scene, times, sent: bool = False):
     t = np.round(np.asarray(times, float) / scene.step_s) * scene.step_s
     r = simulate_events(model, float(t[-1]), t, z0, zd0, tuple(states), tuple(signs), actuators=cmds,
                         box_load=tuple(rnd(scene.box_load)) if scene.box_load else (0.0, 0.0, 0.0),
-                        gravity="gravity" not in scene.disable)
+                        gravity="gravity" not in scene.disable,
+                        stroke_stops="stroke_limits" not in scene.disable)
     feet = scene.model_info.contacts
     t_switch = min([e.t for c in scene.commands if c is not None and c.schedule.kind == "switch"
-                    for e in r.events if e.kind == c.schedule.event and feet[e.foot] == c.schedule.contact],
+                    for e in r.events if e.foot >= 0 and e.kind == c.schedule.event
+                    and feet[e.foot] == c.schedule.contact],
                    default=math.inf)
     return model, r, t_switch
 
@@ -370,7 +372,20 @@ def robot_events_checks(ev, scene: Scene, d: dict, feet, bodies, tol_check, wher
                                float(len(bad_states)), None, "samples", "",
                                "; ".join(bad_states[:4]) or f"{n} samples agree"))
     missing, extra, found = [], [], []
-    ref_ev = [e for e in r.events if 1e-12 < e.t <= t[n - 1] + 1e-12 and e.t <= t_sw]
+    in_run = [e for e in r.events if 1e-12 < e.t <= t[n - 1] + 1e-12 and e.t <= t_sw]
+    ref_ev = [e for e in in_run if e.foot >= 0]       # the contacts' (a stop's has foot -1)
+    if not per_foot:   # the CLI's samples carry the stroke events too (CAN's: the feet's alone)
+        stroke = ("stroke_min", "stroke_max")
+        ref_stops = [e for e in in_run if e.kind in stroke]
+        s_missing = [f"actuator {e.actuator} {e.kind} at {e.t:.6f} s" for e in ref_stops
+                     if e.kind not in d["events"][min(int(np.searchsorted(t, e.t - 1e-12)), len(t) - 1)]]
+        s_extra = [f"{kind} at t = {t[i]:g} s" for i in range(1, n) for kind in set(d["events"][i]) & set(stroke)
+                   if not any(e.kind == kind and t[i - 1] < e.t + 1e-12 <= t[i] + 2e-12 for e in ref_stops)]
+        results.append(CheckResult("stroke stop arrivals in the step that holds the reference's",
+                                   not s_missing and not s_extra, float(len(s_missing) + len(s_extra)), None,
+                                   "events", "", "; ".join([x + " missing" for x in s_missing] +
+                                                           [x + " (not in the reference)" for x in s_extra])
+                                   or f"{len(ref_stops)} arrivals"))
     for e in ref_ev:
         i = int(np.searchsorted(t, e.t - 1e-12))
         if i >= len(t) or e.kind not in got(i, e.foot):

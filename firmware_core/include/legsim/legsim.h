@@ -353,6 +353,11 @@ uint32_t legsim_contact_event_mask(const legsim_sim *sim, int32_t k);
  * step (a starting state that cannot hold). 0 before any event. LEGSIM_ERR_BAD_INPUT for k
  * outside 0 .. n_contacts - 1. */
 legsim_status legsim_contact_event_time(const legsim_sim *sim, int32_t k, double *t_s);
+/* The time (s) actuator a last arrived on a stroke stop: located inside its step (to 1e-6
+ * of the step) in a model with contacts, or the end of the (part) step that crossed it (a
+ * model without contacts, beyond LEGSIM_MAX_EVENTS_PER_STEP, or a start on its end). 0
+ * before any. LEGSIM_ERR_BAD_INPUT for a outside 0 .. n_actuators - 1. */
+legsim_status legsim_stroke_event_time(const legsim_sim *sim, int32_t a, double *t_s);
 
 double legsim_time(const legsim_sim *sim);
 uint64_t legsim_step_count(const legsim_sim *sim);

@@ -42,6 +42,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   s = model_compile(model, sim->model);
   if (s != LEGSIM_OK) return s;
   sim->opt = *options;
+  sim->step_h = real(options->step_s);
   Data &d = sim->data;
   const Model &m = sim->model;
   d.t = 0;
@@ -66,7 +67,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   std::memset(&d.failure, 0, sizeof d.failure);
   std::memset(&d.drivers, 0, sizeof d.drivers);
   d.stroke_mask = 0;
-  for (int a = 0; a < kMaxActuators; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0};
+  for (int a = 0; a < kMaxActuators; ++a) d.act[a] = {LEGSIM_ACTUATOR_FORCE, 0, 0, 0, 0.0};
   std::memset(&d.stop_drivers, 0, sizeof d.stop_drivers);
   d.stop_mask = 0;
   d.work_mask = -1;
@@ -94,7 +95,14 @@ legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options)
   Sim &sm = *as_sim(sim);
   if (same_options(sm.opt, *options)) return LEGSIM_OK;  // sent again: changes nothing
   sm.opt = *options;
-  state_changed(sm.data);  // the step, the integrator, what is enabled: a full restart
+  sm.step_h = real(options->step_s);
+  Data &d = sm.data;
+  if (options->step_s != d.origin_step_s) {  // a new step size: the time line starts here
+    d.origin_t = d.t;
+    d.origin_steps = d.steps;
+    d.origin_step_s = options->step_s;
+  }
+  state_changed(d);  // the step, the integrator, what is enabled: a full restart
   return LEGSIM_OK;
 }
 

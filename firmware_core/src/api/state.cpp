@@ -49,6 +49,14 @@ legsim_status legsim_contact_event_time(const legsim_sim *sim, int32_t k, double
   return LEGSIM_OK;
 }
 
+legsim_status legsim_stroke_event_time(const legsim_sim *sim, int32_t a, double *t_s) {
+  CHECK_SIM(sim);
+  if (!t_s) return LEGSIM_ERR_NULL;
+  if (a < 0 || a >= as_sim(sim)->model.na) return LEGSIM_ERR_BAD_INPUT;
+  *t_s = as_sim(sim)->data.act[a].stop_time;
+  return LEGSIM_OK;
+}
+
 double legsim_time(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.t : 0.0; }
 
 uint64_t legsim_step_count(const legsim_sim *sim) { return sim_ok(sim) ? as_sim(sim)->data.steps : 0; }

@@ -27,7 +27,6 @@ legsim_status stops_layout(Sim &sim) {
   return s;
 }
 
-namespace {
 // An actuator's length at q, (r_rod - r_cyl) . u_cyl + offset: actuator_length's without
 // the rate, from the cylinder's sin/cos alone (the stroke checks need no more).
 real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig) {
@@ -37,14 +36,16 @@ real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig) {
   body_trig(trig, ac.cyl, q[i + 2], s, c);
   return ((q[j] - q[i]) * s + (q[j + 1] - q[i + 1]) * -c) + ac.offset_m;
 }
-}  // namespace
 
-// After a step: an actuator past its stroke is put back on its end (a projection
-// onto Phi = 0 with that length held) and its velocity along the stroke removed:
-// an inelastic impact. From then on a length row holds it in the dynamics, and
-// its multiplier is the stop's force. Raised as an event, never silent. Putting
-// one actuator on its stop can push another past its end, so the check repeats.
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
+// The stop law (one implementation, whether the arrival was located inside the step or is
+// taken at a (part) step's end): an actuator past its stroke, or one in `arriving` (located
+// on its end: the nearer end), is put back on its end (a projection onto Phi = 0 with that
+// length held) and its velocity along the stroke removed: an inelastic impact, the velocity
+// projected M-orthogonally onto the rows held (joints, closed feet, stops), so every held
+// row takes its share of the impulse. From then on a length row holds it in the dynamics,
+// and its multiplier is the stop's force. Raised as an event, never silent. Putting one
+// actuator on its stop can push another past its end, so the check repeats.
+legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t arriving) {
   changed = false;
   const Model &m = sim.model;
   Data &d = sim.data;
@@ -55,9 +56,11 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed) {
       if (d.stop_mask & (1u << a)) continue;
       const real len = stroke_length(m, a, d.q, &d.trig);
       const Actuator &ac = m.act[a];
-      if (len >= ac.lmin && len <= ac.lmax) continue;
-      const bool low = len < ac.lmin;
+      const bool arrived = (arriving >> a) & 1u;
+      if (!arrived && len >= ac.lmin && len <= ac.lmax) continue;
+      const bool low = arrived ? len - ac.lmin < ac.lmax - len : len < ac.lmin;
       added |= 1u << a;
+      d.act[a].stop_time = d.t + double(into);  // (the step starts at d.t)
       raise_event(d, low ? LEGSIM_EVENT_STROKE_MIN : LEGSIM_EVENT_STROKE_MAX);
       dv.length[a] = low ? ac.lmin : ac.lmax;
       dv.rate[a] = dv.accel[a] = 0;

@@ -41,6 +41,7 @@ Snapshot::Snapshot(const Sim &sim)
   for (int a = 0; a < m.na; ++a) {
     act_force[a] = d.act[a].force;
     stop_force[a] = d.act[a].stop_force;
+    stop_time[a] = d.act[a].stop_time;
     stop_length[a] = d.stop_drivers.length[a];
   }
   for (int k = 0; k < kMaxContacts; ++k) {
@@ -67,6 +68,7 @@ void Snapshot::restore(Sim &sim) const {
   for (int a = 0; a < m.na; ++a) {
     d.act[a].force = act_force[a];
     d.act[a].stop_force = stop_force[a];
+    d.act[a].stop_time = stop_time[a];
     d.stop_drivers.length[a] = stop_length[a];
     d.stop_drivers.rate[a] = d.stop_drivers.accel[a] = 0;
   }

@@ -57,13 +57,6 @@ LEGSIM_STAGE_TARGETS bool stage_last(int n, real h6, R_ q, R_ v, const R_ vs, co
 }
 #undef R_
 
-// The largest |J v| of the rows (their rates nu are 0 here: joints, stops, stuck contacts).
-real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv) {
-  j_times(lay, rows, v, jv);
-  real drift = 0;
-  for (int i = 0; i < lay.m; ++i) drift = std::abs(jv[i]) > drift ? std::abs(jv[i]) : drift;
-  return drift;
-}
 }  // namespace
 
 namespace {

@@ -16,6 +16,13 @@ legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd) {
   return all_finite(qd, m.nq) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
+real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv) {
+  j_times(lay, rows, v, jv);
+  real drift = 0;
+  for (int i = 0; i < lay.m; ++i) drift = std::abs(jv[i]) > drift ? std::abs(jv[i]) : drift;
+  return drift;
+}
+
 legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd) {
   const Model &m = sim.model;
   Data &d = sim.data;

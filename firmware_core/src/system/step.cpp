@@ -83,12 +83,13 @@ inline legsim_status stage_integrate(Sim &s, bool rk4, real h) {
   return rk4 ? rk4_step(s, h) : generalized_alpha_step(s, h);
 }
 
-// An actuator past an end of its stroke is put on its stop (an impact that changes q and
-// qd: the derivative and reactions anew); else generalized-alpha's reactions at its end
-// (RK4 leaves its end derivative and reactions itself).
-inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stopped) {
+// An actuator past an end of its stroke is put on its stop `into` s after the step's start
+// (an impact that changes q and qd: the derivative and reactions anew); else
+// generalized-alpha's reactions at its end (RK4 leaves its end derivative and reactions
+// itself). stops = false: the reactions alone (a part step whose stop arrivals are located).
+inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stopped, real into) {
   stopped = false;
-  legsim_status r = stops ? stroke_limits_enforce(s, stopped) : LEGSIM_OK;
+  legsim_status r = stops ? stroke_limits_enforce(s, stopped, into) : LEGSIM_OK;
   if (r != LEGSIM_OK) return r;
   if (stopped) return state_refresh(s);
   return rk4 ? LEGSIM_OK : generalized_alpha_reactions(s);
@@ -105,39 +106,56 @@ inline legsim_status stage_contacts(Sim &s, bool stops, double at,
   legsim_status r = contact_transitions(s, changed, at, located);
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
-    r = stroke_limits_enforce(s, stopped);
+    r = stroke_limits_enforce(s, stopped, real(at - s.data.t));
+    if (r == LEGSIM_OK && stopped) {
+      // a stop put on changes the ground forces: the contacts checked once more (a closed
+      // foot that would now pull lifts off); the state refreshed again only if one changes
+      r = state_refresh(s);
+      bool again = false;
+      if (r == LEGSIM_OK) r = contact_transitions(s, again, at);
+      if (r != LEGSIM_OK || !again) return r;
+    }
   }
   return r == LEGSIM_OK && changed ? state_refresh(s) : r;
 }
 
-// A stop that would have to pull lets go.
-inline legsim_status stage_stops_release(Sim &s, bool stops) {
+// A stop that would have to pull lets go. The ground forces change with it: the contacts are
+// checked again at the step's time plus `done` (a foot that the stop's force held on the
+// ground would pull now: it lifts off, rather than slide into the next step with N < 0, its
+// friction pushing along the slip, where no event function starts positive to find it).
+inline legsim_status stage_stops_release(Sim &s, bool stops, real done) {
   if (!stops) return LEGSIM_OK;
   bool released = false;
-  const legsim_status r = stroke_stops_release(s, released);
-  return r == LEGSIM_OK && released ? state_refresh(s) : r;
+  legsim_status r = stroke_stops_release(s, released);
+  if (r != LEGSIM_OK || !released) return r;
+  r = state_refresh(s);
+  return r == LEGSIM_OK ? stage_contacts(s, stops, s.data.t + double(done)) : r;
 }
 
 inline void stage_advance(Sim &s, bool rk4) {
   Data &d = s.data;
   if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
-  if (s.opt.step_s != d.origin_step_s) {  // a new step size: the time line starts here
-    d.origin_t = d.t;
-    d.origin_steps = d.steps;
-    d.origin_step_s = s.opt.step_s;
-  }
   ++d.steps;
   d.t = d.origin_t + static_cast<double>(d.steps - d.origin_steps) * d.origin_step_s;
   if (d.report.condition > real(LEGSIM_COND_WARN)) raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
 }
 
 #if LEGSIM_WITH_CONTACT  // a build whose models have no contacts has no events to locate
-// ---- contact events located inside the step (docs/design/events.md) ----
-// Per contact two event functions of its mode, each > 0 while the mode holds:
+// ---- contact events and stroke stops located inside the step (docs/design/events.md) ----
+// Per contact two event functions of its mode, each > 0 while the mode holds (function
+// 2k + j):
 // [0] free: the gap n . (p - p0) (touchdown); stuck or sliding: N (lift-off);
 // [1] stuck: mu_s N - |T| (stick to slip); sliding: dir v_t (slip to stick); free: none.
+// Per actuator off its stops two (function kActBase + 2a + j): [0] L - L_min, [1] L_max - L
+// (the stop's arrival); on a stop: none (its release is taken at the (part) step's end).
 // A function counts when it is > 0 at the (part) step's start and < 0 at its end.
 constexpr real kNoEvent = real(1e30);
+constexpr int kActBase = 2 * kMaxContacts;
+constexpr int kFunctions = kActBase + 2 * kMaxActuators;
+using EventBits = uint64_t;  // bit f: function f
+static_assert(kFunctions <= 64, "one bit per event function");
+inline bool is_stop(int f) { return f >= kActBase; }
+inline int stop_actuator(int f) { return (f - kActBase) / 2; }
 constexpr real kThetaTol = real(1e-6);  // the root's tolerance, in parts of the (part) step
 constexpr int kLocateIterations = 12;
 // The located function at the real part step's end must be 0 to its slope times this part of
@@ -149,7 +167,7 @@ constexpr int kHalvings = 4;
 constexpr int kMaxParts = 2 * LEGSIM_MAX_EVENTS_PER_STEP;  // halved part steps a step takes
 
 struct EventValues {
-  real g[kMaxContacts][2];
+  real g[kFunctions];
 };
 
 // Whether function j of contact k in its current mode needs the ground forces (a solve).
@@ -168,26 +186,37 @@ real event_value(const Sim &s, int k, int j, const VecQ &q, const VecQ &v, real 
   return j == 0 ? m.ground_n.dot(p - m.ground_point) : real(c.slip_dir) * m.ground_t.dot(pv);
 }
 
+// Actuator a's two stop functions at q (m): g[0] = L - L_min, g[1] = L_max - L.
+inline void stop_values(const Model &m, int a, const VecQ &q, TrigCache *trig, real *g) {
+  const real len = stroke_length(m, a, q, trig);
+  g[0] = len - m.act[a].lmin;
+  g[1] = m.act[a].lmax - len;
+}
+
 // The functions at the sim's state, with the forces of its last solve. The contact law
 // PAPER decides stick to slip by its own rule (not one contact at a time): not located.
-void event_values(const Sim &s, EventValues &e) {
-  const Data &d = s.data;
+// stops: the stroke stops are in force (their arrivals located).
+void event_values(Sim &s, bool stops, EventValues &e) {
+  Data &d = s.data;
   const bool cone = s.opt.contact_law != LEGSIM_CONTACT_PAPER;
+  for (real &g : e.g) g = kNoEvent;
   for (int k = 0; k < s.model.nc; ++k) {
     const ContactData &c = d.contact[k];
     for (int j = 0; j < 2; ++j)
-      e.g[k][j] = (j == 1 && c.state == LEGSIM_CONTACT_STUCK && !cone)
-                      ? kNoEvent
-                      : event_value(s, k, j, d.q, d.qd, c.normal, c.tangential);
+      e.g[2 * k + j] = (j == 1 && c.state == LEGSIM_CONTACT_STUCK && !cone)
+                           ? kNoEvent
+                           : event_value(s, k, j, d.q, d.qd, c.normal, c.tangential);
   }
+  if (!stops) return;
+  for (int a = 0; a < s.model.na; ++a)
+    if (!((d.stop_mask >> a) & 1u)) stop_values(s.model, a, d.q, &d.trig, &e.g[kActBase + 2 * a]);
 }
 
-// The functions that changed sign over the (part) step (bit 2k + j).
-uint32_t crossings(const Sim &s, const EventValues &start, const EventValues &end) {
-  uint32_t cross = 0;
-  for (int k = 0; k < s.model.nc; ++k)
-    for (int j = 0; j < 2; ++j)
-      if (start.g[k][j] > 0 && end.g[k][j] < 0 && start.g[k][j] < kNoEvent) cross |= 1u << (2 * k + j);
+// The functions that changed sign over the (part) step (bit f).
+EventBits crossings(const EventValues &start, const EventValues &end) {
+  EventBits cross = 0;
+  for (int f = 0; f < kFunctions; ++f)
+    if (start.g[f] > 0 && end.g[f] < 0 && start.g[f] < kNoEvent) cross |= EventBits(1) << f;
   return cross;
 }
 
@@ -215,11 +244,18 @@ void dense_output(const Sim &s, const StepEnd &e, real hs, real th, VecQ &q, Vec
   }
 }
 
-// Function j of contact k at theta on the dense output; a function of the forces solves the
-// dynamics of the current modes there (its multipliers give N and T).
-legsim_status event_at(Sim &s, const StepEnd &e, real hs, int k, int j, real th, real &g) {
+// Function f at theta on the dense output; a function of the forces solves the dynamics of
+// the current modes there (its multipliers give N and T).
+legsim_status event_at(Sim &s, const StepEnd &e, real hs, int f, real th, real &g) {
   VecQ q, v, a;
   dense_output(s, e, hs, th, q, v);
+  if (is_stop(f)) {
+    real pair[2];
+    stop_values(s.model, stop_actuator(f), q, nullptr, pair);
+    g = pair[f % 2];
+    return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
+  }
+  const int k = f / 2, j = f % 2;
   real n_force = 0, t_force = 0;
   if (needs_forces(s.data.contact[k], j)) {
     const legsim_status r = dynamics_solve(s, s.data.dyn, q, v, a, false, false, nullptr);
@@ -233,12 +269,12 @@ legsim_status event_at(Sim &s, const StepEnd &e, real hs, int k, int j, real th,
   return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
-// The root of function j of contact k on [0, 1] (g(0) = g0 > 0 > g(1) = g1) by the Illinois
-// variant of regula falsi, to kThetaTol in at most kLocateIterations evaluations. theta: the
-// bracket's late end (g <= 0: the event surely happened there); exact = false when the
-// iterations ran out (the bracket's late end all the same).
-legsim_status event_root(Sim &s, const StepEnd &e, real hs, int k, int j, real g0, real g1, real &theta,
-                         bool &exact, real &slope) {
+// The root of function f on [0, 1] (g(0) = g0 > 0 > g(1) = g1) by the Illinois variant of
+// regula falsi, to kThetaTol in at most kLocateIterations evaluations. theta: the bracket's
+// late end (g <= 0: the event surely happened there); exact = false when the iterations ran
+// out (the bracket's late end all the same).
+legsim_status event_root(Sim &s, const StepEnd &e, real hs, int f, real g0, real g1, real &theta, bool &exact,
+                         real &slope) {
   real a = 0, b = 1, ga = g0, gb = g1;
   real fa = g0, fb = g1;  // the values at a and b (Illinois halves ga, gb)
   int side = 0;
@@ -248,7 +284,7 @@ legsim_status event_root(Sim &s, const StepEnd &e, real hs, int k, int j, real g
     real c = bisect ? real(0.5) * (a + b) : (a * gb - b * ga) / (gb - ga);
     if (!(c > a && c < b)) c = real(0.5) * (a + b);
     real gc;
-    const legsim_status r = event_at(s, e, hs, k, j, c, gc);
+    const legsim_status r = event_at(s, e, hs, f, c, gc);
     // a mode whose dynamics cannot be solved there (a sliding foot far past its lift-off:
     // the friction's coupling singular) has surely ended before: the late end, bisected
     bisect = r != LEGSIM_OK;
@@ -278,32 +314,34 @@ legsim_status event_root(Sim &s, const StepEnd &e, real hs, int k, int j, real g
 
 // The earliest of the crossing functions (with the start in the sim's state, the end in e):
 // theta, and the events within kThetaTol of it (simultaneous: a level drop lands both feet
-// at once) in ev.
-// first: the earliest function (bit 2k + j), slope: its dg / dtheta there.
+// at once) in ev (contacts) and arriving (bit a: actuator a reaches a stop).
+// first: the earliest function (f), slope: its dg / dtheta there.
 legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues &g0, const EventValues &g1,
-                            uint32_t cross, ContactEvents &ev, real &theta, bool &exact, int &first,
-                            real &slope) {
-  real at[kMaxContacts][2];
+                            EventBits cross, ContactEvents &ev, uint32_t &arriving, real &theta, bool &exact,
+                            int &first, real &slope) {
+  real at[kFunctions];
   theta = 1;
   exact = true;
   first = -1;
   slope = 0;
-  for (int k = 0; k < s.model.nc; ++k)
-    for (int j = 0; j < 2; ++j) {
-      at[k][j] = 2;
-      if (!((cross >> (2 * k + j)) & 1u)) continue;
-      bool ok;
-      real dg;
-      const legsim_status r = event_root(s, e, hs, k, j, g0.g[k][j], g1.g[k][j], at[k][j], ok, dg);
-      if (r != LEGSIM_OK) return r;
-      if (at[k][j] < theta || first < 0) theta = at[k][j], first = 2 * k + j, slope = dg;
-      exact = exact && ok;
-    }
+  for (int f = 0; f < kFunctions; ++f) {
+    at[f] = 2;
+    if (!((cross >> f) & 1u)) continue;
+    bool ok;
+    real dg;
+    const legsim_status r = event_root(s, e, hs, f, g0.g[f], g1.g[f], at[f], ok, dg);
+    if (r != LEGSIM_OK) return r;
+    if (at[f] < theta || first < 0) theta = at[f], first = f, slope = dg;
+    exact = exact && ok;
+  }
+  arriving = 0;
+  for (int f = kActBase; f < kFunctions; ++f)
+    if (at[f] <= theta + kThetaTol) arriving |= 1u << stop_actuator(f);
   ev = ContactEvents{0, 0, 0, 0};
   for (int k = 0; k < s.model.nc; ++k) {
     const ContactData &c = s.data.contact[k];
     for (int j = 0; j < 2; ++j) {
-      if (!(at[k][j] <= theta + kThetaTol)) continue;
+      if (!(at[2 * k + j] <= theta + kThetaTol)) continue;
       const uint32_t bit = 1u << k;
       if (c.state == LEGSIM_CONTACT_FREE) ev.touchdown |= bit;
       else if (j == 0) ev.liftoff |= bit;
@@ -320,17 +358,66 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
 // A part step shorter than this is not taken (its change is within the location's tolerance).
 inline real tiny_step(real h) { return kThetaTol * h; }
 
-// One step of h = opt.step_s with its contact events located inside it: the step taken
-// whole; when an event function of the current modes changed sign over it, the earliest
-// root is located on the step's dense output, the step taken again to the event, the event
-// applied there, and the rest of the step taken from it (located again, up to
-// LEGSIM_MAX_EVENTS_PER_STEP events; beyond, the rest are taken at the step's end with
+// A part step's start again: the snapshot, the derivative, and generalized-alpha's history
+// restarted (h enters it, and a part step's h is its own).
+legsim_status part_restart(Sim &s, bool rk4, const Snapshot &from) {
+  from.restore(s);
+  const legsim_status r = stage_start(s, rk4);
+  if (!rk4) {
+    s.data.acc_aux = s.data.qdd;
+    s.data.past_steps = 0;
+  }
+  return r;
+}
+
+// An RK4 part step inside an event's step, split into equal sub-steps until halving them
+// changes the positions by at most kPartTol (m, rad; step doubling): a mode between two
+// events of one step can be far faster than the step (a sliding foot whose normal force
+// falls to zero within 23 us of its slip onset, the friction's share of its motion growing
+// without bound): one RK4 step over it leaves an error that no smaller h removes. split:
+// the sub-steps to start from (the last part's), at most kPartMaxSplit; it returns with the
+// finer of the last two tries taken. Generalized-alpha takes the part step whole (its
+// history restarts at every part step; a split would restart it at each sub-step).
+constexpr real kPartTol = real(1e-12);
+constexpr int kPartMaxSplit = 16;
+
+legsim_status part_steps(Sim &s, real dt, int n) {
+  legsim_status r = LEGSIM_OK;
+  for (int i = 0; i < n && r == LEGSIM_OK; ++i) r = stage_integrate(s, true, dt / real(n));
+  return r;
+}
+
+legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, int &split) {
+  if (!rk4) return stage_integrate(s, false, dt);
+  Data &d = s.data;
+  const int nq = s.model.nq;
+  legsim_status r = part_steps(s, dt, split);
+  while (r == LEGSIM_OK && split < kPartMaxSplit) {
+    const VecQ coarse = d.q;
+    r = part_restart(s, true, from);
+    if (r == LEGSIM_OK) r = part_steps(s, dt, 2 * split);
+    if (r != LEGSIM_OK) {  // the finer try fails (a mode carried past its domain): the coarse
+      r = part_restart(s, true, from);
+      return r == LEGSIM_OK ? part_steps(s, dt, split) : r;
+    }
+    split *= 2;
+    real change = 0;
+    for (int i = 0; i < nq; ++i) change = std::max(change, std::abs(d.q[i] - coarse[i]));
+    if (!(change > kPartTol)) break;  // a NaN splits no further: the guard refuses it
+  }
+  return r;
+}
+
+// One step of h = opt.step_s with its events (contacts, stroke stop arrivals) located inside
+// it: the step taken whole; when an event function of the current modes changed sign over
+// it, the earliest root is located on the step's dense output, the step taken again to the
+// event, the event applied there, and the rest of the step taken from it (located again, up
+// to LEGSIM_MAX_EVENTS_PER_STEP events; beyond, the rest are taken at the step's end with
 // LEGSIM_EVENT_EVENTS_DEFERRED). start: the state the step started from (all_or_nothing's).
-// Stroke stops are taken at the end of the (part) step that crossed them, as a part step
-// with a stop impact is not located further.
+// A stop's release (its force would pull) is taken at the end of the (part) step.
 [[gnu::noinline]] legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
   Data &d = s.data;
-  const real h = real(s.opt.step_s);
+  const real h = s.step_h;
   const bool contacts = s.model.nc > 0;
   real done = 0;  // the part of the step taken, s
   int located = 0, parts = 0;
@@ -338,44 +425,43 @@ inline real tiny_step(real h) { return kThetaTol * h; }
   std::optional<Snapshot> mid;  // the rest's start, after an event
   const Snapshot *from = &start;
   // the functions a located event put at their boundary (bit 2k + 1: v_t = 0 after a slip
-  // onset, |T| = mu_s N after a slip to stick or a landing): not located again in this step
-  // (they would be found at once, at round-off), their sign change is taken at its end
-  uint32_t fresh = 0;
+  // onset, |T| = mu_s N after a slip to stick or a landing; a stop's pair after its arrival,
+  // should the stop not hold: a dead centre): not located again in this step (they would be
+  // found at once, at round-off), their sign change is taken at its end
+  EventBits fresh = 0;
+  bool stopped = false;
   legsim_status r = stage_start(s, rk4);
   for (;;) {
     if (r != LEGSIM_OK) return r;
     EventValues g0;
-    if (contacts) event_values(s, g0);
+    event_values(s, stops, g0);
     real hs = h - done;
     r = stage_integrate(s, rk4, hs);
     // A mode carried far past its event can leave its domain (a sliding foot well past its
     // lift-off: the Newton iteration or the friction's coupling fails): the part step is
     // halved (at most kHalvings times) to find a state before that, from which it goes on.
     for (int halving = 0; r != LEGSIM_OK && contacts && halving < kHalvings && parts < kMaxParts; ++halving) {
-      from->restore(s);
-      r = stage_start(s, rk4);
+      r = part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
-      if (!rk4) {
-        d.acc_aux = d.qdd;
-        d.past_steps = 0;
-      }
       hs /= 2;
       r = stage_integrate(s, rk4, hs);
     }
     const bool partial = hs < h - done;  // the part step ends before the step
-    bool stopped = false;
-    if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
-    if (r != LEGSIM_OK || !contacts || (stopped && !partial)) break;
+    if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
+    if (r != LEGSIM_OK) break;
     EventValues g1;
-    event_values(s, g1);
-    const uint32_t cross = locate ? crossings(s, g0, g1) & ~fresh : 0u;
+    event_values(s, stops, g1);
+    const EventBits cross = locate ? crossings(g0, g1) & ~fresh : 0u;
     if (cross && located == LEGSIM_MAX_EVENTS_PER_STEP) {
       // the rest at the step's end, as without location
       raise_event(d, LEGSIM_EVENT_EVENTS_DEFERRED);
       locate = false;
     }
-    if (!cross || stopped || !locate) {
-      if (!partial) break;
+    if (!cross || !locate) {
+      // a stop not located (deferred, or started on its end) is taken at this end
+      if (stops) r = stroke_limits_enforce(s, stopped, done + hs);
+      if (r == LEGSIM_OK && stopped) r = state_refresh(s);
+      if (r != LEGSIM_OK || !partial) break;
       ++parts;
       done += hs;  // the rest of the step from here
       mid.emplace(s);
@@ -396,46 +482,44 @@ inline real tiny_step(real h) { return kThetaTol * h; }
     r = stage_start(s, rk4);
     if (r != LEGSIM_OK) return r;
     ContactEvents ev;
+    uint32_t arriving;
     real theta, slope;
     bool exact;
     int first;
-    r = events_locate(s, end, hs, g0, g1, cross, ev, theta, exact, first, slope);
+    r = events_locate(s, end, hs, g0, g1, cross, ev, arriving, theta, exact, first, slope);
     if (r != LEGSIM_OK) return r;
     if (!exact) raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
     // The part step to the root found, taken for real: the located function there must be 0
     // to its slope times kRefineTol h; else the root is sought on the real part steps (Illinois
     // on their values, the bracket [0, hs] of the step's own values), at most kRefinements.
     const real tol = std::abs(slope) * kRefineTol * h / hs;
-    real ra = 0, rb = hs, fa = g0.g[first / 2][first % 2], fb = g1.g[first / 2][first % 2];
+    real ra = 0, rb = hs, fa = g0.g[first], fb = g1.g[first];
     int side = 0;
     real he = theta * hs, g_prev = 0, h_prev = 0;
+    int split = 1;  // the part step to the event's sub-steps (part_integrate)
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
-      from->restore(s);
-      r = stage_start(s, rk4);
+      r = part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
-      if (!rk4) {  // generalized-alpha restarts its history at a part step (h enters it)
-        d.acc_aux = d.qdd;
-        d.past_steps = 0;
-      }
       if (!(he > tiny_step(h))) break;
-      r = stage_integrate(s, rk4, he);
-      bool st2 = false;
-      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, st2);
+      r = part_integrate(s, rk4, he, *from, split);
+      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
       if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
         rb = he, side = 1;
         he = real(0.5) * (ra + rb);
         continue;
       }
       if (r != LEGSIM_OK) return r;
-      if (st2) break;  // a stop on the way: the events at its state
       EventValues ge;
-      event_values(s, ge);
-      const real gf = ge.g[first / 2][first % 2];
+      event_values(s, stops, ge);
+      const real gf = ge.g[first];
       // the distance to the root, by the slope of the interpolant (first) or of the last two
-      // part steps' values (after)
-      const real slope_now = refine == 0 ? slope / hs : (gf - g_prev) / (he - h_prev);
-      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= std::abs(slope_now) * kRefineTol * h) break;
+      // part steps' values (after), never steeper than the interpolant's: past its event a
+      // mode's values can blow up, and a secant through them would take a point far from
+      // the root for one within the tolerance
+      const real slope_now = refine == 0 ? slope / hs
+                                         : std::min(std::abs((gf - g_prev) / (he - h_prev)), std::abs(slope / hs));
+      if (refine == 0 ? std::abs(gf) <= tol : std::abs(gf) <= slope_now * kRefineTol * h) break;
       g_prev = gf, h_prev = he;
       if (refine == kRefinements) {  // the refinements ran out: taken here
         raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
@@ -451,12 +535,21 @@ inline real tiny_step(real h) { return kThetaTol * h; }
     }
     done += he;
     ++located;
-    r = stage_contacts(s, stops, d.t + double(done), &ev);
-    if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+    const double t_event = d.t + double(done);
+    // the stops first (the arriving ones, and any other past its end), then the contacts'
+    // events and checks with the forces of the state on its stops
+    if (stops) {
+      r = stroke_limits_enforce(s, stopped, done, arriving);
+      if (r == LEGSIM_OK && stopped) r = state_refresh(s);
+    }
+    if (r == LEGSIM_OK) r = stage_contacts(s, stops, t_event, &ev);
+    if (r == LEGSIM_OK) r = stage_stops_release(s, stops, done);
     if (r != LEGSIM_OK) return r;
     if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
     for (int k = 0; k < s.model.nc; ++k)
-      if (((ev.touchdown | ev.slip | ev.stick) >> k) & 1u) fresh |= 1u << (2 * k + 1);
+      if (((ev.touchdown | ev.slip | ev.stick) >> k) & 1u) fresh |= EventBits(1) << (2 * k + 1);
+    for (int a = 0; a < s.model.na; ++a)
+      if ((arriving >> a) & 1u) fresh |= EventBits(3) << (kActBase + 2 * a);
     mid.emplace(s);
     from = &*mid;
     if (!rk4) {  // the rest is a part step too
@@ -475,9 +568,9 @@ inline real tiny_step(real h) { return kThetaTol * h; }
 // has 3 KB of stack).
 legsim_status step_whole(Sim &s, bool rk4, bool stops) {
   legsim_status r = stage_start(s, rk4);
-  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, real(s.opt.step_s));
+  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, s.step_h);
   bool stopped = false;
-  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped);
+  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped, s.step_h);
   return r;
 }
 
@@ -503,7 +596,7 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
       (void)events;
       legsim_status r = step_whole(s, rk4, stops);
 #endif
-      if (r == LEGSIM_OK) r = stage_stops_release(s, stops);
+      if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.step_h);
       if (r != LEGSIM_OK) return r;
       s.data.modes_checked = true;
       stage_advance(s, rk4);
