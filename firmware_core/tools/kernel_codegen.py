@@ -340,7 +340,7 @@ class Kernel:
         return o
 
     def rows_locals(self, shared=None, part=None, velocity=None, trig="body_trig"):
-        """sin/cos once per body (through the TrigCache) and its pose pose<b> (rows.hpp), then
+        """sin/cos once per body (through the TrigCache), then its pose pose<b> (rows.hpp), then
         every joint's rows as locals. shared: body -> an earlier body whose angle a
         prismatic joint keeps equal to its own (to round-off after a projection, a stage's
         step further): its pair from that body's by the angle-sum formulas with the small
@@ -367,6 +367,10 @@ class Kernel:
                     o.append("  } else {")
                     o.append(f"    {trig}(trig, {b}, q[{3 * b + 2}], s{b}, c{b});")
                     o.append("  }")
+        # The poses after every trig call: a pair whose address the (out-of-line) call took
+        # is then read where it is used, not held in a register or spilled across the calls.
+        for b in used:
+            if part != "v":
                 o.append(f"  BodyPose pose{b} = body_pose(q, {b}, s{b}, c{b});")
             if part != "q":
                 o.append(f"  body_velocity(pose{b}, {vel(3 * b)}, {vel(3 * b + 1)}, {vel(3 * b + 2)});")
