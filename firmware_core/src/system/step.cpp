@@ -458,8 +458,11 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
       locate = false;
     }
     if (!cross || !locate) {
-      // a stop not located (deferred, or started on its end) is taken at this end
-      if (stops) r = stroke_limits_enforce(s, stopped, done + hs);
+      // a stop not located (deferred, or started on its end) is taken at this end; g1 holds
+      // the lengths already (an actuator past an end has a negative function)
+      bool past = false;
+      for (int f = kActBase; f < kFunctions; ++f) past = past || g1.g[f] < 0;
+      if (stops && past) r = stroke_limits_enforce(s, stopped, done + hs);
       if (r == LEGSIM_OK && stopped) r = state_refresh(s);
       if (r != LEGSIM_OK || !partial) break;
       ++parts;
