@@ -491,6 +491,7 @@ bool all_closed(const Model &m, const Data &d) {
 // - stick to slip: a stuck foot with |T| > mu_s N slides, against T;
 // - slip to stick: a sliding foot whose sliding velocity changed sign sticks where it is (its
 //   tangential velocity removed by an impulse, reported); the problem at rest then decides.
+//   On frictionless ground (mu_s = 0) it slides on, the other way, with no impulse.
 // Under contact_law PAPER, while every foot is on the ground, stick to slip is the paper's
 // rule instead (paper_release): the foot with the smaller |T| is released, the other stays.
 // Under the default law, lift-off and stick to slip are not decided one contact at a time:
@@ -510,6 +511,9 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
   uint32_t slipped = 0, stuck_again = 0;  // each once per check
   uint32_t changing = 0;                  // the contacts the last pass changed
   const real tol = real(sim.opt.newton_tol);
+  // mu_s = 0 (so mu_k = 0): a closed foot only slides (sticking needs T = 0 exactly); its
+  // slip's direction, which no force depends on, turns with its velocity
+  const bool frictionless = !(m.mu_s > 0);
   bool enumerated = false;  // the modes enumerated once per check; after that, one by one
   // The located events switch their contacts in the first pass; a contact switched so sits
   // on its new mode's boundary (N = 0, |T| = mu_s N, v_t = 0 to round-off), where the rules
@@ -557,6 +561,10 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
         c.events |= LEGSIM_EVENT_STICK_TO_SLIP;
         raise_event(d, LEGSIM_EVENT_STICK_TO_SLIP);
       } else if (c.state == LEGSIM_CONTACT_SLIDING && (ev.stick & bit)) {  // located: v_t reached 0
+        if (frictionless) {  // no friction to stop it: it slides on the other way
+          c.slip_dir = int8_t(-c.slip_dir);
+          continue;
+        }
         c.state = LEGSIM_CONTACT_STUCK;
         d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
         to_stick |= bit;
@@ -594,6 +602,10 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
         raise_event(d, LEGSIM_EVENT_STICK_TO_SLIP);
       } else {  // sliding
         if (!(vt * real(c.slip_dir) < 0) || (((stuck_again | slipped) >> k) & 1u)) continue;
+        if (frictionless) {
+          c.slip_dir = int8_t(sign_of(vt));
+          continue;
+        }
         c.state = LEGSIM_CONTACT_STUCK;
         d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
         to_stick |= 1u << k;
