@@ -151,7 +151,7 @@ void stop_forces_update(Sim &sim) {
   int row = m.m;  // the stop rows follow the joints, in actuator order
   for (int a = 0; a < m.na; ++a)
     d.act[a].stop_force = (d.stop_mask & (1u << a)) ? -d.lambda[row++] : real(0);
-  contact_forces_update(sim);  // the contact rows follow the stops
+  if (m.nc > 0) contact_forces_update(sim);  // the contact rows follow the stops
 }
 
 legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }

@@ -18,6 +18,13 @@ void copy_head(V &dst, const V &src, int n) {
   else
     std::memcpy(dst.data(), src.data(), sizeof(real) * size_t(n));
 }
+
+// The most rows any layout of the model has (joints, a driver per actuator, the pose
+// drivers, two per contact): what the solves may write in lambda.
+int rows_bound(const Model &m) {
+  const int n = m.m + m.na + LEGSIM_MAX_POSE_DRIVERS + 2 * m.nc;
+  return n < kMaxRows ? n : kMaxRows;
+}
 }  // namespace
 
 Snapshot::Snapshot(const Sim &sim)
@@ -36,7 +43,7 @@ Snapshot::Snapshot(const Sim &sim)
     copy_head(acc_aux, d.acc_aux, m.nq);
     for (int k = 0; k < kPredictorOrder; ++k) copy_head(qdd_past[k], d.qdd_past[k], m.nq);
   }
-  lambda = d.lambda;  // whole: the solves of every layout write it
+  copy_head(lambda, d.lambda, rows_bound(m));  // the solves of every layout write it
   std::memcpy(reaction, d.reaction, sizeof(legsim_reaction) * size_t(m.nj));
   for (int a = 0; a < m.na; ++a) {
     act_force[a] = d.act[a].force;
@@ -44,7 +51,7 @@ Snapshot::Snapshot(const Sim &sim)
     stop_time[a] = d.act[a].stop_time;
     stop_length[a] = d.stop_drivers.length[a];
   }
-  for (int k = 0; k < kMaxContacts; ++k) {
+  for (int k = 0; k < m.nc; ++k) {
     contact[k] = d.contact[k];
     stick[k] = d.stop_drivers.stick[k];
   }
@@ -62,7 +69,7 @@ void Snapshot::restore(Sim &sim) const {
   }
   d.past_steps = past_steps;
   d.newton_eta = newton_eta;
-  d.lambda = lambda;
+  copy_head(d.lambda, lambda, rows_bound(m));
   d.report = report;
   std::memcpy(d.reaction, reaction, sizeof(legsim_reaction) * size_t(m.nj));
   for (int a = 0; a < m.na; ++a) {
@@ -73,7 +80,7 @@ void Snapshot::restore(Sim &sim) const {
     d.stop_drivers.rate[a] = d.stop_drivers.accel[a] = 0;
   }
   bool rows_changed = d.stop_mask != stop_mask;
-  for (int k = 0; k < kMaxContacts; ++k) {
+  for (int k = 0; k < m.nc; ++k) {
     rows_changed = rows_changed || d.contact[k].state != contact[k].state;
     d.contact[k] = contact[k];
     d.stop_drivers.stick[k] = stick[k];
@@ -132,7 +139,8 @@ real outputs_sum(const Sim &sim) {
   const Data &d = sim.data;
   const auto sum = [](const real *x, int n) { return Exact ? nan_unless_finite(x, n) : block_sum(x, n); };
   const real o = Exact ? real(0) : real(1);
-  real z = sum(d.lambda.data(), kMaxRows) + sum(&d.reaction[0].force_n[0], 3 * m.nj);  // 3 reals each
+  // the multipliers a caller can read (legsim_multipliers: the joints' rows)
+  real z = sum(d.lambda.data(), m.m) + sum(&d.reaction[0].force_n[0], 3 * m.nj);  // 3 reals each
   z += d.report.residual * o + d.report.condition * o;
   for (int a = 0; a < m.na; ++a) z += d.act[a].force * o + d.act[a].stop_force * o;
   for (int c = 0; c < m.nc; ++c) z += d.contact[c].normal * o + d.contact[c].tangential * o;
