@@ -501,6 +501,45 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
   }
 }
 
+// After an event (the sim at the rest's start, in its new modes): whether an event function
+// of the new modes is predicted to cross within kGaImminent times the rest (s), by each
+// function's rate, from a forward difference over dt_j (one dynamics solve; the functions at
+// their boundary, `fresh`, left out): a new mode that ends soon (a foot whose normal force
+// falls to zero within 23 us of its slip onset) takes the rest in adaptive part steps; any
+// other, one part step, as before. The same solve gives the new modes' jerk (jerk_ok: it
+// could be solved; a mode that cannot be solved a moment on is taken adaptively).
+constexpr real kGaImminent = 2;
+
+[[gnu::noinline]] bool ga_event_imminent(Sim &s, bool stops, EventBits fresh, real rest, VecQ &jerk, bool &jerk_ok) {
+  Data &d = s.data;
+  const Model &m = s.model;
+  const real dt_j = real(1e-4) * s.step_h;
+  EventValues g0;
+  event_values(s, stops, g0);  // (the forces of the state's own solve)
+  VecQ q2, v2, a2;
+  for (int i = 0; i < m.nq; ++i) {
+    q2[i] = d.q[i] + dt_j * d.qd[i] + real(0.5) * dt_j * dt_j * d.qdd[i];
+    v2[i] = d.qd[i] + dt_j * d.qdd[i];
+  }
+  jerk_ok = dynamics_solve(s, d.dyn, q2, v2, a2, false, false, nullptr) == LEGSIM_OK;
+  if (!jerk_ok) return true;
+  for (int i = 0; i < m.nq; ++i) jerk[i] = (a2[i] - d.qdd[i]) / dt_j;
+  real normal[kMaxContacts], tangential[kMaxContacts];
+  contact_forces_of_layout(m, d.dyn, d.lambda, normal, tangential);
+  EventValues g1;
+  for (real &g : g1.g) g = kNoEvent;
+  for (int k = 0; k < m.nc; ++k)
+    for (int j = 0; j < 2; ++j) g1.g[2 * k + j] = event_value(s, k, j, q2, v2, normal[k], tangential[k]);
+  if (stops)
+    for (int a = 0; a < m.na; ++a) stop_values(m, a, q2, nullptr, &g1.g[kActBase + 2 * a]);
+  for (int f = 0; f < kFunctions; ++f) {
+    if (((fresh >> f) & 1u) || !(g0.g[f] > 0 && g0.g[f] < kNoEvent) || !std::isfinite(g1.g[f])) continue;
+    const real fall = g0.g[f] - g1.g[f];  // over dt_j
+    if (fall > 0 && g0.g[f] * dt_j < kGaImminent * rest * fall) return true;
+  }
+  return false;
+}
+
 // One step of h = opt.step_s with its events (contacts, stroke stop arrivals) located inside
 // it: the step taken whole; when an event function of the current modes changed sign over
 // it, the earliest root is located on the step's dense output, the step taken again to the
@@ -523,13 +562,16 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
   // found at once, at round-off), their sign change is taken at its end
   EventBits fresh = 0;
   bool stopped = false;
-  // generalized-alpha after a located event: its part steps adaptive (ga_part_adaptive)
+  // generalized-alpha after a located event whose new modes end soon: its part steps
+  // adaptive (ga_part_adaptive); ga is set when adapt is
   bool adapt = false;
-  real hs_last = h;  // the last part step taken (an adaptive one grows from it)
-  real h_from = 0;   // the history's last sub-step (s) at the part's start; 0 after an event
-  real h_sub = 0;    // the last adaptive part's sub-step (s)
-  VecQ jerk;         // d qdd / dt of the new modes after an event (s^-3 units of q)
-  bool jerk_ok = false;
+  struct {
+    real hs_last;  // the last part step taken (an adaptive one grows from it)
+    real h_from;   // the history's last sub-step (s) at the part's start; 0 after an event
+    real h_sub;    // the last adaptive part's sub-step (s)
+    bool jerk_ok;
+    VecQ jerk;     // d qdd / dt of the new modes after the event
+  } ga;
   legsim_status r = stage_start(s, rk4);
   for (;;) {
     if (r != LEGSIM_OK) return r;
@@ -538,10 +580,10 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
     real hs = h - done;
     if (adapt && parts >= kGaMaxParts) adapt = false;  // the rest whole (a bounded step)
     if (adapt) {
-      hs = std::min(hs, kGaPartGrow * hs_last);
-      r = ga_part_adaptive(s, hs, *from, h_from, jerk_ok ? &jerk : nullptr);
-      hs_last = hs;
-      h_sub = real(0.5) * hs;  // the history's (sub-)step, for the next part or step
+      hs = std::min(hs, kGaPartGrow * ga.hs_last);
+      r = ga_part_adaptive(s, hs, *from, ga.h_from, ga.jerk_ok ? &ga.jerk : nullptr);
+      ga.hs_last = hs;
+      ga.h_sub = real(0.5) * hs;  // the history's (sub-)step, for the next part or step
     } else {
       r = stage_integrate(s, rk4, hs);
     }
@@ -553,7 +595,7 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
       if (r != LEGSIM_OK) return r;
       hs /= 2;
       r = stage_integrate(s, rk4, hs);
-      h_sub = hs;  // (a plain part step: its history's step)
+      if (adapt) ga.h_sub = hs;  // (a plain part step: its history's step)
     }
     const bool partial = hs < h - done;  // the part step ends before the step
     if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
@@ -578,7 +620,7 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
       done += hs;  // the rest of the step from here
       mid.emplace(s);
       from = &*mid;
-      h_from = h_sub;  // the same modes go on (an adaptive part's history rescaled)
+      if (adapt) ga.h_from = ga.h_sub;  // the same modes go on (the history rescaled)
       if (!rk4) {
         d.acc_aux = d.qdd;
         d.past_steps = 0;
@@ -612,7 +654,7 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
     int split = 1;  // the part step to the event's sub-steps (part_integrate)
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
-      r = adapt ? ga_part_restart(s, *from, h_from, he, jerk_ok ? &jerk : nullptr) : part_restart(s, rk4, *from);
+      r = adapt ? ga_part_restart(s, *from, ga.h_from, he, ga.jerk_ok ? &ga.jerk : nullptr) : part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
       if (!(he > tiny_step(h))) break;
       r = adapt ? ga_sub_step(s, he) : part_integrate(s, rk4, he, *from, split);
@@ -668,26 +710,21 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
     if (!rk4) {  // the rest is a part step too
       d.acc_aux = d.qdd;
       d.past_steps = 0;
-      adapt = true;
-      hs_last = h - done;
-      h_from = 0;
-      h_sub = 0;
-      {  // the new modes' jerk, by a forward difference over dt_j (one solve)
-        const real dt_j = real(1e-4) * h;
-        VecQ q2, v2, a2;
-        for (int i = 0; i < s.model.nq; ++i) {
-          q2[i] = d.q[i] + dt_j * d.qd[i] + real(0.5) * dt_j * dt_j * d.qdd[i];
-          v2[i] = d.qd[i] + dt_j * d.qdd[i];
-        }
-        jerk_ok = dynamics_solve(s, d.dyn, q2, v2, a2, false, false, nullptr) == LEGSIM_OK;
-        for (int i = 0; i < s.model.nq; ++i) jerk[i] = (a2[i] - d.qdd[i]) / dt_j;
+      adapt = ga_event_imminent(s, stops, fresh, h - done, ga.jerk, ga.jerk_ok);
+      if (!adapt) {  // the probe's solve wrote over the multipliers: the rest as before
+        mid->restore(s);
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
       }
+      ga.hs_last = h - done;
+      ga.h_from = 0;
+      ga.h_sub = 0;
     }
   }
   if (r != LEGSIM_OK) return r;
-  if (adapt && h_sub > 0) {
+  if (adapt && ga.h_sub > 0) {
     // the next step's history: the auxiliary acceleration of the last sub-step rescaled to h
-    const real f = h / h_sub;
+    const real f = h / ga.h_sub;
     for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
     d.past_steps = 0;
   }
