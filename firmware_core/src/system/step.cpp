@@ -412,16 +412,16 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
 // Generalized-alpha's part steps after a located event in the step. A new mode can be far
 // faster than the step (a sliding foot whose normal force falls to zero within 23 us of its
 // slip onset): one step over it ends past the next event unseen (N growing again, the slip
-// reversed). So after an event each part step is sized by step doubling: halved until one
-// step and two half steps (the history going on between them) agree in the positions and in
-// hs times the velocities to kGaPartTol (m, rad), at most kGaPartHalvings times; the two
-// half steps are taken, Richardson-extrapolated (positions and velocities: the local error
-// of order hs^3 taken off, the difference is far below the positions' scale, so the rows
-// hold to its square). The next part starts at most kGaPartGrow times longer. Only steps
-// with a located event pay; at most kGaMaxParts such parts, then the rest is taken whole.
-// kGaPartTol sits a decade under the Newton tolerance's 1e-10 m: far smaller differences are
-// the iterations' noise, and halving on them runs the parts down to nothing.
-constexpr real kGaPartTol = real(1e-11);
+// reversed). So after an event whose new modes end soon (ga_event_imminent) each part step is
+// sized by step doubling: halved until one step and two half steps (the history going on
+// between them) agree in the positions and in hs times the velocities to kGaPartTol times
+// the Newton tolerance (m, rad; 1e-11 at its default 1e-10), at most kGaPartHalvings times;
+// the two half steps are taken, Richardson-extrapolated (positions and velocities: the local
+// error of order hs^3 taken off; the difference is far below the positions' scale, so the
+// rows hold to its square). The next part starts at most kGaPartGrow times longer; at most
+// kGaMaxParts such parts, then the rest is taken whole. Far smaller differences than the
+// Newton tolerance are the iterations' noise: halving on them runs the parts down to nothing.
+constexpr real kGaPartTol = real(0.1);
 constexpr int kGaPartHalvings = 12;
 constexpr real kGaPartGrow = 4;
 constexpr int kGaMaxParts = 64;
@@ -469,6 +469,7 @@ legsim_status ga_sub_step(Sim &s, real hs) {
 legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_prev, const VecQ *jerk) {
   Data &d = s.data;
   const int nq = s.model.nq;
+  const real tol = kGaPartTol * real(s.opt.newton_tol);
   legsim_status r = ga_part_restart(s, from, h_prev, hs, jerk);
   if (r != LEGSIM_OK) return r;
   r = ga_sub_step(s, hs);
@@ -487,7 +488,7 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
       for (int i = 0; i < nq; ++i)
         change = std::max(change, std::max(std::abs(d.q[i] - coarse[i]), hs * std::abs(d.qd[i] - coarse_v[i])));
     }
-    if (change <= kGaPartTol) {  // (a NaN does not pass)
+    if (change <= tol) {  // (a NaN does not pass)
       for (int i = 0; i < nq; ++i) {
         d.q[i] += (d.q[i] - coarse[i]) / 3;
         d.qd[i] += (d.qd[i] - coarse_v[i]) / 3;
