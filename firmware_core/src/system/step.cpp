@@ -3,6 +3,7 @@
 // contacts' transitions, the stops let go; then time advances. The whole step is one
 // all-or-nothing call: a failed stage leaves the state of the last good step.
 // Dimension-free: the stages call the integrators and the element module's event handlers.
+#include <limits>
 #include <optional>
 
 #include "sim.hpp"
@@ -408,6 +409,138 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
   return r;
 }
 
+// Generalized-alpha's part steps after a located event in the step. A new mode can be far
+// faster than the step (a sliding foot whose normal force falls to zero within 23 us of its
+// slip onset): one step over it ends past the next event unseen (N growing again, the slip
+// reversed). So after an event whose new modes end soon (ga_event_imminent) each part step is
+// sized by step doubling: halved until one step and two half steps (the history going on
+// between them) agree in the positions and in hs times the velocities to kGaPartTol times
+// the Newton tolerance (m, rad; 1e-11 at its default 1e-10), at most kGaPartHalvings times;
+// the two half steps are taken, Richardson-extrapolated (positions and velocities: the local
+// error of order hs^3 taken off; the difference is far below the positions' scale, so the
+// rows hold to its square). The next part starts at most kGaPartGrow times longer; at most
+// kGaMaxParts such parts, then the rest is taken whole. Far smaller differences than the
+// Newton tolerance are the iterations' noise: halving on them runs the parts down to nothing.
+constexpr real kGaPartTol = real(0.1);
+constexpr int kGaPartHalvings = 12;
+constexpr real kGaPartGrow = 4;
+constexpr int kGaMaxParts = 64;
+
+// The part's start again, as the part step first took it (no mode check: stage_start's
+// would take the modes' changes at the step's start time), for a step of h_new. Its
+// auxiliary acceleration (Arnold & Bruls: acc_aux ~ qdd(t + (am - af) h), so acc_aux - qdd
+// ~ (am - af) h qdd'): after an event, qdd + (am - af) h_new jerk (the new modes' jerk); in
+// the same modes as the last (sub-)step of h_prev, its acc_aux - qdd rescaled to h_new. A
+// plain restart (acc_aux = qdd) leaves an O(h_new^2) error in each part's velocities, which
+// the many parts of a fast mode add up.
+legsim_status ga_part_restart(Sim &s, const Snapshot &from, real h_prev, real h_new, const VecQ *jerk) {
+  Data &d = s.data;
+  from.restore(s);
+  const legsim_status r = d.history_valid ? LEGSIM_OK : state_refresh(s);
+  if (r == LEGSIM_OK && h_prev > 0) {
+    const real f = h_new / h_prev;
+    for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
+  } else if (r == LEGSIM_OK && jerk) {
+    const real rho = real(s.opt.rho_inf);
+    const real shift = (rho - 1) / (rho + 1) * h_new;  // (am - af) h_new
+    for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + shift * (*jerk)[i];
+  } else {
+    d.acc_aux = d.qdd;
+  }
+  d.past_steps = 0;
+  return r;
+}
+
+// A generalized-alpha step of hs < h inside a part: the index-3 form turns the Newton
+// iteration's position tolerance into velocities over hs and accelerations over hs^2, so
+// the tolerance shrinks by (hs / h)^2 (the errors as at h), down to 64 round-offs. The
+// iteration's contraction (h^2 K / M) shrinks alike: about one iteration more.
+legsim_status ga_sub_step(Sim &s, real hs) {
+  const double tol = s.opt.newton_tol;
+  const double f = double(hs) / double(s.step_h);
+  s.opt.newton_tol = std::min(tol, std::max(tol * f * f, 64.0 * double(std::numeric_limits<real>::epsilon())));
+  const legsim_status r = stage_integrate(s, false, hs);
+  s.opt.newton_tol = tol;
+  return r;
+}
+
+// One adaptive part step from `from` (see above). hs: the part step asked (in), taken (out);
+// h_prev, jerk: ga_part_restart's.
+legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_prev, const VecQ *jerk) {
+  Data &d = s.data;
+  const int nq = s.model.nq;
+  const real tol = kGaPartTol * real(s.opt.newton_tol);
+  legsim_status r = ga_part_restart(s, from, h_prev, hs, jerk);
+  if (r != LEGSIM_OK) return r;
+  r = ga_sub_step(s, hs);
+  bool coarse_ok = r == LEGSIM_OK;
+  VecQ coarse = d.q, coarse_v = d.qd;
+  for (int halving = 0;; ++halving) {
+    r = ga_part_restart(s, from, h_prev, real(0.5) * hs, jerk);
+    if (r != LEGSIM_OK) return r;
+    legsim_status rf = ga_sub_step(s, real(0.5) * hs);
+    const bool half_ok = rf == LEGSIM_OK;
+    const VecQ half = d.q, half_v = d.qd;
+    if (half_ok) rf = ga_sub_step(s, real(0.5) * hs);
+    real change = real(1e30);  // a failed try (a mode past its domain) halves on
+    if (coarse_ok && rf == LEGSIM_OK) {
+      change = 0;
+      for (int i = 0; i < nq; ++i)
+        change = std::max(change, std::max(std::abs(d.q[i] - coarse[i]), hs * std::abs(d.qd[i] - coarse_v[i])));
+    }
+    if (change <= tol) {  // (a NaN does not pass)
+      for (int i = 0; i < nq; ++i) {
+        d.q[i] += (d.q[i] - coarse[i]) / 3;
+        d.qd[i] += (d.qd[i] - coarse_v[i]) / 3;
+      }
+      return rf;
+    }
+    if (halving == kGaPartHalvings) return rf;  // the halvings ran out: the finest try
+    hs *= real(0.5);
+    coarse = half, coarse_v = half_v;
+    coarse_ok = half_ok;
+  }
+}
+
+// After an event (the sim at the rest's start, in its new modes): whether an event function
+// of the new modes is predicted to cross within kGaImminent times the rest (s), by each
+// function's rate, from a forward difference over dt_j (one dynamics solve; the functions at
+// their boundary, `fresh`, left out): a new mode that ends soon (a foot whose normal force
+// falls to zero within 23 us of its slip onset) takes the rest in adaptive part steps; any
+// other, one part step, as before. The same solve gives the new modes' jerk (jerk_ok: it
+// could be solved; a mode that cannot be solved a moment on is taken adaptively).
+constexpr real kGaImminent = 2;
+
+[[gnu::noinline]] bool ga_event_imminent(Sim &s, bool stops, EventBits fresh, real rest, VecQ &jerk, bool &jerk_ok) {
+  Data &d = s.data;
+  const Model &m = s.model;
+  const real dt_j = real(1e-4) * s.step_h;
+  EventValues g0;
+  event_values(s, stops, g0);  // (the forces of the state's own solve)
+  VecQ q2, v2, a2;
+  for (int i = 0; i < m.nq; ++i) {
+    q2[i] = d.q[i] + dt_j * d.qd[i] + real(0.5) * dt_j * dt_j * d.qdd[i];
+    v2[i] = d.qd[i] + dt_j * d.qdd[i];
+  }
+  jerk_ok = dynamics_solve(s, d.dyn, q2, v2, a2, false, false, nullptr) == LEGSIM_OK;
+  if (!jerk_ok) return true;
+  for (int i = 0; i < m.nq; ++i) jerk[i] = (a2[i] - d.qdd[i]) / dt_j;
+  real normal[kMaxContacts], tangential[kMaxContacts];
+  contact_forces_of_layout(m, d.dyn, d.lambda, normal, tangential);
+  EventValues g1;
+  for (real &g : g1.g) g = kNoEvent;
+  for (int k = 0; k < m.nc; ++k)
+    for (int j = 0; j < 2; ++j) g1.g[2 * k + j] = event_value(s, k, j, q2, v2, normal[k], tangential[k]);
+  if (stops)
+    for (int a = 0; a < m.na; ++a) stop_values(m, a, q2, nullptr, &g1.g[kActBase + 2 * a]);
+  for (int f = 0; f < kFunctions; ++f) {
+    if (((fresh >> f) & 1u) || !(g0.g[f] > 0 && g0.g[f] < kNoEvent) || !std::isfinite(g1.g[f])) continue;
+    const real fall = g0.g[f] - g1.g[f];  // over dt_j
+    if (fall > 0 && g0.g[f] * dt_j < kGaImminent * rest * fall) return true;
+  }
+  return false;
+}
+
 // One step of h = opt.step_s with its events (contacts, stroke stop arrivals) located inside
 // it: the step taken whole; when an event function of the current modes changed sign over
 // it, the earliest root is located on the step's dense output, the step taken again to the
@@ -430,13 +563,31 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
   // found at once, at round-off), their sign change is taken at its end
   EventBits fresh = 0;
   bool stopped = false;
+  // generalized-alpha after a located event whose new modes end soon: its part steps
+  // adaptive (ga_part_adaptive); ga is set when adapt is
+  bool adapt = false;
+  struct {
+    real hs_last;  // the last part step taken (an adaptive one grows from it)
+    real h_from;   // the history's last sub-step (s) at the part's start; 0 after an event
+    real h_sub;    // the last adaptive part's sub-step (s)
+    bool jerk_ok;
+    VecQ jerk;     // d qdd / dt of the new modes after the event
+  } ga;
   legsim_status r = stage_start(s, rk4);
   for (;;) {
     if (r != LEGSIM_OK) return r;
     EventValues g0;
     event_values(s, stops, g0);
     real hs = h - done;
-    r = stage_integrate(s, rk4, hs);
+    if (adapt && parts >= kGaMaxParts) adapt = false;  // the rest whole (a bounded step)
+    if (adapt) {
+      hs = std::min(hs, kGaPartGrow * ga.hs_last);
+      r = ga_part_adaptive(s, hs, *from, ga.h_from, ga.jerk_ok ? &ga.jerk : nullptr);
+      ga.hs_last = hs;
+      ga.h_sub = real(0.5) * hs;  // the history's (sub-)step, for the next part or step
+    } else {
+      r = stage_integrate(s, rk4, hs);
+    }
     // A mode carried far past its event can leave its domain (a sliding foot well past its
     // lift-off: the Newton iteration or the friction's coupling fails): the part step is
     // halved (at most kHalvings times) to find a state before that, from which it goes on.
@@ -445,6 +596,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
       if (r != LEGSIM_OK) return r;
       hs /= 2;
       r = stage_integrate(s, rk4, hs);
+      if (adapt) ga.h_sub = hs;  // (a plain part step: its history's step)
     }
     const bool partial = hs < h - done;  // the part step ends before the step
     if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
@@ -469,6 +621,7 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
       done += hs;  // the rest of the step from here
       mid.emplace(s);
       from = &*mid;
+      if (adapt) ga.h_from = ga.h_sub;  // the same modes go on (the history rescaled)
       if (!rk4) {
         d.acc_aux = d.qdd;
         d.past_steps = 0;
@@ -502,10 +655,10 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     int split = 1;  // the part step to the event's sub-steps (part_integrate)
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
-      r = part_restart(s, rk4, *from);
+      r = adapt ? ga_part_restart(s, *from, ga.h_from, he, ga.jerk_ok ? &ga.jerk : nullptr) : part_restart(s, rk4, *from);
       if (r != LEGSIM_OK) return r;
       if (!(he > tiny_step(h))) break;
-      r = part_integrate(s, rk4, he, *from, split);
+      r = adapt ? ga_sub_step(s, he) : part_integrate(s, rk4, he, *from, split);
       if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
       if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
         rb = he, side = 1;
@@ -558,9 +711,24 @@ legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, in
     if (!rk4) {  // the rest is a part step too
       d.acc_aux = d.qdd;
       d.past_steps = 0;
+      adapt = ga_event_imminent(s, stops, fresh, h - done, ga.jerk, ga.jerk_ok);
+      if (!adapt) {  // the probe's solve wrote over the multipliers: the rest as before
+        mid->restore(s);
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      ga.hs_last = h - done;
+      ga.h_from = 0;
+      ga.h_sub = 0;
     }
   }
   if (r != LEGSIM_OK) return r;
+  if (adapt && ga.h_sub > 0) {
+    // the next step's history: the auxiliary acceleration of the last sub-step rescaled to h
+    const real f = h / ga.h_sub;
+    for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
+    d.past_steps = 0;
+  }
   return stage_contacts(s, stops, d.t + double(h));
 }
 
