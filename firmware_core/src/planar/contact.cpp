@@ -524,9 +524,11 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
   ContactData before[kMaxContacts];
   for (int k = 0; k < m.nc; ++k) before[k] = d.contact[k];
   const uint32_t applied = ev.touchdown | settled;
+  uint32_t turned = 0;  // frictionless slips turned (no event: their event time stays)
   const auto stamp = [&]() {  // the time of each contact's events of this check
     for (int k = 0; k < m.nc; ++k) {
       const ContactData &c = d.contact[k], &b = before[k];
+      if (((turned >> k) & 1u) && c.events == b.events && c.state == b.state) continue;
       if (c.events != b.events || c.state != b.state || c.slip_dir != b.slip_dir || ((applied >> k) & 1u))
         d.contact[k].event_time = at;
     }
@@ -563,6 +565,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
       } else if (c.state == LEGSIM_CONTACT_SLIDING && (ev.stick & bit)) {  // located: v_t reached 0
         if (frictionless) {  // no friction to stop it: it slides on the other way
           c.slip_dir = int8_t(-c.slip_dir);
+          turned |= bit;
           continue;
         }
         c.state = LEGSIM_CONTACT_STUCK;
@@ -604,6 +607,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
         if (!(vt * real(c.slip_dir) < 0) || (((stuck_again | slipped) >> k) & 1u)) continue;
         if (frictionless) {
           c.slip_dir = int8_t(sign_of(vt));
+          turned |= bit;
           continue;
         }
         c.state = LEGSIM_CONTACT_STUCK;

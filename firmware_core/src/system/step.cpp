@@ -425,6 +425,7 @@ constexpr real kGaPartTol = real(0.1);
 constexpr int kGaPartHalvings = 12;
 constexpr real kGaPartGrow = 4;
 constexpr int kGaMaxParts = 64;
+constexpr real kGaMaxRescale = 64;  // the history rescaled to h from a sub-step of >= h / 64
 
 // The part's start again, as the part step first took it (no mode check: stage_start's
 // would take the modes' changes at the step's start time), for a step of h_new. Its
@@ -553,7 +554,8 @@ constexpr real kGaImminent = 2;
   const real h = s.step_h;
   const bool contacts = s.model.nc > 0;
   real done = 0;  // the part of the step taken, s
-  int located = 0, parts = 0;
+  int located = 0, parts = 0;  // parts: halved part steps (kMaxParts)
+  int ga_parts = 0;             // generalized-alpha's adaptive parts (kGaMaxParts), apart
   bool locate = true;  // false once the events are deferred to the step's end
   std::optional<Snapshot> mid;  // the rest's start, after an event
   const Snapshot *from = &start;
@@ -579,7 +581,7 @@ constexpr real kGaImminent = 2;
     EventValues g0;
     event_values(s, stops, g0);
     real hs = h - done;
-    if (adapt && parts >= kGaMaxParts) adapt = false;  // the rest whole (a bounded step)
+    if (adapt && ga_parts >= kGaMaxParts) adapt = false;  // the rest whole (a bounded step)
     if (adapt) {
       hs = std::min(hs, kGaPartGrow * ga.hs_last);
       r = ga_part_adaptive(s, hs, *from, ga.h_from, ga.jerk_ok ? &ga.jerk : nullptr);
@@ -617,7 +619,10 @@ constexpr real kGaImminent = 2;
       if (stops && past) r = stroke_limits_enforce(s, stopped, done + hs);
       if (r == LEGSIM_OK && stopped) r = state_refresh(s);
       if (r != LEGSIM_OK || !partial) break;
-      ++parts;
+      if (adapt)
+        ++ga_parts;
+      else
+        ++parts;
       done += hs;  // the rest of the step from here
       mid.emplace(s);
       from = &*mid;
@@ -711,7 +716,7 @@ constexpr real kGaImminent = 2;
     if (!rk4) {  // the rest is a part step too
       d.acc_aux = d.qdd;
       d.past_steps = 0;
-      adapt = ga_event_imminent(s, stops, fresh, h - done, ga.jerk, ga.jerk_ok);
+      adapt = ga_parts < kGaMaxParts && ga_event_imminent(s, stops, fresh, h - done, ga.jerk, ga.jerk_ok);
       if (!adapt) {  // the probe's solve wrote over the multipliers: the rest as before
         mid->restore(s);
         d.acc_aux = d.qdd;
@@ -724,9 +729,12 @@ constexpr real kGaImminent = 2;
   }
   if (r != LEGSIM_OK) return r;
   if (adapt && ga.h_sub > 0) {
-    // the next step's history: the auxiliary acceleration of the last sub-step rescaled to h
+    // the next step's history: the auxiliary acceleration of the last sub-step rescaled to h;
+    // from a sub-step far shorter than h (a late event, halvings run out) that difference is
+    // mostly the Newton iteration's noise, which the rescale would blow up: a restart instead
     const real f = h / ga.h_sub;
-    for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
+    for (int i = 0; i < s.model.nq; ++i)
+      d.acc_aux[i] = f <= kGaMaxRescale ? d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f : d.qdd[i];
     d.past_steps = 0;
   }
   return stage_contacts(s, stops, d.t + double(h));
