@@ -470,7 +470,12 @@ legsim_status ga_sub_step(Sim &s, real hs) {
 legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_prev, const VecQ *jerk) {
   Data &d = s.data;
   const int nq = s.model.nq;
-  const real tol = kGaPartTol * real(s.opt.newton_tol);
+  // the difference asked, and never below what the coordinates' round-off allows (a float
+  // build's 1e-7 m would be below a rounding step of a coordinate past 1 m: no try passes)
+  real qmax = 0;
+  for (int i = 0; i < nq; ++i) qmax = std::max(qmax, std::abs(from.q[i]));
+  const real tol = std::max(kGaPartTol * real(s.opt.newton_tol),
+                            real(64) * std::numeric_limits<real>::epsilon() * (1 + qmax));
   legsim_status r = ga_part_restart(s, from, h_prev, hs, jerk);
   if (r != LEGSIM_OK) return r;
   r = ga_sub_step(s, hs);
