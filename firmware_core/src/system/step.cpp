@@ -434,13 +434,19 @@ constexpr real kGaMaxRescale = 64;  // the history rescaled to h from a sub-step
 // the same modes as the last (sub-)step of h_prev, its acc_aux - qdd rescaled to h_new. A
 // plain restart (acc_aux = qdd) leaves an O(h_new^2) error in each part's velocities, which
 // the many parts of a fast mode add up.
+// The history's acc_aux - qdd (about (am - af) h qdd') carried from a step of h_old to one
+// of f h_old.
+void ga_history_rescale(Sim &s, real f) {
+  Data &d = s.data;
+  for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
+}
+
 legsim_status ga_part_restart(Sim &s, const Snapshot &from, real h_prev, real h_new, const VecQ *jerk) {
   Data &d = s.data;
   from.restore(s);
   const legsim_status r = d.history_valid ? LEGSIM_OK : state_refresh(s);
   if (r == LEGSIM_OK && h_prev > 0) {
-    const real f = h_new / h_prev;
-    for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
+    ga_history_rescale(s, h_new / h_prev);
   } else if (r == LEGSIM_OK && jerk) {
     const real rho = real(s.opt.rho_inf);
     const real shift = (rho - 1) / (rho + 1) * h_new;  // (am - af) h_new
@@ -738,8 +744,10 @@ constexpr real kGaImminent = 2;
     // from a sub-step far shorter than h (a late event, halvings run out) that difference is
     // mostly the Newton iteration's noise, which the rescale would blow up: a restart instead
     const real f = h / ga.h_sub;
-    for (int i = 0; i < s.model.nq; ++i)
-      d.acc_aux[i] = f <= kGaMaxRescale ? d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f : d.qdd[i];
+    if (f <= kGaMaxRescale)
+      ga_history_rescale(s, f);
+    else
+      d.acc_aux = d.qdd;
     d.past_steps = 0;
   }
   return stage_contacts(s, stops, d.t + double(h));
