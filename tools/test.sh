@@ -5,7 +5,7 @@
 #      (on vcan0 here, or in a throwaway QEMU VM when the kernel has no CAN),
 #   2. the C tests through CTest (Unity, the model and CLI tests, the Cortex-M
 #      images under QEMU),
-#   3. every other Python test through pytest (the SocketCAN ones are deselected
+#   3. every other Python test through pytest, one worker per core (pytest-xdist; the SocketCAN ones are deselected
 #      there: they ran in 1).
 # One line per test as it finishes. A test that skips fails the run
 # (LEGSIM_NO_SKIP=1, tests/conftest.py; for CTest: a test that did not run):
@@ -65,7 +65,9 @@ stage "socketcan (vcan0)" test-socketcan.log \
 stage ctest test-ctest.log ctest --preset host
 ignore=()
 for t in "${socketcan_tests[@]}"; do ignore+=(--ignore="$t"); done
-stage pytest test-pytest.log "$py" -m pytest "${pytest_args[@]}" tests "${ignore[@]}"
+# on the host's cores (pytest-xdist, one worker per core): the tests share no files but
+# their own tmp_path and out/hil_scenes/, which they only read
+stage pytest test-pytest.log "$py" -m pytest "${pytest_args[@]}" -n auto tests "${ignore[@]}"
 
 echo "== test: summary"
 printf '  %s\n' "${summary[@]}"
