@@ -149,6 +149,18 @@ legsim_status rk4_step(Sim &sim, real h) {
       // projected q1 (Phi and the Jacobian serve below, its gamma is at zero velocity)
       s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project, true);
       if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
+#if LEGSIM_KERNELS_REDUCED
+      // The rest in the reduced system as a step that needed no position projection (its
+      // velocity projection, derivative, multipliers, reactions; the same to round-off): at
+      // coarse steps every step gets here. Where it cannot (force elements act on projected
+      // velocities), on with the general sequence from the rows at the projected q1.
+      if (reduced_available(lay)) {
+        real drift;
+        if (dynamics_end(sim, plan, q1, v1, d.qdd, reaction, tol, true, d.report.residual, drift) == LEGSIM_OK &&
+            d.report.residual <= tol && drift <= tol)
+          return rk4_finish(sim, false);
+      }
+#endif
       gamma_ready = false;
     }
     s = factor_build(lay, d.rows, m.minv, d.factor);
