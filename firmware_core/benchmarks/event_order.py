@@ -10,7 +10,8 @@ touchdown to 1e-13 s of sqrt(2 d / g)).
 
 Per case, integrator and h it prints: the error at the case's fixed time after the event
 (max over the 39 coordinates, m and rad), the whole run's max error on the 2 ms grid, the
-observed order log2(e(2h) / e(h)), and the step at whose end the core reports each event
+observed order log2(e(2h) / e(h)) (and, after the table, the least-squares order over the
+step sizes whose error is above the reference's own tolerance), and the step at whose end the core reports each event
 (the core reports no event time: the event lies in the step that ends there, so its delay
 is in [0, h)) beside the reference's event time, and the error over the first event's delay
 and its square (constant when the error is first or second order in the delay: an event
@@ -242,6 +243,25 @@ def run_core(case, integrator, h, ref):
     return errs[-1], max(errs), events, lost
 
 
+FIT_FLOOR = 1e-13  # m, rad: the reference's atol
+
+
+def order_fits(rows):
+    """[(case, integrator, points, least-squares order, smallest pairwise order)] over the
+    rows' step sizes whose error at the fixed time is at least FIT_FLOOR (at least 3 of them)."""
+    out = []
+    for key in dict.fromkeys((r[0], r[1]) for r in rows):
+        pts = [(math.log(r[2]), math.log(r[3])) for r in rows if (r[0], r[1]) == key and r[3] >= FIT_FLOOR]
+        if len(pts) < 3:
+            continue
+        mx = sum(x for x, _ in pts) / len(pts)
+        my = sum(y for _, y in pts) / len(pts)
+        slope = sum((x - mx) * (y - my) for x, y in pts) / sum((x - mx) ** 2 for x, _ in pts)
+        worst = min((b[1] - a[1]) / (b[0] - a[0]) for a, b in zip(pts, pts[1:]))
+        out.append((key[0], key[1], len(pts), slope, worst))
+    return out
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--cases", default="touchdown,liftoff,slip,stop,none")
@@ -291,6 +311,15 @@ def main():
     print("|---|---|---|---|---|---|---|---|---|---|")
     for name, integ, h, e_end, e_max, order, core_ev, delay, ratio in rows:
         print(f"| {name} | {integ} | {h:g} | {e_end:.3e} | {e_max:.3e} | {order} | {core_ev} | {delay} | {ratio} |")
+    fits = order_fits(rows)
+    if fits:
+        print(f"\nOrder over the range: the least-squares slope of log(error at the fixed time) on log(h), "
+              f"over the step sizes whose error is at least {FIT_FLOOR:g} (the reference's own absolute "
+              "tolerance: below it the difference is the reference's):\n")
+        print("| case | integrator | step sizes fitted | order (fit) | smallest pairwise order |")
+        print("|---|---|---|---|---|")
+        for name, integ, n, slope, worst in fits:
+            print(f"| {name} | {integ} | {n} | {slope:.2f} | {worst:.2f} |")
     if energy:
         print("\nTouchdown energy, 1 cm level drop, h = 1 ms:\n")
         print("| integrator | kinetic energy the impulse takes (J) | energy lost, E(0) - E(after) (J) | "
