@@ -497,7 +497,7 @@ class Kernel:
         o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
         return o
 
-    def accelerations_locals(self, lval):
+    def accelerations_locals(self, lval, reactions=True):
         """dynamics_solve's steps after the factor (with the rows' locals): b = J M^-1 Q - gamma,
         lambda from the factor (lval: "L" its locals, "a" the array), qdd = M^-1 (Q - J^T
         lambda), the joints' reactions where asked, and the status (qdd not finite:
@@ -511,7 +511,8 @@ class Kernel:
         for n in range(nq):
             o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
             o.append(f"  z += qdd[{n}] * real(0);")
-        o += self.reactions_locals()
+        if reactions:
+            o += self.reactions_locals()
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         return o
 
@@ -664,10 +665,28 @@ class Kernel:
         if reduced and reduced.pinned:
             o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
         fused = f"{sym}_accelerations, {sym}_end" if reduced and reduced.pinned else "nullptr, nullptr"
+        stage = "nullptr"
+        if not (reduced and reduced.pinned):
+            # else dynamics' solve for RK4's stages, in the stage copies (FMA): qdd and the
+            # multipliers alone, its sin/cos without the cache's memory (grid_trig: a value
+            # an FMA copy computed is never read by another path)
+            o.append("#if LEGSIM_KERNEL_STAGE_COPY")
+            o.append(f"LEGSIM_STAGE_TARGETS legsim_status {sym}_stage(const Model &model, "
+                     "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
+                     "TrigCache *trig, VecR &lambda, VecQ &qdd) {")
+            o.append("  const real *w = model.minv;")
+            o += self.rows_locals(trig="grid_trig")
+            o.append("  " + " ".join(f"(void)phi{i};" for i in range(m)) + "  // the acceleration level: no Phi")
+            o.append("  real max_diag = 0;")
+            o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
+            o += self.accelerations_locals("L", reactions=False)
+            o.append("}")
+            o.append("#endif\n")
+            stage = f"LEGSIM_KERNEL_STAGE({sym}_stage)"
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
-                                                    fused)
+                                                    fused, stage)
 
-    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr"):
+    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr", stage="nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -682,7 +701,7 @@ class Kernel:
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, "
                  f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}, "
-                 f"{reduced}}};")
+                 f"{reduced}, {stage}}};")
         return "\n".join(o) + "\n"
 
 
@@ -991,6 +1010,11 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
          "#define LEGSIM_KERNEL_NEWTON(f) f",
          "#else",
          "#define LEGSIM_KERNEL_NEWTON(f) nullptr",
+         "#endif",
+         "#if LEGSIM_KERNEL_STAGE_COPY",
+         "#define LEGSIM_KERNEL_STAGE(f) f",
+         "#else",
+         "#define LEGSIM_KERNEL_STAGE(f) nullptr",
          "#endif", "", "namespace legsim {",
          "namespace {", ""]
     for sym, k in kernels:

@@ -42,12 +42,16 @@
 #define LEGSIM_KERNEL_TARGETS __attribute__((target_clones("avx", "default")))
 #if LEGSIM_KERNEL_FMA
 #define LEGSIM_STAGE_TARGETS __attribute__((target_clones("arch=x86-64-v3", "avx", "default")))
+#define LEGSIM_KERNEL_STAGE_COPY 1  // Kernel::stage: a structure without a reduced system
 #else
 #define LEGSIM_STAGE_TARGETS LEGSIM_KERNEL_TARGETS
 #endif
 #else
 #define LEGSIM_KERNEL_TARGETS
 #define LEGSIM_STAGE_TARGETS
+#endif
+#ifndef LEGSIM_KERNEL_STAGE_COPY
+#define LEGSIM_KERNEL_STAGE_COPY 0
 #endif
 
 namespace legsim {
@@ -147,6 +151,13 @@ struct Kernel {
                        const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
                        bool project, real &residual, real &drift, real &condition, VecR &lambda,
                        VecQ &qdd, legsim_reaction *reaction);
+  // RK4's stage solve where no reduced system serves (the robot): dynamics' solve in the
+  // stage copies (LEGSIM_STAGE_TARGETS, FMA), qdd and lambda alone, the same to round-off,
+  // not bit for bit; its sin/cos without the cache's memory (grid_trig), so no other path
+  // reads a value it computed. Statuses as dynamics'. nullptr where the stage copies are not
+  // built (dynamics serves).
+  legsim_status (*stage)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+                         const VecQ &force, TrigCache *trig, VecR &lambda, VecQ &qdd);
 };
 
 // Whether RK4's solves on layout take the reduced system (dynamics_stage, dynamics_end: the

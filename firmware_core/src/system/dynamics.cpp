@@ -82,6 +82,14 @@ legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q
                          q, qd, qdd);
   }
 #endif
+  if (const Kernel *kern = layout.path.dynamics; kern && kern->stage) {
+    Data &d = sim.data;
+    layout_forces(sim, layout, q, qd);
+    const legsim_status s =
+        kern->stage(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, stage_trig(d), d.lambda, qdd);
+    if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
+    return s;
+  }
   return dynamics_solve(sim, layout, q, qd, qdd, false, false);
 }
 
