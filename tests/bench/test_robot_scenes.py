@@ -353,7 +353,8 @@ def test_sliding_configuration_slides_the_law_s_foot(name, law, foot):
 
 
 # ---- scenes that start off the stance, set their ground, switch on an event (issue 22 section 3) ----
-@pytest.mark.parametrize("name", ["robot_drop_1cm", "robot_throw", "robot_land_switch", "robot_slope_steep"])
+@pytest.mark.parametrize("name", ["robot_drop_1cm", "robot_throw", "robot_land_switch", "robot_slope_steep",
+                                  "robot_fold_stop"])
 def test_event_scenes_meet_their_checks_in_legsim_cli(name):
     sc, out, ev = _bench(name)
     assert ev.passed, [(r.name, r.error, r.detail) for r in ev.results if not r.passed]

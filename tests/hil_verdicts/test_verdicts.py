@@ -107,3 +107,17 @@ def test_a_command_switches_in_the_exchange_after_its_foot_lands():
     after = {v for k, v in sent if k >= td}
     assert td == 46 and len(before) == 1 and len(after) == 1
     assert after.pop() - before.pop() == pytest.approx(0.02, abs=1e-6)
+
+
+def test_a_stroke_stop_arrives_over_can_in_the_step_that_holds_it(capsys):
+    """robot_fold_stop over CAN: the left lower (robot actuator 3: leg 1's St_StrokeMask bit 1)
+    reaches its stroke minimum in the step 84 .. 85 ms, where the reference puts it (84.07 ms),
+    and in no other sample; the verdict's arrival check names it (test_robot_stop_arrivals: the
+    check fails a missing, late, misplaced or extra arrival)."""
+    path = _recording_path("robot_fold_stop")
+    hits = [(s["step"], s["stroke_mask"], s["status"] & (1 << 3 | 1 << 4))
+            for s in load_recording(path)["samples"] if s["stroke_mask"] or s["status"] & (1 << 3 | 1 << 4)]
+    assert hits == [(85, 1 << 3, 1 << 3)]
+    assert bench_main(["check", str(path), "--no-plots"]) == 0
+    assert "stroke stop arrivals in the step that holds the reference's: 1 arrivals: left.lower stroke_min " \
+           "at 0.084071 s" in capsys.readouterr().out

@@ -35,6 +35,8 @@ EVENT_NAMES = ("stroke_min", "stroke_max", "force_saturated", "near_singular", "
                "events_deferred", "event_inexact")
 # the contact transitions of a robot (docs/design/robot-on-ground.md section 8)
 CONTACT_EVENTS = EVENT_NAMES[4:10]
+# an actuator's arrival at its stroke's end
+STROKE_EVENTS = EVENT_NAMES[0:2]
 
 
 # ---- checks -------------------------------------------------------------------------------
@@ -348,7 +350,8 @@ def robot_events_checks(ev, scene: Scene, d: dict, feet, bodies, tol_check, wher
                         sent: bool = False):
     """[checks] events: the run against robot_events_reference, until a switch's event: the
     contact states at every sample, every reference event in the sample whose step holds it
-    (its foot's own events per_foot, else the sample's), no other contact event, positions,
+    (its foot's own events per_foot, else the sample's), no other contact event, every stroke
+    stop's arrival likewise (_stroke_arrivals_check, from what the source carries), positions,
     angles and ground forces."""
     results, t, h = ev.results, d["t"], scene.step_s
     try:
@@ -374,18 +377,7 @@ def robot_events_checks(ev, scene: Scene, d: dict, feet, bodies, tol_check, wher
     missing, extra, found = [], [], []
     in_run = [e for e in r.events if 1e-12 < e.t <= t[n - 1] + 1e-12 and e.t <= t_sw]
     ref_ev = [e for e in in_run if e.foot >= 0]       # the contacts' (a stop's has foot -1)
-    if not per_foot:   # the CLI's samples carry the stroke events too (CAN's: the feet's alone)
-        stroke = ("stroke_min", "stroke_max")
-        ref_stops = [e for e in in_run if e.kind in stroke]
-        s_missing = [f"actuator {e.actuator} {e.kind} at {e.t:.6f} s" for e in ref_stops
-                     if e.kind not in d["events"][min(int(np.searchsorted(t, e.t - 1e-12)), len(t) - 1)]]
-        s_extra = [f"{kind} at t = {t[i]:g} s" for i in range(1, n) for kind in set(d["events"][i]) & set(stroke)
-                   if not any(e.kind == kind and t[i - 1] < e.t + 1e-12 <= t[i] + 2e-12 for e in ref_stops)]
-        results.append(CheckResult("stroke stop arrivals in the step that holds the reference's",
-                                   not s_missing and not s_extra, float(len(s_missing) + len(s_extra)), None,
-                                   "events", "", "; ".join([x + " missing" for x in s_missing] +
-                                                           [x + " (not in the reference)" for x in s_extra])
-                                   or f"{len(ref_stops)} arrivals"))
+    results.append(_stroke_arrivals_check(scene, d, [e for e in in_run if e.kind in STROKE_EVENTS], n))
     for e in ref_ev:
         i = int(np.searchsorted(t, e.t - 1e-12))
         if i >= len(t) or e.kind not in got(i, e.foot):
@@ -416,6 +408,33 @@ def robot_events_checks(ev, scene: Scene, d: dict, feet, bodies, tol_check, wher
     return ev
 
 
+def _stroke_arrivals_check(scene: Scene, d: dict, ref_stops, n: int) -> CheckResult:
+    """Every stop arrival of the reference (stroke_min, stroke_max) in the sample whose step
+    holds its time, and no arrival in a step that holds none. A sample says what its source
+    carries (robot_arrays, robot_can_arrays): the kinds of the arrivals since the previous
+    sample, stroke_kinds, and which actuators arrived, stroke_actuators (None: the source does
+    not say, legsim_cli's; over CAN St_StrokeMask, whose kinds are the sample's)."""
+    t, kinds, acts = d["t"], d["stroke_kinds"], d["stroke_actuators"]
+    names = scene.actuator_names
+    missing, extra, found = [], [], []
+    for e in ref_stops:
+        i = min(int(np.searchsorted(t, e.t - 1e-12)), len(t) - 1)
+        what = f"{names[e.actuator]} {e.kind} at {e.t:.6f} s"
+        if e.kind in kinds[i] and (acts[i] is None or e.actuator in acts[i]):
+            found.append(what)
+        else:
+            missing.append(f"{what} not in the sample at {t[i]:g} s")
+    for i in range(1, n):
+        here = [e for e in ref_stops if t[i - 1] < e.t + 1e-12 <= t[i] + 2e-12]
+        extra += [f"{kind} at t = {t[i]:g} s" for kind in sorted(kinds[i]) if kind not in {e.kind for e in here}]
+        extra += [f"{names[a]} at t = {t[i]:g} s" for a in sorted(acts[i] or ())
+                  if a not in {e.actuator for e in here}]
+    return CheckResult("stroke stop arrivals in the step that holds the reference's", not missing and not extra,
+                       float(len(missing) + len(extra)), None, "events", "",
+                       "; ".join(missing + [x + " (not in the reference)" for x in extra]) or
+                       f"{len(ref_stops)} arrivals" + (": " + "; ".join(found) if found else ""))
+
+
 def robot_arrays(out: dict) -> dict:
     """The CLI's robot samples as arrays: t, q (N, 3 nb), forces, lengths (N, na), reactions
     (N, nj, 3), normal, tangential (N, nc), state (N, nc) names, feet (N, nc, 2), residual,
@@ -435,6 +454,8 @@ def robot_arrays(out: dict) -> dict:
                            for s in S])
     d["residual"] = np.array([num(s["residual"]) for s in S], float)
     d["events"] = [tuple(s.get("events", ())) for s in S]
+    d["stroke_kinds"] = [frozenset(e) & frozenset(STROKE_EVENTS) for e in d["events"]]
+    d["stroke_actuators"] = [None] * len(S)     # legsim_cli names the kinds, not the actuators
     d["impulse"] = np.stack([per("impulse_n"), per("impulse_t")], axis=-1)
     return d
 

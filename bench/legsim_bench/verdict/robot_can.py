@@ -16,6 +16,10 @@ that follow from the bus:
   legsim_cli) plus 2^-24 times the largest |value| of its kind (positions, angles, forces); a
   displacement or drift, the difference of two rounded values, gets twice that.
 
+Stroke stops' arrivals come per actuator (St_StrokeMask) with the kinds of the sample's arrivals
+(St_Status STROKE_MIN, STROKE_MAX): each must be in the sample whose step holds the reference's
+arrival of that actuator, as legsim_cli's (which names the kinds alone).
+
 Contact events come per foot (Ct_Events: the core's legsim_contact_event_mask of that foot over
 every step since the previous sample), so the contact-state sequence is checked foot by foot:
 every change of a foot's state between two samples comes with that foot's event, and a foot
@@ -35,6 +39,7 @@ from . import analyses as an
 from .result import CheckResult, Evaluation
 
 F32_REL = 2.0 ** -24   # float32 round to nearest: |fl(x) - x| <= 2^-24 |x|
+STROKE_STATUS = {"stroke_min": 1 << 3, "stroke_max": 1 << 4}   # St_Status bits (can/README.md)
 
 __all__ = ["evaluate_robot_can", "robot_can_arrays", "can_reference", "float32_allowance", "F32_REL",
            "CHANGE_EVENTS"]
@@ -59,7 +64,9 @@ def robot_can_arrays(rec: dict) -> dict:
     t, step, q (N, 39), forces, lengths (N, 4), reactions (N, 16, 3), normal, tangential (N, 2),
     state (N, 2) names, feet (N, 2, 2), impulse (N, 2, 2) the last impact's (normal, tangential),
     residual, foot_events (N, 2) sets of names, events
-    (N tuples: both feet's, as legsim_cli's one list per sample)."""
+    (N tuples: both feet's, as legsim_cli's one list per sample), the stroke stops' arrivals
+    since the previous sample: stroke_kinds (N sets of stroke_min, stroke_max) and
+    stroke_actuators (N sets of actuator indices)."""
     S = rec["samples"]
     n = len(S)
     C = [s.get("contacts") or [] for s in S]
@@ -78,6 +85,11 @@ def robot_can_arrays(rec: dict) -> dict:
     d["state"] = np.array([[c[k]["state"] for k in range(nc)] for c in C]).reshape(n, nc)
     d["foot_events"] = [[frozenset(c[k]["events"]) for k in range(nc)] for c in C]
     d["events"] = [tuple(sorted(set().union(*fe))) if fe else () for fe in d["foot_events"]]
+    # the stops' arrivals: St_Status' STROKE_MIN / STROKE_MAX are the robot's (both legs send the
+    # same bits), St_StrokeMask each leg's actuators (the bench puts leg k's at bits 2k, 2k + 1)
+    d["stroke_kinds"] = [frozenset(k for k, bit in STROKE_STATUS.items() if s["status"] & bit) for s in S]
+    d["stroke_actuators"] = [frozenset(a for a in range(d["lengths"].shape[1]) if s["stroke_mask"] >> a & 1)
+                             for s in S]
     return d
 
 
