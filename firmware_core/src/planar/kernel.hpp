@@ -30,7 +30,7 @@
 // needs in two-operand SSE2, and its loops take four doubles at a time; neither copy has
 // FMA, so both give the same values bit for bit (tests/core/test_kernels.c checks the
 // copy in use against the general path).
-// RK4's stages (LEGSIM_STAGE_TARGETS: the reduced solve and the stage loops), which agree
+// RK4's stages (LEGSIM_STAGE_TARGETS: the reduced solve, Kernel::stage and the stage loops), which agree
 // with the general path to round-off only anyway, also come in an x86-64-v3 copy (AVX2
 // and FMA, any x86-64 CPU since about 2015; LEGSIM_KERNEL_FMA) that fuses a * b + c where
 // it can (-ffp-contract=fast on these files; only that copy has FMA instructions): one

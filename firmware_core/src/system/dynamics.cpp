@@ -82,6 +82,7 @@ legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q
                          q, qd, qdd);
   }
 #endif
+#if LEGSIM_KERNEL_STAGE_COPY
   if (const Kernel *kern = layout.path.dynamics; kern && kern->stage) {
     Data &d = sim.data;
     layout_forces(sim, layout, q, qd);
@@ -90,6 +91,7 @@ legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q
     if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
     return s;
   }
+#endif
   return dynamics_solve(sim, layout, q, qd, qdd, false, false);
 }
 
