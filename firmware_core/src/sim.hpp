@@ -154,6 +154,7 @@ struct Layout {
     const Kernel *newton;    // Kernel::newton, generalized-alpha's Newton iteration
     const Kernel *factored;  // Kernel::factored, the solve with a given factor
     const Kernel *reduced;   // Kernel::accelerations and Kernel::end, RK4 in the reduced system
+    const Kernel *stage;     // Kernel::accelerations, RK4's stages (with or without Kernel::end)
   } path;
 };
 

@@ -349,7 +349,6 @@ class Kernel:
         velocities, velocity(n) for coordinate n, default qd[n], with "v"). No contacts with
         part. trig: the function that gives a body's pair (sim.hpp: body_trig, or grid_trig
         without its memory)."""
-        assert part is None or not self.contacts
         vel = velocity or (lambda n: f"qd[{n}]")
         o = []
         used = sorted({b for j in self.joints for b in j["body"] if b >= 0})
@@ -379,23 +378,30 @@ class Kernel:
             o += self.joint_locals(n, j, r, part)
             r += NROWS[j["kind"]]
         for k, c in enumerate(self.contacts):
-            o += self.contact_locals(k, c["body"], r)
+            o += self.contact_locals(k, c["body"], r, part)
             r += 2
         return o
 
     @staticmethod
-    def contact_locals(k, b, r):
+    def contact_locals(k, b, r, part=None):
         """A stuck contact's two rows from contact_row (rows.hpp), as the general path sums
         them (rows_eval: onto 0): the gap along the ground's normal, the offset along its
-        tangent from the stick point."""
+        tangent from the stick point. part: as joint_locals' (the unit called in each part,
+        its gamma taken in "v", once the pose has its velocity)."""
         o = [f"  // contact {k}: stuck, rows {r}.."]
         for e, row, target in (("ground_n", r, "real(0)"), ("ground_t", r + 1, f"dv.stick[{k}]")):
-            o.append(f"  real phi{row}, gam{row}, " + ", ".join(f"c{row}_0_{x}" for x in range(3)) + ";")
+            if part != "v":
+                o.append(f"  real phi{row}, " + ", ".join(f"c{row}_0_{x}" for x in range(3)) + ";")
+            if part != "q":
+                o.append(f"  real gam{row};")
             o.append("  {  // (a block of its own: joint_locals says why)")
             o.append("    ContactRow C;")
             o.append(f"    contact_row(model.contact[{k}].point, model.ground_point, model.{e}, {target}, real(1), pose{b}, C);")
-            o.append(f"    phi{row} = real(0) + C.phi, gam{row} = real(0) + C.gamma;")
-            o.append("    " + " ".join(f"c{row}_0_{x} = C.coef[{x}];" for x in range(3)))
+            if part != "v":
+                o.append(f"    phi{row} = real(0) + C.phi;")
+                o.append("    " + " ".join(f"c{row}_0_{x} = C.coef[{x}];" for x in range(3)))
+            if part != "q":
+                o.append(f"    gam{row} = real(0) + C.gamma;")
             o.append("  }")
         return o
 
@@ -497,7 +503,7 @@ class Kernel:
         o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
         return o
 
-    def accelerations_locals(self, lval, reactions=True):
+    def accelerations_locals(self, lval):
         """dynamics_solve's steps after the factor (with the rows' locals): b = J M^-1 Q - gamma,
         lambda from the factor (lval: "L" its locals, "a" the array), qdd = M^-1 (Q - J^T
         lambda), the joints' reactions where asked, and the status (qdd not finite:
@@ -511,8 +517,7 @@ class Kernel:
         for n in range(nq):
             o.append(f"  qdd[{n}] = w[{n}] * (force[{n}] - ({self.jt_expr(n, lambda i: f'l{i}', True)}));")
             o.append(f"  z += qdd[{n}] * real(0);")
-        if reactions:
-            o += self.reactions_locals()
+        o += self.reactions_locals()
         o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         return o
 
@@ -662,31 +667,18 @@ class Kernel:
         o.append("}\n")
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
         reduced = Reduced(self) if self.reduced else None
+        # (a structure without a pinned body, as the robot's, gets the stage solve alone: its
+        # end is dynamics', which keeps the rows and the factor the contacts' problems read)
+        if reduced:
+            o += reduced.emit_accelerations(sym)
         if reduced and reduced.pinned:
-            o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
-        fused = f"{sym}_accelerations, {sym}_end" if reduced and reduced.pinned else "nullptr, nullptr"
-        stage = "nullptr"
-        if not (reduced and reduced.pinned):
-            # else dynamics' solve for RK4's stages, in the stage copies (FMA): qdd and the
-            # multipliers alone, its sin/cos without the cache's memory (grid_trig: a value
-            # an FMA copy computed is never read by another path)
-            o.append("#if LEGSIM_KERNEL_STAGE_COPY")
-            o.append(f"LEGSIM_STAGE_TARGETS legsim_status {sym}_stage(const Model &model, "
-                     "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force, "
-                     "TrigCache *trig, VecR &lambda, VecQ &qdd) {")
-            o.append("  const real *w = model.minv;")
-            o += self.rows_locals(trig="grid_trig")
-            o.append("  " + " ".join(f"(void)phi{i};" for i in range(m)) + "  // the acceleration level: no Phi")
-            o.append("  real max_diag = 0;")
-            o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
-            o += self.accelerations_locals("L", reactions=False)
-            o.append("}")
-            o.append("#endif\n")
-            stage = f"LEGSIM_KERNEL_STAGE({sym}_stage)"
+            o += reduced.emit_accelerations(sym, end=True)
+        fused = ("nullptr, nullptr" if not reduced else f"{sym}_accelerations, {sym}_end" if reduced.pinned
+                 else f"{sym}_accelerations, nullptr")
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
-                                                    fused, stage)
+                                                    fused)
 
-    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr", stage="nullptr"):
+    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -701,7 +693,7 @@ class Kernel:
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, "
                  f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}, "
-                 f"{reduced}, {stage}}};")
+                 f"{reduced}}};")
         return "\n".join(o) + "\n"
 
 
@@ -781,7 +773,8 @@ class Reduced(Kernel):
             o = [f"LEGSIM_STAGE_TARGETS legsim_status {sym}_accelerations(const Model &model, "
                  "[[maybe_unused]] const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &base, "
                  "Data &data, bool actuators, TrigCache *trig, VecQ &qdd) {"]
-        o.append("  const real *w = model.minv, *mass = model.mass;")
+        o.append("  const real *w = model.minv;")
+        o.append("  [[maybe_unused]] const real *mass = model.mass;  // (the pins' terms)")
         # a pinned body on its angle alone (rows.hpp's pin units)
         pinned_w = [f"  const real wr{b} = pin_inverse_inertia(mass + {3 * b}, XY{{sax{n}, say{n}}});  // body {b} on its pin (joint {n})"
                     for b, (n, r) in sorted(self.pinned.items())]
@@ -1010,11 +1003,6 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
          "#define LEGSIM_KERNEL_NEWTON(f) f",
          "#else",
          "#define LEGSIM_KERNEL_NEWTON(f) nullptr",
-         "#endif",
-         "#if LEGSIM_KERNEL_STAGE_COPY",
-         "#define LEGSIM_KERNEL_STAGE(f) f",
-         "#else",
-         "#define LEGSIM_KERNEL_STAGE(f) nullptr",
          "#endif", "", "namespace legsim {",
          "namespace {", ""]
     for sym, k in kernels:

@@ -30,7 +30,7 @@
 // needs in two-operand SSE2, and its loops take four doubles at a time; neither copy has
 // FMA, so both give the same values bit for bit (tests/core/test_kernels.c checks the
 // copy in use against the general path).
-// RK4's stages (LEGSIM_STAGE_TARGETS: the reduced solve, Kernel::stage and the stage loops), which agree
+// RK4's stages (LEGSIM_STAGE_TARGETS: the reduced solve and the stage loops), which agree
 // with the general path to round-off only anyway, also come in an x86-64-v3 copy (AVX2
 // and FMA, any x86-64 CPU since about 2015; LEGSIM_KERNEL_FMA) that fuses a * b + c where
 // it can (-ffp-contract=fast on these files; only that copy has FMA instructions): one
@@ -42,16 +42,12 @@
 #define LEGSIM_KERNEL_TARGETS __attribute__((target_clones("avx", "default")))
 #if LEGSIM_KERNEL_FMA
 #define LEGSIM_STAGE_TARGETS __attribute__((target_clones("arch=x86-64-v3", "avx", "default")))
-#define LEGSIM_KERNEL_STAGE_COPY 1  // Kernel::stage: a structure without a reduced system
 #else
 #define LEGSIM_STAGE_TARGETS LEGSIM_KERNEL_TARGETS
 #endif
 #else
 #define LEGSIM_KERNEL_TARGETS
 #define LEGSIM_STAGE_TARGETS
-#endif
-#ifndef LEGSIM_KERNEL_STAGE_COPY
-#define LEGSIM_KERNEL_STAGE_COPY 0
 #endif
 
 namespace legsim {
@@ -122,14 +118,16 @@ struct Kernel {
   legsim_status (*factored)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                             const VecQ &force, TrigCache *trig, const real *a, VecR &lambda, VecQ &qdd,
                             legsim_reaction *reaction);
-  // RK4's stage solve: the accelerations qdd alone of a system of the joint rows alone, in
-  // fewer rows: every body pinned to the frame by one revolute joint keeps its angle alone
-  // (its pin's rows and multipliers drop out; kernel_codegen.py's Reduced says how). The
+  // RK4's stage solve: the accelerations qdd alone of a system of the joint rows alone (a
+  // stance kernel's: and its stuck contacts' rows), in fewer rows where a body is pinned to
+  // the frame by one revolute joint: it keeps its angle alone (its pin's rows and
+  // multipliers drop out; kernel_codegen.py's Reduced says how; a structure without such a
+  // body, as the robot, keeps all its rows, and gains the stage copies and the forces). The
   // same accelerations as dynamics' to round-off, not bit for bit; no multipliers, rows,
   // factor or condition estimate. LEGSIM_ERR_SINGULAR on a pivot <= kPivotFloor times the
   // whole J M^-1 J^T's largest diagonal entry (dynamics' floor: both paths order the pin
   // rows so that the reduced pivots are the whole factor's later ones), LEGSIM_ERR_DIVERGED
-  // (qdd not finite). nullptr for a structure without such a body (dynamics serves).
+  // (qdd not finite). nullptr where not generated (dynamics serves).
   // The applied forces: base (gravity and the force elements, applied_forces' without the
   // actuators) and, with actuators, each actuator's axial force from its command
   // (actuator_force: its force and events into data) from the solve's own sin/cos (grid_trig,
@@ -151,13 +149,6 @@ struct Kernel {
                        const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
                        bool project, real &residual, real &drift, real &condition, VecR &lambda,
                        VecQ &qdd, legsim_reaction *reaction);
-  // RK4's stage solve where no reduced system serves (the robot): dynamics' solve in the
-  // stage copies (LEGSIM_STAGE_TARGETS, FMA), qdd and lambda alone, the same to round-off,
-  // not bit for bit; its sin/cos without the cache's memory (grid_trig), so no other path
-  // reads a value it computed. Statuses as dynamics'. nullptr where the stage copies are not
-  // built (dynamics serves).
-  legsim_status (*stage)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
-                         const VecQ &force, TrigCache *trig, VecR &lambda, VecQ &qdd);
 };
 
 // Whether RK4's solves on layout take the reduced system (dynamics_stage, dynamics_end: the
@@ -167,6 +158,18 @@ struct Kernel {
 inline bool reduced_available(const Layout &layout) {
 #if LEGSIM_KERNELS_REDUCED
   return layout.path.reduced != nullptr;  // chosen when the layout was built (layout_path)
+#else
+  (void)layout;
+  return false;
+#endif
+}
+// Whether RK4's stages on layout take Kernel::accelerations (dynamics_stage): where
+// reduced_available, and on a structure without a pinned body (the robot), whose kernel has
+// the stage solve alone: its end is the fused dynamics solve, which keeps the rows and the
+// factor of the state (the contacts' problems read them).
+inline bool stage_available(const Layout &layout) {
+#if LEGSIM_KERNELS_REDUCED
+  return layout.path.stage != nullptr;
 #else
   (void)layout;
   return false;
@@ -187,10 +190,10 @@ struct StagePlan {
 };
 inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
   StagePlan p{&layout, nullptr, nullptr, nullptr, false};
-  if (!reduced_available(layout)) return p;
+  if (!stage_available(layout)) return p;
   const uint32_t disable = layout_disable(sim, layout);
   if (force_elements_act(sim, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
-  p.kernel = layout.path.reduced;
+  p.kernel = layout.path.stage;
   p.dv = layout.stops ? &sim.data.stop_drivers : &sim.data.drivers;
   p.base = &sim.model.gravity_force;
   p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);

@@ -75,21 +75,11 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
 
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
 #if LEGSIM_KERNELS_REDUCED
-  if (reduced_available(layout)) {
+  if (stage_available(layout)) {
     bool actuators, elements;
     const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
-    return reduced_stage(sim, *layout.path.reduced, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
+    return reduced_stage(sim, *layout.path.stage, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
                          q, qd, qdd);
-  }
-#endif
-#if LEGSIM_KERNEL_STAGE_COPY
-  if (const Kernel *kern = layout.path.dynamics; kern && kern->stage) {
-    Data &d = sim.data;
-    layout_forces(sim, layout, q, qd);
-    const legsim_status s =
-        kern->stage(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, d.force_q, stage_trig(d), d.lambda, qdd);
-    if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
-    return s;
   }
 #endif
   return dynamics_solve(sim, layout, q, qd, qdd, false, false);
