@@ -154,7 +154,6 @@ struct Layout {
     const Kernel *newton;    // Kernel::newton, generalized-alpha's Newton iteration
     const Kernel *factored;  // Kernel::factored, the solve with a given factor
     const Kernel *reduced;   // Kernel::accelerations and Kernel::end, RK4 in the reduced system
-    const Kernel *stage;     // Kernel::accelerations, RK4's stages (with or without Kernel::end)
   } path;
 };
 
@@ -528,6 +527,9 @@ inline bool force_elements_act(const Sim &sim, uint32_t disable) {
 // decided once.
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
+// The same, and d.factor that of J M^-1 J^T at the state (rows in d.rows) for a caller that
+// reads it (the contacts' Delassus matrix): RK4's reduced end keeps none, so it is built then.
+legsim_status dynamics_state_factored(Sim &sim);
 // The friction of the sliding contacts of layout (contact.cpp): y += sign * sum_i f_i
 // lambda[row_i], f_i the generalized friction force per unit normal multiplier (dir mu_k
 // G_t^T, at q); friction_column: f_i of contact k, its body's kBodyDof entries.

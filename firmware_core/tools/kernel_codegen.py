@@ -667,14 +667,10 @@ class Kernel:
         o.append("}\n")
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
         reduced = Reduced(self) if self.reduced else None
-        # (a structure without a pinned body, as the robot's, gets the stage solve alone: its
-        # end is dynamics', which keeps the rows and the factor the contacts' problems read)
+        # (a structure without a pinned body, as the robot's: on all its rows)
         if reduced:
-            o += reduced.emit_accelerations(sym)
-        if reduced and reduced.pinned:
-            o += reduced.emit_accelerations(sym, end=True)
-        fused = ("nullptr, nullptr" if not reduced else f"{sym}_accelerations, {sym}_end" if reduced.pinned
-                 else f"{sym}_accelerations, nullptr")
+            o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
+        fused = f"{sym}_accelerations, {sym}_end" if reduced else "nullptr, nullptr"
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
                                                     fused)
 

@@ -345,7 +345,7 @@ legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uin
       d.stop_drivers.stick[k] = saved_stick[k];
     }
     legsim_status s = stops_layout(sim);
-    return s == LEGSIM_OK ? dynamics_state_update(sim) : s;
+    return s == LEGSIM_OK ? dynamics_state_factored(sim) : s;
   };
   for (int i = 0; i < n; ++i) {  // every closed contact stuck where it is, for W and b
     ContactData &c = d.contact[idx[i]];
@@ -356,7 +356,7 @@ legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uin
     d.stop_drivers.stick[idx[i]] = m.ground_t.dot(p - m.ground_point);
   }
   legsim_status s = stops_layout(sim);
-  if (s == LEGSIM_OK) s = dynamics_state_update(sim);
+  if (s == LEGSIM_OK) s = dynamics_state_factored(sim);
   if (s != LEGSIM_OK) return s;
   const Layout &lay = d.dyn;
   int row[2 * kMaxContacts];  // the rows of d.dyn of contact i: normal 2i, tangential 2i+1

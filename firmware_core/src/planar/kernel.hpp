@@ -163,18 +163,6 @@ inline bool reduced_available(const Layout &layout) {
   return false;
 #endif
 }
-// Whether RK4's stages on layout take Kernel::accelerations (dynamics_stage): where
-// reduced_available, and on a structure without a pinned body (the robot), whose kernel has
-// the stage solve alone: its end is the fused dynamics solve, which keeps the rows and the
-// factor of the state (the contacts' problems read them).
-inline bool stage_available(const Layout &layout) {
-#if LEGSIM_KERNELS_REDUCED
-  return layout.path.stage != nullptr;
-#else
-  (void)layout;
-  return false;
-#endif
-}
 
 // RK4's solves of one step on a layout (dynamics_stage, dynamics_end): what stays the same
 // from solve to solve, decided once (stage_plan): where the reduced system serves and its
@@ -190,10 +178,10 @@ struct StagePlan {
 };
 inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
   StagePlan p{&layout, nullptr, nullptr, nullptr, false};
-  if (!stage_available(layout)) return p;
+  if (!reduced_available(layout)) return p;
   const uint32_t disable = layout_disable(sim, layout);
   if (force_elements_act(sim, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
-  p.kernel = layout.path.stage;
+  p.kernel = layout.path.reduced;
   p.dv = layout.stops ? &sim.data.stop_drivers : &sim.data.drivers;
   p.base = &sim.model.gravity_force;
   p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);

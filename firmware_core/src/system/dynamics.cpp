@@ -75,10 +75,10 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
 
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
 #if LEGSIM_KERNELS_REDUCED
-  if (stage_available(layout)) {
+  if (reduced_available(layout)) {
     bool actuators, elements;
     const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
-    return reduced_stage(sim, *layout.path.stage, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
+    return reduced_stage(sim, *layout.path.reduced, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
                          q, qd, qdd);
   }
 #endif
@@ -155,6 +155,18 @@ void stop_forces_update(Sim &sim) {
 }
 
 legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }
+
+legsim_status dynamics_state_factored(Sim &sim) {
+  legsim_status s = dynamics_state_update(sim);
+#if LEGSIM_KERNELS_REDUCED
+  Data &d = sim.data;
+  if (s == LEGSIM_OK && sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(d.dyn)) {
+    rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
+    s = factor_build(d.dyn, d.rows, sim.model.minv, d.factor);
+  }
+#endif
+  return s;
+}
 
 legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
   Data &d = sim.data;

@@ -225,10 +225,8 @@ void layout_path(Layout &out) {
   out.path.factored = whole && k->factored ? k : nullptr;
 #if LEGSIM_KERNELS_REDUCED
   out.path.reduced = whole && k->accelerations && k->end ? k : nullptr;
-  out.path.stage = whole && k->accelerations ? k : nullptr;
 #else
   out.path.reduced = nullptr;  // a build without them leaves their callers out too
-  out.path.stage = nullptr;
 #endif
 }
 
