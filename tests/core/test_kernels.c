@@ -6,10 +6,13 @@
  * stop: a row after the kernel's block, a saturating servo with a foot load, gravity off)
  * and the robot (feet stuck; on slippery ground, where a foot slides and one lifts off).
  * The general path factors the joint block in the kernel's order, so the two agree bit
- * for bit here, except RK4 on the leg: its stages and its end solve the kernel's reduced
- * system (the bodies pinned to the frame on their angles alone), which agrees to round-off
- * (7.3e-12 relative over 1 s on the stop, where the multipliers of a stiff servo amplify
- * it). The tolerances allow for round-off only. */
+ * for bit here, except RK4: its stages and its end solve the kernel's reduced system (on the
+ * leg the bodies pinned to the frame on their angles alone; on the robot all its rows) in
+ * another copy (FMA), which agrees to round-off (7.3e-12 relative over 1 s on the leg's stop,
+ * where the multipliers of a stiff servo amplify it). The tolerances allow for round-off
+ * only, and the sliding robot's RK4 run is compared until the paths first take different
+ * contact modes after an ambiguous or inconsistent mode choice (a pick that round-off can
+ * turn either way). */
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
@@ -127,36 +130,47 @@ static void same_scene(enum scene sc, legsim_integrator integ, const char *name)
   static double a[1024], b[1024];
   double worst = 0;
   uint32_t events = 0;
-  /* RK4's stages in the reduced or stage solves (FMA): round-off grows over
-   * 1,000 steps, and more through located contact events (their roots found to 1e-7 h) */
+  /* RK4's stages and end in the reduced system (FMA): round-off grows over 1,000 steps,
+   * and more through located contact events (their roots found to 1e-7 h) */
   const int rk4 = integ == LEGSIM_INTEGRATOR_RK4;
-  const double tol = rk4 ? (sc == ROBOT_SLIDING ? 1e-9 : 1e-10) : 1e-12;
+  const double tol = rk4 ? (sc == ROBOT_SLIDING ? 1e-8 : 1e-10) : 1e-12;
+  /* where several contact modes are consistent (CONTACT_AMBIGUOUS) or none is
+   * (CONTACT_INCONSISTENT: the fallback rule's) the pick goes by values that round-off can
+   * order either way: once either run reported one, the sliding robot's RK4 comparison ends
+   * (passing) at the first step where the two runs differ; before, any difference fails */
+  const int picks_count = rk4 && sc == ROBOT_SLIDING;
+  uint32_t picks = 0;
   int step = 0;
   for (; step < 1000; ++step) {
     const legsim_status sk = legsim_step(k, 1), sg = legsim_step(g, 1);
-    /* where several contact modes are consistent (CONTACT_AMBIGUOUS) or none is
-     * (CONTACT_INCONSISTENT: the fallback rule's) the pick goes by values that round-off can
-     * order either way: RK4's comparison ends at the first such step */
     legsim_report rk, rg;
     legsim_get_report(k, &rk);
     legsim_get_report(g, &rg);
-    if (rk4 && ((rk.events | rg.events) & (LEGSIM_EVENT_CONTACT_AMBIGUOUS | LEGSIM_EVENT_CONTACT_INCONSISTENT))) break;
+    picks |= (rk.events | rg.events) & (LEGSIM_EVENT_CONTACT_AMBIGUOUS | LEGSIM_EVENT_CONTACT_INCONSISTENT);
+    const int n = outputs(k, a), ng = outputs(g, b);
+    double step_worst = 0;
+    int at = 0;
+    for (int i = 0; i < n && n == ng; ++i) {
+      const double d = fabs(a[i] - b[i]) / (1 + fabs(b[i]));
+      if (!(d <= step_worst)) step_worst = d, at = i;
+    }
+    const int differ = sk != sg || n != ng || !(step_worst <= tol);
+    if (differ && picks_count && picks) break;
     TEST_ASSERT_EQUAL_INT(sg, sk);
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, sk);
-    const int n = outputs(k, a);
-    TEST_ASSERT_EQUAL_INT(n, outputs(g, b));
-    for (int i = 0; i < n; ++i) {
-      const double d = fabs(a[i] - b[i]) / (1 + fabs(b[i]));
-      worst = d > worst ? d : worst;
-      if (!(d <= tol)) {
-        printf("%s: step %d, output %d: kernel %.17g, general %.17g\n", name, step, i, a[i], b[i]);
-        TEST_FAIL();
-      }
+    TEST_ASSERT_EQUAL_INT(n, ng);
+    if (!(step_worst <= tol)) {
+      printf("%s: step %d, output %d: kernel %.17g, general %.17g\n", name, step, at, a[at], b[at]);
+      TEST_FAIL();
     }
+    worst = step_worst > worst ? step_worst : worst;
     events |= (uint32_t)a[n - 3];
   }
   printf("%s: %d steps, largest relative difference %.3g, events 0x%x\n", name, step, worst, events);
-  TEST_ASSERT_TRUE(step >= 700);
+  if (picks_count)
+    TEST_ASSERT_TRUE(step >= 700);
+  else
+    TEST_ASSERT_EQUAL_INT(1000, step);
   if (sc == LEG_ON_STOP) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_STROKE_MIN);
   if (sc == ROBOT_SLIDING) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_STICK_TO_SLIP);
   if (sc == LEG_LOADED || sc == LEG_WEIGHTLESS) TEST_ASSERT_TRUE(events & LEGSIM_EVENT_FORCE_SATURATED);

@@ -1,7 +1,7 @@
 // RK4's end of a step in the reduced system (Kernel::end through dynamics_end, kernel.hpp)
 // against the general path's sequence at the same state (rk4_step's: project, then
 // dynamics_solve), on the revolute and slot legs under a force command, a servo and with
-// gravity off: velocities off J qd = 0 by a known amount are projected M-weighted in the
+// gravity off, and on the robot on stuck feet (no pinned body: all its rows): velocities off J qd = 0 by a known amount are projected M-weighted in the
 // whole system by project (linear_solve.cpp), and the end's own projection, in the reduced
 // system where each pinned body keeps its angle alone, must give the same velocities,
 // accelerations, multipliers and reactions to round-off. Also what the end leaves alone:
@@ -14,6 +14,10 @@
 #include "legsim/legsim.h"
 #include "legsim/models.h"
 #include "unity.h"
+#if __has_include("legsim/robot_models.h")
+#include "legsim/robot_models.h"
+#define HAVE_ROBOT 1
+#endif
 
 void setUp(void) {}
 void tearDown(void) {}
@@ -27,7 +31,7 @@ using namespace legsim;
 
 alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[64 * 1024];
 constexpr real kTol = 1e-10;  // the default options' newton_tol
-constexpr int NJ = 8;         // the leg's joints
+constexpr int NJ = LEGSIM_MAX_JOINTS;
 
 // How a scene drives the leg from its stand pose (RK4).
 enum Drive { PUSH_50N, SERVO, PUSH_WEIGHTLESS };
@@ -58,6 +62,28 @@ Sim &moving_leg(const legsim_model_desc *model = &legsim_model_leg_revolute, Dri
   TEST_ASSERT_TRUE((stage_plan(s, s.data.dyn).kernel != nullptr) == (drive != PUSH_WEIGHTLESS));
   return s;
 }
+
+#ifdef HAVE_ROBOT
+// The robot on stuck feet (its stance: joint and contact rows, no pinned body, all its rows
+// in the "reduced" system), three servos holding and the Fig. 7 push, after n steps.
+Sim &moving_robot(int n = 200) {
+  legsim_options opt = legsim_default_options();
+  opt.integrator = LEGSIM_INTEGRATOR_RK4;
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &legsim_model_robot_revolute, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, nullptr, 0.0));
+  legsim_real len[LEGSIM_MAX_ACTUATORS];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, len, nullptr));
+  for (int a = 1; a < 4; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 185.55));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
+  Sim &s = *reinterpret_cast<Sim *>(sim);
+  TEST_ASSERT_TRUE_MESSAGE(reduced_available(s.data.dyn), "the robot's stance layout has the reduced solves");
+  TEST_ASSERT_EQUAL_INT(2, s.model.nc);
+  return s;
+}
+#endif
 
 // v + 1e-6 m/s (rad/s) times a fixed pattern: off J v = 0 by about that much
 VecQ drifted(const VecQ &v, int n) {
@@ -138,6 +164,9 @@ void test_projects_as_the_whole_system_slot(void) {
 void test_projects_as_the_whole_system_servo(void) {
   projects_as_the_whole_system(moving_leg(&legsim_model_leg_revolute, SERVO), "leg, servo");
 }
+#ifdef HAVE_ROBOT
+void test_projects_as_the_whole_system_robot(void) { projects_as_the_whole_system(moving_robot(), "robot, stuck feet"); }
+#endif
 void test_projects_as_the_whole_system_weightless(void) {
   projects_as_the_whole_system(moving_leg(&legsim_model_leg_revolute, PUSH_WEIGHTLESS), "leg, 50 N, no gravity");
 }
@@ -194,6 +223,9 @@ int main(void) {
   RUN_TEST(test_projects_as_the_whole_system_slot);
   RUN_TEST(test_projects_as_the_whole_system_servo);
   RUN_TEST(test_projects_as_the_whole_system_weightless);
+#ifdef HAVE_ROBOT
+  RUN_TEST(test_projects_as_the_whole_system_robot);
+#endif
   RUN_TEST(test_leaves_alone_unless_it_solves);
   RUN_TEST(test_no_projection_under_force_elements);
   return UNITY_END();

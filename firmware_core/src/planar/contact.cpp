@@ -345,7 +345,7 @@ legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uin
       d.stop_drivers.stick[k] = saved_stick[k];
     }
     legsim_status s = stops_layout(sim);
-    return s == LEGSIM_OK ? dynamics_state_factored(sim) : s;
+    return s == LEGSIM_OK ? dynamics_state_update(sim) : s;  // (its factor is read by no one)
   };
   for (int i = 0; i < n; ++i) {  // every closed contact stuck where it is, for W and b
     ContactData &c = d.contact[idx[i]];

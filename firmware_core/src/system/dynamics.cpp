@@ -92,6 +92,7 @@ legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ 
   const Layout &layout = *plan.layout;
   bool actuators = plan.actuators, elements = false;
   const VecQ &base = plan.kernel ? *plan.base : reduced_base(sim, layout, q, qd, actuators, elements);
+  d.factor.of_state = false;  // it keeps no factor: whatever d.factor holds is not this state's
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.path.reduced->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
                             stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
