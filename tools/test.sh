@@ -5,8 +5,8 @@
 #      (on vcan0 here, or in a throwaway QEMU VM when the kernel has no CAN),
 #   2. the C tests through CTest (Unity, the model and CLI tests, the Cortex-M
 #      images under QEMU),
-#   3. every other Python test through pytest, one worker per core (pytest-xdist; the SocketCAN ones are deselected
-#      there: they ran in 1).
+#   3. every other Python test through pytest, one worker per core (pytest-xdist;
+#      the SocketCAN ones are deselected there: they ran in 1).
 # One line per test as it finishes. A test that skips fails the run
 # (LEGSIM_NO_SKIP=1, tests/conftest.py; for CTest: a test that did not run):
 # set-up installs every dependency, so a skip here means something is missing.

@@ -527,8 +527,8 @@ inline bool force_elements_act(const Sim &sim, uint32_t disable) {
 // decided once.
 legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
 legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
-// The same, and d.factor that of J M^-1 J^T at the state (rows in d.rows) for a caller that
-// reads it (the contacts' Delassus matrix): RK4's reduced end keeps none, so it is built then.
+// The same, with d.rows and d.factor (J M^-1 J^T) those of the state, for a caller that reads
+// the factor (the contacts' Delassus matrix): the solve that keeps them, never RK4's reduced end.
 legsim_status dynamics_state_factored(Sim &sim);
 // The friction of the sliding contacts of layout (contact.cpp): y += sign * sum_i f_i
 // lambda[row_i], f_i the generalized friction force per unit normal multiplier (dir mu_k
@@ -544,7 +544,9 @@ void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of
 // lambda and reactions at the current state; the accelerations go to qdd
 // factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within
 // the Newton tolerance, near) the current q; only the rows are evaluated anew.
-legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready = false);
+// keep_factor: Data::rows and Data::factor left those of the state (not RK4's reduced end,
+// which keeps neither: dynamics_state_factored).
+legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready = false, bool keep_factor = false);
 
 // ---- assembly.cpp ----
 // Project: the per-step projection (stroke stops too): cheap, no polishing, no

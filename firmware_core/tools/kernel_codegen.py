@@ -346,8 +346,8 @@ class Kernel:
         step further): its pair from that body's by the angle-sum formulas with the small
         difference e (truncation below e^4 / 24 < 5e-18 for |e| < 1e-4; the TrigCache past
         that). part: as joint_locals' (the sin/cos and the positions with "q"; the
-        velocities, velocity(n) for coordinate n, default qd[n], with "v"). No contacts with
-        part. trig: the function that gives a body's pair (sim.hpp: body_trig, or grid_trig
+        velocities, velocity(n) for coordinate n, default qd[n], with "v"; a stuck contact's
+        rows likewise, contact_locals). trig: the function that gives a body's pair (sim.hpp: body_trig, or grid_trig
         without its memory)."""
         vel = velocity or (lambda n: f"qd[{n}]")
         o = []

@@ -158,23 +158,16 @@ void stop_forces_update(Sim &sim) {
 legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }
 
 legsim_status dynamics_state_factored(Sim &sim) {
-  legsim_status s = dynamics_state_update(sim);
-#if LEGSIM_KERNELS_REDUCED
-  Data &d = sim.data;
-  if (s == LEGSIM_OK && sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(d.dyn)) {
-    rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
-    s = factor_build(d.dyn, d.rows, sim.model.minv, d.factor);
-  }
-#endif
-  return s;
+  return dynamics_state_reactions(sim, sim.data.qdd, false, true);
 }
 
-legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready) {
+legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready, bool keep_factor) {
+  (void)keep_factor;  // (a build without the reduced solves always keeps them)
   Data &d = sim.data;
   const Layout &lay = d.dyn;
   const Kernel *kern = lay.path.factored;
 #if LEGSIM_KERNELS_REDUCED
-  if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay)) {
+  if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay) && !keep_factor) {
     // RK4's restart as its step's end, in the reduced system: the same solve whatever came
     // before (a changed command alone or not), so a refused call changes no later result
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
