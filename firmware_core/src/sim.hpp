@@ -294,6 +294,10 @@ struct Data {
 #endif
   Factor factor;
   bool end_projected;  // RK4: the last step's end needed projecting (its next end takes the general sequence)
+  // generalized-alpha: its last step ended in the generated end solve (Kernel::end_factored),
+  // which left the end state's reactions and forces: generalized_alpha_reactions, right
+  // after it, takes them. Whatever changes q or qd in between clears it.
+  bool end_solved;
   DriverValues drivers;
   VecQ force_q;  // generalized applied forces Q
   VecQ tq[4], tv[3];

@@ -671,10 +671,17 @@ class Kernel:
         if reduced:
             o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
         fused = f"{sym}_accelerations, {sym}_end" if reduced else "nullptr, nullptr"
+        # generalized-alpha's end on the Newton iteration's factor: where the reduced system
+        # is the whole one (no pinned body: the factor's order and storage are the same)
+        if reduced and not reduced.pinned:
+            o += ["#if LEGSIM_WITH_GENERALIZED_ALPHA"] + reduced.emit_end_factored(sym) + ["#endif"]
+            fused += f", LEGSIM_KERNEL_NEWTON({sym}_end_factored)"
+        else:
+            fused += ", nullptr"
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
                                                     fused)
 
-    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr"):
+    def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr, nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
         o.append(f"const int8_t {sym}_joint[][3] = {{{sig}}};")
@@ -879,6 +886,69 @@ class Reduced(Kernel):
         else:
             o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
+        return o
+
+    def emit_end_factored(self, sym):
+        """{sym}_end_factored (Kernel::end_factored): generalized-alpha's end of a step, end's
+        work on the factor given (a: the last Newton iteration's, at an iterate within tol of
+        q, by position) instead of its own: |J qd| (drift), the velocities projected where it
+        is past tol, once more where the first pass (on a factor not q's own) leaves it past
+        tol (the general path's two passes), then qdd, every row's multiplier and the joints'
+        reactions. For a structure without a pinned body only (its reduced system is the
+        whole one, in the same order)."""
+        assert not self.pinned
+        k, nq = self.full, 3 * self.nb
+        o = [f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_end_factored(const Model &model, "
+             "[[maybe_unused]] const DriverValues &dv, const VecQ &q, VecQ &qd, const VecQ &base, "
+             "Data &data, bool actuators, TrigCache *trig, const real *a, real tol, real &drift, VecR &lambda, "
+             "VecQ &qdd, legsim_reaction *reaction) {"]
+        o.append("  const real *w = model.minv;")
+        o += k.rows_locals(part="q")
+        o.append("  " + " ".join(f"(void)phi{i};" for i in range(k.m)) + "  // the velocity level: no Phi")
+        o.append("  real " + ", ".join(f"V{n} = qd[{n}]" for n in range(nq)) + ";  // projected below")
+        drift = ["  r = 0;"]
+        for i in range(k.m):
+            drift.append(f"  jv = std::abs({k.j_expr(i, lambda n: f'V{n}', True)});")
+            drift.append("  r = jv > r ? jv : r;")
+        o.append("  real r, jv;")
+        o += drift
+        o.append("  const bool projected = !(r <= tol);")
+        for npass in range(2):
+            o.append("  if (!(r <= tol)) {  // " + ("a pass" if npass == 0 else "a second pass"))
+            o += ["  " + x for x in self.pass_locals()]
+            o += ["  " + x for x in drift]
+            o.append("  }")
+        o.append("  drift = r;")
+        o += k.rows_locals(part="v", velocity=lambda n: f"V{n}")
+        o += self.forces_locals() + self.defs_g + self.t_locals()
+        o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
+              for i in range(self.m)]
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{self.orig[i]}", lval="a")
+        o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
+        for n in range(nq):
+            o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({self.jt_expr(n, lambda i: f'l{self.orig[i]}', True)}));")
+            o.append(f"  z += qdd[{n}] * real(0);")
+        o += [f"  lambda[{i}] = l{i};" for i in range(k.m)]
+        o += k.reactions_locals()
+        o.append("  if (!(z == z)) return LEGSIM_ERR_DIVERGED;")
+        o.append("  if (projected) {  // the state's velocities now")
+        o.append("    " + " ".join(f"qd[{n}] = V{n};" for n in range(nq)))
+        o.append("  }")
+        o.append("  return LEGSIM_OK;")
+        o.append("}\n")
+        return o
+
+    def pass_locals(self):
+        """One pass of the velocities' projection onto J V = 0 on the factor a (project's, in
+        linear_solve.cpp: V -= W J^T (J W J^T)^-1 J V), a structure without a pinned body."""
+        o = ["  {"]
+        o += [f"    const real pc{i} = {self.j_expr(i, lambda n: f'V{n}', True)};" for i in range(self.m)]
+        o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}", lval="a")]
+        for n in range(3 * self.nb):
+            jt = self.jt_expr(n, lambda i: f"py{i}", True)
+            if jt != "0":
+                o.append(f"    V{n} -= w[{n}] * ({jt});")
+        o.append("  }")
         return o
 
     def t_locals(self):

@@ -131,7 +131,7 @@ void projects_as_the_whole_system(Sim &s, const char *scene) {
   legsim_reaction reaction_end[NJ];
   real residual = -1, drift = -1;
   d.lambda.setZero();
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, lay), q, v_end, qdd_end, reaction_end, kTol, true,
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, lay), q, v_end, qdd_end, s.data.lambda, reaction_end, kTol, true,
                                                 residual, drift));
   TEST_ASSERT_TRUE(residual <= kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, drift);  // projected
@@ -181,7 +181,7 @@ void test_leaves_alone_unless_it_solves(void) {
   VecQ v_end = v, qdd;
   qdd.setConstant(7);
   real residual, drift;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q, v_end, qdd, nullptr, kTol, false,
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q, v_end, qdd, d.lambda, nullptr, kTol, false,
                                                 residual, drift));
   TEST_ASSERT_TRUE(residual <= kTol);
   TEST_ASSERT_TRUE(drift > 100 * kTol);
@@ -191,7 +191,7 @@ void test_leaves_alone_unless_it_solves(void) {
   // positions off Phi = 0 (1e-6 m on the foot's link): rk4_step's sequence, not the end
   VecQ q_off = q;
   q_off[15] += real(1e-6);
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q_off, v_end, qdd, nullptr, kTol, true,
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q_off, v_end, qdd, d.lambda, nullptr, kTol, true,
                                                 residual, drift));
   TEST_ASSERT_TRUE(residual > kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
@@ -211,7 +211,7 @@ void test_no_projection_under_force_elements(void) {
   const VecQ q = d.q, v = drifted(d.qd, n);
   VecQ v_end = v, qdd;
   real residual, drift;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, plan, q, v_end, qdd, nullptr, kTol, true, residual, drift));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, plan, q, v_end, qdd, s.data.lambda, nullptr, kTol, true, residual, drift));
   TEST_ASSERT_TRUE(drift > 100 * kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
 }

@@ -53,6 +53,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.assembled = false;
   state_changed(d);
   d.end_projected = false;
+  d.end_solved = false;
   d.factor.of_state = false;
   d.q.setZero();
   d.qd.setZero();

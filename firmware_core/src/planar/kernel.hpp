@@ -149,6 +149,17 @@ struct Kernel {
                        const VecQ &base, Data &data, bool actuators, TrigCache *trig, real tol,
                        bool project, real &residual, real &drift, real &condition, VecR &lambda,
                        VecQ &qdd, legsim_reaction *reaction);
+  // Generalized-alpha's end of a step: end's work on the factor given (a, by position: the
+  // last Newton iteration's, at an iterate within tol of q) instead of its own, for a
+  // structure whose reduced system is the whole one (no pinned body: the robot's). |J qd|
+  // past tol: qd projected (M-weighted, onto J qd = 0), a second time where the first pass
+  // leaves it past tol (the factor is not q's own); drift: |J qd| after. Then qdd, every
+  // row's multiplier and, reaction not null, the joints' reactions; no condition estimate;
+  // qd written only when the whole call succeeds. LEGSIM_ERR_DIVERGED (qdd not finite).
+  // nullptr elsewhere (and in a build without generalized-alpha).
+  legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
+                                const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
+                                real tol, real &drift, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
 };
 
 // Whether RK4's solves on layout take the reduced system (dynamics_stage, dynamics_end: the
@@ -191,9 +202,9 @@ inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
 // layout where reduced_available: residual and drift, the largest |Phi| and |J qd|; where
 // the drift is past tol, project and no force element acts (their forces may depend on qd),
 // qd projected onto J qd = 0 and drift 0; unless the residual or the drift is past tol then
-// (no more) qdd, the multipliers, the condition estimate into the report and reaction where
-// not null. No rows or factor kept.
-legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd,
+// (no more) qdd, the multipliers (into lambda), the condition estimate into the report and
+// reaction where not null. No rows or factor kept.
+legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd, VecR &lambda,
                            legsim_reaction *reaction, real tol, bool project, real &residual, real &drift);
 // A stage's solve in the reduced system (Kernel::accelerations): neither multipliers nor a
 // factor (the step's end has its own); a singular matrix reports an infinite condition, as

@@ -86,7 +86,7 @@ legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q
 }
 
 #if LEGSIM_KERNELS_REDUCED
-legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd,
+legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd, VecR &lambda,
                            legsim_reaction *reaction, real tol, bool project, real &residual, real &drift) {
   Data &d = sim.data;
   const Layout &layout = *plan.layout;
@@ -96,7 +96,7 @@ legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ 
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
   return layout.path.reduced->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
                             stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
-                            d.lambda, qdd, reaction);
+                            lambda, qdd, reaction);
 }
 #endif
 
@@ -172,7 +172,7 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready, b
     // before (a changed command alone or not), so a refused call changes no later result
     const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
     real residual, drift;  // (no projection test here: the report's residual stays the step's)
-    const legsim_status s = dynamics_end(sim, stage_plan(sim, lay), d.q, d.qd, qdd, reactions ? d.reaction : nullptr,
+    const legsim_status s = dynamics_end(sim, stage_plan(sim, lay), d.q, d.qd, qdd, d.lambda, reactions ? d.reaction : nullptr,
                                          real(INFINITY), false, residual, drift);
     if (s != LEGSIM_OK) return s;
     stop_forces_update(sim);

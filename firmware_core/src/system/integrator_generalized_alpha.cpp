@@ -167,10 +167,29 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // factor is the Newton iteration's last, J M^-1 J^T at an iterate within the tolerance of
   // q1: a second pass takes off what that difference leaves, cheaper than a new factor.
   // A model without contacts has no such restart: it keeps its cost (the Cortex-M4F leg).
+  // Where the generated kernel has the end on that factor (Kernel::end_factored: the robot's),
+  // the passes and the end state's solve, reactions and forces are one call, and
+  // generalized_alpha_reactions has nothing left to do; not where force elements act (their
+  // forces may depend on the projected velocities).
+  VecR lambda_end;  // the end solve's multipliers (acceleration level)
+  if (LEGSIM_WITH_CONTACT && m.nc > 0) d.end_solved = false;  // (never set without contacts)
   if (LEGSIM_WITH_CONTACT && m.nc > 0 && !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
-    rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
-    for (int pass = 0; pass < 2 && velocity_drift(lay, d.rows, v1, d.rhs) > tol; ++pass)
-      project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
+#if LEGSIM_KERNELS_REDUCED
+    const StagePlan plan = stage_plan(sim, lay);
+    if (kern && plan.kernel && plan.kernel->end_factored) {
+      real drift;
+      VecQ qdd_end;
+      legsim_reaction *const reaction = sim.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
+      d.end_solved = plan.kernel->end_factored(m, d.stop_drivers, q1, v1, *plan.base, d, plan.actuators, &d.trig,
+                                               d.factor.a.data(), tol, drift, lambda_end, qdd_end,
+                                               reaction) == LEGSIM_OK;
+    }
+#endif
+    if (!d.end_solved) {
+      rows_eval(m, lay, d.stop_drivers, q1, v1, d.rows, &d.trig);
+      for (int pass = 0; pass < 2 && velocity_drift(lay, d.rows, v1, d.rhs) > tol; ++pass)
+        project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v1, d.rhs);
+    }
   }
   acc_aux_update(n, af, am, d.qdd.data(), qdd1.data(), d.acc_aux.data());
   // the history for the next step's predictor (its order's steps: whole fixed-size vectors,
@@ -182,8 +201,15 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   d.q = q1;
   d.qd = v1;
   d.qdd = qdd1;
+  // the ground's and the stops' forces: the end solve's where it ran (the reactions'), else the
+  // iteration's (generalized_alpha_reactions replaces them); the next step starts from the
+  // iteration's multipliers either way
+  if (LEGSIM_WITH_CONTACT && d.end_solved) {
+    d.lambda = lambda_end;
+    stop_forces_update(sim);
+  }
   d.lambda = lambda;
-  stop_forces_update(sim);
+  if (!(LEGSIM_WITH_CONTACT && d.end_solved)) stop_forces_update(sim);
   return LEGSIM_OK;
 }
 
@@ -193,6 +219,10 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
 // the exact reactions of that state. Skipped when reactions are disabled.
 legsim_status generalized_alpha_reactions(Sim &sim) {
   Data &d = sim.data;
+  if (LEGSIM_WITH_CONTACT && d.end_solved) {  // the step's end solve left them (and the actuators' forces)
+    d.end_solved = false;
+    return LEGSIM_OK;
+  }
   if (sim.opt.disable & LEGSIM_DISABLE_REACTIONS) {
     actuator_forces_update(sim.model, sim.opt, d, d.q, d.qd);
     return LEGSIM_OK;

@@ -115,7 +115,7 @@ legsim_status rk4_step(Sim &sim, real h) {
     // whose positions need projecting starts over below (no rows or factor kept), as after
     // the fused solve.
     real drift;
-    if (dynamics_end(sim, plan, q1, v1, d.qdd, reaction, projection ? tol : real(INFINITY), projection,
+    if (dynamics_end(sim, plan, q1, v1, d.qdd, d.lambda, reaction, projection ? tol : real(INFINITY), projection,
                      d.report.residual, drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
       return rk4_finish(sim, false);
@@ -156,7 +156,7 @@ legsim_status rk4_step(Sim &sim, real h) {
       // velocities), on with the general sequence from the rows at the projected q1.
       if (reduced_available(lay)) {
         real drift;
-        if (dynamics_end(sim, plan, q1, v1, d.qdd, reaction, tol, true, d.report.residual, drift) == LEGSIM_OK &&
+        if (dynamics_end(sim, plan, q1, v1, d.qdd, d.lambda, reaction, tol, true, d.report.residual, drift) == LEGSIM_OK &&
             d.report.residual <= tol && drift <= tol)
           return rk4_finish(sim, false);
       }

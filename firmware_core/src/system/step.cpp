@@ -505,6 +505,7 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
         d.q[i] += (d.q[i] - coarse[i]) / 3;
         d.qd[i] += (d.qd[i] - coarse_v[i]) / 3;
       }
+      d.end_solved = false;  // the last sub-step's end solve is not this state's
       return rf;
     }
     if (halving == kGaPartHalvings) return rf;  // the halvings ran out: the finest try
