@@ -548,8 +548,9 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
       ContactData &c = d.contact[k];
       const uint32_t bit = 1u << k;
       if ((settled & bit) && pass > 0) continue;
-      Vec2 p, v;
-      contact_point(m, k, d.q, d.qd, p, v);
+      // the foot's point and velocity: no branch of a stuck contact reads them
+      Vec2 p = Vec2::Zero(), v = Vec2::Zero();
+      if (c.state != LEGSIM_CONTACT_STUCK) contact_point(m, k, d.q, d.qd, p, v);
       const real vt = m.ground_t.dot(v);
       if (c.state != LEGSIM_CONTACT_FREE && (ev.liftoff & bit)) {  // located: N reached 0
         c.state = LEGSIM_CONTACT_FREE;
