@@ -214,8 +214,15 @@ def bar_inertia(leg: Leg, b):
 class Absolute:
     """Bodies 0 (yoke), 1..6 (the bars); q per body (r, quaternion), v per body (v, omega_body)."""
 
-    def __init__(self, leg: Leg, F=(50.0, 0.0), tau=1.0):
-        self.leg, self.F, self.tau = leg, np.array(F, float), tau
+    ROWS = ("plane", "tree", "full3d")
+
+    def __init__(self, leg: Leg, F=(50.0, 0.0), tau=1.0, rows="tree"):
+        """rows: "plane": each bar held in the yoke's plane (3 rows) and the planar joints' rows
+        along the yoke's in-plane axes; "tree": the spanning tree's joints as 3D joints (5 rows)
+        and the two cut joints' 2 in-plane rows along a body's own axes; "full3d": every joint a
+        3D joint (redundant: 3 rows per closed loop)."""
+        assert rows in self.ROWS
+        self.leg, self.F, self.tau, self.variant = leg, np.array(F, float), tau, rows
         self.nb = 7
         self.mass = np.concatenate([[YOKE_MASS], leg.m])
         self.inertia = np.vstack([YOKE_INERTIA] + [bar_inertia(leg, b) for b in range(6)])
@@ -242,6 +249,10 @@ class Absolute:
         rows.append(("hip", (V(0, e3), None), K(e2)))
         pa, pc, pk = V(0, PLANE[:, 0]), V(0, PLANE[:, 1]), V(0, PLANE[:, 2])
         origin = P(0, self.s_origin)
+        if self.variant != "plane":
+            cut = ("C_rod_thigh", "D") if self.variant == "tree" else ()
+            self.rows = rows + self._rows_3d(P, V, K, cut)
+            return
         # each bar in the yoke's plane: its centre on it, its k axis along the plane's normal
         for b in range(1, 7):
             rows.append(("plane", (P(b, [0, 0, 0]), origin), pk))
@@ -265,6 +276,45 @@ class Absolute:
                 rows.append((j[0], (V(i + 1, e1), None), V(k + 1, e2)))
                 rows.append((j[0], (P(k + 1, [0, 0, 0]), P(i + 1, [0, 0, 0])), V(i + 1, e2)))
         self.rows = rows
+
+    def _rows_3d(self, P, V, K, cut):
+        """the joints as 3D joints (revolute: 3 + 2 rows, prismatic: 3 + 2), the joints in `cut`
+        by their 2 rows in the plane of their second body's axes (u, n)"""
+        leg, rows = self.leg, []
+        e1, e2, e3 = np.eye(3)
+        kw = (V(0, PLANE[:, 2]),)
+        for j in leg.joints:
+            kind = j[1]
+            if kind in ("revolute_to_frame", "revolute"):
+                if kind == "revolute_to_frame":
+                    _, _, b, s, fp = j
+                    f = self.s_origin + PLANE @ np.array([*leg.frame[fp], 0.0])
+                    x, i, other = (P(b + 1, [*s, 0]), P(0, f)), b + 1, kw[0]
+                else:
+                    _, _, i, si, k, sk = j
+                    x, i, other = (P(i + 1, [*si, 0]), P(k + 1, [*sk, 0])), i + 1, None
+                if j[0] in cut:
+                    rows.append((j[0], x, V(k + 1, e1)))
+                    rows.append((j[0], x, V(k + 1, e2)))
+                    continue
+                for e in (e1, e2, e3):
+                    rows.append((j[0], x, K(e)))
+                ax = (V(i, e3), None)
+                if other is None:
+                    rows.append((j[0], ax, V(k + 1, e1)))
+                    rows.append((j[0], ax, V(k + 1, e2)))
+                else:
+                    rows.append((j[0], ax, V(0, PLANE[:, 0])))
+                    rows.append((j[0], ax, V(0, PLANE[:, 1])))
+            else:
+                _, _, i, k = j
+                rows.append((j[0], (V(i + 1, e1), None), V(k + 1, e2)))
+                rows.append((j[0], (V(i + 1, e1), None), V(k + 1, e3)))
+                rows.append((j[0], (V(i + 1, e2), None), V(k + 1, e3)))
+                x = (P(k + 1, [0, 0, 0]), P(i + 1, [0, 0, 0]))
+                rows.append((j[0], x, V(i + 1, e2)))
+                rows.append((j[0], x, V(i + 1, e3)))
+        return rows
 
     def _expr(self, ex, st):
         """value, Jacobian {body: 3 x 6}, velocity, the velocity-quadratic part of the acceleration"""
@@ -395,8 +445,14 @@ class Absolute:
         z = np.zeros((self.nb, 3))
         return np.array(r), np.array(q), z.copy(), z.copy()
 
+    def health(self, y):
+        """the Jacobian's smallest singular value, max | |q| - 1 |, max |Phi|"""
+        phi, J, _ = self.rows_eval(self.state(*y))
+        return (np.linalg.svd(J, compute_uv=False)[-1], np.max(np.abs(np.linalg.norm(y[1], axis=1) - 1)),
+                np.max(np.abs(phi)))
+
     def outputs(self, y):
-        """psi, the foot in the world, and the bars' planar poses in the yoke's plane"""
+        """psi and the foot in the world"""
         r, q, v, w = y
         R = [quat_matrix(qq) for qq in q]
         psi = math.atan2(R[0][1, 0], R[0][0, 0])
@@ -415,8 +471,7 @@ class Absolute:
             pc = r[c + 1] + R[c + 1] @ np.array([-self.leg.L[c] / 2, 0, 0])
             pr = r[rd + 1] + R[rd + 1] @ np.array([self.leg.L[rd] / 2, 0, 0])
             work += self.F[a] * np.linalg.norm(pr - pc)
-        psi = math.atan2(R[0][1, 0], R[0][0, 0])
-        return T + V - work - self.tau * psi
+        return T + V - work
 
 
 # ---------------------------------------------------------------------------------------------
@@ -668,6 +723,10 @@ class Relative:
         z = np.array([psi, pose[0, 2], s1, pose[2, 2], pose[3, 2], s2, pose[5, 2] - pose[0, 2]])
         return z, np.zeros(7)
 
+    def health(self, y):
+        phi, J, _ = self.rows_eval(*y)
+        return np.linalg.svd(J, compute_uv=False)[-1], 0.0, np.max(np.abs(phi))
+
     def outputs(self, y):
         z, zd = y
         psi, bars, _ = self.kinematics(z, zd)
@@ -695,7 +754,7 @@ def energy_in_plane(form, kin, y):
         pc = bars[c].point((-form.leg.L[c] / 2, 0.0))
         pr = bars[r].point((form.leg.L[r] / 2, 0.0))
         work += form.dyn.F[a] * math.hypot(pr[0].v - pc[0].v, pr[1].v - pc[1].v)
-    return T + V - work - form.dyn.tau * psi.v
+    return T + V - work
 
 
 # ---------------------------------------------------------------------------------------------
@@ -761,10 +820,17 @@ def run_fixed(form, h, T, sample):
     for k in range(n + 1):
         if k % every == 0:
             psi, foot = form.outputs(y)
-            out.append([k * h, psi, *foot, form.energy(y)])
+            out.append([k * h, psi, *foot, form.energy(y), *form.health(y)])
         if k < n:
             y = form.step(y, h)
-    return np.array(out), y
+    return unwrap(np.array(out), form.tau if isinstance(form, Absolute) else form.dyn.tau), y
+
+
+def unwrap(out, tau):
+    """psi continuous over the samples; the energy column less the rowing torque's work"""
+    out[:, 1] = np.unwrap(out[:, 1])
+    out[:, 5] -= tau * out[:, 1]
+    return out
 
 
 def run_reference(leg, T, sample, F=(50.0, 0.0), tau=1.0, tol=1e-12):
@@ -777,10 +843,457 @@ def run_reference(leg, T, sample, F=(50.0, 0.0), tau=1.0, tol=1e-12):
     out = []
     for t, yy in zip(sol.t, sol.y.T):
         psi, foot = form.outputs((yy[:3], yy[3:]))
-        out.append([t, psi, *foot, form.energy((yy[:3], yy[3:]))])
-    return np.array(out), sol
+        out.append([t, psi, *foot, form.energy((yy[:3], yy[3:])), 0.0, 0.0, 0.0])
+    return unwrap(np.array(out), tau), sol
 
 
 def traj_error(a, b):
     """the largest foot-position (m) and psi (rad) difference over the samples"""
     return float(np.max(np.linalg.norm(a[:, 2:5] - b[:, 2:5], axis=1))), float(np.max(np.abs(a[:, 1] - b[:, 1])))
+
+
+# ---------------------------------------------------------------------------------------------
+# operation counts of a fixed-structure kernel (multiply-adds; a division counts as one)
+def symbolic_ldl(adj, order):
+    """L D L^T of a symmetric pattern (adjacency sets) in the given order: nnz(L) below the
+    diagonal, multiply-adds of the factorization and of one solve (forward, 1/D, backward)."""
+    g = {i: set(adj[i]) - {i} for i in range(len(adj))}
+    nnz = fact = 0
+    for p in order:
+        nb = g.pop(p)
+        c = len(nb)
+        nnz += c
+        fact += c + c * (c + 1) // 2
+        for a in nb:
+            g[a] |= nb - {a}
+            g[a].discard(p)
+    return nnz, fact, 2 * nnz + len(adj)
+
+
+def min_degree(adj, groups=None):
+    """greedy minimum degree on the elimination graph (ties: lowest index); with groups, each
+    group's nodes are eliminated before the next group's."""
+    g = {i: set(adj[i]) - {i} for i in range(len(adj))}
+    groups = groups or [list(range(len(adj)))]
+    order = []
+    for grp in groups:
+        left = set(grp)
+        while left:
+            p = min(left, key=lambda i: (len(g[i]), i))
+            left.remove(p)
+            nb = g.pop(p)
+            for a in nb:
+                g[a] |= nb - {a}
+                g[a].discard(p)
+            order.append(p)
+    return order
+
+
+def gram_pattern(nz_rows):
+    """the pattern of A W A^T from the columns of each row of A, and the multiply-adds of forming
+    its lower triangle (W diagonal: one product per shared column, A W once)"""
+    n = len(nz_rows)
+    adj = [set() for _ in range(n)]
+    form = sum(len(r) for r in nz_rows)
+    for i in range(n):
+        for k in range(i + 1):
+            c = len(nz_rows[i] & nz_rows[k])
+            if c:
+                adj[i].add(k)
+                adj[k].add(i)
+                form += c
+    return adj, form
+
+
+def absolute_structure(a: Absolute, seed=1):
+    """the structural non-zero columns of each row of J at a generic configuration"""
+    rng = np.random.default_rng(seed)
+    r = rng.normal(size=(a.nb, 3))
+    q = rng.normal(size=(a.nb, 4))
+    q /= np.linalg.norm(q, axis=1)[:, None]
+    w = rng.normal(size=(a.nb, 3))
+    v = rng.normal(size=(a.nb, 3))
+    _, J, _ = a.rows_eval(a.state(r, q, v, w))
+    return [set(np.nonzero(np.abs(row) > 1e-14)[0]) for row in J], J
+
+
+def relative_structure(b: Relative, seed=1):
+    """the structural non-zeros of R (body velocities (v world, omega body) from z') and of Phi_z"""
+    rng = np.random.default_rng(seed)
+    z = rng.normal(size=7)
+    z[2] = 0.3
+    z[5] = 0.25
+    psi, bars, rows = b.kinematics(z, rng.normal(size=7))
+    ez = np.array([0, 0, 1.0])
+    kw = np.array([math.sin(psi.v), -math.cos(psi.v), 0.0])
+    blocks = [np.vstack([np.outer([-math.sin(psi.v), math.cos(psi.v), 0], psi.d), np.outer(ez, psi.d)])]
+    for bar in bars:
+        ph = planar_angle_jet(bar)
+        R = bar_rotation(psi.v, ph.v)
+        X = bar.x + HIP_OFFSET
+        V = np.array([(X * jcos(psi)).d, (X * jsin(psi)).d, bar.y.d])
+        Om = R.T @ (np.outer(ez, psi.d) + np.outer(kw, ph.d))
+        blocks.append(np.vstack([V, Om]))
+    Rm = np.vstack(blocks)
+    Jz = np.array([r.d for r in rows])
+    return Rm, Jz
+
+
+def leg_costs(leg: Leg, rows="tree"):
+    """per-stage and per-step multiply-adds of the linear algebra, both formulations, one leg"""
+    out = {}
+    a = Absolute(leg, rows=rows)
+    nzr, J = absolute_structure(a)
+    m = len(nzr)
+    adj, form = gram_pattern(nzr)
+    nnzJ = sum(len(r) for r in nzr)
+    res = {}
+    for name, order in (("natural", list(range(m))), ("min_degree", min_degree(adj))):
+        nnzL, fact, solve = symbolic_ldl(adj, order)
+        stage = form + fact + solve + 2 * nnzJ + a.nv           # J W Q - gamma, W (Q - J^T lambda)
+        end = form + fact + solve + 3 * nnzJ + a.nv             # velocity projection
+        res[name] = dict(nnzA=sum(len(s) for s in adj) // 2 + m, nnzL=nnzL, form=form, fact=fact,
+                         solve=solve, stage=stage, step=4 * stage + end)
+    out["a"] = dict(nq=7 * a.nb, nv=a.nv, rows=m, nnzJ=nnzJ, orders=res)
+    b = Relative(leg)
+    Rm, Jz = relative_structure(b)
+    cols = [set(np.nonzero(np.abs(Rm[:, k]) > 1e-14)[0]) for k in range(7)]
+    nnzR = int(np.sum(np.abs(Rm) > 1e-14))
+    _, formM = gram_pattern(cols)                   # R^T M R, M diagonal per body (body frame)
+    nz = 7
+    kkt = [set(range(nz)) for _ in range(nz)] + [set() for _ in range(Jz.shape[0])]
+    for i, row in enumerate(Jz):
+        for k in np.nonzero(np.abs(row) > 1e-14)[0]:
+            kkt[nz + i].add(int(k))
+            kkt[int(k)].add(nz + i)
+    nnzL, fact, solve = symbolic_ldl(kkt, list(range(nz + Jz.shape[0])))
+    nnzPhi = int(np.sum(np.abs(Jz) > 1e-14))
+    stage = formM + fact + solve + 2 * nnzR + 0          # Q_bar = R^T (Q - M bias)
+    end = fact + solve + 2 * nnzPhi + nz              # velocity projection on the stage's factor pattern
+    out["b"] = dict(nq=nz, nv=nz, rows=Jz.shape[0], nnzR=nnzR, nnzPhi=nnzPhi,
+                    orders={"coords_first": dict(nnzA=sum(len(s) for s in kkt) // 2 + len(kkt),
+                                                  nnzL=nnzL, form=formM, fact=fact, solve=solve,
+                                                  stage=stage, step=4 * stage + end + formM)})
+    return out
+
+
+def hexapod_costs(leg: Leg, stuck=3, rows="tree"):
+    """the six legs on a free box (6 velocity coordinates), `stuck` feet with 3 rows each"""
+    out = {}
+    # (a): the box is body 0, leg l's bodies 1 + 7 l ...; its hip rows act on the box too
+    a = Absolute(leg, rows=rows)
+    nzr, _ = absolute_structure(a)
+    rows, groups, hip = [], [], []
+    for l in range(6):
+        base = 6 + 42 * l
+        grp = []
+        for i, cols in enumerate(nzr):
+            c = {base + x for x in cols}
+            if a.rows[i][0] == "hip":
+                c |= set(range(6)) if i < 3 else set(range(3, 6))
+                hip.append(len(rows))
+            else:
+                grp.append(len(rows))
+            rows.append(c)
+        if l < stuck:
+            shank = base + 6 * 6
+            for _ in range(3):
+                grp.append(len(rows))
+                rows.append(set(range(shank, shank + 6)))
+        groups.append(grp)
+    adj, form = gram_pattern(rows)
+    nnzJ = sum(len(r) for r in rows)
+    nv = 6 + 42 * 6
+    res = {}
+    for name, order in (("min_degree", min_degree(adj)),
+                        ("legs_then_hips", min_degree(adj, groups + [hip]))):
+        nnzL, fact, solve = symbolic_ldl(adj, order)
+        stage = form + fact + solve + 2 * nnzJ + nv
+        end = form + fact + solve + 3 * nnzJ + nv
+        res[name] = dict(nnzA=sum(len(x) for x in adj) // 2 + len(adj), nnzL=nnzL, form=form,
+                         fact=fact, solve=solve, stage=stage, step=4 * stage + end)
+    out["a"] = dict(nq=7 + 49 * 6, nv=nv, rows=len(rows), nnzJ=nnzJ, orders=res)
+    # (b): z = box (6) + 7 per leg; rows: 4 loop rows per leg, 3 per stuck foot (box + chain)
+    b = Relative(leg)
+    Rm, Jz = relative_structure(b)
+    nz = 6 + 7 * 6
+    cols_of_body = []                       # R's pattern: each body velocity's z columns
+    cols_of_body += [set(range(6))] * 6
+    for l in range(6):
+        for k in range(Rm.shape[0]):
+            cols_of_body.append(set(range(6)) | {6 + 7 * l + int(c) for c in np.nonzero(np.abs(Rm[k]) > 1e-14)[0]})
+    zcols = [set() for _ in range(nz)]
+    for i, c in enumerate(cols_of_body):
+        for k in c:
+            zcols[k].add(i)
+    _, formM = gram_pattern(zcols)
+    nnzR = sum(len(c) for c in cols_of_body)
+    shank_rows = range(6 * 6, 6 * 7)          # the shank's block of the leg's R
+    foot_cols = set()
+    for k in shank_rows:
+        foot_cols |= {int(c) for c in np.nonzero(np.abs(Rm[k]) > 1e-14)[0]}
+    nodes = [set() for _ in range(nz)]
+    order = []
+    def link(i, k):
+        nodes[i].add(k)
+        nodes[k].add(i)
+    for i in range(nz):                       # M_bar: box-box, leg-leg, box-leg dense
+        for k in range(nz):
+            li, lk = (i - 6) // 7 if i >= 6 else -1, (k - 6) // 7 if k >= 6 else -1
+            if i != k and (li == lk or li < 0 or lk < 0):
+                nodes[i].add(k)
+    nrows = 0
+    for l in range(6):
+        order += list(range(6 + 7 * l, 13 + 7 * l))
+        leg_rows = [{6 + 7 * l + int(c) for c in np.nonzero(np.abs(r) > 1e-14)[0]} for r in Jz]
+        if l < stuck:
+            leg_rows += [set(range(6)) | {6 + 7 * l + c for c in foot_cols}] * 3
+        for cset in leg_rows:
+            nodes.append(set())
+            idx = len(nodes) - 1
+            for c in cset:
+                link(idx, c)
+            order.append(idx)
+            nrows += 1
+    order += list(range(6))
+    nnzL, fact, solve = symbolic_ldl(nodes, order)
+    nnzPhi = sum(len(x) for x in nodes[nz:])
+    stage = formM + fact + solve + 2 * nnzR
+    end = fact + solve + 2 * nnzPhi + nz
+    out["b"] = dict(nq=7 + 42, nv=nz, rows=nrows, nnzR=nnzR, orders={"legs_then_box": dict(
+        nnzA=sum(len(x) for x in nodes) // 2 + len(nodes), nnzL=nnzL, form=formM, fact=fact,
+        solve=solve, stage=stage, step=4 * stage + end + formM)})
+    return out
+
+
+def kkt_tree_order(a: Absolute, nb_offset=0, row_offset=0):
+    """(a)'s [M J^T; J 0] in the tree's order, leaves first: a body's 6 coordinates, then the
+    rows of its joint to its parent; the cut joints' rows; the yoke; the hip rows last.
+    Nodes: coordinates 0 .. nv-1, rows nv + i."""
+    names = [r[0] for r in a.rows]
+    rows_of = lambda n: [row_offset + i for i, x in enumerate(names) if x == n]   # noqa: E731
+    coords = lambda b: list(range(nb_offset + 6 * b, nb_offset + 6 * b + 6))    # noqa: E731
+    seq = [(6, "C_rod_shank"), (2, "upper_actuator"), (1, "A"), (5, "lower_actuator"),
+           (4, "B_lower"), (3, "B_thigh")]
+    order = []
+    for b, joint in seq:
+        order += coords(b) + rows_of(joint)
+    order += rows_of("C_rod_thigh") + rows_of("D") + coords(0)
+    return order, rows_of("hip")
+
+
+def kkt_costs(J, order, nv, check=True):
+    """symbolic L D L^T of [M J^T; J 0] (M diagonal) in `order` (rows as nv + i); with check,
+    a numerical L D L^T at J and random masses confirms that no pivot vanishes"""
+    m = J.shape[0]
+    n = nv + m
+    adj = [set() for _ in range(n)]
+    for i in range(m):
+        for c in np.nonzero(np.abs(J[i]) > 1e-14)[0]:
+            adj[nv + i].add(int(c))
+            adj[int(c)].add(nv + i)
+    nnzL, fact, solve = symbolic_ldl(adj, [o if o < nv else o for o in order])
+    minpiv = None
+    if check:
+        K = np.zeros((n, n))
+        K[:nv, :nv] = np.diag(np.random.default_rng(2).uniform(0.5, 2.0, nv))
+        K[nv:, :nv] = J
+        K[:nv, nv:] = J.T
+        K = K[np.ix_(order, order)]
+        piv = []
+        for k in range(n):
+            d = K[k, k]
+            piv.append(abs(d))
+            if d == 0:
+                break
+            l = K[k + 1:, k] / d
+            K[k + 1:, k + 1:] -= np.outer(l, K[k, k + 1:])
+        minpiv = float(min(piv))
+    return nnzL, fact, solve, minpiv
+
+
+def kkt_leg_and_hexapod(leg: Leg, stuck=3):
+    """(a) "tree" rows in the tree's KKT order: one leg on a fixed box, and six on a free box"""
+    a = Absolute(leg, rows="tree")
+    _, J = absolute_structure(a)
+    order, hip = kkt_tree_order(a, 0, a.nv)
+    leg_res = kkt_costs(J, order + hip, a.nv)
+    nnzJ = int(np.sum(np.abs(J) > 1e-14))
+    out = {"leg": dict(nnzL=leg_res[0], fact=leg_res[1], solve=leg_res[2], min_pivot=leg_res[3],
+                       stage=leg_res[1] + leg_res[2] + 2 * nnzJ, step=5 * (leg_res[1] + leg_res[2] + 2 * nnzJ))}
+    # the hexapod: the box is coordinates 0..5; leg l's bodies at 6 + 42 l; its rows after all
+    # coordinates; its hip rows also act on the box (a rotated copy is structure enough)
+    nv = 6 + 42 * 6
+    rows = []
+    order, hips = [], []
+    m0 = J.shape[0]
+    nrow_leg = m0 + 3
+    total_rows = 6 * m0 + 3 * stuck
+    H = np.zeros((total_rows, nv))
+    r = 0
+    for l in range(6):
+        base = 6 + 42 * l
+        H[r:r + m0, base:base + 42] = J
+        for i in range(5):
+            H[r + i, 0:6] = 1.0 if i < 3 else np.r_[0, 0, 0, 1.0, 1.0, 1.0]
+        lo, hi_ = kkt_tree_order(a, base, nv + r)
+        # a stuck foot: 3 rows on the shank, eliminated right after the shank's coordinates
+        if l < stuck:
+            foot = [nv + 6 * m0 + 3 * l + k for k in range(3)]
+            H[6 * m0 + 3 * l:6 * m0 + 3 * l + 3, base + 36:base + 42] = np.random.default_rng(l).normal(size=(3, 6))
+            lo = lo[:6] + foot + lo[6:]
+        order += lo
+        hips += hi_
+        r += m0
+    order += hips + list(range(6))
+    hx = kkt_costs(H, order, nv, check=False)
+    nnzH = int(np.sum(np.abs(H) > 1e-14))
+    out["hexapod"] = dict(rows=total_rows, nnzL=hx[0], fact=hx[1], solve=hx[2],
+                          stage=hx[1] + hx[2] + 2 * nnzH, step=5 * (hx[1] + hx[2] + 2 * nnzH))
+    return out
+
+
+# ---------------------------------------------------------------------------------------------
+# the figures
+STEPS = (2e-3, 1e-3, 5e-4, 2.5e-4)
+
+
+def accuracy(leg, T=1.0, steps=STEPS, sample=0.01, F=(50.0, 0.0), tau=1.0, forms=None, log=print):
+    """per formulation and step: the largest foot error over the run against the reference,
+    psi's, the energy balance's drift, the smallest singular value, max | |q| - 1 |"""
+    ref, sol = run_reference(leg, T, sample, F, tau)
+    log(f"reference: DOP853 rtol = atol = 1e-12, {sol.nfev} evaluations, energy balance drift "
+        f"{np.ptp(ref[:, 5]):.1e} J")
+    forms = forms or {"a": lambda: Absolute(leg, F, tau, rows="tree"),
+                      "a-plane": lambda: Absolute(leg, F, tau, rows="plane"),
+                      "b": lambda: Relative(leg, F, tau)}
+    res = {}
+    for name, make in forms.items():
+        for h in steps:
+            out, _ = run_fixed(make(), h, T, sample)
+            ef, ep = traj_error(out, ref)
+            res[name, h] = dict(foot=ef, psi=ep, energy=float(np.max(np.abs(out[:, 5] - out[0, 5]))),
+                                smin=float(np.min(out[:, 6])), quat=float(np.max(out[:, 7])),
+                                phi=float(np.max(out[:, 8])), out=out)
+            log(f"{name:8s} h = {h:.1e}: foot {ef:.2e} m, psi {ep:.2e} rad, energy {res[name, h]['energy']:.2e} J, "
+                f"sigma_min {res[name, h]['smin']:.3f}, | |q| - 1 | {res[name, h]['quat']:.1e}")
+    return res, ref
+
+
+def order_of(res, name, steps, key="foot"):
+    x = np.log(np.array(steps))
+    y = np.log(np.array([res[name, h][key] for h in steps]))
+    return float(np.polyfit(x, y, 1)[0])
+
+
+def planar_check(leg, T=1.0, h=1e-3, sample=0.01, log=print):
+    """rowing torque 0: psi stays 0, and the foot moves as the planar model's; against the
+    reference (tau = 0) and, where it loads, the legsim library's planar leg (RK4, same h)"""
+    ref, _ = run_reference(leg, T, sample, tau=0.0)
+    res = {}
+    for name, form in (("a", Absolute(leg, tau=0.0)), ("b", Relative(leg, tau=0.0))):
+        out, _ = run_fixed(form, h, T, sample)
+        res[name] = dict(psi=float(np.max(np.abs(out[:, 1]))), foot=traj_error(out, ref)[0],
+                         lateral=float(np.max(np.abs(out[:, 3]))), out=out)
+        log(f"planar check {name}: max |psi| {res[name]['psi']:.1e}, max |foot y| "
+            f"{res[name]['lateral']:.1e} m, foot vs minimal reference {res[name]['foot']:.2e} m")
+    try:
+        import os
+        main = Path(os.environ.get("LEGSIM_MAIN", "/work/main"))
+        os.environ.setdefault("LEGSIM_LIB_DIR", str(main / "build/host/firmware_core"))
+        sys.path.insert(0, str(main / "python"))
+        import legsim
+        sim = legsim.Sim(str(main / "models/leg.toml"), integrator="rk4", step=h)
+        sim.assemble_pose("stand")
+        sim.command_force("upper", 50.0)
+        feet = [sim.foot().copy()]
+        every = int(round(sample / h))
+        for _ in range(int(round(T / sample))):
+            sim.step(every)
+            feet.append(sim.foot().copy())
+        feet = np.array(feet)
+        mine = res["a"]["out"]
+        world = np.column_stack([HIP_OFFSET + feet[:, 0], feet[:, 1]])
+        for name in ("a", "b"):
+            mine = res[name]["out"]
+            e = float(np.max(np.hypot(mine[:, 2] - world[:, 0], mine[:, 4] - world[:, 1])))
+            res[name]["legsim"] = e
+            log(f"planar check {name}: foot vs legsim's planar leg (RK4, h = {h:g}) {e:.2e} m")
+        e = float(np.max(np.hypot(ref[:, 2] - world[:, 0], ref[:, 4] - world[:, 1])))
+        log(f"planar check: minimal reference vs legsim's planar leg {e:.2e} m, events {sim.events()}")
+        res["legsim_vs_ref"] = e
+    except Exception as ex:   # the library is optional here
+        log(f"planar check: legsim not available ({type(ex).__name__}: {ex})")
+    return res
+
+
+def cost_table(leg, log=print):
+    lc = {v: leg_costs(leg, v) for v in ("tree", "plane")}
+    kk = {st: kkt_leg_and_hexapod(leg, st) for st in (0, 3, 6)}
+    hx = {(v, st): hexapod_costs(leg, st, v) for v in ("tree", "plane") for st in (0, 3, 6)}
+    log("\n| one leg, fixed box | coordinates | velocity coordinates | rows | nnz(J) | nnz(A), lower | "
+        "nnz(L) | factor | solve | RK4 stage | RK4 step |")
+    log("|---|---|---|---|---|---|---|---|---|---|---|")
+    for v in ("tree", "plane"):
+        c = lc[v]["a"]
+        for o, r in c["orders"].items():
+            log(f"| (a) {v} rows, J M^-1 J^T, {o} order | {c['nq']} | {c['nv']} | {c['rows']} | {c['nnzJ']} | "
+                f"{r['nnzA']} | {r['nnzL']} | {r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+    k = kk[0]["leg"]
+    c = lc["tree"]["a"]
+    log(f"| (a) tree rows, [M J^T; J 0], tree order | {c['nq']} | {c['nv']} | {c['rows']} | {c['nnzJ']} | - | "
+        f"{k['nnzL']} | {k['fact']:,} | {k['solve']:,} | {k['stage']:,} | {k['step']:,} |")
+    c = lc["tree"]["b"]
+    r = c["orders"]["coords_first"]
+    log(f"| (b) relative, [R^T M R, Phi_z^T; Phi_z 0] | {c['nq']} | {c['nv']} | {c['rows']} | {c['nnzPhi']} (R: {c['nnzR']}) | "
+        f"{r['nnzA']} | {r['nnzL']} | {r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+    log("\n| hexapod, free box | feet stuck | coordinates | velocity coordinates | rows | nnz(L) | factor | solve | RK4 stage | RK4 step |")
+    log("|---|---|---|---|---|---|---|---|---|---|")
+    for st in (0, 3, 6):
+        c = hx["tree", st]["a"]
+        r = c["orders"]["legs_then_hips"]
+        log(f"| (a) tree rows, J M^-1 J^T, legs then hip rows | {st} | {c['nq']} | {c['nv']} | {c['rows']} | {r['nnzL']:,} | "
+            f"{r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+    for st in (0, 3, 6):
+        k = kk[st]["hexapod"]
+        log(f"| (a) tree rows, [M J^T; J 0], legs then box | {st} | 301 | 258 | {k['rows']} | {k['nnzL']:,} | "
+            f"{k['fact']:,} | {k['solve']:,} | {k['stage']:,} | {k['step']:,} |")
+    for st in (0, 3, 6):
+        c = hx["plane", st]["a"]
+        r = c["orders"]["legs_then_hips"]
+        log(f"| (a) plane rows, J M^-1 J^T, legs then hip rows | {st} | {c['nq']} | {c['nv']} | {c['rows']} | {r['nnzL']:,} | "
+            f"{r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+    for st in (0, 3, 6):
+        c = hx["tree", st]["b"]
+        r = c["orders"]["legs_then_box"]
+        log(f"| (b) relative, KKT, legs then box | {st} | {c['nq']} | {c['nv']} | {c['rows']} | {r['nnzL']:,} | "
+            f"{r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+    return lc, kk, hx
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--table", action="store_true", help="accuracy and cost tables (several minutes)")
+    ap.add_argument("--costs", action="store_true", help="the operation counts alone")
+    ap.add_argument("--planar", action="store_true", help="the planar check")
+    ap.add_argument("--T", type=float, default=1.0)
+    args = ap.parse_args(argv)
+    leg = Leg()
+    if args.table or args.costs:
+        cost_table(leg)
+    if args.planar or args.table:
+        planar_check(leg, T=args.T)
+    if args.table:
+        res, _ = accuracy(leg, T=args.T)
+        print("\n| formulation | h (s) | foot error (m) | psi error (rad) | energy balance (J) | min sigma(J) | max abs(abs(q) - 1) |")
+        print("|---|---|---|---|---|---|---|")
+        for (name, h), r in res.items():
+            print(f"| {name} | {h:g} | {r['foot']:.2e} | {r['psi']:.2e} | {r['energy']:.2e} | {r['smin']:.4f} | "
+                  f"{r['quat']:.1e} |")
+        for name in ("a", "a-plane", "b"):
+            print(f"order of accuracy {name}: foot {order_of(res, name, STEPS):.2f}, "
+                  f"psi {order_of(res, name, STEPS, 'psi'):.2f}")
+
+
+if __name__ == "__main__":
+    main()
