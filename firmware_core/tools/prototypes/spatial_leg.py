@@ -216,13 +216,14 @@ class Absolute:
 
     ROWS = ("plane", "tree", "full3d")
 
-    def __init__(self, leg: Leg, F=(50.0, 0.0), tau=1.0, rows="tree"):
+    def __init__(self, leg: Leg, F=(50.0, 0.0), tau=1.0, rows="tree", group=True):
         """rows: "plane": each bar held in the yoke's plane (3 rows) and the planar joints' rows
         along the yoke's in-plane axes; "tree": the spanning tree's joints as 3D joints (5 rows)
         and the two cut joints' 2 in-plane rows along a body's own axes; "full3d": every joint a
         3D joint (redundant: 3 rows per closed loop)."""
         assert rows in self.ROWS
         self.leg, self.F, self.tau, self.variant = leg, np.array(F, float), tau, rows
+        self.group = group      # RK4 on the group (True) or on the quaternions' components
         self.nb = 7
         self.mass = np.concatenate([[YOKE_MASS], leg.m])
         self.inertia = np.vstack([YOKE_INERTIA] + [bar_inertia(leg, b) for b in range(6)])
@@ -391,6 +392,33 @@ class Absolute:
         return r + d[:, :3], np.array([quat_mul(qq, quat_exp(th)) for qq, th in zip(q, d[:, 3:])])
 
     def step(self, y, h, normalize=False):
+        if not self.group:
+            return self.step_components(y, h)
+        return self.step_group(y, h, normalize)
+
+    def step_components(self, y, h):
+        """classical RK4 on the quaternions' 4 components, q' = q (0, omega) / 2, each stage's
+        rotation from q / |q|, and q normalized at the end of the step"""
+        r0, q0, v0, w0 = y
+
+        def f(r, q, v, w):
+            qn = q / np.linalg.norm(q, axis=1)[:, None]
+            st = {"r": r, "R": [quat_matrix(x) for x in qn], "v": v, "w": w}
+            a, _ = self.accel(st)
+            a = a.reshape(-1, 6)
+            qd = np.array([0.5 * quat_mul(q[b], np.r_[0.0, w[b]]) for b in range(self.nb)])
+            return v, qd, a[:, :3], a[:, 3:]
+
+        y0 = (r0, q0, v0, w0)
+        k1 = f(*y0)
+        k2 = f(*(x + h / 2 * k for x, k in zip(y0, k1)))
+        k3 = f(*(x + h / 2 * k for x, k in zip(y0, k2)))
+        k4 = f(*(x + h * k for x, k in zip(y0, k3)))
+        r, q, v, w = (x + h / 6 * (a + 2 * b + 2 * c + d) for x, a, b, c, d in zip(y0, k1, k2, k3, k4))
+        q = q / np.linalg.norm(q, axis=1)[:, None]
+        return self.project((r, q, v, w))
+
+    def step_group(self, y, h, normalize=False):
         """RK4 on the group (Munthe-Kaas, exact dexp^-1): each body's rotation R0 exp(theta^),
         classical RK4 on (dr, theta, v, omega) from theta = 0, then R0 exp(theta1^)."""
         r0, q0, v0, w0 = y
@@ -1166,10 +1194,11 @@ def accuracy(leg, T=1.0, steps=STEPS, sample=0.01, F=(50.0, 0.0), tau=1.0, forms
         f"{np.ptp(ref[:, 5]):.1e} J")
     forms = forms or {"a": lambda: Absolute(leg, F, tau, rows="tree"),
                       "a-plane": lambda: Absolute(leg, F, tau, rows="plane"),
+                      "a-quat": lambda: Absolute(leg, F, tau, rows="tree", group=False),
                       "b": lambda: Relative(leg, F, tau)}
     res = {}
     for name, make in forms.items():
-        for h in steps:
+        for h in (steps if name != "a-quat" else steps[:2]):
             out, _ = run_fixed(make(), h, T, sample)
             ef, ep = traj_error(out, ref)
             res[name, h] = dict(foot=ef, psi=ep, energy=float(np.max(np.abs(out[:, 5] - out[0, 5]))),
@@ -1290,7 +1319,7 @@ def main(argv=None):
         res, _ = accuracy(leg, T=args.T)
         print("\n| formulation | h (s) | foot error (m) | psi error (rad) | energy balance (J) | min sigma(J) | max abs(abs(q) - 1) |")
         print("|---|---|---|---|---|---|---|")
-        for (name, h), r in res.items():
+        for (name, h), r in sorted(res.items(), key=lambda x: ("a", "a-plane", "a-quat", "b").index(x[0][0])):
             print(f"| {name} | {h:g} | {r['foot']:.2e} | {r['psi']:.2e} | {r['energy']:.2e} | {r['smin']:.4f} | "
                   f"{r['quat']:.1e} |")
         for name in ("a", "a-plane", "b"):
