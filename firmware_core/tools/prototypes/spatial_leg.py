@@ -133,6 +133,11 @@ def planar_closed_form(leg: Leg, phi3, phi6):
 
 # ---------------------------------------------------------------------------------------------
 # rotations
+def cross(a, b):
+    """a x b of two 3-vectors (numpy's cross is slow on single vectors)"""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def hat(w):
     return np.array([[0, -w[2], w[1]], [w[2], 0, -w[0]], [-w[1], w[0], 0]])
 
@@ -181,8 +186,8 @@ def dexp_inv_right(theta, w):
         c = 1.0 / 12.0 + t2 / 720.0
     else:
         c = 1.0 / t2 - (1 + math.cos(t)) / (2 * t * math.sin(t))
-    tw = np.cross(theta, w)
-    return w + 0.5 * tw + c * np.cross(theta, tw)
+    tw = cross(theta, w)
+    return w + 0.5 * tw + c * cross(theta, tw)
 
 
 def rot_z(psi):
@@ -324,7 +329,7 @@ class Absolute:
             z = np.zeros(3)
             return c, {}, z, z
         R, w = st["R"][b], st["w"][b]
-        wc = np.cross(w, c)
+        wc = cross(w, c)
         if kind == "p":
             val = st["r"][b] + R @ c
             jac = np.hstack([np.eye(3), -R @ hat(c)])
@@ -333,7 +338,7 @@ class Absolute:
             val = R @ c
             jac = np.hstack([np.zeros((3, 3)), -R @ hat(c)])
             vel = R @ wc
-        return val, {b: jac}, vel, R @ np.cross(w, wc)
+        return val, {b: jac}, vel, R @ cross(w, wc)
 
     def _diff(self, pair, st):
         a = self._expr(pair[0], st)
@@ -369,7 +374,7 @@ class Absolute:
         for b in range(self.nb):
             Q[6 * b + 2] = -self.mass[b] * G
             Ib = self.inertia[b]
-            Q[6 * b + 3:6 * b + 6] = -np.cross(st["w"][b], Ib * st["w"][b])
+            Q[6 * b + 3:6 * b + 6] = -cross(st["w"][b], Ib * st["w"][b])
         Q[3:6] += st["R"][0].T @ np.array([0, 0, self.tau])
         for a, (_, cyl, rod) in enumerate(self.leg.actuators):
             f = self.F[a] * (st["R"][cyl + 1] @ np.array([1.0, 0, 0]))
@@ -617,7 +622,7 @@ class LegInPlane:
         Iw = Ry @ np.diag(YOKE_INERTIA) @ Ry.T
         M += YOKE_MASS * Vm.T @ Vm + Om.T @ Iw @ Om
         Fy = np.array([0, 0, -YOKE_MASS * G])
-        Q += Vm.T @ (Fy - YOKE_MASS * ab) + Om.T @ (ez * self.tau - Iw @ al - np.cross(w, Iw @ w))
+        Q += Vm.T @ (Fy - YOKE_MASS * ab) + Om.T @ (ez * self.tau - Iw @ al - cross(w, Iw @ w))
         # the bars, each in the plane turned by psi
         ucyl = {}
         Vbars = []
@@ -630,11 +635,11 @@ class LegInPlane:
             R = bar_rotation(psi.v, ph.v)
             Om = np.outer(ez, psi.d) + np.outer(kw, ph.d)
             w = ez * psi.t + kw * ph.t
-            al = ez * psi.b + kw * ph.b + ph.t * psi.t * np.cross(ez, kw)
+            al = ez * psi.b + kw * ph.b + ph.t * psi.t * cross(ez, kw)
             Iw = R @ np.diag(self.Ib[b]) @ R.T
             m = self.leg.m[b]
             M += m * Vm.T @ Vm + Om.T @ Iw @ Om
-            Q += Vm.T @ (np.array([0, 0, -m * G]) - m * ab) + Om.T @ (-Iw @ al - np.cross(w, Iw @ w))
+            Q += Vm.T @ (np.array([0, 0, -m * G]) - m * ab) + Om.T @ (-Iw @ al - cross(w, Iw @ w))
             ucyl[b] = R[:, 0]
             Vbars.append(Vm)
         for a, (_, cyl, rod) in enumerate(self.leg.actuators):
