@@ -105,3 +105,20 @@ def test_planar_when_not_rowing(leg):
         assert np.max(np.abs(out[:, 1])) < 1e-13
         assert np.max(np.abs(out[:, 3])) < 1e-13          # the foot stays in the plane y = 0
         assert sl.traj_error(out, ref)[0] < 1e-8
+
+
+def test_counted_fill_is_the_factor_s(leg):
+    # the symbolic count of nnz(L) equals a numerical L D L^T's non-zeros at a generic configuration
+    a = sl.Absolute(leg, rows="tree")
+    nzr, J = sl.absolute_structure(a)
+    adj, _ = sl.gram_pattern(nzr)
+    order = sl.min_degree(adj)
+    A = (J * a.Minv) @ J.T
+    A = A[np.ix_(order, order)]
+    n = len(order)
+    L = np.eye(n)
+    for k in range(n):
+        L[k + 1:, k] = A[k + 1:, k] / A[k, k]
+        A[k + 1:, k + 1:] -= np.outer(L[k + 1:, k], A[k, k + 1:])
+    nnz_numeric = int(np.sum(np.abs(np.tril(L, -1)) > 1e-12))
+    assert sl.symbolic_ldl(adj, order)[0] == nnz_numeric == 397

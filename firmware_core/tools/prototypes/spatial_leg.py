@@ -50,7 +50,7 @@ class Leg:
         d = tomllib.loads(Path(path).read_text())
         self.L = np.array([b["length"] for b in d["body"]])
         self.m = np.array([b["mass"] for b in d["body"]])
-        self.J = self.m * self.L**2 / 12.0
+        self.J = np.array([b.get("inertia", b["mass"] * b["length"]**2 / 12.0) for b in d["body"]])
         self.frame = {k: np.array(v, float) for k, v in d["frame"].items()}
         self.joints = []
         for j in d["joint"]:
