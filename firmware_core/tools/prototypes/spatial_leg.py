@@ -135,7 +135,8 @@ def planar_closed_form(leg: Leg, phi3, phi6):
 # rotations
 def cross(a, b):
     """a x b of two 3-vectors (numpy's cross is slow on single vectors)"""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2],
+                     a[0] * b[1] - a[1] * b[0]])
 
 
 def hat(w):
@@ -323,7 +324,7 @@ class Absolute:
         return rows
 
     def _expr(self, ex, st):
-        """value, Jacobian {body: 3 x 6}, velocity, the velocity-quadratic part of the acceleration"""
+        """value, Jacobian {body: 3 x 6}, velocity, the acceleration's velocity-quadratic part"""
         kind, b, c = ex
         if b < 0:
             z = np.zeros(3)
@@ -419,7 +420,8 @@ class Absolute:
         k2 = f(*(x + h / 2 * k for x, k in zip(y0, k1)))
         k3 = f(*(x + h / 2 * k for x, k in zip(y0, k2)))
         k4 = f(*(x + h * k for x, k in zip(y0, k3)))
-        r, q, v, w = (x + h / 6 * (a + 2 * b + 2 * c + d) for x, a, b, c, d in zip(y0, k1, k2, k3, k4))
+        r, q, v, w = (x + h / 6 * (a + 2 * b + 2 * c + d)
+                      for x, a, b, c, d in zip(y0, k1, k2, k3, k4))
         q = q / np.linalg.norm(q, axis=1)[:, None]
         return self.project((r, q, v, w))
 
@@ -434,14 +436,16 @@ class Absolute:
                   "v": v, "w": w}
             a, _ = self.accel(st)
             a = a.reshape(-1, 6)
-            return v, np.array([dexp_inv_right(th[b], w[b]) for b in range(self.nb)]), a[:, :3], a[:, 3:]
+            thd = np.array([dexp_inv_right(th[b], w[b]) for b in range(self.nb)])
+            return v, thd, a[:, :3], a[:, 3:]
 
         Z = np.zeros((self.nb, 3))
         k1 = f(Z, Z, v0, w0)
         k2 = f(*(x + h / 2 * k for x, k in zip((Z, Z, v0, w0), k1)))
         k3 = f(*(x + h / 2 * k for x, k in zip((Z, Z, v0, w0), k2)))
         k4 = f(*(x + h * k for x, k in zip((Z, Z, v0, w0), k3)))
-        inc = [x + h / 6 * (a + 2 * b + 2 * c + d) for x, a, b, c, d in zip((Z, Z, v0, w0), k1, k2, k3, k4)]
+        inc = [x + h / 6 * (a + 2 * b + 2 * c + d)
+               for x, a, b, c, d in zip((Z, Z, v0, w0), k1, k2, k3, k4)]
         r = r0 + inc[0]
         q = np.array([quat_mul(q0[b], quat_exp(inc[1][b])) for b in range(self.nb)])
         if normalize:
@@ -481,7 +485,8 @@ class Absolute:
     def health(self, y):
         """the Jacobian's smallest singular value, max | |q| - 1 |, max |Phi|"""
         phi, J, _ = self.rows_eval(self.state(*y))
-        return (np.linalg.svd(J, compute_uv=False)[-1], np.max(np.abs(np.linalg.norm(y[1], axis=1) - 1)),
+        return (np.linalg.svd(J, compute_uv=False)[-1],
+                np.max(np.abs(np.linalg.norm(y[1], axis=1) - 1)),
                 np.max(np.abs(phi)))
 
     def outputs(self, y):
@@ -593,7 +598,8 @@ class Bar:
         self.n = n if n is not None else jn(phi)
 
     def point(self, s):
-        return (self.x + self.u[0] * s[0] + self.n[0] * s[1], self.y + self.u[1] * s[0] + self.n[1] * s[1])
+        return (self.x + self.u[0] * s[0] + self.n[0] * s[1],
+                self.y + self.u[1] * s[0] + self.n[1] * s[1])
 
 
 # ---------------------------------------------------------------------------------------------
@@ -882,7 +888,8 @@ def run_reference(leg, T, sample, F=(50.0, 0.0), tau=1.0, tol=1e-12):
 
 def traj_error(a, b):
     """the largest foot-position (m) and psi (rad) difference over the samples"""
-    return float(np.max(np.linalg.norm(a[:, 2:5] - b[:, 2:5], axis=1))), float(np.max(np.abs(a[:, 1] - b[:, 1])))
+    return (float(np.max(np.linalg.norm(a[:, 2:5] - b[:, 2:5], axis=1))),
+            float(np.max(np.abs(a[:, 1] - b[:, 1]))))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -959,7 +966,8 @@ def relative_structure(b: Relative, seed=1):
     psi, bars, rows = b.kinematics(z, rng.normal(size=7))
     ez = np.array([0, 0, 1.0])
     kw = np.array([math.sin(psi.v), -math.cos(psi.v), 0.0])
-    blocks = [np.vstack([np.outer([-math.sin(psi.v), math.cos(psi.v), 0], psi.d), np.outer(ez, psi.d)])]
+    blocks = [np.vstack([np.outer([-math.sin(psi.v), math.cos(psi.v), 0], psi.d),
+                         np.outer(ez, psi.d)])]
     for bar in bars:
         ph = planar_angle_jet(bar)
         R = bar_rotation(psi.v, ph.v)
@@ -1002,7 +1010,7 @@ def leg_costs(leg: Leg, rows="tree"):
     nnzL, fact, solve = symbolic_ldl(kkt, list(range(nz + Jz.shape[0])))
     nnzPhi = int(np.sum(np.abs(Jz) > 1e-14))
     stage = formM + fact + solve + 2 * nnzR + 0          # Q_bar = R^T (Q - M bias)
-    end = fact + solve + 2 * nnzPhi + nz              # velocity projection on the stage's factor pattern
+    end = fact + solve + 2 * nnzPhi + nz              # the velocity projection
     out["b"] = dict(nq=nz, nv=nz, rows=Jz.shape[0], nnzR=nnzR, nnzPhi=nnzPhi,
                     orders={"coords_first": dict(nnzA=sum(len(s) for s in kkt) // 2 + len(kkt),
                                                   nnzL=nnzL, form=formM, fact=fact, solve=solve,
@@ -1054,7 +1062,8 @@ def hexapod_costs(leg: Leg, stuck=3, rows="tree"):
     cols_of_body += [set(range(6))] * 6
     for l in range(6):
         for k in range(Rm.shape[0]):
-            cols_of_body.append(set(range(6)) | {6 + 7 * l + int(c) for c in np.nonzero(np.abs(Rm[k]) > 1e-14)[0]})
+            nzc = np.nonzero(np.abs(Rm[k]) > 1e-14)[0]
+            cols_of_body.append(set(range(6)) | {6 + 7 * l + int(c) for c in nzc})
     zcols = [set() for _ in range(nz)]
     for i, c in enumerate(cols_of_body):
         for k in c:
@@ -1152,8 +1161,9 @@ def kkt_leg_and_hexapod(leg: Leg, stuck=3):
     order, hip = kkt_tree_order(a, 0, a.nv)
     leg_res = kkt_costs(J, order + hip, a.nv)
     nnzJ = int(np.sum(np.abs(J) > 1e-14))
+    stage = leg_res[1] + leg_res[2] + 2 * nnzJ
     out = {"leg": dict(nnzL=leg_res[0], fact=leg_res[1], solve=leg_res[2], min_pivot=leg_res[3],
-                       stage=leg_res[1] + leg_res[2] + 2 * nnzJ, step=5 * (leg_res[1] + leg_res[2] + 2 * nnzJ))}
+                       stage=stage, step=5 * stage)}
     # the hexapod: the box is coordinates 0..5; leg l's bodies at 6 + 42 l; its rows after all
     # coordinates; its hip rows also act on the box (a rotated copy is structure enough)
     nv = 6 + 42 * 6
@@ -1173,7 +1183,8 @@ def kkt_leg_and_hexapod(leg: Leg, stuck=3):
         # a stuck foot: 3 rows on the shank, eliminated right after the shank's coordinates
         if l < stuck:
             foot = [nv + 6 * m0 + 3 * l + k for k in range(3)]
-            H[6 * m0 + 3 * l:6 * m0 + 3 * l + 3, base + 36:base + 42] = np.random.default_rng(l).normal(size=(3, 6))
+            f0 = 6 * m0 + 3 * l
+            H[f0:f0 + 3, base + 36:base + 42] = np.random.default_rng(l).normal(size=(3, 6))
             lo = lo[:6] + foot + lo[6:]
         order += lo
         hips += hi_
@@ -1206,10 +1217,11 @@ def accuracy(leg, T=1.0, steps=STEPS, sample=0.01, F=(50.0, 0.0), tau=1.0, forms
         for h in (steps if name != "a-quat" else steps[:2]):
             out, _ = run_fixed(make(), h, T, sample)
             ef, ep = traj_error(out, ref)
-            res[name, h] = dict(foot=ef, psi=ep, energy=float(np.max(np.abs(out[:, 5] - out[0, 5]))),
+            de = float(np.max(np.abs(out[:, 5] - out[0, 5])))
+            res[name, h] = dict(foot=ef, psi=ep, energy=de,
                                 smin=float(np.min(out[:, 6])), quat=float(np.max(out[:, 7])),
                                 phi=float(np.max(out[:, 8])), out=out)
-            log(f"{name:8s} h = {h:.1e}: foot {ef:.2e} m, psi {ep:.2e} rad, energy {res[name, h]['energy']:.2e} J, "
+            log(f"{name:8s} h = {h:.1e}: foot {ef:.2e} m, psi {ep:.2e} rad, energy {de:.2e} J, "
                 f"sigma_min {res[name, h]['smin']:.3f}, | |q| - 1 | {res[name, h]['quat']:.1e}")
     return res, ref
 
@@ -1264,53 +1276,64 @@ def planar_check(leg, T=1.0, h=1e-3, sample=0.01, log=print):
     return res
 
 
+def md_row(*cells):
+    """a markdown table row; integers with thousands separators"""
+    return "| " + " | ".join(f"{c:,}" if isinstance(c, int) else str(c) for c in cells) + " |"
+
+
 def cost_table(leg, log=print):
     lc = {v: leg_costs(leg, v) for v in ("tree", "plane")}
     kk = {st: kkt_leg_and_hexapod(leg, st) for st in (0, 3, 6)}
     hx = {(v, st): hexapod_costs(leg, st, v) for v in ("tree", "plane") for st in (0, 3, 6)}
-    log("\n| one leg, fixed box | coordinates | velocity coordinates | rows | nnz(J) | nnz(A), lower | "
-        "nnz(L) | factor | solve | RK4 stage | RK4 step |")
-    log("|---|---|---|---|---|---|---|---|---|---|---|")
+    cols = ("coordinates", "velocity coordinates", "rows", "nnz(J)", "nnz(A), lower", "nnz(L)",
+            "factor", "solve", "RK4 stage", "RK4 step")
+    log("\n" + md_row("one leg, fixed box", *cols))
+    log(md_row(*["---"] * (len(cols) + 1)))
+    cost = lambda r: (r["fact"], r["solve"], r["stage"], r["step"])      # noqa: E731
     for v in ("tree", "plane"):
         c = lc[v]["a"]
         for o, r in c["orders"].items():
-            log(f"| (a) {v} rows, J M^-1 J^T, {o} order | {c['nq']} | {c['nv']} | {c['rows']} | {c['nnzJ']} | "
-                f"{r['nnzA']} | {r['nnzL']} | {r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+            log(md_row(f"(a) {v} rows, J M^-1 J^T, {o} order", c["nq"], c["nv"], c["rows"],
+                       c["nnzJ"], r["nnzA"], r["nnzL"], *cost(r)))
     k = kk[0]["leg"]
     c = lc["tree"]["a"]
-    log(f"| (a) tree rows, [M J^T; J 0], tree order | {c['nq']} | {c['nv']} | {c['rows']} | {c['nnzJ']} | - | "
-        f"{k['nnzL']} | {k['fact']:,} | {k['solve']:,} | {k['stage']:,} | {k['step']:,} |")
+    log(md_row("(a) tree rows, [M J^T; J 0], tree order", c["nq"], c["nv"], c["rows"], c["nnzJ"],
+               "-", k["nnzL"], *cost(k)))
     c = lc["tree"]["b"]
     r = c["orders"]["coords_first"]
-    log(f"| (b) relative, [R^T M R, Phi_z^T; Phi_z 0] | {c['nq']} | {c['nv']} | {c['rows']} | {c['nnzPhi']} (R: {c['nnzR']}) | "
-        f"{r['nnzA']} | {r['nnzL']} | {r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
-    log("\n| hexapod, free box | feet stuck | coordinates | velocity coordinates | rows | nnz(L) | factor | solve | RK4 stage | RK4 step |")
-    log("|---|---|---|---|---|---|---|---|---|---|")
+    log(md_row("(b) relative, [R^T M R, Phi_z^T; Phi_z 0]", c["nq"], c["nv"], c["rows"],
+               f"{c['nnzPhi']} (R: {c['nnzR']})", r["nnzA"], r["nnzL"], *cost(r)))
+    cols = ("feet stuck", "coordinates", "velocity coordinates", "rows", "nnz(L)", "factor",
+            "solve", "RK4 stage", "RK4 step")
+    log("\n" + md_row("hexapod, free box", *cols))
+    log(md_row(*["---"] * (len(cols) + 1)))
     for st in (0, 3, 6):
         c = hx["tree", st]["a"]
         r = c["orders"]["legs_then_hips"]
-        log(f"| (a) tree rows, J M^-1 J^T, legs then hip rows | {st} | {c['nq']} | {c['nv']} | {c['rows']} | {r['nnzL']:,} | "
-            f"{r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+        log(md_row("(a) tree rows, J M^-1 J^T, legs then hip rows", st, c["nq"], c["nv"],
+                   c["rows"], r["nnzL"], *cost(r)))
     for st in (0, 3, 6):
         k = kk[st]["hexapod"]
-        log(f"| (a) tree rows, [M J^T; J 0], legs then box | {st} | 301 | 258 | {k['rows']} | {k['nnzL']:,} | "
-            f"{k['fact']:,} | {k['solve']:,} | {k['stage']:,} | {k['step']:,} |")
+        log(md_row("(a) tree rows, [M J^T; J 0], legs then box", st, 301, 258, k["rows"],
+                   k["nnzL"], *cost(k)))
     for st in (0, 3, 6):
         c = hx["plane", st]["a"]
         r = c["orders"]["legs_then_hips"]
-        log(f"| (a) plane rows, J M^-1 J^T, legs then hip rows | {st} | {c['nq']} | {c['nv']} | {c['rows']} | {r['nnzL']:,} | "
-            f"{r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+        log(md_row("(a) plane rows, J M^-1 J^T, legs then hip rows", st, c["nq"], c["nv"],
+                   c["rows"], r["nnzL"], *cost(r)))
     for st in (0, 3, 6):
         c = hx["tree", st]["b"]
         r = c["orders"]["legs_then_box"]
-        log(f"| (b) relative, KKT, legs then box | {st} | {c['nq']} | {c['nv']} | {c['rows']} | {r['nnzL']:,} | "
-            f"{r['fact']:,} | {r['solve']:,} | {r['stage']:,} | {r['step']:,} |")
+        log(md_row("(b) relative, KKT, legs then box", st, c["nq"], c["nv"], c["rows"],
+                   r["nnzL"], *cost(r)))
     return lc, kk, hx
 
 
 def main(argv=None):
-    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
-    ap.add_argument("--table", action="store_true", help="accuracy and cost tables (several minutes)")
+    ap = argparse.ArgumentParser(description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--table", action="store_true",
+                    help="accuracy and cost tables (several minutes)")
     ap.add_argument("--costs", action="store_true", help="the operation counts alone")
     ap.add_argument("--planar", action="store_true", help="the planar check")
     ap.add_argument("--T", type=float, default=1.0)
@@ -1322,11 +1345,13 @@ def main(argv=None):
         planar_check(leg, T=args.T)
     if args.table:
         res, _ = accuracy(leg, T=args.T)
-        print("\n| formulation | h (s) | foot error (m) | psi error (rad) | energy balance (J) | min sigma(J) | max abs(abs(q) - 1) |")
-        print("|---|---|---|---|---|---|---|")
-        for (name, h), r in sorted(res.items(), key=lambda x: ("a", "a-plane", "a-quat", "b").index(x[0][0])):
-            print(f"| {name} | {h:g} | {r['foot']:.2e} | {r['psi']:.2e} | {r['energy']:.2e} | {r['smin']:.4f} | "
-                  f"{r['quat']:.1e} |")
+        print("\n" + md_row("formulation", "h (s)", "foot error (m)", "psi error (rad)",
+                            "energy balance (J)", "min sigma(J)", "max abs(abs(q) - 1)"))
+        print(md_row(*["---"] * 7))
+        names = ("a", "a-plane", "a-quat", "b")
+        for (name, h), r in sorted(res.items(), key=lambda x: names.index(x[0][0])):
+            print(md_row(name, f"{h:g}", f"{r['foot']:.2e}", f"{r['psi']:.2e}",
+                         f"{r['energy']:.2e}", f"{r['smin']:.4f}", f"{r['quat']:.1e}"))
         for name in ("a", "a-plane", "b"):
             print(f"order of accuracy {name}: foot {order_of(res, name, STEPS):.2f}, "
                   f"psi {order_of(res, name, STEPS, 'psi'):.2f}")
