@@ -12,7 +12,8 @@
 
 The actuators and the rowing motor are forces (constant here), not driven coordinates.
 Usage: python spatial_leg.py --table      (the figures of docs/design/spatial.md)
-       python spatial_leg.py --planar     (the planar check against the legsim library)
+       python spatial_leg.py --planar     (the planar check against the legsim library of
+                                           $LEGSIM_MAIN, default this tree, if built)
 """
 from __future__ import annotations
 
@@ -1245,7 +1246,7 @@ def planar_check(leg, T=1.0, h=1e-3, sample=0.01, log=print):
             f"{res[name]['lateral']:.1e} m, foot vs minimal reference {res[name]['foot']:.2e} m")
     try:
         import os
-        main = Path(os.environ.get("LEGSIM_MAIN", "/work/main"))
+        main = Path(os.environ.get("LEGSIM_MAIN", ROOT))   # a tree with build/host built
         os.environ.setdefault("LEGSIM_LIB_DIR", str(main / "build/host/firmware_core"))
         sys.path.insert(0, str(main / "python"))
         import legsim
