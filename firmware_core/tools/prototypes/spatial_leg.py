@@ -1,9 +1,11 @@
 """One leg of models/leg.toml on a rowing hip yoke, on a fixed box, in two spatial formulations.
 
 (a) absolute: every body (yoke, six bars) has position + unit quaternion (7 numbers) and
-    velocity (v world, omega body frame: 6 numbers); rows: the yoke's revolute about the
-    vertical (5), each bar held in the yoke's plane (3 each), the leg's 16 planar rows written
-    in the yoke's plane: 39 rows on 42 velocity coordinates, 3 degrees of freedom.
+    velocity (v world, omega body frame: 6 numbers); 39 rows on 42 velocity coordinates, 3
+    degrees of freedom, in two sets: "tree" (the yoke's revolute about the vertical, 5 rows;
+    the spanning tree's joints as 3D joints, 5 rows each; the two loop-closing joints by their
+    2 in-plane rows) and "plane" (the yoke's 5 rows, each bar held in the yoke's plane by 3,
+    the leg's 16 planar rows along the yoke's in-plane axes). RK4 on the rotation group (RKMK).
 (b) relative (semi-recursive): z = (psi, phi1, s1, phi3, phi4, s2, theta6): the yoke angle, the
     pinned bars' angles in the yoke's plane, the actuators' extensions, the shank's angle on
     the upper rod; the two cut joints (C_rod_thigh, D) give 4 loop-closure rows.
