@@ -61,7 +61,7 @@ int main(int argc, char **argv) {
     ConeReport rep;
     failed += solve(n, W, q, mu, r, u, &rep) != LEGSIM_OK;
     iterations += rep.iterations;
-    sweeps += rep.method == CONE_SWEEPS;
+    sweeps += rep.method == ConeMethod::Sweeps;
     worst = rep.iterations > worst ? rep.iterations : worst;
   }
   std::printf("%d contacts, %d problems: %.2f iterations a solve (at most %d), %d by sweeps, %d not converged\n", n,

@@ -92,8 +92,12 @@ void test_single_contact_closed_forms(void) {
   TEST_ASSERT_DOUBLE_WITHIN(1e-12, -0.25 * 4 / 5, r[2]);
   TEST_ASSERT_DOUBLE_WITHIN(1e-12, 3 * (1 - 0.25 / 5), u[1]);
   TEST_ASSERT_DOUBLE_WITHIN(1e-12, 4 * (1 - 0.25 / 5), u[2]);
-  // frictionless: the tangential force 0 whatever the slip
+  // frictionless: the tangential force 0 whatever the slip; apart without a slip at once
   const real mu0[1] = {0};
+  const real q_leave[3] = {1, 0, 0};
+  solve_and_check(1, Wi, q_leave, mu0, r, u, rep);
+  for (int k = 0; k < 3; ++k) TEST_ASSERT_EQUAL_DOUBLE(0, r[k]);
+  TEST_ASSERT_EQUAL_INT(0, rep.iterations);
   solve_and_check(1, Wi, q_slide, mu0, r, u, rep);
   TEST_ASSERT_DOUBLE_WITHIN(1e-12, 0.5, r[0]);
   TEST_ASSERT_DOUBLE_WITHIN(1e-12, 0, r[1]);
@@ -243,7 +247,7 @@ void test_random_coupled_problems(void) {
     for (int i = 0; i < n; ++i) mu[i] = uniform(0, real(1.5));
     ConeReport rep;
     solve_and_check(n, W, q, mu, r, u, rep);
-    sweeps += rep.method == CONE_SWEEPS;
+    sweeps += rep.method == ConeMethod::Sweeps;
     iterations += rep.iterations;
     worst = rep.iterations > worst ? rep.iterations : worst;
   }

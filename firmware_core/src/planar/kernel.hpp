@@ -155,8 +155,10 @@ struct Kernel {
   // past tol: qd projected (M-weighted, onto J qd = 0), a second time where the first pass
   // leaves it past tol (the factor is not q's own); drift: |J qd| after. Then qdd, every
   // row's multiplier and, reaction not null, the joints' reactions; no condition estimate;
-  // qd written only when the whole call succeeds. LEGSIM_ERR_DIVERGED (qdd not finite).
-  // nullptr elsewhere (and in a build without generalized-alpha).
+  // qd written only when the whole call succeeds (the multipliers, reactions, data.force_q
+  // and the actuators' forces may be written before a failure: the caller's fallback writes
+  // them again). LEGSIM_ERR_DIVERGED (qdd not finite). nullptr elsewhere (and in a build
+  // without generalized-alpha).
   legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
                                 const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
                                 real tol, real &drift, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);

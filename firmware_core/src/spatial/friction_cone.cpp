@@ -24,9 +24,10 @@ void alart_curnier(int n, int i, const real *W, const real *r, const real *u, re
   const bool pressed = xn > 0;
   const real radius = pressed ? mu * xn : real(0);
   const real norm = hypot2(xt[0], xt[1]);
-  const bool inside = norm <= radius;
+  // apart: the disk is a point, P_D = 0 whatever x_t (and so is its derivative)
+  const bool inside = pressed && norm <= radius;
   phi[0] = r[a] - (pressed ? xn : real(0));
-  const real s = inside ? real(1) : radius / norm;  // P_D(x_t) = s x_t
+  const real s = !pressed ? real(0) : inside ? real(1) : radius / norm;  // P_D(x_t) = s x_t
   phi[1] = r[a + 1] - s * xt[0];
   phi[2] = r[a + 2] - s * xt[1];
   if (!jac) return;
@@ -37,7 +38,9 @@ void alart_curnier(int n, int i, const real *W, const real *r, const real *u, re
     const real dxt0 = e1 - rho * W[(a + 1) * m + c], dxt1 = e2 - rho * W[(a + 2) * m + c];
     jac[0 * m + c] = e0 - (pressed ? dxn : real(0));
     real dp0, dp1;
-    if (inside) {
+    if (!pressed) {
+      dp0 = dp1 = 0;
+    } else if (inside) {
       dp0 = dxt0;
       dp1 = dxt1;
     } else {
@@ -180,10 +183,10 @@ bool local_exact(const real *w, const real *b, real mu, real *r) {
 
 void cone_project(real mu, const real *x, real *p) {
   const real tn = hypot2(x[1], x[2]);
-  if (tn <= mu * x[0]) {  // inside
-    p[0] = x[0], p[1] = x[1], p[2] = x[2];
-  } else if (mu * tn <= -x[0]) {  // in the polar cone
+  if (mu * tn <= -x[0]) {  // in the polar cone (first: with mu = 0 and x_t = 0 both tests pass)
     p[0] = p[1] = p[2] = 0;
+  } else if (tn <= mu * x[0]) {  // inside
+    p[0] = x[0], p[1] = x[1], p[2] = x[2];
   } else {  // onto the surface
     const real a = (x[0] + mu * tn) / (1 + mu * mu);
     p[0] = a;
@@ -306,11 +309,11 @@ legsim_status cone_solve(int n, const real *W, const real *q, const real *mu, re
   }
   velocities(m, W, q, r, u);
   p.keep(r, u);
-  report.method = CONE_NEWTON;
+  report.method = ConeMethod::Newton;
   newton(p, r, u, opt.max_newton);
   if (!(p.best_error <= p.tol)) {
     // sweeps from the best iterate, Newton's polish now and then from where they are
-    report.method = CONE_SWEEPS;
+    report.method = ConeMethod::Sweeps;
     for (int k = 0; k < m; ++k) r[k] = p.best[k];
     velocities(m, W, q, r, u);
     real rs[kConeMaxRows], us[kConeMaxRows];

@@ -24,18 +24,20 @@ namespace legsim {
 using cone_real = legsim_real;
 
 // The most contacts one problem holds (the hexapod's six feet): the solver's workspace is
-// fixed at this size, on the stack (about 6 KB in double).
+// fixed at this size, on the stack (about 4 KB in double).
 constexpr int kConeMaxContacts = 6;
 constexpr int kConeMaxRows = 3 * kConeMaxContacts;
 
 struct ConeOptions {
-  cone_real tol = cone_real(1e-10);  // natural map's error / (1 + |q|)
+  // the natural map's error / (1 + |q|) that counts as converged: 1e-10 in double, 1e-5 in
+  // float (64 of its round-offs)
+  cone_real tol = cone_real(sizeof(cone_real) == sizeof(float) ? 1e-5 : 1e-10);
   int max_newton = 30;
   int max_sweeps = 200;
 };
 
 // How the problem was solved.
-enum ConeMethod : int { CONE_NEWTON = 0, CONE_SWEEPS = 1 };
+enum class ConeMethod { Newton, Sweeps };
 
 struct ConeReport {
   bool converged;

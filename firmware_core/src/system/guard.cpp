@@ -100,6 +100,7 @@ void Snapshot::restore(Sim &sim) const {
   d.history_valid = history_valid;
   d.forcing_only = forcing_only;
   d.end_projected = end_projected;
+  d.end_solved = false;  // (of a step now undone)
   // The workspace is not put back: a refused step may have run to its end, its factor that
   // of a state now undone (the output check refuses after the solves).
   d.factor.of_state = false;

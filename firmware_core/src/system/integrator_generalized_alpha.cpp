@@ -170,19 +170,20 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // Where the generated kernel has the end on that factor (Kernel::end_factored: the robot's),
   // the passes and the end state's solve, reactions and forces are one call, and
   // generalized_alpha_reactions has nothing left to do; not where force elements act (their
-  // forces may depend on the projected velocities).
-  VecR lambda_end;  // the end solve's multipliers (acceleration level)
+  // forces may depend on the projected velocities), nor with the reactions disabled (the
+  // contacts' and stops' forces are then the iteration's, as on the general path).
   if (LEGSIM_WITH_CONTACT && m.nc > 0) d.end_solved = false;  // (never set without contacts)
   if (LEGSIM_WITH_CONTACT && m.nc > 0 && !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
 #if LEGSIM_KERNELS_REDUCED
     const StagePlan plan = stage_plan(sim, lay);
-    if (kern && plan.kernel && plan.kernel->end_factored) {
+    if (kern && plan.kernel && plan.kernel->end_factored && !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS)) {
+      // its multipliers (acceleration level) into d.lambda, for the forces below; the
+      // iteration's are put back after
       real drift;
       VecQ qdd_end;
-      legsim_reaction *const reaction = sim.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
       d.end_solved = plan.kernel->end_factored(m, d.stop_drivers, q1, v1, *plan.base, d, plan.actuators, &d.trig,
-                                               d.factor.a.data(), tol, drift, lambda_end, qdd_end,
-                                               reaction) == LEGSIM_OK;
+                                               d.factor.a.data(), tol, drift, d.lambda, qdd_end,
+                                               d.reaction) == LEGSIM_OK;
     }
 #endif
     if (!d.end_solved) {
@@ -201,13 +202,10 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   d.q = q1;
   d.qd = v1;
   d.qdd = qdd1;
-  // the ground's and the stops' forces: the end solve's where it ran (the reactions'), else the
-  // iteration's (generalized_alpha_reactions replaces them); the next step starts from the
-  // iteration's multipliers either way
-  if (LEGSIM_WITH_CONTACT && d.end_solved) {
-    d.lambda = lambda_end;
-    stop_forces_update(sim);
-  }
+  // the ground's and the stops' forces: the end solve's where it ran (d.lambda holds its
+  // multipliers), else the iteration's (generalized_alpha_reactions replaces them); the next
+  // step starts from the iteration's multipliers either way
+  if (LEGSIM_WITH_CONTACT && d.end_solved) stop_forces_update(sim);
   d.lambda = lambda;
   if (!(LEGSIM_WITH_CONTACT && d.end_solved)) stop_forces_update(sim);
   return LEGSIM_OK;

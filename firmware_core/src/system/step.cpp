@@ -60,6 +60,7 @@ void state_changed(Data &d) {
   d.derivative_valid = false;
   d.history_valid = false;
   d.forcing_only = false;
+  d.end_solved = false;
 }
 
 namespace {
