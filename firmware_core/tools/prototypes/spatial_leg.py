@@ -1029,7 +1029,7 @@ def hexapod_costs(leg: Leg, stuck=3, rows="tree"):
     nzr, _ = absolute_structure(a)
     rows, groups, hip = [], [], []
     for l in range(6):
-        base = 6 + 42 * l
+        base = 6 + a.nv * l
         grp = []
         for i, cols in enumerate(nzr):
             c = {base + x for x in cols}
@@ -1047,7 +1047,7 @@ def hexapod_costs(leg: Leg, stuck=3, rows="tree"):
         groups.append(grp)
     adj, form = gram_pattern(rows)
     nnzJ = sum(len(r) for r in rows)
-    nv = 6 + 42 * 6
+    nv = 6 + a.nv * 6
     res = {}
     for name, order in (("min_degree", min_degree(adj)),
                         ("legs_then_hips", min_degree(adj, groups + [hip]))):
@@ -1105,7 +1105,8 @@ def hexapod_costs(leg: Leg, stuck=3, rows="tree"):
     nnzPhi = sum(len(x) for x in nodes[nz:])
     stage = formM + fact + solve + 2 * nnzR
     end = fact + solve + 2 * nnzPhi + nz
-    out["b"] = dict(nq=7 + 42, nv=nz, rows=nrows, nnzR=nnzR, orders={"legs_then_box": dict(
+    # coordinates: the velocity coordinates and one more (the box's quaternion: 4 for 3 rates)
+    out["b"] = dict(nq=nz + 1, nv=nz, rows=nrows, nnzR=nnzR, orders={"legs_then_box": dict(
         nnzA=sum(len(x) for x in nodes) // 2 + len(nodes), nnzL=nnzL, form=formM, fact=fact,
         solve=solve, stage=stage, step=4 * stage + end + formM)})
     return out
@@ -1169,7 +1170,7 @@ def kkt_leg_and_hexapod(leg: Leg, stuck=3):
                        stage=stage, step=5 * stage)}
     # the hexapod: the box is coordinates 0..5; leg l's bodies at 6 + 42 l; its rows after all
     # coordinates; its hip rows also act on the box (a rotated copy is structure enough)
-    nv = 6 + 42 * 6
+    nv = 6 + a.nv * 6
     rows = []
     order, hips = [], []
     m0 = J.shape[0]
@@ -1178,8 +1179,8 @@ def kkt_leg_and_hexapod(leg: Leg, stuck=3):
     H = np.zeros((total_rows, nv))
     r = 0
     for l in range(6):
-        base = 6 + 42 * l
-        H[r:r + m0, base:base + 42] = J
+        base = 6 + a.nv * l
+        H[r:r + m0, base:base + a.nv] = J
         for i in range(5):
             H[r + i, 0:6] = 1.0 if i < 3 else np.r_[0, 0, 0, 1.0, 1.0, 1.0]
         lo, hi_ = kkt_tree_order(a, base, nv + r)
@@ -1187,7 +1188,7 @@ def kkt_leg_and_hexapod(leg: Leg, stuck=3):
         if l < stuck:
             foot = [nv + 6 * m0 + 3 * l + k for k in range(3)]
             f0 = 6 * m0 + 3 * l
-            H[f0:f0 + 3, base + 36:base + 42] = np.random.default_rng(l).normal(size=(3, 6))
+            H[f0:f0 + 3, base + a.nv - 6:base + a.nv] = np.random.default_rng(l).normal(size=(3, 6))
             lo = lo[:6] + foot + lo[6:]
         order += lo
         hips += hi_
@@ -1195,7 +1196,9 @@ def kkt_leg_and_hexapod(leg: Leg, stuck=3):
     order += hips + list(range(6))
     hx = kkt_costs(H, order, nv, check=False)
     nnzH = int(np.sum(np.abs(H) > 1e-14))
-    out["hexapod"] = dict(rows=total_rows, nnzL=hx[0], fact=hx[1], solve=hx[2],
+    # coordinates: the box's 7 (position, quaternion) and 7 per body of each leg
+    out["hexapod"] = dict(nq=7 + 6 * 7 * a.nb, nv=nv, rows=total_rows, nnzL=hx[0], fact=hx[1],
+                          solve=hx[2],
                           stage=hx[1] + hx[2] + 2 * nnzH, step=5 * (hx[1] + hx[2] + 2 * nnzH))
     return out
 
@@ -1317,7 +1320,7 @@ def cost_table(leg, log=print):
                    c["rows"], r["nnzL"], *cost(r)))
     for st in (0, 3, 6):
         k = kk[st]["hexapod"]
-        log(md_row("(a) tree rows, [M J^T; J 0], legs then box", st, 301, 258, k["rows"],
+        log(md_row("(a) tree rows, [M J^T; J 0], legs then box", st, k["nq"], k["nv"], k["rows"],
                    k["nnzL"], *cost(k)))
     for st in (0, 3, 6):
         c = hx["plane", st]["a"]
