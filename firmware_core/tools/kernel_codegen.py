@@ -875,14 +875,7 @@ class Reduced(Kernel):
                     o.append(f"  const real l{r + e} = (Q{3 * b + e} - mass[{3 * b + e}] * q{axis}{b})"
                              + (f" - ({others});" if others != "0" else ";"))
                 o.append(f"  z += l{r} * real(0) + l{r + 1} * real(0);")
-            o += [f"  lambda[{i}] = l{i};" for i in range(k.m)]
-            o += k.reactions_locals()
-            o.append("  if (!(z == z)) return LEGSIM_ERR_DIVERGED;")
-            o.append("  if (projected) {  // the state's velocities now: J qd = 0 to round-off")
-            o.append("    " + " ".join(f"qd[{n}] = V{n};" for n in range(nq)))
-            o.append("    drift = 0;")
-            o.append("  }")
-            o.append("  return LEGSIM_OK;")
+            o += self.end_tail("the state's velocities now: J qd = 0 to round-off", ["drift = 0;"])
         else:
             o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
@@ -915,7 +908,7 @@ class Reduced(Kernel):
         o.append("  const bool projected = !(r <= tol);")
         for npass in range(2):
             o.append("  if (!(r <= tol)) {  // " + ("a pass" if npass == 0 else "a second pass"))
-            o += ["  " + x for x in self.pass_locals()]
+            o += ["  " + x for x in self.projection_locals(guard="", lval="a")]
             o += ["  " + x for x in drift]
             o.append("  }")
         o.append("  drift = r;")
@@ -928,27 +921,23 @@ class Reduced(Kernel):
         for n in range(nq):
             o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({self.jt_expr(n, lambda i: f'l{self.orig[i]}', True)}));")
             o.append(f"  z += qdd[{n}] * real(0);")
-        o += [f"  lambda[{i}] = l{i};" for i in range(k.m)]
-        o += k.reactions_locals()
-        o.append("  if (!(z == z)) return LEGSIM_ERR_DIVERGED;")
-        o.append("  if (projected) {  // the state's velocities now")
-        o.append("    " + " ".join(f"qd[{n}] = V{n};" for n in range(nq)))
-        o.append("  }")
-        o.append("  return LEGSIM_OK;")
+        o += self.end_tail("the state's velocities now")
         o.append("}\n")
         return o
 
-    def pass_locals(self):
-        """One pass of the velocities' projection onto J V = 0 on the factor a (project's, in
-        linear_solve.cpp: V -= W J^T (J W J^T)^-1 J V), a structure without a pinned body."""
-        o = ["  {"]
-        o += [f"    const real pc{i} = {self.j_expr(i, lambda n: f'V{n}', True)};" for i in range(self.m)]
-        o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}", lval="a")]
-        for n in range(3 * self.nb):
-            jt = self.jt_expr(n, lambda i: f"py{i}", True)
-            if jt != "0":
-                o.append(f"    V{n} -= w[{n}] * ({jt});")
+    def end_tail(self, note, also=()):
+        """The ends' last lines: every row's multiplier and the joints' reactions out, the
+        status (qdd not finite: LEGSIM_ERR_DIVERGED), and only then the projected velocities
+        (with `also`), so that qd is written only when the whole call succeeds."""
+        k = self.full
+        o = [f"  lambda[{i}] = l{i};" for i in range(k.m)]
+        o += k.reactions_locals()
+        o.append("  if (!(z == z)) return LEGSIM_ERR_DIVERGED;")
+        o.append(f"  if (projected) {{  // {note}")
+        o.append("    " + " ".join(f"qd[{n}] = V{n};" for n in range(3 * self.nb)))
+        o += [f"    {x}" for x in also]
         o.append("  }")
+        o.append("  return LEGSIM_OK;")
         return o
 
     def t_locals(self):
@@ -962,21 +951,23 @@ class Reduced(Kernel):
                 o.append(f"  const real t{n} = wr{b} * fr{b};")
         return o
 
-    def projection_locals(self):
-        """Where projected: the velocities V<n> projected onto J V = 0, M-weighted, as the
+    def projection_locals(self, guard="if (projected) ", lval="L"):
+        """Where guard holds: the velocities V<n> projected onto J V = 0, M-weighted, as the
         general path's project does it in the whole system (linear_solve.cpp), here in the
         reduced one (the same result to round-off): a pinned body's velocities v_b become
         its angle's rate u_b = wr_b G_b^T M_b v_b (the M-nearest G_b u_b, which meets its
         pin's rows), and with the reduced rows J_r, W_r (wr_b on a pinned body's angle):
         u <- u - W_r J_r^T (J_r W_r J_r^T)^-1 J_r u, the factor's, then v_b = G_b u_b. The
         whole projection is this one: it is M-orthogonal to the pins' G_b u, and the rest is
-        the reduced problem."""
-        o = ["  if (projected) {"]
+        the reduced problem. lval: the factor's, as solve_locals' (the array a: generalized-
+        alpha's end on the Newton iteration's factor, a structure without a pinned body)."""
+        assert lval == "L" or not self.pinned  # (a holds the whole system's factor)
+        o = [f"  {guard}{{"]
         for b, (n, r) in sorted(self.pinned.items()):
             o.append(f"    const real ur{b} = pin_rate(mass + {3 * b}, XY{{sax{n}, say{n}}}, wr{b}, V{3 * b}, V{3 * b + 1}, V{3 * b + 2});")
         u = lambda n: f"ur{n // 3}" if n // 3 in self.pinned else f"V{n}"  # noqa: E731
         o += [f"    const real pc{i} = {self.j_expr(i, u, True)};" for i in range(self.m)]
-        o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}")]
+        o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}", lval=lval)]
         for n in range(3 * self.nb):
             b, x = divmod(n, 3)
             jt = self.jt_expr(n, lambda i: f"py{i}", True)
