@@ -4,6 +4,8 @@
 
 #include <cmath>
 
+#include "system/dense_solve.hpp"
+
 namespace legsim {
 namespace {
 
@@ -71,39 +73,6 @@ real merit(int n, const real *W, const real *r, const real *u, const real *mu, c
     for (int k = 0; k < 3; ++k) f += phi[3 * i + k] * phi[3 * i + k];
   }
   return real(0.5) * f;
-}
-
-// A x = b by Gaussian elimination with partial pivoting (A destroyed); false on a pivot below
-// floor.
-bool dense_solve(int m, real *A, real *b, real floor) {
-  for (int c = 0; c < m; ++c) {
-    int p = c;
-    for (int i = c + 1; i < m; ++i)
-      if (std::abs(A[i * m + c]) > std::abs(A[p * m + c])) p = i;
-    if (!(std::abs(A[p * m + c]) > floor)) return false;
-    if (p != c) {
-      for (int j = 0; j < m; ++j) {
-        const real t = A[c * m + j];
-        A[c * m + j] = A[p * m + j];
-        A[p * m + j] = t;
-      }
-      const real t = b[c];
-      b[c] = b[p];
-      b[p] = t;
-    }
-    for (int i = c + 1; i < m; ++i) {
-      const real f = A[i * m + c] / A[c * m + c];
-      if (f == 0) continue;
-      for (int j = c; j < m; ++j) A[i * m + j] -= f * A[c * m + j];
-      b[i] -= f * b[c];
-    }
-  }
-  for (int i = m - 1; i >= 0; --i) {
-    real s = b[i];
-    for (int j = i + 1; j < m; ++j) s -= A[i * m + j] * b[j];
-    b[i] = s / A[i * m + i];
-  }
-  return true;
 }
 
 // One contact exactly, the others' reactions fixed: the 3 x 3 problem on w r + b (w: W's

@@ -5,6 +5,7 @@
 
 #include "planar/kernel.hpp"
 #include "planar/mass.hpp"
+#include "system/dense_solve.hpp"
 #include "system/solve.hpp"
 
 namespace legsim {
@@ -116,31 +117,14 @@ legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const
     j_times(layout, d.rows, mf, z[j]);
     factor_solve(d.factor, z[j]);
   }
-  // C y = E^T x, C = I + E^T Z, by Gaussian elimination with partial pivoting (zeroed
-  // first: GCC cannot tell that only the first ns rows and columns are read)
-  real c[kMaxContacts][kMaxContacts + 1] = {};
+  // C y = E^T x, C = I + E^T Z; a vanishing pivot: friction that cancels the normal
+  // stiffness (Painleve)
+  real c[kMaxContacts * kMaxContacts], y[kMaxContacts];
   for (int i = 0; i < ns; ++i) {
-    for (int j = 0; j < ns; ++j) c[i][j] = (i == j ? real(1) : real(0)) + z[j][layout.slide_row[i]];
-    c[i][ns] = x[layout.slide_row[i]];
+    for (int j = 0; j < ns; ++j) c[i * ns + j] = (i == j ? real(1) : real(0)) + z[j][layout.slide_row[i]];
+    y[i] = x[layout.slide_row[i]];
   }
-  for (int col = 0; col < ns; ++col) {
-    int piv = col;
-    for (int i = col + 1; i < ns; ++i)
-      if (std::abs(c[i][col]) > std::abs(c[piv][col])) piv = i;
-    // a vanishing pivot: friction that cancels the normal stiffness (Painleve)
-    if (!(std::abs(c[piv][col]) > real(1e-9))) return LEGSIM_ERR_CONTACT;
-    for (int j = 0; j <= ns; ++j) std::swap(c[col][j], c[piv][j]);
-    for (int i = col + 1; i < ns; ++i) {
-      const real r = c[i][col] / c[col][col];
-      for (int j = col; j <= ns; ++j) c[i][j] -= r * c[col][j];
-    }
-  }
-  real y[kMaxContacts];
-  for (int i = ns - 1; i >= 0; --i) {
-    real s = c[i][ns];
-    for (int j = i + 1; j < ns; ++j) s -= c[i][j] * y[j];
-    y[i] = s / c[i][i];
-  }
+  if (!dense_solve(ns, c, y, real(1e-9))) return LEGSIM_ERR_CONTACT;
   for (int j = 0; j < ns; ++j)
     for (int i = 0; i < layout.m; ++i) x[i] -= z[j][i] * y[j];
   return LEGSIM_OK;
