@@ -118,8 +118,9 @@ legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const
     factor_solve(d.factor, z[j]);
   }
   // C y = E^T x, C = I + E^T Z; a vanishing pivot: friction that cancels the normal
-  // stiffness (Painleve)
-  real c[kMaxContacts * kMaxContacts], y[kMaxContacts];
+  // stiffness (Painleve). Zeroed first: GCC cannot tell that only the first ns rows and
+  // columns are read (an LTO link's -Wmaybe-uninitialized).
+  real c[kMaxContacts * kMaxContacts] = {}, y[kMaxContacts] = {};
   for (int i = 0; i < ns; ++i) {
     for (int j = 0; j < ns; ++j) c[i * ns + j] = (i == j ? real(1) : real(0)) + z[j][layout.slide_row[i]];
     y[i] = x[layout.slide_row[i]];
