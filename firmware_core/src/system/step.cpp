@@ -762,14 +762,25 @@ constexpr real kGaImminent = 2;
 
 #endif
 
-// One whole step of a model without contacts (the leg): it has no event to locate, and
-// none of step_with_events' snapshots and dense output on its stack (a Cortex-M4F leg image
-// has 3 KB of stack).
-legsim_status step_whole(Sim &s, bool rk4, bool stops) {
+// One whole step of a model without contacts (the leg): none of step_with_events' snapshots
+// and dense output on its stack (a Cortex-M4F leg image has 3 KB of stack). Its only events
+// are the stops' arrivals: where the event code is built, a step that takes one at its end is
+// taken again from its start with the arrival located (the rare step pays; the others pay a
+// branch); a build without it (LEGSIM_MAX_CONTACTS = 0: the Cortex-M4F leg image, whose flash
+// it does not fit) takes the arrival at the step's end.
+legsim_status step_whole(Sim &s, bool rk4, bool stops, const Snapshot &start) {
   legsim_status r = stage_start(s, rk4);
   if (r == LEGSIM_OK) r = stage_integrate(s, rk4, s.step_h);
   bool stopped = false;
   if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped, s.step_h);
+#if LEGSIM_WITH_CONTACT
+  if (r == LEGSIM_OK && stopped) {
+    start.restore(s);
+    r = step_with_events(s, rk4, stops, start);
+  }
+#else
+  (void)start;
+#endif
   return r;
 }
 
@@ -789,11 +800,10 @@ legsim_status steps_run(Sim &s, int32_t n_steps) {
     // refuses a step whose state, accelerations, multipliers or report are not finite)
     const legsim_status st = all_or_nothing(s, [&](const Snapshot &start) {
 #if LEGSIM_WITH_CONTACT
-      legsim_status r = events ? step_with_events(s, rk4, stops, start) : step_whole(s, rk4, stops);
+      legsim_status r = events ? step_with_events(s, rk4, stops, start) : step_whole(s, rk4, stops, start);
 #else
-      (void)start;
       (void)events;
-      legsim_status r = step_whole(s, rk4, stops);
+      legsim_status r = step_whole(s, rk4, stops, start);
 #endif
       if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.step_h);
       if (r != LEGSIM_OK) return r;
