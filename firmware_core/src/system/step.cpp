@@ -178,10 +178,10 @@ inline bool needs_forces(const ContactData &c, int j) {
   return c.state != LEGSIM_CONTACT_FREE && (j == 0 || c.state == LEGSIM_CONTACT_STUCK);
 }
 
-// Function j of contact k at (q, v) with ground forces N, T (those of its mode).
-real event_value(const Sim &s, int k, int j, const VecQ &q, const VecQ &v, real n_force, real t_force) {
+// Function j of contact k (in c's mode) at (q, v) with ground forces N, T (those of its mode).
+real event_value(const Sim &s, int k, const ContactData &c, int j, const VecQ &q, const VecQ &v, real n_force,
+                 real t_force) {
   const Model &m = s.model;
-  const ContactData &c = s.data.contact[k];
   if (c.state == LEGSIM_CONTACT_FREE && j == 1) return kNoEvent;
   if (needs_forces(c, j)) return j == 0 ? n_force : m.mu_s * n_force - std::abs(t_force);
   Vec2 p, pv;
@@ -196,23 +196,34 @@ inline void stop_values(const Model &m, int a, const VecQ &q, TrigCache *trig, r
   g[1] = m.act[a].lmax - len;
 }
 
-// The functions at the sim's state, with the forces of its last solve. The contact law
-// PAPER decides stick to slip by its own rule (not one contact at a time): not located.
-// stops: the stroke stops are in force (their arrivals located).
-void event_values(Sim &s, bool stops, EventValues &e) {
-  Data &d = s.data;
+// The functions at (q, qd) with the contacts' modes and the forces of their last solve
+// (contact) and the stops on (stop_mask): the sim's state, or a step's start kept in its
+// snapshot. The contact law PAPER decides stick to slip by its own rule (not one contact at a
+// time): not located. stops: the stroke stops are in force (their arrivals located).
+void event_values_of(Sim &s, bool stops, const VecQ &q, const VecQ &qd, const ContactData *contact,
+                     uint32_t stop_mask, EventValues &e) {
   const bool cone = s.opt.contact_law != LEGSIM_CONTACT_PAPER;
   for (real &g : e.g) g = kNoEvent;
   for (int k = 0; k < s.model.nc; ++k) {
-    const ContactData &c = d.contact[k];
+    const ContactData &c = contact[k];
     for (int j = 0; j < 2; ++j)
       e.g[2 * k + j] = (j == 1 && c.state == LEGSIM_CONTACT_STUCK && !cone)
                            ? kNoEvent
-                           : event_value(s, k, j, d.q, d.qd, c.normal, c.tangential);
+                           : event_value(s, k, c, j, q, qd, c.normal, c.tangential);
   }
   if (!stops) return;
   for (int a = 0; a < s.model.na; ++a)
-    if (!((d.stop_mask >> a) & 1u)) stop_values(s.model, a, d.q, &d.trig, &e.g[kActBase + 2 * a]);
+    if (!((stop_mask >> a) & 1u)) stop_values(s.model, a, q, &s.data.trig, &e.g[kActBase + 2 * a]);
+}
+void event_values(Sim &s, bool stops, EventValues &e) {
+  const Data &d = s.data;
+  event_values_of(s, stops, d.q, d.qd, d.contact, d.stop_mask, e);
+}
+// Whether a function is below zero (a crossing needs one at the (part) step's end).
+bool any_below_zero(const EventValues &e) {
+  bool below = false;
+  for (int f = 0; f < kFunctions; ++f) below = below || e.g[f] < 0;
+  return below;
 }
 
 // The functions that changed sign over the (part) step (bit f).
@@ -268,7 +279,7 @@ legsim_status event_at(Sim &s, const StepEnd &e, real hs, int f, real th, real &
     n_force = normal[k];
     t_force = tangential[k];
   }
-  g = event_value(s, k, j, q, v, n_force, t_force);
+  g = event_value(s, k, s.data.contact[k], j, q, v, n_force, t_force);
   return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
@@ -545,7 +556,7 @@ constexpr real kGaImminent = 2;
   EventValues g1;
   for (real &g : g1.g) g = kNoEvent;
   for (int k = 0; k < m.nc; ++k)
-    for (int j = 0; j < 2; ++j) g1.g[2 * k + j] = event_value(s, k, j, q2, v2, normal[k], tangential[k]);
+    for (int j = 0; j < 2; ++j) g1.g[2 * k + j] = event_value(s, k, d.contact[k], j, q2, v2, normal[k], tangential[k]);
   if (stops)
     for (int a = 0; a < m.na; ++a) stop_values(m, a, q2, nullptr, &g1.g[kActBase + 2 * a]);
   for (int f = 0; f < kFunctions; ++f) {
@@ -595,11 +606,17 @@ constexpr real kGaImminent = 2;
     bool jerk_ok;
     VecQ jerk;     // d qdd / dt of the new modes after the event
   } ga;
+  // The functions at the step's start are needed only where one is below zero at the (part)
+  // step's end. Where stage_start changes nothing (the common step) the start is `start`
+  // exactly: they are taken from it then, if at all; else at once, as at a part's start.
+  bool g0_from_start = (rk4 ? d.derivative_valid : d.history_valid) && (d.modes_checked || !contacts);
   legsim_status r = stage_start(s, rk4);
   for (;;) {
     if (r != LEGSIM_OK) return r;
     EventValues g0;
-    event_values(s, stops, g0);
+    bool g0_known = !g0_from_start;
+    g0_from_start = false;
+    if (g0_known) event_values(s, stops, g0);
     real hs = h - done;
     if (adapt && ga_parts >= kGaMaxParts) adapt = false;  // the rest whole (a bounded step)
     if (adapt) {
@@ -625,7 +642,11 @@ constexpr real kGaImminent = 2;
     if (r != LEGSIM_OK) break;
     EventValues g1;
     event_values(s, stops, g1);
-    const EventBits cross = locate ? crossings(g0, g1) & ~fresh : 0u;
+    if (!g0_known && locate && any_below_zero(g1)) {
+      event_values_of(s, stops, start.q, start.qd, start.contact, start.stop_mask, g0);
+      g0_known = true;
+    }
+    const EventBits cross = locate && g0_known ? crossings(g0, g1) & ~fresh : 0u;
     if (cross && located == LEGSIM_MAX_EVENTS_PER_STEP) {
       // the rest at the step's end, as without location
       raise_event(d, LEGSIM_EVENT_EVENTS_DEFERRED);
