@@ -1,0 +1,141 @@
+// The spatial row units (docs/design/spatial.md, formulation (a) with the "tree" rows): every
+// row is a dot product x . y of two vectors of the bodies (a point r + R s, an axis R c, a
+// difference of two points, or a constant), with its Jacobian coefficients on each body's
+// (v, omega) and its acceleration right-hand side gamma (Phi_q qdd = gamma with qdd = (v',
+// omega')): for a body vector x its velocity x' and the velocity part of its acceleration
+// x_q = R (omega x (omega x s)) give gamma = -(x_q . y + 2 x' . y' + x . y_q). A joint kind is a
+// few such rows; one implementation of each, as the planar row units (planar/rows.hpp).
+//
+// The three forms:
+//   along:         e . (p_a - p_b), e a constant world direction (a point coincidence's rows);
+//   perpendicular: (R_a c_a) . (R_b c_b) (the orientation rows of revolute and prismatic joints);
+//   along_axis:    (p_a - p_b) . (R_b c) (a prismatic's rod on its cylinder's axis, a loop-closing
+//                  joint's in-plane rows).
+// Body b may be the ground (ground_state(): its coefficients are then not used).
+#pragma once
+
+#include "spatial/body.hpp"
+
+namespace legsim::spatial {
+
+// One row: Phi, gamma and the coefficients on the two bodies' velocity coordinates
+// (v_x, v_y, v_z, omega_x, omega_y, omega_z; omega in the body's frame).
+struct Row {
+  real phi, gamma;
+  real ja[kBodyDof], jb[kBodyDof];
+};
+
+// A point p = r + R s of a body (s body-fixed, m): p, p', and p_q = R (w x (w x s)).
+struct PointJet {
+  V3 p, pd, pq;
+};
+inline PointJet point_jet(const BodyState &B, const V3 &s) {
+  const V3 ws = cross(B.w, s);
+  return {B.r + rotate(B.R, s), B.v + rotate(B.R, ws), rotate(B.R, cross(B.w, ws))};
+}
+// An axis a = R c of a body (c body-fixed): a, a', a_q.
+inline PointJet axis_jet(const BodyState &B, const V3 &c) {
+  const V3 wc = cross(B.w, c);
+  return {rotate(B.R, c), rotate(B.R, wc), rotate(B.R, cross(B.w, wc))};
+}
+
+// The coefficients of y . d(point s of body B) on (v, omega) (sign: +1 or -1): y on v,
+// s x (R^T y) on omega (y . R (dtheta x s) = dtheta . (s x R^T y)).
+inline void point_coefficients(const BodyState &B, const V3 &s, const V3 &y, real sign, real *j) {
+  const V3 o = cross(s, rotate_back(B.R, y));
+  j[0] += sign * y.x, j[1] += sign * y.y, j[2] += sign * y.z;
+  j[3] += sign * o.x, j[4] += sign * o.y, j[5] += sign * o.z;
+}
+// The coefficients of y . d(axis c of body B): c x (R^T y) on omega.
+inline void axis_coefficients(const BodyState &B, const V3 &c, const V3 &y, real *j) {
+  const V3 o = cross(c, rotate_back(B.R, y));
+  j[3] += o.x, j[4] += o.y, j[5] += o.z;
+}
+inline Row row_zero() { return {0, 0, {0, 0, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0}}; }
+
+// e . (p_a - p_b): point s_a of body a and s_b of body b along the world direction e.
+inline Row row_along(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &e) {
+  const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb);
+  Row r = row_zero();
+  r.phi = dot(e, pa.p - pb.p);
+  r.gamma = -dot(e, pa.pq - pb.pq);
+  point_coefficients(A, sa, e, 1, r.ja);
+  point_coefficients(B, sb, e, -1, r.jb);
+  return r;
+}
+
+// (R_a c_a) . (R_b c_b): axis c_a of body a and c_b of body b.
+inline Row row_perpendicular(const BodyState &A, const V3 &ca, const BodyState &B, const V3 &cb) {
+  const PointJet a = axis_jet(A, ca), b = axis_jet(B, cb);
+  Row r = row_zero();
+  r.phi = dot(a.p, b.p);
+  r.gamma = -(dot(a.pq, b.p) + 2 * dot(a.pd, b.pd) + dot(a.p, b.pq));
+  axis_coefficients(A, ca, b.p, r.ja);
+  axis_coefficients(B, cb, a.p, r.jb);
+  return r;
+}
+
+// (p_a - p_b) . (R_b c): point s_a of body a less point s_b of body b along body b's axis c.
+inline Row row_along_axis(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &c) {
+  const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb), y = axis_jet(B, c);
+  const V3 d = pa.p - pb.p, dd = pa.pd - pb.pd, dq = pa.pq - pb.pq;
+  Row r = row_zero();
+  r.phi = dot(d, y.p);
+  r.gamma = -(dot(dq, y.p) + 2 * dot(dd, y.pd) + dot(d, y.pq));
+  point_coefficients(A, sa, y.p, 1, r.ja);
+  point_coefficients(B, sb, y.p, -1, r.jb);
+  axis_coefficients(B, c, d, r.jb);
+  return r;
+}
+
+// The same row with its two bodies' coefficients exchanged (a unit written with b first).
+inline Row swapped(const Row &r) {
+  Row o = r;
+  for (int i = 0; i < kBodyDof; ++i) o.ja[i] = r.jb[i], o.jb[i] = r.ja[i];
+  return o;
+}
+
+// ---- joint kinds (the tree set's) ----
+constexpr V3 kWorldAxes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+
+// A spherical joint: point s_a of body a on point s_b of body b (3 rows, world x, y, z).
+inline void spherical_rows(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, Row *out) {
+  for (int k = 0; k < 3; ++k) out[k] = row_along(A, sa, B, sb, kWorldAxes[k]);
+}
+
+// A revolute joint about body a's axis k_a (unit, body-fixed) at point s_a, on body b's point s_b
+// whose axes u_b, n_b (unit, perpendicular to each other and to the joint axis in body b's
+// frame) stay perpendicular to k_a: 5 rows (the point's 3, then k_a . u_b, k_a . n_b). Its 5
+// multipliers are the joint's force (3) and its two moments.
+inline void revolute_rows(const BodyState &A, const V3 &sa, const V3 &ka, const BodyState &B, const V3 &sb,
+                          const V3 &ub, const V3 &nb, Row *out) {
+  spherical_rows(A, sa, B, sb, out);
+  out[3] = row_perpendicular(A, ka, B, ub);
+  out[4] = row_perpendicular(A, ka, B, nb);
+}
+
+// A prismatic joint: body b (the rod) slides along body a's (the cylinder's) axis u_a, the two
+// frames aligned (body-fixed unit axes (u, n, k) of each, right-handed): 3 orientation rows
+// (u_a . n_b, u_a . k_b, n_a . k_b), then the rod's point s_b on the cylinder's axis through
+// its point s_a (along n_a and k_a): 5 rows.
+inline void prismatic_rows(const BodyState &A, const V3 &sa, const V3 &ua, const V3 &na, const V3 &ka,
+                           const BodyState &B, const V3 &sb, const V3 &nb, const V3 &kb, Row *out) {
+  out[0] = row_perpendicular(A, ua, B, nb);
+  out[1] = row_perpendicular(A, ua, B, kb);
+  out[2] = row_perpendicular(A, na, B, kb);
+  // (p_b - p_a) . (R_a n_a): row_along_axis with the rod first, its coefficients put back in
+  // (a, b) order
+  out[3] = swapped(row_along_axis(B, sb, A, sa, na));
+  out[4] = swapped(row_along_axis(B, sb, A, sa, ka));
+}
+
+// A joint that closes a planar loop: point s_a of body a on point s_b of body b in the plane
+// of body b's axes u_b, n_b only (2 rows): out of the plane the loop is already held by the
+// tree's joints (a full 3D joint here would add 3 redundant rows).
+inline void planar_cut_rows(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &ub,
+                            const V3 &nb, Row *out) {
+  out[0] = row_along_axis(A, sa, B, sb, ub);
+  out[1] = row_along_axis(A, sa, B, sb, nb);
+}
+
+}  // namespace legsim::spatial
