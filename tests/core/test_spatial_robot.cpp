@@ -1,7 +1,8 @@
-// The leg in space (firmware_core/src/spatial/leg.hpp): models/leg.toml (the compiled-in
-// description) lifted onto its hip yoke, against the planar core (another formulation: planar
-// absolute coordinates and its own row units) and the spatial prototype
-// (firmware_core/tools/prototypes/spatial_leg.py, docs/design/spatial.md):
+// Legs in space (firmware_core/src/spatial/robot.hpp): models/leg.toml (the compiled-in
+// description) lifted onto its hip yoke, on a fixed box and six times on a free box, against
+// the planar core (another formulation: planar absolute coordinates and its own row units),
+// the spatial prototype (firmware_core/tools/prototypes/spatial_leg.py, docs/design/spatial.md)
+// and invariants. One leg on the fixed box:
 // - 39 rows on 42 velocity coordinates; the two loop-closing joints by their in-plane rows;
 // - the planar core's stand pose and a planar velocity, lifted at any rowing angle and rate:
 //   every row vanishes, J v = 0;
@@ -9,13 +10,18 @@
 // - the spatial equations of motion (M a + J^T lambda = Q, J a = gamma, gravity alone, the
 //   yoke free) give the planar core's accelerations lifted, and no rowing acceleration (the
 //   leg's forces lie in a plane through the hip axis).
+// Six on a free box (three hips a side, the left ones turned by pi): 234 rows on 258 velocity
+// coordinates (the prototype's counts); the stand lifted at any box pose and rowing angles
+// meets every row; a rigid motion of the whole robot, and the legs' own motions on a moving
+// box, are in J's null space; J has full row rank; in free fall (gravity alone, at rest) every
+// body falls at g and every multiplier is zero.
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
 
 #include "legsim/legsim.h"
 #include "legsim/models.h"
-#include "spatial/leg.hpp"
+#include "spatial/robot.hpp"
 #include "unity.h"
 
 void setUp(void) {}
@@ -53,14 +59,24 @@ PlanarState planar_leg() {
   return p;
 }
 
-SpatialLeg lifted() {
-  SpatialLeg leg;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, leg_lift(legsim_model_leg_revolute, YokeDesc{}, leg));
+const legsim_model_desc *const kLeg = &legsim_model_leg_revolute;
+const HipDesc kStandHip = {{0, 0, 0}, 0};
+
+// One leg on the fixed box, its hip at the origin.
+SpatialRobot lifted() {
+  SpatialRobot leg;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift(&kLeg, &kStandHip, 1, YokeDesc{}, nullptr, leg));
   return leg;
 }
+// The one leg's state.
+void leg_state(const SpatialRobot &leg, const double *qp, const double *qdp, double psi, double psid, double *q,
+               double *v) {
+  robot_state(leg, nullptr, nullptr, &qp, &qdp, &psi, &psid, q, v);
+}
+void leg_rows(const SpatialRobot &leg, const double *q, const double *v, Row *rows) { robot_rows(leg, q, v, rows); }
 
 // J (m x 6 nb) from the rows.
-MatrixXd jacobian(const SpatialLeg &leg, const Row *rows) {
+MatrixXd jacobian(const SpatialRobot &leg, const Row *rows) {
   MatrixXd J = MatrixXd::Zero(leg.m, kBodyDof * leg.nb);
   for (int k = 0; k < leg.nj; ++k) {
     const LegJoint &j = leg.joint[k];
@@ -75,7 +91,7 @@ MatrixXd jacobian(const SpatialLeg &leg, const Row *rows) {
 }  // namespace
 
 void test_rows_and_tree(void) {
-  const SpatialLeg leg = lifted();
+  const SpatialRobot leg = lifted();
   TEST_ASSERT_EQUAL_INT(7, leg.nb);
   TEST_ASSERT_EQUAL_INT(39, leg.m);
   // the yoke's hip, then leg.toml's joints: C_rod_thigh (5th) and D (8th) close the loops
@@ -86,10 +102,10 @@ void test_rows_and_tree(void) {
 }
 
 void test_lifted_state_meets_every_row(void) {
-  const SpatialLeg leg = lifted();
+  const SpatialRobot leg = lifted();
   const PlanarState p = planar_leg();
-  legsim_real q[kBodyConfig * kMaxLegBodies], v[kBodyDof * kMaxLegBodies];
-  Row rows[kMaxLegRows];
+  legsim_real q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  Row rows[kMaxRobotRows];
   const double psis[4] = {0.0, 0.7, -2.4, 3.1};
   for (double psi : psis) {
     leg_state(leg, p.q, p.qd, psi, 1.3 * psi - 0.5, q, v);
@@ -107,15 +123,15 @@ void test_lifted_state_meets_every_row(void) {
 }
 
 void test_jacobian_full_rank_as_the_prototype(void) {
-  const SpatialLeg leg = lifted();
+  const SpatialRobot leg = lifted();
   legsim_options opt = legsim_default_options();
   legsim_sim *sim = nullptr;
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &legsim_model_leg_revolute, &opt, &sim));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
   double qp[3 * LEGSIM_MAX_BODIES], zero[3 * LEGSIM_MAX_BODIES] = {0};
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_q(sim, qp));
-  legsim_real q[kBodyConfig * kMaxLegBodies], v[kBodyDof * kMaxLegBodies];
-  Row rows[kMaxLegRows];
+  legsim_real q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  Row rows[kMaxRobotRows];
   leg_state(leg, qp, zero, 0.0, 0.0, q, v);
   leg_rows(leg, q, v, rows);
   const Eigen::JacobiSVD<MatrixXd> svd(jacobian(leg, rows));
@@ -125,11 +141,11 @@ void test_jacobian_full_rank_as_the_prototype(void) {
 }
 
 void test_dynamics_is_the_planar_leg_lifted(void) {
-  const SpatialLeg leg = lifted();
+  const SpatialRobot leg = lifted();
   const PlanarState p = planar_leg();
   const int nv = kBodyDof * leg.nb, m = leg.m;
-  legsim_real q[kBodyConfig * kMaxLegBodies], v[kBodyDof * kMaxLegBodies];
-  Row rows[kMaxLegRows];
+  legsim_real q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  Row rows[kMaxRobotRows];
   const double psi = 0.9;
   leg_state(leg, p.q, p.qd, psi, 0.0, q, v);
   leg_rows(leg, q, v, rows);
@@ -177,13 +193,114 @@ void test_dynamics_is_the_planar_leg_lifted(void) {
 }
 
 void test_refuses_what_it_cannot_lift(void) {
-  SpatialLeg leg;
-  legsim_model_desc d = legsim_model_leg_revolute;
+  static SpatialRobot leg;
+  static legsim_model_desc d;
+  const legsim_model_desc *dp = &d;
+  d = legsim_model_leg_revolute;
   d.gravity_mps2[0] = 1.0;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, leg_lift(d, YokeDesc{}, leg));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, robot_lift(&dp, &kStandHip, 1, YokeDesc{}, nullptr, leg));
   d = legsim_model_leg_revolute;
   d.joint[0].kind = LEGSIM_JOINT_SLOT;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, leg_lift(d, YokeDesc{}, leg));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_MODEL, robot_lift(&dp, &kStandHip, 1, YokeDesc{}, nullptr, leg));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_CAPACITY, robot_lift(&dp, &kStandHip, kMaxLegs + 1, YokeDesc{}, nullptr, leg));
+}
+
+namespace {
+// Six legs on a free box: hips at x = -0.3, 0, 0.3 m, y = -0.25 (right, the leg out along -y)
+// and +0.25 m (left, turned by pi), on the box's underside (z = -0.1 m). The box numbers are the
+// test's own (no hexapod file yet).
+SpatialRobot &hexapod() {
+  static SpatialRobot robot;
+  static bool built = false;
+  if (!built) {
+    const legsim_model_desc *legs[6];
+    HipDesc hips[6];
+    for (int k = 0; k < 6; ++k) {
+      legs[k] = kLeg;
+      const double side = k < 3 ? -1 : 1;
+      hips[k] = {{-0.3 + 0.3 * (k % 3), 0.25 * side, -0.1}, side * 1.5707963267948966};
+    }
+    const BoxDesc box = {30.0, {0.5, 1.2, 1.5}};
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift(legs, hips, 6, YokeDesc{}, &box, robot));
+    built = true;
+  }
+  return robot;
+}
+// The box at a pose and velocity, the legs at the planar state p with rowing angles and rates.
+void hexapod_state(const SpatialRobot &robot, const PlanarState &p, bool legs_move, const double *box_q,
+                   const double *box_v, double *q, double *v) {
+  const double *qp[6], *qdp[6];
+  static double zero[3 * LEGSIM_MAX_BODIES];
+  double psi[6], psid[6];
+  for (int k = 0; k < 6; ++k) {
+    qp[k] = p.q;
+    qdp[k] = legs_move ? p.qd : zero;
+    psi[k] = 0.4 * k - 1.0;
+    psid[k] = legs_move ? 0.3 * k - 0.8 : 0.0;
+  }
+  robot_state(robot, box_q, box_v, qp, qdp, psi, psid, q, v);
+}
+}  // namespace
+
+void test_hexapod_counts_rows_and_motions(void) {
+  const SpatialRobot &robot = hexapod();
+  TEST_ASSERT_EQUAL_INT(43, robot.nb);
+  TEST_ASSERT_EQUAL_INT(234, robot.m);
+  const PlanarState p = planar_leg();
+  static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  static Row rows[kMaxRobotRows];
+  const Quat tilt = quat_exp({0.3, -0.2, 1.1});
+  const double box_q[7] = {0.4, -1.2, 0.9, tilt.w, tilt.x, tilt.y, tilt.z};
+  const double box_v[6] = {0.5, -0.3, 0.2, 0.7, -1.1, 0.4};
+  for (int legs_move = 0; legs_move < 2; ++legs_move) {
+    hexapod_state(robot, p, legs_move, box_q, box_v, q, v);
+    robot_rows(robot, q, v, rows);
+    const MatrixXd J = jacobian(robot, rows);
+    VectorXd vv(kBodyDof * robot.nb);
+    for (int i = 0; i < kBodyDof * robot.nb; ++i) vv[i] = v[i];
+    double phi = 0;
+    for (int r = 0; r < robot.m; ++r) phi = std::fmax(phi, std::fabs(rows[r].phi));
+    const double jv = (J * vv).cwiseAbs().maxCoeff();
+    printf("hexapod, %s: max |Phi| %.2e, max |J v| %.2e\n", legs_move ? "legs moving" : "rigid", phi, jv);
+    TEST_ASSERT_TRUE(phi < 1e-12);
+    TEST_ASSERT_TRUE(jv < 1e-12);
+  }
+  const Eigen::JacobiSVD<MatrixXd> svd(jacobian(robot, rows));
+  const double smin = svd.singularValues()[robot.m - 1];
+  printf("hexapod: smallest singular value of J %.4f\n", smin);
+  TEST_ASSERT_TRUE(smin > 0.1);
+}
+
+void test_hexapod_falls_freely(void) {
+  const SpatialRobot &robot = hexapod();
+  PlanarState p = planar_leg();
+  const int nv = kBodyDof * robot.nb, m = robot.m;
+  static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  static Row rows[kMaxRobotRows];
+  const Quat tilt = quat_exp({-0.2, 0.5, 2.0});
+  const double box_q[7] = {0.1, 0.2, 0.8, tilt.w, tilt.x, tilt.y, tilt.z}, box_v[6] = {0, 0, 0, 0, 0, 0};
+  hexapod_state(robot, p, false, box_q, box_v, q, v);
+  robot_rows(robot, q, v, rows);
+  MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
+  VectorXd rhs = VectorXd::Zero(nv + m);
+  const MatrixXd J = jacobian(robot, rows);
+  for (int b = 0; b < robot.nb; ++b) {
+    const double I[3] = {robot.inertia[b].x, robot.inertia[b].y, robot.inertia[b].z};
+    for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = robot.mass[b];
+    for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
+    rhs[kBodyDof * b + 2] = robot.mass[b] * robot.gravity.z;
+  }
+  K.topRightCorner(nv, m) = J.transpose();
+  K.bottomLeftCorner(m, nv) = J;
+  for (int r = 0; r < m; ++r) rhs[nv + r] = rows[r].gamma;
+  const VectorXd x = K.fullPivLu().solve(rhs);
+  double worst = 0;
+  for (int b = 0; b < robot.nb; ++b)
+    for (int i = 0; i < 6; ++i) worst = std::fmax(worst, std::fabs(x[kBodyDof * b + i] - (i == 2 ? robot.gravity.z : 0.0)));
+  const double lam = x.tail(m).cwiseAbs().maxCoeff();
+  printf("free fall: accelerations off g by %.2e, largest multiplier %.2e\n", worst, lam);
+  TEST_ASSERT_TRUE(worst < 1e-10);
+  TEST_ASSERT_TRUE(lam < 1e-9);
 }
 
 int main(void) {
@@ -193,5 +310,7 @@ int main(void) {
   RUN_TEST(test_jacobian_full_rank_as_the_prototype);
   RUN_TEST(test_dynamics_is_the_planar_leg_lifted);
   RUN_TEST(test_refuses_what_it_cannot_lift);
+  RUN_TEST(test_hexapod_counts_rows_and_motions);
+  RUN_TEST(test_hexapod_falls_freely);
   return UNITY_END();
 }

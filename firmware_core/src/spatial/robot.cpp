@@ -1,0 +1,182 @@
+#include "spatial/robot.hpp"
+
+namespace legsim::spatial {
+
+namespace {
+constexpr V3 kX = {1, 0, 0}, kY = {0, 1, 0}, kZ = {0, 0, 1};
+// A bar's body axes (u, n, k) in its frame.
+constexpr V3 kU = {1, 0, 0}, kN = {0, 1, 0}, kK = {0, 0, 1};
+
+// Union-find over the robot's bodies (a leg's frame joints join its bars to its yoke).
+int find(int *parent, int i) {
+  while (parent[i] != i) i = parent[i] = parent[parent[i]];
+  return i;
+}
+
+Quat z_turn(real angle) { return {std::cos(real(0.5) * angle), 0, 0, std::sin(real(0.5) * angle)}; }
+// the yoke's plane: planar (x, y, z) to the yoke's (x, z, -y): +90 degrees about x
+const Quat kPlane = {real(0.70710678118654752440), real(0.70710678118654752440), 0, 0};
+// a bar's (u, n, k) from the plane's axes at angle 0: u = -y, n = x (-90 degrees about z)
+const Quat kBarAxes = {real(0.70710678118654752440), 0, 0, -real(0.70710678118654752440)};
+
+void put(real *q, real *v, const V3 &r, const Quat &p, const V3 &vr, const V3 &w) {
+  const real c[kBodyConfig] = {r.x, r.y, r.z, p.w, p.x, p.y, p.z};
+  const real s[kBodyDof] = {vr.x, vr.y, vr.z, w.x, w.y, w.z};
+  for (int i = 0; i < kBodyConfig; ++i) q[i] = c[i];
+  for (int i = 0; i < kBodyDof; ++i) v[i] = s[i];
+}
+}  // namespace
+
+legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hips, int nlegs, const YokeDesc &yoke,
+                         const BoxDesc *box, SpatialRobot &out) {
+  if (nlegs < 1 || nlegs > kMaxLegs || !legs || !hips) return LEGSIM_ERR_CAPACITY;
+  SpatialRobot &R = out;
+  R.free_box = box != nullptr;
+  R.nlegs = nlegs;
+  R.yoke_com = {real(yoke.com_m[0]), real(yoke.com_m[1]), real(yoke.com_m[2])};
+  R.origin_x = real(yoke.hip_offset_m);
+  R.gravity = {0, 0, real(legs[0]->gravity_mps2[1])};
+  int nb = 0;
+  if (box) {
+    R.mass[0] = real(box->mass_kg);
+    R.inertia[0] = {real(box->inertia_kgm2[0]), real(box->inertia_kgm2[1]), real(box->inertia_kgm2[2])};
+    nb = 1;
+  }
+  const int box_body = box ? 0 : -1;
+  int parent[kMaxRobotBodies];
+  int nj = 0, row = 0;
+  auto add = [&](const LegJoint &j, int nrows) {
+    R.joint[nj] = j;
+    R.joint[nj].row = row;
+    R.joint[nj].nrows = nrows;
+    ++nj;
+    row += nrows;
+  };
+  for (int l = 0; l < nlegs; ++l) {
+    const legsim_model_desc &desc = *legs[l];
+    const int nbar = desc.n_bodies;
+    if (nbar < 1 || nbar > kMaxLegBars || desc.n_joints > kMaxLegJoints) return LEGSIM_ERR_CAPACITY;
+    // the leg's plane is vertical, and every leg falls alike
+    if (desc.gravity_mps2[0] != 0 || real(desc.gravity_mps2[1]) != R.gravity.z) return LEGSIM_ERR_MODEL;
+    const int y = nb;
+    RobotLeg &L = R.leg[l];
+    L.yoke = y;
+    L.nbars = nbar;
+    L.hip = {real(hips[l].point_m[0]), real(hips[l].point_m[1]), real(hips[l].point_m[2])};
+    L.yaw = real(hips[l].yaw_rad);
+    R.mass[y] = real(yoke.mass_kg);
+    R.inertia[y] = {real(yoke.inertia_kgm2[0]), real(yoke.inertia_kgm2[1]), real(yoke.inertia_kgm2[2])};
+    for (int b = 0; b < nbar; ++b) {
+      const legsim_body_desc &bd = desc.body[b];
+      R.mass[y + 1 + b] = real(bd.mass_kg);
+      // about u a tube's; about n and k the planar inertia (the planar dynamics unchanged)
+      R.inertia[y + 1 + b] = {real(0.5 * bd.mass_kg * yoke.bar_radius_m * yoke.bar_radius_m),
+                              real(bd.inertia_kgm2), real(bd.inertia_kgm2)};
+    }
+    nb += 1 + nbar;
+    for (int i = y; i < nb; ++i) parent[i] = i;
+    // the yoke about the box's z through the hip: its axis point is -com in its frame
+    add({LegJointKind::Revolute, y, box_body, -1 * R.yoke_com, L.hip, kZ, kX, kY, 0, 0}, 5);
+    for (int k = 0; k < desc.n_joints; ++k) {
+      const legsim_joint_desc &jd = desc.joint[k];
+      const int a = y + 1 + jd.body[0];
+      const V3 sa = {real(jd.point[0][0]), real(jd.point[0][1]), 0};
+      switch (jd.kind) {
+        case LEGSIM_JOINT_REVOLUTE_TO_FRAME: {
+          // to the yoke, about the plane's normal; the yoke's in-plane axes x and z across it
+          parent[find(parent, a)] = find(parent, y);
+          const V3 sb = V3{R.origin_x + real(jd.point[1][0]), 0, real(jd.point[1][1])} - R.yoke_com;
+          add({LegJointKind::Revolute, a, y, sa, sb, kK, kX, kZ, 0, 0}, 5);
+          break;
+        }
+        case LEGSIM_JOINT_REVOLUTE: {
+          const int b = y + 1 + jd.body[1];
+          const V3 sb = {real(jd.point[1][0]), real(jd.point[1][1]), 0};
+          const int ra = find(parent, a), rb = find(parent, b);
+          if (ra == rb) {
+            add({LegJointKind::Cut, a, b, sa, sb, kK, kU, kN, 0, 0}, 2);
+          } else {
+            parent[ra] = rb;
+            add({LegJointKind::Revolute, a, b, sa, sb, kK, kU, kN, 0, 0}, 5);
+          }
+          break;
+        }
+        case LEGSIM_JOINT_PRISMATIC: {
+          const int b = y + 1 + jd.body[1];
+          const int ra = find(parent, a), rb = find(parent, b);
+          if (ra == rb) return LEGSIM_ERR_MODEL;
+          parent[ra] = rb;
+          add({LegJointKind::Prismatic, a, b, {0, 0, 0}, {0, 0, 0}, kU, kN, kK, 0, 0}, 5);
+          break;
+        }
+        default:
+          return LEGSIM_ERR_MODEL;  // a slot has no spatial row unit yet
+      }
+    }
+  }
+  R.nb = nb;
+  R.nj = nj;
+  R.m = row;
+  return LEGSIM_OK;
+}
+
+void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v, const real *const *q_planar,
+                 const real *const *qd_planar, const real *psi, const real *psid, real *q, real *v) {
+  // the box: its pose, its velocity and its angular velocity in the world
+  Quat pb = {1, 0, 0, 0};
+  V3 rb = {0, 0, 0}, vb = {0, 0, 0}, wb = {0, 0, 0};
+  if (robot.free_box) {
+    pb = {box_q[3], box_q[4], box_q[5], box_q[6]};
+    rb = {box_q[0], box_q[1], box_q[2]};
+    vb = {box_v[0], box_v[1], box_v[2]};
+    wb = rotate(rotation(pb), V3{box_v[3], box_v[4], box_v[5]});
+    for (int i = 0; i < kBodyConfig; ++i) q[i] = box_q[i];
+    for (int i = 0; i < kBodyDof; ++i) v[i] = box_v[i];
+  }
+  const Rot Rb = rotation(pb);
+  for (int l = 0; l < robot.nlegs; ++l) {
+    const RobotLeg &L = robot.leg[l];
+    // the hip axis point, its velocity; the yoke's rotation and angular velocity (world)
+    const V3 ph = rb + rotate(Rb, L.hip), vh = vb + cross(wb, ph - rb);
+    const Quat py = quat_mul(pb, z_turn(L.yaw + psi[l]));
+    const Rot Ry = rotation(py);
+    const V3 wy = wb + psid[l] * Rb.c2;
+    const V3 ry = ph + rotate(Ry, robot.yoke_com);
+    put(q + kBodyConfig * L.yoke, v + kBodyDof * L.yoke, ry, py, vh + cross(wy, ry - ph), rotate_back(Ry, wy));
+    const Quat plane = quat_mul(py, kPlane);
+    const V3 k_world = rotate(Ry, V3{0, -1, 0});  // the plane's normal (the planar angle's axis)
+    for (int b = 0; b < L.nbars; ++b) {
+      const real *qp = q_planar[l] + 3 * b, *vp = qd_planar[l] + 3 * b;
+      const V3 r = ph + rotate(Ry, V3{robot.origin_x + qp[0], 0, qp[1]});
+      const V3 vr = vh + cross(wy, r - ph) + rotate(Ry, V3{vp[0], 0, vp[1]});
+      const Quat p = quat_mul(quat_mul(plane, z_turn(qp[2])), kBarAxes);
+      const V3 w = rotate_back(rotation(p), wy + vp[2] * k_world);  // body frame
+      const int body = L.yoke + 1 + b;
+      put(q + kBodyConfig * body, v + kBodyDof * body, r, p, vr, w);
+    }
+  }
+}
+
+void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out) {
+  BodyState st[kMaxRobotBodies];
+  for (int b = 0; b < robot.nb; ++b) st[b] = body_state(q + kBodyConfig * b, v + kBodyDof * b);
+  const BodyState world = ground_state();
+  for (int k = 0; k < robot.nj; ++k) {
+    const LegJoint &j = robot.joint[k];
+    const BodyState &A = st[j.a], &B = j.b < 0 ? world : st[j.b];
+    Row *r = out + j.row;
+    switch (j.kind) {
+      case LegJointKind::Revolute:
+        revolute_rows(A, j.sa, j.ka, B, j.sb, j.ub, j.nb, r);
+        break;
+      case LegJointKind::Cut:
+        planar_cut_rows(A, j.sa, B, j.sb, j.ub, j.nb, r);
+        break;
+      case LegJointKind::Prismatic:
+        prismatic_rows(A, j.sa, j.ka, j.ub, j.nb, B, j.sb, j.ub, j.nb, r);
+        break;
+    }
+  }
+}
+
+}  // namespace legsim::spatial

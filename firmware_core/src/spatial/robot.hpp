@@ -1,0 +1,104 @@
+// Legs in space on a box (docs/design/spatial.md, formulation (a), the tree rows): each leg is
+// its own planar description (legsim_model_desc, the leg file as the planar model reads it)
+// lifted onto a hip yoke that its rowing actuator turns about the box's vertical axis at the
+// leg's hip. The box is a free body (body 0: the hexapod) or the fixed world (one leg on a test
+// stand). Bodies: [the box,] then per leg its yoke and its bars in the leg file's order. The
+// world: z up.
+//
+// A leg moves in its yoke's plane: planar x along the yoke's x (out from the hip axis), planar y
+// along z (up), the planar angle's positive sense about -y_yoke; a bar's body frame is (u, n,
+// k): its axis u and normal n of eq. (1) and the plane's normal k = u x n. A leg on the left of
+// the box is the same leg with its hip turned by pi (a planar mechanism turned about an axis in
+// its plane is its mirror image): no mirrored file.
+//
+// Rows (non-redundant: the tree set): per leg its yoke's revolute to the box (5), the joints of
+// a spanning tree of the leg, taken in the file's order, as 3D joints (a revolute 5, a
+// prismatic 5), a revolute that closes a loop by its 2 in-plane rows only (a prismatic joint
+// that would close one is refused). The leg of models/leg.toml: 39 rows on 42 velocity
+// coordinates; six of them on a free box: 234 rows on 258.
+#pragma once
+
+#include "legsim/legsim.h"
+#include "spatial/rows.hpp"
+
+namespace legsim::spatial {
+
+constexpr int kMaxLegs = 6;
+constexpr int kMaxLegBars = 8;
+constexpr int kMaxRobotBodies = 1 + kMaxLegs * (1 + kMaxLegBars);
+constexpr int kMaxLegJoints = 10;
+constexpr int kMaxRobotJoints = kMaxLegs * (1 + kMaxLegJoints);
+constexpr int kMaxRobotRows = 5 * kMaxRobotJoints;
+
+// The hip yoke. The paper gives no yoke or hip numbers: these defaults are ASSUMPTIONS (the
+// spatial prototype's, firmware_core/tools/prototypes/spatial_leg.py).
+struct YokeDesc {
+  double mass_kg = 1.0;
+  double com_m[3] = {0.03, 0.0, 0.0};  // from the hip axis point, yoke frame (x out, z up)
+  double inertia_kgm2[3] = {0.004, 0.006, 0.005};  // principal, about the centre of mass
+  double hip_offset_m = 0.08;  // the leg's planar origin, out along x from the axis
+  double bar_radius_m = 0.025;  // a bar's inertia about its own axis: a tube's m r^2 / 2
+};
+
+// The box (body 0 when free): mass and principal inertia (box frame, about its centre).
+struct BoxDesc {
+  double mass_kg;
+  double inertia_kgm2[3];
+};
+
+// A leg's place: its hip axis point on the box (box frame, from its centre; the world's origin
+// for a fixed box) and its yoke's heading at rowing angle 0 (rad about the box's z).
+struct HipDesc {
+  double point_m[3];
+  double yaw_rad;
+};
+
+enum class LegJointKind : uint8_t { Revolute, Cut, Prismatic };
+
+// A joint's rows (rows.hpp): Revolute: a's axis ka at its point sa, on b's point sb, b's axes
+// ub, nb across it; Cut: a's point sa on b's sb in the plane of ub, nb; Prismatic: b (the rod)
+// along a's (the cylinder's) axis ka = u, the frames aligned (ub = n, nb = k of both). Body -1:
+// the fixed world.
+struct LegJoint {
+  LegJointKind kind;
+  int a, b;
+  V3 sa, sb, ka, ub, nb;
+  int row, nrows;
+};
+
+struct RobotLeg {
+  int yoke, nbars;  // the yoke's body; its bars follow it
+  V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
+  real yaw;         // rad
+};
+
+struct SpatialRobot {
+  bool free_box;     // body 0 is the box (else the box is the fixed world)
+  int nb, nj, m, nlegs;  // bodies, joints, rows, legs
+  real mass[kMaxRobotBodies];
+  V3 inertia[kMaxRobotBodies];  // principal, body frame (kg m^2)
+  LegJoint joint[kMaxRobotJoints];
+  RobotLeg leg[kMaxLegs];
+  V3 gravity;    // world (m/s^2): the leg files' (0, g_y), along z
+  V3 yoke_com;   // yoke frame, from the hip axis point
+  real origin_x; // the leg's planar origin, yoke frame: out along x from the hip axis
+};
+
+// nlegs legs (legs[k] placed at hips[k]) on the box (nullptr: fixed). LEGSIM_ERR_MODEL for a
+// slot joint, a prismatic joint closing a loop, or a gravity with a horizontal part or that
+// differs between the legs; LEGSIM_ERR_CAPACITY past the capacities above.
+legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hips, int nlegs, const YokeDesc &yoke,
+                         const BoxDesc *box, SpatialRobot &out);
+
+// The spatial state (q: 7 per body, v: 6 per body) of: the box at box_q (r, quaternion) moving
+// at box_v (v world, omega box frame), ignored for a fixed box; per leg k its planar state
+// (q_planar[k]: x, y, phi per bar; qd_planar[k] their rates) on its yoke at rowing angle psi[k]
+// (rad) turning at psid[k] (rad/s).
+void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v, const real *const *q_planar,
+                 const real *const *qd_planar, const real *psi, const real *psid, real *q, real *v);
+
+// Every row at (q, v): out[0 .. robot.m - 1]; row r of joint j acts on bodies joint[j].a, .b
+// (its ja, jb).
+void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out);
+
+}  // namespace legsim::spatial
