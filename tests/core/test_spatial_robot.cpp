@@ -37,11 +37,13 @@ alignas(16) unsigned char storage[1 << 20];
 struct PlanarState {
   int nq;
   double q[3 * LEGSIM_MAX_BODIES], qd[3 * LEGSIM_MAX_BODIES], qdd[3 * LEGSIM_MAX_BODIES];
+  double length[LEGSIM_MAX_ACTUATORS];
 };
 
 // The planar core's leg at its stand pose moving at actuator rates (0.1, -0.2) m/s under
-// gravity and zero actuator forces, one RK4 step of 1 ms on: q, qd and the derivative at them.
-PlanarState planar_leg() {
+// gravity and the actuator forces f (N), one RK4 step of 1 ms on: q, qd and the derivative at
+// them, and the actuators' lengths.
+PlanarState planar_leg(double f0 = 0, double f1 = 0) {
   legsim_options opt = legsim_default_options();
   opt.integrator = LEGSIM_INTEGRATOR_RK4;
   legsim_sim *sim = nullptr;
@@ -49,13 +51,15 @@ PlanarState planar_leg() {
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
   const legsim_real rates[2] = {0.1, -0.2};
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_velocity_analysis(sim, rates));
-  for (int a = 0; a < 2; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, a, 0.0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, f0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 1, f1));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 1));
   PlanarState p;
   p.nq = 3 * legsim_model_leg_revolute.n_bodies;
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_q(sim, p.q));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_qd(sim, p.qd));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_qdd(sim, p.qdd));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, p.length, nullptr));
   return p;
 }
 
@@ -87,6 +91,48 @@ MatrixXd jacobian(const SpatialRobot &leg, const Row *rows) {
       }
   }
   return J;
+}
+// [M J^T; J 0] [a; lambda] = [Q; gamma] at (q, v) with Q from robot_forces.
+VectorXd accelerations(const SpatialRobot &robot, const double *q, const double *v, const double *force_n,
+                       const double *rowing_nm) {
+  static Row rows[kMaxRobotRows];
+  static double Q[kBodyDof * kMaxRobotBodies];
+  robot_rows(robot, q, v, rows);
+  robot_forces(robot, q, v, force_n, rowing_nm, Q);
+  const int nv = kBodyDof * robot.nb, m = robot.m;
+  MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
+  VectorXd rhs = VectorXd::Zero(nv + m);
+  for (int b = 0; b < robot.nb; ++b) {
+    const double I[3] = {robot.inertia[b].x, robot.inertia[b].y, robot.inertia[b].z};
+    for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = robot.mass[b];
+    for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
+  }
+  for (int i = 0; i < nv; ++i) rhs[i] = Q[i];
+  const MatrixXd J = jacobian(robot, rows);
+  K.topRightCorner(nv, m) = J.transpose();
+  K.bottomLeftCorner(m, nv) = J;
+  for (int r = 0; r < m; ++r) rhs[nv + r] = rows[r].gamma;
+  return K.fullPivLu().solve(rhs);
+}
+
+// The largest difference between the spatial accelerations x of the one leg on its yoke at
+// angle psi and the planar accelerations qdd lifted (linear along the plane's axes, angular
+// about its normal, in the body frame), and the largest lifted one.
+void lifted_difference(const SpatialRobot &leg, const double *q, const double *qdd, double psi, const VectorXd &x,
+                       double &worst, double &scale) {
+  const double c = std::cos(psi), s = std::sin(psi);
+  worst = 0, scale = 0;
+  for (int b = 1; b < leg.nb; ++b) {
+    const double *a = qdd + 3 * (b - 1);
+    const double *qb = q + kBodyConfig * b;
+    const Rot R = rotation({qb[3], qb[4], qb[5], qb[6]});
+    const V3 ang = rotate_back(R, V3{a[2] * s, -a[2] * c, 0});
+    const double expect[6] = {c * a[0], s * a[0], a[1], ang.x, ang.y, ang.z};
+    for (int i = 0; i < 6; ++i) {
+      worst = std::fmax(worst, std::fabs(x[kBodyDof * b + i] - expect[i]));
+      scale = std::fmax(scale, std::fabs(expect[i]));
+    }
+  }
 }
 }  // namespace
 
@@ -303,6 +349,63 @@ void test_hexapod_falls_freely(void) {
   TEST_ASSERT_TRUE(lam < 1e-9);
 }
 
+void test_actuators_push_as_the_planar_leg(void) {
+  const SpatialRobot leg = lifted();
+  TEST_ASSERT_EQUAL_INT(2, leg.na);
+  const PlanarState p = planar_leg(50.0, -30.0);
+  static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  const double psi = -1.3;
+  leg_state(leg, p.q, p.qd, psi, 0.0, q, v);
+  for (int a = 0; a < 2; ++a) TEST_ASSERT_TRUE(std::fabs(robot_actuator_length(leg, a, q) - p.length[a]) < 1e-14);
+  const double force[2] = {50.0, -30.0}, rowing[1] = {0.0};
+  const VectorXd x = accelerations(leg, q, v, force, rowing);
+  double worst, scale;
+  lifted_difference(leg, q, p.qdd, psi, x, worst, scale);
+  printf("with the actuators at (50, -30) N: spatial - planar accelerations %.2e of %.2e, rowing %.2e\n", worst,
+         scale, x[5]);
+  TEST_ASSERT_TRUE(worst < 1e-9 * scale);
+  TEST_ASSERT_TRUE(std::fabs(x[5]) < 1e-9 * scale);
+}
+
+void test_rowing_torque_turns_the_leg_rigidly(void) {
+  // the rowing torque turns the yoke and the leg about the hip axis as one body (tau / I_axis,
+  // I_axis summed independently from the bodies' poses) when the yoke is not turning yet, and
+  // the leg's own accelerations stay the planar ones (the turn's acceleration lies across the
+  // leg's plane, its inertia's principal axes keep the two apart)
+  const SpatialRobot leg = lifted();
+  const PlanarState p = planar_leg();
+  const double *qdd = p.qdd;
+  static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  const double psi = 0.6, tau = 2.5;
+  leg_state(leg, p.q, p.qd, psi, 0.0, q, v);
+  double I_axis = 0;
+  for (int b = 0; b < leg.nb; ++b) {
+    const double *qb = q + kBodyConfig * b;
+    const Rot R = rotation({qb[3], qb[4], qb[5], qb[6]});
+    const V3 zb = rotate_back(R, V3{0, 0, 1});  // the axis in the body's frame
+    I_axis += leg.inertia[b].x * zb.x * zb.x + leg.inertia[b].y * zb.y * zb.y + leg.inertia[b].z * zb.z * zb.z +
+              leg.mass[b] * (qb[0] * qb[0] + qb[1] * qb[1]);
+  }
+  const double force[2] = {0, 0}, rowing[1] = {tau};
+  const VectorXd x = accelerations(leg, q, v, force, rowing);
+  // the yoke's angular acceleration about z (its frame's z is the axis)
+  printf("rowing: psi'' %.12f, tau / I_axis %.12f (I_axis %.6f kg m^2)\n", x[5], tau / I_axis, I_axis);
+  TEST_ASSERT_TRUE(std::fabs(x[5] - tau / I_axis) < 1e-12 * std::fabs(tau / I_axis));
+  // each body's acceleration: the planar one lifted plus the turn's (psi'' ez x r, and psi''
+  // about z in its frame)
+  const double c = std::cos(psi), s = std::sin(psi), pdd = x[5];
+  double worst = 0;
+  for (int b = 1; b < leg.nb; ++b) {
+    const double *a = qdd + 3 * (b - 1), *qb = q + kBodyConfig * b;
+    const Rot R = rotation({qb[3], qb[4], qb[5], qb[6]});
+    const V3 ang = rotate_back(R, V3{a[2] * s, -a[2] * c, pdd});
+    const double expect[6] = {c * a[0] - pdd * qb[1], s * a[0] + pdd * qb[0], a[1], ang.x, ang.y, ang.z};
+    for (int i = 0; i < 6; ++i) worst = std::fmax(worst, std::fabs(x[kBodyDof * b + i] - expect[i]));
+  }
+  printf("rowing: the bodies' accelerations off the planar ones plus the turn by %.2e\n", worst);
+  TEST_ASSERT_TRUE(worst < 1e-10);
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_rows_and_tree);
@@ -310,6 +413,8 @@ int main(void) {
   RUN_TEST(test_jacobian_full_rank_as_the_prototype);
   RUN_TEST(test_dynamics_is_the_planar_leg_lifted);
   RUN_TEST(test_refuses_what_it_cannot_lift);
+  RUN_TEST(test_actuators_push_as_the_planar_leg);
+  RUN_TEST(test_rowing_torque_turns_the_leg_rigidly);
   RUN_TEST(test_hexapod_counts_rows_and_motions);
   RUN_TEST(test_hexapod_falls_freely);
   return UNITY_END();

@@ -36,7 +36,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.yoke_com = {real(yoke.com_m[0]), real(yoke.com_m[1]), real(yoke.com_m[2])};
   R.origin_x = real(yoke.hip_offset_m);
   R.gravity = {0, 0, real(legs[0]->gravity_mps2[1])};
-  int nb = 0;
+  int nb = 0, na = 0;
   if (box) {
     R.mass[0] = real(box->mass_kg);
     R.inertia[0] = {real(box->inertia_kgm2[0]), real(box->inertia_kgm2[1]), real(box->inertia_kgm2[2])};
@@ -72,6 +72,15 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
       // about u a tube's; about n and k the planar inertia (the planar dynamics unchanged)
       R.inertia[y + 1 + b] = {real(0.5 * bd.mass_kg * yoke.bar_radius_m * yoke.bar_radius_m),
                               real(bd.inertia_kgm2), real(bd.inertia_kgm2)};
+    }
+    if (desc.n_actuators > LEGSIM_MAX_ACTUATORS) return LEGSIM_ERR_CAPACITY;
+    L.first_actuator = na;
+    L.nactuators = desc.n_actuators;
+    for (int a = 0; a < desc.n_actuators; ++a) {
+      const int jn = desc.actuator[a].joint;
+      if (jn < 0 || jn >= desc.n_joints || desc.joint[jn].kind != LEGSIM_JOINT_PRISMATIC) return LEGSIM_ERR_MODEL;
+      const int cyl = desc.joint[jn].body[0], rod = desc.joint[jn].body[1];
+      R.act[na++] = {y + 1 + cyl, y + 1 + rod, real(0.5 * (desc.body[cyl].length_m + desc.body[rod].length_m))};
     }
     nb += 1 + nbar;
     for (int i = y; i < nb; ++i) parent[i] = i;
@@ -115,6 +124,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     }
   }
   R.nb = nb;
+  R.na = na;
   R.nj = nj;
   R.m = row;
   return LEGSIM_OK;
@@ -176,6 +186,44 @@ void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *ou
         prismatic_rows(A, j.sa, j.ka, j.ub, j.nb, B, j.sb, j.ub, j.nb, r);
         break;
     }
+  }
+}
+
+real robot_actuator_length(const SpatialRobot &robot, int a, const real *q) {
+  const RobotActuator &ac = robot.act[a];
+  const real zero[kBodyDof] = {0, 0, 0, 0, 0, 0};
+  const BodyState rod = body_state(q + kBodyConfig * ac.rod, zero), cyl = body_state(q + kBodyConfig * ac.cyl, zero);
+  return row_along_axis(rod, {0, 0, 0}, cyl, {0, 0, 0}, kU).phi + ac.offset;
+}
+
+void robot_forces(const SpatialRobot &robot, const real *q, const real *v, const real *force_n,
+                  const real *rowing_nm, real *Q) {
+  for (int b = 0; b < robot.nb; ++b) {
+    real *f = Q + kBodyDof * b;
+    const real *w = v + kBodyDof * b + 3;
+    const V3 &I = robot.inertia[b];
+    const real m = robot.mass[b];
+    const V3 Iw = {I.x * w[0], I.y * w[1], I.z * w[2]};
+    const V3 gyro = -1 * cross({w[0], w[1], w[2]}, Iw);
+    const real fb[kBodyDof] = {m * robot.gravity.x, m * robot.gravity.y, m * robot.gravity.z, gyro.x, gyro.y, gyro.z};
+    for (int i = 0; i < kBodyDof; ++i) f[i] = fb[i];
+  }
+  // an actuator: F times its length's gradient, the row (p_rod - p_cyl) . (R_cyl u)'s
+  // coefficients (rows.hpp)
+  for (int a = 0; a < robot.na; ++a) {
+    const RobotActuator &ac = robot.act[a];
+    const BodyState rod = body_state(q + kBodyConfig * ac.rod, v + kBodyDof * ac.rod);
+    const BodyState cyl = body_state(q + kBodyConfig * ac.cyl, v + kBodyDof * ac.cyl);
+    const Row r = row_along_axis(rod, {0, 0, 0}, cyl, {0, 0, 0}, kU);
+    for (int i = 0; i < kBodyDof; ++i) {
+      Q[kBodyDof * ac.rod + i] += force_n[a] * r.ja[i];
+      Q[kBodyDof * ac.cyl + i] += force_n[a] * r.jb[i];
+    }
+  }
+  // a rowing torque about the hip axis: the yoke's z, and the box's z
+  for (int l = 0; l < robot.nlegs; ++l) {
+    Q[kBodyDof * robot.leg[l].yoke + 5] += rowing_nm[l];
+    if (robot.free_box) Q[5] -= rowing_nm[l];
   }
 }
 

@@ -29,6 +29,7 @@ constexpr int kMaxRobotBodies = 1 + kMaxLegs * (1 + kMaxLegBars);
 constexpr int kMaxLegJoints = 10;
 constexpr int kMaxRobotJoints = kMaxLegs * (1 + kMaxLegJoints);
 constexpr int kMaxRobotRows = 5 * kMaxRobotJoints;
+constexpr int kMaxRobotActuators = kMaxLegs * LEGSIM_MAX_ACTUATORS;
 
 // The hip yoke. The paper gives no yoke or hip numbers: these defaults are ASSUMPTIONS (the
 // spatial prototype's, firmware_core/tools/prototypes/spatial_leg.py).
@@ -68,17 +69,26 @@ struct LegJoint {
 
 struct RobotLeg {
   int yoke, nbars;  // the yoke's body; its bars follow it
+  int first_actuator, nactuators;  // its linear actuators in SpatialRobot::act
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
   real yaw;         // rad
 };
 
+// A linear actuator: its length (m) is (r_rod - r_cyl) . u_cyl + offset, the planar model's,
+// and its axial force F acts by virtual work F dl (the planar model's applied force).
+struct RobotActuator {
+  int cyl, rod;
+  real offset;  // (L_cyl + L_rod) / 2
+};
+
 struct SpatialRobot {
   bool free_box;     // body 0 is the box (else the box is the fixed world)
-  int nb, nj, m, nlegs;  // bodies, joints, rows, legs
+  int nb, nj, m, nlegs, na;  // bodies, joints, rows, legs, linear actuators
   real mass[kMaxRobotBodies];
   V3 inertia[kMaxRobotBodies];  // principal, body frame (kg m^2)
   LegJoint joint[kMaxRobotJoints];
   RobotLeg leg[kMaxLegs];
+  RobotActuator act[kMaxRobotActuators];
   V3 gravity;    // world (m/s^2): the leg files' (0, g_y), along z
   V3 yoke_com;   // yoke frame, from the hip axis point
   real origin_x; // the leg's planar origin, yoke frame: out along x from the hip axis
@@ -100,5 +110,15 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
 // Every row at (q, v): out[0 .. robot.m - 1]; row r of joint j acts on bodies joint[j].a, .b
 // (its ja, jb).
 void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out);
+
+// Linear actuator a's length (m) at q.
+real robot_actuator_length(const SpatialRobot &robot, int a, const real *q);
+
+// The applied forces Q (6 per body: force on v in the world, moment on omega in the body's
+// frame) at (q, v): gravity, the gyroscopic moments -omega x (J omega), each linear actuator's
+// axial force force_n[a] (N), and each leg's rowing torque rowing_nm[l] (N m, on its yoke about
+// the hip axis, and its reaction on the box).
+void robot_forces(const SpatialRobot &robot, const real *q, const real *v, const real *force_n,
+                  const real *rowing_nm, real *Q);
 
 }  // namespace legsim::spatial
