@@ -15,6 +15,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <memory>
 #include <new>
 #include <string>
 #include <tuple>
@@ -1185,6 +1186,123 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
   m.ground.mu_kinetic = mu_k;
 }
 
+// ---- a hexapod file: six leg files on hip yokes on a free box (legsim/hexapod.h) ----
+bool is_hexapod(Table doc) { return has(doc, "yoke") || has(doc, "rowing"); }
+
+// A table key of doc, required, as a table.
+Table req_table(Table doc, const std::string &key, const std::string &label) {
+  Node n = req(doc, key, label);
+  if (!is_table(n)) fail(label, q(key) + " must be a table");
+  return n->as_table();
+}
+void copy3(double (&dst)[3], const std::vector<double> &v) {
+  for (int i = 0; i < 3; ++i) dst[i] = v[i];
+}
+std::vector<double> positive3(Table t, const std::string &key, double lo, double hi, const std::string &label) {
+  return ranged_vec(get_vec(t, key, 3, label), lo, hi, key, label);
+}
+
+void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &h) {
+  const std::string label0 = "hexapod";
+  check_keys(doc, {"name", "gravity", "box", "yoke", "rowing", "leg", "ground"}, label0);
+  const std::string name = get_string(doc, "name", label0);
+  check_name(name, label0);
+  const std::vector<double> gravity = ranged_vec(get_vec(doc, "gravity", 3, label0), -LEGSIM_MAX_GRAVITY_MPS2,
+                                                 LEGSIM_MAX_GRAVITY_MPS2, "gravity", label0);
+  if (gravity[0] != 0 || gravity[1] != 0)
+    fail(label0, "'gravity' must be vertical, [0, 0, g_z] (the world's z is up; got [" + g(gravity[0]) + ", " +
+                     g(gravity[1]) + ", " + g(gravity[2]) + "])");
+  std::memset(&h, 0, sizeof h);
+  copy_name(h.name, name);
+  copy3(h.gravity_mps2, gravity);
+
+  Table bt = req_table(doc, "box", label0);
+  check_keys(bt, {"mass", "size", "inertia"}, "box");
+  h.box_mass_kg = ranged(get_positive(bt, "mass", "box"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "box");
+  copy3(h.box_size_m, positive3(bt, "size", LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD, "box"));
+  copy3(h.box_inertia_kgm2, positive3(bt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "box"));
+
+  Table yt = req_table(doc, "yoke", label0);
+  check_keys(yt, {"mass", "com", "inertia", "hip_offset", "bar_radius"}, "yoke");
+  h.yoke_mass_kg = ranged(get_positive(yt, "mass", "yoke"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "yoke");
+  copy3(h.yoke_com_m, positive3(yt, "com", -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "yoke"));
+  copy3(h.yoke_inertia_kgm2, positive3(yt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "yoke"));
+  h.hip_offset_m = ranged(get_positive(yt, "hip_offset", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
+                          "hip_offset", "yoke");
+  h.bar_radius_m = ranged(get_positive(yt, "bar_radius", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
+                          "bar_radius", "yoke");
+
+  Table rt = req_table(doc, "rowing", label0);
+  check_keys(rt, {"gear_ratio", "max_torque", "stroke"}, "rowing");
+  h.rowing_gear_ratio = ranged(get_positive(rt, "gear_ratio", "rowing"), 1.0, 1e4, "gear_ratio", "rowing");
+  h.rowing_max_torque_nm = ranged(get_positive(rt, "max_torque", "rowing"), LEGSIM_MIN_FORCE_N,
+                                  LEGSIM_MAX_FORCE_N, "max_torque", "rowing");
+  const std::vector<double> stroke = get_vec(rt, "stroke", 2, "rowing");
+  if (!(stroke[0] > -M_PI && stroke[0] < 0 && stroke[1] > 0 && stroke[1] < M_PI))
+    fail("rowing", "'stroke' must be [min, max] with -pi < min < 0 < max < pi rad (got [" + exact(stroke[0]) + ", " +
+                       exact(stroke[1]) + "])");
+  h.rowing_stroke_rad[0] = stroke[0];
+  h.rowing_stroke_rad[1] = stroke[1];
+
+  auto leg_tables = get_table_array(doc, "leg", label0);
+  if (leg_tables.size() != LEGSIM_HEXAPOD_LEGS)
+    fail(label0, "needs " + std::to_string(LEGSIM_HEXAPOD_LEGS) + " [[leg]] (got " +
+                     std::to_string(leg_tables.size()) + ")");
+  std::vector<std::string> names;
+  for (size_t k = 0; k < leg_tables.size(); ++k) {
+    Table tl = leg_tables[k];
+    std::string label = "leg #" + std::to_string(k + 1);
+    const std::string lname = get_string(tl, "name", label);
+    check_name(lname, label);
+    check_unique(lname, names, "leg", label);
+    names.push_back(lname);
+    label = "leg " + q(lname);
+    check_keys(tl, {"name", "file", "variant", "hip", "heading"}, label);
+    const std::string lfile = get_string(tl, "file", label);
+    const std::string lvariant = has(tl, "variant") ? get_string(tl, "variant", label) : kDefaultVariant;
+    legsim_hexapod_leg_desc &L = h.leg[k];
+    copy_name(L.name, lname);
+    copy3(L.hip_m, ranged_vec(get_vec(tl, "hip", 3, label), -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "hip", label));
+    L.heading_rad = ranged(get_real(tl, "heading", label), -M_PI, M_PI, "heading", label);
+    toml::table ldoc = read_leg_toml(path_join(base_dir, lfile), label, lfile);
+    if (is_robot(&ldoc) || is_hexapod(&ldoc)) fail(label, "file " + q(lfile) + " is not a leg file");
+    try {
+      parse_model(&ldoc, lvariant, L.leg);
+    } catch (Fail &f) {
+      f.message = label + ": " + lfile + ": " + f.message;
+      throw;
+    }
+#if LEGSIM_MODEL_TOML_CORE_CHECK
+    char core_msg[256] = {0};
+    if (legsim_model_check(&L.leg, core_msg, sizeof core_msg) != LEGSIM_OK)
+      fail(label, lfile + ": " + core_msg);
+#endif
+    // one gravity: a leg file that states another is refused, not ignored
+    if (L.leg.gravity_mps2[0] != 0 || L.leg.gravity_mps2[1] != gravity[2])
+      fail(label, "the gravity of " + q(lfile) + ", [" + g(L.leg.gravity_mps2[0]) + ", " +
+                      g(L.leg.gravity_mps2[1]) + "], is not the hexapod's [0, " + g(gravity[2]) +
+                      "] in its plane");
+    if (L.leg.foot_body < 0) fail(label, "file " + q(lfile) + " has no [foot]: a hexapod's feet are its legs'");
+  }
+  h.n_legs = LEGSIM_HEXAPOD_LEGS;
+
+  Table gt = req_table(doc, "ground", label0);
+  check_keys(gt, {"point", "normal", "mu_static", "mu_kinetic"}, "ground");
+  copy3(h.ground_point_m, ranged_vec(get_vec(gt, "point", 3, "ground"), -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD,
+                                     "point", "ground"));
+  const std::vector<double> nrm = get_vec(gt, "normal", 3, "ground");
+  const double len = std::sqrt(nrm[0] * nrm[0] + nrm[1] * nrm[1] + nrm[2] * nrm[2]);
+  if (!(std::abs(len - 1) <= 1e-9))
+    fail("ground", "'normal' must be a unit vector (its length is " + exact(len) + ")");
+  if (!(std::acos(std::min(1.0, nrm[2] / len)) <= kMaxSlope))
+    fail("ground", "'normal' must be within " + g(kMaxSlope) + " rad of the vertical");
+  copy3(h.ground_normal, nrm);
+  h.mu_static = ranged(get_nonnegative(gt, "mu_static", "ground"), 0.0, kMaxFriction, "mu_static", "ground");
+  h.mu_kinetic = ranged(get_nonnegative(gt, "mu_kinetic", "ground"), 0.0, kMaxFriction, "mu_kinetic", "ground");
+  if (h.mu_kinetic > h.mu_static)
+    fail("ground", "mu_kinetic " + g(h.mu_kinetic) + " > mu_static " + g(h.mu_static));
+}
+
 legsim_status parse_text(const std::string &text, const std::string &source, const char *variant,
                          legsim_model_desc *out, char *msg, size_t msg_len) {
   const std::string v = (variant && *variant) ? variant : kDefaultVariant;
@@ -1192,6 +1310,8 @@ legsim_status parse_text(const std::string &text, const std::string &source, con
     toml::table doc = parse_toml(text, source);
     legsim_model_desc m;
     try {
+      if (is_hexapod(&doc))
+        fail("file", "a hexapod file: load it with legsim_hexapod_load_toml", LEGSIM_ERR_BAD_INPUT);
       if (is_robot(&doc))
         parse_robot(&doc, dir_name(source), v, m);
       else
@@ -1285,6 +1405,40 @@ extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*nam
       std::memcpy(names[i], list[i].data(), std::min(list[i].size(), size_t(LEGSIM_NAME_LEN - 1)));
     }
     *n_names = static_cast<int32_t>(list.size());
+    put_msg(msg, msg_len, "");
+    return LEGSIM_OK;
+  } catch (const Fail &f) {
+    put_msg(msg, msg_len, f.message);
+    return f.status;
+  } catch (...) {
+    put_msg(msg, msg_len, std::string(path) + ": unexpected error");
+    return LEGSIM_ERR_MODEL;
+  }
+}
+
+extern "C" legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexapod_desc *out, char *msg,
+                                                  size_t msg_len) {
+  if (!path || !out) {
+    put_msg(msg, msg_len, "legsim_hexapod_load_toml: path or out is NULL");
+    return LEGSIM_ERR_NULL;
+  }
+  try {
+    std::string text, err;
+    if (!read_toml_file(path, text, err)) {
+      put_msg(msg, msg_len, err);
+      return LEGSIM_ERR_BAD_INPUT;
+    }
+    const std::string source = path;
+    toml::table doc = parse_toml(text, source);
+    auto h = std::make_unique<legsim_hexapod_desc>();
+    try {
+      if (!is_hexapod(&doc)) fail("file", "not a hexapod file (no [yoke] or [rowing])", LEGSIM_ERR_BAD_INPUT);
+      parse_hexapod(&doc, dir_name(source), *h);
+    } catch (Fail &f) {
+      f.message = source + ": " + f.message;
+      throw;
+    }
+    *out = *h;
     put_msg(msg, msg_len, "");
     return LEGSIM_OK;
   } catch (const Fail &f) {

@@ -22,6 +22,7 @@
 #include <stddef.h>
 #include <stdint.h>
 
+#include "legsim/hexapod.h"
 #include "legsim/legsim.h"
 
 #ifdef __cplusplus
@@ -55,6 +56,13 @@ legsim_status legsim_model_parse_toml(const char *text, size_t text_len, const c
 legsim_status legsim_model_toml_variants(const char *path, char (*names)[LEGSIM_NAME_LEN],
                                          int32_t max_names, int32_t *n_names, char *msg,
                                          size_t msg_len);
+
+/* Loads a hexapod file (models/hexapod.toml; legsim/hexapod.h says what it holds and the
+ * ranges it keeps): its six leg files are read by this same loader (the variant each [[leg]]
+ * names) and must state the hexapod's gravity in their plane and have a [foot]. A hexapod file
+ * given to legsim_model_load_toml is refused (LEGSIM_ERR_BAD_INPUT), and a model file given here.
+ * Statuses and messages as legsim_model_load_toml's. */
+legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexapod_desc *out, char *msg, size_t msg_len);
 
 #ifdef __cplusplus
 }

@@ -73,6 +73,8 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
       R.inertia[y + 1 + b] = {real(0.5 * bd.mass_kg * yoke.bar_radius_m * yoke.bar_radius_m),
                               real(bd.inertia_kgm2), real(bd.inertia_kgm2)};
     }
+    L.foot_body = desc.foot_body >= 0 && desc.foot_body < nbar ? y + 1 + desc.foot_body : -1;
+    L.foot_point = {real(desc.foot_point[0]), real(desc.foot_point[1]), 0};
     if (desc.n_actuators > LEGSIM_MAX_ACTUATORS) return LEGSIM_ERR_CAPACITY;
     L.first_actuator = na;
     L.nactuators = desc.n_actuators;
@@ -128,6 +130,29 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.nj = nj;
   R.m = row;
   return LEGSIM_OK;
+}
+
+legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out) {
+  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_MODEL;
+  YokeDesc yoke;
+  yoke.mass_kg = h.yoke_mass_kg;
+  for (int i = 0; i < 3; ++i) yoke.com_m[i] = h.yoke_com_m[i], yoke.inertia_kgm2[i] = h.yoke_inertia_kgm2[i];
+  yoke.hip_offset_m = h.hip_offset_m;
+  yoke.bar_radius_m = h.bar_radius_m;
+  const BoxDesc box = {h.box_mass_kg, {h.box_inertia_kgm2[0], h.box_inertia_kgm2[1], h.box_inertia_kgm2[2]}};
+  const legsim_model_desc *legs[LEGSIM_HEXAPOD_LEGS];
+  HipDesc hips[LEGSIM_HEXAPOD_LEGS];
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    legs[l] = &h.leg[l].leg;
+    hips[l] = {{h.leg[l].hip_m[0], h.leg[l].hip_m[1], h.leg[l].hip_m[2]}, h.leg[l].heading_rad};
+  }
+  return robot_lift(legs, hips, LEGSIM_HEXAPOD_LEGS, yoke, &box, out);
+}
+
+V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q) {
+  const RobotLeg &L = robot.leg[l];
+  const real *qb = q + kBodyConfig * L.foot_body;
+  return V3{qb[0], qb[1], qb[2]} + rotate(rotation({qb[3], qb[4], qb[5], qb[6]}), L.foot_point);
 }
 
 void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v, const real *const *q_planar,

@@ -18,6 +18,7 @@
 // coordinates; six of them on a free box: 234 rows on 258.
 #pragma once
 
+#include "legsim/hexapod.h"
 #include "legsim/legsim.h"
 #include "spatial/rows.hpp"
 
@@ -70,6 +71,8 @@ struct LegJoint {
 struct RobotLeg {
   int yoke, nbars;  // the yoke's body; its bars follow it
   int first_actuator, nactuators;  // its linear actuators in SpatialRobot::act
+  int foot_body;    // its foot's bar (a body of the robot), or -1: the leg file has no [foot]
+  V3 foot_point;    // on it, body frame
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
   real yaw;         // rad
 };
@@ -99,6 +102,12 @@ struct SpatialRobot {
 // differs between the legs; LEGSIM_ERR_CAPACITY past the capacities above.
 legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hips, int nlegs, const YokeDesc &yoke,
                          const BoxDesc *box, SpatialRobot &out);
+
+// The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box.
+legsim_status robot_lift_hexapod(const legsim_hexapod_desc &hexapod, SpatialRobot &out);
+
+// Leg l's foot point (world, m) at q.
+V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q);
 
 // The spatial state (q: 7 per body, v: 6 per body) of: the box at box_q (r, quaternion) moving
 // at box_v (v world, omega box frame), ignored for a fixed box; per leg k its planar state

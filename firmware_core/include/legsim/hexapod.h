@@ -1,0 +1,57 @@
+/* The hexapod's description (docs/design/spatial.md): six legs, each the leg's own planar file
+ * on a hip yoke that a rowing actuator turns about the box's vertical axis, on a box that moves
+ * with six degrees of freedom, over a ground plane. A hexapod file (models/hexapod.toml) is read
+ * by the one model file parser (firmware_core/host/model_toml.hpp: legsim_hexapod_load_toml);
+ * the spatial module lifts it (firmware_core/src/spatial/robot.hpp). SI units, the world z up.
+ *
+ * Ranges (the loader refuses anything outside them):
+ *   gravity: (0, 0, g_z), |g_z| <= LEGSIM_MAX_GRAVITY_MPS2, and each leg file's (0, g_z);
+ *   masses [LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG]; principal inertias
+ *   [LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2]; sizes, the hip offset and the bar radius
+ *   [LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD]; points |x| <= LEGSIM_MAX_COORD; headings |h| <= pi;
+ *   the rowing stroke -pi < min < 0 < max < pi rad; gear ratio [1, 1e4]; max torque
+ *   (0, LEGSIM_MAX_FORCE_N] N m; the ground's normal a unit vector within 1e-9 whose angle from z
+ *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. */
+#ifndef LEGSIM_HEXAPOD_H
+#define LEGSIM_HEXAPOD_H
+
+#include "legsim/legsim.h"
+
+#ifdef __cplusplus
+extern "C" {
+#endif
+
+#define LEGSIM_HEXAPOD_LEGS 6
+
+typedef struct legsim_hexapod_leg_desc {
+  char name[LEGSIM_NAME_LEN];
+  legsim_model_desc leg;  /* its file (the variant named), as the planar model reads it */
+  double hip_m[3];        /* the hip axis point on the box: box frame, from its centre */
+  double heading_rad;     /* the yoke's x (the leg's plane, out from the hip) at rowing angle 0,
+                             about the box's z from its x */
+} legsim_hexapod_leg_desc;
+
+typedef struct legsim_hexapod_desc {
+  char name[LEGSIM_NAME_LEN];
+  double gravity_mps2[3];
+  /* the box: a uniform block's size (drawing and clearance), its mass and principal inertia
+   * (box frame: x forward, y left, z up) */
+  double box_mass_kg, box_size_m[3], box_inertia_kgm2[3];
+  /* every hip's yoke: mass, centre of mass (yoke frame from the hip axis point: x out along
+   * the leg's plane, z up), principal inertia, the leg's planar origin out along x from the
+   * axis, and the bars' radius (their inertia about their own axis: m r^2 / 2) */
+  double yoke_mass_kg, yoke_com_m[3], yoke_inertia_kgm2[3], hip_offset_m, bar_radius_m;
+  /* the rowing actuator, a DC gear motor at each hip: torque at the yoke saturates at
+   * max_torque; its angle's stroke about the heading */
+  double rowing_gear_ratio, rowing_max_torque_nm, rowing_stroke_rad[2];
+  int32_t n_legs; /* LEGSIM_HEXAPOD_LEGS */
+  legsim_hexapod_leg_desc leg[LEGSIM_HEXAPOD_LEGS];
+  /* the ground plane: a point, its upward unit normal, Coulomb friction */
+  double ground_point_m[3], ground_normal[3], mu_static, mu_kinetic;
+} legsim_hexapod_desc;
+
+#ifdef __cplusplus
+}
+#endif
+
+#endif
