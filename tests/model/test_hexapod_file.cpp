@@ -4,6 +4,12 @@
 // - lifted: 43 bodies, 234 rows, 12 linear actuators; the box level at the origin, every leg at
 //   its stand and rowing angle 0: every row met, the six feet at one height, the right and left
 //   feet mirror images across the box's x-z plane;
+// - standing (robot_statics): on a tripod the feet's vertical forces are the closed form of the
+//   centre of mass's place in the support triangle and their horizontal forces zero; on six
+//   feet they balance the weight; each leg's actuator forces are the planar core's statics of
+//   the leg under its foot's force (another formulation); the box's own equilibrium, from the
+//   legs' hip multipliers, holds; a horizontal push on the box makes each stance leg's rowing
+//   torque -((p_foot - p_hip) x f)_z; collinear feet and two feet are refused;
 // - refused, each with a message naming the file, the item and the problem: a hexapod file given
 //   to the model loader and a leg file given here, five legs, a horizontal gravity, a leg file
 //   whose gravity differs, a leg without a [foot], a rowing stroke past pi, a ground normal
@@ -23,6 +29,7 @@
 #include "legsim/models.h"
 #include "model_toml.hpp"
 #include "spatial/robot.hpp"
+#include "spatial/statics.hpp"
 #include "unity.h"
 
 void setUp(void) {}
@@ -118,6 +125,166 @@ void test_lifted_stand(void) {
   }
 }
 
+namespace {
+// The hexapod at its stand, the box level at the origin, the legs turned by unequal rowing
+// angles (the centre of mass off the middle, no two support triangles alike).
+struct Standing {
+  SpatialRobot robot;
+  double q[kBodyConfig * kMaxRobotBodies];
+  double M;
+  V3 com;
+  legsim_hexapod_desc desc;
+};
+Standing &standing() {
+  static Standing s;
+  static bool built = false;
+  if (built) return s;
+  char msg[256];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_load_toml(kHexapod, &s.desc, msg, sizeof msg));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift_hexapod(s.desc, s.robot));
+  legsim_options opt = legsim_default_options();
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &s.desc.leg[0].leg, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  static double qp[3 * LEGSIM_MAX_BODIES], zero[3 * LEGSIM_MAX_BODIES];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_q(sim, qp));
+  const double *qs[6], *vs[6];
+  double psi[6] = {0.3, 0.1, -0.2, 0.0, 0.25, -0.15}, psid[6] = {0};
+  for (int l = 0; l < 6; ++l) qs[l] = qp, vs[l] = zero;
+  const double box_q[7] = {0, 0, 0, 1, 0, 0, 0}, box_v[6] = {0, 0, 0, 0, 0, 0};
+  static double v[kBodyDof * kMaxRobotBodies];
+  robot_state(s.robot, box_q, box_v, qs, vs, psi, psid, s.q, v);
+  s.M = 0;
+  double c[3] = {0, 0, 0};
+  for (int b = 0; b < s.robot.nb; ++b) {
+    s.M += s.robot.mass[b];
+    for (int i = 0; i < 3; ++i) c[i] += s.robot.mass[b] * s.q[kBodyConfig * b + i];
+  }
+  s.com = {c[0] / s.M, c[1] / s.M, c[2] / s.M};
+  built = true;
+  return s;
+}
+
+// The planar core's statics of the leg under a foot force (fx along its plane's x, fz up), N.
+void planar_statics(const legsim_model_desc &leg, double fx, double fz, double *force) {
+  legsim_options opt = legsim_default_options();
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &leg, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  const double load[2] = {fx, fz};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_force(sim, 0, load));  // leg.toml's foot_load
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_statics(sim, force));
+}
+
+// The box's own equation from the legs' hip multipliers: J_box^T lambda - Q_box (its weight,
+// the load, the rowing torques' reactions): zero when the whole robot and every leg balance.
+double box_residual(const Standing &s, const RobotStatics &st, const double *box_force) {
+  static Row rows[kMaxRobotRows];
+  static double rest[kBodyDof * kMaxRobotBodies];
+  robot_rows(s.robot, s.q, rest, rows);
+  double r[6] = {0, 0, s.robot.mass[0] * 9.81, 0, 0, 0};  // -(its weight)
+  for (int i = 0; i < 3; ++i) r[i] -= box_force ? box_force[i] : 0.0;
+  for (int l = 0; l < 6; ++l) r[5] += st.rowing_torque[l];
+  for (int k = 0; k < s.robot.nj; ++k) {
+    const LegJoint &j = s.robot.joint[k];
+    if (j.b != 0) continue;
+    for (int row = j.row; row < j.row + j.nrows; ++row)
+      for (int i = 0; i < 6; ++i) r[i] += rows[row].jb[i] * st.multiplier[row];
+  }
+  double worst = 0;
+  for (double x : r) worst = std::fmax(worst, std::fabs(x));
+  return worst;
+}
+}  // namespace
+
+void test_standing_on_a_tripod(void) {
+  Standing &s = standing();
+  static RobotStatics st;
+  const uint32_t tripod = 1u << 0 | 1u << 2 | 1u << 4;  // right front, right rear, left middle
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(s.robot, s.q, tripod, nullptr, st));
+  const double W = s.M * 9.81;
+  // the closed form: the weight shared by the centre of mass's barycentric coordinates
+  const V3 a = robot_foot_position(s.robot, 0, s.q), b = robot_foot_position(s.robot, 2, s.q),
+           c = robot_foot_position(s.robot, 4, s.q);
+  const double det = (b.x - a.x) * (c.y - a.y) - (c.x - a.x) * (b.y - a.y);
+  const double wb = ((s.com.x - a.x) * (c.y - a.y) - (c.x - a.x) * (s.com.y - a.y)) / det;
+  const double wc = ((b.x - a.x) * (s.com.y - a.y) - (s.com.x - a.x) * (b.y - a.y)) / det;
+  const double expect[3] = {(1 - wb - wc) * W, wb * W, wc * W};
+  const int legs[3] = {0, 2, 4};
+  for (int k = 0; k < 3; ++k) {
+    const V3 &f = st.foot_force[legs[k]];
+    printf("tripod: leg %d's foot force (%.3e, %.3e, %.9f) N, closed form %.9f N\n", legs[k], f.x, f.y, f.z,
+           expect[k]);
+    TEST_ASSERT_TRUE(std::fabs(f.z - expect[k]) <= 1e-9 * W);
+    TEST_ASSERT_TRUE(std::fabs(f.x) <= 1e-9 * W && std::fabs(f.y) <= 1e-9 * W);
+  }
+  // each leg's actuators: the planar statics under its foot's vertical force; no rowing torque
+  for (int l = 0; l < 6; ++l) {
+    double planar[2];
+    planar_statics(s.desc.leg[l].leg, 0.0, st.foot_force[l].z, planar);
+    for (int i = 0; i < 2; ++i) {
+      const double f = st.actuator_force[2 * l + i];
+      TEST_ASSERT_TRUE_MESSAGE(std::fabs(f - planar[i]) <= 1e-9 * (1 + std::fabs(planar[i])), "actuator");
+    }
+    TEST_ASSERT_TRUE(std::fabs(st.rowing_torque[l]) <= 1e-9 * W);
+  }
+  printf("tripod: leg 0's actuators %.6f, %.6f N; the box's residual %.2e N\n", st.actuator_force[0],
+         st.actuator_force[1], box_residual(s, st, nullptr));
+  TEST_ASSERT_TRUE(box_residual(s, st, nullptr) <= 1e-9 * W);
+}
+
+void test_standing_on_six_feet_and_pushed(void) {
+  Standing &s = standing();
+  static RobotStatics st;
+  const double W = s.M * 9.81;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(s.robot, s.q, 0x3F, nullptr, st));
+  double fz = 0;
+  for (int l = 0; l < 6; ++l) {
+    fz += st.foot_force[l].z;
+    double planar[2];
+    planar_statics(s.desc.leg[l].leg, 0.0, st.foot_force[l].z, planar);
+    for (int i = 0; i < 2; ++i) TEST_ASSERT_TRUE(std::fabs(st.actuator_force[2 * l + i] - planar[i]) <= 1e-9 * W);
+  }
+  TEST_ASSERT_TRUE(std::fabs(fz - W) <= 1e-9 * W);
+  TEST_ASSERT_TRUE(box_residual(s, st, nullptr) <= 1e-9 * W);
+  // a push on the box, on the tripod: horizontal foot forces, and rowing torques that balance
+  // their moments about the hip axes
+  const double push[3] = {30.0, -20.0, 0.0};
+  const uint32_t tripod = 1u << 0 | 1u << 2 | 1u << 4;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(s.robot, s.q, tripod, push, st));
+  double fx = 0, fy = 0;
+  for (int l : {0, 2, 4}) {
+    const V3 f = st.foot_force[l], p = robot_foot_position(s.robot, l, s.q);
+    const double *hip = s.desc.leg[l].hip_m;
+    const double expect = -((p.x - hip[0]) * f.y - (p.y - hip[1]) * f.x);
+    printf("pushed: leg %d's rowing torque %.9f N m, -((p - hip) x f)_z %.9f N m\n", l, st.rowing_torque[l], expect);
+    TEST_ASSERT_TRUE(std::fabs(st.rowing_torque[l] - expect) <= 1e-9 * (1 + std::fabs(expect)));
+    TEST_ASSERT_TRUE(std::fabs(expect) > 0.1);
+    fx += f.x, fy += f.y;
+  }
+  TEST_ASSERT_TRUE(std::fabs(fx + push[0]) <= 1e-9 * W && std::fabs(fy + push[1]) <= 1e-9 * W);
+  TEST_ASSERT_TRUE(box_residual(s, st, push) <= 1e-9 * W);
+}
+
+void test_stance_that_cannot_stand(void) {
+  Standing &s = standing();
+  static RobotStatics st;
+  // at rowing angles 0 the right side's three feet lie on one line; two feet are too few
+  legsim_options opt = legsim_default_options();
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &s.desc.leg[0].leg, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  static double qp[3 * LEGSIM_MAX_BODIES], zero[3 * LEGSIM_MAX_BODIES], q0[kBodyConfig * kMaxRobotBodies],
+      v0[kBodyDof * kMaxRobotBodies];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_q(sim, qp));
+  const double *qs[6] = {qp, qp, qp, qp, qp, qp}, *vs[6] = {zero, zero, zero, zero, zero, zero};
+  const double psi[6] = {0}, box_q[7] = {0, 0, 0, 1, 0, 0, 0}, box_v[6] = {0};
+  robot_state(s.robot, box_q, box_v, qs, vs, psi, psi, q0, v0);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NO_EQUILIBRIUM, robot_statics(s.robot, q0, 0x07, nullptr, st));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NO_EQUILIBRIUM, robot_statics(s.robot, s.q, 0x09, nullptr, st));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_statics(s.robot, s.q, 1u << 6, nullptr, st));
+}
+
 void test_refusals(void) {
   const std::string leg = read("models/leg.toml");
   {  // the model loader refuses a hexapod file; this one a leg file
@@ -158,6 +325,9 @@ int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_loads_six_legs_of_the_leg_file);
   RUN_TEST(test_lifted_stand);
+  RUN_TEST(test_standing_on_a_tripod);
+  RUN_TEST(test_standing_on_six_feet_and_pushed);
+  RUN_TEST(test_stance_that_cannot_stand);
   RUN_TEST(test_refusals);
   return UNITY_END();
 }
