@@ -92,7 +92,8 @@ struct Model {
 // ---- rows of the constraint system: joint equations plus drivers ----
 // Contact rows: the foot's normal gap, its tangential offset from the stick point,
 // and (assembly on the ground) the midpoint of two feet along the line.
-enum class RowKind : uint8_t { Joint, ActuatorLength, Coordinate, ContactNormal, ContactTangent, ContactMid };
+// FootPoint: the leg's foot at a point (legsim_assemble_foot; sub 0: x, 1: y).
+enum class RowKind : uint8_t { Joint, ActuatorLength, Coordinate, ContactNormal, ContactTangent, ContactMid, FootPoint };
 
 // Which rows a contact contributes to a layout.
 enum ContactRows : uint8_t { kContactNone = 0, kContactNormal = 1, kContactStuck = 2 };
@@ -171,6 +172,7 @@ struct DriverValues {
   int ncoord;
   real stick[kMaxContacts];  // a stuck contact's stick point: its coordinate along the line (m)
   real feet_mid;             // ContactMid target (m along the line)
+  real foot[2];              // FootPoint targets (m, world)
 };
 
 // Relative pivot of J W J^T below which J is taken as rank deficient.
@@ -399,9 +401,10 @@ legsim_status model_compile(const legsim_model_desc *desc, Model &model);
 // ---- constraints.cpp ----
 // Builds a layout of the joint equations followed by driver rows for the
 // actuators in actuator_mask and for ncoord coordinate drivers.
-// contacts (NULL: none): per contact its ContactRows; mid: one ContactMid row (assembly).
+// contacts (NULL: none): per contact its ContactRows; mid: one ContactMid row (assembly);
+// foot: the two FootPoint rows (legsim_assemble_foot).
 legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out,
-                           const uint8_t *contacts = nullptr, bool mid = false);
+                           const uint8_t *contacts = nullptr, bool mid = false, bool foot = false);
 // The layout's solve path (Layout::path) from its kernel and rows (layout_build's last step).
 void layout_path(Layout &out);
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.

@@ -325,6 +325,7 @@ class Library:
             "legsim_foot_position": (st, [P, RP]),
             "legsim_assemble": (st, [P, RP]),
             "legsim_assemble_pose": (st, [P, C.c_int32]),
+            "legsim_assemble_foot": (st, [P, RP]),
             "legsim_velocity_analysis": (st, [P, RP]),
             "legsim_acceleration_analysis": (st, [P, RP]),
             "legsim_inverse_dynamics": (st, [P, RP, RP, RP, RP]),

@@ -481,6 +481,17 @@ class Sim:
         self._check(self.library.cdll.legsim_assemble(self.handle, arr), "legsim_assemble")
         return self.q
 
+    def assemble_foot(self, foot) -> np.ndarray:
+        """The leg's inverse kinematics: Newton-Raphson from the current q (the branch near
+        it) onto Phi(q) = 0 with the foot at ``foot`` (m, world (x, y)); qd = 0; the lengths
+        that put it there are ``actuator_lengths()[0]``. Raises UnreachableError,
+        NotConvergedError, SingularError, OutOfStrokeError (a foot the strokes do not
+        reach), BadInputError (a model without a foot, or a robot); on failure q is
+        unchanged. Returns q."""
+        self._check(self.library.cdll.legsim_assemble_foot(self.handle, self._arr(foot, 2, "foot")),
+                    "legsim_assemble_foot")
+        return self.q
+
     def velocity_analysis(self, rates) -> np.ndarray:
         """Sets and returns qd for driven actuator length rates (m/s) in the current q."""
         self._check(self.library.cdll.legsim_velocity_analysis(

@@ -370,6 +370,7 @@ static void check_refused_everywhere(legsim_sim *s) {
   TEST_ASSERT_EQUAL_INT(want, legsim_assemble_pose(s, 0));
   TEST_ASSERT_EQUAL_INT(want, legsim_assemble(s, NULL));
   TEST_ASSERT_EQUAL_INT(want, legsim_assemble(s, len));
+  TEST_ASSERT_EQUAL_INT(want, legsim_assemble_foot(s, len));
   TEST_ASSERT_EQUAL_INT(want, legsim_set_options(s, &o));
   TEST_ASSERT_EQUAL_INT(want, legsim_get_report(s, &r));
   TEST_ASSERT_EQUAL_INT(want, legsim_failure_report(s, &r));

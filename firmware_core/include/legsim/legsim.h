@@ -388,6 +388,14 @@ legsim_status legsim_foot_position(const legsim_sim *sim, legsim_real *xy);
 legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m);
 /* Assembles a named pose of the model from its guess, driving its coordinates. */
 legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose);
+/* The leg's inverse kinematics: Newton from the current q (the branch near it) onto Phi(q) =
+ * 0 with its [foot] point at foot_xy (m, world, |x| <= LEGSIM_MAX_COORD); qd is set to zero,
+ * and legsim_actuator_lengths gives the lengths that put it there. A model without a foot or
+ * with contacts (a robot) LEGSIM_ERR_BAD_INPUT; a point the leg cannot reach
+ * LEGSIM_ERR_UNREACHABLE or LEGSIM_ERR_NOT_CONVERGED, a singular pose LEGSIM_ERR_SINGULAR,
+ * one that needs a length outside its stroke LEGSIM_ERR_OUT_OF_STROKE; on failure q is left
+ * unchanged. */
+legsim_status legsim_assemble_foot(legsim_sim *sim, const legsim_real *foot_xy);
 
 /* ---- 2. velocity and acceleration analysis ------------------------------- */
 /* For driven actuator length rates (|rate| <= LEGSIM_MAX_RATE_MPS) and accelerations

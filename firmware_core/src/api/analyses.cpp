@@ -51,6 +51,31 @@ legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
   });
 }
 
+legsim_status legsim_assemble_foot(legsim_sim *sim, const legsim_real *foot_xy) {
+  CHECK_SIM(sim);
+  if (!foot_xy) return LEGSIM_ERR_NULL;
+  Sim &s = *as_sim(sim);
+  const Model &m = s.model;
+  Data &d = s.data;
+  if (m.foot_body < 0 || m.nc > 0) return LEGSIM_ERR_BAD_INPUT;  // a leg's foot; a robot's feet are contacts
+  if (!bounded_array(foot_xy, 2, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
+  if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
+  d.drivers.foot[0] = foot_xy[0];
+  d.drivers.foot[1] = foot_xy[1];
+  d.drivers.ncoord = 0;
+  d.work_mask = -1;  // foot rows: built for this call only
+  legsim_status st = layout_build(m, 0, 0, d.work, nullptr, false, true);
+  if (st == LEGSIM_OK) st = layout_finish(d.work, d.drivers);
+  if (st != LEGSIM_OK) return st;
+  return all_or_nothing(s, [&] {
+    legsim_status r = assemble_commit(s);
+    if (r != LEGSIM_OK) return r;
+    real len[kMaxActuators];
+    legsim_actuator_lengths(sim, len, nullptr);
+    return lengths_check(m, len);  // a foot the strokes do not reach: refused
+  });
+}
+
 legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_mps) {
   CHECK_SIM(sim);
   if (!rate_mps) return LEGSIM_ERR_NULL;

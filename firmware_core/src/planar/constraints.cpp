@@ -81,6 +81,17 @@ void contact_rows(const Model &m, const Vec2 &e, int k, const BodyPose *pose, re
   out.nu[row] = 0;
 }
 
+// The foot's point along world x (sub 0) or y (1) at its target: contact_row's unit (a body
+// point along a direction) from the origin.
+void foot_rows(const Model &m, const DriverValues &dv, int sub, const BodyPose *pose, int row, Rows &out) {
+  ContactRow r;
+  contact_row(m.foot_point, Vec2(0, 0), sub == 0 ? Vec2(1, 0) : Vec2(0, 1), dv.foot[sub], 1, pose[m.foot_body], r);
+  out.phi[row] = r.phi;
+  for (int x = 0; x < kBodyDof; ++x) out.coef[row][0][x] = r.coef[x];
+  out.gamma[row] = r.gamma;
+  out.nu[row] = 0;
+}
+
 void coordinate_rows(const legsim_coord_driver &c, const VecQ &q, int row, Rows &out) {
   out.phi[row] = coordinate_phi(c, q);
   out.coef[row][0][0] = out.coef[row][0][1] = out.coef[row][0][2] = 0;
@@ -91,7 +102,7 @@ void coordinate_rows(const legsim_coord_driver &c, const VecQ &q, int row, Rows 
 }  // namespace
 
 legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoord, Layout &out,
-                           const uint8_t *contacts, bool mid) {
+                           const uint8_t *contacts, bool mid, bool foot) {
   int m = 0;
   for (int j = 0; j < model.nj; ++j) {
     const Joint &jt = model.joint[j];
@@ -134,6 +145,14 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
     out.src[m] = {RowKind::ContactMid, 0, 0};
     out.body[m][0] = int8_t(model.contact[0].body);
     out.body[m][1] = int8_t(model.nc > 1 ? model.contact[model.nc - 1].body : -1);
+    ++m;
+  }
+  // the foot at a point: its x and y rows
+  for (int r = 0; foot && r < 2; ++r) {
+    if (m >= kMaxRows || model.foot_body < 0) return LEGSIM_ERR_CAPACITY;
+    out.src[m] = {RowKind::FootPoint, 0, uint8_t(r)};
+    out.body[m][0] = int8_t(model.foot_body);
+    out.body[m][1] = -1;
     ++m;
   }
   out.m = m;
@@ -199,6 +218,10 @@ void rows_eval(const Model &model, const Layout &layout, const DriverValues &dv,
         break;
       case RowKind::ContactTangent:
         contact_rows(model, model.ground_t, s.index, pose, dv.stick[s.index], 0, 1, i, rows);
+        ++i;
+        break;
+      case RowKind::FootPoint:
+        foot_rows(model, dv, s.sub, pose, i, rows);
         ++i;
         break;
       case RowKind::ContactMid: {
