@@ -93,7 +93,9 @@ LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd,
       continue;
     }
     for (int i = 0; i < lay.m; ++i) d.rhs[i] -= d.rows.nu[i];  // (d.rhs: J v1)
-    const legsim_status s = multiplier_solve(m, d, lay, q1, d.rhs);
+    // the Newton iteration's last coupled solve left its columns, on this factor: the rows
+    // they were built from are within the tolerance of q1's, which the second pass takes off
+    const legsim_status s = coupled_resolve(d, lay, d.rhs);
     if (s != LEGSIM_OK) return s;
     VecQ corr;
     constraint_forces(m, d, lay, q1, d.rhs, corr);
