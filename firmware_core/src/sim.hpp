@@ -304,6 +304,11 @@ struct Data {
   VecQ force_q;  // generalized applied forces Q
   VecQ tq[4], tv[3];
   VecR rhs;
+#if LEGSIM_WITH_CONTACT
+  // coupled_solve's Woodbury columns A^-1 U (one per sliding contact) of its last call, with
+  // d.factor and the rows it had: another solve on them pays no column again (coupled_resolve)
+  VecR slide_z[kMaxContacts];
+#endif
 };
 
 // The TrigCache of RK4's reduced stage solves (Kernel::accelerations).
@@ -547,6 +552,8 @@ void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (
 // sliding contacts' friction columns, E: their normal rows) by the Woodbury identity: one
 // extra solve per sliding contact. LEGSIM_ERR_CONTACT when the coupled matrix is singular.
 legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x);
+// The same system again, on the columns and factor of coupled_solve's last call (Data::slide_z).
+legsim_status coupled_resolve(Data &d, const Layout &layout, VecR &x);
 void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
 // factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within

@@ -101,22 +101,16 @@ legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ 
 }
 #endif
 
+#if LEGSIM_WITH_CONTACT
 // M qdd = Q - J^T lambda + F E^T lambda, J qdd = gamma: (A - J M^-1 F E^T) lambda = rhs with
 // A = J M^-1 J^T. With U = -J M^-1 F: lambda = x - Z (I + E^T Z)^-1 E^T x, x = A^-1 rhs,
-// Z = A^-1 U (Woodbury). At most kMaxContacts columns: a small dense elimination.
-legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x) {
+// Z = A^-1 U (Woodbury, the columns in d.slide_z). At most kMaxContacts columns: a small
+// dense elimination.
+namespace {
+inline legsim_status woodbury(Data &d, const Layout &layout, VecR &x) {
   const int ns = layout.nslide;
+  const VecR *z = d.slide_z;
   factor_solve(d.factor, x);
-  VecR z[kMaxContacts];
-  for (int j = 0; j < ns; ++j) {
-    const int k = layout.slide_contact[j], b = m.contact[k].body;
-    real f[kBodyDof];
-    friction_column(m, d, k, q, f);
-    VecQ mf = VecQ::Zero();
-    for (int c = 0; c < kBodyDof; ++c) mf[kBodyDof * b + c] = -Bodies::mass_inverse_times(m.minv, kBodyDof * b + c, f[c]);
-    j_times(layout, d.rows, mf, z[j]);
-    factor_solve(d.factor, z[j]);
-  }
   // C y = E^T x, C = I + E^T Z; a vanishing pivot: friction that cancels the normal
   // stiffness (Painleve). Zeroed first: GCC cannot tell that only the first ns rows and
   // columns are read (an LTO link's -Wmaybe-uninitialized).
@@ -130,6 +124,26 @@ legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const
     for (int i = 0; i < layout.m; ++i) x[i] -= z[j][i] * y[j];
   return LEGSIM_OK;
 }
+}  // namespace
+
+legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x) {
+  for (int j = 0; j < layout.nslide; ++j) {
+    const int k = layout.slide_contact[j], b = m.contact[k].body;
+    real f[kBodyDof];
+    friction_column(m, d, k, q, f);
+    VecQ mf = VecQ::Zero();
+    for (int c = 0; c < kBodyDof; ++c) mf[kBodyDof * b + c] = -Bodies::mass_inverse_times(m.minv, kBodyDof * b + c, f[c]);
+    j_times(layout, d.rows, mf, d.slide_z[j]);
+    factor_solve(d.factor, d.slide_z[j]);
+  }
+  return woodbury(d, layout, x);
+}
+
+legsim_status coupled_resolve(Data &d, const Layout &layout, VecR &x) { return woodbury(d, layout, x); }
+#else  // nothing slides without contacts (no layout has a sliding row)
+legsim_status coupled_solve(const Model &, Data &, const Layout &, const VecQ &, VecR &) { return LEGSIM_ERR_DISABLED; }
+legsim_status coupled_resolve(Data &, const Layout &, VecR &) { return LEGSIM_ERR_DISABLED; }
+#endif
 
 void stop_forces_update(Sim &sim) {
   const Model &m = sim.model;
