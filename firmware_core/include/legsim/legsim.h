@@ -320,7 +320,9 @@ enum legsim_event {
                                              its end (docs/design/events.md) */
   LEGSIM_EVENT_EVENT_INEXACT = 1u << 11     /* a contact event's root finding ran out of its
                                              iterations (or a solve inside it failed): taken at
-                                             the bracket's late end (or the step's end) */
+                                             the bracket's late end (or the step's end); one
+                                             still short of its root there is not taken (the
+                                             step goes on from there) */
 };
 /* Contact events are located inside the step (on its dense output, to 1e-6 of the step) and
  * taken at their time: a step is cut there and finished from the event. One step locates at

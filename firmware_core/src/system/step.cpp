@@ -677,6 +677,7 @@ constexpr real kGaImminent = 2;
     int side = 0;
     real he = theta * hs, g_prev = 0, h_prev = 0;
     int split = 1;  // the part step to the event's sub-steps (part_integrate)
+    bool short_of_root = false;
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
       r = adapt ? ga_part_restart(s, *from, ga.h_from, he, ga.jerk_ok ? &ga.jerk : nullptr) : part_restart(s, rk4, *from);
@@ -703,6 +704,10 @@ constexpr real kGaImminent = 2;
       g_prev = gf, h_prev = he;
       if (refine == kRefinements) {  // the refinements ran out: taken here
         raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
+        // still short of its root: the step's trial crossed where its part steps do not reach
+        // (a motion the step does not resolve); the event is not taken here (a stop or a foot
+        // put there would jump), the rest is located again from here
+        short_of_root = gf > slope_now * kRefineTol * h;
         break;
       }
       // regula falsi, bisecting when an end is kept twice (a mode far past its event can
@@ -715,6 +720,16 @@ constexpr real kGaImminent = 2;
     }
     done += he;
     ++located;
+    if (short_of_root) {  // no event: the rest of the step from here, as after a part step
+      if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));
+      from = new (&mid.at) Snapshot(s);
+      if (adapt) ga.h_from = he;  // (its one sub-step)
+      if (!rk4) {
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      continue;
+    }
     const double t_event = d.t + double(done);
     // the stops first (the arriving ones, and any other past its end), then the contacts'
     // events and checks with the forces of the state on its stops
