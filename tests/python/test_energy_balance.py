@@ -225,6 +225,26 @@ def test_dead_centre_phantom_stop_is_truncation():
     assert abs(g256) < 1e-3 * abs(whole) and abs(g256) < abs(g64) / 16
 
 
+def test_sliding_foot_force_through_a_pole_is_refused():
+    """Seed 328, RK4, h = 2 ms, step 1: both feet sliding at 46 m/s on mu = 6.7, the right
+    actuators pushing. Inside the step the left foot's sliding mode turns singular (its
+    normal force N, solved with the friction's coupling, goes through a pole: +4.5e3 N,
+    +1.1e8 N, then -2.9e9 N over 0.2 ms: Painleve's paradox). Its lift-off function was
+    "located" at the pole and the step returned OK with +3.04e5 J (T from 3.4e4 to 3.4e5 J).
+    Now it is refused with LEGSIM_ERR_CONTACT, the state as it was; the same 2 ms in 32 steps
+    of 62.5 us meets the mode's end before the pole (lift-off, slip to stick) and loses
+    energy."""
+    rb, before = _step_of(328, "rk4", 2e-3, 1)
+    s = rb.sim
+    state = s.state_bytes()
+    with pytest.raises(legsim.ContactError):
+        s.step(1)
+    assert s.state_bytes() == state
+    (g32,) = eb.refine(rb, before, 2e-3, (32,))
+    print(f"the step in 32 parts: dH {g32:+.4g} J")
+    assert -1e3 < g32 < 0
+
+
 def _campaign(seeds, hs):
     """The campaign's OK steps that create energy; asserts on the way that no closed foot ends
     a step pulling (a foot that would pull lifts off)."""

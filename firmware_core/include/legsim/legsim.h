@@ -507,7 +507,9 @@ legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real
  * a legsim_event (LIFTOFF, TOUCHDOWN, STICK_TO_SLIP, SLIP_TO_STICK; located to within
  * the step) with the same all-or-nothing rule as the stroke stops; a contact problem
  * with no usable solution fails the step with LEGSIM_ERR_CONTACT (the last good state
- * kept). Builds with LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
+ * kept), as does a foot force that passes through a pole inside the step (a sliding foot
+ * whose friction coupling turns singular, Painleve's paradox: a shorter step ends the mode
+ * before it). Builds with LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
 typedef enum legsim_contact_state {
   LEGSIM_CONTACT_FREE = 0,
   LEGSIM_CONTACT_STUCK = 1,

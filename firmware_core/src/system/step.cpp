@@ -358,6 +358,14 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
   return LEGSIM_OK;
 }
 
+// Whether function f, g0 > 0 at the part step's start, is a force whose bracket [fa, fb]
+// has both ends above |g0| once the refinements ran out: a pole, not a root (out of line:
+// step_with_events' plain step keeps its cost).
+[[gnu::noinline]] bool force_pole(const Sim &s, int f, real g0, real fa, real fb) {
+  return !is_stop(f) && needs_forces(s.data.contact[f / 2], f % 2) &&
+         std::min(std::abs(fa), std::abs(fb)) > std::abs(g0);
+}
+
 // A part step shorter than this is not taken (its change is within the location's tolerance).
 inline real tiny_step(real h) { return kThetaTol * h; }
 
@@ -704,6 +712,12 @@ constexpr real kGaImminent = 2;
       g_prev = gf, h_prev = he;
       if (refine == kRefinements) {  // the refinements ran out: taken here
         raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
+        // a force whose bracket's ends both exceed its start passes through a pole, not a root
+        // (a sliding foot's normal force where the friction's coupling turns singular:
+        // Painleve's paradox): its mode has no usable solution there, and the part steps
+        // towards it gain energy without bound. Refused; a shorter step meets the mode's end
+        // before it (its modes check at a step's end)
+        if (force_pole(s, first, g0.g[first], fa, fb)) return LEGSIM_ERR_CONTACT;
         // still short of its root: the step's trial crossed where its part steps do not reach
         // (a motion the step does not resolve); the event is not taken here (a stop or a foot
         // put there would jump), the rest is located again from here
