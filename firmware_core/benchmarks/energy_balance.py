@@ -308,6 +308,22 @@ def classify(gains: list[float], integrator: str, tol: float) -> str:
     return "slow"
 
 
+FURTHER = (32, 64, 128, 256)
+
+
+def refine_further(rb: Robot, b: StepBalance, before: bytes) -> None:
+    """A gain that does not shrink by 16 parts (or whose refinement failed), taken again in
+    32 .. 256 parts and classified on those: an RK4 step whose event location cut it into
+    part steps has taken them in up to 16 sub-steps each (step.cpp, part_integrate), so its
+    16-part refinement repeats it. b.gains becomes those of 1, 32, 64, 128, 256 parts when they
+    all succeed."""
+    fine = refine(rb, before, b.case.h, FURTHER)
+    if all(np.isfinite(fine)):
+        b.gains = b.gains[:1] + fine
+        b.kind = classify(b.gains, b.case.integrator, b.tol)
+        b.further = True
+
+
 def campaign(runs: int, seed0: int, integrators, hs, steps: int, verbose=False):
     """Runs the cases of seeds seed0 .. seed0 + runs - 1."""
     """All the cases' OK steps that create energy, with counts."""
@@ -324,6 +340,8 @@ def campaign(runs: int, seed0: int, integrators, hs, steps: int, verbose=False):
                     if b.creates:
                         b.gains = refine(rb, before, b.case.h)
                         b.kind = classify(b.gains, b.case.integrator, b.tol)
+                        if b.kind in ("law", "failed-refinement"):
+                            refine_further(rb, b, before)
                 bal, err = run_case(c, on_step)
                 n_ok += len(bal)
                 if err is not None:
@@ -381,6 +399,8 @@ def order_table(runs: int, seed0: int, integrators, hs, duration: float, scales=
 def describe(b: StepBalance) -> str:
     kind = getattr(b, "kind", "")
     gains = " ".join(f"{x:.3g}" for x in getattr(b, "gains", []))
+    if getattr(b, "further", False):
+        gains = "n = 1, " + ", ".join(map(str, FURTHER)) + ": " + gains
     return (f"[{kind}: {gains}] {b.case.label()} step {b.step}: dH = {b.dH:+.4g} J (tol {b.tol:.3g}, moved {b.moved:.4g}) "
             f"events {b.events} {b.states_before}->{b.states_after} N {np.round(b.normals, 3)} "
             f"slip {np.round(b.slips, 3)}")

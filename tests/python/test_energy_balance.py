@@ -20,6 +20,11 @@ hostile campaign (both integrators, h = 2 ms and 1 ms), and pins the case that m
   checked: a sliding foot went into the next steps with N < 0, which no event function finds
   (N must start positive), its friction pushing along the slip (+0.25 .. +3.4 J a step, not
   shrinking with h). The contacts are now checked again after a stop lets go.
+- an event the step's diverged trial crossed but its part steps never reached was taken
+  where the location's refinements ran out: a stroke stop put on from up to 0.16 m away
+  (+10 .. +1.35e5 J in a step). It is not taken there now.
+- a sliding foot's normal force through a pole (Painleve's paradox) was taken as a lift-off
+  (+3.04e5 J). The step is refused with LEGSIM_ERR_CONTACT now.
 
 The long campaign (400 seeds, h = 2e-3 ... 2.5e-4 s) is the benchmark's:
 `python firmware_core/benchmarks/energy_balance.py --runs 400`.
@@ -166,6 +171,83 @@ def test_frictionless_slip_turning_slides_on():
     assert len(bal) >= 25
     assert "slip_to_stick" not in events
     _assert_truncation_only(found)
+
+
+def _step_of(seed, integrator, h, step):
+    """The campaign's run of seed up to `step`: (robot, its state before that step)."""
+    c = eb.random_case(seed, integrator, h)
+    rb = eb.make_robot(c)
+    for i in range(step + 1):
+        if i == c.switch_at:
+            rb.set_loads(c.loads2)
+        if i == step:
+            return rb, rb.sim._save()
+        rb.sim.step(1)
+
+
+@pytest.mark.parametrize("seed,integrator,h,step", [(231, "rk4", 2e-3, 28), (302, "rk4", 1e-3, 2),
+                                                    (324, "rk4", 5e-4, 10)])
+def test_stop_arrival_short_of_its_end_is_not_taken(seed, integrator, h, step):
+    """The step's whole RK4 trial runs an actuator past a stroke end, its part steps do not
+    reach it: the location's refinements run out with the actuator still 2.6 mm .. 0.16 m
+    inside its stroke. The stop put on there (the positions projected onto its end) made
+    +135 J (seed 231), +1.35e5 J (302) and +10 J (324) in one step, whose part step to that
+    point had lost energy (-0.062, -75, -6.3 J). No stop is put on short of its end; the
+    step goes on from there."""
+    rb, before = _step_of(seed, integrator, h, step)
+    s = rb.sim
+    h0 = rb.terms()
+    s.clear_events()
+    s.step(1)
+    d = rb.terms() - h0
+    moved = float(np.sum(np.abs(d)))
+    tol = eb.RTOL * moved + eb.ATOL_REL * float(np.sum(np.abs(h0)) + np.sum(np.abs(rb.terms()))) \
+        + rb.projection_slack()
+    print(f"seed {seed}: dH {np.sum(d):+.4g} J (tol {tol:.3g}), events {s.events()}")
+    assert "event_inexact" in s.events()
+    assert "stroke_min" not in s.events() and "stroke_max" not in s.events()
+    assert float(np.sum(d)) <= tol
+
+
+def test_dead_centre_phantom_stop_is_truncation():
+    """Seed 206, RK4, h = 1 ms, step 3 (the robot at 2,000 m/s, T = 7.07e7 J, under 2e5 N
+    loads): the whole RK4 trial diverges (T to 1.2e14 J), a stroke stop is located on it, the
+    part steps never reach it (the actuator 0.25 m inside its stroke). It was put on the
+    other end, at the straight knee's dead centre: refused there as singular, flagged
+    STROKE_MAX and NEAR_SINGULAR. Now no stop is put on and no stroke event raised. The
+    step's gain (+1,036 J of 6.99e4 J moved, the part step's 16 RK4 sub-steps) is the
+    integrator's: the same step in 64 and 256 parts gains -5.8 and -0.007 J."""
+    rb, before = _step_of(206, "rk4", 1e-3, 3)
+    s = rb.sim
+    s.clear_events()
+    s.step(1)
+    assert s.events() == ["event_inexact"]
+    lengths = s.actuator_lengths()[0]
+    strokes = np.array([(0.40, 0.80), (0.35, 0.70)] * 2)
+    assert np.all(lengths > strokes[:, 0]) and np.all(lengths < strokes[:, 1])
+    whole, g64, g256 = eb.refine(rb, before, 1e-3, (1, 64, 256))
+    print(f"dH whole {whole:+.4g} J, 64 parts {g64:+.4g} J, 256 parts {g256:+.4g} J")
+    assert abs(g256) < 1e-3 * abs(whole) and abs(g256) < abs(g64) / 16
+
+
+def test_sliding_foot_force_through_a_pole_is_refused():
+    """Seed 328, RK4, h = 2 ms, step 1: both feet sliding at 46 m/s on mu = 6.7, the right
+    actuators pushing. Inside the step the left foot's sliding mode turns singular (its
+    normal force N, solved with the friction's coupling, goes through a pole: +4.5e3 N,
+    +1.1e8 N, then -2.9e9 N over 0.2 ms: Painleve's paradox). Its lift-off function was
+    "located" at the pole and the step returned OK with +3.04e5 J (T from 3.4e4 to 3.4e5 J).
+    Now it is refused with LEGSIM_ERR_CONTACT, the state as it was; the same 2 ms in 32 steps
+    of 62.5 us meets the mode's end before the pole (lift-off, slip to stick) and loses
+    energy."""
+    rb, before = _step_of(328, "rk4", 2e-3, 1)
+    s = rb.sim
+    state = s.state_bytes()
+    with pytest.raises(legsim.ContactError):
+        s.step(1)
+    assert s.state_bytes() == state
+    (g32,) = eb.refine(rb, before, 2e-3, (32,))
+    print(f"the step in 32 parts: dH {g32:+.4g} J")
+    assert -1e3 < g32 < 0
 
 
 def _campaign(seeds, hs):

@@ -320,7 +320,9 @@ enum legsim_event {
                                              its end (docs/design/events.md) */
   LEGSIM_EVENT_EVENT_INEXACT = 1u << 11     /* a contact event's root finding ran out of its
                                              iterations (or a solve inside it failed): taken at
-                                             the bracket's late end (or the step's end) */
+                                             the bracket's late end (or the step's end); one
+                                             still short of its root there is not taken (the
+                                             step goes on from there) */
 };
 /* Contact events are located inside the step (on its dense output, to 1e-6 of the step) and
  * taken at their time: a step is cut there and finished from the event. One step locates at
@@ -513,7 +515,9 @@ legsim_status legsim_set_force(legsim_sim *sim, int32_t force, const legsim_real
  * a legsim_event (LIFTOFF, TOUCHDOWN, STICK_TO_SLIP, SLIP_TO_STICK; located to within
  * the step) with the same all-or-nothing rule as the stroke stops; a contact problem
  * with no usable solution fails the step with LEGSIM_ERR_CONTACT (the last good state
- * kept). Builds with LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
+ * kept), as does a foot force that passes through a pole inside the step (a sliding foot
+ * whose friction coupling turns singular, Painleve's paradox: a shorter step ends the mode
+ * before it). Builds with LEGSIM_MAX_CONTACTS = 0 return LEGSIM_ERR_DISABLED. */
 typedef enum legsim_contact_state {
   LEGSIM_CONTACT_FREE = 0,
   LEGSIM_CONTACT_STUCK = 1,

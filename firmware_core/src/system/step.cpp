@@ -369,6 +369,14 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
   return LEGSIM_OK;
 }
 
+// Whether function f, g0 > 0 at the part step's start, is a force whose bracket [fa, fb]
+// has both ends above |g0| once the refinements ran out: a pole, not a root (out of line:
+// step_with_events' plain step keeps its cost).
+[[gnu::noinline]] bool force_pole(const Sim &s, int f, real g0, real fa, real fb) {
+  return !is_stop(f) && needs_forces(s.data.contact[f / 2], f % 2) &&
+         std::min(std::abs(fa), std::abs(fb)) > std::abs(g0);
+}
+
 // A part step shorter than this is not taken (its change is within the location's tolerance).
 inline real tiny_step(real h) { return kThetaTol * h; }
 
@@ -698,6 +706,7 @@ constexpr real kGaImminent = 2;
     int side = 0;
     real he = theta * hs, g_prev = 0, h_prev = 0;
     int split = 1;  // the part step to the event's sub-steps (part_integrate)
+    bool short_of_root = false;
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
       r = adapt ? ga_part_restart(s, *from, ga.h_from, he, ga.jerk_ok ? &ga.jerk : nullptr) : part_restart(s, rk4, *from);
@@ -724,6 +733,16 @@ constexpr real kGaImminent = 2;
       g_prev = gf, h_prev = he;
       if (refine == kRefinements) {  // the refinements ran out: taken here
         raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
+        // a force whose bracket's ends both exceed its start passes through a pole, not a root
+        // (a sliding foot's normal force where the friction's coupling turns singular:
+        // Painleve's paradox): its mode has no usable solution there, and the part steps
+        // towards it gain energy without bound. Refused; a shorter step meets the mode's end
+        // before it (its modes check at a step's end)
+        if (force_pole(s, first, g0.g[first], fa, fb)) return LEGSIM_ERR_CONTACT;
+        // still short of its root: the step's trial crossed where its part steps do not reach
+        // (a motion the step does not resolve); the event is not taken here (a stop or a foot
+        // put there would jump), the rest is located again from here
+        short_of_root = gf > slope_now * kRefineTol * h;
         break;
       }
       // regula falsi, bisecting when an end is kept twice (a mode far past its event can
@@ -736,6 +755,16 @@ constexpr real kGaImminent = 2;
     }
     done += he;
     ++located;
+    if (short_of_root) {  // no event: the rest of the step from here, as after a part step
+      if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));
+      from = new (&mid.at) Snapshot(s);
+      if (adapt) ga.h_from = he;  // (its one sub-step)
+      if (!rk4) {
+        d.acc_aux = d.qdd;
+        d.past_steps = 0;
+      }
+      continue;
+    }
     const double t_event = d.t + double(done);
     // the stops first (the arriving ones, and any other past its end), then the contacts'
     // events and checks with the forces of the state on its stops
