@@ -1198,7 +1198,7 @@ Table req_table(Table doc, const std::string &key, const std::string &label) {
 void copy3(double (&dst)[3], const std::vector<double> &v) {
   for (int i = 0; i < 3; ++i) dst[i] = v[i];
 }
-std::vector<double> positive3(Table t, const std::string &key, double lo, double hi, const std::string &label) {
+std::vector<double> ranged3(Table t, const std::string &key, double lo, double hi, const std::string &label) {
   return ranged_vec(get_vec(t, key, 3, label), lo, hi, key, label);
 }
 
@@ -1219,14 +1219,14 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
   Table bt = req_table(doc, "box", label0);
   check_keys(bt, {"mass", "size", "inertia"}, "box");
   h.box_mass_kg = ranged(get_positive(bt, "mass", "box"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "box");
-  copy3(h.box_size_m, positive3(bt, "size", LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD, "box"));
-  copy3(h.box_inertia_kgm2, positive3(bt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "box"));
+  copy3(h.box_size_m, ranged3(bt, "size", LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD, "box"));
+  copy3(h.box_inertia_kgm2, ranged3(bt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "box"));
 
   Table yt = req_table(doc, "yoke", label0);
   check_keys(yt, {"mass", "com", "inertia", "hip_offset", "bar_radius"}, "yoke");
   h.yoke_mass_kg = ranged(get_positive(yt, "mass", "yoke"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "yoke");
-  copy3(h.yoke_com_m, positive3(yt, "com", -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "yoke"));
-  copy3(h.yoke_inertia_kgm2, positive3(yt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "yoke"));
+  copy3(h.yoke_com_m, ranged3(yt, "com", -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "yoke"));
+  copy3(h.yoke_inertia_kgm2, ranged3(yt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "yoke"));
   h.hip_offset_m = ranged(get_positive(yt, "hip_offset", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
                           "hip_offset", "yoke");
   h.bar_radius_m = ranged(get_positive(yt, "bar_radius", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
@@ -1283,6 +1283,13 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
                       g(L.leg.gravity_mps2[1]) + "], is not the hexapod's [0, " + g(gravity[2]) +
                       "] in its plane");
     if (L.leg.foot_body < 0) fail(label, "file " + q(lfile) + " has no [foot]: a hexapod's feet are its legs'");
+    if (L.leg.n_bodies > LEGSIM_HEXAPOD_MAX_LEG_BARS)
+      fail(label, "file " + q(lfile) + " has " + std::to_string(L.leg.n_bodies) + " bodies (a hexapod's leg at most " +
+                      std::to_string(LEGSIM_HEXAPOD_MAX_LEG_BARS) + ")",
+           LEGSIM_ERR_CAPACITY);
+    for (int j = 0; j < L.leg.n_joints; ++j)
+      if (L.leg.joint[j].kind == LEGSIM_JOINT_SLOT)
+        fail(label, "joint " + q(L.leg.joint[j].name) + " of " + q(lfile) + " is a slot (no spatial rows for it)");
   }
   h.n_legs = LEGSIM_HEXAPOD_LEGS;
 

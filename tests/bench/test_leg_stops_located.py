@@ -7,13 +7,12 @@ impact and the held motion in closed form):
   the upper actuator's 300 N less, its stroke minimum raised to 0.645 m (a copy of the file): it
   shortens and arrives there at 50.4 ms at -0.67 m/s;
 - the core reports the arrival's time (legsim_stroke_event_time) within 1e-3 h of the
-  reference's, with both integrators and at every h (taken at the step's end it was 0.27 h to
-  0.82 h late);
+  reference's, with both integrators and at every h;
 - the stop takes Carnot's energy, 1/2 ldot^2 / (g M^-1 g) with g = dl/dtheta (the reference's
-  closed form), to 1e-6 relative at h = 1 ms (at the step's end: -2.7e-6);
+  closed form), to 1e-6 relative at h = 1 ms;
 - after it the trajectory keeps RK4's order: the error at 0.1 s (50 ms on) falls by >= 2^3.5
-  per halving of h (at the step's end: orders 1.56, 2.33, 0.00); the reference's stop keeps
-  pushing over that time (checked).
+  per halving of h; the reference's stop keeps pushing over that time (checked).
+(An arrival taken at the step's end fails all three: firmware_core/benchmarks/results.md.)
 
 A build without the event code (LEGSIM_MAX_CONTACTS = 0, the Cortex-M4F leg image) takes the
 arrival at the step's end; this library is the host's.

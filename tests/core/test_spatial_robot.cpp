@@ -18,6 +18,7 @@
 #include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 
 #include "legsim/legsim.h"
 #include "legsim/models.h"
@@ -238,6 +239,71 @@ void test_dynamics_is_the_planar_leg_lifted(void) {
   TEST_ASSERT_TRUE(std::fabs(rowing) < 1e-9 * scale);
 }
 
+void test_angular_momentum_about_the_hip_axis(void) {
+  // the yoke turning and the leg moving in its plane, on the fixed box: no moment about the hip
+  // axis acts but the rowing torque (gravity is parallel to it, the hip's force acts on it, its
+  // moments across it), so the angular momentum about it, summed body by body in Newton-Euler's
+  // form, dH_z/dt = sum m (r x a)_z + (R (J w' + w x J w))_z, equals the rowing torque; this
+  // holds only with the gyroscopic moments -w x J w in Q right
+  const SpatialRobot leg = lifted();
+  const PlanarState p = planar_leg(40.0, -10.0);
+  static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  leg_state(leg, p.q, p.qd, 0.5, 1.7, q, v);
+  for (const double tau : {0.0, 3.0}) {
+    const double force[2] = {40.0, -10.0}, rowing[1] = {tau};
+    const VectorXd x = accelerations(leg, q, v, force, rowing);
+    double dH = 0, scale = 0;
+    for (int b = 0; b < leg.nb; ++b) {
+      const double *qb = q + kBodyConfig * b, *vb = v + kBodyDof * b;
+      const Rot R = rotation({qb[3], qb[4], qb[5], qb[6]});
+      const V3 r = {qb[0], qb[1], qb[2]}, a = {x[kBodyDof * b], x[kBodyDof * b + 1], x[kBodyDof * b + 2]};
+      const V3 w = {vb[3], vb[4], vb[5]}, wd = {x[kBodyDof * b + 3], x[kBodyDof * b + 4], x[kBodyDof * b + 5]};
+      const V3 &I = leg.inertia[b];
+      const V3 Jw = {I.x * w.x, I.y * w.y, I.z * w.z}, Jwd = {I.x * wd.x, I.y * wd.y, I.z * wd.z};
+      const double lin = leg.mass[b] * cross(r, a).z, ang = rotate(R, Jwd + cross(w, Jw)).z;
+      dH += lin + ang;
+      scale += std::fabs(lin) + std::fabs(ang);
+    }
+    printf("rowing torque %.1f N m: dH_z/dt %.12f N m (terms up to %.3f)\n", tau, dH, scale);
+    TEST_ASSERT_TRUE(scale > 1);
+    TEST_ASSERT_TRUE(std::fabs(dH - tau) < 1e-10 * scale);
+  }
+}
+
+void test_joint_order_does_not_matter(void) {
+  // the leg's frame joints last: A and B_thigh/B_lower then close loops against the yoke, by
+  // their in-plane rows; still 39 rows of full rank, every row met at the lifted stand
+  static legsim_model_desc d;
+  d = legsim_model_leg_revolute;
+  int k = 0;
+  for (int pass = 0; pass < 2; ++pass)
+    for (int j = 0; j < legsim_model_leg_revolute.n_joints; ++j) {
+      const bool frame = legsim_model_leg_revolute.joint[j].kind == LEGSIM_JOINT_REVOLUTE_TO_FRAME;
+      if (frame == (pass == 1)) d.joint[k++] = legsim_model_leg_revolute.joint[j];
+    }
+  for (int a = 0; a < d.n_actuators; ++a)  // the actuators' joints, renumbered
+    for (int j = 0; j < d.n_joints; ++j)
+      if (std::strcmp(d.joint[j].name,
+                      legsim_model_leg_revolute.joint[legsim_model_leg_revolute.actuator[a].joint].name) == 0)
+        d.actuator[a].joint = j;
+  const legsim_model_desc *dp = &d;
+  static SpatialRobot leg;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift(&dp, &kStandHip, 1, YokeDesc{}, nullptr, leg));
+  TEST_ASSERT_EQUAL_INT(39, leg.m);
+  const PlanarState p = planar_leg();
+  static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  static Row rows[kMaxRobotRows];
+  leg_state(leg, p.q, p.qd, 0.4, 0.2, q, v);
+  robot_rows(leg, q, v, rows);
+  const Eigen::JacobiSVD<MatrixXd> svd(jacobian(leg, rows));
+  double phi = 0;
+  for (int r = 0; r < leg.m; ++r) phi = std::fmax(phi, std::fabs(rows[r].phi));
+  printf("frame joints last: %d rows, max |Phi| %.2e, smallest singular value %.4f\n", leg.m, phi,
+         svd.singularValues()[leg.m - 1]);
+  TEST_ASSERT_TRUE(phi < 1e-12);
+  TEST_ASSERT_TRUE(svd.singularValues()[leg.m - 1] > 0.1);
+}
+
 void test_refuses_what_it_cannot_lift(void) {
   static SpatialRobot leg;
   static legsim_model_desc d;
@@ -254,7 +320,7 @@ void test_refuses_what_it_cannot_lift(void) {
 namespace {
 // Six legs on a free box: hips at x = -0.3, 0, 0.3 m, y = -0.25 (right, the leg out along -y)
 // and +0.25 m (left, turned by pi), on the box's underside (z = -0.1 m). The box numbers are the
-// test's own (no hexapod file yet).
+// test's own (models/hexapod.toml's are tested in tests/model/test_hexapod_file.cpp).
 SpatialRobot &hexapod() {
   static SpatialRobot robot;
   static bool built = false;
@@ -412,6 +478,8 @@ int main(void) {
   RUN_TEST(test_lifted_state_meets_every_row);
   RUN_TEST(test_jacobian_full_rank_as_the_prototype);
   RUN_TEST(test_dynamics_is_the_planar_leg_lifted);
+  RUN_TEST(test_angular_momentum_about_the_hip_axis);
+  RUN_TEST(test_joint_order_does_not_matter);
   RUN_TEST(test_refuses_what_it_cannot_lift);
   RUN_TEST(test_actuators_push_as_the_planar_leg);
   RUN_TEST(test_rowing_torque_turns_the_leg_rigidly);

@@ -9,10 +9,12 @@
 //   feet they balance the weight; each leg's actuator forces are the planar core's statics of
 //   the leg under its foot's force (another formulation); the box's own equilibrium, from the
 //   legs' hip multipliers, holds; a horizontal push on the box makes each stance leg's rowing
-//   torque -((p_foot - p_hip) x f)_z; collinear feet and two feet are refused;
+//   torque -((p_foot - p_hip) x f)_z; collinear feet, two feet and a tripod around which the
+//   centre of mass falls (a foot would pull) are refused;
 // - refused, each with a message naming the file, the item and the problem: a hexapod file given
 //   to the model loader and a leg file given here, five legs, a horizontal gravity, a leg file
-//   whose gravity differs, a leg without a [foot], a rowing stroke past pi, a ground normal
+//   whose gravity differs, a leg without a [foot], a leg of the slot variant (no spatial rows
+//   for a slot), a rowing stroke past pi, a ground normal
 //   that is not a unit vector.
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
 #include <cmath>
@@ -282,6 +284,9 @@ void test_stance_that_cannot_stand(void) {
   robot_state(s.robot, box_q, box_v, qs, vs, psi, psi, q0, v0);
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NO_EQUILIBRIUM, robot_statics(s.robot, q0, 0x07, nullptr, st));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NO_EQUILIBRIUM, robot_statics(s.robot, s.q, 0x09, nullptr, st));
+  // right front, right middle and left front: the centre of mass outside their triangle (a
+  // foot would have to pull)
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NO_EQUILIBRIUM, robot_statics(s.robot, s.q, 0x0B, nullptr, st));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_statics(s.robot, s.q, 1u << 6, nullptr, st));
 }
 
@@ -315,6 +320,9 @@ void test_refusals(void) {
     footless.erase(k, (e == std::string::npos ? leg.size() : e + 1) - k);
     expect_refused(variant_dir(footless, "", ""), "hexapod.toml", LEGSIM_ERR_MODEL, "has no [foot]");
   }
+  expect_refused(variant_dir(leg, "file = \"leg.toml\"\nhip = [0.35, -0.25, -0.15]",
+                             "file = \"leg.toml\"\nvariant = \"slot\"\nhip = [0.35, -0.25, -0.15]"),
+                 "hexapod.toml", LEGSIM_ERR_MODEL, "is a slot");
   expect_refused(variant_dir(leg, "stroke = [-0.6, 0.6]", "stroke = [-0.6, 3.2]"), "hexapod.toml",
                  LEGSIM_ERR_MODEL, "'stroke' must be [min, max]");
   expect_refused(variant_dir(leg, "normal = [0.0, 0.0, 1.0]", "normal = [0.0, 0.0, 2.0]"), "hexapod.toml",

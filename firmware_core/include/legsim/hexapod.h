@@ -10,7 +10,9 @@
  *   [LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2]; sizes, the hip offset and the bar radius
  *   [LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD]; points |x| <= LEGSIM_MAX_COORD; headings |h| <= pi;
  *   the rowing stroke -pi < min < 0 < max < pi rad; gear ratio [1, 1e4]; max torque
- *   (0, LEGSIM_MAX_FORCE_N] N m; the ground's normal a unit vector within 1e-9 whose angle from z
+ *   [LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N] N m; each leg file at most
+ *   LEGSIM_HEXAPOD_MAX_LEG_BARS bodies and no slot joint (the spatial rows have none), its force
+ *   elements not lifted (the hexapod's loads are its own); the ground's normal a unit vector within 1e-9 whose angle from z
  *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. */
 #ifndef LEGSIM_HEXAPOD_H
 #define LEGSIM_HEXAPOD_H
@@ -22,6 +24,7 @@ extern "C" {
 #endif
 
 #define LEGSIM_HEXAPOD_LEGS 6
+#define LEGSIM_HEXAPOD_MAX_LEG_BARS 8
 
 typedef struct legsim_hexapod_leg_desc {
   char name[LEGSIM_NAME_LEN];

@@ -95,9 +95,15 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
       switch (jd.kind) {
         case LEGSIM_JOINT_REVOLUTE_TO_FRAME: {
           // to the yoke, about the plane's normal; the yoke's in-plane axes x and z across it
-          parent[find(parent, a)] = find(parent, y);
+          // (or, closing a loop, in their plane only)
           const V3 sb = V3{R.origin_x + real(jd.point[1][0]), 0, real(jd.point[1][1])} - R.yoke_com;
-          add({LegJointKind::Revolute, a, y, sa, sb, kK, kX, kZ, 0, 0}, 5);
+          const int ra = find(parent, a), ry = find(parent, y);
+          if (ra == ry) {
+            add({LegJointKind::Cut, a, y, sa, sb, kK, kX, kZ, 0, 0}, 2);
+          } else {
+            parent[ra] = ry;
+            add({LegJointKind::Revolute, a, y, sa, sb, kK, kX, kZ, 0, 0}, 5);
+          }
           break;
         }
         case LEGSIM_JOINT_REVOLUTE: {
@@ -121,7 +127,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
           break;
         }
         default:
-          return LEGSIM_ERR_MODEL;  // a slot has no spatial row unit yet
+          return LEGSIM_ERR_MODEL;  // a slot: no spatial row unit
       }
     }
   }
@@ -151,6 +157,7 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out
 
 V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q) {
   const RobotLeg &L = robot.leg[l];
+  if (L.foot_body < 0) return {real(NAN), real(NAN), real(NAN)};  // (documented: none)
   const real *qb = q + kBodyConfig * L.foot_body;
   return V3{qb[0], qb[1], qb[2]} + rotate(rotation({qb[3], qb[4], qb[5], qb[6]}), L.foot_point);
 }

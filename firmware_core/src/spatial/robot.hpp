@@ -25,7 +25,7 @@
 namespace legsim::spatial {
 
 constexpr int kMaxLegs = 6;
-constexpr int kMaxLegBars = 8;
+constexpr int kMaxLegBars = LEGSIM_HEXAPOD_MAX_LEG_BARS;
 constexpr int kMaxRobotBodies = 1 + kMaxLegs * (1 + kMaxLegBars);
 constexpr int kMaxLegJoints = 10;
 constexpr int kMaxRobotJoints = kMaxLegs * (1 + kMaxLegJoints);
@@ -106,7 +106,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
 // The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box.
 legsim_status robot_lift_hexapod(const legsim_hexapod_desc &hexapod, SpatialRobot &out);
 
-// Leg l's foot point (world, m) at q.
+// Leg l's foot point (world, m) at q; NaN for a leg without a foot.
 V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q);
 
 // The spatial state (q: 7 per body, v: 6 per body) of: the box at box_q (r, quaternion) moving

@@ -72,6 +72,11 @@ legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t s
   if (n < 3) return LEGSIM_ERR_NO_EQUILIBRIUM;
   legsim_status s = stance_forces(n, p, c, load, load_moment, f);
   if (s != LEGSIM_OK) return s;
+  // a foot that would have to pull (its force not up, against gravity) cannot stand there: the
+  // loads' line of action outside the support polygon, or a stance that needs the ground to hold
+  const V3 up = -1 * robot.gravity;
+  for (int k = 0; k < n; ++k)
+    if (!(dot(f[k], up) > 0)) return LEGSIM_ERR_NO_EQUILIBRIUM;
   for (int k = 0; k < n; ++k) out.foot_force[leg_of[k]] = f[k];
 
   // each leg on its own: K x = Q, x = (its multipliers, its actuators' forces, its rowing torque)
@@ -93,7 +98,7 @@ legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t s
       r1 = j.row + j.nrows;
     }
     const int nrows = r1 - r0;
-    if (nrows + L.nactuators + 1 != neq) return LEGSIM_ERR_SINGULAR;  // not a mechanism of 3 + ... freedoms
+    if (nrows + L.nactuators + 1 != neq) return LEGSIM_ERR_MODEL;  // not as many freedoms as actuators
     static_assert(kLegUnknownsMax <= 64, "a leg's dense system on the stack");
     real K[kLegUnknownsMax * kLegUnknownsMax] = {}, x[kLegUnknownsMax] = {};
     auto put = [&](int body, int col, const real *coef, real sign) {

@@ -28,8 +28,10 @@ struct RobotStatics {
 
 // At q (the velocities zero), the feet in stance_mask (bit l: leg l) on the ground, a force
 // box_force_n (N, world; nullptr: none) at the box's centre. LEGSIM_ERR_NO_EQUILIBRIUM when the
-// stance cannot balance the loads (fewer than three feet, or all on one line), LEGSIM_ERR_SINGULAR
-// when a leg is at a dead centre, LEGSIM_ERR_BAD_INPUT for a fixed box, a mask naming a leg
+// stance cannot balance the loads (fewer than three feet, all on one line, or a foot that would
+// have to pull: its force not against gravity), LEGSIM_ERR_SINGULAR
+// when a leg is at a dead centre, LEGSIM_ERR_MODEL for a leg with other freedoms than its
+// actuators and its rowing, LEGSIM_ERR_BAD_INPUT for a fixed box, a mask naming a leg
 // the robot does not have or a leg without a foot.
 legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t stance_mask, const real *box_force_n,
                             RobotStatics &out);
