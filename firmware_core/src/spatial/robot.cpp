@@ -225,7 +225,7 @@ real robot_actuator_length(const SpatialRobot &robot, int a, const real *q) {
   const RobotActuator &ac = robot.act[a];
   const real zero[kBodyDof] = {0, 0, 0, 0, 0, 0};
   const BodyState rod = body_state(q + kBodyConfig * ac.rod, zero), cyl = body_state(q + kBodyConfig * ac.cyl, zero);
-  return row_along_axis(rod, {0, 0, 0}, cyl, {0, 0, 0}, kU).phi + ac.offset;
+  return actuator_row(rod, cyl).phi + ac.offset;
 }
 
 void robot_forces(const SpatialRobot &robot, const real *q, const real *v, const real *force_n,
@@ -240,13 +240,12 @@ void robot_forces(const SpatialRobot &robot, const real *q, const real *v, const
     const real fb[kBodyDof] = {m * robot.gravity.x, m * robot.gravity.y, m * robot.gravity.z, gyro.x, gyro.y, gyro.z};
     for (int i = 0; i < kBodyDof; ++i) f[i] = fb[i];
   }
-  // an actuator: F times its length's gradient, the row (p_rod - p_cyl) . (R_cyl u)'s
-  // coefficients (rows.hpp)
+  // an actuator: F times its length's gradient (actuator_row's coefficients)
   for (int a = 0; a < robot.na; ++a) {
     const RobotActuator &ac = robot.act[a];
     const BodyState rod = body_state(q + kBodyConfig * ac.rod, v + kBodyDof * ac.rod);
     const BodyState cyl = body_state(q + kBodyConfig * ac.cyl, v + kBodyDof * ac.cyl);
-    const Row r = row_along_axis(rod, {0, 0, 0}, cyl, {0, 0, 0}, kU);
+    const Row r = actuator_row(rod, cyl);
     for (int i = 0; i < kBodyDof; ++i) {
       Q[kBodyDof * ac.rod + i] += force_n[a] * r.ja[i];
       Q[kBodyDof * ac.cyl + i] += force_n[a] * r.jb[i];

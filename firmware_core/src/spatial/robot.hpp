@@ -83,6 +83,11 @@ struct RobotActuator {
   int cyl, rod;
   real offset;  // (L_cyl + L_rod) / 2
 };
+// Its length less the offset as a row (rows.hpp's along_axis form): its gradient is the row's
+// coefficients (ja on the rod, jb on the cylinder).
+inline Row actuator_row(const BodyState &rod, const BodyState &cyl) {
+  return row_along_axis(rod, {0, 0, 0}, cyl, {0, 0, 0}, {1, 0, 0});
+}
 
 struct SpatialRobot {
   bool free_box;     // body 0 is the box (else the box is the fixed world)

@@ -115,7 +115,7 @@ legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t s
     }
     for (int a = 0; a < L.nactuators; ++a) {
       const RobotActuator &ac = robot.act[L.first_actuator + a];
-      const Row g = row_along_axis(st[ac.rod], {0, 0, 0}, st[ac.cyl], {0, 0, 0}, {1, 0, 0});
+      const Row g = actuator_row(st[ac.rod], st[ac.cyl]);
       put(ac.rod, nrows + a, g.ja, -1);
       put(ac.cyl, nrows + a, g.jb, -1);
     }
