@@ -185,9 +185,10 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   }
   if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
   // The index-3 form holds the positions on Phi = 0 but leaves the velocities off the rows by
-  // O(h^2) (J v1 != nu). Projected M-weighted onto J v1 = nu, as RK4's end is (with a sliding
-  // contact, along its friction too: end_drift_off): the projection only takes kinetic energy
-  // out. Without it a step restarted from such a velocity (after a
+  // O(h^2) (J v1 != nu). Projected M-weighted onto J v1 = nu, as RK4's end is, which only
+  // takes kinetic energy out (with a sliding contact, along its friction too: end_drift_off;
+  // that correction does the friction's work over the drift, either way, of order h^2 a step).
+  // Without it a step restarted from such a velocity (after a
   // contact event, at a part step) turns the drift into a velocity jump that does not shrink
   // with the part step, and an event located on its rows acts on a foot moving off them.
   // (Projected only there, the drift grows along a run: 0.56 m/s in a throw at 27 m/s.) The
