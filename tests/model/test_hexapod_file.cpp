@@ -268,6 +268,41 @@ void test_standing_on_six_feet_and_pushed(void) {
   TEST_ASSERT_TRUE(box_residual(s, st, push) <= 1e-9 * W);
 }
 
+void test_leg_targets_round_trip(void) {
+  // each foot of the lifted stand (legs at unequal rowing angles) given back as a target: its
+  // rowing angle and its planar foot point; the planar leg's inverse kinematics at that point
+  // gives back the stand's lengths
+  Standing &s = standing();
+  const double psi_set[6] = {0.3, 0.1, -0.2, 0.0, 0.25, -0.15};
+  legsim_options opt = legsim_default_options();
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &s.desc.leg[0].leg, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  double stand_foot[2], stand_len[2];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_foot_position(sim, stand_foot));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, stand_len, nullptr));
+  for (int l = 0; l < 6; ++l) {
+    const V3 f = robot_foot_position(s.robot, l, s.q);  // the box at the origin, level: its frame
+    double psi, xy[2];
+    leg_plane_target(s.robot, l, f, psi, xy);
+    TEST_ASSERT_TRUE(std::fabs(psi - psi_set[l]) < 1e-14);
+    TEST_ASSERT_TRUE(std::fabs(xy[0] - stand_foot[0]) < 1e-14 && std::fabs(xy[1] - stand_foot[1]) < 1e-14);
+    // from a pose off the stand, the inverse kinematics finds the stand's lengths again
+    const double other[2] = {0.62, 0.60};
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble(sim, other));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_foot(sim, xy));
+    double len[2];
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, len, nullptr));
+    TEST_ASSERT_TRUE(std::fabs(len[0] - stand_len[0]) < 1e-9 && std::fabs(len[1] - stand_len[1]) < 1e-9);
+  }
+  // a foot behind the hip axis: the plane turned back by pi, the planar x beyond the axis
+  double psi, xy[2];
+  const V3 hip = {s.desc.leg[0].hip_m[0], s.desc.leg[0].hip_m[1], s.desc.leg[0].hip_m[2]};
+  leg_plane_target(s.robot, 0, V3{hip.x, hip.y + 0.02, hip.z - 0.8}, psi, xy);  // right leg: heading -y
+  TEST_ASSERT_TRUE(std::fabs(psi) < 1e-14);
+  TEST_ASSERT_TRUE(std::fabs(xy[0] - (-0.02 - s.desc.hip_offset_m)) < 1e-14 && std::fabs(xy[1] + 0.8) < 1e-14);
+}
+
 void test_stance_that_cannot_stand(void) {
   Standing &s = standing();
   static RobotStatics st;
@@ -335,6 +370,7 @@ int main(void) {
   RUN_TEST(test_lifted_stand);
   RUN_TEST(test_standing_on_a_tripod);
   RUN_TEST(test_standing_on_six_feet_and_pushed);
+  RUN_TEST(test_leg_targets_round_trip);
   RUN_TEST(test_stance_that_cannot_stand);
   RUN_TEST(test_refusals);
   return UNITY_END();

@@ -155,6 +155,21 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out
   return robot_lift(legs, hips, LEGSIM_HEXAPOD_LEGS, yoke, &box, out);
 }
 
+void leg_plane_target(const SpatialRobot &robot, int l, const V3 &foot_box, real &psi, real *foot_xy) {
+  const RobotLeg &L = robot.leg[l];
+  const V3 d = foot_box - L.hip;
+  real r = std::sqrt(d.x * d.x + d.y * d.y);
+  real a = std::atan2(d.y, d.x) - L.yaw;  // the plane's angle from the heading
+  a = std::remainder(a, 2 * real(3.14159265358979323846));
+  if (std::abs(a) > real(3.14159265358979323846) / 2) {  // the foot behind the axis: the plane turned back
+    a -= std::copysign(real(3.14159265358979323846), a);
+    r = -r;
+  }
+  psi = a;
+  foot_xy[0] = r - robot.origin_x;
+  foot_xy[1] = d.z;
+}
+
 V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q) {
   const RobotLeg &L = robot.leg[l];
   if (L.foot_body < 0) return {real(NAN), real(NAN), real(NAN)};  // (documented: none)

@@ -111,6 +111,13 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
 // The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box.
 legsim_status robot_lift_hexapod(const legsim_hexapod_desc &hexapod, SpatialRobot &out);
 
+// Where leg l must be for its foot at foot_box (box frame, m; the world for a fixed box): its
+// rowing angle psi (rad, within pi / 2 of its heading: the leg's plane through the hip axis and
+// the foot, the foot on the yoke's x side when it can be) and the point its planar leg must put
+// its [foot] at (m, in its file's frame: legsim_assemble_foot gives the lengths). The foot's
+// place on its bar (its planar point) is where the lift put it: the planar leg's own.
+void leg_plane_target(const SpatialRobot &robot, int l, const V3 &foot_box, real &psi, real *foot_xy);
+
 // Leg l's foot point (world, m) at q; NaN for a leg without a foot.
 V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q);
 
