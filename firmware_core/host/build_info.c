@@ -1,6 +1,8 @@
 /* The build's facts for dynamic bindings (see build_info.h). */
 #include "build_info.h"
 
+#include "legsim/hexapod.h"
+
 #define FACT(macro) {#macro, (int64_t)(macro)}
 #define SIZE(type) {"sizeof(" #type ")", (int64_t)sizeof(type)}
 
@@ -31,6 +33,9 @@ static const struct {
     SIZE(legsim_reaction),
     SIZE(legsim_worst_case),
     SIZE(legsim_contact),
+    SIZE(legsim_hexapod_desc),
+    SIZE(legsim_hexapod_pose),
+    SIZE(legsim_hexapod_standing),
 };
 
 #define N_FACTS ((int32_t)(sizeof facts / sizeof facts[0]))

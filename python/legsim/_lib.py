@@ -267,6 +267,29 @@ class Library:
                         ("actuator_at_length_m", (real * MA) * MA),
                         ("n_poses", i32), ("n_failed", i32)]
 
+        class HexapodLegDesc(C.Structure):
+            _fields_ = [("name", C.c_char * NL), ("leg", ModelDesc), ("hip_m", d * 3),
+                        ("heading_rad", d)]
+
+        class HexapodDesc(C.Structure):
+            _fields_ = [("name", C.c_char * NL), ("gravity_mps2", d * 3), ("box_mass_kg", d),
+                        ("box_size_m", d * 3), ("box_inertia_kgm2", d * 3), ("yoke_mass_kg", d),
+                        ("yoke_com_m", d * 3), ("yoke_inertia_kgm2", d * 3), ("hip_offset_m", d),
+                        ("bar_radius_m", d), ("rowing_gear_ratio", d), ("rowing_max_torque_nm", d),
+                        ("rowing_stroke_rad", d * 2), ("n_legs", i32), ("leg", HexapodLegDesc * 6),
+                        ("ground_point_m", d * 3), ("ground_normal", d * 3), ("mu_static", d),
+                        ("mu_kinetic", d)]
+
+        class HexapodPose(C.Structure):
+            _fields_ = [("box_m", d * 3), ("box_quat", d * 4), ("rowing_rad", d * 6),
+                        ("length_m", (d * 2) * 6)]
+
+        class HexapodStanding(C.Structure):
+            _fields_ = [("com_m", d * 3), ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6),
+                        ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6),
+                        ("margin_m", d)]
+
+        self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding
         self.ModelDesc, self.Options, self.Report = ModelDesc, Options, Report
         self.Reaction, self.WorstCase = Reaction, WorstCase
         self.Contact = Contact
@@ -277,7 +300,9 @@ class Library:
         pairs = [("legsim_real", self.real), ("legsim_model_desc", self.ModelDesc),
                  ("legsim_options", self.Options), ("legsim_report", self.Report),
                  ("legsim_reaction", self.Reaction), ("legsim_worst_case", self.WorstCase),
-                 ("legsim_contact", self.Contact)]
+                 ("legsim_contact", self.Contact), ("legsim_hexapod_desc", self.HexapodDesc),
+                 ("legsim_hexapod_pose", self.HexapodPose),
+                 ("legsim_hexapod_standing", self.HexapodStanding)]
         bad = [f"{n}: library {cfg[f'sizeof({n})']} bytes, binding {C.sizeof(t)}"
                for n, t in pairs
                if f"sizeof({n})" in cfg and cfg[f"sizeof({n})"] != C.sizeof(t)]
@@ -348,10 +373,16 @@ class Library:
                                              C.c_char_p, C.c_size_t]),
             "legsim_model_toml_variants": (st, [C.c_char_p, NAMES, C.c_int32,
                                                 C.POINTER(C.c_int32), C.c_char_p, C.c_size_t]),
+            "legsim_hexapod_load_toml": (st, [C.c_char_p, C.POINTER(self.HexapodDesc), C.c_char_p,
+                                              C.c_size_t]),
+            "legsim_hexapod_storage_size": (C.c_size_t, []),
+            "legsim_hexapod_statics": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
+                                            C.c_uint32, C.POINTER(C.c_double), P, C.c_size_t,
+                                            C.POINTER(self.HexapodStanding)]),
         }
         self.has_toml_loader = hasattr(self.cdll, "legsim_model_load_toml")
         for fname, (res, args) in protos.items():
-            if fname.startswith("legsim_model_") and "toml" in fname and not self.has_toml_loader:
+            if "toml" in fname and not self.has_toml_loader:
                 continue
             f = getattr(self.cdll, fname)
             f.restype = res

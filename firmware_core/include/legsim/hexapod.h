@@ -53,6 +53,46 @@ typedef struct legsim_hexapod_desc {
   double ground_point_m[3], ground_normal[3], mu_static, mu_kinetic;
 } legsim_hexapod_desc;
 
+/* ---- standing (statics) ------------------------------------------------ */
+/* A pose of the hexapod: the box's centre (m, world) and its unit quaternion (w, x, y, z: box to
+ * world, normalized by the call when within 1e-6 of unit length), each leg's rowing angle (rad,
+ * within its stroke) and its two actuators' lengths (m, within their strokes: each leg is
+ * assembled at them from its file's stand, the branch nearest it). */
+typedef struct legsim_hexapod_pose {
+  double box_m[3];
+  double box_quat[4];
+  double rowing_rad[LEGSIM_HEXAPOD_LEGS];
+  double length_m[LEGSIM_HEXAPOD_LEGS][2];
+} legsim_hexapod_pose;
+
+/* The hexapod standing at a pose. */
+typedef struct legsim_hexapod_standing {
+  double com_m[3];                                  /* the centre of mass (world) */
+  double foot_m[LEGSIM_HEXAPOD_LEGS][3];            /* each foot (world) */
+  double foot_force_n[LEGSIM_HEXAPOD_LEGS][3];      /* the ground's force on it (world; 0 off the stance) */
+  double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2];  /* each leg's two actuators' axial forces */
+  double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS];     /* each yoke's, about its hip axis */
+  double margin_m;                                  /* the stance's static stability margin */
+} legsim_hexapod_standing;
+
+/* Bytes of storage legsim_hexapod_statics needs (aligned to LEGSIM_STORAGE_ALIGN). */
+size_t legsim_hexapod_storage_size(void);
+
+/* The hexapod of h standing at pose on the feet of stance_mask (bit l: leg l), a force
+ * box_force_n (N, world; NULL: none) at the box's centre: the stance feet take the loads with the
+ * least sum of squares of their forces among those that balance them (on level ground a tripod's
+ * vertical forces are the closed form of the centre of mass in its triangle, its horizontal ones
+ * zero), then each leg its own (docs/design/spatial.md). Statuses: LEGSIM_ERR_NULL,
+ * LEGSIM_ERR_STORAGE (storage too small or misaligned), LEGSIM_ERR_BAD_INPUT (a pose value out of
+ * range or not finite, a quaternion not of unit length, a mask of other legs),
+ * LEGSIM_ERR_OUT_OF_STROKE, LEGSIM_ERR_UNREACHABLE / _NOT_CONVERGED / _SINGULAR (a leg's
+ * assembly), LEGSIM_ERR_NO_EQUILIBRIUM (fewer than three feet, on one line, or a foot that would
+ * pull). *out is written only on LEGSIM_OK. The feet need not be on the ground plane (the
+ * caller's pose says where they are). */
+legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_hexapod_pose *pose,
+                                     uint32_t stance_mask, const double *box_force_n, void *storage,
+                                     size_t storage_bytes, legsim_hexapod_standing *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -1,0 +1,107 @@
+// The C API, the hexapod (legsim/hexapod.h): standing at a pose, on the spatial module
+// (spatial/robot, spatial/statics) with each leg assembled by the planar core.
+#include <cmath>
+#include <new>
+
+#include "api/internal.hpp"
+#include "legsim/hexapod.h"
+#include "spatial/gait.hpp"
+#include "spatial/statics.hpp"
+
+using namespace legsim;
+
+namespace {
+using spatial::kBodyConfig;
+using spatial::kBodyDof;
+using spatial::kMaxRobotBodies;
+
+// The storage's parts, each aligned: the planar leg's sim, then the spatial robot's.
+struct HexapodWork {
+  spatial::SpatialRobot robot;
+  spatial::RobotStatics statics;
+  real q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
+  real leg_q[LEGSIM_HEXAPOD_LEGS][3 * LEGSIM_MAX_BODIES];
+};
+constexpr size_t round_up(size_t n) { return (n + LEGSIM_STORAGE_ALIGN - 1) / LEGSIM_STORAGE_ALIGN * LEGSIM_STORAGE_ALIGN; }
+size_t sim_bytes() { return round_up(legsim_sim_size()); }
+
+bool finite_within(const double *x, int n, double bound) {
+  for (int i = 0; i < n; ++i)
+    if (!(std::abs(x[i]) <= bound)) return false;
+  return true;
+}
+}  // namespace
+
+extern "C" {
+
+size_t legsim_hexapod_storage_size(void) { return sim_bytes() + round_up(sizeof(HexapodWork)); }
+
+legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_hexapod_pose *pose,
+                                     uint32_t stance_mask, const double *box_force_n, void *storage,
+                                     size_t storage_bytes, legsim_hexapod_standing *out) {
+  if (!h || !pose || !storage || !out) return LEGSIM_ERR_NULL;
+  if (storage_bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
+    return LEGSIM_ERR_STORAGE;
+  if (h->n_legs != LEGSIM_HEXAPOD_LEGS || (stance_mask >> LEGSIM_HEXAPOD_LEGS)) return LEGSIM_ERR_BAD_INPUT;
+  // the pose's ranges
+  const double qn = std::sqrt(pose->box_quat[0] * pose->box_quat[0] + pose->box_quat[1] * pose->box_quat[1] +
+                              pose->box_quat[2] * pose->box_quat[2] + pose->box_quat[3] * pose->box_quat[3]);
+  if (!finite_within(pose->box_m, 3, LEGSIM_MAX_COORD) || !(std::abs(qn - 1) <= 1e-6)) return LEGSIM_ERR_BAD_INPUT;
+  if (box_force_n && !finite_within(box_force_n, 3, LEGSIM_MAX_FORCE_N)) return LEGSIM_ERR_BAD_INPUT;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const double psi = pose->rowing_rad[l];
+    if (!(psi >= h->rowing_stroke_rad[0] && psi <= h->rowing_stroke_rad[1])) return LEGSIM_ERR_BAD_INPUT;
+    if (!finite_within(pose->length_m[l], 2, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
+  }
+  unsigned char *base = static_cast<unsigned char *>(storage);
+  HexapodWork &w = *new (base + sim_bytes()) HexapodWork;
+  legsim_status st = spatial::robot_lift_hexapod(*h, w.robot);
+  if (st != LEGSIM_OK) return st;
+  // each leg assembled at its lengths from its file's stand
+  legsim_options opt = legsim_default_options();
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    legsim_sim *sim = nullptr;
+    st = legsim_init(base, sim_bytes(), &h->leg[l].leg, &opt, &sim);
+    if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
+    legsim_real len[2] = {legsim_real(pose->length_m[l][0]), legsim_real(pose->length_m[l][1])};
+    if (st == LEGSIM_OK) st = legsim_assemble(sim, len);
+    if (st == LEGSIM_OK) st = legsim_get_q(sim, w.leg_q[l]);
+    if (st != LEGSIM_OK) return st;
+  }
+  const real box_q[7] = {real(pose->box_m[0]), real(pose->box_m[1]), real(pose->box_m[2]), real(pose->box_quat[0] / qn),
+                         real(pose->box_quat[1] / qn), real(pose->box_quat[2] / qn), real(pose->box_quat[3] / qn)};
+  const real box_v[6] = {0, 0, 0, 0, 0, 0};
+  static const real rest[3 * LEGSIM_MAX_BODIES] = {};
+  const real *qs[LEGSIM_HEXAPOD_LEGS], *vs[LEGSIM_HEXAPOD_LEGS];
+  real psi[LEGSIM_HEXAPOD_LEGS], psid[LEGSIM_HEXAPOD_LEGS] = {};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) qs[l] = w.leg_q[l], vs[l] = rest, psi[l] = real(pose->rowing_rad[l]);
+  spatial::robot_state(w.robot, box_q, box_v, qs, vs, psi, psid, w.q, w.v);
+  real load[3] = {0, 0, 0};
+  if (box_force_n) load[0] = real(box_force_n[0]), load[1] = real(box_force_n[1]), load[2] = real(box_force_n[2]);
+  st = spatial::robot_statics(w.robot, w.q, stance_mask, load, w.statics);
+  if (st != LEGSIM_OK) return st;
+  // the results (the centre of mass, the feet and the margin of the stance about it)
+  legsim_hexapod_standing r;
+  double M = 0, c[3] = {0, 0, 0};
+  for (int b = 0; b < w.robot.nb; ++b) {
+    M += w.robot.mass[b];
+    for (int i = 0; i < 3; ++i) c[i] += w.robot.mass[b] * w.q[kBodyConfig * b + i];
+  }
+  for (int i = 0; i < 3; ++i) r.com_m[i] = c[i] / M;
+  spatial::V3 stance_feet[LEGSIM_HEXAPOD_LEGS];
+  int n = 0;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::V3 f = spatial::robot_foot_position(w.robot, l, w.q);
+    const spatial::V3 &F = w.statics.foot_force[l];
+    r.foot_m[l][0] = f.x, r.foot_m[l][1] = f.y, r.foot_m[l][2] = f.z;
+    r.foot_force_n[l][0] = F.x, r.foot_force_n[l][1] = F.y, r.foot_force_n[l][2] = F.z;
+    for (int a = 0; a < 2; ++a) r.actuator_force_n[l][a] = w.statics.actuator_force[w.robot.leg[l].first_actuator + a];
+    r.rowing_torque_nm[l] = w.statics.rowing_torque[l];
+    if ((stance_mask >> l) & 1u) stance_feet[n++] = f;
+  }
+  r.margin_m = spatial::support_margin(stance_feet, n, real(r.com_m[0]), real(r.com_m[1]));
+  *out = r;
+  return LEGSIM_OK;
+}
+
+}  // extern "C"

@@ -1,0 +1,99 @@
+"""The hexapod in space (``legsim/hexapod.h``): its file, and the robot standing at a pose.
+
+    >>> h = legsim.Hexapod.from_toml(legsim.data_path("models/hexapod.toml"))
+    >>> pose = h.stand_pose(box_height=1.0)
+    >>> s = h.statics(pose, stance=(0, 2, 4))          # a tripod
+    >>> s["foot_force_n"][0]                           # N, world: the ground on the right front foot
+
+Units SI, the world's z up. What the file holds and its ranges: firmware_core/include/legsim/hexapod.h;
+the formulation and the rule statics takes for what it leaves free: docs/design/spatial.md.
+"""
+from __future__ import annotations
+
+import ctypes as C
+import os
+
+import numpy as np
+
+from ._lib import STORAGE_ALIGN, Library, load_library
+from .model import Model
+
+_MSG_LEN = 512
+LEGS = 6
+
+
+class Hexapod:
+    """A hexapod file's description (``legsim_hexapod_desc``)."""
+
+    def __init__(self, desc, library: Library, source: str):
+        self.desc, self.library, self.source = desc, library, source
+        size = int(library.cdll.legsim_hexapod_storage_size())
+        self._storage = C.create_string_buffer(size + STORAGE_ALIGN)
+        base = C.addressof(self._storage)
+        self._addr, self._size = base + (-base) % STORAGE_ALIGN, size
+
+    @classmethod
+    def from_toml(cls, path, *, precision: str | None = None, lib_path=None) -> "Hexapod":
+        """Loads the hexapod file at ``path`` (its legs' files relative to it)."""
+        lib = load_library(precision, lib_path)
+        if not lib.has_toml_loader:
+            raise RuntimeError(f"{lib.path}: this library has no TOML loader")
+        desc = lib.HexapodDesc()
+        msg = C.create_string_buffer(_MSG_LEN)
+        path = os.fspath(path)
+        st = lib.cdll.legsim_hexapod_load_toml(path.encode(), C.byref(desc), msg, _MSG_LEN)
+        lib.check(st, "legsim_hexapod_load_toml", msg.value.decode(errors="replace"))
+        return cls(desc, lib, path)
+
+    @property
+    def leg_names(self) -> list[str]:
+        return [self.desc.leg[k].name.decode() for k in range(LEGS)]
+
+    def leg_model(self, k: int) -> Model:
+        """Leg k's planar model (its file, as the planar core reads it)."""
+        d = self.library.ModelDesc()
+        C.memmove(C.byref(d), C.byref(self.desc.leg[k].leg), C.sizeof(d))
+        return Model(d, self.library, "revolute", self.source)
+
+    def stand_pose(self, box_height: float, rowing=(0.0,) * LEGS) -> dict:
+        """A pose with the box level at (0, 0, box_height) m and every leg at its file's stand
+        lengths; rowing angles (rad) as given."""
+        from .sim import Sim
+        lengths = []
+        for k in range(LEGS):
+            s = Sim(self.leg_model(k))
+            s.assemble_pose(0)
+            lengths.append(list(s.actuator_lengths()[0]))
+        return {"box_m": [0.0, 0.0, float(box_height)], "box_quat": [1.0, 0.0, 0.0, 0.0],
+                "rowing_rad": list(rowing), "length_m": lengths}
+
+    def statics(self, pose: dict, stance=range(LEGS), box_force_n=None) -> dict:
+        """The robot standing at ``pose`` (keys box_m, box_quat (w, x, y, z), rowing_rad,
+        length_m: each leg's two lengths) on the feet of ``stance`` (leg indices), a force
+        ``box_force_n`` (N, world) at the box's centre. Returns numpy arrays: com_m (3), foot_m
+        (6, 3), foot_force_n (6, 3), actuator_force_n (6, 2), rowing_torque_nm (6), and
+        margin_m. Raises NoEquilibriumError when the stance cannot hold the loads."""
+        lib = self.library
+        p = lib.HexapodPose()
+        for i in range(3):
+            p.box_m[i] = float(pose["box_m"][i])
+        for i in range(4):
+            p.box_quat[i] = float(pose["box_quat"][i])
+        for k in range(LEGS):
+            p.rowing_rad[k] = float(pose["rowing_rad"][k])
+            for a in range(2):
+                p.length_m[k][a] = float(pose["length_m"][k][a])
+        mask = 0
+        for k in stance:
+            if not 0 <= int(k) < LEGS:
+                raise ValueError(f"stance: leg {k} does not exist (0..5)")
+            mask |= 1 << int(k)
+        force = None if box_force_n is None else (C.c_double * 3)(*[float(x) for x in box_force_n])
+        out = lib.HexapodStanding()
+        st = lib.cdll.legsim_hexapod_statics(C.byref(self.desc), C.byref(p), mask, force,
+                                             C.c_void_p(self._addr), self._size, C.byref(out))
+        lib.check(st, "legsim_hexapod_statics")
+        return {"com_m": np.array(out.com_m[:]), "foot_m": np.array([out.foot_m[k][:] for k in range(LEGS)]),
+                "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
+                "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
+                "rowing_torque_nm": np.array(out.rowing_torque_nm[:]), "margin_m": float(out.margin_m)}

@@ -1,0 +1,83 @@
+"""The hexapod through the Python API (legsim.Hexapod: legsim_hexapod_load_toml and
+legsim_hexapod_statics), against closed forms and the planar core:
+
+- models/hexapod.toml: six legs of leg.toml, named, each the planar leg bit for bit;
+- standing at its stand on a tripod (the box level, the legs at unequal rowing angles): the
+  feet's vertical forces are the barycentric closed form of the centre of mass in their triangle
+  (to 1e-9 of the weight), their horizontal ones zero, and each leg's actuator forces the planar
+  core's statics under its foot's force (Sim.statics with the leg's foot load);
+- on six feet the weight is carried; a stance that cannot hold, a pose out of range: refused.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+legsim = pytest.importorskip("legsim")
+
+HEXAPOD = legsim.data_path("models/hexapod.toml")
+ROWING = (0.3, 0.1, -0.2, 0.0, 0.25, -0.15)
+
+
+@pytest.fixture(scope="module")
+def hexapod():
+    return legsim.Hexapod.from_toml(HEXAPOD)
+
+
+def planar_forces(h, k, fz):
+    s = legsim.Sim(h.leg_model(k))
+    s.assemble_pose(0)
+    s.set_force("foot_load", [0.0, fz])
+    return s.statics()
+
+
+def test_file(hexapod):
+    assert hexapod.leg_names == ["right_front", "right_middle", "right_rear", "left_front", "left_middle",
+                                 "left_rear"]
+    leg = legsim.Model.from_toml(legsim.data_path("models/leg.toml"))
+    assert bytes(hexapod.leg_model(0).desc) == bytes(leg.desc)
+
+
+def test_tripod(hexapod):
+    pose = hexapod.stand_pose(1.0, ROWING)
+    s = hexapod.statics(pose, stance=(0, 2, 4))
+    f = s["foot_force_n"]
+    W = f[:, 2].sum()  # the weight, checked against the masses below
+    a, b, c = (s["foot_m"][k] for k in (0, 2, 4))
+    com = s["com_m"]
+    det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1])
+    wb = ((com[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (com[1] - a[1])) / det
+    wc = ((b[0] - a[0]) * (com[1] - a[1]) - (com[0] - a[0]) * (b[1] - a[1])) / det
+    expect = np.array([1 - wb - wc, wb, wc]) * W
+    print("tripod: vertical forces", f[[0, 2, 4], 2], "closed form", expect, "margin", s["margin_m"])
+    assert np.allclose(f[[0, 2, 4], 2], expect, rtol=0, atol=1e-9 * W)
+    assert np.abs(f[:, :2]).max() < 1e-9 * W
+    assert np.all(f[[1, 3, 5]] == 0)
+    assert s["margin_m"] > 0
+    # the weight: the masses of the box, the yokes and the legs
+    d = hexapod.desc
+    m = d.box_mass_kg + 6 * d.yoke_mass_kg + 6 * sum(d.leg[0].leg.body[b].mass_kg for b in range(6))
+    assert abs(W - 9.81 * m) < 1e-9 * W
+    for k in range(6):
+        planar = planar_forces(hexapod, k, f[k, 2])
+        assert np.allclose(s["actuator_force_n"][k], planar, rtol=1e-9, atol=1e-9)
+    assert np.abs(s["rowing_torque_nm"]).max() < 1e-9 * W
+
+
+def test_six_feet_and_refusals(hexapod):
+    pose = hexapod.stand_pose(1.0, ROWING)
+    s = hexapod.statics(pose)
+    W = 9.81 * (hexapod.desc.box_mass_kg + 6 * hexapod.desc.yoke_mass_kg
+                + 6 * sum(hexapod.desc.leg[0].leg.body[b].mass_kg for b in range(6)))
+    assert abs(s["foot_force_n"][:, 2].sum() - W) < 1e-9 * W
+    with pytest.raises(legsim.NoEquilibriumError):
+        hexapod.statics(pose, stance=(0, 3))
+    bad = dict(pose, box_quat=[1.0, 0.1, 0.0, 0.0])
+    with pytest.raises(legsim.BadInputError):
+        hexapod.statics(bad)
+    bad = dict(pose, rowing_rad=[1.0] + list(ROWING[1:]))  # past the 0.6 rad stroke
+    with pytest.raises(legsim.BadInputError):
+        hexapod.statics(bad)
+    bad = dict(pose, length_m=[[0.2, 0.62]] + pose["length_m"][1:])  # below the upper stroke
+    with pytest.raises(legsim.OutOfStrokeError):
+        hexapod.statics(bad)
