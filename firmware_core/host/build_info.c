@@ -36,6 +36,8 @@ static const struct {
     SIZE(legsim_hexapod_desc),
     SIZE(legsim_hexapod_pose),
     SIZE(legsim_hexapod_standing),
+    SIZE(legsim_hexapod_gait),
+    SIZE(legsim_hexapod_setpoint),
 };
 
 #define N_FACTS ((int32_t)(sizeof facts / sizeof facts[0]))

@@ -289,7 +289,16 @@ class Library:
                         ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6),
                         ("margin_m", d)]
 
+        class HexapodGait(C.Structure):
+            _fields_ = [("period_s", d), ("duty", d), ("step_length_m", d), ("step_height_m", d),
+                        ("turn_rad", d), ("box_height_m", d)]
+
+        class HexapodSetpoint(C.Structure):
+            _fields_ = [("foot_box_m", (d * 3) * 6), ("stance", i32 * 6), ("rowing_rad", d * 6),
+                        ("length_m", (d * 2) * 6)]
+
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding
+        self.HexapodGait, self.HexapodSetpoint = HexapodGait, HexapodSetpoint
         self.ModelDesc, self.Options, self.Report = ModelDesc, Options, Report
         self.Reaction, self.WorstCase = Reaction, WorstCase
         self.Contact = Contact
@@ -302,7 +311,8 @@ class Library:
                  ("legsim_reaction", self.Reaction), ("legsim_worst_case", self.WorstCase),
                  ("legsim_contact", self.Contact), ("legsim_hexapod_desc", self.HexapodDesc),
                  ("legsim_hexapod_pose", self.HexapodPose),
-                 ("legsim_hexapod_standing", self.HexapodStanding)]
+                 ("legsim_hexapod_standing", self.HexapodStanding),
+                 ("legsim_hexapod_gait", self.HexapodGait), ("legsim_hexapod_setpoint", self.HexapodSetpoint)]
         bad = [f"{n}: library {cfg[f'sizeof({n})']} bytes, binding {C.sizeof(t)}"
                for n, t in pairs
                if f"sizeof({n})" in cfg and cfg[f"sizeof({n})"] != C.sizeof(t)]
@@ -379,6 +389,8 @@ class Library:
             "legsim_hexapod_statics": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
                                             C.c_uint32, C.POINTER(C.c_double), P, C.c_size_t,
                                             C.POINTER(self.HexapodStanding)]),
+            "legsim_hexapod_gait_setpoints": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodGait),
+                                                   C.c_double, P, C.c_size_t, C.POINTER(self.HexapodSetpoint)]),
         }
         self.has_toml_loader = hasattr(self.cdll, "legsim_model_load_toml")
         for fname, (res, args) in protos.items():

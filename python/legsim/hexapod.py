@@ -67,6 +67,24 @@ class Hexapod:
         return {"box_m": [0.0, 0.0, float(box_height)], "box_quat": [1.0, 0.0, 0.0, 0.0],
                 "rowing_rad": list(rowing), "length_m": lengths}
 
+    def gait_setpoints(self, t_s: float, *, period_s: float, duty: float, step_length_m: float,
+                       step_height_m: float, turn_rad: float = 0.0, box_height_m: float) -> dict:
+        """The tripod gait's set-points at ``t_s`` (legsim_hexapod_gait_setpoints): each foot's
+        target in the box's frame (foot_box_m, 6 x 3), whether it stands (stance, 6 bools), and
+        the rowing angles (rowing_rad) and actuator lengths (length_m, 6 x 2) that put it there.
+        Raises OutOfStrokeError (or UnreachableError, ...) for a target the leg cannot reach."""
+        lib = self.library
+        g = lib.HexapodGait(float(period_s), float(duty), float(step_length_m), float(step_height_m),
+                            float(turn_rad), float(box_height_m))
+        out = lib.HexapodSetpoint()
+        st = lib.cdll.legsim_hexapod_gait_setpoints(C.byref(self.desc), C.byref(g), float(t_s),
+                                                    C.c_void_p(self._addr), self._size, C.byref(out))
+        lib.check(st, "legsim_hexapod_gait_setpoints")
+        return {"foot_box_m": np.array([out.foot_box_m[k][:] for k in range(LEGS)]),
+                "stance": np.array([bool(out.stance[k]) for k in range(LEGS)]),
+                "rowing_rad": np.array(out.rowing_rad[:]),
+                "length_m": np.array([out.length_m[k][:] for k in range(LEGS)])}
+
     def statics(self, pose: dict, stance=range(LEGS), box_force_n=None) -> dict:
         """The robot standing at ``pose`` (keys box_m, box_quat (w, x, y, z), rowing_rad,
         length_m: each leg's two lengths) on the feet of ``stance`` (leg indices), a force

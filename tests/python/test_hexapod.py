@@ -81,3 +81,51 @@ def test_six_feet_and_refusals(hexapod):
     bad = dict(pose, length_m=[[0.2, 0.62]] + pose["length_m"][1:])  # below the upper stroke
     with pytest.raises(legsim.OutOfStrokeError):
         hexapod.statics(bad)
+
+
+GAIT = dict(period_s=1.2, duty=0.6, step_length_m=0.12, step_height_m=0.05, box_height_m=1.0)
+
+
+def test_gait_setpoints_walk(hexapod):
+    """The tripod gait's set-points, put back through the robot's kinematics (statics' feet:
+    another path, the legs assembled at the set lengths and turned by the set rowing angles)
+    with the box carried along at the gait's speed: every standing foot holds its place on the
+    ground in the world, a swinging foot is off it by the planned rise, the stance balances
+    the weight with a positive margin at every time."""
+    T, duty = GAIT["period_s"], GAIT["duty"]
+    v = GAIT["step_length_m"] / (duty * T)
+    held = {}
+    worst_hold = worst_ground = worst_rise = 0.0
+    margins = []
+    for k in range(49):                      # two periods
+        t = k * T / 24
+        sp = hexapod.gait_setpoints(t, **GAIT)
+        pose = {"box_m": [v * t, 0.0, GAIT["box_height_m"]], "box_quat": [1.0, 0.0, 0.0, 0.0],
+                "rowing_rad": list(sp["rowing_rad"]), "length_m": [list(x) for x in sp["length_m"]]}
+        stance = [l for l in range(6) if sp["stance"][l]]
+        assert len(stance) >= 3
+        s = hexapod.statics(pose, stance=stance)
+        margins.append(s["margin_m"])
+        for l in range(6):
+            foot = s["foot_m"][l]
+            if sp["stance"][l]:
+                worst_ground = max(worst_ground, abs(foot[2]))
+                if l in held and held[l][0] == k - 1:  # the same stance as the last sample
+                    worst_hold = max(worst_hold, float(np.hypot(*(foot[:2] - held[l][1]))))
+                held[l] = (k, foot[:2].copy())
+            else:
+                held.pop(l, None)
+                rise = sp["foot_box_m"][l][2] + GAIT["box_height_m"]
+                worst_rise = max(worst_rise, abs(foot[2] - rise))
+        assert np.all(s["foot_force_n"][stance, 2] > 0)
+    print(f"stance feet held to {worst_hold:.2e} m, on the ground to {worst_ground:.2e} m; swing feet "
+          f"at their rise to {worst_rise:.2e} m; margin {min(margins):.4f} .. {max(margins):.4f} m")
+    assert worst_hold < 1e-9 and worst_ground < 1e-9 and worst_rise < 1e-9
+    assert min(margins) > 0.05
+
+
+def test_gait_out_of_reach(hexapod):
+    with pytest.raises(legsim.LegsimError):
+        hexapod.gait_setpoints(0.0, **dict(GAIT, step_length_m=2.0))  # far past the rowing stroke
+    with pytest.raises(legsim.BadInputError):
+        hexapod.gait_setpoints(0.0, **dict(GAIT, duty=0.3))

@@ -93,6 +93,32 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
                                      uint32_t stance_mask, const double *box_force_n, void *storage,
                                      size_t storage_bytes, legsim_hexapod_standing *out);
 
+/* ---- the tripod gait ------------------------------------------------------- */
+/* Two tripods (legs 0, 2, 4 and 1, 3, 5) take turns: each foot stands for the fraction duty
+ * (in [0.5, 1)) of period_s (> 0) while the box moves forward by step_length_m (>= 0) and turns by
+ * turn_rad (|turn| < pi / 2) about its z, then swings, rising by step_height_m (>= 0). Each
+ * foot's neutral point (its place at the middle of its stance) is the stand's foot, on the ground
+ * box_height_m (> 0) below the box's centre. (docs/design/spatial.md; lengths <= LEGSIM_MAX_COORD.) */
+typedef struct legsim_hexapod_gait {
+  double period_s, duty, step_length_m, step_height_m, turn_rad, box_height_m;
+} legsim_hexapod_gait;
+
+/* The set-points of the gait at a time: each foot's target (box frame, m), whether it stands,
+ * and the rowing angle (rad) and actuator lengths (m) that put it there. */
+typedef struct legsim_hexapod_setpoint {
+  double foot_box_m[LEGSIM_HEXAPOD_LEGS][3];
+  int32_t stance[LEGSIM_HEXAPOD_LEGS];
+  double rowing_rad[LEGSIM_HEXAPOD_LEGS];
+  double length_m[LEGSIM_HEXAPOD_LEGS][2];
+} legsim_hexapod_setpoint;
+
+/* The set-points at t_s (s; the gait repeats). LEGSIM_ERR_BAD_INPUT for a gait out of range;
+ * LEGSIM_ERR_OUT_OF_STROKE for a target past a rowing or linear stroke, LEGSIM_ERR_UNREACHABLE /
+ * _NOT_CONVERGED / _SINGULAR for one the leg cannot reach (each leg's inverse kinematics from its
+ * file's stand); storage as legsim_hexapod_statics'. *out is written only on LEGSIM_OK. */
+legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
+                                            void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out);
+
 #ifdef __cplusplus
 }
 #endif

@@ -104,4 +104,63 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
   return LEGSIM_OK;
 }
 
+legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
+                                            void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out) {
+  if (!h || !gait || !storage || !out) return LEGSIM_ERR_NULL;
+  if (storage_bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
+    return LEGSIM_ERR_STORAGE;
+  if (h->n_legs != LEGSIM_HEXAPOD_LEGS || !std::isfinite(t_s) || !(std::abs(t_s) <= LEGSIM_MAX_TIME_S) ||
+      !(gait->box_height_m > 0 && gait->box_height_m <= LEGSIM_MAX_COORD))
+    return LEGSIM_ERR_BAD_INPUT;
+  unsigned char *base = static_cast<unsigned char *>(storage);
+  HexapodWork &w = *new (base + sim_bytes()) HexapodWork;
+  legsim_status st = spatial::robot_lift_hexapod(*h, w.robot);
+  if (st != LEGSIM_OK) return st;
+  // the neutral points: the stand's feet (rowing 0, the box level at the origin), on the ground
+  legsim_options opt = legsim_default_options();
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    legsim_sim *sim = nullptr;
+    st = legsim_init(base, sim_bytes(), &h->leg[l].leg, &opt, &sim);
+    if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
+    if (st == LEGSIM_OK) st = legsim_get_q(sim, w.leg_q[l]);
+    if (st != LEGSIM_OK) return st;
+  }
+  static const real rest[3 * LEGSIM_MAX_BODIES] = {};
+  const real box_q[7] = {0, 0, 0, 1, 0, 0, 0}, box_v[6] = {0, 0, 0, 0, 0, 0};
+  const real *qs[LEGSIM_HEXAPOD_LEGS], *vs[LEGSIM_HEXAPOD_LEGS];
+  real psi[LEGSIM_HEXAPOD_LEGS] = {}, psid[LEGSIM_HEXAPOD_LEGS] = {};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) qs[l] = w.leg_q[l], vs[l] = rest;
+  spatial::robot_state(w.robot, box_q, box_v, qs, vs, psi, psid, w.q, w.v);
+  spatial::TripodGait g;
+  g.period_s = real(gait->period_s), g.duty = real(gait->duty), g.step_length_m = real(gait->step_length_m);
+  g.step_height_m = real(gait->step_height_m), g.turn_rad = real(gait->turn_rad);
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::V3 f = spatial::robot_foot_position(w.robot, l, w.q);
+    g.neutral[l] = {f.x, f.y, -real(gait->box_height_m)};
+  }
+  if (spatial::gait_check(g) != LEGSIM_OK) return LEGSIM_ERR_BAD_INPUT;
+  spatial::V3 feet[LEGSIM_HEXAPOD_LEGS];
+  bool stance[LEGSIM_HEXAPOD_LEGS];
+  spatial::gait_feet(g, t_s, feet, stance);
+  legsim_hexapod_setpoint r;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    real angle, xy[2];
+    spatial::leg_plane_target(w.robot, l, feet[l], angle, xy);
+    if (!(angle >= h->rowing_stroke_rad[0] && angle <= h->rowing_stroke_rad[1])) return LEGSIM_ERR_OUT_OF_STROKE;
+    legsim_sim *sim = nullptr;
+    st = legsim_init(base, sim_bytes(), &h->leg[l].leg, &opt, &sim);
+    if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
+    if (st == LEGSIM_OK) st = legsim_assemble_foot(sim, xy);
+    legsim_real len[2] = {0, 0};
+    if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, nullptr);
+    if (st != LEGSIM_OK) return st;
+    r.foot_box_m[l][0] = feet[l].x, r.foot_box_m[l][1] = feet[l].y, r.foot_box_m[l][2] = feet[l].z;
+    r.stance[l] = stance[l] ? 1 : 0;
+    r.rowing_rad[l] = angle;
+    r.length_m[l][0] = len[0], r.length_m[l][1] = len[1];
+  }
+  *out = r;
+  return LEGSIM_OK;
+}
+
 }  // extern "C"
