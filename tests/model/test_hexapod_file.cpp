@@ -325,6 +325,43 @@ void test_stance_that_cannot_stand(void) {
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_statics(s.robot, s.q, 1u << 6, nullptr, st));
 }
 
+void test_api_refuses_and_leaves_out(void) {
+  // legsim_hexapod_statics and _gait_setpoints: NULLs, short or misaligned storage, bad values;
+  // a refused call leaves its output as it was
+  Standing &s = standing();
+  alignas(16) static unsigned char big[1 << 20];
+  TEST_ASSERT_TRUE(legsim_hexapod_storage_size() + 16 <= sizeof big);
+  legsim_hexapod_pose pose = {};
+  pose.box_m[2] = 1.0;
+  pose.box_quat[0] = 1.0;
+  for (int l = 0; l < 6; ++l) pose.length_m[l][0] = 0.6614378277661477, pose.length_m[l][1] = 0.6244997998398398;
+  legsim_hexapod_standing out;
+  std::memset(&out, 0x5a, sizeof out);
+  const legsim_hexapod_standing before = out;
+  const size_t n = legsim_hexapod_storage_size();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_statics(nullptr, &pose, 0x15, nullptr, big, n, &out));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_statics(&s.desc, &pose, 0x15, nullptr, big, n, nullptr));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STORAGE, legsim_hexapod_statics(&s.desc, &pose, 0x15, nullptr, big, n - 1, &out));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STORAGE, legsim_hexapod_statics(&s.desc, &pose, 0x15, nullptr, big + 8, n, &out));
+  pose.box_quat[1] = 0.5;  // not a unit quaternion
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_statics(&s.desc, &pose, 0x15, nullptr, big, n, &out));
+  pose.box_quat[1] = 0;
+  pose.length_m[2][0] = NAN;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_statics(&s.desc, &pose, 0x15, nullptr, big, n, &out));
+  pose.length_m[2][0] = 0.6614378277661477;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_statics(&s.desc, &pose, 1u << 6, nullptr, big, n, &out));
+  TEST_ASSERT_EQUAL_INT(0, std::memcmp(&before, &out, sizeof out));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_statics(&s.desc, &pose, 0x15, nullptr, big, n, &out));
+  legsim_hexapod_gait g = {1.2, 0.6, 0.12, 0.05, 0.0, 1.0};
+  legsim_hexapod_setpoint sp;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_gait_setpoints(&s.desc, nullptr, 0, big, n, &sp));
+  g.box_height_m = -1;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_gait_setpoints(&s.desc, &g, 0, big, n, &sp));
+  g.box_height_m = 1.0;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_gait_setpoints(&s.desc, &g, NAN, big, n, &sp));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_gait_setpoints(&s.desc, &g, 0.3, big, n, &sp));
+}
+
 void test_refusals(void) {
   const std::string leg = read("models/leg.toml");
   {  // the model loader refuses a hexapod file; this one a leg file
@@ -372,6 +409,7 @@ int main(void) {
   RUN_TEST(test_standing_on_six_feet_and_pushed);
   RUN_TEST(test_leg_targets_round_trip);
   RUN_TEST(test_stance_that_cannot_stand);
+  RUN_TEST(test_api_refuses_and_leaves_out);
   RUN_TEST(test_refusals);
   return UNITY_END();
 }
