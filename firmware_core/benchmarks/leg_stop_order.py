@@ -27,19 +27,14 @@ ROOT = Path(__file__).resolve().parents[2]
 sys.path[:0] = [str(ROOT / "python"), str(ROOT / "bench")]
 
 import legsim  # noqa: E402
-from legsim_bench.reference.leg_stop import stop_case, upper_stop  # noqa: E402
+from legsim_bench.reference.leg_stop import state_energy, stop_case, upper_stop  # noqa: E402
 
 STROKE_MIN, PUSH, T_END = 0.645, -300.0, 0.1
 STEPS = (2e-3, 1e-3, 5e-4, 2.5e-4)
 
 
 def energy(s, ref, forces):
-    v = np.asarray(s.qd).reshape(-1, 3)
-    q = np.asarray(s.q).reshape(-1, 3)
-    kin = 0.5 * float(np.sum(s.model.masses * (v[:, 0] ** 2 + v[:, 1] ** 2))
-                      + np.sum(s.model.inertias * v[:, 2] ** 2))
-    pot = -float(np.sum(s.model.masses * (q[:, :2] @ ref.gravity)))
-    return kin + pot - float(np.dot(forces, s.actuator_lengths()[0]))
+    return state_energy(s.q, s.qd, s.model.masses, s.model.inertias, ref.gravity, forces, s.actuator_lengths()[0])
 
 
 def main():

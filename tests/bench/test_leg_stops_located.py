@@ -26,7 +26,7 @@ import pytest
 
 legsim = pytest.importorskip("legsim")
 
-from legsim_bench.reference.leg_stop import stop_case, upper_stop  # noqa: E402
+from legsim_bench.reference.leg_stop import state_energy, stop_case, upper_stop  # noqa: E402
 from model_files import LEG_TOML  # noqa: E402
 
 STROKE_MIN = 0.645      # m: the upper actuator's raised minimum
@@ -54,13 +54,7 @@ def core_run(case, integrator, h):
 
 
 def energy(s, ref, forces):
-    """kinetic + gravity's potential - sum F l (constant forces): conserved but for the stop."""
-    v = np.asarray(s.qd).reshape(-1, 3)
-    q = np.asarray(s.q).reshape(-1, 3)
-    kin = 0.5 * float(np.sum(s.model.masses * (v[:, 0] ** 2 + v[:, 1] ** 2))
-                      + np.sum(s.model.inertias * v[:, 2] ** 2))
-    pot = -float(np.sum(s.model.masses * (q[:, :2] @ ref.gravity)))
-    return kin + pot - float(np.dot(forces, s.actuator_lengths()[0]))
+    return state_energy(s.q, s.qd, s.model.masses, s.model.inertias, ref.gravity, forces, s.actuator_lengths()[0])
 
 
 @pytest.mark.parametrize("integrator", ["rk4", "galpha"])

@@ -90,3 +90,15 @@ def upper_stop(ref: LegModel, theta0, forces, l_min: float, t_end: float) -> Sto
     lam = np.array([shank(*held.sol(t))[1] for t in np.linspace(t_arr, t_end, 41)])
     q_end = ref.absolute_q(np.array([th[0], held.y[0, -1]]))
     return StopRun(t_arr, rate, carnot, th.copy(), lam, q_end)
+
+
+def state_energy(q, qd, masses, inertias, gravity, forces, lengths) -> float:
+    """Kinetic + gravity's potential - sum F l (J) of a planar state in absolute coordinates
+    (q, qd: x, y, phi per body; masses, inertias per body; gravity (2,); constant actuator forces
+    F at lengths l): conserved but for a stop, so a step's loss of it is the stop's."""
+    v = np.asarray(qd).reshape(-1, 3)
+    p = np.asarray(q).reshape(-1, 3)
+    kin = 0.5 * float(np.sum(masses * (v[:, 0] ** 2 + v[:, 1] ** 2)) + np.sum(inertias * v[:, 2] ** 2))
+    pot = -float(np.sum(masses * (p[:, :2] @ np.asarray(gravity))))
+    return kin + pot - float(np.dot(forces, lengths))
+

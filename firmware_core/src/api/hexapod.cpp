@@ -30,6 +30,32 @@ bool finite_within(const double *x, int n, double bound) {
     if (!(std::abs(x[i]) <= bound)) return false;
   return true;
 }
+
+// The storage checked and its work part built, the robot lifted from h.
+legsim_status work_begin(const legsim_hexapod_desc &h, void *storage, size_t bytes, HexapodWork *&w) {
+  if (bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
+    return LEGSIM_ERR_STORAGE;
+  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  w = new (static_cast<unsigned char *>(storage) + sim_bytes()) HexapodWork;
+  return spatial::robot_lift_hexapod(h, w->robot);
+}
+
+// Leg l's planar sim at its file's stand, in the storage's first part.
+legsim_status leg_at_stand(const legsim_hexapod_desc &h, int l, void *storage, legsim_sim *&sim) {
+  const legsim_options opt = legsim_default_options();
+  legsim_status st = legsim_init(storage, sim_bytes(), &h.leg[l].leg, &opt, &sim);
+  return st == LEGSIM_OK ? legsim_assemble_pose(sim, 0) : st;
+}
+
+// The robot's state at rest: the box at box_q, each leg at w.leg_q turned by psi.
+void place_at_rest(HexapodWork &w, const real *box_q, const real *psi) {
+  static const real rest[3 * LEGSIM_MAX_BODIES] = {};
+  const real box_v[6] = {0, 0, 0, 0, 0, 0};
+  const real *qs[LEGSIM_HEXAPOD_LEGS], *vs[LEGSIM_HEXAPOD_LEGS];
+  const real psid[LEGSIM_HEXAPOD_LEGS] = {};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) qs[l] = w.leg_q[l], vs[l] = rest;
+  spatial::robot_state(w.robot, box_q, box_v, qs, vs, psi, psid, w.q, w.v);
+}
 }  // namespace
 
 extern "C" {
@@ -40,9 +66,7 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
                                      uint32_t stance_mask, const double *box_force_n, void *storage,
                                      size_t storage_bytes, legsim_hexapod_standing *out) {
   if (!h || !pose || !storage || !out) return LEGSIM_ERR_NULL;
-  if (storage_bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
-    return LEGSIM_ERR_STORAGE;
-  if (h->n_legs != LEGSIM_HEXAPOD_LEGS || (stance_mask >> LEGSIM_HEXAPOD_LEGS)) return LEGSIM_ERR_BAD_INPUT;
+  if (stance_mask >> LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
   // the pose's ranges
   const double qn = std::sqrt(pose->box_quat[0] * pose->box_quat[0] + pose->box_quat[1] * pose->box_quat[1] +
                               pose->box_quat[2] * pose->box_quat[2] + pose->box_quat[3] * pose->box_quat[3]);
@@ -53,16 +77,14 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
     if (!(psi >= h->rowing_stroke_rad[0] && psi <= h->rowing_stroke_rad[1])) return LEGSIM_ERR_BAD_INPUT;
     if (!finite_within(pose->length_m[l], 2, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
   }
-  unsigned char *base = static_cast<unsigned char *>(storage);
-  HexapodWork &w = *new (base + sim_bytes()) HexapodWork;
-  legsim_status st = spatial::robot_lift_hexapod(*h, w.robot);
+  HexapodWork *wp = nullptr;
+  legsim_status st = work_begin(*h, storage, storage_bytes, wp);
   if (st != LEGSIM_OK) return st;
+  HexapodWork &w = *wp;
   // each leg assembled at its lengths from its file's stand
-  legsim_options opt = legsim_default_options();
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
     legsim_sim *sim = nullptr;
-    st = legsim_init(base, sim_bytes(), &h->leg[l].leg, &opt, &sim);
-    if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
+    st = leg_at_stand(*h, l, storage, sim);
     legsim_real len[2] = {legsim_real(pose->length_m[l][0]), legsim_real(pose->length_m[l][1])};
     if (st == LEGSIM_OK) st = legsim_assemble(sim, len);
     if (st == LEGSIM_OK) st = legsim_get_q(sim, w.leg_q[l]);
@@ -70,12 +92,9 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
   }
   const real box_q[7] = {real(pose->box_m[0]), real(pose->box_m[1]), real(pose->box_m[2]), real(pose->box_quat[0] / qn),
                          real(pose->box_quat[1] / qn), real(pose->box_quat[2] / qn), real(pose->box_quat[3] / qn)};
-  const real box_v[6] = {0, 0, 0, 0, 0, 0};
-  static const real rest[3 * LEGSIM_MAX_BODIES] = {};
-  const real *qs[LEGSIM_HEXAPOD_LEGS], *vs[LEGSIM_HEXAPOD_LEGS];
-  real psi[LEGSIM_HEXAPOD_LEGS], psid[LEGSIM_HEXAPOD_LEGS] = {};
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) qs[l] = w.leg_q[l], vs[l] = rest, psi[l] = real(pose->rowing_rad[l]);
-  spatial::robot_state(w.robot, box_q, box_v, qs, vs, psi, psid, w.q, w.v);
+  real psi[LEGSIM_HEXAPOD_LEGS];
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) psi[l] = real(pose->rowing_rad[l]);
+  place_at_rest(w, box_q, psi);
   real load[3] = {0, 0, 0};
   if (box_force_n) load[0] = real(box_force_n[0]), load[1] = real(box_force_n[1]), load[2] = real(box_force_n[2]);
   st = spatial::robot_statics(w.robot, w.q, stance_mask, load, w.statics);
@@ -107,30 +126,22 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
 legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
                                             void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out) {
   if (!h || !gait || !storage || !out) return LEGSIM_ERR_NULL;
-  if (storage_bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
-    return LEGSIM_ERR_STORAGE;
-  if (h->n_legs != LEGSIM_HEXAPOD_LEGS || !std::isfinite(t_s) || !(std::abs(t_s) <= LEGSIM_MAX_TIME_S) ||
+  if (!std::isfinite(t_s) || !(std::abs(t_s) <= LEGSIM_MAX_TIME_S) ||
       !(gait->box_height_m > 0 && gait->box_height_m <= LEGSIM_MAX_COORD))
     return LEGSIM_ERR_BAD_INPUT;
-  unsigned char *base = static_cast<unsigned char *>(storage);
-  HexapodWork &w = *new (base + sim_bytes()) HexapodWork;
-  legsim_status st = spatial::robot_lift_hexapod(*h, w.robot);
+  HexapodWork *wp = nullptr;
+  legsim_status st = work_begin(*h, storage, storage_bytes, wp);
   if (st != LEGSIM_OK) return st;
+  HexapodWork &w = *wp;
   // the neutral points: the stand's feet (rowing 0, the box level at the origin), on the ground
-  legsim_options opt = legsim_default_options();
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
     legsim_sim *sim = nullptr;
-    st = legsim_init(base, sim_bytes(), &h->leg[l].leg, &opt, &sim);
-    if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
+    st = leg_at_stand(*h, l, storage, sim);
     if (st == LEGSIM_OK) st = legsim_get_q(sim, w.leg_q[l]);
     if (st != LEGSIM_OK) return st;
   }
-  static const real rest[3 * LEGSIM_MAX_BODIES] = {};
-  const real box_q[7] = {0, 0, 0, 1, 0, 0, 0}, box_v[6] = {0, 0, 0, 0, 0, 0};
-  const real *qs[LEGSIM_HEXAPOD_LEGS], *vs[LEGSIM_HEXAPOD_LEGS];
-  real psi[LEGSIM_HEXAPOD_LEGS] = {}, psid[LEGSIM_HEXAPOD_LEGS] = {};
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) qs[l] = w.leg_q[l], vs[l] = rest;
-  spatial::robot_state(w.robot, box_q, box_v, qs, vs, psi, psid, w.q, w.v);
+  const real box_q[7] = {0, 0, 0, 1, 0, 0, 0}, psi[LEGSIM_HEXAPOD_LEGS] = {};
+  place_at_rest(w, box_q, psi);
   spatial::TripodGait g;
   g.period_s = real(gait->period_s), g.duty = real(gait->duty), g.step_length_m = real(gait->step_length_m);
   g.step_height_m = real(gait->step_height_m), g.turn_rad = real(gait->turn_rad);
@@ -148,8 +159,7 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
     spatial::leg_plane_target(w.robot, l, feet[l], angle, xy);
     if (!(angle >= h->rowing_stroke_rad[0] && angle <= h->rowing_stroke_rad[1])) return LEGSIM_ERR_OUT_OF_STROKE;
     legsim_sim *sim = nullptr;
-    st = legsim_init(base, sim_bytes(), &h->leg[l].leg, &opt, &sim);
-    if (st == LEGSIM_OK) st = legsim_assemble_pose(sim, 0);
+    st = leg_at_stand(*h, l, storage, sim);
     if (st == LEGSIM_OK) st = legsim_assemble_foot(sim, xy);
     legsim_real len[2] = {0, 0};
     if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, nullptr);
