@@ -1390,13 +1390,11 @@ extern "C" legsim_status legsim_model_load_toml(const char *path, const char *va
   }
 }
 
-extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*names)[LEGSIM_NAME_LEN],
-                                                    int32_t max_names, int32_t *n_names, char *msg,
-                                                    size_t msg_len) {
-  if (!path || !n_names || (max_names > 0 && !names)) {
-    put_msg(msg, msg_len, "legsim_model_toml_variants: a required pointer is NULL");
-    return LEGSIM_ERR_NULL;
-  }
+namespace {
+// A file's TOML read and given to use(doc) (which writes the results): the file's refusals,
+// Fail's message and status, or any other exception as "unexpected error", into msg.
+template <typename Use>
+legsim_status with_toml_file(const char *path, char *msg, size_t msg_len, Use &&use) {
   try {
     std::string text, err;
     if (!read_toml_file(path, text, err)) {
@@ -1404,14 +1402,7 @@ extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*nam
       return LEGSIM_ERR_BAD_INPUT;
     }
     toml::table doc = parse_toml(text, path);
-    std::vector<std::string> list = {kDefaultVariant};
-    if (const toml::table *vt = doc["variant"].as_table())
-      for (const auto &k : file_order_keys(vt)) list.push_back(k);
-    for (int32_t i = 0; i < max_names && i < static_cast<int32_t>(list.size()); ++i) {
-      std::memset(names[i], 0, LEGSIM_NAME_LEN);
-      std::memcpy(names[i], list[i].data(), std::min(list[i].size(), size_t(LEGSIM_NAME_LEN - 1)));
-    }
-    *n_names = static_cast<int32_t>(list.size());
+    use(doc);
     put_msg(msg, msg_len, "");
     return LEGSIM_OK;
   } catch (const Fail &f) {
@@ -1422,6 +1413,26 @@ extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*nam
     return LEGSIM_ERR_MODEL;
   }
 }
+}  // namespace
+
+extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*names)[LEGSIM_NAME_LEN],
+                                                    int32_t max_names, int32_t *n_names, char *msg,
+                                                    size_t msg_len) {
+  if (!path || !n_names || (max_names > 0 && !names)) {
+    put_msg(msg, msg_len, "legsim_model_toml_variants: a required pointer is NULL");
+    return LEGSIM_ERR_NULL;
+  }
+  return with_toml_file(path, msg, msg_len, [&](toml::table &doc) {
+    std::vector<std::string> list = {kDefaultVariant};
+    if (const toml::table *vt = doc["variant"].as_table())
+      for (const auto &k : file_order_keys(vt)) list.push_back(k);
+    for (int32_t i = 0; i < max_names && i < static_cast<int32_t>(list.size()); ++i) {
+      std::memset(names[i], 0, LEGSIM_NAME_LEN);
+      std::memcpy(names[i], list[i].data(), std::min(list[i].size(), size_t(LEGSIM_NAME_LEN - 1)));
+    }
+    *n_names = static_cast<int32_t>(list.size());
+  });
+}
 
 extern "C" legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexapod_desc *out, char *msg,
                                                   size_t msg_len) {
@@ -1429,14 +1440,8 @@ extern "C" legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexap
     put_msg(msg, msg_len, "legsim_hexapod_load_toml: path or out is NULL");
     return LEGSIM_ERR_NULL;
   }
-  try {
-    std::string text, err;
-    if (!read_toml_file(path, text, err)) {
-      put_msg(msg, msg_len, err);
-      return LEGSIM_ERR_BAD_INPUT;
-    }
-    const std::string source = path;
-    toml::table doc = parse_toml(text, source);
+  const std::string source = path;
+  return with_toml_file(path, msg, msg_len, [&](toml::table &doc) {
     auto h = std::make_unique<legsim_hexapod_desc>();
     try {
       if (!is_hexapod(&doc)) fail("file", "not a hexapod file (no [yoke] or [rowing])", LEGSIM_ERR_BAD_INPUT);
@@ -1446,13 +1451,5 @@ extern "C" legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexap
       throw;
     }
     *out = *h;
-    put_msg(msg, msg_len, "");
-    return LEGSIM_OK;
-  } catch (const Fail &f) {
-    put_msg(msg, msg_len, f.message);
-    return f.status;
-  } catch (...) {
-    put_msg(msg, msg_len, std::string(path) + ": unexpected error");
-    return LEGSIM_ERR_MODEL;
-  }
+  });
 }
