@@ -31,6 +31,7 @@
 #include "legsim/models.h"
 #include "model_toml.hpp"
 #include "spatial/robot.hpp"
+#include "hexapod_standing.hpp"
 #include "spatial/statics.hpp"
 #include "unity.h"
 
@@ -128,45 +129,6 @@ void test_lifted_stand(void) {
 }
 
 namespace {
-// The hexapod at its stand, the box level at the origin, the legs turned by unequal rowing
-// angles (the centre of mass off the middle, no two support triangles alike).
-struct Standing {
-  SpatialRobot robot;
-  double q[kBodyConfig * kMaxRobotBodies];
-  double M;
-  V3 com;
-  legsim_hexapod_desc desc;
-};
-Standing &standing() {
-  static Standing s;
-  static bool built = false;
-  if (built) return s;
-  char msg[256];
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_load_toml(kHexapod, &s.desc, msg, sizeof msg));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift_hexapod(s.desc, s.robot));
-  legsim_options opt = legsim_default_options();
-  legsim_sim *sim = nullptr;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &s.desc.leg[0].leg, &opt, &sim));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
-  static double qp[3 * LEGSIM_MAX_BODIES], zero[3 * LEGSIM_MAX_BODIES];
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_q(sim, qp));
-  const double *qs[6], *vs[6];
-  double psi[6] = {0.3, 0.1, -0.2, 0.0, 0.25, -0.15}, psid[6] = {0};
-  for (int l = 0; l < 6; ++l) qs[l] = qp, vs[l] = zero;
-  const double box_q[7] = {0, 0, 0, 1, 0, 0, 0}, box_v[6] = {0, 0, 0, 0, 0, 0};
-  static double v[kBodyDof * kMaxRobotBodies];
-  robot_state(s.robot, box_q, box_v, qs, vs, psi, psid, s.q, v);
-  s.M = 0;
-  double c[3] = {0, 0, 0};
-  for (int b = 0; b < s.robot.nb; ++b) {
-    s.M += s.robot.mass[b];
-    for (int i = 0; i < 3; ++i) c[i] += s.robot.mass[b] * s.q[kBodyConfig * b + i];
-  }
-  s.com = {c[0] / s.M, c[1] / s.M, c[2] / s.M};
-  built = true;
-  return s;
-}
-
 // The planar core's statics of the leg under a foot force (fx along its plane's x, fz up), N.
 void planar_statics(const legsim_model_desc &leg, double fx, double fz, double *force) {
   legsim_options opt = legsim_default_options();

@@ -49,6 +49,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     R.joint[nj] = j;
     R.joint[nj].row = row;
     R.joint[nj].nrows = nrows;
+    for (int r = row; r < row + nrows; ++r) R.row_body[r][0] = j.a, R.row_body[r][1] = j.b;
     ++nj;
     row += nrows;
   };
@@ -86,6 +87,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     }
     nb += 1 + nbar;
     for (int i = y; i < nb; ++i) parent[i] = i;
+    L.row0 = row;
     // the yoke about the box's z through the hip: its axis point is -com in its frame
     add({LegJointKind::Revolute, y, box_body, -1 * R.yoke_com, L.hip, kZ, kX, kY, 0, 0}, 5);
     for (int k = 0; k < desc.n_joints; ++k) {
@@ -130,6 +132,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
           return LEGSIM_ERR_MODEL;  // a slot: no spatial row unit
       }
     }
+    L.nrows = row - L.row0;
   }
   R.nb = nb;
   R.na = na;

@@ -71,6 +71,7 @@ struct LegJoint {
 struct RobotLeg {
   int yoke, nbars;  // the yoke's body; its bars follow it
   int first_actuator, nactuators;  // its linear actuators in SpatialRobot::act
+  int row0, nrows;  // its joints' rows (its hip's first): contiguous in the robot's row order
   int foot_body;    // its foot's bar (a body of the robot), or -1: the leg file has no [foot]
   V3 foot_point;    // on it, body frame
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
@@ -95,6 +96,7 @@ struct SpatialRobot {
   real mass[kMaxRobotBodies];
   V3 inertia[kMaxRobotBodies];  // principal, body frame (kg m^2)
   LegJoint joint[kMaxRobotJoints];
+  int row_body[kMaxRobotRows][2];  // each row's two bodies (-1: the world), from its joint
   RobotLeg leg[kMaxLegs];
   RobotActuator act[kMaxRobotActuators];
   V3 gravity;    // world (m/s^2): the leg files' (0, g_y), along z

@@ -1,6 +1,6 @@
-// A small dense linear system (the system layer's one): the Woodbury correction's few
-// columns (coupled_solve, dynamics.cpp) and the 3D contact problem's generalized Jacobian
-// (spatial/friction_cone.cpp). No Eigen: a header the element modules can take alone;
+// Small dense linear systems (the system layer's): the Woodbury correction's few columns
+// (coupled_solve, dynamics.cpp), the 3D contact problem's generalized Jacobian
+// (spatial/friction_cone.cpp), a spatial leg's rows (spatial/dynamics.cpp). No Eigen: a header the element modules can take alone;
 // inline, since its callers' sizes are small.
 #pragma once
 
@@ -35,6 +35,39 @@ inline bool dense_solve(int n, legsim_real *A, legsim_real *b, legsim_real floor
     b[i] = s / A[i * n + i];
   }
   return true;
+}
+
+// A = L L^T for A n x n symmetric positive definite, row-major: L in A's lower triangle (the
+// upper part not read, not written). false at a pivot not above floor: A then not positive
+// definite to that margin (a singular or dependent set of rows), L part-way.
+inline bool dense_cholesky(int n, legsim_real *A, legsim_real floor) {
+  for (int j = 0; j < n; ++j) {
+    legsim_real d = A[j * n + j];
+    for (int k = 0; k < j; ++k) d -= A[j * n + k] * A[j * n + k];
+    if (!(d > floor)) return false;
+    d = std::sqrt(d);
+    A[j * n + j] = d;
+    for (int i = j + 1; i < n; ++i) {
+      legsim_real s = A[i * n + j];
+      for (int k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
+      A[i * n + j] = s / d;
+    }
+  }
+  return true;
+}
+
+// L L^T x = b with dense_cholesky's L; b becomes x.
+inline void cholesky_solve(int n, const legsim_real *L, legsim_real *b) {
+  for (int i = 0; i < n; ++i) {
+    legsim_real s = b[i];
+    for (int k = 0; k < i; ++k) s -= L[i * n + k] * b[k];
+    b[i] = s / L[i * n + i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    legsim_real s = b[i];
+    for (int k = i + 1; k < n; ++k) s -= L[k * n + i] * b[k];
+    b[i] = s / L[i * n + i];
+  }
 }
 
 }  // namespace legsim

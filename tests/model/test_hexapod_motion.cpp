@@ -1,0 +1,281 @@
+// The hexapod of models/hexapod.toml moving (spatial/dynamics, spatial/motion), checked against
+// another solve and against invariants:
+// - the leg-by-leg solve with the box's Schur complement gives the dense KKT system's
+//   accelerations and multipliers (Eigen's full-pivot LU) with the box turning, the legs rowing
+//   and a tripod's feet stuck;
+// - standing (robot_statics' actuator forces and rowing torques, on six feet and on a tripod)
+//   is rest: no acceleration, the stuck feet's forces the statics', and it stays so over 0.2 s;
+// - in flight without gravity, under the actuators' and motors' forces (internal to the robot)
+//   the linear and angular momenta stay constant, and the energy (kinetic, less the work the
+//   constant forces would do back) at RK4's order;
+// - the paper's Fig. 7 on six feet (the stand's statics plus 50 N on the three right legs' upper
+//   actuators): the box's path converges at order 4 over h = 4 .. 0.5 ms, the feet stay where they
+//   stand, the energy holds;
+// - bad input refused, data unchanged.
+// Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <memory>
+
+#include "hexapod_standing.hpp"
+#include "spatial/motion.hpp"
+#include "spatial/statics.hpp"
+
+void setUp(void) {}
+void tearDown(void) {}
+
+namespace {
+using namespace legsim::spatial;
+using Eigen::MatrixXd;
+using Eigen::VectorXd;
+
+constexpr uint32_t kTripod = 0x15;  // legs 0, 2, 4
+constexpr uint32_t kSix = 0x3F;
+
+FeetHold hold_at(const SpatialRobot &robot, const double *q, uint32_t stuck) {
+  FeetHold h;
+  h.stuck = stuck;
+  for (int l = 0; l < robot.nlegs; ++l) h.anchor[l] = robot_foot_position(robot, l, q);
+  return h;
+}
+
+// The state of the stand with the box turning and moving and the legs rowing (the legs' own
+// planar coordinates at rest).
+void moving_state(const Standing &s, double *q, double *v) {
+  static double zero[3 * LEGSIM_MAX_BODIES];
+  const double *qs[6], *vs[6];
+  double psi[6] = {0.3, 0.1, -0.2, 0.0, 0.25, -0.15}, psid[6] = {0.5, -0.4, 0.3, 0.8, -0.6, 0.2};
+  for (int l = 0; l < 6; ++l) qs[l] = s.leg_q, vs[l] = zero;
+  const Quat tilt = quat_exp({0.1, -0.05, 0.3});
+  const double box_q[7] = {0.02, -0.01, 0.03, tilt.w, tilt.x, tilt.y, tilt.z};
+  const double box_v[6] = {0.2, -0.1, 0.05, 0.3, -0.2, 0.6};
+  robot_state(s.robot, box_q, box_v, qs, vs, psi, psid, q, v);
+}
+
+// The rows' number in use and their indices (the joints', then the stuck feet's).
+int used(const SpatialRobot &robot, uint32_t stuck, int *idx) {
+  int n = 0;
+  for (int r = 0; r < robot.m; ++r) idx[n++] = r;
+  for (int l = 0; l < robot.nlegs; ++l)
+    if ((stuck >> l) & 1u)
+      for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;
+  return n;
+}
+
+// Leg l's rowing angle (rad): its yoke's x in the box's frame, from its heading.
+double rowing_angle(const SpatialRobot &robot, int l, const double *q) {
+  const Rot Rb = rotation({q[3], q[4], q[5], q[6]});
+  const double *qy = q + kBodyConfig * robot.leg[l].yoke;
+  const V3 x = rotate_back(Rb, rotation({qy[3], qy[4], qy[5], qy[6]}).c0);
+  return std::remainder(std::atan2(x.y, x.x) - robot.leg[l].yaw, 2 * M_PI);
+}
+
+// The energy of the robot under constant commands: kinetic, gravity's, less the work the
+// actuators and the motors would do back (-F l, -tau psi).
+double energy(const SpatialRobot &robot, const RobotData &d) {
+  double E = robot_kinetic_energy(robot, d.v) + robot_gravity_potential(robot, d.q);
+  for (int a = 0; a < robot.na; ++a) E -= d.actuator_force[a] * robot_actuator_length(robot, a, d.q);
+  for (int l = 0; l < robot.nlegs; ++l) E -= d.rowing_torque[l] * rowing_angle(robot, l, d.q);
+  return E;
+}
+
+// Linear and angular (about the world's origin) momentum.
+void momentum(const SpatialRobot &robot, const double *q, const double *v, V3 &p, V3 &L) {
+  p = {0, 0, 0}, L = {0, 0, 0};
+  for (int b = 0; b < robot.nb; ++b) {
+    const double *qb = q + kBodyConfig * b, *vb = v + kBodyDof * b;
+    const V3 mv = robot.mass[b] * V3{vb[0], vb[1], vb[2]};
+    const V3 &I = robot.inertia[b];
+    const V3 Iw = {I.x * vb[3], I.y * vb[4], I.z * vb[5]};
+    p = p + mv;
+    L = L + cross({qb[0], qb[1], qb[2]}, mv) + rotate(rotation({qb[3], qb[4], qb[5], qb[6]}), Iw);
+  }
+}
+
+double norm(const V3 &a) { return std::sqrt(dot(a, a)); }
+
+// The stand's statics on the stance as commands, the stance's feet stuck where they stand.
+std::unique_ptr<RobotData> standing_data(const Standing &s, uint32_t stance) {
+  static RobotStatics st;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(s.robot, s.q, stance, nullptr, st));
+  static double v[kMaxRobotDof];
+  auto d = std::make_unique<RobotData>();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(s.robot, s.q, v, hold_at(s.robot, s.q, stance), *d));
+  for (int a = 0; a < s.robot.na; ++a) d->actuator_force[a] = st.actuator_force[a];
+  for (int l = 0; l < s.robot.nlegs; ++l) d->rowing_torque[l] = st.rowing_torque[l];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(s.robot, *d));
+  return d;
+}
+}  // namespace
+
+void test_solve_is_the_dense_kkt(void) {
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  static double q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], Q[kMaxRobotDof], a[kMaxRobotDof];
+  static double mu[kMaxSystemRows];
+  static Row rows[kMaxSystemRows];
+  moving_state(s, q, v);
+  double force[kMaxRobotActuators], tau[kMaxLegs];
+  for (int k = 0; k < R.na; ++k) force[k] = 40.0 * std::sin(1.0 + k);
+  for (int l = 0; l < R.nlegs; ++l) tau[l] = 3.0 * std::cos(2.0 + l);
+  robot_forces(R, q, v, force, tau, Q);
+  for (uint32_t stuck : {0u, kTripod}) {
+    const FeetHold hold = hold_at(R, q, stuck);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_accelerations(R, hold, q, v, Q, a, mu));
+    system_rows(R, hold, q, v, rows);
+    int idx[kMaxSystemRows];
+    const int m = used(R, stuck, idx), nv = kBodyDof * R.nb;
+    MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
+    VectorXd rhs = VectorXd::Zero(nv + m);
+    for (int b = 0; b < R.nb; ++b) {
+      const double I[3] = {R.inertia[b].x, R.inertia[b].y, R.inertia[b].z};
+      for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = R.mass[b];
+      for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
+    }
+    for (int i = 0; i < nv; ++i) rhs[i] = Q[i];
+    for (int i = 0; i < m; ++i) {
+      const int r = idx[i];
+      const int ba = r < R.m ? R.row_body[r][0] : R.leg[(r - R.m) / 3].foot_body;
+      const int bb = r < R.m ? R.row_body[r][1] : -1;
+      for (int k = 0; k < kBodyDof; ++k) {
+        K(nv + i, kBodyDof * ba + k) += rows[r].ja[k];
+        if (bb >= 0) K(nv + i, kBodyDof * bb + k) += rows[r].jb[k];
+      }
+      rhs[nv + i] = rows[r].gamma;
+    }
+    K.topRightCorner(nv, m) = K.bottomLeftCorner(m, nv).transpose();
+    const VectorXd x = K.fullPivLu().solve(rhs);
+    double da = 0, sa = 0, dl = 0, sl = 0;
+    for (int k = 0; k < nv; ++k) da = std::fmax(da, std::fabs(a[k] - x[k])), sa = std::fmax(sa, std::fabs(x[k]));
+    for (int i = 0; i < m; ++i)
+      dl = std::fmax(dl, std::fabs(mu[idx[i]] - x[nv + i])), sl = std::fmax(sl, std::fabs(x[nv + i]));
+    printf("stuck 0x%02x: %d rows; accelerations off the dense solve by %.2e of %.2e, multipliers %.2e of %.2e\n",
+           stuck, m, da, sa, dl, sl);
+    TEST_ASSERT_TRUE(sa > 1 && sl > 1);
+    TEST_ASSERT_TRUE(da < 1e-11 * sa);
+    TEST_ASSERT_TRUE(dl < 1e-11 * sl);
+  }
+}
+
+void test_statics_is_rest(void) {
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  for (uint32_t stance : {kSix, kTripod}) {
+    static RobotStatics st;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(R, s.q, stance, nullptr, st));
+    auto d = standing_data(s, stance);
+    double amax = 0, fmax = 0, fdiff = 0;
+    for (int k = 0; k < kBodyDof * R.nb; ++k) amax = std::fmax(amax, std::fabs(d->a[k]));
+    for (int l = 0; l < R.nlegs; ++l) {
+      if (!((stance >> l) & 1u)) continue;
+      const V3 f = foot_force(R, d->mu, l);
+      fdiff = std::fmax(fdiff, norm(f - st.foot_force[l]));
+      fmax = std::fmax(fmax, norm(f));
+    }
+    double drift = 0;
+    for (int n = 0; n < 200; ++n) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, 1e-3));
+    for (int k = 0; k < kBodyConfig * R.nb; ++k) drift = std::fmax(drift, std::fabs(d->q[k] - s.q[k]));
+    printf("stance 0x%02x: largest acceleration %.2e, feet's forces off the statics by %.2e N of %.1f N; "
+           "after 0.2 s moved %.2e\n",
+           stance, amax, fdiff, fmax, drift);
+    TEST_ASSERT_TRUE(fmax > 50);
+    TEST_ASSERT_TRUE(amax < 1e-10);
+    TEST_ASSERT_TRUE(fdiff < 1e-10 * fmax);
+    TEST_ASSERT_TRUE(drift < 1e-12);
+  }
+}
+
+void test_flight_keeps_momentum_and_energy(void) {
+  const Standing &s = standing();
+  static SpatialRobot R;
+  R = s.robot;
+  R.gravity = {0, 0, 0};
+  static double q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
+  moving_state(s, q, v);
+  double dE[2];
+  for (int run = 0; run < 2; ++run) {
+    const double h = run == 0 ? 2e-3 : 1e-3;
+    auto d = std::make_unique<RobotData>();
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold_at(R, q, 0), *d));
+    for (int a = 0; a < R.na; ++a) d->actuator_force[a] = 20.0 * std::sin(0.5 + a);
+    for (int l = 0; l < R.nlegs; ++l) d->rowing_torque[l] = 0.5 * std::cos(1.5 + l);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
+    V3 p0, L0, p1, L1;
+    momentum(R, d->q, d->v, p0, L0);
+    const double E0 = energy(R, *d);
+    const int n = int(std::lround(0.2 / h));
+    for (int k = 0; k < n; ++k) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, h));
+    momentum(R, d->q, d->v, p1, L1);
+    dE[run] = std::fabs(energy(R, *d) - E0);
+    printf("flight, h = %.0e s: momentum off by %.2e of %.2e kg m/s, angular %.2e of %.2e kg m^2/s; "
+           "energy %.3e of kinetic %.3e J\n",
+           h, norm(p1 - p0), norm(p0), norm(L1 - L0), norm(L0), dE[run], robot_kinetic_energy(R, d->v));
+    // linear momentum RK4 keeps exactly (a linear invariant); angular momentum to its truncation
+    TEST_ASSERT_TRUE(norm(p1 - p0) < 1e-13 * norm(p0));
+    TEST_ASSERT_TRUE(norm(L1 - L0) < 1e-9 * norm(L0));
+  }
+  printf("flight energy error ratio over a halved step: %.1f\n", dE[0] / dE[1]);
+  TEST_ASSERT_TRUE(dE[0] / dE[1] > 12);
+}
+
+void test_fig7_on_six_feet_converges_at_order_4(void) {
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  const double hs[4] = {8e-3, 4e-3, 2e-3, 1e-3}, T = 0.4;
+  V3 box[4];
+  double dE[4];
+  for (int run = 0; run < 4; ++run) {
+    auto d = standing_data(s, kSix);
+    for (int l = 0; l < 3; ++l) d->actuator_force[R.leg[l].first_actuator] += 50;  // the right legs' upper ones
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
+    const double E0 = energy(R, *d);
+    const int n = int(std::lround(T / hs[run]));
+    double feet = 0;
+    for (int k = 0; k < n; ++k) {
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, hs[run]));
+      for (int l = 0; l < 6; ++l) feet = std::fmax(feet, norm(robot_foot_position(R, l, d->q) - d->hold.anchor[l]));
+    }
+    box[run] = {d->q[0], d->q[1], d->q[2]};
+    dE[run] = energy(R, *d) - E0;
+    printf("Fig. 7 on six feet, h = %.1e s: box at (%.9f, %.9f, %.9f) m, feet off their places %.1e m, energy %+.2e J\n",
+           hs[run], box[run].x, box[run].y, box[run].z, feet, dE[run]);
+    TEST_ASSERT_TRUE(feet < 1e-12);
+  }
+  TEST_ASSERT_TRUE(norm(box[3] - V3{s.q[0], s.q[1], s.q[2]}) > 0.05);  // the box moves
+  for (int k = 0; k < 2; ++k) {
+    const double order = std::log2(norm(box[k] - box[k + 1]) / norm(box[k + 1] - box[k + 2]));
+    printf("order between h = %.1e and %.1e s: %.2f (differences %.2e, %.2e m)\n", hs[k], hs[k + 2], order,
+           norm(box[k] - box[k + 1]), norm(box[k + 1] - box[k + 2]));
+    TEST_ASSERT_TRUE(order > 3.5 && order < 4.5);
+  }
+  TEST_ASSERT_TRUE(std::fabs(dE[2]) < 1e-7);
+}
+
+void test_refuses_bad_input(void) {
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  auto d = standing_data(s, kSix);
+  const RobotData before = *d;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_step_rk4(R, *d, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_step_rk4(R, *d, NAN));
+  d->hold.stuck = 0x40;  // a seventh leg
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_data_refresh(R, *d));
+  d->hold.stuck = before.hold.stuck;
+  TEST_ASSERT_EQUAL_INT(0, std::memcmp(&before, d.get(), sizeof before));
+  static double v[kMaxRobotDof];
+  FeetHold bad = hold_at(R, s.q, 0x80);
+  auto e = std::make_unique<RobotData>();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_data_init(R, s.q, v, bad, *e));
+}
+
+int main(void) {
+  UNITY_BEGIN();
+  RUN_TEST(test_solve_is_the_dense_kkt);
+  RUN_TEST(test_statics_is_rest);
+  RUN_TEST(test_flight_keeps_momentum_and_energy);
+  RUN_TEST(test_fig7_on_six_feet_converges_at_order_4);
+  RUN_TEST(test_refuses_bad_input);
+  return UNITY_END();
+}
