@@ -38,6 +38,7 @@ static const struct {
     SIZE(legsim_hexapod_standing),
     SIZE(legsim_hexapod_gait),
     SIZE(legsim_hexapod_setpoint),
+    SIZE(legsim_hexapod_state),
 };
 
 #define N_FACTS ((int32_t)(sizeof facts / sizeof facts[0]))

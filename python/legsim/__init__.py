@@ -23,7 +23,7 @@ from .errors import (BadInputError, CapacityError, ContactError, DisabledError, 
                      LegsimError, LibraryNotFound, ModelError, NoEquilibriumError,
                      NotConvergedError, NullError, OutOfStrokeError, SingularError, StateError,
                      Status, StorageError, UnreachableError, error_for, status_name)
-from .hexapod import Hexapod
+from .hexapod import Hexapod, HexapodSim
 from .model import Model, builtin_variants, model_variants
 from .resources import cli_path, data_dir, data_path
 from .sim import (COND_SINGULAR, COND_WARN, CONTACT_DTYPE, CONTACT_STATES, DISABLE, EVENTS,
@@ -33,7 +33,7 @@ from .sim import (COND_SINGULAR, COND_WARN, CONTACT_DTYPE, CONTACT_STATES, DISAB
 __version__ = "0.1.0"  # = python/pyproject.toml, project() of CMakeLists.txt
 
 __all__ = [
-    "Sim", "Model", "Hexapod", "Report", "WorstCase", "Library", "Status",
+    "Sim", "Model", "Hexapod", "HexapodSim", "Report", "WorstCase", "Library", "Status",
     "model_variants", "builtin_variants", "data_dir", "data_path", "cli_path", "find_library", "library_available", "load_library",
     "status_name", "error_for", "disable_mask",
     "LegsimError", "NullError", "StorageError", "ModelError", "CapacityError", "BadInputError",

@@ -297,6 +297,13 @@ class Library:
             _fields_ = [("foot_box_m", (d * 3) * 6), ("stance", i32 * 6), ("rowing_rad", d * 6),
                         ("length_m", (d * 2) * 6)]
 
+        class HexapodState(C.Structure):
+            _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
+                        ("box_omega_radps", d * 3), ("rowing_rad", d * 6), ("length_m", (d * 2) * 6),
+                        ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6), ("stuck", i32 * 6),
+                        ("kinetic_energy_j", d)]
+
+        self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding
         self.HexapodGait, self.HexapodSetpoint = HexapodGait, HexapodSetpoint
         self.ModelDesc, self.Options, self.Report = ModelDesc, Options, Report
@@ -312,7 +319,8 @@ class Library:
                  ("legsim_contact", self.Contact), ("legsim_hexapod_desc", self.HexapodDesc),
                  ("legsim_hexapod_pose", self.HexapodPose),
                  ("legsim_hexapod_standing", self.HexapodStanding),
-                 ("legsim_hexapod_gait", self.HexapodGait), ("legsim_hexapod_setpoint", self.HexapodSetpoint)]
+                 ("legsim_hexapod_gait", self.HexapodGait), ("legsim_hexapod_setpoint", self.HexapodSetpoint),
+                 ("legsim_hexapod_state", self.HexapodState)]
         bad = [f"{n}: library {cfg[f'sizeof({n})']} bytes, binding {C.sizeof(t)}"
                for n, t in pairs
                if f"sizeof({n})" in cfg and cfg[f"sizeof({n})"] != C.sizeof(t)]
@@ -391,6 +399,12 @@ class Library:
                                             C.POINTER(self.HexapodStanding)]),
             "legsim_hexapod_gait_setpoints": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodGait),
                                                    C.c_double, P, C.c_size_t, C.POINTER(self.HexapodSetpoint)]),
+            "legsim_hexapod_sim_size": (C.c_size_t, []),
+            "legsim_hexapod_sim_init": (st, [P, C.c_size_t, C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
+                                             C.c_uint32, C.POINTER(P)]),
+            "legsim_hexapod_command": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
+            "legsim_hexapod_step": (st, [P, C.c_double, C.c_int32]),
+            "legsim_hexapod_get_state": (st, [P, C.POINTER(self.HexapodState)]),
         }
         self.has_toml_loader = hasattr(self.cdll, "legsim_model_load_toml")
         for fname, (res, args) in protos.items():

@@ -4,6 +4,9 @@
     >>> pose = h.stand_pose(box_height=1.0)
     >>> s = h.statics(pose, stance=(0, 2, 4))          # a tripod
     >>> s["foot_force_n"][0]                           # N, world: the ground on the right front foot
+    >>> m = h.sim(pose, stuck=(0, 2, 4))               # moving, the tripod's feet held
+    >>> m.command(s["actuator_force_n"], s["rowing_torque_nm"])
+    >>> m.step(100, h_s=1e-3); m.state()["box_m"]
 
 Units SI, the world's z up. What the file holds and its ranges: firmware_core/include/legsim/hexapod.h;
 the formulation and the rule statics takes for what it leaves free: docs/design/spatial.md.
@@ -85,14 +88,8 @@ class Hexapod:
                 "rowing_rad": np.array(out.rowing_rad[:]),
                 "length_m": np.array([out.length_m[k][:] for k in range(LEGS)])}
 
-    def statics(self, pose: dict, stance=range(LEGS), box_force_n=None) -> dict:
-        """The robot standing at ``pose`` (keys box_m, box_quat (w, x, y, z), rowing_rad,
-        length_m: each leg's two lengths) on the feet of ``stance`` (leg indices), a force
-        ``box_force_n`` (N, world) at the box's centre. Returns numpy arrays: com_m (3), foot_m
-        (6, 3), foot_force_n (6, 3), actuator_force_n (6, 2), rowing_torque_nm (6), and
-        margin_m. Raises NoEquilibriumError when the stance cannot hold the loads."""
-        lib = self.library
-        p = lib.HexapodPose()
+    def _pose(self, pose: dict):
+        p = self.library.HexapodPose()
         for i in range(3):
             p.box_m[i] = float(pose["box_m"][i])
         for i in range(4):
@@ -101,11 +98,22 @@ class Hexapod:
             p.rowing_rad[k] = float(pose["rowing_rad"][k])
             for a in range(2):
                 p.length_m[k][a] = float(pose["length_m"][k][a])
-        mask = 0
-        for k in stance:
-            if not 0 <= int(k) < LEGS:
-                raise ValueError(f"stance: leg {k} does not exist (0..5)")
-            mask |= 1 << int(k)
+        return p
+
+    def sim(self, pose: dict, stuck=range(LEGS)) -> "HexapodSim":
+        """The robot moving from ``pose`` (as statics'), at rest, the feet of ``stuck`` (leg
+        indices) held where the pose puts them, the commands zero (legsim_hexapod_sim_init)."""
+        return HexapodSim(self, pose, _mask(stuck, "stuck"))
+
+    def statics(self, pose: dict, stance=range(LEGS), box_force_n=None) -> dict:
+        """The robot standing at ``pose`` (keys box_m, box_quat (w, x, y, z), rowing_rad,
+        length_m: each leg's two lengths) on the feet of ``stance`` (leg indices), a force
+        ``box_force_n`` (N, world) at the box's centre. Returns numpy arrays: com_m (3), foot_m
+        (6, 3), foot_force_n (6, 3), actuator_force_n (6, 2), rowing_torque_nm (6), and
+        margin_m. Raises NoEquilibriumError when the stance cannot hold the loads."""
+        lib = self.library
+        p = self._pose(pose)
+        mask = _mask(stance, "stance")
         force = None if box_force_n is None else (C.c_double * 3)(*[float(x) for x in box_force_n])
         out = lib.HexapodStanding()
         st = lib.cdll.legsim_hexapod_statics(C.byref(self.desc), C.byref(p), mask, force,
@@ -115,3 +123,54 @@ class Hexapod:
                 "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
                 "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
                 "rowing_torque_nm": np.array(out.rowing_torque_nm[:]), "margin_m": float(out.margin_m)}
+
+
+def _mask(legs, what: str) -> int:
+    mask = 0
+    for k in legs:
+        if not 0 <= int(k) < LEGS:
+            raise ValueError(f"{what}: leg {k} does not exist (0..5)")
+        mask |= 1 << int(k)
+    return mask
+
+
+class HexapodSim:
+    """The hexapod moving (``legsim_hexapod_sim``): RK4 on the rotation group, the stuck feet
+    held; each linear actuator's force and each rowing torque held as commanded."""
+
+    def __init__(self, hexapod: Hexapod, pose: dict, mask: int):
+        lib = self.library = hexapod.library
+        size = int(lib.cdll.legsim_hexapod_sim_size())
+        self._storage = C.create_string_buffer(size + STORAGE_ALIGN)
+        base = C.addressof(self._storage)
+        addr = base + (-base) % STORAGE_ALIGN
+        self._sim = C.c_void_p()
+        st = lib.cdll.legsim_hexapod_sim_init(C.c_void_p(addr), size, C.byref(hexapod.desc),
+                                              C.byref(hexapod._pose(pose)), mask, C.byref(self._sim))
+        lib.check(st, "legsim_hexapod_sim_init")
+
+    def command(self, actuator_force_n, rowing_torque_nm) -> None:
+        """Each leg's two actuators' axial forces (N, 6 x 2) and rowing torques (N m, 6)."""
+        f = ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*map(float, row)) for row in actuator_force_n])
+        t = (C.c_double * LEGS)(*map(float, rowing_torque_nm))
+        self.library.check(self.library.cdll.legsim_hexapod_command(self._sim, f, t), "legsim_hexapod_command")
+
+    def step(self, n: int = 1, *, h_s: float = 1e-3) -> None:
+        self.library.check(self.library.cdll.legsim_hexapod_step(self._sim, float(h_s), int(n)),
+                           "legsim_hexapod_step")
+
+    def state(self) -> dict:
+        """t_s, box_m, box_quat (w, x, y, z), box_velocity_mps (world), box_omega_radps (box frame),
+        rowing_rad (6), length_m (6 x 2), foot_m (6 x 3, world), foot_force_n (6 x 3: the ground's
+        on a stuck foot), stuck (6 bools), kinetic_energy_j."""
+        out = self.library.HexapodState()
+        self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
+                           "legsim_hexapod_get_state")
+        return {"t_s": out.t_s, "box_m": np.array(out.box_m[:]), "box_quat": np.array(out.box_quat[:]),
+                "box_velocity_mps": np.array(out.box_velocity_mps[:]),
+                "box_omega_radps": np.array(out.box_omega_radps[:]), "rowing_rad": np.array(out.rowing_rad[:]),
+                "length_m": np.array([out.length_m[k][:] for k in range(LEGS)]),
+                "foot_m": np.array([out.foot_m[k][:] for k in range(LEGS)]),
+                "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
+                "stuck": np.array([bool(out.stuck[k]) for k in range(LEGS)]),
+                "kinetic_energy_j": out.kinetic_energy_j}

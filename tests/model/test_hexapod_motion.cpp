@@ -64,20 +64,12 @@ int used(const SpatialRobot &robot, uint32_t stuck, int *idx) {
   return n;
 }
 
-// Leg l's rowing angle (rad): its yoke's x in the box's frame, from its heading.
-double rowing_angle(const SpatialRobot &robot, int l, const double *q) {
-  const Rot Rb = rotation({q[3], q[4], q[5], q[6]});
-  const double *qy = q + kBodyConfig * robot.leg[l].yoke;
-  const V3 x = rotate_back(Rb, rotation({qy[3], qy[4], qy[5], qy[6]}).c0);
-  return std::remainder(std::atan2(x.y, x.x) - robot.leg[l].yaw, 2 * M_PI);
-}
-
 // The energy of the robot under constant commands: kinetic, gravity's, less the work the
 // actuators and the motors would do back (-F l, -tau psi).
 double energy(const SpatialRobot &robot, const RobotData &d) {
   double E = robot_kinetic_energy(robot, d.v) + robot_gravity_potential(robot, d.q);
   for (int a = 0; a < robot.na; ++a) E -= d.actuator_force[a] * robot_actuator_length(robot, a, d.q);
-  for (int l = 0; l < robot.nlegs; ++l) E -= d.rowing_torque[l] * rowing_angle(robot, l, d.q);
+  for (int l = 0; l < robot.nlegs; ++l) E -= d.rowing_torque[l] * robot_rowing_angle(robot, l, d.q);
   return E;
 }
 

@@ -6,7 +6,9 @@ legsim_hexapod_statics), against closed forms and the planar core:
   feet's vertical forces are the barycentric closed form of the centre of mass in their triangle
   (to 1e-9 of the weight), their horizontal ones zero, and each leg's actuator forces the planar
   core's statics under its foot's force (Sim.statics with the leg's foot load);
-- on six feet the weight is carried; a stance that cannot hold, a pose out of range: refused.
+- on six feet the weight is carried; a stance that cannot hold, a pose out of range: refused;
+- moving (legsim.HexapodSim): at its statics it stays at rest with the statics' foot forces; pushed,
+  the box rises and the stuck feet hold; bad commands and steps refused, the state unchanged.
 """
 from __future__ import annotations
 
@@ -129,3 +131,51 @@ def test_gait_out_of_reach(hexapod):
         hexapod.gait_setpoints(0.0, **dict(GAIT, step_length_m=2.0))  # far past the rowing stroke
     with pytest.raises(legsim.BadInputError):
         hexapod.gait_setpoints(0.0, **dict(GAIT, duty=0.3))
+
+
+def test_sim_stands_on_its_statics(hexapod):
+    """Moving (legsim.HexapodSim): on a tripod's statics the robot stays at rest, the stuck feet's
+    ground forces the statics' (another solve: the whole robot's balance, then each leg's), its
+    lengths and rowing angles the pose's; with 20 N more on every upper actuator the box rises
+    while the stuck feet keep their places, and the swinging legs' lengths change."""
+    pose = hexapod.stand_pose(1.0, ROWING)
+    tripod = (0, 2, 4)
+    s = hexapod.statics(pose, stance=tripod)
+    m = hexapod.sim(pose, stuck=tripod)
+    m.command(s["actuator_force_n"], s["rowing_torque_nm"])
+    m.step(200, h_s=1e-3)
+    st = m.state()
+    W = np.linalg.norm(s["foot_force_n"][:, 2].sum())
+    assert st["t_s"] == pytest.approx(0.2, abs=1e-12)
+    assert np.abs(st["box_m"] - pose["box_m"]).max() < 1e-12
+    assert np.abs(st["foot_force_n"] - s["foot_force_n"]).max() < 1e-10 * W
+    assert np.abs(st["length_m"] - np.array(pose["length_m"])).max() < 1e-12
+    assert np.abs(st["rowing_rad"] - np.array(ROWING)).max() < 1e-12
+    assert list(st["stuck"]) == [True, False, True, False, True, False]
+    assert st["kinetic_energy_j"] < 1e-20
+
+    m = hexapod.sim(pose, stuck=tripod)
+    forces = np.array(s["actuator_force_n"])
+    forces[:, 0] += 20.0
+    m.command(forces, s["rowing_torque_nm"])
+    feet0 = m.state()["foot_m"]
+    m.step(100, h_s=1e-3)
+    st = m.state()
+    assert st["box_m"][2] - pose["box_m"][2] > 1e-3
+    assert np.abs(st["foot_m"][list(tripod)] - feet0[list(tripod)]).max() < 1e-12
+    assert np.abs(st["length_m"][[1, 3, 5]] - np.array(pose["length_m"])[[1, 3, 5]]).max() > 1e-3
+    assert st["kinetic_energy_j"] > 0
+
+
+def test_sim_refuses(hexapod):
+    pose = hexapod.stand_pose(1.0, ROWING)
+    m = hexapod.sim(pose, stuck=range(6))
+    before = m.state()
+    with pytest.raises(legsim.BadInputError):
+        m.command([[float("nan"), 0.0]] + [[0.0, 0.0]] * 5, [0.0] * 6)
+    with pytest.raises(legsim.BadInputError):
+        m.step(1, h_s=0.0)
+    with pytest.raises(ValueError):
+        hexapod.sim(pose, stuck=(6,))
+    after = m.state()
+    assert all(np.array_equal(np.asarray(before[k]), np.asarray(after[k])) for k in before)

@@ -119,6 +119,52 @@ typedef struct legsim_hexapod_setpoint {
 legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
                                             void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out);
 
+/* ---- the hexapod moving --------------------------------------------------- */
+/* Forward dynamics (docs/design/spatial.md): the whole robot in absolute spatial coordinates,
+ * the feet of a stuck mask held where they stand (three rows each: their ground forces are the
+ * multipliers), the others free; each linear actuator's axial force and each rowing torque held
+ * over a step as commanded; RK4 on the rotation group, the positions and velocities projected
+ * onto the rows at each step's end. A step is all or nothing. No contact law yet: a stuck foot
+ * stays stuck whatever its force (the report gives the force to judge it by), a free foot passes
+ * through the ground. */
+typedef struct legsim_hexapod_sim legsim_hexapod_sim;
+
+/* Bytes of storage legsim_hexapod_sim_init needs (aligned to LEGSIM_STORAGE_ALIGN). */
+size_t legsim_hexapod_sim_size(void);
+
+/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l) held where the pose
+ * puts them, the commands zero. Statuses as legsim_hexapod_statics' (its pose checks, a leg's
+ * assembly), LEGSIM_ERR_SINGULAR / _NOT_CONVERGED (the rows with the stuck feet cannot be met
+ * or solved). *out is written only on LEGSIM_OK. */
+legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const legsim_hexapod_desc *h,
+                                      const legsim_hexapod_pose *pose, uint32_t stuck_mask,
+                                      legsim_hexapod_sim **out);
+
+/* The commands from now on: each leg's two actuators' axial forces (N, |F| <= LEGSIM_MAX_FORCE_N)
+ * and rowing torques (N m, |tau| <= LEGSIM_MAX_FORCE_N m). LEGSIM_ERR_BAD_INPUT for a value out
+ * of range or not finite (nothing changed). */
+legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2],
+                                     const double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS]);
+
+/* n_steps (>= 1) steps of h_s (s, in (0, 0.1]). Stops at the first step that fails, the state
+ * that of the last step taken: LEGSIM_ERR_SINGULAR (a leg at a dead centre), _NOT_CONVERGED (the
+ * projection), _DIVERGED (a non-finite result). */
+legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n_steps);
+
+typedef struct legsim_hexapod_state {
+  double t_s;
+  double box_m[3], box_quat[4];                  /* the box's centre (world) and rotation */
+  double box_velocity_mps[3], box_omega_radps[3]; /* world; its angular velocity in its frame */
+  double rowing_rad[LEGSIM_HEXAPOD_LEGS];        /* each yoke's angle from its heading */
+  double length_m[LEGSIM_HEXAPOD_LEGS][2];       /* each leg's actuators */
+  double foot_m[LEGSIM_HEXAPOD_LEGS][3];         /* each foot (world) */
+  double foot_force_n[LEGSIM_HEXAPOD_LEGS][3];   /* the ground's force on a stuck foot (world), else 0 */
+  int32_t stuck[LEGSIM_HEXAPOD_LEGS];
+  double kinetic_energy_j;
+} legsim_hexapod_state;
+
+legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);
+
 #ifdef __cplusplus
 }
 #endif

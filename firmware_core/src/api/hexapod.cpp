@@ -6,6 +6,7 @@
 #include "api/internal.hpp"
 #include "legsim/hexapod.h"
 #include "spatial/gait.hpp"
+#include "spatial/motion.hpp"
 #include "spatial/statics.hpp"
 
 using namespace legsim;
@@ -56,6 +57,49 @@ void place_at_rest(HexapodWork &w, const real *box_q, const real *psi) {
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) qs[l] = w.leg_q[l], vs[l] = rest;
   spatial::robot_state(w.robot, box_q, box_v, qs, vs, psi, psid, w.q, w.v);
 }
+
+// The robot at pose, at rest (the pose's ranges checked, each leg assembled at its lengths from
+// its file's stand), in w.q, w.v.
+legsim_status place_pose(const legsim_hexapod_desc &h, const legsim_hexapod_pose &pose, void *storage, size_t bytes,
+                         HexapodWork *&wp) {
+  const double qn = std::sqrt(pose.box_quat[0] * pose.box_quat[0] + pose.box_quat[1] * pose.box_quat[1] +
+                              pose.box_quat[2] * pose.box_quat[2] + pose.box_quat[3] * pose.box_quat[3]);
+  if (!finite_within(pose.box_m, 3, LEGSIM_MAX_COORD) || !(std::abs(qn - 1) <= 1e-6)) return LEGSIM_ERR_BAD_INPUT;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const double psi = pose.rowing_rad[l];
+    if (!(psi >= h.rowing_stroke_rad[0] && psi <= h.rowing_stroke_rad[1])) return LEGSIM_ERR_BAD_INPUT;
+    if (!finite_within(pose.length_m[l], 2, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
+  }
+  legsim_status st = work_begin(h, storage, bytes, wp);
+  if (st != LEGSIM_OK) return st;
+  HexapodWork &w = *wp;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    legsim_sim *sim = nullptr;
+    st = leg_at_stand(h, l, storage, sim);
+    legsim_real len[2] = {legsim_real(pose.length_m[l][0]), legsim_real(pose.length_m[l][1])};
+    if (st == LEGSIM_OK) st = legsim_assemble(sim, len);
+    if (st == LEGSIM_OK) st = legsim_get_q(sim, w.leg_q[l]);
+    if (st != LEGSIM_OK) return st;
+  }
+  const real box_q[7] = {real(pose.box_m[0]), real(pose.box_m[1]), real(pose.box_m[2]), real(pose.box_quat[0] / qn),
+                         real(pose.box_quat[1] / qn), real(pose.box_quat[2] / qn), real(pose.box_quat[3] / qn)};
+  real psi[LEGSIM_HEXAPOD_LEGS];
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) psi[l] = real(pose.rowing_rad[l]);
+  place_at_rest(w, box_q, psi);
+  return LEGSIM_OK;
+}
+}  // namespace
+
+// A hexapod in motion: the model (the lifted robot) and its data.
+struct legsim_hexapod_sim {
+  uint32_t magic;
+  spatial::SpatialRobot robot;
+  spatial::RobotData data;
+};
+
+namespace {
+constexpr uint32_t kHexapodMagic = 0x48455841u;  // "HEXA"
+size_t hexapod_sim_offset() { return sim_bytes() + round_up(sizeof(HexapodWork)); }
 }  // namespace
 
 extern "C" {
@@ -67,34 +111,11 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
                                      size_t storage_bytes, legsim_hexapod_standing *out) {
   if (!h || !pose || !storage || !out) return LEGSIM_ERR_NULL;
   if (stance_mask >> LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
-  // the pose's ranges
-  const double qn = std::sqrt(pose->box_quat[0] * pose->box_quat[0] + pose->box_quat[1] * pose->box_quat[1] +
-                              pose->box_quat[2] * pose->box_quat[2] + pose->box_quat[3] * pose->box_quat[3]);
-  if (!finite_within(pose->box_m, 3, LEGSIM_MAX_COORD) || !(std::abs(qn - 1) <= 1e-6)) return LEGSIM_ERR_BAD_INPUT;
   if (box_force_n && !finite_within(box_force_n, 3, LEGSIM_MAX_FORCE_N)) return LEGSIM_ERR_BAD_INPUT;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    const double psi = pose->rowing_rad[l];
-    if (!(psi >= h->rowing_stroke_rad[0] && psi <= h->rowing_stroke_rad[1])) return LEGSIM_ERR_BAD_INPUT;
-    if (!finite_within(pose->length_m[l], 2, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
-  }
   HexapodWork *wp = nullptr;
-  legsim_status st = work_begin(*h, storage, storage_bytes, wp);
+  legsim_status st = place_pose(*h, *pose, storage, storage_bytes, wp);
   if (st != LEGSIM_OK) return st;
   HexapodWork &w = *wp;
-  // each leg assembled at its lengths from its file's stand
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    legsim_sim *sim = nullptr;
-    st = leg_at_stand(*h, l, storage, sim);
-    legsim_real len[2] = {legsim_real(pose->length_m[l][0]), legsim_real(pose->length_m[l][1])};
-    if (st == LEGSIM_OK) st = legsim_assemble(sim, len);
-    if (st == LEGSIM_OK) st = legsim_get_q(sim, w.leg_q[l]);
-    if (st != LEGSIM_OK) return st;
-  }
-  const real box_q[7] = {real(pose->box_m[0]), real(pose->box_m[1]), real(pose->box_m[2]), real(pose->box_quat[0] / qn),
-                         real(pose->box_quat[1] / qn), real(pose->box_quat[2] / qn), real(pose->box_quat[3] / qn)};
-  real psi[LEGSIM_HEXAPOD_LEGS];
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) psi[l] = real(pose->rowing_rad[l]);
-  place_at_rest(w, box_q, psi);
   real load[3] = {0, 0, 0};
   if (box_force_n) load[0] = real(box_force_n[0]), load[1] = real(box_force_n[1]), load[2] = real(box_force_n[2]);
   st = spatial::robot_statics(w.robot, w.q, stance_mask, load, w.statics);
@@ -169,6 +190,88 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
     r.rowing_rad[l] = angle;
     r.length_m[l][0] = len[0], r.length_m[l][1] = len[1];
   }
+  *out = r;
+  return LEGSIM_OK;
+}
+
+size_t legsim_hexapod_sim_size(void) { return hexapod_sim_offset() + round_up(sizeof(legsim_hexapod_sim)); }
+
+legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const legsim_hexapod_desc *h,
+                                      const legsim_hexapod_pose *pose, uint32_t stuck_mask,
+                                      legsim_hexapod_sim **out) {
+  if (!h || !pose || !storage || !out) return LEGSIM_ERR_NULL;
+  if (storage_bytes < legsim_hexapod_sim_size()) return LEGSIM_ERR_STORAGE;
+  if (stuck_mask >> LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  HexapodWork *wp = nullptr;
+  legsim_status st = place_pose(*h, *pose, storage, storage_bytes, wp);
+  if (st != LEGSIM_OK) return st;
+  HexapodWork &w = *wp;
+  auto *sim = new (static_cast<unsigned char *>(storage) + hexapod_sim_offset()) legsim_hexapod_sim;
+  sim->magic = 0;
+  sim->robot = w.robot;
+  spatial::FeetHold hold;
+  hold.stuck = stuck_mask;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) hold.anchor[l] = spatial::robot_foot_position(w.robot, l, w.q);
+  st = spatial::robot_data_init(sim->robot, w.q, w.v, hold, sim->data);
+  if (st != LEGSIM_OK) return st;
+  sim->magic = kHexapodMagic;
+  *out = sim;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2],
+                                     const double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS]) {
+  if (!sim || !actuator_force_n || !rowing_torque_nm) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    if (!finite_within(actuator_force_n[l], 2, LEGSIM_MAX_FORCE_N) ||
+        !finite_within(&rowing_torque_nm[l], 1, LEGSIM_MAX_FORCE_N))
+      return LEGSIM_ERR_BAD_INPUT;
+  spatial::RobotData &d = sim->data;
+  const spatial::RobotData before = d;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::RobotLeg &L = sim->robot.leg[l];
+    for (int a = 0; a < L.nactuators && a < 2; ++a) d.actuator_force[L.first_actuator + a] = real(actuator_force_n[l][a]);
+    d.rowing_torque[l] = real(rowing_torque_nm[l]);
+  }
+  const legsim_status st = spatial::robot_data_refresh(sim->robot, d);
+  if (st != LEGSIM_OK) d = before;
+  return st;
+}
+
+legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n_steps) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  if (!(h_s > 0 && h_s <= 0.1) || n_steps < 1) return LEGSIM_ERR_BAD_INPUT;
+  for (int32_t k = 0; k < n_steps; ++k) {
+    const legsim_status st = spatial::robot_step_rk4(sim->robot, sim->data, real(h_s));
+    if (st != LEGSIM_OK) return st;
+  }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out) {
+  if (!sim || !out) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  const spatial::SpatialRobot &R = sim->robot;
+  const spatial::RobotData &d = sim->data;
+  legsim_hexapod_state r;
+  r.t_s = d.t;
+  for (int i = 0; i < 3; ++i) r.box_m[i] = d.q[i], r.box_velocity_mps[i] = d.v[i], r.box_omega_radps[i] = d.v[3 + i];
+  for (int i = 0; i < 4; ++i) r.box_quat[i] = d.q[3 + i];
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::RobotLeg &L = R.leg[l];
+    r.rowing_rad[l] = spatial::robot_rowing_angle(R, l, d.q);
+    for (int a = 0; a < 2; ++a)
+      r.length_m[l][a] = a < L.nactuators ? spatial::robot_actuator_length(R, L.first_actuator + a, d.q) : 0.0;
+    const spatial::V3 f = spatial::robot_foot_position(R, l, d.q);
+    r.foot_m[l][0] = f.x, r.foot_m[l][1] = f.y, r.foot_m[l][2] = f.z;
+    const bool stuck = (d.hold.stuck >> l) & 1u;
+    const spatial::V3 F = stuck ? spatial::foot_force(R, d.mu, l) : spatial::V3{0, 0, 0};
+    r.foot_force_n[l][0] = F.x, r.foot_force_n[l][1] = F.y, r.foot_force_n[l][2] = F.z;
+    r.stuck[l] = stuck ? 1 : 0;
+  }
+  r.kinetic_energy_j = spatial::robot_kinetic_energy(R, d.v);
   *out = r;
   return LEGSIM_OK;
 }

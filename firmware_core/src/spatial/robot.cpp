@@ -239,6 +239,13 @@ void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *ou
   }
 }
 
+real robot_rowing_angle(const SpatialRobot &robot, int l, const real *q) {
+  const Rot Rb = robot.free_box ? rotation({q[3], q[4], q[5], q[6]}) : Rot{kX, kY, kZ};
+  const real *qy = q + kBodyConfig * robot.leg[l].yoke;
+  const V3 x = rotate_back(Rb, rotation({qy[3], qy[4], qy[5], qy[6]}).c0);
+  return std::remainder(std::atan2(x.y, x.x) - robot.leg[l].yaw, 2 * real(3.14159265358979323846));
+}
+
 real robot_actuator_length(const SpatialRobot &robot, int a, const real *q) {
   const RobotActuator &ac = robot.act[a];
   const real zero[kBodyDof] = {0, 0, 0, 0, 0, 0};

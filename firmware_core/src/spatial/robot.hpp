@@ -134,6 +134,9 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
 // (its ja, jb).
 void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out);
 
+// Leg l's rowing angle (rad, in [-pi, pi]) at q: its yoke's x in the box's frame, from its heading.
+real robot_rowing_angle(const SpatialRobot &robot, int l, const real *q);
+
 // Linear actuator a's length (m) at q.
 real robot_actuator_length(const SpatialRobot &robot, int a, const real *q);
 

@@ -1,0 +1,91 @@
+/* The hexapod's cost per step (issue 24, section 5), for robot_step_cost.py --hexapod: the robot
+ * of models/hexapod.toml at its legs' stand, standing on a tripod (legs 0, 2, 4 stuck, the
+ * other three swinging free) or on six feet, under its statics' commands with 20 N more on
+ * every upper actuator (so that it moves), stepped at h = 1 ms through legsim_hexapod_step.
+ *
+ *     hexapod_step_cost CASE INTEGRATOR STEPS [REPS]     CASE: tripod | six; INTEGRATOR: rk4
+ *
+ * Prints robot_step_cost's lines: the count of steps of each kind (all "stuck": the feet held)
+ * and, with REPS, the min over REPS repetitions of the median step's wall time. Runs from the
+ * source tree's root (the model file's path). */
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <ctime>
+
+#include "legsim/hexapod.h"
+#include "legsim/legsim.h"
+#include "model_toml.hpp"
+
+#define MAX_STEPS 100000
+alignas(LEGSIM_STORAGE_ALIGN) static unsigned char storage[4 * 1024 * 1024];
+alignas(LEGSIM_STORAGE_ALIGN) static unsigned char work[4 * 1024 * 1024];
+static legsim_hexapod_desc desc;
+static double step_us[MAX_STEPS];
+
+static double now_s(void) {
+  struct timespec t;
+  clock_gettime(CLOCK_MONOTONIC, &t);
+  return double(t.tv_sec) + 1e-9 * double(t.tv_nsec);
+}
+static int cmp(const void *a, const void *b) {
+  const double x = *static_cast<const double *>(a), y = *static_cast<const double *>(b);
+  return (x > y) - (x < y);
+}
+
+/* callgrind's inclusive cost of this function over the count of steps is a step's */
+__attribute__((noinline)) legsim_status step_stuck(legsim_hexapod_sim *sim) { return legsim_hexapod_step(sim, 1e-3, 1); }
+
+static legsim_status set_up(uint32_t stance, legsim_hexapod_sim **out) {
+  legsim_sim *leg = NULL;
+  legsim_options opt = legsim_default_options();
+  legsim_status st = legsim_init(work, sizeof work, &desc.leg[0].leg, &opt, &leg);
+  legsim_real len[LEGSIM_MAX_ACTUATORS];
+  if (st == LEGSIM_OK) st = legsim_assemble_pose(leg, 0);
+  if (st == LEGSIM_OK) st = legsim_actuator_lengths(leg, len, NULL);
+  if (st != LEGSIM_OK) return st;
+  legsim_hexapod_pose pose = {{0, 0, 0}, {1, 0, 0, 0}, {0.1, 0, -0.1, 0.1, 0, -0.1}, {}};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) pose.length_m[l][0] = len[0], pose.length_m[l][1] = len[1];
+  legsim_hexapod_standing s;
+  st = legsim_hexapod_statics(&desc, &pose, stance, NULL, work, sizeof work, &s);
+  if (st == LEGSIM_OK) st = legsim_hexapod_sim_init(storage, sizeof storage, &desc, &pose, stance, out);
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) s.actuator_force_n[l][0] += 20.0;
+  if (st == LEGSIM_OK) st = legsim_hexapod_command(*out, s.actuator_force_n, s.rowing_torque_nm);
+  return st;
+}
+
+int main(int argc, char **argv) {
+  if (argc < 4 || (strcmp(argv[1], "tripod") && strcmp(argv[1], "six")) || strcmp(argv[2], "rk4")) {
+    fprintf(stderr, "usage: hexapod_step_cost tripod|six rk4 STEPS [REPS]\n");
+    return 2;
+  }
+  const long n = atol(argv[3]), reps = argc > 4 ? atol(argv[4]) : 0;
+  if (n < 1 || n > MAX_STEPS) return 2;
+  char msg[512];
+  legsim_status st = legsim_hexapod_load_toml("models/hexapod.toml", &desc, msg, sizeof msg);
+  if (st != LEGSIM_OK) {
+    fprintf(stderr, "%s\n", msg);
+    return 1;
+  }
+  const uint32_t stance = strcmp(argv[1], "six") ? 0x15u : 0x3Fu;
+  double best = 0;
+  legsim_hexapod_sim *sim = NULL;
+  for (long r = 0; r < (reps > 0 ? reps : 1) && st == LEGSIM_OK; ++r) {
+    st = set_up(stance, &sim);
+    for (long i = 0; i < n && st == LEGSIM_OK; ++i) {
+      const double t0 = now_s();
+      st = step_stuck(sim);
+      step_us[i] = 1e6 * (now_s() - t0);
+    }
+    qsort(step_us, size_t(n), sizeof step_us[0], cmp);
+    if (r == 0 || step_us[n / 2] < best) best = step_us[n / 2];
+  }
+  legsim_hexapod_state s;
+  if (sim) legsim_hexapod_get_state(sim, &s);
+  printf("%s %s: %ld steps, status %s, t = %g s, box at z %+.6f m; steps by kind: stuck %ld\n", argv[1], argv[2], n,
+         legsim_status_str(st), sim ? s.t_s : 0.0, sim ? s.box_m[2] : 0.0, n);
+  if (reps > 0) printf("%s %s: wall us/step, min over %ld repetitions of each kind's median: stuck %.3f\n", argv[1],
+                       argv[2], reps, best);
+  return st == LEGSIM_OK ? 0 : 1;
+}
