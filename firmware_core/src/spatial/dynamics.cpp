@@ -8,26 +8,27 @@ namespace legsim::spatial {
 
 namespace {
 constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
+constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 
-// M^-1 of body b on its 6 velocity coordinates.
-inline void inverse_mass(const SpatialRobot &robot, int b, real *out) {
-  const real im = 1 / robot.mass[b];
-  out[0] = out[1] = out[2] = im;
-  out[3] = 1 / robot.inertia[b].x, out[4] = 1 / robot.inertia[b].y, out[5] = 1 / robot.inertia[b].z;
-}
-
-// A row's coefficients on body b (nullptr when it does not act on b).
-inline const real *coefficients(const Row &row, int a, int b_row, int body) {
-  return body == a ? row.ja : body == b_row ? row.jb : nullptr;
-}
-
-// The rows of leg l: its joints', then its foot's when stuck.
-int leg_rows(const SpatialRobot &robot, uint32_t stuck, int l, int *idx) {
+// The rows of leg l in its elimination order: its own joints' and its stuck foot's first, its
+// hip's (the rows on the box) last, so that S_l^-1 reaches the box through the factor's last
+// rows only. Returns their number; nh: the hip's.
+int leg_rows(const SpatialRobot &robot, uint32_t stuck, int l, int *idx, int &nh) {
   const RobotLeg &L = robot.leg[l];
   int n = 0;
-  for (int r = L.row0; r < L.row0 + L.nrows; ++r) idx[n++] = r;
-  if ((stuck >> l) & 1u)
-    for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;
+  nh = 0;
+  for (int pass = 0; pass < 2; ++pass)
+    for (int r = L.row0; r < L.row0 + L.nrows; ++r) {
+      const bool hip = robot.row_body[r][1] == 0 && robot.free_box;
+      if (hip != (pass == 1)) continue;
+      if (pass == 0 || !hip) {
+        idx[n++] = r;
+      } else {
+        idx[n++] = r, ++nh;
+      }
+      if (pass == 0 && r == L.row0 + L.nrows - 1 && ((stuck >> l) & 1u))
+        for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;
+    }
   return n;
 }
 
@@ -56,77 +57,85 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
                         real *x, real *mu) {
   const bool box = robot.free_box;
   real A0[36] = {}, b0[6] = {};
-  if (box) {
-    real im[kBodyDof];
-    inverse_mass(robot, 0, im);
-    for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / im[i], b0[i] = f[i];
-  }
-  // each leg's lambda0 (in mu) and G (6 columns) for the box's solve and the legs' back-substitution
+  if (box)
+    for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i], b0[i] = f[i];
+  // per leg: its factor L_l, y_l = L_l^-1 c_l and W_l = L_l^-1 B_l (its last nh rows only)
   static_assert(kMaxLegRows <= 64, "a leg's rows on the stack");
-  real G[kMaxLegs][kMaxLegRows * kBodyDof];
-  int idx[kMaxLegs][kMaxLegRows], nrow[kMaxLegs];
+  real Lf[kMaxLegs][kMaxLegRows * kMaxLegRows], y[kMaxLegs][kMaxLegRows], W[kMaxLegs][5 * kBodyDof];
+  int idx[kMaxLegs][kMaxLegRows], nrow[kMaxLegs], nhip[kMaxLegs];
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars;
     int *ix = idx[l];
-    const int n = nrow[l] = leg_rows(robot, stuck, l, ix);
-    real S[kMaxLegRows * kMaxLegRows], c[kMaxLegRows];
-    real *Gl = G[l];  // row-major n x 6: B_l, then S_l^-1 B_l
-    real scale = 0;
+    int nh;
+    const int n = nrow[l] = leg_rows(robot, stuck, l, ix, nh);
+    nhip[l] = nh;
+    real *S = Lf[l], *c = y[l];
+    // each leg body's rows (local index, and the row's coefficients on it scaled by M^-1)
+    int on[kMaxLegBodies][2 * kMaxLegRows], non[kMaxLegBodies] = {};
+    real scaled[kMaxLegRows][2][kBodyDof];
+    const real *coef[kMaxLegRows][2];
     for (int i = 0; i < n; ++i) {
-      int ai, bi;
-      bodies_of(robot, ix[i], ai, bi);
+      int ab[2];
+      bodies_of(robot, ix[i], ab[0], ab[1]);
       const Row &ri = rows[ix[i]];
-      // (J M^-1 f)_i - g_i on the leg's bodies; B_l's row on the box
       real ci = -g[ix[i]];
       for (int s = 0; s < 2; ++s) {
-        const int body = s == 0 ? ai : bi;
-        if (body < b_lo || body >= b_hi) continue;
-        const real *cf = s == 0 ? ri.ja : ri.jb;
-        real im[kBodyDof];
-        inverse_mass(robot, body, im);
-        for (int k = 0; k < kBodyDof; ++k) ci += cf[k] * im[k] * f[kBodyDof * body + k];
+        const int body = ab[s] - b_lo;
+        if (body < 0 || body >= nbl) continue;
+        const real *cf = s == 0 ? ri.ja : ri.jb, *im = robot.inverse_mass[ab[s]];
+        real *sc = scaled[i][s];
+        for (int k = 0; k < kBodyDof; ++k) sc[k] = cf[k] * im[k], ci += sc[k] * f[kBodyDof * ab[s] + k];
+        coef[i][s] = cf;
+        on[body][non[body]++] = 2 * i + s;
       }
       c[i] = ci;
-      const real *cb = box ? coefficients(ri, ai, bi, 0) : nullptr;
-      for (int k = 0; k < kBodyDof; ++k) Gl[kBodyDof * i + k] = cb ? cb[k] : 0;
-      for (int j = 0; j <= i; ++j) {
-        int aj, bj;
-        bodies_of(robot, ix[j], aj, bj);
-        const Row &rj = rows[ix[j]];
-        real s_ij = 0;
-        for (int s = 0; s < 2; ++s) {
-          const int body = s == 0 ? ai : bi;
-          if (body < b_lo || body >= b_hi) continue;
-          const real *cj = coefficients(rj, aj, bj, body);
-          if (!cj) continue;
-          const real *cf = s == 0 ? ri.ja : ri.jb;
-          real im[kBodyDof];
-          inverse_mass(robot, body, im);
-          for (int k = 0; k < kBodyDof; ++k) s_ij += cf[k] * im[k] * cj[k];
+    }
+    // S = J_l M_l^-1 J_l^T: the pairs of rows on a common body (its lower triangle)
+    for (int i = 0; i < n; ++i)
+      for (int j = 0; j <= i; ++j) S[n * i + j] = 0;
+    for (int b = 0; b < nbl; ++b)
+      for (int p = 0; p < non[b]; ++p) {
+        const int i = on[b][p] >> 1, si = on[b][p] & 1;
+        const real *sc = scaled[i][si];
+        for (int q = 0; q <= p; ++q) {
+          const int j = on[b][q] >> 1, sj = on[b][q] & 1;
+          const real *cj = coef[j][sj];
+          real s_ij = 0;
+          for (int k = 0; k < kBodyDof; ++k) s_ij += sc[k] * cj[k];
+          if (i >= j) {
+            S[n * i + j] += s_ij;
+          } else {
+            S[n * j + i] += s_ij;
+          }
         }
-        S[n * i + j] = s_ij;
       }
-      scale = std::max(scale, S[n * i + i]);
-    }
+    real scale = 0;
+    for (int i = 0; i < n; ++i) scale = std::max(scale, S[n * i + i]);
     if (!dense_cholesky(n, S, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
-    cholesky_solve(n, S, c);
-    for (int i = 0; i < n; ++i) mu[ix[i]] = c[i];
-    if (!box) continue;
-    real col[kMaxLegRows], B[kMaxLegRows * kBodyDof];
-    std::copy(Gl, Gl + n * kBodyDof, B);
-    for (int k = 0; k < kBodyDof; ++k) {
-      for (int i = 0; i < n; ++i) col[i] = B[kBodyDof * i + k];
-      cholesky_solve(n, S, col);
-      for (int i = 0; i < n; ++i) Gl[kBodyDof * i + k] = col[i];
-    }
-    // the box's complement: M_0 + B^T G, and its right-hand side f_0 - B^T lambda0
+    // y = L^-1 c
     for (int i = 0; i < n; ++i) {
-      const real *bi = B + kBodyDof * i, *gi = Gl + kBodyDof * i;
+      real t = c[i];
+      for (int k = 0; k < i; ++k) t -= S[n * i + k] * c[k];
+      c[i] = t / S[n * i + i];
+    }
+    if (!box) continue;
+    // W = L^-1 B: B is zero above the hip's rows, so W is too; B^T S^-1 B = W^T W
+    const int h0 = n - nh;
+    real *Wl = W[l];
+    for (int i = 0; i < nh; ++i) {
+      const real *cb = rows[ix[h0 + i]].jb;  // the hip's rows: the box is their second body
+      for (int k = 0; k < kBodyDof; ++k) {
+        real t = cb[k];
+        for (int m = 0; m < i; ++m) t -= S[n * (h0 + i) + h0 + m] * Wl[kBodyDof * m + k];
+        Wl[kBodyDof * i + k] = t / S[n * (h0 + i) + h0 + i];
+      }
+    }
+    for (int i = 0; i < nh; ++i) {
+      const real *wi = Wl + kBodyDof * i;
       for (int r = 0; r < kBodyDof; ++r) {
-        if (bi[r] == 0) continue;
-        for (int s = 0; s < kBodyDof; ++s) A0[kBodyDof * r + s] += bi[r] * gi[s];
-        b0[r] -= bi[r] * c[i];
+        for (int s2 = 0; s2 < kBodyDof; ++s2) A0[kBodyDof * r + s2] += wi[r] * wi[s2];
+        b0[r] -= wi[r] * c[h0 + i];
       }
     }
   }
@@ -138,32 +147,36 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
     cholesky_solve(kBodyDof, A0, b0);
     for (int k = 0; k < kBodyDof; ++k) a0[k] = x[k] = b0[k];
   }
-  // each leg: lambda = lambda0 + G a0, then its bodies' a = M^-1 (f - J^T lambda)
+  // each leg: lambda = L^-T (y + W a0), then its bodies' a = M^-1 (f - J^T lambda)
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars;
+    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars, n = nrow[l], nh = nhip[l];
+    const real *S = Lf[l];
+    real *lam = y[l];
+    if (box)
+      for (int i = 0; i < nh; ++i)
+        for (int k = 0; k < kBodyDof; ++k) lam[n - nh + i] += W[l][kBodyDof * i + k] * a0[k];
+    for (int i = n - 1; i >= 0; --i) {
+      real t = lam[i];
+      for (int k = i + 1; k < n; ++k) t -= S[n * k + i] * lam[k];
+      lam[i] = t / S[n * i + i];
+    }
     for (int b = b_lo; b < b_hi; ++b)
       for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] = f[kBodyDof * b + k];
-    for (int i = 0; i < nrow[l]; ++i) {
+    for (int i = 0; i < n; ++i) {
       const int r = idx[l][i];
-      real lam = mu[r];
-      if (box)
-        for (int k = 0; k < kBodyDof; ++k) lam += G[l][kBodyDof * i + k] * a0[k];
-      mu[r] = lam;
+      mu[r] = lam[i];
       int a, b;
       bodies_of(robot, r, a, b);
-      for (int s = 0; s < 2; ++s) {
-        const int body = s == 0 ? a : b;
+      for (int s2 = 0; s2 < 2; ++s2) {
+        const int body = s2 == 0 ? a : b;
         if (body < b_lo || body >= b_hi) continue;
-        const real *cf = s == 0 ? rows[r].ja : rows[r].jb;
-        for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * body + k] -= cf[k] * lam;
+        const real *cf = s2 == 0 ? rows[r].ja : rows[r].jb;
+        for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * body + k] -= cf[k] * lam[i];
       }
     }
-    for (int b = b_lo; b < b_hi; ++b) {
-      real im[kBodyDof];
-      inverse_mass(robot, b, im);
-      for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] *= im[k];
-    }
+    for (int b = b_lo; b < b_hi; ++b)
+      for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] *= robot.inverse_mass[b][k];
   }
   return LEGSIM_OK;
 }

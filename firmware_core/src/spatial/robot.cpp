@@ -135,6 +135,11 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     L.nrows = row - L.row0;
   }
   R.nb = nb;
+  for (int b = 0; b < nb; ++b) {
+    const real im[kBodyDof] = {1 / R.mass[b], 1 / R.mass[b], 1 / R.mass[b],
+                               1 / R.inertia[b].x, 1 / R.inertia[b].y, 1 / R.inertia[b].z};
+    for (int k = 0; k < kBodyDof; ++k) R.inverse_mass[b][k] = im[k];
+  }
   R.na = na;
   R.nj = nj;
   R.m = row;

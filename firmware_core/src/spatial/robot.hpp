@@ -95,6 +95,7 @@ struct SpatialRobot {
   int nb, nj, m, nlegs, na;  // bodies, joints, rows, legs, linear actuators
   real mass[kMaxRobotBodies];
   V3 inertia[kMaxRobotBodies];  // principal, body frame (kg m^2)
+  real inverse_mass[kMaxRobotBodies][kBodyDof];  // M^-1's diagonal on (v, omega)
   LegJoint joint[kMaxRobotJoints];
   int row_body[kMaxRobotRows][2];  // each row's two bodies (-1: the world), from its joint
   RobotLeg leg[kMaxLegs];
