@@ -111,7 +111,9 @@ class HexapodResult:
     (phi3, phi6); lengths (N, 6, 2) m; feet (N, 6, 3) m world; foot_force (N, 6, 3): the
     ground's force on each stuck foot (N, world; 0 for a free leg); com (N, 3);
     kinetic, potential, energy (N,) J (potential: gravity, -F l, -tau psi, -F_box . r);
-    stance (the stuck legs); nfev."""
+    stance (the stuck legs); com_accel (N, 3) m/s^2 (sum m a / M over the bodies: Newton's
+    check of the ground forces); angular_momentum (N, 3) about the centre of mass (world,
+    kg m^2/s); nfev."""
     t: np.ndarray
     box_q: np.ndarray
     box_v: np.ndarray
@@ -125,6 +127,8 @@ class HexapodResult:
     potential: np.ndarray
     energy: np.ndarray
     stance: tuple
+    com_accel: np.ndarray = None
+    angular_momentum: np.ndarray = None
     nfev: int = 0
 
 
@@ -403,6 +407,38 @@ class HexapodModel:
         M, rhs, legs, free = self._system(r, R, v, w, sq, sqd, stance, feet, Fa, tau, Fbox)
         return np.linalg.solve(M, rhs), legs, free
 
+    def multiplier_accelerations(self, y, stance, feet, Fa, tau, Fbox=np.zeros(3)):
+        """The same state's accelerations the other way: every leg free (24 coordinates), each
+        stuck foot's acceleration held at zero by a multiplier, its ground force:
+        [M -C^T; C 0] (u_dot, f) = (rhs, -c_f), C = [I, -(a + b_f)^, G] its rows. Returns
+        (u_dot: v, omega, then every leg's (psi, theta)_ddot (24,), f (6, 3)); a check of the
+        minimal coordinates' elimination and ground forces."""
+        stance = tuple(sorted(stance))
+        nfree = LEGS - len(stance)
+        r, qb, sq, v, w, sqd = self._unpack(y, nfree)
+        R = quat_matrix(qb)
+        q_all, qd_all = np.zeros((LEGS, 3)), np.zeros((LEGS, 3))
+        free = [k for k in range(LEGS) if k not in stance]
+        for k in range(LEGS):
+            if k in stance:
+                J, E, e, rates = self._stuck_leg(k, r, R, v, w, feet[k])
+                q_all[k], qd_all[k] = [J.psi, *J.theta], rates
+            else:
+                q_all[k], qd_all[k] = sq[free.index(k)], sqd[free.index(k)]
+        M, rhs, legs, _ = self._system(r, R, v, w, q_all, qd_all, (), feet, Fa, tau, Fbox)
+        nu, nc = len(rhs), 3 * len(stance)
+        C, cb = np.zeros((nc, nu)), np.zeros(nc)
+        for i, k in enumerate(stance):
+            J = legs[k][0]
+            C[3 * i:3 * i + 3, :6] = np.hstack([np.eye(3), -_skew(J.a + J.bf)])
+            C[3 * i:3 * i + 3, 6 + 3 * k:9 + 3 * k] = J.G
+            cb[3 * i:3 * i + 3] = -J.cf
+        K = np.block([[M, -C.T], [C, np.zeros((nc, nc))]])
+        x = np.linalg.solve(K, np.concatenate([rhs, cb]))
+        f = np.zeros((LEGS, 3))
+        f[list(stance)] = x[nu:].reshape(-1, 3)
+        return x[:nu], f
+
     def _outputs(self, y, stance, feet, Fa, tau, Fbox):
         """Everything simulate reports at one state."""
         nfree = LEGS - len(stance)
@@ -410,11 +446,13 @@ class HexapodModel:
         R = quat_matrix(qb)
         ud, legs, free = self.accelerations(y, stance, feet, Fa, tau, Fbox)
         out = {"psi": np.zeros(LEGS), "theta": np.zeros((LEGS, 2)), "l": np.zeros((LEGS, 2)),
-               "feet": np.zeros((LEGS, 3)), "f": np.zeros((LEGS, 3))}
+               "feet": np.zeros((LEGS, 3)), "f": np.zeros((LEGS, 3)), "qdd": np.zeros((LEGS, 3))}
         kin = 0.5 * self.box_mass * v @ v + 0.5 * w @ ((R * self.box_inertia) @ R.T) @ w
         pot = -self.box_mass * self.gravity @ r - Fbox @ r
         mx = self.box_mass * r
         ma = self.box_mass * ud[:3]
+        mv = self.box_mass * v
+        H = self.box_mass * _cx(r, v) + (R * self.box_inertia) @ R.T @ w   # about the origin
         for k in range(LEGS):
             J, E, e, rates = legs[k]
             if E is None:
@@ -422,6 +460,7 @@ class HexapodModel:
                 qdd = ud[s:s + 3]
             else:
                 qdd = E @ ud[:6] + e
+            out["qdd"][k] = qdd
             # the bodies' accelerations
             alin = np.einsum("bij,j->bi", J.Lb, ud[:6]) + np.einsum("bij,j->bi", J.Ll, qdd) + J.cl
             aang = ud[3:6] + np.einsum("bij,j->bi", J.Wl, qdd) + J.ca
@@ -438,7 +477,10 @@ class HexapodModel:
             pot -= J.m @ (J.X @ self.gravity) + Fa[k] @ J.l + tau[k] * J.psi
             mx = mx + J.m @ J.X
             ma = ma + J.m @ alin
-        out.update(kinetic=kin, potential=pot, com=mx / self.mass, ma=ma, ud=ud, r=r, q=qb / np.linalg.norm(qb),
+            mv = mv + J.m @ J.xd
+            H = H + np.einsum("b,bi->i", J.m, _cx(J.X, J.xd)) + np.einsum("bij,bj->i", J.Iw, J.w)
+        c = mx / self.mass
+        out.update(kinetic=kin, potential=pot, com=c, com_a=ma / self.mass, H=H - _cx(c, mv), ud=ud, r=r, q=qb / np.linalg.norm(qb),
                    v=v, w=w)
         return out
 
@@ -491,7 +533,8 @@ class HexapodModel:
         N = len(sol.t)
         res = HexapodResult(sol.t, np.zeros((N, 7)), np.zeros((N, 6)), np.zeros((N, LEGS)), np.zeros((N, LEGS, 2)),
                             np.zeros((N, LEGS, 2)), np.zeros((N, LEGS, 3)), np.zeros((N, LEGS, 3)), np.zeros((N, 3)),
-                            np.zeros(N), np.zeros(N), np.zeros(N), stance, nfev[0])
+                            np.zeros(N), np.zeros(N), np.zeros(N), stance, np.zeros((N, 3)), np.zeros((N, 3)),
+                            nfev[0])
         for i in range(N):
             o = self._outputs(sol.y[:, i], stance, feet, Fa, tau, Fbox)
             res.box_q[i] = np.concatenate([o["r"], o["q"]])
@@ -499,6 +542,7 @@ class HexapodModel:
             res.rowing[i], res.theta[i], res.lengths[i] = o["psi"], o["theta"], o["l"]
             res.feet[i], res.foot_force[i], res.com[i] = o["feet"], o["f"], o["com"]
             res.kinetic[i], res.potential[i] = o["kinetic"], o["potential"]
+            res.com_accel[i], res.angular_momentum[i] = o["com_a"], o["H"]
         res.energy = res.kinetic + res.potential
         return res
 
