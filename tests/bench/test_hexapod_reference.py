@@ -212,3 +212,17 @@ def test_two_formulations(ref):
           f"{np.abs(o['qdd']).max():.1f}), ground forces {d_f:.1e} N (of {np.abs(f).max():.1f})")
     assert d_box < 1e-11 and d_legs < 1e-10 and d_f < 1e-10
     assert np.abs(o["qdd"]).max() > 1.0
+
+
+def test_leg_foot_inverse_kinematics(ref):
+    """LegModel.theta_from_foot (the stuck legs' planar inverse kinematics) gives back the pose
+    of each length pair over a grid inside the strokes, on the stand's branch."""
+    leg = ref.legs[0].model
+    worst, n = 0.0, 0
+    for l0 in np.linspace(0.45, 0.74, 7):
+        for l1 in np.linspace(0.40, 0.68, 7):
+            th = leg.theta_from_lengths([l0, l1])
+            worst = max(worst, np.abs(leg.theta_from_foot(leg.foot(th)) - th).max())
+            n += 1
+    print(f"theta_from_foot over {n} poses: {worst:.1e} rad")
+    assert worst < 1e-12
