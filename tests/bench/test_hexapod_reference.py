@@ -19,6 +19,7 @@ import numpy as np
 import pytest
 
 from legsim_bench.reference.hexapod import LEGS, HexapodModel
+from legsim_bench.reference.model import NoEquilibriumError
 
 legsim = pytest.importorskip("legsim")
 
@@ -90,6 +91,16 @@ def test_level_tripod_closed_form(ref):
         assert np.abs(s["rowing_torque_nm"]).max() < 1e-12 * W
 
 
+def test_refusals(ref, core):
+    """Two feet; a push that tips the tripod (a foot would pull): both refuse."""
+    pose = ref.stand_pose(1.0, ROW)
+    for stance, push in (((0, 3), None), ((0, 2, 4), [2000.0, 0.0, 0.0])):
+        with pytest.raises(NoEquilibriumError):
+            ref.statics(pose, stance=stance, box_force_n=push)
+        with pytest.raises(legsim.NoEquilibriumError):
+            core.statics(pose, stance=stance, box_force_n=push)
+
+
 def test_push_rowing_torque(ref):
     """A push on the box: each stance leg's rowing torque is -((p_foot - p_hip) x f)_z, the legs'
     own weights having no moment about a vertical axis."""
@@ -107,7 +118,7 @@ def test_rest_at_statics(ref, stance, rowing):
     pose = ref.stand_pose(1.0, rowing)
     s = ref.statics(pose, stance=stance)
     y0, feet = ref.initial_state(pose, stance)
-    o = ref._outputs(y0, stance, feet, s["actuator_force_n"], s["rowing_torque_nm"], np.zeros(3))
+    o = ref.evaluate(y0, stance, feet, s["actuator_force_n"], s["rowing_torque_nm"], np.zeros(3))
     print(stance, "accelerations at the statics' forces", np.abs(o["ud"]).max(),
           "ground forces off the statics'", np.abs(o["f"] - s["foot_force_n"]).max())
     assert np.abs(o["ud"]).max() < 1e-12
@@ -117,7 +128,7 @@ def test_rest_at_statics(ref, stance, rowing):
 def test_free_fall(ref):
     pose = ref.stand_pose(1.0, ROW)
     y0, feet = ref.initial_state(pose, ())
-    o = ref._outputs(y0, (), feet, np.zeros((LEGS, 2)), np.zeros(LEGS), np.zeros(3))
+    o = ref.evaluate(y0, (), feet, np.zeros((LEGS, 2)), np.zeros(LEGS))
     expect = np.zeros(6 + 3 * LEGS)
     expect[2] = -9.81
     assert np.abs(o["ud"] - expect).max() < 1e-13
@@ -203,7 +214,7 @@ def test_two_formulations(ref):
     rates = rng.uniform(-0.5, 0.5, (LEGS, 3))
     y, feet = ref.initial_state(pose, stance, box_v=[0.05, -0.1, 0.08, 0.3, -0.2, 0.4], rates=rates)
     box_force = np.array([10.0, -5.0, 3.0])
-    o = ref._outputs(y, stance, feet, Fa, tau, box_force)
+    o = ref.evaluate(y, stance, feet, Fa, tau, box_force)
     ud, f = ref.multiplier_accelerations(y, stance, feet, Fa, tau, box_force)
     d_box = np.abs(ud[:6] - o["ud"][:6]).max()
     d_legs = np.abs(ud[6:].reshape(LEGS, 3) - o["qdd"]).max()

@@ -297,7 +297,9 @@ class HexapodModel:
     def stance_forces(self, feet, com, box_point, box_force=None) -> np.ndarray:
         """The least sum of squares of the feet's forces (n, 3) balancing the weight at ``com``
         and ``box_force`` at ``box_point``: f_k = lambda + mu x e_k about the feet's centroid."""
-        p = np.asarray(feet, float)
+        p = np.asarray(feet, float).reshape(-1, 3)
+        if len(p) < 3:
+            raise NoEquilibriumError("fewer than three feet")
         W = self.mass * self.gravity
         Fb = np.zeros(3) if box_force is None else np.asarray(box_force, float)
         pc = p.mean(axis=0)
@@ -306,8 +308,8 @@ class HexapodModel:
         Jf = np.sum(np.einsum("ki,ki->k", e, e)) * np.eye(3) - e.T @ e
         moment = _cx(np.asarray(com, float) - pc, W) + _cx(np.asarray(box_point, float) - pc, Fb)
         s = np.linalg.svd(Jf, compute_uv=False)
-        if len(p) < 3 or s[-1] <= 1e-12 * s[0]:
-            raise NoEquilibriumError("fewer than three feet, or on one line")
+        if s[-1] <= 1e-12 * s[0]:
+            raise NoEquilibriumError("the feet on one line")
         mu = np.linalg.solve(Jf, -moment)
         return lam + _cx(mu, e)
 
@@ -364,15 +366,14 @@ class HexapodModel:
                 dq = E                      # d(psi, theta)/du on the box's columns
                 legs[k] = (J, E, e, rates)
             else:
-                s = 6 + 3 * free.index(k)
                 i = free.index(k)
+                s = 6 + 3 * i
                 J = self._leg(k, r, R, v, w, swing_q[i, 0], swing_qd[i, 0], swing_q[i, 1:], swing_qd[i, 1:])
                 Al = np.concatenate([J.Lb, J.Ll], axis=2)
                 Aw = np.concatenate([np.zeros_like(J.Lb), J.Wl], axis=2)
                 Aw[:, :, 3:6] += np.eye(3)
                 cl, ca = J.cl, J.ca
-                idx = np.r_[0:6, s:s + 3]
-                cols = idx
+                cols = np.r_[0:6, s:s + 3]
                 dq = np.zeros((3, 9))
                 dq[:, 6:] = np.eye(3)
                 legs[k] = (J, None, None, None)
@@ -399,21 +400,24 @@ class HexapodModel:
         sqd = y[nq + 6:].reshape(nfree, 3)
         return r, qb, sq, v, w, sqd
 
-    def accelerations(self, y, stance, feet, Fa, tau, Fbox=np.zeros(3)):
-        """u_dot at the state y (simulate's layout) and the pieces for the outputs."""
+    def accelerations(self, y, stance, feet, Fa, tau, Fbox=None):
+        """u_dot at the state y (simulate's layout, see initial_state) with the feet of stance
+        stuck at feet (6, 3), and the pieces for the outputs."""
+        Fbox = np.zeros(3) if Fbox is None else np.asarray(Fbox, float)
         nfree = LEGS - len(stance)
         r, qb, sq, v, w, sqd = self._unpack(y, nfree)
         R = quat_matrix(qb)
         M, rhs, legs, free = self._system(r, R, v, w, sq, sqd, stance, feet, Fa, tau, Fbox)
         return np.linalg.solve(M, rhs), legs, free
 
-    def multiplier_accelerations(self, y, stance, feet, Fa, tau, Fbox=np.zeros(3)):
+    def multiplier_accelerations(self, y, stance, feet, Fa, tau, Fbox=None):
         """The same state's accelerations the other way: every leg free (24 coordinates), each
         stuck foot's acceleration held at zero by a multiplier, its ground force:
         [M -C^T; C 0] (u_dot, f) = (rhs, -c_f), C = [I, -(a + b_f)^, G] its rows. Returns
         (u_dot: v, omega, then every leg's (psi, theta)_ddot (24,), f (6, 3)); a check of the
         minimal coordinates' elimination and ground forces."""
         stance = tuple(sorted(stance))
+        Fbox = np.zeros(3) if Fbox is None else np.asarray(Fbox, float)
         nfree = LEGS - len(stance)
         r, qb, sq, v, w, sqd = self._unpack(y, nfree)
         R = quat_matrix(qb)
@@ -439,8 +443,13 @@ class HexapodModel:
         f[list(stance)] = x[nu:].reshape(-1, 3)
         return x[:nu], f
 
-    def _outputs(self, y, stance, feet, Fa, tau, Fbox):
-        """Everything simulate reports at one state."""
+    def evaluate(self, y, stance, feet, Fa, tau, Fbox=None) -> dict:
+        """Everything simulate reports at one state y (initial_state's layout): psi (6), theta
+        (6, 2), l (6, 2), feet (6, 3), f (6, 3) the stuck feet's ground forces, qdd (6, 3) every
+        leg's (psi, theta)_ddot, ud (u_dot), kinetic, potential, com, com_a, H (about the centre
+        of mass), r, q, v, w."""
+        stance = tuple(sorted(stance))
+        Fbox = np.zeros(3) if Fbox is None else np.asarray(Fbox, float)
         nfree = LEGS - len(stance)
         r, qb, sq, v, w, sqd = self._unpack(y, nfree)
         R = quat_matrix(qb)
@@ -485,7 +494,8 @@ class HexapodModel:
         return out
 
     def initial_state(self, pose, stance=(), box_v=(0, 0, 0, 0, 0, 0), rates=None):
-        """(y0, feet): simulate's state at ``pose`` (legsim.Hexapod's keys) with the box moving at
+        """(y0, feet): simulate's state y = (r, quaternion, each free leg's (psi, theta), v, omega,
+        their rates) at ``pose`` (legsim.Hexapod's keys) with the box moving at
         ``box_v`` (v, omega, world), the free legs at ``rates`` ((6, 3): psi_dot, theta_dot;
         default rest); the stuck feet's places (6, 3) (world; where the pose puts them)."""
         stance = tuple(sorted(int(k) for k in stance))
@@ -536,7 +546,7 @@ class HexapodModel:
                             np.zeros(N), np.zeros(N), np.zeros(N), stance, np.zeros((N, 3)), np.zeros((N, 3)),
                             nfev[0])
         for i in range(N):
-            o = self._outputs(sol.y[:, i], stance, feet, Fa, tau, Fbox)
+            o = self.evaluate(sol.y[:, i], stance, feet, Fa, tau, Fbox)
             res.box_q[i] = np.concatenate([o["r"], o["q"]])
             res.box_v[i] = np.concatenate([o["v"], o["w"]])
             res.rowing[i], res.theta[i], res.lengths[i] = o["psi"], o["theta"], o["l"]
