@@ -5,13 +5,16 @@ against its own invariants:
 - statics: the feet, the centre of mass, the stance forces, the actuator forces and the rowing
   torques agree with the core's on six feet, each tripod, four feet on a tilted box with a box
   force (the legs at unequal rowing angles) to 1e-12 of the scale; a level tripod's vertical
-  forces are the barycentric closed form, its horizontal ones zero;
+  forces are the barycentric closed form, its horizontal ones zero; a push's rowing torques
+  -((p_foot - p_hip) x f)_z; two feet and a tipping push refused by both;
 - dynamics: at the statics' forces the robot stays at rest (six feet, a tripod with three legs
   free) and the stuck feet's ground forces are the statics'; in free flight every point falls at
   g, and with forces and spin the centre of mass falls at g and the angular momentum about it
   holds; scenes (a) six feet stuck with +50 N on the right legs' upper actuators, (b) a tripod
   stuck and three legs free: the energy is conserved, Newton's law of the whole robot holds with
-  the stuck feet's ground forces, and the trajectory agrees between rtol 1e-12 and 1e-10.
+  the stuck feet's ground forces, and the trajectory agrees between rtol 1e-12 and 1e-10; at a
+  moving state the minimal coordinates' accelerations and ground forces are those of every leg
+  free with its foot held by multipliers; the stuck legs' inverse kinematics round-trips.
 """
 from __future__ import annotations
 
