@@ -135,6 +135,14 @@ def test_free_fall(ref):
     expect = np.zeros(6 + 3 * LEGS)
     expect[2] = -9.81
     assert np.abs(o["ud"] - expect).max() < 1e-13
+    res = ref.simulate(pose, (), np.zeros((LEGS, 2)), np.zeros(LEGS), 0.1, [0.0, 0.05, 0.1])
+    drop = res.feet - res.feet[0]
+    fall = -0.5 * 9.81 * res.t ** 2
+    print(f"free fall: feet off 1/2 g t^2 by {np.abs(drop[:, :, 2] - fall[:, None]).max():.1e} m")
+    assert np.abs(drop[:, :, 2] - fall[:, None]).max() < 1e-12
+    assert np.abs(drop[:, :, :2]).max() < 1e-12
+    assert np.abs(res.box_q[:, 2] - 1.0 - fall).max() < 1e-12
+    assert np.abs(res.rowing - ROW).max() < 1e-12 and np.abs(res.lengths - res.lengths[0]).max() < 1e-12
 
 
 def test_free_flight_momentum(ref):
