@@ -45,7 +45,6 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Optional, Sequence
 
 import numpy as np
 from scipy.integrate import solve_ivp
@@ -95,9 +94,10 @@ class _Leg:
 
 class _LegJets:
     """One leg's bodies (yoke, then its bars in the file's order) at one state: positions X,
-    masses m, world inertias Iw, angular velocities w; partial velocities on the box's
-    (v, omega) (Lb, Wb: 3 x 6) and on the leg's (psi_dot, theta_dot) (Ll, Wl: 3 x 3) and the
-    bias accelerations (cl, ca); the foot's b_f, G, bias cf; the lengths l, lg."""
+    velocities xd, masses m, world inertias Iw, angular velocities w; partial velocities on the
+    box's (v, omega) (Lb: 3 x 6; the angular one is [0, I] for every body) and on the leg's
+    (psi_dot, theta_dot) (Ll, Wl: 3 x 3), the bias accelerations (cl, ca); the hip a = R h, the
+    box's z; the foot's b_f (from the hip), G, bias cf; the lengths l, their jacobian lg."""
     __slots__ = ("X", "m", "Iw", "w", "Lb", "Ll", "cl", "Wl", "ca", "a", "z", "bf", "G", "cf",
                  "l", "lg", "theta", "psi", "xd")
 
@@ -253,6 +253,9 @@ class HexapodModel:
         J.theta, J.psi = np.asarray(th, float), psi
         return J
 
+    def _at_rest(self, k, r, R, psi, th) -> _LegJets:
+        return self._leg(k, r, R, np.zeros(3), np.zeros(3), psi, 0.0, th, np.zeros(2))
+
     def leg_coordinates(self, k, r, R, foot) -> tuple:
         """Leg k's (psi, theta) that put its foot at ``foot`` (world) on the box (r, R): psi in
         closed form (the plane through the hip axis and the foot), theta by the leg's planar
@@ -287,7 +290,7 @@ class HexapodModel:
         th = self._thetas(pose)
         feet, mx = np.empty((LEGS, 3)), self.box_mass * r
         for k in range(LEGS):
-            J = self._leg(k, r, R, np.zeros(3), np.zeros(3), float(pose["rowing_rad"][k]), 0.0, th[k], np.zeros(2))
+            J = self._at_rest(k, r, R, float(pose["rowing_rad"][k]), th[k])
             feet[k] = r + J.a + J.bf
             mx = mx + J.m @ J.X
         return {"foot_m": feet, "com_m": mx / self.mass, "theta": th,
@@ -322,8 +325,7 @@ class HexapodModel:
         r = np.asarray(pose["box_m"], float)
         R = quat_matrix(pose["box_quat"])
         th = self._thetas(pose)
-        jets = [self._leg(k, r, R, np.zeros(3), np.zeros(3), float(pose["rowing_rad"][k]), 0.0, th[k], np.zeros(2))
-                for k in range(LEGS)]
+        jets = [self._at_rest(k, r, R, float(pose["rowing_rad"][k]), th[k]) for k in range(LEGS)]
         feet = np.array([r + J.a + J.bf for J in jets])
         com = (self.box_mass * r + sum(J.m @ J.X for J in jets)) / self.mass
         f = np.zeros((LEGS, 3))
@@ -489,7 +491,8 @@ class HexapodModel:
             mv = mv + J.m @ J.xd
             H = H + np.einsum("b,bi->i", J.m, _cx(J.X, J.xd)) + np.einsum("bij,bj->i", J.Iw, J.w)
         c = mx / self.mass
-        out.update(kinetic=kin, potential=pot, com=c, com_a=ma / self.mass, H=H - _cx(c, mv), ud=ud, r=r, q=qb / np.linalg.norm(qb),
+        out.update(kinetic=kin, potential=pot, com=c, com_a=ma / self.mass, H=H - _cx(c, mv), ud=ud, r=r,
+                   q=qb / np.linalg.norm(qb),
                    v=v, w=w)
         return out
 
