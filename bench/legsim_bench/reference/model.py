@@ -426,6 +426,7 @@ class LegModel:
         self.ndof = len(th)
         # assembly modes (branch signs) of the closed-form position problem
         self._mode = self._modes(self._stand)
+        self._foot_mode = None   # theta_from_foot's branch at the stand, on first use
 
     def _discover_topology(self, data, id2i):
         """Map leg.toml onto the roles the closed-form kinematics needs."""
@@ -698,6 +699,38 @@ class LegModel:
             phi6 = min((near[1] + _wrap(x - near[1]) for x in c6), key=lambda x: abs(x - near[1]))
         th = [phi3, phi6] + ([s] if self.variant == "slot" else [])
         return np.array(th)
+
+    def theta_from_foot(self, foot, near=None) -> np.ndarray:
+        """Closed-form inverse kinematics of the foot (revolute variant): theta = (phi3, phi6)
+        that put the foot at ``foot`` (m, the leg's frame). The thigh B-C and the line from C
+        to the foot make a triangle with |foot - B|: phi3 = angle of (foot - B) +- its angle at B.
+        Branch: ``near=None`` the stand pose's, else the root nearest ``near``."""
+        if self.variant != "revolute":
+            raise ReferenceError("theta_from_foot needs the revolute variant (2 dof)")
+        L3 = self.bodies[self._thigh].length
+        d = self.bodies[self._shank].length / 2.0 + self._foot_pt[0]
+        e = self._foot_pt[1]
+        rho, delta = math.hypot(d, e), math.atan2(e, d)   # foot - C = rho u(phi6 + delta)
+        r = np.asarray(foot, float) - self._B
+        R = math.hypot(*r)
+        c = (L3 * L3 + R * R - rho * rho) / (2.0 * L3 * R)
+        if not abs(c) <= 1.0:
+            raise UnreachableError(f"foot {tuple(foot)} cannot be reached")
+        psi, ac = math.atan2(r[0], -r[1]), math.acos(c)
+        ref = self._stand if near is None else np.asarray(near, float)
+        if near is None:
+            if self._foot_mode is None:
+                p0 = self.foot(self._stand) - self._B
+                psi0 = math.atan2(p0[0], -p0[1])
+                self._foot_mode = 1.0 if _wrap(self._stand[0] - psi0) >= 0 else -1.0
+            phi3 = psi + self._foot_mode * ac
+        else:
+            phi3 = min((psi + ac, psi - ac), key=lambda x: abs(_wrap(x - ref[0])))
+        phi3 = ref[0] + _wrap(phi3 - ref[0])
+        w = np.asarray(foot, float) - (self._B + L3 * u(phi3))
+        phi6 = math.atan2(w[0], -w[1]) - delta
+        phi6 = ref[1] + _wrap(phi6 - ref[1])
+        return np.array([phi3, phi6])
 
     # ------------------------------------------------------------ dynamics
     def _gravity(self, gravity):
