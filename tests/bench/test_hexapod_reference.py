@@ -14,7 +14,9 @@ against its own invariants:
   stuck and three legs free: the energy is conserved, Newton's law of the whole robot holds with
   the stuck feet's ground forces, and the trajectory agrees between rtol 1e-12 and 1e-10; at a
   moving state the minimal coordinates' accelerations and ground forces are those of every leg
-  free with its foot held by multipliers; the stuck legs' inverse kinematics round-trips.
+  free with its foot held by multipliers; the stuck legs' inverse kinematics round-trips;
+- the core's forward dynamics (legsim.HexapodSim) on scenes (a) and (b) converges to this
+  reference at order 4 (at h = 1 ms within 1e-9 m and rad, ground forces within 1e-6 relative).
 """
 from __future__ import annotations
 
@@ -248,3 +250,47 @@ def test_leg_foot_inverse_kinematics(ref):
             n += 1
     print(f"theta_from_foot over {n} poses: {worst:.1e} rad")
     assert worst < 1e-12
+
+
+def core_scene(core, scene, h_s):
+    """The core's forward dynamics (legsim.HexapodSim, RK4 on the rotation group) on scene_a's or
+    scene_b's set-up to 0.2 s at step h_s: its state at the end."""
+    if scene is scene_a:
+        pose, stance, push = core.stand_pose(1.0), tuple(range(6)), (0, 1, 2)
+    else:
+        pose, stance, push = core.stand_pose(1.0, ROW), (0, 2, 4), (0, 2)
+    s = core.statics(pose, stance=stance)
+    Fa = np.array(s["actuator_force_n"])
+    Fa[list(push), 0] += 50.0
+    m = core.sim(pose, stuck=stance)
+    m.command(Fa, s["rowing_torque_nm"])
+    m.step(int(round(0.2 / h_s)), h_s=h_s)
+    return m.state()
+
+
+@pytest.mark.parametrize("scene", [scene_a, scene_b], ids=["a_six", "b_tripod"])
+def test_core_motion_against_reference(ref, core, scene):
+    """The core's RK4 on the rotation group (absolute coordinates, multipliers, projections)
+    against this reference (minimal coordinates, DOP853 at rtol 1e-12) at 0.2 s: the box's place
+    and rotation, the rowing angles, the lengths and the stuck feet's ground forces converge at
+    order 4 to it over h = 4, 2, 1 ms (the larger of the rotation's and the lengths' errors)."""
+    res = scene(ref)
+    errors = []
+    for h in (4e-3, 2e-3, 1e-3):
+        st = core_scene(core, scene, h)
+        e = {"box": np.abs(st["box_m"] - res.box_q[-1, :3]).max(),
+             "quat": np.abs(st["box_quat"] - res.box_q[-1, 3:]).max(),
+             "rowing": np.abs(st["rowing_rad"] - res.rowing[-1]).max(),
+             "lengths": np.abs(st["length_m"] - res.lengths[-1]).max(),
+             "force": np.abs(st["foot_force_n"] - res.foot_force[-1]).max()}
+        errors.append(e)
+        print(f"{scene.__name__}, h = {h:.0e} s: " + ", ".join(f"{k} {v:.2e}" for k, v in e.items()))
+    # the order on the largest positional errors (the box's place reaches the reference's own
+    # accuracy, ~1e-12 m, at 1 ms)
+    size = [max(e["quat"], e["lengths"]) for e in errors]
+    orders = [np.log2(size[k] / size[k + 1]) for k in range(2)]
+    print(f"  orders {orders}")
+    assert errors[-1]["box"] < 1e-9 and errors[-1]["lengths"] < 1e-9
+    assert errors[-1]["quat"] < 1e-9 and errors[-1]["rowing"] < 1e-9
+    assert errors[-1]["force"] < 1e-6 * np.abs(res.foot_force[-1]).max()
+    assert min(orders) > 3.5
