@@ -37,6 +37,7 @@ constexpr uint32_t kSix = 0x3F;
 FeetHold hold_at(const SpatialRobot &robot, const double *q, uint32_t stuck) {
   FeetHold h;
   h.stuck = stuck;
+  h.sliding = 0;
   for (int l = 0; l < robot.nlegs; ++l) h.anchor[l] = robot_foot_position(robot, l, q);
   return h;
 }
@@ -60,7 +61,7 @@ int used(const SpatialRobot &robot, uint32_t stuck, int *idx) {
   for (int r = 0; r < robot.m; ++r) idx[n++] = r;
   for (int l = 0; l < robot.nlegs; ++l)
     if ((stuck >> l) & 1u)
-      for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;
+      for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;  // stuck: the normal's, t1's, t2's
   return n;
 }
 
@@ -115,8 +116,8 @@ void test_solve_is_the_dense_kkt(void) {
   robot_forces(R, q, v, force, tau, Q);
   for (uint32_t stuck : {0u, kTripod}) {
     const FeetHold hold = hold_at(R, q, stuck);
-    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_accelerations(R, hold, q, v, Q, a, mu));
-    system_rows(R, hold, q, v, rows);
+    static RobotFactor F;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_accelerations(R, hold, q, v, Q, a, mu, rows, F));
     int idx[kMaxSystemRows];
     const int m = used(R, stuck, idx), nv = kBodyDof * R.nb;
     MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
@@ -162,7 +163,7 @@ void test_statics_is_rest(void) {
     for (int k = 0; k < kBodyDof * R.nb; ++k) amax = std::fmax(amax, std::fabs(d->a[k]));
     for (int l = 0; l < R.nlegs; ++l) {
       if (!((stance >> l) & 1u)) continue;
-      const V3 f = foot_force(R, d->mu, l);
+      const V3 f = foot_force(R, d->hold, d->mu, l);
       fdiff = std::fmax(fdiff, norm(f - st.foot_force[l]));
       fmax = std::fmax(fmax, norm(f));
     }

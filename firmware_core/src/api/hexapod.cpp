@@ -211,6 +211,7 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
   sim->robot = w.robot;
   spatial::FeetHold hold;
   hold.stuck = stuck_mask;
+  hold.sliding = 0;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) hold.anchor[l] = spatial::robot_foot_position(w.robot, l, w.q);
   st = spatial::robot_data_init(sim->robot, w.q, w.v, hold, sim->data);
   if (st != LEGSIM_OK) return st;
@@ -267,7 +268,7 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
     const spatial::V3 f = spatial::robot_foot_position(R, l, d.q);
     r.foot_m[l][0] = f.x, r.foot_m[l][1] = f.y, r.foot_m[l][2] = f.z;
     const bool stuck = (d.hold.stuck >> l) & 1u;
-    const spatial::V3 F = stuck ? spatial::foot_force(R, d.mu, l) : spatial::V3{0, 0, 0};
+    const spatial::V3 F = spatial::foot_force(R, d.hold, d.mu, l);
     r.foot_force_n[l][0] = F.x, r.foot_force_n[l][1] = F.y, r.foot_force_n[l][2] = F.z;
     r.stuck[l] = stuck ? 1 : 0;
   }

@@ -7,13 +7,12 @@
 namespace legsim::spatial {
 
 namespace {
-constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
 constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 
 // The rows of leg l in its elimination order: its own joints' and its stuck foot's first, its
 // hip's (the rows on the box) last, so that S_l^-1 reaches the box through the factor's last
 // rows only. Returns their number; nh: the hip's.
-int leg_rows(const SpatialRobot &robot, uint32_t stuck, int l, int *idx, int &nh) {
+int leg_rows(const SpatialRobot &robot, const FeetHold &hold, int l, int *idx, int &nh) {
   const RobotLeg &L = robot.leg[l];
   int n = 0;
   nh = 0;
@@ -26,8 +25,8 @@ int leg_rows(const SpatialRobot &robot, uint32_t stuck, int l, int *idx, int &nh
       } else {
         idx[n++] = r, ++nh;
       }
-      if (pass == 0 && r == L.row0 + L.nrows - 1 && ((stuck >> l) & 1u))
-        for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;
+      if (pass == 0 && r == L.row0 + L.nrows - 1)
+        for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
     }
   return n;
 }
@@ -45,32 +44,34 @@ inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows) {
   robot_rows(robot, q, v, rows);
   const BodyState world = ground_state();
+  const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
   for (int l = 0; l < robot.nlegs; ++l) {
-    if (!((hold.stuck >> l) & 1u)) continue;
+    const int n = foot_rows(hold, l);
+    if (n == 0) continue;
     const int fb = robot.leg[l].foot_body;
     const BodyState foot = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
-    spherical_rows(foot, robot.leg[l].foot_point, world, hold.anchor[l], rows + foot_row(robot, l));
+    for (int k = 0; k < n; ++k)
+      rows[foot_row(robot, l) + k] = row_along(foot, robot.leg[l].foot_point, world, hold.anchor[l], axes[k]);
   }
 }
 
-legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *rows, const real *f, const real *g,
-                        real *x, real *mu) {
+legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
   const bool box = robot.free_box;
-  real A0[36] = {}, b0[6] = {};
+  F.stuck = hold.stuck, F.sliding = hold.sliding;
+  F.rows = rows;
+  real *A0 = F.A0;
+  for (int i = 0; i < kBodyDof * kBodyDof; ++i) A0[i] = 0;
   if (box)
-    for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i], b0[i] = f[i];
-  // per leg: its factor L_l, y_l = L_l^-1 c_l and W_l = L_l^-1 B_l (its last nh rows only)
-  static_assert(kMaxLegRows <= 64, "a leg's rows on the stack");
-  real Lf[kMaxLegs][kMaxLegRows * kMaxLegRows], y[kMaxLegs][kMaxLegRows], W[kMaxLegs][5 * kBodyDof];
-  int idx[kMaxLegs][kMaxLegRows], nrow[kMaxLegs], nhip[kMaxLegs];
+    for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
+  static_assert(kMaxLegRows <= 64, "a leg's rows");
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
     const int b_lo = L.yoke, nbl = 1 + L.nbars;
-    int *ix = idx[l];
+    int *ix = F.idx[l];
     int nh;
-    const int n = nrow[l] = leg_rows(robot, stuck, l, ix, nh);
-    nhip[l] = nh;
-    real *S = Lf[l], *c = y[l];
+    const int n = F.nrow[l] = leg_rows(robot, hold, l, ix, nh);
+    F.nhip[l] = nh;
+    real *S = F.L[l];
     // each leg body's rows (local index, and the row's coefficients on it scaled by M^-1)
     int on[kMaxLegBodies][2 * kMaxLegRows], non[kMaxLegBodies] = {};
     real scaled[kMaxLegRows][2][kBodyDof];
@@ -79,17 +80,15 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
       int ab[2];
       bodies_of(robot, ix[i], ab[0], ab[1]);
       const Row &ri = rows[ix[i]];
-      real ci = -g[ix[i]];
       for (int s = 0; s < 2; ++s) {
         const int body = ab[s] - b_lo;
         if (body < 0 || body >= nbl) continue;
         const real *cf = s == 0 ? ri.ja : ri.jb, *im = robot.inverse_mass[ab[s]];
         real *sc = scaled[i][s];
-        for (int k = 0; k < kBodyDof; ++k) sc[k] = cf[k] * im[k], ci += sc[k] * f[kBodyDof * ab[s] + k];
+        for (int k = 0; k < kBodyDof; ++k) sc[k] = cf[k] * im[k];
         coef[i][s] = cf;
         on[body][non[body]++] = 2 * i + s;
       }
-      c[i] = ci;
     }
     // S = J_l M_l^-1 J_l^T: the pairs of rows on a common body (its lower triangle)
     for (int i = 0; i < n; ++i)
@@ -113,16 +112,10 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
     real scale = 0;
     for (int i = 0; i < n; ++i) scale = std::max(scale, S[n * i + i]);
     if (!dense_cholesky(n, S, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
-    // y = L^-1 c
-    for (int i = 0; i < n; ++i) {
-      real t = c[i];
-      for (int k = 0; k < i; ++k) t -= S[n * i + k] * c[k];
-      c[i] = t / S[n * i + i];
-    }
     if (!box) continue;
     // W = L^-1 B: B is zero above the hip's rows, so W is too; B^T S^-1 B = W^T W
     const int h0 = n - nh;
-    real *Wl = W[l];
+    real *Wl = F.W[l];
     for (int i = 0; i < nh; ++i) {
       const real *cb = rows[ix[h0 + i]].jb;  // the hip's rows: the box is their second body
       for (int k = 0; k < kBodyDof; ++k) {
@@ -133,29 +126,62 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
     }
     for (int i = 0; i < nh; ++i) {
       const real *wi = Wl + kBodyDof * i;
-      for (int r = 0; r < kBodyDof; ++r) {
+      for (int r = 0; r < kBodyDof; ++r)
         for (int s2 = 0; s2 < kBodyDof; ++s2) A0[kBodyDof * r + s2] += wi[r] * wi[s2];
-        b0[r] -= wi[r] * c[h0 + i];
-      }
     }
   }
-  real a0[kBodyDof] = {0, 0, 0, 0, 0, 0};
   if (box) {
     real scale = 0;
     for (int i = 0; i < kBodyDof; ++i) scale = std::max(scale, A0[7 * i]);
     if (!dense_cholesky(kBodyDof, A0, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
-    cholesky_solve(kBodyDof, A0, b0);
+  }
+  return LEGSIM_OK;
+}
+
+void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
+  const bool box = robot.free_box;
+  const Row *rows = F.rows;
+  real y[kMaxLegs][kMaxLegRows], b0[kBodyDof] = {};
+  if (box)
+    for (int i = 0; i < kBodyDof; ++i) b0[i] = f[i];
+  // per leg y = L^-1 c, c = J_l M_l^-1 f_l - g_l; the box's right-hand side f_0 - W^T y
+  for (int l = 0; l < robot.nlegs; ++l) {
+    const RobotLeg &L = robot.leg[l];
+    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars, n = F.nrow[l], nh = F.nhip[l];
+    const int *ix = F.idx[l];
+    const real *S = F.L[l];
+    real *c = y[l];
+    for (int i = 0; i < n; ++i) {
+      int a, b;
+      bodies_of(robot, ix[i], a, b);
+      real ci = -g[ix[i]];
+      for (int s = 0; s < 2; ++s) {
+        const int body = s == 0 ? a : b;
+        if (body < b_lo || body >= b_hi) continue;
+        const real *cf = s == 0 ? rows[ix[i]].ja : rows[ix[i]].jb, *im = robot.inverse_mass[body];
+        for (int k = 0; k < kBodyDof; ++k) ci += cf[k] * im[k] * f[kBodyDof * body + k];
+      }
+      for (int k = 0; k < i; ++k) ci -= S[n * i + k] * c[k];
+      c[i] = ci / S[n * i + i];
+    }
+    if (!box) continue;
+    for (int i = 0; i < nh; ++i)
+      for (int r = 0; r < kBodyDof; ++r) b0[r] -= F.W[l][kBodyDof * i + r] * c[n - nh + i];
+  }
+  real a0[kBodyDof] = {0, 0, 0, 0, 0, 0};
+  if (box) {
+    cholesky_solve(kBodyDof, F.A0, b0);
     for (int k = 0; k < kBodyDof; ++k) a0[k] = x[k] = b0[k];
   }
   // each leg: lambda = L^-T (y + W a0), then its bodies' a = M^-1 (f - J^T lambda)
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars, n = nrow[l], nh = nhip[l];
-    const real *S = Lf[l];
+    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars, n = F.nrow[l], nh = F.nhip[l];
+    const real *S = F.L[l];
     real *lam = y[l];
     if (box)
       for (int i = 0; i < nh; ++i)
-        for (int k = 0; k < kBodyDof; ++k) lam[n - nh + i] += W[l][kBodyDof * i + k] * a0[k];
+        for (int k = 0; k < kBodyDof; ++k) lam[n - nh + i] += F.W[l][kBodyDof * i + k] * a0[k];
     for (int i = n - 1; i >= 0; --i) {
       real t = lam[i];
       for (int k = i + 1; k < n; ++k) t -= S[n * k + i] * lam[k];
@@ -164,7 +190,7 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
     for (int b = b_lo; b < b_hi; ++b)
       for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] = f[kBodyDof * b + k];
     for (int i = 0; i < n; ++i) {
-      const int r = idx[l][i];
+      const int r = F.idx[l][i];
       mu[r] = lam[i];
       int a, b;
       bodies_of(robot, r, a, b);
@@ -178,19 +204,18 @@ legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *ro
     for (int b = b_lo; b < b_hi; ++b)
       for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] *= robot.inverse_mass[b][k];
   }
-  return LEGSIM_OK;
 }
 
 legsim_status robot_accelerations(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v,
-                                  const real *Q, real *a, real *mu) {
-  Row rows[kMaxSystemRows];
+                                  const real *Q, real *a, real *mu, Row *rows, RobotFactor &F) {
   system_rows(robot, hold, q, v, rows);
   real g[kMaxSystemRows];
   for (int r = 0; r < robot.m; ++r) g[r] = rows[r].gamma;
   for (int l = 0; l < robot.nlegs; ++l)
-    if ((hold.stuck >> l) & 1u)
-      for (int k = 0; k < 3; ++k) g[foot_row(robot, l) + k] = rows[foot_row(robot, l) + k].gamma;
-  return robot_kkt(robot, hold.stuck, rows, Q, g, a, mu);
+    for (int k = 0; k < foot_rows(hold, l); ++k) g[foot_row(robot, l) + k] = rows[foot_row(robot, l) + k].gamma;
+  const legsim_status s = robot_factor(robot, hold, rows, F);
+  if (s == LEGSIM_OK) robot_solve(robot, F, Q, g, a, mu);
+  return s;
 }
 
 }  // namespace legsim::spatial

@@ -10,9 +10,10 @@
 // lambda_l). The same solve with other right-hand sides projects positions and velocities
 // onto the rows (the M-orthogonal corrections).
 //
-// A multiplier is a row's (rows.hpp): a body's constraint force is -J^T lambda; a stuck foot's
-// rows are e_k . (p_foot - anchor), so the ground's force on the foot is -(lambda_x, lambda_y,
-// lambda_z).
+// A multiplier is a row's (rows.hpp): a body's constraint force is -J^T lambda. A foot on the
+// ground has its rows along the ground's frame (normal, t1, t2): e_k . (p_foot - anchor), three
+// when stuck, the normal's alone when sliding; the ground's force on it is -(lambda_n n +
+// lambda_1 t1 + lambda_2 t2), its normal force N = -lambda_n.
 #pragma once
 
 #include "spatial/robot.hpp"
@@ -20,36 +21,67 @@
 namespace legsim::spatial {
 
 // The system's rows: the robot's joints' [0, robot.m), then three slots per leg for its foot
-// (robot.m + 3 l ..), used when the foot is stuck.
+// (robot.m + 3 l ..: the normal's, t1's, t2's), used as its mode says.
 constexpr int kMaxSystemRows = kMaxRobotRows + 3 * kMaxLegs;
 constexpr int kMaxRobotDof = kBodyDof * kMaxRobotBodies;
 
-// Which feet the ground holds (bit l: leg l) and where (world, m).
+// Which feet the ground holds (bit l: leg l) and how: stuck (held at anchor[l], world, m) or
+// sliding (held on the plane through anchor[l]); the ground's frame (world: unit normal, up, and
+// two unit tangents, right-handed).
 struct FeetHold {
-  uint32_t stuck;
+  uint32_t stuck, sliding;
   V3 anchor[kMaxLegs];
+  V3 normal = {0, 0, 1}, t1 = {1, 0, 0}, t2 = {0, 1, 0};
 };
+// The number of rows foot l has in hold.
+inline int foot_rows(const FeetHold &hold, int l) {
+  return ((hold.stuck >> l) & 1u) ? 3 : ((hold.sliding >> l) & 1u) ? 1 : 0;
+}
 inline int foot_row(const SpatialRobot &robot, int l) { return robot.m + 3 * l; }
 
-// Every row of the system at (q, v): the joints' (robot_rows) and the stuck feet's.
+// Every row of the system at (q, v): the joints' (robot_rows) and the feet's on the ground.
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows);
 
-// [M J^T; J 0] [x; mu] = [f; g] with J the coefficients of rows (system_rows'), f one force per
-// velocity coordinate (6 per body), g one value per system row (the unused foot slots ignored).
-// LEGSIM_ERR_SINGULAR when a leg's rows or the box's complement are dependent (a leg at a dead
-// centre, a stuck foot's rows dependent on its leg's); x and mu then unspecified.
-legsim_status robot_kkt(const SpatialRobot &robot, uint32_t stuck, const Row *rows, const real *f, const real *g,
-                        real *x, real *mu);
+constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
+
+// The factor of [M J^T; J 0] for the rows of system_rows at one q with the feet of `stuck`: per
+// leg its rows in elimination order (its own and its stuck foot's, then its hip's), the
+// Cholesky factor L_l of S_l = J_l M_l^-1 J_l^T, W_l = L_l^-1 B_l on its hip rows; the box's
+// complement's factor. Built once, solved for several right-hand sides (the stages'
+// accelerations, the projections, a sliding foot's friction columns).
+struct RobotFactor {
+  uint32_t stuck, sliding;
+  const Row *rows;  // the rows it was built from (system_rows'), read by the solves
+  int nrow[kMaxLegs], nhip[kMaxLegs];
+  int idx[kMaxLegs][kMaxLegRows];
+  real L[kMaxLegs][kMaxLegRows * kMaxLegRows];
+  real W[kMaxLegs][5 * kBodyDof];
+  real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
+};
+
+// Factor the system for rows (kept by pointer: they must outlive the solves). LEGSIM_ERR_SINGULAR
+// when a leg's rows or the box's complement are dependent (a leg at a dead centre, a stuck
+// foot's rows dependent on its leg's); the factor is then unusable.
+legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F);
+
+// [M J^T; J 0] [x; mu] = [f; g] with F's factor: f one force per velocity coordinate (6 per
+// body), g one value per system row (the unused foot slots ignored); x, mu out.
+void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu);
 
 // The accelerations a (6 per body: v' world, omega' body frame) and multipliers mu (per system
-// row) at (q, v) under the applied forces Q (robot_forces').
+// row) at (q, v) under the applied forces Q (robot_forces'), the feet's rows held as hold says
+// (a sliding foot's friction is not here: it is a force, spatial/contact's); rows and F: work
+// space (the rows at (q, v) and their factor on return).
 legsim_status robot_accelerations(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v,
-                                  const real *Q, real *a, real *mu);
+                                  const real *Q, real *a, real *mu, Row *rows, RobotFactor &F);
 
-// The ground's force on stuck foot l (N, world) from the multipliers.
-inline V3 foot_force(const SpatialRobot &robot, const real *mu, int l) {
+// The ground's force on foot l (N, world) from the multipliers: 0 for a free foot, the normal
+// force alone for a sliding one (its friction is an applied force).
+inline V3 foot_force(const SpatialRobot &robot, const FeetHold &hold, const real *mu, int l) {
   const real *m = mu + foot_row(robot, l);
-  return {-m[0], -m[1], -m[2]};
+  const int n = foot_rows(hold, l);
+  const V3 f = n == 0 ? V3{0, 0, 0} : -m[0] * hold.normal;
+  return n == 3 ? f - m[1] * hold.t1 - m[2] * hold.t2 : f;
 }
 
 }  // namespace legsim::spatial

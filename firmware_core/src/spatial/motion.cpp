@@ -7,12 +7,11 @@ namespace legsim::spatial {
 
 namespace {
 // J v on the used rows: the joints' and the stuck feet's (a row's rate from its coefficients).
-int used_rows(const SpatialRobot &robot, uint32_t stuck, int *idx) {
+int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
   int n = 0;
   for (int r = 0; r < robot.m; ++r) idx[n++] = r;
   for (int l = 0; l < robot.nlegs; ++l)
-    if ((stuck >> l) & 1u)
-      for (int k = 0; k < 3; ++k) idx[n++] = foot_row(robot, l) + k;
+    for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
   return n;
 }
 
@@ -35,17 +34,17 @@ real row_rate(const SpatialRobot &robot, const Row &row, int r, const real *v) {
 }
 
 legsim_status hold_check(const SpatialRobot &robot, const FeetHold &hold) {
-  if (hold.stuck >> robot.nlegs) return LEGSIM_ERR_BAD_INPUT;
+  if ((hold.stuck | hold.sliding) >> robot.nlegs || (hold.stuck & hold.sliding)) return LEGSIM_ERR_BAD_INPUT;
   for (int l = 0; l < robot.nlegs; ++l)
-    if (((hold.stuck >> l) & 1u) && robot.leg[l].foot_body < 0) return LEGSIM_ERR_BAD_INPUT;
+    if (foot_rows(hold, l) && robot.leg[l].foot_body < 0) return LEGSIM_ERR_BAD_INPUT;
   return LEGSIM_OK;
 }
 
-legsim_status accelerations(const SpatialRobot &robot, const RobotData &d, const real *q, const real *v, real *a,
+legsim_status accelerations(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a,
                             real *mu) {
   real Q[kMaxRobotDof];
   robot_forces(robot, q, v, d.actuator_force, d.rowing_torque, Q);
-  return robot_accelerations(robot, d.hold, q, v, Q, a, mu);
+  return robot_accelerations(robot, d.hold, q, v, Q, a, mu, d.rows, d.factor);
 }
 }  // namespace
 
@@ -54,7 +53,7 @@ legsim_status robot_project(const SpatialRobot &robot, const FeetHold &hold, rea
   static const real zero_v[kMaxRobotDof] = {};
   real f[kMaxRobotDof] = {}, g[kMaxSystemRows], dx[kMaxRobotDof], mu[kMaxSystemRows];
   int idx[kMaxSystemRows];
-  const int n = used_rows(robot, hold.stuck, idx);
+  const int n = used_rows(robot, hold, idx);
   Row rows[kMaxSystemRows];
   int it = 0;
   for (;; ++it) {
@@ -67,8 +66,10 @@ legsim_status robot_project(const SpatialRobot &robot, const FeetHold &hold, rea
     if (!(worst == worst)) return LEGSIM_ERR_NOT_CONVERGED;  // NaN
     if (worst <= kProjectionTolerance) break;
     if (it == kProjectionMaxIterations) return LEGSIM_ERR_NOT_CONVERGED;
-    const legsim_status s = robot_kkt(robot, hold.stuck, rows, f, g, dx, mu);
+    static thread_local RobotFactor F;
+    const legsim_status s = robot_factor(robot, hold, rows, F);
     if (s != LEGSIM_OK) return s;
+    robot_solve(robot, F, f, g, dx, mu);
     for (int b = 0; b < robot.nb; ++b) {
       real out[kBodyConfig];
       config_add(q + kBodyConfig * b, dx + kBodyDof * b, out);
@@ -78,8 +79,10 @@ legsim_status robot_project(const SpatialRobot &robot, const FeetHold &hold, rea
   if (iterations) *iterations = it;
   system_rows(robot, hold, q, v, rows);
   for (int i = 0; i < n; ++i) g[idx[i]] = -row_rate(robot, rows[idx[i]], idx[i], v);
-  const legsim_status s = robot_kkt(robot, hold.stuck, rows, f, g, dx, mu);
+  static thread_local RobotFactor F;
+  const legsim_status s = robot_factor(robot, hold, rows, F);
   if (s != LEGSIM_OK) return s;
+  robot_solve(robot, F, f, g, dx, mu);
   for (int k = 0; k < nv; ++k) v[k] += dx[k];
   return LEGSIM_OK;
 }

@@ -23,6 +23,9 @@ struct RobotData {
   real actuator_force[kMaxRobotActuators];  // N, each linear actuator's, held over a step
   real rowing_torque[kMaxLegs];             // N m, each yoke's about its hip axis
   int projection_iterations;                // the last step's position projection's Newton iterations
+  // work space: the rows at the last evaluation and their factor
+  Row rows[kMaxSystemRows];
+  RobotFactor factor;
 };
 
 // The projection's tolerance: every row's |Phi| (m, or a cosine) at most this.
