@@ -1,6 +1,7 @@
 /* The hexapod's cost per step (issue 24, section 5), for robot_step_cost.py --hexapod: the robot
- * of models/hexapod.toml at its legs' stand, standing on a tripod (legs 0, 2, 4 stuck, the
- * other three swinging free) or on six feet, under its statics' commands with 20 N more on
+ * of models/hexapod.toml at its legs' stand, the box 1 m up, its feet on the ground, standing on a
+ * tripod (legs 0, 2, 4 stuck, the other three free, their upper actuators 3 cm shorter: their
+ * feet 8.6 cm up) or on six feet, under its statics' commands with 20 N more on
  * every upper actuator (so that it moves), stepped at h = 1 ms through legsim_hexapod_step.
  *
  *     hexapod_step_cost CASE INTEGRATOR STEPS [REPS]     CASE: tripod | six; INTEGRATOR: rk4
@@ -45,8 +46,11 @@ static legsim_status set_up(uint32_t stance, legsim_hexapod_sim **out) {
   if (st == LEGSIM_OK) st = legsim_assemble_pose(leg, 0);
   if (st == LEGSIM_OK) st = legsim_actuator_lengths(leg, len, NULL);
   if (st != LEGSIM_OK) return st;
-  legsim_hexapod_pose pose = {{0, 0, 0}, {1, 0, 0, 0}, {0.1, 0, -0.1, 0.1, 0, -0.1}, {}};
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) pose.length_m[l][0] = len[0], pose.length_m[l][1] = len[1];
+  legsim_hexapod_pose pose = {{0, 0, 1.0}, {1, 0, 0, 0}, {0.1, 0, -0.1, 0.1, 0, -0.1}, {}};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const bool lift = !((stance >> l) & 1u);
+    pose.length_m[l][0] = len[0] - (lift ? 0.03 : 0.0), pose.length_m[l][1] = len[1];
+  }
   legsim_hexapod_standing s;
   st = legsim_hexapod_statics(&desc, &pose, stance, NULL, work, sizeof work, &s);
   if (st == LEGSIM_OK) st = legsim_hexapod_sim_init(storage, sizeof storage, &desc, &pose, stance, out);

@@ -300,8 +300,8 @@ class Library:
         class HexapodState(C.Structure):
             _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
                         ("box_omega_radps", d * 3), ("rowing_rad", d * 6), ("length_m", (d * 2) * 6),
-                        ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6), ("stuck", i32 * 6),
-                        ("kinetic_energy_j", d)]
+                        ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6), ("foot_state", i32 * 6),
+                        ("kinetic_energy_j", d), ("events", i32), ("impacts", i32)]
 
         self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding

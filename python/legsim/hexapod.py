@@ -23,6 +23,7 @@ from .model import Model
 
 _MSG_LEN = 512
 LEGS = 6
+_FOOT_STATES = ("free", "stuck", "sliding")  # legsim_contact_state
 
 
 class Hexapod:
@@ -162,7 +163,8 @@ class HexapodSim:
     def state(self) -> dict:
         """t_s, box_m, box_quat (w, x, y, z), box_velocity_mps (world), box_omega_radps (box frame),
         rowing_rad (6), length_m (6 x 2), foot_m (6 x 3, world), foot_force_n (6 x 3: the ground's
-        on a stuck foot), stuck (6 bools), kinetic_energy_j."""
+        on each foot), foot_state (6: "free", "stuck" or "sliding"), kinetic_energy_j, events (located
+        in the last step), impacts (touchdowns since the start)."""
         out = self.library.HexapodState()
         self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
                            "legsim_hexapod_get_state")
@@ -172,5 +174,5 @@ class HexapodSim:
                 "length_m": np.array([out.length_m[k][:] for k in range(LEGS)]),
                 "foot_m": np.array([out.foot_m[k][:] for k in range(LEGS)]),
                 "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
-                "stuck": np.array([bool(out.stuck[k]) for k in range(LEGS)]),
-                "kinetic_energy_j": out.kinetic_energy_j}
+                "foot_state": [_FOOT_STATES[out.foot_state[k]] for k in range(LEGS)],
+                "kinetic_energy_j": out.kinetic_energy_j, "events": out.events, "impacts": out.impacts}

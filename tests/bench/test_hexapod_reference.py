@@ -176,10 +176,18 @@ def scene_a(ref, **kw):
     return ref.simulate(pose, range(6), Fa, s["rowing_torque_nm"], 0.2, T_EVAL, **kw)
 
 
+def lifted(pose, legs=(1, 3, 5), by=0.03):
+    """pose with the upper actuators of `legs` shorter by `by` m: their feet 8.6 cm off the ground."""
+    lengths = [list(x) for x in pose["length_m"]]
+    for k in legs:
+        lengths[k][0] -= by
+    return dict(pose, length_m=lengths)
+
+
 def scene_b(ref, **kw):
-    """A tripod stuck, the rowing angles unequal, the tripod statics' forces and +50 N on the
-    stuck right legs' uppers; the other three legs free."""
-    pose = ref.stand_pose(1.0, ROW)
+    """A tripod stuck, the rowing angles unequal, the other three legs free with their feet lifted
+    off the ground; the tripod statics' forces and +50 N on the stuck right legs' uppers."""
+    pose = lifted(ref.stand_pose(1.0, ROW))
     s = ref.statics(pose, stance=(0, 2, 4))
     Fa = s["actuator_force_n"].copy()
     Fa[[0, 2], 0] += 50.0
@@ -258,7 +266,7 @@ def core_scene(core, scene, h_s):
     if scene is scene_a:
         pose, stance, push = core.stand_pose(1.0), tuple(range(6)), (0, 1, 2)
     else:
-        pose, stance, push = core.stand_pose(1.0, ROW), (0, 2, 4), (0, 2)
+        pose, stance, push = lifted(core.stand_pose(1.0, ROW)), (0, 2, 4), (0, 2)
     s = core.statics(pose, stance=stance)
     Fa = np.array(s["actuator_force_n"])
     Fa[list(push), 0] += 50.0

@@ -95,7 +95,7 @@ std::unique_ptr<RobotData> standing_data(const Standing &s, uint32_t stance) {
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(s.robot, s.q, stance, nullptr, st));
   static double v[kMaxRobotDof];
   auto d = std::make_unique<RobotData>();
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(s.robot, s.q, v, hold_at(s.robot, s.q, stance), *d));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(s.robot, s.q, v, hold_at(s.robot, s.q, stance), nullptr, *d));
   for (int a = 0; a < s.robot.na; ++a) d->actuator_force[a] = st.actuator_force[a];
   for (int l = 0; l < s.robot.nlegs; ++l) d->rowing_torque[l] = st.rowing_torque[l];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(s.robot, *d));
@@ -191,7 +191,7 @@ void test_flight_keeps_momentum_and_energy(void) {
   for (int run = 0; run < 2; ++run) {
     const double h = run == 0 ? 2e-3 : 1e-3;
     auto d = std::make_unique<RobotData>();
-    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold_at(R, q, 0), *d));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold_at(R, q, 0), nullptr, *d));
     for (int a = 0; a < R.na; ++a) d->actuator_force[a] = 20.0 * std::sin(0.5 + a);
     for (int l = 0; l < R.nlegs; ++l) d->rowing_torque[l] = 0.5 * std::cos(1.5 + l);
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
@@ -260,7 +260,7 @@ void test_refuses_bad_input(void) {
   static double v[kMaxRobotDof];
   FeetHold bad = hold_at(R, s.q, 0x80);
   auto e = std::make_unique<RobotData>();
-  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_data_init(R, s.q, v, bad, *e));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, robot_data_init(R, s.q, v, bad, nullptr, *e));
 }
 
 int main(void) {

@@ -120,22 +120,25 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
                                             void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out);
 
 /* ---- the hexapod moving --------------------------------------------------- */
-/* Forward dynamics (docs/design/spatial.md): the whole robot in absolute spatial coordinates,
- * the feet of a stuck mask held where they stand (three rows each: their ground forces are the
- * multipliers), the others free; each linear actuator's axial force and each rowing torque held
- * over a step as commanded; RK4 on the rotation group, the positions and velocities projected
- * onto the rows at each step's end. A step is all or nothing. No contact law yet: a stuck foot
- * stays stuck whatever its force (the report gives the force to judge it by), a free foot passes
- * through the ground. */
+/* Forward dynamics (docs/design/spatial.md): the whole robot in absolute spatial coordinates on
+ * the file's ground plane, each foot free, stuck (three rows hold it: its ground force is their
+ * multipliers) or sliding (its normal row; friction mu_kinetic N against its slip), changing at
+ * events located inside the step: a touchdown (an impact on the feet's circular cones), a lift-off
+ * (N reaches 0), stick to slip (|F_t| reaches mu_static N), slip to stick. Each linear actuator's
+ * axial force and each rowing torque held over a step as commanded; RK4 on the rotation group,
+ * the positions and velocities projected onto the rows at each step's end. A step is all or
+ * nothing. */
 typedef struct legsim_hexapod_sim legsim_hexapod_sim;
 
 /* Bytes of storage legsim_hexapod_sim_init needs (aligned to LEGSIM_STORAGE_ALIGN). */
 size_t legsim_hexapod_sim_size(void);
 
-/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l) held where the pose
- * puts them, the commands zero. Statuses as legsim_hexapod_statics' (its pose checks, a leg's
- * assembly), LEGSIM_ERR_SINGULAR / _NOT_CONVERGED (the rows with the stuck feet cannot be met
- * or solved). *out is written only on LEGSIM_OK. */
+/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l) stuck where the pose
+ * puts them (on the ground or not: the caller's pose says), the others free, the commands zero.
+ * Statuses as legsim_hexapod_statics' (its pose checks, a leg's assembly; LEGSIM_ERR_BAD_INPUT
+ * also for a free foot more than 1e-9 m under the ground), LEGSIM_ERR_SINGULAR /
+ * _NOT_CONVERGED (the rows with the stuck feet cannot be met or solved). *out is written only on
+ * LEGSIM_OK. The commands zero, the stuck feet's modes are checked at the first command. */
 legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const legsim_hexapod_desc *h,
                                       const legsim_hexapod_pose *pose, uint32_t stuck_mask,
                                       legsim_hexapod_sim **out);
@@ -158,9 +161,11 @@ typedef struct legsim_hexapod_state {
   double rowing_rad[LEGSIM_HEXAPOD_LEGS];        /* each yoke's angle from its heading */
   double length_m[LEGSIM_HEXAPOD_LEGS][2];       /* each leg's actuators */
   double foot_m[LEGSIM_HEXAPOD_LEGS][3];         /* each foot (world) */
-  double foot_force_n[LEGSIM_HEXAPOD_LEGS][3];   /* the ground's force on a stuck foot (world), else 0 */
-  int32_t stuck[LEGSIM_HEXAPOD_LEGS];
+  double foot_force_n[LEGSIM_HEXAPOD_LEGS][3];   /* the ground's force on each foot (world; 0 when free) */
+  int32_t foot_state[LEGSIM_HEXAPOD_LEGS];       /* legsim_contact_state */
   double kinetic_energy_j;
+  int32_t events;                                /* contact events located in the last step */
+  int32_t impacts;                               /* touchdowns since the start */
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

@@ -213,7 +213,10 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
   hold.stuck = stuck_mask;
   hold.sliding = 0;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) hold.anchor[l] = spatial::robot_foot_position(w.robot, l, w.q);
-  st = spatial::robot_data_init(sim->robot, w.q, w.v, hold, sim->data);
+  const spatial::GroundPlane ground = {{h->ground_point_m[0], h->ground_point_m[1], h->ground_point_m[2]},
+                                       {h->ground_normal[0], h->ground_normal[1], h->ground_normal[2]},
+                                       h->mu_static, h->mu_kinetic};
+  st = spatial::robot_data_init(sim->robot, w.q, w.v, hold, &ground, sim->data);
   if (st != LEGSIM_OK) return st;
   sim->magic = kHexapodMagic;
   *out = sim;
@@ -267,12 +270,15 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
       r.length_m[l][a] = a < L.nactuators ? spatial::robot_actuator_length(R, L.first_actuator + a, d.q) : 0.0;
     const spatial::V3 f = spatial::robot_foot_position(R, l, d.q);
     r.foot_m[l][0] = f.x, r.foot_m[l][1] = f.y, r.foot_m[l][2] = f.z;
-    const bool stuck = (d.hold.stuck >> l) & 1u;
-    const spatial::V3 F = spatial::foot_force(R, d.hold, d.mu, l);
+    const spatial::V3 F = spatial::robot_foot_force(R, d, l);
     r.foot_force_n[l][0] = F.x, r.foot_force_n[l][1] = F.y, r.foot_force_n[l][2] = F.z;
-    r.stuck[l] = stuck ? 1 : 0;
+    r.foot_state[l] = ((d.hold.stuck >> l) & 1u)     ? LEGSIM_CONTACT_STUCK
+                      : ((d.hold.sliding >> l) & 1u) ? LEGSIM_CONTACT_SLIDING
+                                                     : LEGSIM_CONTACT_FREE;
   }
   r.kinetic_energy_j = spatial::robot_kinetic_energy(R, d.v);
+  r.events = d.events;
+  r.impacts = d.impacts;
   *out = r;
   return LEGSIM_OK;
 }

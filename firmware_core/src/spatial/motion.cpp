@@ -6,7 +6,8 @@
 namespace legsim::spatial {
 
 namespace {
-// J v on the used rows: the joints' and the stuck feet's (a row's rate from its coefficients).
+inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
+
 int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
   int n = 0;
   for (int r = 0; r < robot.m; ++r) idx[n++] = r;
@@ -15,17 +16,9 @@ int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
   return n;
 }
 
-void body_pair(const SpatialRobot &robot, int r, int &a, int &b) {
-  if (r < robot.m) {
-    a = robot.row_body[r][0], b = robot.row_body[r][1];
-  } else {
-    a = robot.leg[(r - robot.m) / 3].foot_body, b = -1;
-  }
-}
-
 real row_rate(const SpatialRobot &robot, const Row &row, int r, const real *v) {
-  int a, b;
-  body_pair(robot, r, a, b);
+  const int a = r < robot.m ? robot.row_body[r][0] : robot.leg[(r - robot.m) / 3].foot_body;
+  const int b = r < robot.m ? robot.row_body[r][1] : -1;
   real s = 0;
   for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * v[kBodyDof * a + k];
   if (b >= 0)
@@ -40,89 +33,97 @@ legsim_status hold_check(const SpatialRobot &robot, const FeetHold &hold) {
   return LEGSIM_OK;
 }
 
-legsim_status accelerations(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a,
-                            real *mu) {
-  real Q[kMaxRobotDof];
-  robot_forces(robot, q, v, d.actuator_force, d.rowing_torque, Q);
-  return robot_accelerations(robot, d.hold, q, v, Q, a, mu, d.rows, d.factor);
-}
-}  // namespace
-
-legsim_status robot_project(const SpatialRobot &robot, const FeetHold &hold, real *q, real *v, int *iterations) {
-  const int nv = kBodyDof * robot.nb;
+// q and v onto the rows: q by simplified Newton iterations of the M-orthogonal correction (the
+// factor at the first q), then v by one; on return d.rows and d.factor are those at (q, v).
+legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v, int &iterations) {
   static const real zero_v[kMaxRobotDof] = {};
-  real f[kMaxRobotDof] = {}, g[kMaxSystemRows], dx[kMaxRobotDof], mu[kMaxSystemRows];
+  static const real zero_f[kMaxRobotDof] = {};
+  real g[kMaxSystemRows], dx[kMaxRobotDof], mu[kMaxSystemRows];
   int idx[kMaxSystemRows];
-  const int n = used_rows(robot, hold, idx);
-  Row rows[kMaxSystemRows];
-  int it = 0;
-  for (;; ++it) {
-    system_rows(robot, hold, q, zero_v, rows);
+  const int n = used_rows(robot, d.hold, idx);
+  bool factored = false;
+  iterations = 0;
+  for (;;) {
+    system_rows(robot, d.hold, q, zero_v, d.rows_work);
     real worst = 0;
     for (int i = 0; i < n; ++i) {
-      g[idx[i]] = -rows[idx[i]].phi;
-      worst = std::max(worst, std::abs(rows[idx[i]].phi));
+      g[idx[i]] = -d.rows_work[idx[i]].phi;
+      worst = std::max(worst, std::abs(g[idx[i]]));
     }
-    if (!(worst == worst)) return LEGSIM_ERR_NOT_CONVERGED;  // NaN
+    if (!(worst == worst)) return LEGSIM_ERR_DIVERGED;
     if (worst <= kProjectionTolerance) break;
-    if (it == kProjectionMaxIterations) return LEGSIM_ERR_NOT_CONVERGED;
-    static thread_local RobotFactor F;
-    const legsim_status s = robot_factor(robot, hold, rows, F);
-    if (s != LEGSIM_OK) return s;
-    robot_solve(robot, F, f, g, dx, mu);
+    if (iterations == kProjectionMaxIterations) return LEGSIM_ERR_NOT_CONVERGED;
+    if (!factored) {
+      system_rows(robot, d.hold, q, zero_v, d.rows);
+      const legsim_status s = robot_factor(robot, d.hold, d.rows, d.factor);
+      if (s != LEGSIM_OK) return s;
+      factored = true;
+    }
+    robot_solve(robot, d.factor, zero_f, g, dx, mu);
     for (int b = 0; b < robot.nb; ++b) {
       real out[kBodyConfig];
       config_add(q + kBodyConfig * b, dx + kBodyDof * b, out);
       std::copy(out, out + kBodyConfig, q + kBodyConfig * b);
     }
+    ++iterations;
   }
-  if (iterations) *iterations = it;
-  system_rows(robot, hold, q, v, rows);
-  for (int i = 0; i < n; ++i) g[idx[i]] = -row_rate(robot, rows[idx[i]], idx[i], v);
-  static thread_local RobotFactor F;
-  const legsim_status s = robot_factor(robot, hold, rows, F);
+  system_rows(robot, d.hold, q, v, d.rows);
+  const legsim_status s = robot_factor(robot, d.hold, d.rows, d.factor);
   if (s != LEGSIM_OK) return s;
-  robot_solve(robot, F, f, g, dx, mu);
-  for (int k = 0; k < nv; ++k) v[k] += dx[k];
+  for (int i = 0; i < n; ++i) g[idx[i]] = -row_rate(robot, d.rows[idx[i]], idx[i], v);
+  robot_solve(robot, d.factor, zero_f, g, dx, mu);
+  for (int k = 0; k < kBodyDof * robot.nb; ++k) v[k] += dx[k];
+  system_rows(robot, d.hold, q, v, d.rows);  // gamma at the new v; J is the factor's
   return LEGSIM_OK;
 }
 
-legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const real *v, const FeetHold &hold,
-                              RobotData &data) {
-  legsim_status s = hold_check(robot, hold);
-  if (s != LEGSIM_OK) return s;
-  RobotData d;
-  d.t = 0;
-  std::copy(q, q + kBodyConfig * robot.nb, d.q);
-  std::copy(v, v + kBodyDof * robot.nb, d.v);
-  d.hold = hold;
-  std::fill(d.actuator_force, d.actuator_force + kMaxRobotActuators, real(0));
-  std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
-  d.projection_iterations = 0;
-  s = robot_project(robot, d.hold, d.q, d.v, &d.projection_iterations);
-  if (s == LEGSIM_OK) s = accelerations(robot, d, d.q, d.v, d.a, d.mu);
-  if (s == LEGSIM_OK) data = d;
-  return s;
+// The accelerations, multipliers and sliding feet's normal forces at (q, v) under d's commands.
+legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a, real *mu,
+                       real *N, bool factored) {
+  real Q[kMaxRobotDof];
+  robot_forces(robot, q, v, d.actuator_force, d.rowing_torque, Q);
+  return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, d.slip_dir, q, v, Q, a, mu, N, d.rows, d.factor,
+                               factored);
 }
 
-legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
-  legsim_status s = hold_check(robot, data.hold);
-  if (s != LEGSIM_OK) return s;
-  real a[kMaxRobotDof], mu[kMaxSystemRows];
-  s = accelerations(robot, data, data.q, data.v, a, mu);
-  if (s != LEGSIM_OK) return s;
-  std::copy(a, a + kBodyDof * robot.nb, data.a);
-  std::copy(mu, mu + kMaxSystemRows, data.mu);
-  return LEGSIM_OK;
+// The state a step starts from and returns to when it fails.
+struct Core {
+  real t;
+  real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], a[kMaxRobotDof], mu[kMaxSystemRows];
+  real N[kMaxLegs];
+  FeetHold hold;
+  V3 slip_dir[kMaxLegs];
+};
+void save(const SpatialRobot &robot, const RobotData &d, Core &c) {
+  c.t = d.t;
+  std::copy(d.q, d.q + kBodyConfig * robot.nb, c.q);
+  std::copy(d.v, d.v + kBodyDof * robot.nb, c.v);
+  std::copy(d.a, d.a + kBodyDof * robot.nb, c.a);
+  std::copy(d.mu, d.mu + kMaxSystemRows, c.mu);
+  std::copy(d.normal_force, d.normal_force + kMaxLegs, c.N);
+  c.hold = d.hold;
+  std::copy(d.slip_dir, d.slip_dir + kMaxLegs, c.slip_dir);
+}
+void load(const SpatialRobot &robot, const Core &c, RobotData &d) {
+  d.t = c.t;
+  std::copy(c.q, c.q + kBodyConfig * robot.nb, d.q);
+  std::copy(c.v, c.v + kBodyDof * robot.nb, d.v);
+  std::copy(c.a, c.a + kBodyDof * robot.nb, d.a);
+  std::copy(c.mu, c.mu + kMaxSystemRows, d.mu);
+  std::copy(c.N, c.N + kMaxLegs, d.normal_force);
+  d.hold = c.hold;
+  std::copy(c.slip_dir, c.slip_dir + kMaxLegs, d.slip_dir);
 }
 
-legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &data, real h) {
-  if (!(h > 0) || !std::isfinite(h)) return LEGSIM_ERR_BAD_INPUT;
+// One RK4 step of H on d in place (d.a must be the accelerations at d's state); d part-way on
+// failure.
+legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
   const int nb = robot.nb, nv = kBodyDof * nb;
-  const real *q0 = data.q, *v0 = data.v;
-  real q[kBodyConfig * kMaxRobotBodies], th[kMaxRobotDof], v[kMaxRobotDof], mu[kMaxSystemRows];
+  real q0[kBodyConfig * kMaxRobotBodies], v0[kMaxRobotDof];
+  std::copy(d.q, d.q + kBodyConfig * nb, q0);
+  std::copy(d.v, d.v + nv, v0);
+  real q[kBodyConfig * kMaxRobotBodies], th[kMaxRobotDof], v[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
   real kth[4][kMaxRobotDof], kv[4][kMaxRobotDof];
-  // stage s at theta = th, velocity v: theta' and v'
   auto stage = [&](int s, const real *ths, const real *vs) {
     for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, ths + kBodyDof * b, q + kBodyConfig * b);
     for (int b = 0; b < nb; ++b) {
@@ -131,35 +132,259 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &data, real h)
       const V3 w = dexp_inv({tb[3], tb[4], tb[5]}, {vb[3], vb[4], vb[5]});
       o[0] = vb[0], o[1] = vb[1], o[2] = vb[2], o[3] = w.x, o[4] = w.y, o[5] = w.z;
     }
-    return accelerations(robot, data, q, vs, kv[s], mu);
+    return evaluate(robot, d, q, vs, kv[s], mu, N, false);
   };
-  // the first stage is the last step's end (robot_data_init / _refresh keep it current)
-  for (int k = 0; k < nv; ++k) kth[0][k] = v0[k], kv[0][k] = data.a[k];
+  for (int k = 0; k < nv; ++k) kth[0][k] = v0[k], kv[0][k] = d.a[k];
   static const real c[3] = {real(0.5), real(0.5), real(1)};
   for (int s = 1; s < 4; ++s) {
-    for (int k = 0; k < nv; ++k) th[k] = c[s - 1] * h * kth[s - 1][k], v[k] = v0[k] + c[s - 1] * h * kv[s - 1][k];
+    for (int k = 0; k < nv; ++k) th[k] = c[s - 1] * H * kth[s - 1][k], v[k] = v0[k] + c[s - 1] * H * kv[s - 1][k];
     const legsim_status st = stage(s, th, v);
     if (st != LEGSIM_OK) return st;
   }
   for (int k = 0; k < nv; ++k) {
-    th[k] = h / 6 * (kth[0][k] + 2 * (kth[1][k] + kth[2][k]) + kth[3][k]);
-    v[k] = v0[k] + h / 6 * (kv[0][k] + 2 * (kv[1][k] + kv[2][k]) + kv[3][k]);
+    th[k] = H / 6 * (kth[0][k] + 2 * (kth[1][k] + kth[2][k]) + kth[3][k]);
+    d.v[k] = v0[k] + H / 6 * (kv[0][k] + 2 * (kv[1][k] + kv[2][k]) + kv[3][k]);
   }
-  for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, th + kBodyDof * b, q + kBodyConfig * b);
-  int iterations = 0;
-  legsim_status st = robot_project(robot, data.hold, q, v, &iterations);
-  real a[kMaxRobotDof];
-  if (st == LEGSIM_OK) st = accelerations(robot, data, q, v, a, mu);
+  for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, th + kBodyDof * b, d.q + kBodyConfig * b);
+  legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
+  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true);
   if (st != LEGSIM_OK) return st;
-  for (int k = 0; k < nv; ++k) {
-    if (!std::isfinite(v[k]) || !std::isfinite(a[k])) return LEGSIM_ERR_NOT_CONVERGED;
+  for (int k = 0; k < nv; ++k)
+    if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
+  d.t += H;
+  return LEGSIM_OK;
+}
+
+// ---- contact events -------------------------------------------------------------------------
+// Per foot two functions, each >= 0 while its mode holds: a free foot's height above the
+// ground (m) and none; a stuck foot's normal force (N) and its cone's margin mu_s N - |F_t|
+// (N); a sliding foot's normal force and its slip velocity along its direction at the step's
+// start (m/s).
+constexpr real kNone = real(1e300);
+void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, real (*e)[2]) {
+  for (int l = 0; l < robot.nlegs; ++l) {
+    e[l][0] = e[l][1] = kNone;
+    if (!d.has_ground || robot.leg[l].foot_body < 0) continue;
+    const uint32_t bit = 1u << l;
+    const real *m = d.mu + foot_row(robot, l);
+    if (d.hold.stuck & bit) {
+      e[l][0] = -m[0];
+      e[l][1] = d.ground.mu_static * -m[0] - std::hypot(m[1], m[2]);
+    } else if (d.hold.sliding & bit) {
+      V3 p, pv;
+      foot_motion(robot, l, d.q, d.v, p, pv);
+      e[l][0] = d.normal_force[l];
+      e[l][1] = dot(tangential(d.hold, pv), ref[l]);
+    } else {
+      V3 p, pv;
+      foot_motion(robot, l, d.q, d.v, p, pv);
+      e[l][0] = dot(p - d.ground.point, d.ground.normal);
+    }
   }
-  std::copy(q, q + kBodyConfig * nb, data.q);
-  std::copy(v, v + nv, data.v);
-  std::copy(a, a + nv, data.a);
+}
+
+// Below -tol an event function has crossed (round-off above it is still "at the root"): heights
+// and slip velocities to 1e-12 (m, m/s), forces to 1e-10 of the robot's mass in kg (N).
+real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k) {
+  if (!((d.hold.stuck | d.hold.sliding) >> l & 1u) || (k == 1 && ((d.hold.sliding >> l) & 1u))) return real(1e-12);
+  real mass = 1;
+  for (int b = 0; b < robot.nb; ++b) mass += robot.mass[b];
+  return real(1e-10) * mass;
+}
+
+// The modes checked against the cone at d's state (after an event or at the start): a stuck foot
+// pulling is let go, one past mu_s N starts to slide opposite its tangential force; a sliding
+// foot pulling is let go; projected and evaluated again until none changes.
+legsim_status settle(const SpatialRobot &robot, RobotData &d) {
+  for (int round = 0; round <= 2 * robot.nlegs + 1; ++round) {
+    legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
+    if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true);
+    if (st != LEGSIM_OK) return st;
+    if (!d.has_ground) return LEGSIM_OK;
+    real scale = 1;
+    for (int b = 0; b < robot.nb; ++b) scale += robot.mass[b];
+    const real tol = real(1e-9) * scale;
+    bool changed = false;
+    for (int l = 0; l < robot.nlegs; ++l) {
+      const uint32_t bit = 1u << l;
+      const real *m = d.mu + foot_row(robot, l);
+      if (d.hold.stuck & bit) {
+        const real N = -m[0], Ft = std::hypot(m[1], m[2]);
+        if (N < -tol) {
+          d.hold.stuck &= ~bit, changed = true;
+        } else if (Ft > d.ground.mu_static * N + tol) {
+          d.hold.stuck &= ~bit, d.hold.sliding |= bit, changed = true;
+          d.slip_dir[l] = (1 / Ft) * (m[1] * d.hold.t1 + m[2] * d.hold.t2);  // opposite the ground's force
+        }
+      } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
+        d.hold.sliding &= ~bit, changed = true;
+      }
+    }
+    if (!changed) return LEGSIM_OK;
+  }
+  return LEGSIM_ERR_CONTACT;
+}
+
+// Event (l, k) applied at d's state.
+legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k) {
+  const uint32_t bit = 1u << l;
+  V3 p, pv;
+  foot_motion(robot, l, d.q, d.v, p, pv);
+  const V3 on_ground = p - dot(p - d.ground.point, d.ground.normal) * d.ground.normal;
+  if (d.hold.stuck & bit) {
+    d.hold.stuck &= ~bit;
+    if (k == 1) {  // stick to slip: opposite the ground's tangential force
+      const real *m = d.mu + foot_row(robot, l);
+      const real Ft = std::hypot(m[1], m[2]);
+      d.hold.sliding |= bit;
+      d.slip_dir[l] = Ft > 0 ? (1 / Ft) * (m[1] * d.hold.t1 + m[2] * d.hold.t2) : d.hold.t1;
+    }
+  } else if (d.hold.sliding & bit) {
+    d.hold.sliding &= ~bit;
+    if (k == 1) d.hold.stuck |= bit, d.hold.anchor[l] = on_ground;  // slip to stick
+  } else {  // a touchdown: the impact of every foot in touch
+    const uint32_t touching = d.hold.stuck | d.hold.sliding | bit;
+    for (int j = 0; j < robot.nlegs; ++j) d.impulse[j] = {0, 0, 0};
+    const legsim_status st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse,
+                                            d.impact, d.rows, d.factor);
+    if (st != LEGSIM_OK) return st;
+    ++d.impacts;
+  }
+  return settle(robot, d);
+}
+}  // namespace
+
+legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const real *v, const FeetHold &hold,
+                              const GroundPlane *ground, RobotData &data) {
+  legsim_status s = hold_check(robot, hold);
+  if (s != LEGSIM_OK) return s;
+  RobotData &d = data;
+  d.t = 0;
+  std::copy(q, q + kBodyConfig * robot.nb, d.q);
+  std::copy(v, v + kBodyDof * robot.nb, d.v);
+  d.hold = hold;
+  d.has_ground = ground != nullptr;
+  if (ground) {
+    d.ground = *ground;
+    ground_frame(*ground, d.hold);
+    for (int l = 0; l < robot.nlegs; ++l) {
+      if (robot.leg[l].foot_body < 0 || foot_rows(hold, l)) continue;
+      const V3 p = robot_foot_position(robot, l, q);
+      if (dot(p - ground->point, ground->normal) < -real(1e-9)) return LEGSIM_ERR_BAD_INPUT;  // a free foot under it
+    }
+  } else {
+    d.ground = {{0, 0, 0}, {0, 0, 1}, 0, 0};
+  }
+  for (int l = 0; l < kMaxLegs; ++l) d.slip_dir[l] = d.hold.t1, d.normal_force[l] = 0, d.impulse[l] = {0, 0, 0};
+  std::fill(d.actuator_force, d.actuator_force + kMaxRobotActuators, real(0));
+  std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
+  std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
+  d.projection_iterations = d.events = d.impacts = 0;
+  d.impact = {true, ConeMethod::Newton, 0, 0};
+  return settle(robot, d);
+}
+
+legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
+  legsim_status s = hold_check(robot, data.hold);
+  if (s != LEGSIM_OK) return s;
+  real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
+  std::copy(data.normal_force, data.normal_force + kMaxLegs, N);
+  s = evaluate(robot, data, data.q, data.v, a, mu, N, false);
+  if (s != LEGSIM_OK) return s;
+  std::copy(a, a + kBodyDof * robot.nb, data.a);
   std::copy(mu, mu + kMaxSystemRows, data.mu);
-  data.projection_iterations = iterations;
-  data.t += h;
+  std::copy(N, N + kMaxLegs, data.normal_force);
+  return LEGSIM_OK;
+}
+
+legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
+  if (!(h > 0) || !std::isfinite(h)) return LEGSIM_ERR_BAD_INPUT;
+  Core start, s0;
+  save(robot, d, start);
+  const int events_before = d.impacts;
+  int events = 0;
+  real remaining = h;
+  auto fail = [&](legsim_status st) {
+    load(robot, start, d);
+    d.impacts = events_before;
+    return st;
+  };
+  for (;;) {
+    save(robot, d, s0);
+    V3 ref[kMaxLegs];
+    for (int l = 0; l < robot.nlegs; ++l)
+      ref[l] = ((d.hold.sliding >> l) & 1u) ? slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]) : V3{0, 0, 0};
+    real e0[kMaxLegs][2], e1[kMaxLegs][2];
+    event_values(robot, d, ref, e0);
+    legsim_status st = rk4(robot, d, remaining);
+    if (st != LEGSIM_OK) return fail(st);
+    event_values(robot, d, ref, e1);
+    // the crossings: the earliest by the line through the two ends first
+    int el = -1, ek = -1;
+    real best = 2;
+    for (int l = 0; l < robot.nlegs; ++l)
+      for (int k = 0; k < 2; ++k) {
+        if (!(e1[l][k] < -event_tolerance(robot, d, l, k))) continue;
+        const real a0 = std::max(e0[l][k], real(0));
+        const real est = a0 / (a0 - e1[l][k]);
+        if (est < best) best = est, el = l, ek = k;
+      }
+    if (el < 0) break;
+    // locate it: regula falsi (Illinois) on the fraction of the step; then check that no other
+    // event crossed before it, else locate that one within the shorter window
+    real window = 1;
+    for (int guard = 0; guard < 2 * kMaxLegs; ++guard) {
+      real lo = 0, hi = window, flo = std::max(e0[el][ek], real(0)), fhi = e1[el][ek];
+      if (guard > 0) {  // the new event's value at the window's end
+        load(robot, s0, d);
+        if ((st = rk4(robot, d, hi * remaining)) != LEGSIM_OK) return fail(st);
+        real e[kMaxLegs][2];
+        event_values(robot, d, ref, e);
+        fhi = e[el][ek];
+      }
+      int side = 0;
+      for (int it = 0; it < 60 && (hi - lo) * remaining > real(1e-13) * (1 + remaining); ++it) {
+        real th = (lo * fhi - hi * flo) / (fhi - flo);
+        if (!(th > lo && th < hi)) th = real(0.5) * (lo + hi);
+        load(robot, s0, d);
+        if ((st = rk4(robot, d, th * remaining)) != LEGSIM_OK) return fail(st);
+        real e[kMaxLegs][2];
+        event_values(robot, d, ref, e);
+        const real f = e[el][ek];
+        if (f < 0) {
+          hi = th, fhi = f;
+          if (side == -1) flo *= real(0.5);
+          side = -1;
+        } else {
+          lo = th, flo = f;
+          if (side == 1) fhi *= real(0.5);
+          side = 1;
+        }
+        if (f == 0) {
+          hi = th;
+          break;
+        }
+      }
+      load(robot, s0, d);
+      if ((st = rk4(robot, d, hi * remaining)) != LEGSIM_OK) return fail(st);
+      real e[kMaxLegs][2];
+      event_values(robot, d, ref, e);
+      int nl = -1, nk = -1;
+      for (int l = 0; l < robot.nlegs; ++l)
+        for (int k = 0; k < 2; ++k)
+          if ((l != el || k != ek) && e[l][k] < -event_tolerance(robot, d, l, k)) nl = l, nk = k;
+      window = hi;
+      if (nl < 0) break;
+      el = nl, ek = nk;
+    }
+    st = apply_event(robot, d, el, ek);
+    if (st != LEGSIM_OK) return fail(st);
+    remaining -= window * remaining;
+    if (++events > kMaxStepEvents) return fail(LEGSIM_ERR_CONTACT);
+    if (remaining <= real(1e-14) * h) break;
+  }
+  d.t = start.t + h;
+  d.events = events;
   return LEGSIM_OK;
 }
 
@@ -180,6 +405,15 @@ real robot_gravity_potential(const SpatialRobot &robot, const real *q) {
     U -= robot.mass[b] * (robot.gravity.x * q[kBodyConfig * b] + robot.gravity.y * q[kBodyConfig * b + 1] +
                           robot.gravity.z * q[kBodyConfig * b + 2]);
   return U;
+}
+
+V3 robot_foot_force(const SpatialRobot &robot, const RobotData &d, int l) {
+  const uint32_t bit = 1u << l;
+  if (d.hold.sliding & bit) {
+    const V3 s = slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]);
+    return d.normal_force[l] * d.hold.normal - d.ground.mu_kinetic * d.normal_force[l] * s;
+  }
+  return foot_force(robot, d.hold, d.mu, l);
 }
 
 }  // namespace legsim::spatial

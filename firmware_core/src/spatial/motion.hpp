@@ -1,58 +1,76 @@
 // The legs in space stepped in time (docs/design/spatial.md): the robot's state (q: 7 numbers a
 // body, v: 6), its commands held over a step (each linear actuator's axial force, each rowing
-// torque), the feet the ground holds; RK4 on the rotation group (Munthe-Kaas: each body's local
-// coordinates start at 0 each step, theta' = dexp^-1(theta) omega), then the positions and
-// velocities projected onto the rows (M-orthogonal: the least kinetic-energy correction), then
-// the accelerations and multipliers at the step's end (the reactions it reports, and the next
-// step's first stage).
+// torque), its feet's modes on the ground (spatial/contact). A step is RK4 on the rotation
+// group (Munthe-Kaas: each body's local coordinates start at 0, theta' = dexp^-1(theta) omega),
+// then the positions and velocities projected onto the rows (M-orthogonal: the least
+// kinetic-energy correction), then the accelerations and multipliers at its end (the reactions
+// it reports, and the next step's first stage). A contact event inside the step (a touchdown, a
+// lift-off, stick to slip, slip to stick) is located by retaking the step from its start to a
+// fraction of it (regula falsi with the Illinois rule on the event's function), applied there,
+// and the rest of the step taken after it.
 //
 // (model, data): the robot (SpatialRobot, robot.hpp) is the model; RobotData the data. A step is
 // all or nothing: data changes only when it returns LEGSIM_OK.
 #pragma once
 
-#include "spatial/dynamics.hpp"
+#include "spatial/contact.hpp"
 
 namespace legsim::spatial {
 
 struct RobotData {
   real t;  // s
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
-  real a[kMaxRobotDof];     // at (t, q, v)
-  real mu[kMaxSystemRows];  // the multipliers at (t, q, v)
-  FeetHold hold;
+  real a[kMaxRobotDof];       // at (t, q, v)
+  real mu[kMaxSystemRows];    // the multipliers at (t, q, v)
+  real normal_force[kMaxLegs];  // N: each sliding foot's at (t, q, v)
+  FeetHold hold;              // the feet's modes (and the ground's frame)
+  V3 slip_dir[kMaxLegs];      // a sliding foot's friction direction while its slip is below 1e-9 m/s
+  bool has_ground;            // else the feet pass through (no contact events)
+  GroundPlane ground;
   real actuator_force[kMaxRobotActuators];  // N, each linear actuator's, held over a step
   real rowing_torque[kMaxLegs];             // N m, each yoke's about its hip axis
-  int projection_iterations;                // the last step's position projection's Newton iterations
+  // the last step's report
+  int projection_iterations;  // its last position projection's Newton iterations
+  int events;                 // contact events located in it
+  int impacts;                // touchdowns among them
+  ConeReport impact;          // the last impact's contact problem
+  V3 impulse[kMaxLegs];       // N s, world: the ground's on each foot at the last impact
   // work space: the rows at the last evaluation and their factor
-  Row rows[kMaxSystemRows];
+  Row rows[kMaxSystemRows], rows_work[kMaxSystemRows];
   RobotFactor factor;
 };
 
 // The projection's tolerance: every row's |Phi| (m, or a cosine) at most this.
 constexpr real kProjectionTolerance = real(sizeof(real) == sizeof(float) ? 1e-5 : 1e-12);
 constexpr int kProjectionMaxIterations = 8;
+// The most events located in one step: more is a Zeno cascade or modes that do not settle.
+constexpr int kMaxStepEvents = 16;
 
-// q and v moved onto the rows (with hold's feet): q by Newton's iterations of the M-orthogonal
-// correction, then v by one. LEGSIM_ERR_NOT_CONVERGED when the rows are not met to
-// kProjectionTolerance in kProjectionMaxIterations; LEGSIM_ERR_SINGULAR as robot_kkt.
-legsim_status robot_project(const SpatialRobot &robot, const FeetHold &hold, real *q, real *v, int *iterations = nullptr);
-
-// data at (q, v) with the feet of hold stuck and the commands zero: projected, then its
-// accelerations and multipliers. LEGSIM_ERR_BAD_INPUT for a stuck leg without a foot or a mask
-// naming a leg the robot does not have; else as robot_project.
+// data at (q, v) with the feet of hold (stuck and sliding; free feet may not be below the
+// ground), the ground (nullptr: none) and the commands zero: projected, its modes checked against
+// the cone (a stuck foot pulling or past mu_s N is let go), its accelerations and multipliers.
+// LEGSIM_ERR_BAD_INPUT for a foot mode on a leg without a foot or the robot does not have, a
+// foot both stuck and sliding, a free foot more than 1e-9 m under the ground; LEGSIM_ERR_CONTACT when no modes hold; else as robot_step_rk4.
 legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const real *v, const FeetHold &hold,
-                              RobotData &data);
+                              const GroundPlane *ground, RobotData &data);
 
 // The accelerations and multipliers at data's state under its commands (after a change of
-// commands or feet; robot_step keeps them).
+// commands; robot_step keeps them).
 legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data);
 
-// One RK4 step of h (s, > 0) on the rotation group. Statuses: robot_accelerations' and
-// robot_project's, and LEGSIM_ERR_BAD_INPUT for h not positive and finite.
+// One step of h (s, > 0): RK4 on the group with the contact events inside it located. Statuses:
+// LEGSIM_ERR_BAD_INPUT for h not positive and finite; LEGSIM_ERR_SINGULAR (a leg at a dead
+// centre); LEGSIM_ERR_NOT_CONVERGED (the projection, an impact's contact problem);
+// LEGSIM_ERR_CONTACT (friction making a normal force arbitrary, modes that do not settle, more
+// than kMaxStepEvents events); LEGSIM_ERR_DIVERGED (a non-finite result).
 legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &data, real h);
 
 // The robot's kinetic energy (J) at v, and gravity's potential (J, from z = 0) at q.
 real robot_kinetic_energy(const SpatialRobot &robot, const real *v);
 real robot_gravity_potential(const SpatialRobot &robot, const real *q);
+
+// The ground's force on foot l at data's state (N, world): a stuck foot's from its rows, a
+// sliding foot's normal force and its friction, 0 for a free foot.
+V3 robot_foot_force(const SpatialRobot &robot, const RobotData &data, int l);
 
 }  // namespace legsim::spatial

@@ -1,0 +1,176 @@
+#include "spatial/contact.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include "system/dense_solve.hpp"
+
+namespace legsim::spatial {
+
+namespace {
+constexpr real kSlipFloor = real(1e-9);  // m/s: below it a slip velocity has no direction to trust
+
+inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
+
+// The generalized force of a force f (world) at foot l's point: 6 per body, zero but its bar's.
+void foot_force_column(const SpatialRobot &robot, int l, const real *q, const V3 &f, real *col) {
+  const int nv = kBodyDof * robot.nb, fb = robot.leg[l].foot_body;
+  std::fill(col, col + nv, real(0));
+  static const real zero_v[kBodyDof] = {0, 0, 0, 0, 0, 0};
+  point_coefficients(body_state(q + kBodyConfig * fb, zero_v), robot.leg[l].foot_point, f, 1,
+                     col + kBodyDof * fb);
+}
+
+// The used rows' indices (the joints', the feet's of hold): a sum over them touches no unused slot.
+int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
+  int n = 0;
+  for (int r = 0; r < robot.m; ++r) idx[n++] = r;
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
+  return n;
+}
+}  // namespace
+
+void ground_frame(const GroundPlane &g, FeetHold &hold) {
+  const V3 n = g.normal;
+  const V3 e = std::abs(n.x) < real(0.9) ? V3{1, 0, 0} : V3{0, 1, 0};
+  V3 t1 = e - dot(e, n) * n;
+  t1 = (1 / norm(t1)) * t1;
+  hold.normal = n, hold.t1 = t1, hold.t2 = cross(n, t1);
+}
+
+void foot_motion(const SpatialRobot &robot, int l, const real *q, const real *v, V3 &p, V3 &pv) {
+  const int fb = robot.leg[l].foot_body;
+  const PointJet j = point_jet(body_state(q + kBodyConfig * fb, v + kBodyDof * fb), robot.leg[l].foot_point);
+  p = j.p, pv = j.pd;
+}
+
+V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const real *q, const real *v,
+                  const V3 &fallback) {
+  V3 p, pv;
+  foot_motion(robot, l, q, v, p, pv);
+  const V3 vt = tangential(hold, pv);
+  const real s = norm(vt);
+  return s > kSlipFloor ? (1 / s) * vt : fallback;
+}
+
+legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
+                                    const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
+                                    real *normal_force, Row *rows, RobotFactor &F, bool factored) {
+  if (!factored) {
+    system_rows(robot, hold, q, v, rows);
+    const legsim_status st = robot_factor(robot, hold, rows, F);
+    if (st != LEGSIM_OK) return st;
+  }
+  int idx[kMaxSystemRows];
+  const int n = used_rows(robot, hold, idx);
+  real g[kMaxSystemRows];
+  for (int i = 0; i < n; ++i) g[idx[i]] = rows[idx[i]].gamma;
+  robot_solve(robot, F, Q, g, a, mu);
+  if (!hold.sliding) return LEGSIM_OK;
+  // each sliding foot's friction per newton of its normal force, and what it does
+  const int nv = kBodyDof * robot.nb;
+  int feet[kMaxLegs], s = 0;
+  for (int l = 0; l < robot.nlegs; ++l)
+    if ((hold.sliding >> l) & 1u) feet[s++] = l;
+  real x[kMaxLegs][kMaxRobotDof], m[kMaxLegs][kMaxSystemRows], col[kMaxRobotDof];
+  static const real zero_g[kMaxSystemRows] = {};
+  for (int j = 0; j < s; ++j) {
+    const V3 dir = slip_direction(robot, hold, feet[j], q, v, slip_dir[feet[j]]);
+    foot_force_column(robot, feet[j], q, -mu_kinetic * dir, col);
+    robot_solve(robot, F, col, zero_g, x[j], m[j]);
+  }
+  // N_k = -lambda_n,k of the whole: (I + Lambda) N = -lambda0_n, Lambda_kj = lambda_n,k of column j
+  real A[kMaxLegs * kMaxLegs], N[kMaxLegs], scale = 1;
+  for (int k = 0; k < s; ++k) {
+    const int r = foot_row(robot, feet[k]);
+    N[k] = -mu[r];
+    for (int j = 0; j < s; ++j) {
+      A[s * k + j] = (k == j ? 1 : 0) + m[j][r];
+      scale = std::max(scale, std::abs(A[s * k + j]));
+    }
+  }
+  if (!dense_solve(s, A, N, real(1e-9) * scale)) return LEGSIM_ERR_CONTACT;
+  for (int j = 0; j < s; ++j) {
+    for (int k = 0; k < nv; ++k) a[k] += N[j] * x[j][k];
+    for (int i = 0; i < n; ++i) mu[idx[i]] += N[j] * m[j][idx[i]];
+    normal_force[feet[j]] = N[j];
+  }
+  return LEGSIM_OK;
+}
+
+legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
+                             real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
+                             RobotFactor &F) {
+  FeetHold none = hold;
+  none.stuck = none.sliding = 0;
+  system_rows(robot, none, q, v, rows);
+  legsim_status st = robot_factor(robot, none, rows, F);
+  if (st != LEGSIM_OK) return st;
+  const int nv = kBodyDof * robot.nb;
+  int feet[kMaxLegs], n = 0;
+  for (int l = 0; l < robot.nlegs; ++l)
+    if ((touching >> l) & 1u) feet[n++] = l;
+  const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
+  // the velocity change per unit impulse along each contact's axes, and the Delassus matrix
+  real X[3 * kMaxLegs][kMaxRobotDof];
+  real mu_tmp[kMaxSystemRows], col[kMaxRobotDof];
+  static const real zero_g[kMaxSystemRows] = {};
+  real W[kConeMaxRows * kConeMaxRows], u0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows], mus[kConeMaxContacts];
+  real coef[kMaxLegs][3][kBodyDof];
+  static const real zero_v[kBodyDof] = {0, 0, 0, 0, 0, 0};
+  for (int i = 0; i < n; ++i) {
+    const int fb = robot.leg[feet[i]].foot_body;
+    const BodyState B = body_state(q + kBodyConfig * fb, zero_v);
+    V3 p, pv;
+    foot_motion(robot, feet[i], q, v, p, pv);
+    for (int k = 0; k < 3; ++k) {
+      std::fill(coef[i][k], coef[i][k] + kBodyDof, real(0));
+      point_coefficients(B, robot.leg[feet[i]].foot_point, axes[k], 1, coef[i][k]);
+      foot_force_column(robot, feet[i], q, axes[k], col);
+      robot_solve(robot, F, col, zero_g, X[3 * i + k], mu_tmp);
+      u0[3 * i + k] = dot(axes[k], pv);
+    }
+    mus[i] = ground.mu_kinetic;
+  }
+  const int nr = 3 * n;
+  for (int j = 0; j < n; ++j) {
+    const int fb = robot.leg[feet[j]].foot_body;
+    for (int m = 0; m < 3; ++m)
+      for (int c = 0; c < nr; ++c) {
+        real w = 0;
+        for (int k = 0; k < kBodyDof; ++k) w += coef[j][m][k] * X[c][kBodyDof * fb + k];
+        W[nr * (3 * j + m) + c] = w;
+      }
+  }
+  // symmetric to round-off: make it so (the solver's contract)
+  for (int i = 0; i < nr; ++i)
+    for (int j = 0; j < i; ++j) W[nr * i + j] = W[nr * j + i] = real(0.5) * (W[nr * i + j] + W[nr * j + i]);
+  st = cone_solve(n, W, u0, mus, r, u, report);
+  if (st != LEGSIM_OK) return st;
+  for (int c = 0; c < nr; ++c)
+    for (int k = 0; k < nv; ++k) v[k] += r[c] * X[c][k];
+  real scale_u = 0;
+  for (int c = 0; c < nr; ++c) scale_u = std::max(scale_u, std::abs(u0[c]));
+  const real tol_u = real(1e-8) * (1 + scale_u);
+  for (int i = 0; i < n; ++i) {
+    const int l = feet[i];
+    const uint32_t bit = 1u << l;
+    impulse[l] = r[3 * i] * axes[0] + r[3 * i + 1] * axes[1] + r[3 * i + 2] * axes[2];
+    V3 p, pv;
+    foot_motion(robot, l, q, v, p, pv);
+    hold.anchor[l] = p - dot(p - ground.point, hold.normal) * hold.normal;
+    const V3 ut = u[3 * i + 1] * axes[1] + u[3 * i + 2] * axes[2];
+    hold.stuck &= ~bit, hold.sliding &= ~bit;
+    if (u[3 * i] > tol_u) continue;  // leaves the ground (its impulse zero by the cone's law): free
+    if (norm(ut) <= tol_u) {
+      hold.stuck |= bit;
+    } else {
+      hold.sliding |= bit;
+      slip_dir[l] = (1 / norm(ut)) * ut;
+    }
+  }
+  return LEGSIM_OK;
+}
+
+}  // namespace legsim::spatial

@@ -1,0 +1,56 @@
+// The feet on the ground in space (docs/design/spatial.md, "Contact"): a plane with Coulomb's
+// circular cone. A foot is free, stuck (three rows hold it at its anchor) or sliding (the
+// normal's row keeps it on the plane; friction mu_k N opposite its slip velocity, whose
+// direction may turn, is an applied force that depends on the normal force N). Its modes change
+// at events located inside the step (spatial/motion): a touchdown (an impact: the feet in touch
+// take impulses on their cones, cone_solve, friction_cone.hpp), a lift-off (N reaches 0), stick
+// to slip (the tangential force reaches mu_s N), slip to stick (the slip velocity reaches 0).
+#pragma once
+
+#include "spatial/dynamics.hpp"
+#include "spatial/friction_cone.hpp"
+
+namespace legsim::spatial {
+
+// The ground: a point on it and its upward unit normal (world, m), friction coefficients.
+struct GroundPlane {
+  V3 point, normal;
+  real mu_static, mu_kinetic;
+};
+
+// The ground's frame for the feet's rows: its normal and two unit tangents (right-handed).
+void ground_frame(const GroundPlane &g, FeetHold &hold);
+
+// Foot l's point and its velocity (world) at (q, v).
+void foot_motion(const SpatialRobot &robot, int l, const real *q, const real *v, V3 &p, V3 &pv);
+
+// The tangential part of a world vector in hold's frame.
+inline V3 tangential(const FeetHold &hold, const V3 &x) { return x - dot(x, hold.normal) * hold.normal; }
+
+// The accelerations and multipliers at (q, v) under Q with the feet of hold, each sliding foot's
+// friction -mu_k N s coupled in (s its slip velocity's direction, or slip_dir[l] while that is
+// below 1e-9 m/s): the solve for Q, one more per sliding foot for its friction per newton of N,
+// and a small system for the N's (their friction moves their own multipliers). normal_force[l]:
+// each sliding foot's N. factored: rows and F are already those at (q, v) (the projections'),
+// else they are built here. LEGSIM_ERR_CONTACT when that system is singular (Painleve: friction
+// can make the normal force arbitrary); else as robot_factor.
+legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
+                                    const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
+                                    real *normal_force, Row *rows, RobotFactor &F, bool factored = false);
+
+// Sliding foot l's friction direction at (q, v) (unit, tangential): its slip velocity's, or
+// fallback's below 1e-9 m/s.
+V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const real *q, const real *v,
+                  const V3 &fallback);
+
+// A touchdown's impact at (q, v): the feet of `touching` (bit l) take impulses on their cones
+// (mu_kinetic), the joints' rows holding; v becomes the velocity after it (no foot approaching
+// the ground, the kinetic energy not above before). On return `hold` gives each touching foot's
+// mode after it: stuck where it stopped, sliding along its slip (slip_dir), free when it leaves
+// with no impulse; impulse[l] the ground's on foot l (N s, world). LEGSIM_ERR_NOT_CONVERGED
+// with cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor.
+legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
+                             real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
+                             RobotFactor &F);
+
+}  // namespace legsim::spatial
