@@ -246,6 +246,80 @@ void test_fig7_on_six_feet_converges_at_order_4(void) {
   TEST_ASSERT_TRUE(std::fabs(dE[2]) < 1e-7);
 }
 
+namespace {
+// The fixture's stand moved up so that its feet are `lift` m above the ground of the file (z = 0).
+void lifted_stand(const Standing &s, double lift, double *q) {
+  std::copy(s.q, s.q + kBodyConfig * s.robot.nb, q);
+  const double dz = lift - robot_foot_position(s.robot, 0, s.q).z;
+  for (int b = 0; b < s.robot.nb; ++b) q[kBodyConfig * b + 2] += dz;
+}
+GroundPlane file_ground(const Standing &s) {
+  const legsim_hexapod_desc &h = s.desc;
+  return {{h.ground_point_m[0], h.ground_point_m[1], h.ground_point_m[2]},
+          {h.ground_normal[0], h.ground_normal[1], h.ground_normal[2]}, h.mu_static, h.mu_kinetic};
+}
+struct Checked {
+  double worst_under, energy_rise, worst_cone, worst_pull;
+  int events, impacts;
+};
+// Steps d to T (s) at h, checking at every step: no foot under the ground; the energy (kinetic,
+// gravity's, less the commands' work) not rising by more than the integrator's error; every
+// stuck foot inside its cone and every foot on the ground pushing.
+Checked run_checked(const SpatialRobot &R, RobotData &d, double T, double h) {
+  Checked c = {0, 0, 0, 0, 0, 0};
+  const GroundPlane &g = d.ground;
+  double E = energy(R, d);
+  for (int n = 0; n < int(std::lround(T / h)); ++n) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, d, h));
+    c.events += d.events;
+    const double E1 = energy(R, d);
+    c.energy_rise = std::fmax(c.energy_rise, E1 - E);
+    E = E1;
+    for (int l = 0; l < R.nlegs; ++l) {
+      const V3 p = robot_foot_position(R, l, d.q);
+      c.worst_under = std::fmax(c.worst_under, -dot(p - g.point, g.normal));
+      const V3 f = robot_foot_force(R, d, l);
+      const double N = dot(f, g.normal), Ft = norm(f - N * g.normal);
+      if ((d.hold.stuck | d.hold.sliding) >> l & 1u) c.worst_pull = std::fmax(c.worst_pull, -N);
+      if (d.hold.stuck >> l & 1u) c.worst_cone = std::fmax(c.worst_cone, Ft - g.mu_static * N);
+    }
+  }
+  c.impacts = d.impacts;
+  return c;
+}
+}  // namespace
+
+void test_drop_onto_the_ground(void) {
+  // Six feet 2 cm above the ground, the legs held by the stand's statics forces: the robot falls,
+  // its feet touch down (impacts on their cones) and it stands.
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  static RobotStatics st;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(R, s.q, kSix, nullptr, st));
+  static double q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
+  lifted_stand(s, 0.02, q);
+  const GroundPlane g = file_ground(s);
+  auto d = std::make_unique<RobotData>();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold_at(R, q, 0), &g, *d));
+  for (int a = 0; a < R.na; ++a) d->actuator_force[a] = st.actuator_force[a];
+  for (int l = 0; l < R.nlegs; ++l) d->rowing_torque[l] = st.rowing_torque[l];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
+  const Checked c = run_checked(R, *d, 0.3, 1e-3);
+  int on = 0;
+  for (int l = 0; l < 6; ++l) on += (d->hold.stuck | d->hold.sliding) >> l & 1u;
+  printf("drop from 2 cm: %d events, %d impacts, last impact's contact problem %s in %d iterations (residual "
+         "%.1e); feet on the ground at 0.3 s: %d; deepest %.1e m; energy rise at most %.1e J; cone excess %.1e N, "
+         "pull %.1e N; kinetic at the end %.2e J\n",
+         c.events, c.impacts, d->impact.converged ? "converged" : "NOT converged", d->impact.iterations,
+         d->impact.residual, on, c.worst_under, c.energy_rise, c.worst_cone, c.worst_pull,
+         robot_kinetic_energy(R, d->v));
+  TEST_ASSERT_TRUE(c.impacts >= 1 && d->impact.converged);
+  TEST_ASSERT_EQUAL_INT(6, on);
+  TEST_ASSERT_TRUE(c.worst_under < 1e-9);
+  TEST_ASSERT_TRUE(c.energy_rise < 1e-6);
+  TEST_ASSERT_TRUE(c.worst_cone < 1e-6 && c.worst_pull < 1e-6);
+}
+
 void test_refuses_bad_input(void) {
   const Standing &s = standing();
   const SpatialRobot &R = s.robot;
@@ -269,6 +343,7 @@ int main(void) {
   RUN_TEST(test_statics_is_rest);
   RUN_TEST(test_flight_keeps_momentum_and_energy);
   RUN_TEST(test_fig7_on_six_feet_converges_at_order_4);
+  RUN_TEST(test_drop_onto_the_ground);
   RUN_TEST(test_refuses_bad_input);
   return UNITY_END();
 }

@@ -9,6 +9,7 @@ namespace legsim::spatial {
 
 namespace {
 constexpr real kSlipFloor = real(1e-9);  // m/s: below it a slip velocity has no direction to trust
+constexpr real kCapture = real(1e-4);    // m/s: a foot leaving an impact slower stays on the ground
 
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
@@ -162,7 +163,11 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
     hold.anchor[l] = p - dot(p - ground.point, hold.normal) * hold.normal;
     const V3 ut = u[3 * i + 1] * axes[1] + u[3 * i + 2] * axes[2];
     hold.stuck &= ~bit, hold.sliding &= ~bit;
-    if (u[3 * i] > tol_u) continue;  // leaves the ground (its impulse zero by the cone's law): free
+    // leaves the ground (its impulse zero by the cone's law): free; slower than kCapture it would
+    // be back within microseconds (a cascade of ever smaller impacts): it stays, its normal
+    // velocity taken off by the projection (kinetic energy removed, never added), and the
+    // modes' check lets it go if it pulls
+    if (u[3 * i] > std::max(tol_u, kCapture)) continue;
     if (norm(ut) <= tol_u) {
       hold.stuck |= bit;
     } else {

@@ -47,7 +47,7 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 // (mu_kinetic), the joints' rows holding; v becomes the velocity after it (no foot approaching
 // the ground, the kinetic energy not above before). On return `hold` gives each touching foot's
 // mode after it: stuck where it stopped, sliding along its slip (slip_dir), free when it leaves
-// with no impulse; impulse[l] the ground's on foot l (N s, world). LEGSIM_ERR_NOT_CONVERGED
+// faster than 1e-4 m/s (slower it stays: the projection takes its normal velocity off); impulse[l] the ground's on foot l (N s, world). LEGSIM_ERR_NOT_CONVERGED
 // with cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor.
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
                              real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,

@@ -252,6 +252,29 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
   }
   return settle(robot, d);
 }
+
+// The longest part of a step a sliding foot allows: its friction's direction turns at
+// |a_t,perp| / |v_t| and its slip speed changes at |a_t . s| / |v_t| (s the slip's direction):
+// slow slips make fast directions, faster than RK4 resolves in a step (its error, of low order
+// there, is what the energy shows); a part turns them by at most kSlipTurn. Unlimited (kNone)
+// without sliding feet.
+constexpr real kSlipTurn = real(0.05);  // rad (or relative speed) per part
+real slip_part(const SpatialRobot &robot, const RobotData &d) {
+  real rate = 0;
+  for (int l = 0; l < robot.nlegs; ++l) {
+    if (!((d.hold.sliding >> l) & 1u)) continue;
+    const int fb = robot.leg[l].foot_body;
+    const BodyState B = body_state(d.q + kBodyConfig * fb, d.v + kBodyDof * fb);
+    const PointJet j = point_jet(B, robot.leg[l].foot_point);
+    const real *ab = d.a + kBodyDof * fb;
+    const V3 pa = V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, robot.leg[l].foot_point)) + j.pq;
+    const V3 vt = tangential(d.hold, j.pd), at = tangential(d.hold, pa);
+    const real speed = norm(vt);
+    if (!(speed > real(1e-9))) continue;  // no direction yet: the event's fallback holds it
+    rate = std::max(rate, norm(at) / speed);
+  }
+  return rate > 0 ? kSlipTurn / rate : kNone;
+}
 }  // namespace
 
 legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const real *v, const FeetHold &hold,
@@ -316,7 +339,9 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
       ref[l] = ((d.hold.sliding >> l) & 1u) ? slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]) : V3{0, 0, 0};
     real e0[kMaxLegs][2], e1[kMaxLegs][2];
     event_values(robot, d, ref, e0);
-    legsim_status st = rk4(robot, d, remaining);
+    // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
+    const real part = std::min(remaining, std::max(slip_part(robot, d), h / 256));
+    legsim_status st = rk4(robot, d, part);
     if (st != LEGSIM_OK) return fail(st);
     event_values(robot, d, ref, e1);
     // the crossings: the earliest by the line through the two ends first
@@ -324,12 +349,19 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
     real best = 2;
     for (int l = 0; l < robot.nlegs; ++l)
       for (int k = 0; k < 2; ++k) {
-        if (!(e1[l][k] < -event_tolerance(robot, d, l, k))) continue;
+        const real tol = event_tolerance(robot, d, l, k);
+        // a crossing; or a function already below at the start still falling (a free foot
+        // under the ground, rising from an impact, is left to rise)
+        if (!(e1[l][k] < -tol) || !(e0[l][k] >= -tol || e1[l][k] < e0[l][k] - tol)) continue;
         const real a0 = std::max(e0[l][k], real(0));
         const real est = a0 / (a0 - e1[l][k]);
         if (est < best) best = est, el = l, ek = k;
       }
-    if (el < 0) break;
+    if (el < 0) {
+      remaining -= part;
+      if (remaining <= real(1e-14) * h) break;
+      continue;
+    }
     // locate it: regula falsi (Illinois) on the fraction of the step; then check that no other
     // event crossed before it, else locate that one within the shorter window
     real window = 1;
@@ -337,17 +369,17 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
       real lo = 0, hi = window, flo = std::max(e0[el][ek], real(0)), fhi = e1[el][ek];
       if (guard > 0) {  // the new event's value at the window's end
         load(robot, s0, d);
-        if ((st = rk4(robot, d, hi * remaining)) != LEGSIM_OK) return fail(st);
+        if ((st = rk4(robot, d, hi * part)) != LEGSIM_OK) return fail(st);
         real e[kMaxLegs][2];
         event_values(robot, d, ref, e);
         fhi = e[el][ek];
       }
       int side = 0;
-      for (int it = 0; it < 60 && (hi - lo) * remaining > real(1e-13) * (1 + remaining); ++it) {
+      for (int it = 0; it < 60 && (hi - lo) * part > real(1e-13) * (1 + part); ++it) {
         real th = (lo * fhi - hi * flo) / (fhi - flo);
         if (!(th > lo && th < hi)) th = real(0.5) * (lo + hi);
         load(robot, s0, d);
-        if ((st = rk4(robot, d, th * remaining)) != LEGSIM_OK) return fail(st);
+        if ((st = rk4(robot, d, th * part)) != LEGSIM_OK) return fail(st);
         real e[kMaxLegs][2];
         event_values(robot, d, ref, e);
         const real f = e[el][ek];
@@ -366,20 +398,22 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
         }
       }
       load(robot, s0, d);
-      if ((st = rk4(robot, d, hi * remaining)) != LEGSIM_OK) return fail(st);
+      if ((st = rk4(robot, d, hi * part)) != LEGSIM_OK) return fail(st);
       real e[kMaxLegs][2];
       event_values(robot, d, ref, e);
       int nl = -1, nk = -1;
       for (int l = 0; l < robot.nlegs; ++l)
         for (int k = 0; k < 2; ++k)
-          if ((l != el || k != ek) && e[l][k] < -event_tolerance(robot, d, l, k)) nl = l, nk = k;
+          if ((l != el || k != ek) && e[l][k] < -event_tolerance(robot, d, l, k) &&
+              (e0[l][k] >= -event_tolerance(robot, d, l, k) || e[l][k] < e0[l][k] - event_tolerance(robot, d, l, k)))
+            nl = l, nk = k;
       window = hi;
       if (nl < 0) break;
       el = nl, ek = nk;
     }
     st = apply_event(robot, d, el, ek);
     if (st != LEGSIM_OK) return fail(st);
-    remaining -= window * remaining;
+    remaining -= window * part;
     if (++events > kMaxStepEvents) return fail(LEGSIM_ERR_CONTACT);
     if (remaining <= real(1e-14) * h) break;
   }

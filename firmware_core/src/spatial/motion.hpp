@@ -44,7 +44,7 @@ struct RobotData {
 constexpr real kProjectionTolerance = real(sizeof(real) == sizeof(float) ? 1e-5 : 1e-12);
 constexpr int kProjectionMaxIterations = 8;
 // The most events located in one step: more is a Zeno cascade or modes that do not settle.
-constexpr int kMaxStepEvents = 16;
+constexpr int kMaxStepEvents = 64;
 
 // data at (q, v) with the feet of hold (stuck and sliding; free feet may not be below the
 // ground), the ground (nullptr: none) and the commands zero: projected, its modes checked against
