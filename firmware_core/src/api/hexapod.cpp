@@ -213,9 +213,11 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
   hold.stuck = stuck_mask;
   hold.sliding = 0;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) hold.anchor[l] = spatial::robot_foot_position(w.robot, l, w.q);
-  const spatial::GroundPlane ground = {{h->ground_point_m[0], h->ground_point_m[1], h->ground_point_m[2]},
-                                       {h->ground_normal[0], h->ground_normal[1], h->ground_normal[2]},
-                                       h->mu_static, h->mu_kinetic};
+  const spatial::GroundPlane ground = {
+      {real(h->ground_point_m[0]), real(h->ground_point_m[1]), real(h->ground_point_m[2])},
+      {real(h->ground_normal[0]), real(h->ground_normal[1]), real(h->ground_normal[2])},
+      real(h->mu_static),
+      real(h->mu_kinetic)};
   st = spatial::robot_data_init(sim->robot, w.q, w.v, hold, &ground, sim->data);
   if (st != LEGSIM_OK) return st;
   sim->magic = kHexapodMagic;
