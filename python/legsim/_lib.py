@@ -276,7 +276,8 @@ class Library:
                         ("box_size_m", d * 3), ("box_inertia_kgm2", d * 3), ("yoke_mass_kg", d),
                         ("yoke_com_m", d * 3), ("yoke_inertia_kgm2", d * 3), ("hip_offset_m", d),
                         ("bar_radius_m", d), ("rowing_gear_ratio", d), ("rowing_max_torque_nm", d),
-                        ("rowing_stroke_rad", d * 2), ("n_legs", i32), ("leg", HexapodLegDesc * 6),
+                        ("rowing_stroke_rad", d * 2), ("rowing_servo_kp_nm_per_rad", d),
+                        ("rowing_servo_kd_nms_per_rad", d), ("n_legs", i32), ("leg", HexapodLegDesc * 6),
                         ("ground_point_m", d * 3), ("ground_normal", d * 3), ("mu_static", d),
                         ("mu_kinetic", d)]
 
@@ -300,7 +301,8 @@ class Library:
         class HexapodState(C.Structure):
             _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
                         ("box_omega_radps", d * 3), ("rowing_rad", d * 6), ("length_m", (d * 2) * 6),
-                        ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6), ("foot_state", i32 * 6),
+                        ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6),
+                        ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6), ("foot_state", i32 * 6),
                         ("kinetic_energy_j", d), ("events", i32), ("impacts", i32)]
 
         self.HexapodState = HexapodState
@@ -403,6 +405,7 @@ class Library:
             "legsim_hexapod_sim_init": (st, [P, C.c_size_t, C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
                                              C.c_uint32, C.POINTER(P)]),
             "legsim_hexapod_command": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
+            "legsim_hexapod_command_pose": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
             "legsim_hexapod_step": (st, [P, C.c_double, C.c_int32]),
             "legsim_hexapod_get_state": (st, [P, C.POINTER(self.HexapodState)]),
         }

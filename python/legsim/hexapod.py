@@ -123,6 +123,8 @@ class Hexapod:
         return {"com_m": np.array(out.com_m[:]), "foot_m": np.array([out.foot_m[k][:] for k in range(LEGS)]),
                 "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
                 "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
+                "rowing_torque_nm": np.array(out.rowing_torque_nm[:]),
+                "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
                 "rowing_torque_nm": np.array(out.rowing_torque_nm[:]), "margin_m": float(out.margin_m)}
 
 
@@ -156,6 +158,14 @@ class HexapodSim:
         t = (C.c_double * LEGS)(*map(float, rowing_torque_nm))
         self.library.check(self.library.cdll.legsim_hexapod_command(self._sim, f, t), "legsim_hexapod_command")
 
+    def command_pose(self, length_m, rowing_rad) -> None:
+        """The servos' set-points: each leg's two actuator lengths (m, 6 x 2) and rowing angles
+        (rad, 6), e.g. a gait's (Hexapod.gait_setpoints). Raises OutOfStrokeError past a stroke."""
+        f = ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*map(float, row)) for row in length_m])
+        t = (C.c_double * LEGS)(*map(float, rowing_rad))
+        self.library.check(self.library.cdll.legsim_hexapod_command_pose(self._sim, f, t),
+                           "legsim_hexapod_command_pose")
+
     def step(self, n: int = 1, *, h_s: float = 1e-3) -> None:
         self.library.check(self.library.cdll.legsim_hexapod_step(self._sim, float(h_s), int(n)),
                            "legsim_hexapod_step")
@@ -163,7 +173,8 @@ class HexapodSim:
     def state(self) -> dict:
         """t_s, box_m, box_quat (w, x, y, z), box_velocity_mps (world), box_omega_radps (box frame),
         rowing_rad (6), length_m (6 x 2), foot_m (6 x 3, world), foot_force_n (6 x 3: the ground's
-        on each foot), foot_state (6: "free", "stuck" or "sliding"), kinetic_energy_j, events (located
+        on each foot), actuator_force_n (6 x 2), rowing_torque_nm (6), foot_state (6: "free", "stuck"
+        or "sliding"), kinetic_energy_j, events (located
         in the last step), impacts (touchdowns since the start)."""
         out = self.library.HexapodState()
         self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
@@ -174,5 +185,7 @@ class HexapodSim:
                 "length_m": np.array([out.length_m[k][:] for k in range(LEGS)]),
                 "foot_m": np.array([out.foot_m[k][:] for k in range(LEGS)]),
                 "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
+                "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
+                "rowing_torque_nm": np.array(out.rowing_torque_nm[:]),
                 "foot_state": [_FOOT_STATES[out.foot_state[k]] for k in range(LEGS)],
                 "kinetic_energy_j": out.kinetic_energy_j, "events": out.events, "impacts": out.impacts}

@@ -96,8 +96,8 @@ std::unique_ptr<RobotData> standing_data(const Standing &s, uint32_t stance) {
   static double v[kMaxRobotDof];
   auto d = std::make_unique<RobotData>();
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(s.robot, s.q, v, hold_at(s.robot, s.q, stance), nullptr, *d));
-  for (int a = 0; a < s.robot.na; ++a) d->actuator_force[a] = st.actuator_force[a];
-  for (int l = 0; l < s.robot.nlegs; ++l) d->rowing_torque[l] = st.rowing_torque[l];
+  for (int a = 0; a < s.robot.na; ++a) d->command.actuator[a] = st.actuator_force[a];
+  for (int l = 0; l < s.robot.nlegs; ++l) d->command.rowing[l] = st.rowing_torque[l];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(s.robot, *d));
   return d;
 }
@@ -192,8 +192,8 @@ void test_flight_keeps_momentum_and_energy(void) {
     const double h = run == 0 ? 2e-3 : 1e-3;
     auto d = std::make_unique<RobotData>();
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold_at(R, q, 0), nullptr, *d));
-    for (int a = 0; a < R.na; ++a) d->actuator_force[a] = 20.0 * std::sin(0.5 + a);
-    for (int l = 0; l < R.nlegs; ++l) d->rowing_torque[l] = 0.5 * std::cos(1.5 + l);
+    for (int a = 0; a < R.na; ++a) d->command.actuator[a] = 20.0 * std::sin(0.5 + a);
+    for (int l = 0; l < R.nlegs; ++l) d->command.rowing[l] = 0.5 * std::cos(1.5 + l);
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
     V3 p0, L0, p1, L1;
     momentum(R, d->q, d->v, p0, L0);
@@ -221,7 +221,7 @@ void test_fig7_on_six_feet_converges_at_order_4(void) {
   double dE[4];
   for (int run = 0; run < 4; ++run) {
     auto d = standing_data(s, kSix);
-    for (int l = 0; l < 3; ++l) d->actuator_force[R.leg[l].first_actuator] += 50;  // the right legs' upper ones
+    for (int l = 0; l < 3; ++l) d->command.actuator[R.leg[l].first_actuator] += 50;  // the right legs' upper ones
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
     const double E0 = energy(R, *d);
     const int n = int(std::lround(T / hs[run]));
@@ -301,8 +301,8 @@ void test_drop_onto_the_ground(void) {
   const GroundPlane g = file_ground(s);
   auto d = std::make_unique<RobotData>();
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold_at(R, q, 0), &g, *d));
-  for (int a = 0; a < R.na; ++a) d->actuator_force[a] = st.actuator_force[a];
-  for (int l = 0; l < R.nlegs; ++l) d->rowing_torque[l] = st.rowing_torque[l];
+  for (int a = 0; a < R.na; ++a) d->command.actuator[a] = st.actuator_force[a];
+  for (int l = 0; l < R.nlegs; ++l) d->command.rowing[l] = st.rowing_torque[l];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
   const Checked c = run_checked(R, *d, 0.3, 1e-3);
   int on = 0;

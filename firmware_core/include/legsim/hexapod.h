@@ -10,7 +10,8 @@
  *   [LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2]; sizes, the hip offset and the bar radius
  *   [LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD]; points |x| <= LEGSIM_MAX_COORD; headings |h| <= pi;
  *   the rowing stroke -pi < min < 0 < max < pi rad; gear ratio [1, 1e4]; max torque
- *   [LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N] N m; each leg file at most
+ *   [LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N] N m; servo kp [0, LEGSIM_MAX_STIFFNESS_N_PER_M] N m/rad,
+ *   kd [0, LEGSIM_MAX_DAMPING_NS_PER_M] N m s/rad; each leg file at most
  *   LEGSIM_HEXAPOD_MAX_LEG_BARS bodies and no slot joint (the spatial rows have none), its force
  *   elements not lifted (the hexapod's loads are its own); the ground's normal a unit vector within 1e-9 whose angle from z
  *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. */
@@ -45,8 +46,10 @@ typedef struct legsim_hexapod_desc {
    * axis, and the bars' radius (their inertia about their own axis: m r^2 / 2) */
   double yoke_mass_kg, yoke_com_m[3], yoke_inertia_kgm2[3], hip_offset_m, bar_radius_m;
   /* the rowing actuator, a DC gear motor at each hip: torque at the yoke saturates at
-   * max_torque; its angle's stroke about the heading */
+   * max_torque; its angle's stroke about the heading; its angle servo's gains (the torque
+   * kp (angle_cmd - angle) - kd rate, saturated) */
   double rowing_gear_ratio, rowing_max_torque_nm, rowing_stroke_rad[2];
+  double rowing_servo_kp_nm_per_rad, rowing_servo_kd_nms_per_rad;
   int32_t n_legs; /* LEGSIM_HEXAPOD_LEGS */
   legsim_hexapod_leg_desc leg[LEGSIM_HEXAPOD_LEGS];
   /* the ground plane: a point, its upward unit normal, Coulomb friction */
@@ -143,11 +146,19 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
                                       const legsim_hexapod_pose *pose, uint32_t stuck_mask,
                                       legsim_hexapod_sim **out);
 
-/* The commands from now on: each leg's two actuators' axial forces (N, |F| <= LEGSIM_MAX_FORCE_N)
- * and rowing torques (N m, |tau| <= LEGSIM_MAX_FORCE_N m). LEGSIM_ERR_BAD_INPUT for a value out
- * of range or not finite (nothing changed). */
+/* The commands from the next step on: each leg's two actuators' axial forces (N, |F| <= its
+ * max_force) and rowing torques (N m, |tau| <= the file's rowing max_torque). LEGSIM_ERR_BAD_INPUT
+ * for a value out of range or not finite (nothing changed). */
 legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2],
                                      const double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS]);
+
+/* The servos' set-points from the next step on: each leg's two actuator lengths (m, within their
+ * strokes) and rowing angles (rad, within the rowing stroke): each actuator's force
+ * kp (l_cmd - l) - kd l' (its file's gains) and each rowing torque kp (a_cmd - a) - kd a' (the
+ * file's [rowing] gains), saturated at max_force and max_torque. LEGSIM_ERR_OUT_OF_STROKE for a
+ * set-point past its stroke, LEGSIM_ERR_BAD_INPUT for one not finite (nothing changed). */
+legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double length_m[LEGSIM_HEXAPOD_LEGS][2],
+                                          const double rowing_rad[LEGSIM_HEXAPOD_LEGS]);
 
 /* n_steps (>= 1) steps of h_s (s, in (0, 0.1]). Stops at the first step that fails, the state
  * that of the last step taken: LEGSIM_ERR_SINGULAR (a leg at a dead centre), _NOT_CONVERGED (the
@@ -162,6 +173,8 @@ typedef struct legsim_hexapod_state {
   double length_m[LEGSIM_HEXAPOD_LEGS][2];       /* each leg's actuators */
   double foot_m[LEGSIM_HEXAPOD_LEGS][3];         /* each foot (world) */
   double foot_force_n[LEGSIM_HEXAPOD_LEGS][3];   /* the ground's force on each foot (world; 0 when free) */
+  double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2]; /* each actuator's axial force (its command's) */
+  double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS];   /* each rowing motor's torque at its yoke */
   int32_t foot_state[LEGSIM_HEXAPOD_LEGS];       /* legsim_contact_state */
   double kinetic_energy_j;
   int32_t events;                                /* contact events located in the last step */

@@ -99,6 +99,16 @@ struct legsim_hexapod_sim {
 
 namespace {
 constexpr uint32_t kHexapodMagic = 0x48455841u;  // "HEXA"
+
+// New commands from the next step on: the accelerations under them now (all or nothing).
+legsim_status command_apply(legsim_hexapod_sim &sim, const spatial::RobotCommands &c) {
+  spatial::RobotData &d = sim.data;
+  const spatial::RobotCommands before = d.command;
+  d.command = c;
+  const legsim_status st = spatial::robot_data_refresh(sim.robot, d);
+  if (st != LEGSIM_OK) d.command = before;  // refresh writes nothing unless it succeeds
+  return st;
+}
 size_t hexapod_sim_offset() { return sim_bytes() + round_up(sizeof(HexapodWork)); }
 }  // namespace
 
@@ -229,20 +239,51 @@ legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actua
                                      const double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS]) {
   if (!sim || !actuator_force_n || !rowing_torque_nm) return LEGSIM_ERR_NULL;
   if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
-    if (!finite_within(actuator_force_n[l], 2, LEGSIM_MAX_FORCE_N) ||
-        !finite_within(&rowing_torque_nm[l], 1, LEGSIM_MAX_FORCE_N))
-      return LEGSIM_ERR_BAD_INPUT;
-  spatial::RobotData &d = sim->data;
-  const spatial::RobotData before = d;
+  const spatial::SpatialRobot &R = sim->robot;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    const spatial::RobotLeg &L = sim->robot.leg[l];
-    for (int a = 0; a < L.nactuators && a < 2; ++a) d.actuator_force[L.first_actuator + a] = real(actuator_force_n[l][a]);
-    d.rowing_torque[l] = real(rowing_torque_nm[l]);
+    for (int a = 0; a < R.leg[l].nactuators && a < 2; ++a)
+      if (!finite_within(&actuator_force_n[l][a], 1, double(R.act[R.leg[l].first_actuator + a].max_force)))
+        return LEGSIM_ERR_BAD_INPUT;
+    if (!finite_within(&rowing_torque_nm[l], 1, double(R.rowing_max_torque))) return LEGSIM_ERR_BAD_INPUT;
   }
-  const legsim_status st = spatial::robot_data_refresh(sim->robot, d);
-  if (st != LEGSIM_OK) d = before;
-  return st;
+  spatial::RobotCommands c = sim->data.command;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::RobotLeg &L = R.leg[l];
+    for (int a = 0; a < L.nactuators && a < 2; ++a) {
+      c.actuator_mode[L.first_actuator + a] = spatial::CommandMode::Force;
+      c.actuator[L.first_actuator + a] = real(actuator_force_n[l][a]);
+    }
+    c.rowing_mode[l] = spatial::CommandMode::Force;
+    c.rowing[l] = real(rowing_torque_nm[l]);
+  }
+  return command_apply(*sim, c);
+}
+
+legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double length_m[LEGSIM_HEXAPOD_LEGS][2],
+                                          const double rowing_rad[LEGSIM_HEXAPOD_LEGS]) {
+  if (!sim || !length_m || !rowing_rad) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  const spatial::SpatialRobot &R = sim->robot;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    if (!std::isfinite(rowing_rad[l])) return LEGSIM_ERR_BAD_INPUT;
+    if (!(rowing_rad[l] >= R.rowing_stroke[0] && rowing_rad[l] <= R.rowing_stroke[1])) return LEGSIM_ERR_OUT_OF_STROKE;
+    for (int a = 0; a < R.leg[l].nactuators && a < 2; ++a) {
+      const spatial::RobotActuator &ac = R.act[R.leg[l].first_actuator + a];
+      if (!std::isfinite(length_m[l][a])) return LEGSIM_ERR_BAD_INPUT;
+      if (!(length_m[l][a] >= ac.stroke[0] && length_m[l][a] <= ac.stroke[1])) return LEGSIM_ERR_OUT_OF_STROKE;
+    }
+  }
+  spatial::RobotCommands c = sim->data.command;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::RobotLeg &L = R.leg[l];
+    for (int a = 0; a < L.nactuators && a < 2; ++a) {
+      c.actuator_mode[L.first_actuator + a] = spatial::CommandMode::Servo;
+      c.actuator[L.first_actuator + a] = real(length_m[l][a]);
+    }
+    c.rowing_mode[l] = spatial::CommandMode::Servo;
+    c.rowing[l] = real(rowing_rad[l]);
+  }
+  return command_apply(*sim, c);
 }
 
 legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n_steps) {
@@ -277,6 +318,11 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
     r.foot_state[l] = ((d.hold.stuck >> l) & 1u)     ? LEGSIM_CONTACT_STUCK
                       : ((d.hold.sliding >> l) & 1u) ? LEGSIM_CONTACT_SLIDING
                                                      : LEGSIM_CONTACT_FREE;
+  }
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const spatial::RobotLeg &L = R.leg[l];
+    for (int a = 0; a < 2; ++a) r.actuator_force_n[l][a] = a < L.nactuators ? d.actuator_force[L.first_actuator + a] : 0.0;
+    r.rowing_torque_nm[l] = d.rowing_torque[l];
   }
   r.kinetic_energy_j = spatial::robot_kinetic_energy(R, d.v);
   r.events = d.events;

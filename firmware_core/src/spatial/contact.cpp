@@ -100,6 +100,85 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
   return LEGSIM_OK;
 }
 
+namespace {
+// Foot l's point's acceleration (world) from the bodies' accelerations a at (q, v).
+V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a) {
+  const int fb = robot.leg[l].foot_body;
+  const BodyState B = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
+  const real *ab = a + kBodyDof * fb;
+  return V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, robot.leg[l].foot_point)) +
+         point_jet(B, robot.leg[l].foot_point).pq;
+}
+}  // namespace
+
+legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
+                            const real *Q, FeetHold &hold, V3 *slip_dir, ConeReport &report, Row *rows,
+                            RobotFactor &F) {
+  int feet[kMaxLegs], n = 0;
+  for (int l = 0; l < robot.nlegs; ++l)
+    if ((hold.stuck >> l) & 1u) feet[n++] = l;
+  if (n == 0) return LEGSIM_OK;
+  FeetHold released = hold;
+  released.stuck = 0;
+  system_rows(robot, released, q, v, rows);
+  legsim_status st = robot_factor(robot, released, rows, F);
+  if (st != LEGSIM_OK) return st;
+  const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
+  const int nv = kBodyDof * robot.nb, nr = 3 * n;
+  real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs], Qc[kMaxRobotDof], col[kMaxRobotDof];
+  // q: the feet's accelerations released; W: their change per newton along each axis (the
+  // solve is affine in the applied forces: the differences are exact)
+  real W[kConeMaxRows * kConeMaxRows], q0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows];
+  st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Q, a, mu, N, rows, F, true);
+  if (st != LEGSIM_OK) return st;
+  for (int i = 0; i < n; ++i) {
+    const V3 pa = foot_acceleration(robot, feet[i], q, v, a);
+    for (int k = 0; k < 3; ++k) q0[3 * i + k] = dot(axes[k], pa);
+  }
+  for (int j = 0; j < n; ++j)
+    for (int m = 0; m < 3; ++m) {
+      foot_force_column(robot, feet[j], q, axes[m], col);
+      for (int k = 0; k < nv; ++k) Qc[k] = Q[k] + col[k];
+      st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Qc, a, mu, N, rows, F, true);
+      if (st != LEGSIM_OK) return st;
+      for (int i = 0; i < n; ++i) {
+        const V3 pa = foot_acceleration(robot, feet[i], q, v, a);
+        for (int k = 0; k < 3; ++k) W[nr * (3 * i + k) + 3 * j + m] = dot(axes[k], pa) - q0[3 * i + k];
+      }
+    }
+  if (!hold.sliding)  // symmetric but for round-off (the solver's contract); sliding feet make it not
+    for (int i = 0; i < nr; ++i)
+      for (int j = 0; j < i; ++j) W[nr * i + j] = W[nr * j + i] = real(0.5) * (W[nr * i + j] + W[nr * j + i]);
+  real mus[kConeMaxContacts], scale = 0;
+  for (int i = 0; i < n; ++i) mus[i] = ground.mu_static;
+  for (int c = 0; c < nr; ++c) scale = std::max(scale, std::abs(q0[c]));
+  const real tol = real(1e-9) * (1 + scale);
+  // which stick (on mu_static), then the others' slip on mu_kinetic (at most two passes more)
+  for (int pass = 0; pass < 3; ++pass) {
+    st = cone_solve(n, W, q0, mus, r, u, report);
+    if (st != LEGSIM_OK) return st;
+    bool changed = false;
+    for (int i = 0; i < n; ++i) {
+      const bool slips = std::hypot(u[3 * i + 1], u[3 * i + 2]) > tol && !(u[3 * i] > tol);
+      const real want = slips ? ground.mu_kinetic : ground.mu_static;
+      if (want != mus[i]) mus[i] = want, changed = true;
+    }
+    if (!changed) break;
+  }
+  for (int i = 0; i < n; ++i) {
+    const int l = feet[i];
+    const uint32_t bit = 1u << l;
+    const V3 ut = u[3 * i + 1] * axes[1] + u[3 * i + 2] * axes[2];
+    if (u[3 * i] > tol) {
+      hold.stuck &= ~bit;  // its force gone, its point leaving the ground
+    } else if (norm(ut) > tol) {
+      hold.stuck &= ~bit, hold.sliding |= bit;
+      slip_dir[l] = (1 / norm(ut)) * ut;
+    }
+  }
+  return LEGSIM_OK;
+}
+
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
                              real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
                              RobotFactor &F) {

@@ -53,4 +53,15 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
                              real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
                              RobotFactor &F);
 
+// The modes of the stuck feet decided on their cones at (q, v) under Q: the acceleration-level
+// contact problem of those feet (u = W r + q: r their ground forces, u their points'
+// accelerations; W and q from the robot's solve with them released, the sliding feet's friction
+// coupled in), by cone_solve: first on mu_static (which stick), then with mu_kinetic on those that
+// slip (which way: slip_dir, their acceleration's tangential direction). A foot whose force
+// vanishes and whose point accelerates off the ground is let go. LEGSIM_ERR_NOT_CONVERGED with
+// the contact problem unsolved; else as contact_accelerations.
+legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
+                            const real *Q, FeetHold &hold, V3 *slip_dir, ConeReport &report, Row *rows,
+                            RobotFactor &F);
+
 }  // namespace legsim::spatial

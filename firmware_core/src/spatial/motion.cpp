@@ -6,6 +6,7 @@
 namespace legsim::spatial {
 
 namespace {
+constexpr real kNone = real(sizeof(real) == sizeof(float) ? 1e30 : 1e300);  // no event function
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
 int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
@@ -78,10 +79,16 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
 }
 
 // The accelerations, multipliers and sliding feet's normal forces at (q, v) under d's commands.
+// report: the state is data's own (the forces kept as its report).
 legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a, real *mu,
-                       real *N, bool factored) {
-  real Q[kMaxRobotDof];
-  robot_forces(robot, q, v, d.actuator_force, d.rowing_torque, Q);
+                       real *N, bool factored, bool report = false) {
+  real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
+  command_forces(robot, d.command, q, v, F, T);
+  robot_forces(robot, q, v, F, T, Q);
+  if (report) {
+    std::copy(F, F + robot.na, d.actuator_force);
+    std::copy(T, T + robot.nlegs, d.rowing_torque);
+  }
   return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, d.slip_dir, q, v, Q, a, mu, N, d.rows, d.factor,
                                factored);
 }
@@ -132,8 +139,15 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
       const V3 w = dexp_inv({tb[3], tb[4], tb[5]}, {vb[3], vb[4], vb[5]});
       o[0] = vb[0], o[1] = vb[1], o[2] = vb[2], o[3] = w.x, o[4] = w.y, o[5] = w.z;
     }
+    for (int l = 0; l < robot.nlegs; ++l) {
+      if (!((d.hold.sliding >> l) & 1u)) continue;
+      V3 p, pv;
+      foot_motion(robot, l, q, vs, p, pv);
+      d.slip_stage_min[l] = std::min(d.slip_stage_min[l], dot(tangential(d.hold, pv), d.slip_ref[l]));
+    }
     return evaluate(robot, d, q, vs, kv[s], mu, N, false);
   };
+  for (int l = 0; l < robot.nlegs; ++l) d.slip_stage_min[l] = kNone;
   for (int k = 0; k < nv; ++k) kth[0][k] = v0[k], kv[0][k] = d.a[k];
   static const real c[3] = {real(0.5), real(0.5), real(1)};
   for (int s = 1; s < 4; ++s) {
@@ -147,7 +161,7 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
   }
   for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, th + kBodyDof * b, d.q + kBodyConfig * b);
   legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
-  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true);
+  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
   if (st != LEGSIM_OK) return st;
   for (int k = 0; k < nv; ++k)
     if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
@@ -160,7 +174,6 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
 // ground (m) and none; a stuck foot's normal force (N) and its cone's margin mu_s N - |F_t|
 // (N); a sliding foot's normal force and its slip velocity along its direction at the step's
 // start (m/s).
-constexpr real kNone = real(1e300);
 void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, real (*e)[2]) {
   for (int l = 0; l < robot.nlegs; ++l) {
     e[l][0] = e[l][1] = kNone;
@@ -174,7 +187,7 @@ void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, 
       V3 p, pv;
       foot_motion(robot, l, d.q, d.v, p, pv);
       e[l][0] = d.normal_force[l];
-      e[l][1] = dot(tangential(d.hold, pv), ref[l]);
+      e[l][1] = std::min(dot(tangential(d.hold, pv), ref[l]), d.slip_stage_min[l]);
     } else {
       V3 p, pv;
       foot_motion(robot, l, d.q, d.v, p, pv);
@@ -192,33 +205,41 @@ real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k
   return real(1e-10) * mass;
 }
 
-// The modes checked against the cone at d's state (after an event or at the start): a stuck foot
-// pulling is let go, one past mu_s N starts to slide opposite its tangential force; a sliding
-// foot pulling is let go; projected and evaluated again until none changes.
-legsim_status settle(const SpatialRobot &robot, RobotData &d) {
+// The modes checked against the cone at d's state (after an event or at the start): when a stuck
+// foot pulls or its force leaves its mu_s cone, the stuck feet's modes are decided on their cones
+// at once (contact_modes: stick, slip and which way, or leave); a sliding foot pulling is let go;
+// projected and evaluated again until none changes.
+// decide: the stuck feet's modes decided on their cones in the first round whatever their forces
+// (a located lift-off or stick to slip, its function at its root).
+legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false) {
   for (int round = 0; round <= 2 * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
-    if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true);
+    if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
     if (st != LEGSIM_OK) return st;
     if (!d.has_ground) return LEGSIM_OK;
     real scale = 1;
     for (int b = 0; b < robot.nb; ++b) scale += robot.mass[b];
     const real tol = real(1e-9) * scale;
-    bool changed = false;
+    bool off_cone = decide && round == 0, changed = false;
     for (int l = 0; l < robot.nlegs; ++l) {
       const uint32_t bit = 1u << l;
       const real *m = d.mu + foot_row(robot, l);
       if (d.hold.stuck & bit) {
         const real N = -m[0], Ft = std::hypot(m[1], m[2]);
-        if (N < -tol) {
-          d.hold.stuck &= ~bit, changed = true;
-        } else if (Ft > d.ground.mu_static * N + tol) {
-          d.hold.stuck &= ~bit, d.hold.sliding |= bit, changed = true;
-          d.slip_dir[l] = (1 / Ft) * (m[1] * d.hold.t1 + m[2] * d.hold.t2);  // opposite the ground's force
-        }
+        if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
       } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
         d.hold.sliding &= ~bit, changed = true;
       }
+    }
+    if (off_cone) {
+      const FeetHold before = d.hold;
+      real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
+      command_forces(robot, d.command, d.q, d.v, F, T);
+      robot_forces(robot, d.q, d.v, F, T, Q);
+      st = contact_modes(robot, d.ground, d.q, d.v, Q, d.hold, d.slip_dir, d.impact, d.rows, d.factor);
+      if (st != LEGSIM_OK) return st;
+      changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
+      if (!changed && !(decide && round == 0)) return LEGSIM_ERR_CONTACT;  // the cone keeps what the multipliers refuse
     }
     if (!changed) return LEGSIM_OK;
   }
@@ -232,13 +253,7 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
   foot_motion(robot, l, d.q, d.v, p, pv);
   const V3 on_ground = p - dot(p - d.ground.point, d.ground.normal) * d.ground.normal;
   if (d.hold.stuck & bit) {
-    d.hold.stuck &= ~bit;
-    if (k == 1) {  // stick to slip: opposite the ground's tangential force
-      const real *m = d.mu + foot_row(robot, l);
-      const real Ft = std::hypot(m[1], m[2]);
-      d.hold.sliding |= bit;
-      d.slip_dir[l] = Ft > 0 ? (1 / Ft) * (m[1] * d.hold.t1 + m[2] * d.hold.t2) : d.hold.t1;
-    }
+    return settle(robot, d, true);  // a lift-off or stick to slip: decided on the cones
   } else if (d.hold.sliding & bit) {
     d.hold.sliding &= ~bit;
     if (k == 1) d.hold.stuck |= bit, d.hold.anchor[l] = on_ground;  // slip to stick
@@ -254,11 +269,11 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
 }
 
 // The longest part of a step a sliding foot allows: its friction's direction turns at
-// |a_t,perp| / |v_t| and its slip speed changes at |a_t . s| / |v_t| (s the slip's direction):
-// slow slips make fast directions, faster than RK4 resolves in a step (its error, of low order
-// there, is what the energy shows); a part turns them by at most kSlipTurn. Unlimited (kNone)
-// without sliding feet.
-constexpr real kSlipTurn = real(0.05);  // rad (or relative speed) per part
+// |a_t,perp| / |v_t| (a_t,perp its tangential acceleration across its slip): slow slips turn
+// fast, faster than RK4 resolves in a step (its error, of low order there, is what the energy
+// shows); a part turns them by at most kSlipTurn. Along the slip the friction keeps its
+// direction (a slip slowing to a stop is an event). Unlimited (kNone) without sliding feet.
+constexpr real kSlipTurn = real(0.05);  // rad per part
 real slip_part(const SpatialRobot &robot, const RobotData &d) {
   real rate = 0;
   for (int l = 0; l < robot.nlegs; ++l) {
@@ -271,7 +286,8 @@ real slip_part(const SpatialRobot &robot, const RobotData &d) {
     const V3 vt = tangential(d.hold, j.pd), at = tangential(d.hold, pa);
     const real speed = norm(vt);
     if (!(speed > real(1e-9))) continue;  // no direction yet: the event's fallback holds it
-    rate = std::max(rate, norm(at) / speed);
+    const V3 s = (1 / speed) * vt;
+    rate = std::max(rate, norm(at - dot(at, s) * s) / speed);
   }
   return rate > 0 ? kSlipTurn / rate : kNone;
 }
@@ -299,6 +315,8 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
     d.ground = {{0, 0, 0}, {0, 0, 1}, 0, 0};
   }
   for (int l = 0; l < kMaxLegs; ++l) d.slip_dir[l] = d.hold.t1, d.normal_force[l] = 0, d.impulse[l] = {0, 0, 0};
+  for (int a = 0; a < kMaxRobotActuators; ++a) d.command.actuator_mode[a] = CommandMode::Force, d.command.actuator[a] = 0;
+  for (int l = 0; l < kMaxLegs; ++l) d.command.rowing_mode[l] = CommandMode::Force, d.command.rowing[l] = 0;
   std::fill(d.actuator_force, d.actuator_force + kMaxRobotActuators, real(0));
   std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
   std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
@@ -314,6 +332,7 @@ legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
   std::copy(data.normal_force, data.normal_force + kMaxLegs, N);
   s = evaluate(robot, data, data.q, data.v, a, mu, N, false);
   if (s != LEGSIM_OK) return s;
+  command_forces(robot, data.command, data.q, data.v, data.actuator_force, data.rowing_torque);
   std::copy(a, a + kBodyDof * robot.nb, data.a);
   std::copy(mu, mu + kMaxSystemRows, data.mu);
   std::copy(N, N + kMaxLegs, data.normal_force);
@@ -335,8 +354,10 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
   for (;;) {
     save(robot, d, s0);
     V3 ref[kMaxLegs];
-    for (int l = 0; l < robot.nlegs; ++l)
+    for (int l = 0; l < robot.nlegs; ++l) {
       ref[l] = ((d.hold.sliding >> l) & 1u) ? slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]) : V3{0, 0, 0};
+      d.slip_ref[l] = ref[l], d.slip_stage_min[l] = kNone;
+    }
     real e0[kMaxLegs][2], e1[kMaxLegs][2];
     event_values(robot, d, ref, e0);
     // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
@@ -420,6 +441,28 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
   d.t = start.t + h;
   d.events = events;
   return LEGSIM_OK;
+}
+
+void command_forces(const SpatialRobot &robot, const RobotCommands &c, const real *q, const real *v, real *force_n,
+                    real *rowing_nm) {
+  for (int a = 0; a < robot.na; ++a) {
+    if (c.actuator_mode[a] == CommandMode::Force) {
+      force_n[a] = c.actuator[a];
+      continue;
+    }
+    const RobotActuator &ac = robot.act[a];
+    const real f = ac.kp * (c.actuator[a] - robot_actuator_length(robot, a, q)) - ac.kd * robot_actuator_rate(robot, a, q, v);
+    force_n[a] = std::max(-ac.max_force, std::min(ac.max_force, f));
+  }
+  for (int l = 0; l < robot.nlegs; ++l) {
+    if (c.rowing_mode[l] == CommandMode::Force) {
+      rowing_nm[l] = c.rowing[l];
+      continue;
+    }
+    const real t = robot.rowing_kp * std::remainder(c.rowing[l] - robot_rowing_angle(robot, l, q), 2 * real(3.14159265358979323846)) -
+                   robot.rowing_kd * robot_rowing_rate(robot, l, q, v);
+    rowing_nm[l] = std::max(-robot.rowing_max_torque, std::min(robot.rowing_max_torque, t));
+  }
 }
 
 real robot_kinetic_energy(const SpatialRobot &robot, const real *v) {

@@ -17,6 +17,17 @@
 
 namespace legsim::spatial {
 
+// What each actuator is told, held over a step: a force (N; a rowing torque, N m) or a servo's
+// set-point (a length, m; a rowing angle, rad) that the servo holds by its PD law, saturated at
+// the actuator's largest force (robot.hpp: RobotActuator, SpatialRobot's rowing numbers).
+enum class CommandMode : uint8_t { Force, Servo };
+struct RobotCommands {
+  CommandMode actuator_mode[kMaxRobotActuators];
+  real actuator[kMaxRobotActuators];
+  CommandMode rowing_mode[kMaxLegs];
+  real rowing[kMaxLegs];
+};
+
 struct RobotData {
   real t;  // s
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
@@ -25,10 +36,15 @@ struct RobotData {
   real normal_force[kMaxLegs];  // N: each sliding foot's at (t, q, v)
   FeetHold hold;              // the feet's modes (and the ground's frame)
   V3 slip_dir[kMaxLegs];      // a sliding foot's friction direction while its slip is below 1e-9 m/s
+  // a sliding foot's slip direction at the (part) step's start, and its slip velocity's least
+  // component along it over the last RK4 step's stages (a reversal the end can miss)
+  V3 slip_ref[kMaxLegs];
+  real slip_stage_min[kMaxLegs];
   bool has_ground;            // else the feet pass through (no contact events)
   GroundPlane ground;
-  real actuator_force[kMaxRobotActuators];  // N, each linear actuator's, held over a step
-  real rowing_torque[kMaxLegs];             // N m, each yoke's about its hip axis
+  RobotCommands command;
+  real actuator_force[kMaxRobotActuators];  // N, each linear actuator's at (t, q, v)
+  real rowing_torque[kMaxLegs];             // N m, each yoke's about its hip axis at (t, q, v)
   // the last step's report
   int projection_iterations;  // its last position projection's Newton iterations
   int events;                 // contact events located in it
@@ -47,7 +63,7 @@ constexpr int kProjectionMaxIterations = 8;
 constexpr int kMaxStepEvents = 64;
 
 // data at (q, v) with the feet of hold (stuck and sliding; free feet may not be below the
-// ground), the ground (nullptr: none) and the commands zero: projected, its modes checked against
+// ground), the ground (nullptr: none) and zero forces commanded: projected, its modes checked against
 // the cone (a stuck foot pulling or past mu_s N is let go), its accelerations and multipliers.
 // LEGSIM_ERR_BAD_INPUT for a foot mode on a leg without a foot or the robot does not have, a
 // foot both stuck and sliding, a free foot more than 1e-9 m under the ground; LEGSIM_ERR_CONTACT when no modes hold; else as robot_step_rk4.
@@ -56,6 +72,10 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
 
 // The accelerations and multipliers at data's state under its commands (after a change of
 // commands; robot_step keeps them).
+
+// Each actuator's force and rowing torque at (q, v) by the commands (a servo's saturated).
+void command_forces(const SpatialRobot &robot, const RobotCommands &c, const real *q, const real *v, real *force_n,
+                    real *rowing_nm);
 legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data);
 
 // One step of h (s, > 0): RK4 on the group with the contact events inside it located. Statuses:

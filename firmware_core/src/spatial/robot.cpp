@@ -35,6 +35,9 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.nlegs = nlegs;
   R.yoke_com = {real(yoke.com_m[0]), real(yoke.com_m[1]), real(yoke.com_m[2])};
   R.origin_x = real(yoke.hip_offset_m);
+  R.rowing_max_torque = real(yoke.rowing_max_torque_nm);
+  R.rowing_stroke[0] = real(yoke.rowing_stroke_rad[0]), R.rowing_stroke[1] = real(yoke.rowing_stroke_rad[1]);
+  R.rowing_kp = real(yoke.rowing_kp_nm_per_rad), R.rowing_kd = real(yoke.rowing_kd_nms_per_rad);
   R.gravity = {0, 0, real(legs[0]->gravity_mps2[1])};
   int nb = 0, na = 0;
   if (box) {
@@ -83,7 +86,14 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
       const int jn = desc.actuator[a].joint;
       if (jn < 0 || jn >= desc.n_joints || desc.joint[jn].kind != LEGSIM_JOINT_PRISMATIC) return LEGSIM_ERR_MODEL;
       const int cyl = desc.joint[jn].body[0], rod = desc.joint[jn].body[1];
-      R.act[na++] = {y + 1 + cyl, y + 1 + rod, real(0.5 * (desc.body[cyl].length_m + desc.body[rod].length_m))};
+      const legsim_actuator_desc &ad = desc.actuator[a];
+      R.act[na++] = {y + 1 + cyl,
+                     y + 1 + rod,
+                     real(0.5 * (desc.body[cyl].length_m + desc.body[rod].length_m)),
+                     {real(ad.stroke_min_m), real(ad.stroke_max_m)},
+                     real(ad.max_force_n),
+                     real(ad.servo_kp_n_per_m),
+                     real(ad.servo_kd_ns_per_m)};
     }
     nb += 1 + nbar;
     for (int i = y; i < nb; ++i) parent[i] = i;
@@ -153,6 +163,10 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out
   for (int i = 0; i < 3; ++i) yoke.com_m[i] = h.yoke_com_m[i], yoke.inertia_kgm2[i] = h.yoke_inertia_kgm2[i];
   yoke.hip_offset_m = h.hip_offset_m;
   yoke.bar_radius_m = h.bar_radius_m;
+  yoke.rowing_max_torque_nm = h.rowing_max_torque_nm;
+  yoke.rowing_stroke_rad[0] = h.rowing_stroke_rad[0], yoke.rowing_stroke_rad[1] = h.rowing_stroke_rad[1];
+  yoke.rowing_kp_nm_per_rad = h.rowing_servo_kp_nm_per_rad;
+  yoke.rowing_kd_nms_per_rad = h.rowing_servo_kd_nms_per_rad;
   const BoxDesc box = {h.box_mass_kg, {h.box_inertia_kgm2[0], h.box_inertia_kgm2[1], h.box_inertia_kgm2[2]}};
   const legsim_model_desc *legs[LEGSIM_HEXAPOD_LEGS];
   HipDesc hips[LEGSIM_HEXAPOD_LEGS];
@@ -256,6 +270,26 @@ real robot_actuator_length(const SpatialRobot &robot, int a, const real *q) {
   const real zero[kBodyDof] = {0, 0, 0, 0, 0, 0};
   const BodyState rod = body_state(q + kBodyConfig * ac.rod, zero), cyl = body_state(q + kBodyConfig * ac.cyl, zero);
   return actuator_row(rod, cyl).phi + ac.offset;
+}
+
+real robot_actuator_rate(const SpatialRobot &robot, int a, const real *q, const real *v) {
+  const RobotActuator &ac = robot.act[a];
+  const BodyState rod = body_state(q + kBodyConfig * ac.rod, v + kBodyDof * ac.rod);
+  const BodyState cyl = body_state(q + kBodyConfig * ac.cyl, v + kBodyDof * ac.cyl);
+  const Row r = actuator_row(rod, cyl);
+  real s = 0;
+  for (int i = 0; i < kBodyDof; ++i) s += r.ja[i] * v[kBodyDof * ac.rod + i] + r.jb[i] * v[kBodyDof * ac.cyl + i];
+  return s;
+}
+
+real robot_rowing_rate(const SpatialRobot &robot, int l, const real *q, const real *v) {
+  // the yoke's angular velocity less the box's, about the box's z (both in the world)
+  const real *qy = q + kBodyConfig * robot.leg[l].yoke, *vy = v + kBodyDof * robot.leg[l].yoke;
+  const V3 wy = rotate(rotation({qy[3], qy[4], qy[5], qy[6]}), V3{vy[3], vy[4], vy[5]});
+  if (!robot.free_box) return wy.z;
+  const Rot Rb = rotation({q[3], q[4], q[5], q[6]});
+  const V3 wb = rotate(Rb, V3{v[3], v[4], v[5]});
+  return dot(wy - wb, Rb.c2);
 }
 
 void robot_forces(const SpatialRobot &robot, const real *q, const real *v, const real *force_n,

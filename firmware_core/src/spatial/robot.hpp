@@ -40,6 +40,9 @@ struct YokeDesc {
   double inertia_kgm2[3] = {0.004, 0.006, 0.005};  // principal, about the centre of mass
   double hip_offset_m = 0.08;  // the leg's planar origin, out along x from the axis
   double bar_radius_m = 0.025;  // a bar's inertia about its own axis: a tube's m r^2 / 2
+  // the rowing motor: its torque at the yoke saturates; its angle's stroke; its angle servo
+  double rowing_max_torque_nm = 30.0, rowing_stroke_rad[2] = {-0.6, 0.6};
+  double rowing_kp_nm_per_rad = 2000.0, rowing_kd_nms_per_rad = 40.0;
 };
 
 // The box (body 0 when free): mass and principal inertia (box frame, about its centre).
@@ -83,6 +86,7 @@ struct RobotLeg {
 struct RobotActuator {
   int cyl, rod;
   real offset;  // (L_cyl + L_rod) / 2
+  real stroke[2], max_force, kp, kd;  // m, N, N/m, N s/m: its file's; the servo's F = kp (l* - l) - kd l'
 };
 // Its length less the offset as a row (rows.hpp's along_axis form): its gradient is the row's
 // coefficients (ja on the rod, jb on the cylinder).
@@ -103,6 +107,7 @@ struct SpatialRobot {
   V3 gravity;    // world (m/s^2): the leg files' (0, g_y), along z
   V3 yoke_com;   // yoke frame, from the hip axis point
   real origin_x; // the leg's planar origin, yoke frame: out along x from the hip axis
+  real rowing_max_torque, rowing_stroke[2], rowing_kp, rowing_kd;  // N m, rad, N m/rad, N m s/rad
 };
 
 // nlegs legs (legs[k] placed at hips[k]) on the box (nullptr: fixed). LEGSIM_ERR_MODEL for a
@@ -140,6 +145,9 @@ real robot_rowing_angle(const SpatialRobot &robot, int l, const real *q);
 
 // Linear actuator a's length (m) at q.
 real robot_actuator_length(const SpatialRobot &robot, int a, const real *q);
+// Its rate (m/s) and leg l's rowing rate (rad/s) at (q, v).
+real robot_actuator_rate(const SpatialRobot &robot, int a, const real *q, const real *v);
+real robot_rowing_rate(const SpatialRobot &robot, int l, const real *q, const real *v);
 
 // The applied forces Q (6 per body: force on v in the world, moment on omega in the body's
 // frame) at (q, v): gravity, the gyroscopic moments -omega x (J omega), each linear actuator's
