@@ -8,7 +8,7 @@
 namespace legsim::spatial {
 
 namespace {
-constexpr real kSlipFloor = real(1e-9);  // m/s: below it a slip velocity has no direction to trust
+
 constexpr real kCapture = real(1e-4);    // m/s: a foot leaving an impact slower stays on the ground
 
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
@@ -52,7 +52,7 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
   foot_motion(robot, l, q, v, p, pv);
   const V3 vt = tangential(hold, pv);
   const real s = norm(vt);
-  return s > kSlipFloor ? (1 / s) * vt : fallback;
+  return s > kSlipHold ? (1 / s) * vt : fallback;
 }
 
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
@@ -112,8 +112,8 @@ V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real
 }  // namespace
 
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
-                            const real *Q, FeetHold &hold, V3 *slip_dir, ConeReport &report, Row *rows,
-                            RobotFactor &F) {
+                            const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
+                            Row *rows, RobotFactor &F) {
   int feet[kMaxLegs], n = 0;
   for (int l = 0; l < robot.nlegs; ++l)
     if ((hold.stuck >> l) & 1u) feet[n++] = l;
@@ -150,7 +150,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
     for (int i = 0; i < nr; ++i)
       for (int j = 0; j < i; ++j) W[nr * i + j] = W[nr * j + i] = real(0.5) * (W[nr * i + j] + W[nr * j + i]);
   real mus[kConeMaxContacts], scale = 0;
-  for (int i = 0; i < n; ++i) mus[i] = ground.mu_static;
+  for (int i = 0; i < n; ++i) mus[i] = ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
   for (int c = 0; c < nr; ++c) scale = std::max(scale, std::abs(q0[c]));
   const real tol = real(1e-9) * (1 + scale);
   // which stick (on mu_static), then the others' slip on mu_kinetic (at most two passes more)
@@ -160,7 +160,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
     bool changed = false;
     for (int i = 0; i < n; ++i) {
       const bool slips = std::hypot(u[3 * i + 1], u[3 * i + 2]) > tol && !(u[3 * i] > tol);
-      const real want = slips ? ground.mu_kinetic : ground.mu_static;
+      const real want = slips || ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
       if (want != mus[i]) mus[i] = want, changed = true;
     }
     if (!changed) break;

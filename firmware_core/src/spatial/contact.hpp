@@ -27,9 +27,15 @@ void foot_motion(const SpatialRobot &robot, int l, const real *q, const real *v,
 // The tangential part of a world vector in hold's frame.
 inline V3 tangential(const FeetHold &hold, const V3 &x) { return x - dot(x, hold.normal) * hold.normal; }
 
+// A slip slower than this (m/s) keeps the direction it had (its last above it, or the one its
+// slip started with: contact_modes'): near a standstill a slip's direction turns faster than any
+// step resolves (it is singular at 0). Friction along a kept direction s does work -mu_k N s . v_t,
+// never positive while the slip goes along s; its turning back is the slip-to-stick event.
+constexpr real kSlipHold = real(1e-4);
+
 // The accelerations and multipliers at (q, v) under Q with the feet of hold, each sliding foot's
-// friction -mu_k N s coupled in (s its slip velocity's direction, or slip_dir[l] while that is
-// below 1e-9 m/s): the solve for Q, one more per sliding foot for its friction per newton of N,
+// friction -mu_k N s coupled in (s its slip velocity's direction, or slip_dir[l] below
+// kSlipHold): the solve for Q, one more per sliding foot for its friction per newton of N,
 // and a small system for the N's (their friction moves their own multipliers). normal_force[l]:
 // each sliding foot's N. factored: rows and F are already those at (q, v) (the projections'),
 // else they are built here. LEGSIM_ERR_CONTACT when that system is singular (Painleve: friction
@@ -39,7 +45,7 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
                                     real *normal_force, Row *rows, RobotFactor &F, bool factored = false);
 
 // Sliding foot l's friction direction at (q, v) (unit, tangential): its slip velocity's, or
-// fallback's below 1e-9 m/s.
+// fallback's below kSlipHold.
 V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const real *q, const real *v,
                   const V3 &fallback);
 
@@ -57,11 +63,13 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
 // contact problem of those feet (u = W r + q: r their ground forces, u their points'
 // accelerations; W and q from the robot's solve with them released, the sliding feet's friction
 // coupled in), by cone_solve: first on mu_static (which stick), then with mu_kinetic on those that
-// slip (which way: slip_dir, their acceleration's tangential direction). A foot whose force
-// vanishes and whose point accelerates off the ground is let go. LEGSIM_ERR_NOT_CONVERGED with
-// the contact problem unsolved; else as contact_accelerations.
+// slip (which way: slip_dir, their acceleration's tangential direction). The feet of `slipping`
+// (their force at the mu_static cone's edge and leaving it: a located stick to slip) are on
+// mu_kinetic from the start: the acceleration level alone would keep them at the edge. A foot
+// whose force vanishes and whose point accelerates off the ground is let go.
+// LEGSIM_ERR_NOT_CONVERGED with the contact problem unsolved; else as contact_accelerations.
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
-                            const real *Q, FeetHold &hold, V3 *slip_dir, ConeReport &report, Row *rows,
-                            RobotFactor &F);
+                            const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
+                            Row *rows, RobotFactor &F);
 
 }  // namespace legsim::spatial

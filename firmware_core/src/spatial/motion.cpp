@@ -210,8 +210,8 @@ real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k
 // at once (contact_modes: stick, slip and which way, or leave); a sliding foot pulling is let go;
 // projected and evaluated again until none changes.
 // decide: the stuck feet's modes decided on their cones in the first round whatever their forces
-// (a located lift-off or stick to slip, its function at its root).
-legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false) {
+// (a located stick to slip, its function at its root: slipping, that foot's bit).
+legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false, uint32_t slipping = 0) {
   for (int round = 0; round <= 2 * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
@@ -236,7 +236,8 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
       command_forces(robot, d.command, d.q, d.v, F, T);
       robot_forces(robot, d.q, d.v, F, T, Q);
-      st = contact_modes(robot, d.ground, d.q, d.v, Q, d.hold, d.slip_dir, d.impact, d.rows, d.factor);
+      st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.impact,
+                         d.rows, d.factor);
       if (st != LEGSIM_OK) return st;
       changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
       if (!changed && !(decide && round == 0)) return LEGSIM_ERR_CONTACT;  // the cone keeps what the multipliers refuse
@@ -253,7 +254,11 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
   foot_motion(robot, l, d.q, d.v, p, pv);
   const V3 on_ground = p - dot(p - d.ground.point, d.ground.normal) * d.ground.normal;
   if (d.hold.stuck & bit) {
-    return settle(robot, d, true);  // a lift-off or stick to slip: decided on the cones
+    if (k == 0) {  // a lift-off: its force at 0 and falling (the acceleration level alone would keep it)
+      d.hold.stuck &= ~bit;
+      return settle(robot, d);
+    }
+    return settle(robot, d, true, bit);  // stick to slip: decided on the cones
   } else if (d.hold.sliding & bit) {
     d.hold.sliding &= ~bit;
     if (k == 1) d.hold.stuck |= bit, d.hold.anchor[l] = on_ground;  // slip to stick
@@ -285,7 +290,7 @@ real slip_part(const SpatialRobot &robot, const RobotData &d) {
     const V3 pa = V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, robot.leg[l].foot_point)) + j.pq;
     const V3 vt = tangential(d.hold, j.pd), at = tangential(d.hold, pa);
     const real speed = norm(vt);
-    if (!(speed > real(1e-9))) continue;  // no direction yet: the event's fallback holds it
+    if (!(speed > kSlipHold)) continue;  // its direction kept: nothing turns
     const V3 s = (1 / speed) * vt;
     rate = std::max(rate, norm(at - dot(at, s) * s) / speed);
   }
@@ -356,6 +361,7 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
     V3 ref[kMaxLegs];
     for (int l = 0; l < robot.nlegs; ++l) {
       ref[l] = ((d.hold.sliding >> l) & 1u) ? slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]) : V3{0, 0, 0};
+      if ((d.hold.sliding >> l) & 1u) d.slip_dir[l] = ref[l];  // the direction kept below kSlipHold
       d.slip_ref[l] = ref[l], d.slip_stage_min[l] = kNone;
     }
     real e0[kMaxLegs][2], e1[kMaxLegs][2];

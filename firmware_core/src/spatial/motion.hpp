@@ -35,7 +35,7 @@ struct RobotData {
   real mu[kMaxSystemRows];    // the multipliers at (t, q, v)
   real normal_force[kMaxLegs];  // N: each sliding foot's at (t, q, v)
   FeetHold hold;              // the feet's modes (and the ground's frame)
-  V3 slip_dir[kMaxLegs];      // a sliding foot's friction direction while its slip is below 1e-9 m/s
+  V3 slip_dir[kMaxLegs];      // a sliding foot's friction direction while its slip is below kSlipHold
   // a sliding foot's slip direction at the (part) step's start, and its slip velocity's least
   // component along it over the last RK4 step's stages (a reversal the end can miss)
   V3 slip_ref[kMaxLegs];
