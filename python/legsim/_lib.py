@@ -405,9 +405,11 @@ class Library:
             "legsim_hexapod_sim_init": (st, [P, C.c_size_t, C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
                                              C.c_uint32, C.POINTER(P)]),
             "legsim_hexapod_command": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
-            "legsim_hexapod_command_pose": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
+            "legsim_hexapod_command_pose": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double),
+                                                 C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
             "legsim_hexapod_step": (st, [P, C.c_double, C.c_int32]),
             "legsim_hexapod_get_state": (st, [P, C.POINTER(self.HexapodState)]),
+            "legsim_hexapod_body_poses": (st, [P, C.POINTER(C.c_double), C.c_int32, C.POINTER(C.c_int32)]),
         }
         self.has_toml_loader = hasattr(self.cdll, "legsim_model_load_toml")
         for fname, (res, args) in protos.items():

@@ -101,6 +101,61 @@ class Hexapod:
                 p.length_m[k][a] = float(pose["length_m"][k][a])
         return p
 
+    def walk(self, *, period_s: float, duty: float, step_length_m: float, step_height_m: float,
+             box_height_m: float, turn_rad: float = 0.0, t_end_s: float, h_s: float = 1e-3,
+             every: int = 10, feedforward: bool = True) -> dict:
+        """The robot walking on the tripod gait: it starts at rest at the gait's pose at t = 0
+        (the box level box_height_m over the origin, the standing feet stuck on the ground of the
+        file, the others free), and before every step of h_s its servos get the gait's set-points
+        at the step's end (HexapodSim.command_pose) with, by default, the statics of the planned
+        pose on its planned stance as feed-forward (the load the servos' gains alone would sag
+        under); the feet touch down, stick, slip and lift off as the ground's cones decide. Returns numpy arrays sampled every `every` steps (the
+        start included): t_s, box_m (n, 3), box_quat (n, 4), foot_m (n, 6, 3), foot_force_n
+        (n, 6, 3), foot_state (n, 6: 0 free, 1 stuck, 2 sliding), set_foot_box_m (n, 6, 3: the
+        gait's targets in the box's frame), body_pose (n, bodies, 7), events (each sample's
+        count since the last), impacts (touchdowns so far), kinetic_energy_j."""
+        gait = dict(period_s=period_s, duty=duty, step_length_m=step_length_m, step_height_m=step_height_m,
+                    turn_rad=turn_rad, box_height_m=box_height_m)
+        sp = self.gait_setpoints(0.0, **gait)
+        pose = {"box_m": [0.0, 0.0, float(box_height_m)], "box_quat": [1.0, 0.0, 0.0, 0.0],
+                "rowing_rad": list(sp["rowing_rad"]), "length_m": sp["length_m"].tolist()}
+        m = self.sim(pose, stuck=[k for k in range(LEGS) if sp["stance"][k]])
+
+        def command(sp):
+            ff = fm = None
+            if feedforward:
+                at = dict(pose, rowing_rad=list(sp["rowing_rad"]), length_m=sp["length_m"].tolist())
+                s = self.statics(at, stance=[k for k in range(LEGS) if sp["stance"][k]])
+                ff, fm = s["actuator_force_n"], s["rowing_torque_nm"]
+            m.command_pose(sp["length_m"], sp["rowing_rad"], ff, fm)
+
+        command(sp)
+        n = int(round(float(t_end_s) / float(h_s)))
+        out = {k: [] for k in ("t_s", "box_m", "box_quat", "foot_m", "foot_force_n", "foot_state",
+                               "set_foot_box_m", "body_pose", "events", "impacts", "kinetic_energy_j")}
+        events = 0
+
+        def sample(st, target):
+            out["t_s"].append(st["t_s"])
+            for k in ("box_m", "box_quat", "foot_m", "foot_force_n", "impacts", "kinetic_energy_j"):
+                out[k].append(st[k])
+            out["foot_state"].append([_FOOT_STATES.index(x) for x in st["foot_state"]])
+            out["set_foot_box_m"].append(target)
+            out["body_pose"].append(m.body_poses())
+            out["events"].append(events)
+
+        sample(m.state(), sp["foot_box_m"])
+        for i in range(n):
+            sp = self.gait_setpoints((i + 1) * float(h_s), **gait)
+            command(sp)
+            m.step(1, h_s=h_s)
+            st = m.state()
+            events += st["events"]
+            if (i + 1) % every == 0 or i + 1 == n:
+                sample(st, sp["foot_box_m"])
+                events = 0
+        return {k: np.array(v) for k, v in out.items()}
+
     def sim(self, pose: dict, stuck=range(LEGS)) -> "HexapodSim":
         """The robot moving from ``pose`` (as statics'), at rest, the feet of ``stuck`` (leg
         indices) held where the pose puts them, the commands zero (legsim_hexapod_sim_init)."""
@@ -158,13 +213,28 @@ class HexapodSim:
         t = (C.c_double * LEGS)(*map(float, rowing_torque_nm))
         self.library.check(self.library.cdll.legsim_hexapod_command(self._sim, f, t), "legsim_hexapod_command")
 
-    def command_pose(self, length_m, rowing_rad) -> None:
+    def command_pose(self, length_m, rowing_rad, feedforward_n=None, feedforward_nm=None) -> None:
         """The servos' set-points: each leg's two actuator lengths (m, 6 x 2) and rowing angles
-        (rad, 6), e.g. a gait's (Hexapod.gait_setpoints). Raises OutOfStrokeError past a stroke."""
-        f = ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*map(float, row)) for row in length_m])
-        t = (C.c_double * LEGS)(*map(float, rowing_rad))
-        self.library.check(self.library.cdll.legsim_hexapod_command_pose(self._sim, f, t),
+        (rad, 6), e.g. a gait's (Hexapod.gait_setpoints), with feed-forward forces (N, 6 x 2) and
+        torques (N m, 6) added to the servos' (None: 0). Raises OutOfStrokeError past a stroke."""
+        def pairs(x):
+            return ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*map(float, row)) for row in x])
+
+        f, t = pairs(length_m), (C.c_double * LEGS)(*map(float, rowing_rad))
+        ff = None if feedforward_n is None else pairs(feedforward_n)
+        fm = None if feedforward_nm is None else (C.c_double * LEGS)(*map(float, feedforward_nm))
+        self.library.check(self.library.cdll.legsim_hexapod_command_pose(self._sim, f, t, ff, fm),
                            "legsim_hexapod_command_pose")
+
+    def body_poses(self) -> np.ndarray:
+        """Every body's pose (bodies x 7: centre, unit quaternion w, x, y, z; world): the box,
+        then per leg its yoke and its bars in its file's order (a bar's axis is its frame's x)."""
+        cap = 1 + LEGS * (1 + 8)
+        buf = (C.c_double * (7 * cap))()
+        n = C.c_int32()
+        self.library.check(self.library.cdll.legsim_hexapod_body_poses(self._sim, buf, cap, C.byref(n)),
+                           "legsim_hexapod_body_poses")
+        return np.array(buf[:7 * n.value]).reshape(n.value, 7)
 
     def step(self, n: int = 1, *, h_s: float = 1e-3) -> None:
         self.library.check(self.library.cdll.legsim_hexapod_step(self._sim, float(h_s), int(n)),

@@ -154,11 +154,16 @@ legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actua
 
 /* The servos' set-points from the next step on: each leg's two actuator lengths (m, within their
  * strokes) and rowing angles (rad, within the rowing stroke): each actuator's force
- * kp (l_cmd - l) - kd l' (its file's gains) and each rowing torque kp (a_cmd - a) - kd a' (the
- * file's [rowing] gains), saturated at max_force and max_torque. LEGSIM_ERR_OUT_OF_STROKE for a
- * set-point past its stroke, LEGSIM_ERR_BAD_INPUT for one not finite (nothing changed). */
+ * F_ff + kp (l_cmd - l) - kd l' (its file's gains) and each rowing torque
+ * tau_ff + kp (a_cmd - a) - kd a' (the file's [rowing] gains), saturated at max_force and
+ * max_torque; the feed-forwards (N, |F_ff| <= max_force; N m, |tau_ff| <= max_torque; NULL: 0),
+ * e.g. legsim_hexapod_statics' at the set-points, carry the load the gains would otherwise sag
+ * under. LEGSIM_ERR_OUT_OF_STROKE for a set-point past its stroke, LEGSIM_ERR_BAD_INPUT for a
+ * value not finite or a feed-forward out of range (nothing changed). */
 legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double length_m[LEGSIM_HEXAPOD_LEGS][2],
-                                          const double rowing_rad[LEGSIM_HEXAPOD_LEGS]);
+                                          const double rowing_rad[LEGSIM_HEXAPOD_LEGS],
+                                          const double feedforward_n[LEGSIM_HEXAPOD_LEGS][2],
+                                          const double feedforward_nm[LEGSIM_HEXAPOD_LEGS]);
 
 /* n_steps (>= 1) steps of h_s (s, in (0, 0.1]). Stops at the first step that fails, the state
  * that of the last step taken: LEGSIM_ERR_SINGULAR (a leg at a dead centre), _NOT_CONVERGED (the
@@ -182,6 +187,12 @@ typedef struct legsim_hexapod_state {
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);
+
+/* Every body's pose (world): its centre (m) and unit quaternion (w, x, y, z), 7 numbers each, in
+ * the order the box, then per leg its yoke and its bars in its file's order (a bar's axis, from
+ * its proximal to its distal end, is its frame's x). *n: the bodies' number; capacity: pose's
+ * room in bodies (LEGSIM_ERR_CAPACITY, nothing written, when short). */
+legsim_status legsim_hexapod_body_poses(const legsim_hexapod_sim *sim, double *pose, int32_t capacity, int32_t *n);
 
 #ifdef __cplusplus
 }

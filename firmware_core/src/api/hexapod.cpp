@@ -260,10 +260,18 @@ legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actua
 }
 
 legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double length_m[LEGSIM_HEXAPOD_LEGS][2],
-                                          const double rowing_rad[LEGSIM_HEXAPOD_LEGS]) {
+                                          const double rowing_rad[LEGSIM_HEXAPOD_LEGS],
+                                          const double feedforward_n[LEGSIM_HEXAPOD_LEGS][2],
+                                          const double feedforward_nm[LEGSIM_HEXAPOD_LEGS]) {
   if (!sim || !length_m || !rowing_rad) return LEGSIM_ERR_NULL;
   if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
   const spatial::SpatialRobot &R = sim->robot;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    if (feedforward_nm && !finite_within(&feedforward_nm[l], 1, double(R.rowing_max_torque))) return LEGSIM_ERR_BAD_INPUT;
+    for (int a = 0; feedforward_n && a < R.leg[l].nactuators && a < 2; ++a)
+      if (!finite_within(&feedforward_n[l][a], 1, double(R.act[R.leg[l].first_actuator + a].max_force)))
+        return LEGSIM_ERR_BAD_INPUT;
+  }
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
     if (!std::isfinite(rowing_rad[l])) return LEGSIM_ERR_BAD_INPUT;
     if (!(rowing_rad[l] >= R.rowing_stroke[0] && rowing_rad[l] <= R.rowing_stroke[1])) return LEGSIM_ERR_OUT_OF_STROKE;
@@ -279,9 +287,11 @@ legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double 
     for (int a = 0; a < L.nactuators && a < 2; ++a) {
       c.actuator_mode[L.first_actuator + a] = spatial::CommandMode::Servo;
       c.actuator[L.first_actuator + a] = real(length_m[l][a]);
+      c.actuator_ff[L.first_actuator + a] = feedforward_n ? real(feedforward_n[l][a]) : real(0);
     }
     c.rowing_mode[l] = spatial::CommandMode::Servo;
     c.rowing[l] = real(rowing_rad[l]);
+    c.rowing_ff[l] = feedforward_nm ? real(feedforward_nm[l]) : real(0);
   }
   return command_apply(*sim, c);
 }
@@ -328,6 +338,16 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
   r.events = d.events;
   r.impacts = d.impacts;
   *out = r;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_body_poses(const legsim_hexapod_sim *sim, double *pose, int32_t capacity, int32_t *n) {
+  if (!sim || !pose || !n) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  const int nb = sim->robot.nb;
+  if (capacity < nb) return LEGSIM_ERR_CAPACITY;
+  for (int k = 0; k < kBodyConfig * nb; ++k) pose[k] = sim->data.q[k];
+  *n = nb;
   return LEGSIM_OK;
 }
 

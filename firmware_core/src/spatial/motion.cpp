@@ -320,8 +320,10 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
     d.ground = {{0, 0, 0}, {0, 0, 1}, 0, 0};
   }
   for (int l = 0; l < kMaxLegs; ++l) d.slip_dir[l] = d.hold.t1, d.normal_force[l] = 0, d.impulse[l] = {0, 0, 0};
-  for (int a = 0; a < kMaxRobotActuators; ++a) d.command.actuator_mode[a] = CommandMode::Force, d.command.actuator[a] = 0;
-  for (int l = 0; l < kMaxLegs; ++l) d.command.rowing_mode[l] = CommandMode::Force, d.command.rowing[l] = 0;
+  for (int a = 0; a < kMaxRobotActuators; ++a)
+    d.command.actuator_mode[a] = CommandMode::Force, d.command.actuator[a] = d.command.actuator_ff[a] = 0;
+  for (int l = 0; l < kMaxLegs; ++l)
+    d.command.rowing_mode[l] = CommandMode::Force, d.command.rowing[l] = d.command.rowing_ff[l] = 0;
   std::fill(d.actuator_force, d.actuator_force + kMaxRobotActuators, real(0));
   std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
   std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
@@ -457,7 +459,8 @@ void command_forces(const SpatialRobot &robot, const RobotCommands &c, const rea
       continue;
     }
     const RobotActuator &ac = robot.act[a];
-    const real f = ac.kp * (c.actuator[a] - robot_actuator_length(robot, a, q)) - ac.kd * robot_actuator_rate(robot, a, q, v);
+    const real f = c.actuator_ff[a] + ac.kp * (c.actuator[a] - robot_actuator_length(robot, a, q)) -
+                   ac.kd * robot_actuator_rate(robot, a, q, v);
     force_n[a] = std::max(-ac.max_force, std::min(ac.max_force, f));
   }
   for (int l = 0; l < robot.nlegs; ++l) {
@@ -465,7 +468,9 @@ void command_forces(const SpatialRobot &robot, const RobotCommands &c, const rea
       rowing_nm[l] = c.rowing[l];
       continue;
     }
-    const real t = robot.rowing_kp * std::remainder(c.rowing[l] - robot_rowing_angle(robot, l, q), 2 * real(3.14159265358979323846)) -
+    const real t = c.rowing_ff[l] +
+                   robot.rowing_kp * std::remainder(c.rowing[l] - robot_rowing_angle(robot, l, q),
+                                                    2 * real(3.14159265358979323846)) -
                    robot.rowing_kd * robot_rowing_rate(robot, l, q, v);
     rowing_nm[l] = std::max(-robot.rowing_max_torque, std::min(robot.rowing_max_torque, t));
   }

@@ -18,14 +18,15 @@
 namespace legsim::spatial {
 
 // What each actuator is told, held over a step: a force (N; a rowing torque, N m) or a servo's
-// set-point (a length, m; a rowing angle, rad) that the servo holds by its PD law, saturated at
-// the actuator's largest force (robot.hpp: RobotActuator, SpatialRobot's rowing numbers).
+// set-point (a length, m; a rowing angle, rad) that the servo holds by its PD law plus a
+// feed-forward force (N; N m), saturated at the actuator's largest force (robot.hpp:
+// RobotActuator, SpatialRobot's rowing numbers).
 enum class CommandMode : uint8_t { Force, Servo };
 struct RobotCommands {
   CommandMode actuator_mode[kMaxRobotActuators];
-  real actuator[kMaxRobotActuators];
+  real actuator[kMaxRobotActuators], actuator_ff[kMaxRobotActuators];
   CommandMode rowing_mode[kMaxLegs];
-  real rowing[kMaxLegs];
+  real rowing[kMaxLegs], rowing_ff[kMaxLegs];
 };
 
 struct RobotData {
