@@ -198,11 +198,14 @@ void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, 
 
 // Below -tol an event function has crossed (round-off above it is still "at the root"): heights
 // and slip velocities to 1e-12 (m, m/s), forces to 1e-10 of the robot's mass in kg (N).
-real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k) {
-  if (!((d.hold.stuck | d.hold.sliding) >> l & 1u) || (k == 1 && ((d.hold.sliding >> l) & 1u))) return real(1e-12);
+real force_tolerance(const SpatialRobot &robot) {
   real mass = 1;
   for (int b = 0; b < robot.nb; ++b) mass += robot.mass[b];
   return real(1e-10) * mass;
+}
+real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k) {
+  if (!((d.hold.stuck | d.hold.sliding) >> l & 1u) || (k == 1 && ((d.hold.sliding >> l) & 1u))) return real(1e-12);
+  return force_tolerance(robot);
 }
 
 // The modes checked against the cone at d's state (after an event or at the start): when a stuck
@@ -217,9 +220,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
     if (st != LEGSIM_OK) return st;
     if (!d.has_ground) return LEGSIM_OK;
-    real scale = 1;
-    for (int b = 0; b < robot.nb; ++b) scale += robot.mass[b];
-    const real tol = real(1e-9) * scale;
+    const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
     for (int l = 0; l < robot.nlegs; ++l) {
       const uint32_t bit = 1u << l;
@@ -350,6 +351,23 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
   if (!(h > 0) || !std::isfinite(h)) return LEGSIM_ERR_BAD_INPUT;
   Core start, s0;
   save(robot, d, start);
+  // new commands (or a new state) may leave a foot pulling or off its cone: its modes first
+  if (d.has_ground) {
+    V3 ref[kMaxLegs] = {};
+    real e[kMaxLegs][2];
+    event_values(robot, d, ref, e);
+    bool off = false;
+    for (int l = 0; l < robot.nlegs; ++l)
+      off = off || ((d.hold.stuck | d.hold.sliding) >> l & 1u && (e[l][0] < -force_tolerance(robot) ||
+                                                                  ((d.hold.stuck >> l) & 1u && e[l][1] < -force_tolerance(robot))));
+    if (off) {
+      const legsim_status st = settle(robot, d);
+      if (st != LEGSIM_OK) {
+        load(robot, start, d);
+        return st;
+      }
+    }
+  }
   const int events_before = d.impacts;
   int events = 0;
   real remaining = h;
