@@ -6,7 +6,10 @@
     legsim-bench check RECORDING...             reference model, checks, table, CSV/JSON/PNG
     legsim-bench check --log TRACE [--scene S]  a raw CAN trace decoded into a recording, checked
     legsim-bench demo [--build] [--all]         build, vcan0 (here or in the VM), hil_sim,
-                                                record, check: the README's main command
+                                                record, check, then the hexapod's walk: the
+                                                README's main command
+    legsim-bench hexapod [--turn R] [--periods N]  the hexapod walking (in process), checked,
+                                                with its plot and 3D animation
     legsim-bench workprecision|options|stress|mcu   the benchmarks (their own options; results
                                                 in out/bench-results/, --update-results for
                                                 the committed bench/results/)
@@ -47,6 +50,8 @@ BENCHMARKS = {
     "mcu": ("legsim_bench.benchmarks.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
     "robot-peers": ("legsim_bench.benchmarks.peers.robot_results",
                     "the two-leg robot in legsim, MuJoCo and Siconos: errors against the bench's reference and cost"),
+    "hexapod": ("legsim_bench.hexapod_walk",
+                "the hexapod walking on its tripod gait (in process): checks, plot, 3D animation"),
 }
 
 
@@ -508,10 +513,18 @@ def cmd_demo(args) -> int:
     args.recordings = [str(p) for p in paths]
     args.out = None
     rc = cmd_check(args)
+    # the hexapod walking (in process: no CAN node for it yet)
+    from .hexapod_walk import print_rows, run_walk
+
+    print()
+    walk_dir = out_base / "hexapod_walk"
+    ok, rows, _ = run_walk(root, None if args.no_plots else walk_dir)
+    print_rows("the hexapod walking two periods of its tripod gait (models/hexapod.toml, legsim.Hexapod.walk)", rows)
+    rc = rc or (0 if ok else 1)
     print("\nplots and data:")
-    for n in names:
-        pngs = sorted([*(out_base / n).glob("*.png"), *(out_base / n).glob("*.gif")])
-        print(f"  {out_base / n}/  " + (" ".join(p.name for p in pngs) if pngs else "(no plots)"))
+    for d in [*(out_base / n for n in names), walk_dir]:
+        pngs = sorted([*d.glob("*.png"), *d.glob("*.gif")])
+        print(f"  {d}/  " + (" ".join(p.name for p in pngs) if pngs else "(no plots)"))
     return rc
 
 

@@ -70,3 +70,19 @@ def test_turns_on_the_spot(hexapod):
     assert abs(yaw[-1] - planned) < 0.1 * planned
     assert np.hypot(*w["box_m"][-1, :2]) < 0.03 and np.degrees(tilt.max()) < 3
     contact_invariants(hexapod, w)
+
+
+def test_bench_command_writes_its_checks_and_animation(tmp_path):
+    """`legsim-bench hexapod` (the demo's last part): its checks pass and it writes the walk's
+    plot and its 3D animation (a GIF of about one frame per 0.1 s: Pillow merges equal ones)."""
+    from PIL import Image
+
+    from legsim_bench.hexapod_walk import run_walk
+    from legsim_bench.scene import find_root
+
+    ok, rows, files = run_walk(find_root(None), tmp_path, periods=1)
+    assert ok, rows
+    names = sorted(p.name for p in files)
+    assert names == ["hexapod_walk.gif", "hexapod_walk.png"]
+    with Image.open(tmp_path / "hexapod_walk.gif") as im:
+        assert 10 <= im.n_frames <= 13  # 1.2 s at 10 frames a second, both ends
