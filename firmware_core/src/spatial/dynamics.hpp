@@ -45,7 +45,7 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
 constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
 
 // The factor of [M J^T; J 0] for the rows of system_rows at one q with the feet of `stuck`: per
-// leg its rows in elimination order (its own and its stuck foot's, then its hip's), the
+// leg its rows in elimination order (RobotLeg::order with its held foot's, then its hip's), the
 // Cholesky factor L_l of S_l = J_l M_l^-1 J_l^T, W_l = L_l^-1 B_l on its hip rows; the box's
 // complement's factor. Built once, solved for several right-hand sides (the stages'
 // accelerations, the projections, a sliding foot's friction columns).
@@ -54,7 +54,11 @@ struct RobotFactor {
   const Row *rows;  // the rows it was built from (system_rows'), read by the solves
   int nrow[kMaxLegs], nhip[kMaxLegs];
   int idx[kMaxLegs][kMaxLegRows];
-  real L[kMaxLegs][kMaxLegRows * kMaxLegRows];
+  int8_t body[kMaxLegs][kMaxLegRows][2];  // a row's bodies, from the leg's yoke (-1: off the leg)
+  // L_l in its envelope (L_l has no fill left of a row's first coupled row): row i holds
+  // columns first[i] .. i, L(i, j) at L[off[i] + j]
+  int first[kMaxLegs][kMaxLegRows], off[kMaxLegs][kMaxLegRows];
+  real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
 };

@@ -76,6 +76,11 @@ struct RobotLeg {
   V3 foot_point;    // on it, body frame
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
   real yaw;         // rad
+  // The order its rows are eliminated in (spatial/dynamics.cpp), chosen at lift: its joints'
+  // rows but the hip's on a free box (those go last), the foot's held rows before
+  // order[foot_slot] (after the last when foot_slot == norder).
+  int order[5 * (1 + kMaxLegJoints)];
+  int norder, foot_slot;
 };
 
 // A linear actuator: its length (m) is (r_rod - r_cyl) . u_cyl + offset, the planar model's,

@@ -1,7 +1,8 @@
 // Small dense linear systems (the system layer's): the Woodbury correction's few columns
 // (coupled_solve, dynamics.cpp), the 3D contact problem's generalized Jacobian
-// (spatial/friction_cone.cpp), a spatial leg's rows (spatial/dynamics.cpp). No Eigen: a header the element modules can take alone;
-// inline, since its callers' sizes are small.
+// (spatial/friction_cone.cpp), a spatial leg's rows (spatial/dynamics.cpp, in envelope form).
+// No Eigen: a header the element modules can take alone; inline, since its callers' sizes are
+// small.
 #pragma once
 
 #include <cmath>
@@ -52,6 +53,27 @@ inline bool dense_cholesky(int n, legsim_real *A, legsim_real floor) {
       for (int k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
       A[i * n + j] = s / d;
     }
+  }
+  return true;
+}
+
+// dense_cholesky in envelope storage: row i of A holds its columns first[i] .. i at A + off[i]
+// (A(i, j) = A[off[i] + j]), L there on return. Row i of L is zero left of first[i] (no fill
+// outside the envelope), so the sums skip only zeros: dense_cholesky's result.
+inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_real *A, legsim_real floor) {
+  for (int i = 0; i < n; ++i) {
+    legsim_real *ri = A + off[i];
+    const int fi = first[i];
+    for (int j = fi; j < i; ++j) {
+      const legsim_real *rj = A + off[j];
+      legsim_real s = ri[j];
+      for (int k = fi > first[j] ? fi : first[j]; k < j; ++k) s -= ri[k] * rj[k];
+      ri[j] = s / rj[j];
+    }
+    legsim_real d = ri[i];
+    for (int k = fi; k < i; ++k) d -= ri[k] * ri[k];
+    if (!(d > floor)) return false;
+    ri[i] = std::sqrt(d);
   }
   return true;
 }
