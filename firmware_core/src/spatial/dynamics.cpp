@@ -95,10 +95,11 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
         on[body][non[body]++] = 2 * i + s;
       }
       first[i] = f, off[i] = size - f;
+      // zeroed row by row: a short loop, not one long memset
+      for (int k = size; k <= size + i - f; ++k) S[k] = 0;
       size += i - f + 1;
     }
     // S = J_l M_l^-1 J_l^T: the pairs of rows on a common body (its lower triangle)
-    for (int k = 0; k < size; ++k) S[k] = 0;
     for (int b = 0; b < nbl; ++b)
       for (int p = 0; p < non[b]; ++p) {
         const int i = on[b][p] >> 1, si = on[b][p] & 1;
@@ -198,18 +199,25 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
       const real t = lam[i] /= Li[i];
       for (int k = first[i]; k < i; ++k) lam[k] -= Li[k] * t;
     }
-    real *xl = x + kBodyDof * b_lo;
-    for (int k = 0; k < kBodyDof * nbl; ++k) xl[k] = f[kBodyDof * b_lo + k];
+    // f - J^T lambda in a local array (no aliasing with the rows: kept in registers)
+    real xb[kMaxLegBodies][kBodyDof];
+    for (int b = 0; b < nbl; ++b)
+      for (int k = 0; k < kBodyDof; ++k) xb[b][k] = f[kBodyDof * (b_lo + b) + k];
     for (int i = 0; i < n; ++i) {
       const Row &ri = rows[ix[i]];
-      mu[ix[i]] = lam[i];
-      if (rb[i][0] >= 0)
-        for (int k = 0; k < kBodyDof; ++k) xl[kBodyDof * rb[i][0] + k] -= ri.ja[k] * lam[i];
-      if (rb[i][1] >= 0)
-        for (int k = 0; k < kBodyDof; ++k) xl[kBodyDof * rb[i][1] + k] -= ri.jb[k] * lam[i];
+      const real li = lam[i];
+      mu[ix[i]] = li;
+      if (rb[i][0] >= 0) {
+        real *xa = xb[rb[i][0]];
+        for (int k = 0; k < kBodyDof; ++k) xa[k] -= ri.ja[k] * li;
+      }
+      if (rb[i][1] >= 0) {
+        real *xa = xb[rb[i][1]];
+        for (int k = 0; k < kBodyDof; ++k) xa[k] -= ri.jb[k] * li;
+      }
     }
     for (int b = 0; b < nbl; ++b)
-      for (int k = 0; k < kBodyDof; ++k) xl[kBodyDof * b + k] *= robot.inverse_mass[b_lo + b][k];
+      for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * (b_lo + b) + k] = xb[b][k] * robot.inverse_mass[b_lo + b][k];
   }
 }
 

@@ -64,7 +64,23 @@ inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_re
   for (int i = 0; i < n; ++i) {
     legsim_real *ri = A + off[i];
     const int fi = first[i];
-    for (int j = fi; j < i; ++j) {
+    int j = fi;
+    // two columns at a time: each ri[k] loaded once for both sums (each still in k's order)
+    for (; j + 1 < i; j += 2) {
+      const legsim_real *r0 = A + off[j], *r1 = A + off[j + 1];
+      const int k0 = fi > first[j] ? fi : first[j], k1 = fi > first[j + 1] ? fi : first[j + 1];
+      const int kc = k0 > k1 ? k0 : k1;
+      legsim_real s0 = ri[j], s1 = ri[j + 1];
+      for (int k = k0; k < kc; ++k) s0 -= ri[k] * r0[k];
+      for (int k = k1; k < kc; ++k) s1 -= ri[k] * r1[k];
+      for (int k = kc; k < j; ++k) {
+        const legsim_real a = ri[k];
+        s0 -= a * r0[k], s1 -= a * r1[k];
+      }
+      ri[j] = s0 / r0[j];
+      ri[j + 1] = (s1 - ri[j] * r1[j]) / r1[j + 1];
+    }
+    for (; j < i; ++j) {
       const legsim_real *rj = A + off[j];
       legsim_real s = ri[j];
       for (int k = fi > first[j] ? fi : first[j]; k < j; ++k) s -= ri[k] * rj[k];
