@@ -69,10 +69,10 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     real *S = F.L[l];
     // each row's leg bodies and its envelope (from the first row on either body); each body's
     // rows (local index, and the row's coefficients on it scaled by M^-1)
-    int on[kMaxLegBodies][2 * kMaxLegRows], non[kMaxLegBodies], fb[kMaxLegBodies];
+    int on[kMaxLegBodies][kMaxLegRows], non[kMaxLegBodies], fb[kMaxLegBodies];
     for (int b = 0; b < nbl; ++b) non[b] = 0, fb[b] = n;
     real scaled[kMaxLegRows][2][kBodyDof];
-    const real *coef[kMaxLegRows][2];
+    const real *coef[kMaxLegBodies][kMaxLegRows], *scl[kMaxLegBodies][kMaxLegRows];
     int size = 0;
     for (int i = 0; i < n; ++i) {
       int ab[2];
@@ -91,8 +91,8 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
         const real *cf = s == 0 ? ri.ja : ri.jb, *im = robot.inverse_mass[ab[s]];
         real *sc = scaled[i][s];
         for (int k = 0; k < kBodyDof; ++k) sc[k] = cf[k] * im[k];
-        coef[i][s] = cf;
-        on[body][non[body]++] = 2 * i + s;
+        coef[body][non[body]] = cf, scl[body][non[body]] = sc;
+        on[body][non[body]++] = i;
       }
       first[i] = f, off[i] = size - f;
       // zeroed row by row: a short loop, not one long memset
@@ -102,16 +102,14 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     // S = J_l M_l^-1 J_l^T: the pairs of rows on a common body (its lower triangle)
     for (int b = 0; b < nbl; ++b)
       for (int p = 0; p < non[b]; ++p) {
-        const int i = on[b][p] >> 1, si = on[b][p] & 1;
-        const real *sc = scaled[i][si];
-        real *Si = S + off[i];
+        const real *sc = scl[b][p];
+        real *Si = S + off[on[b][p]];
         for (int q = 0; q <= p; ++q) {
           // a body's rows in increasing order: j <= i
-          const int j = on[b][q] >> 1, sj = on[b][q] & 1;
-          const real *cj = coef[j][sj];
+          const real *cj = coef[b][q];
           real s_ij = 0;
           for (int k = 0; k < kBodyDof; ++k) s_ij += sc[k] * cj[k];
-          Si[j] += s_ij;
+          Si[on[b][q]] += s_ij;
         }
       }
     real scale = 0;
