@@ -7,24 +7,6 @@
 namespace legsim::spatial {
 
 namespace {
-constexpr int kMaxLegBodies = 1 + kMaxLegBars;
-
-// The rows of leg l in its elimination order: RobotLeg::order (its joints' but the hip's on a
-// free box) with its held foot's in their slot, then its hip's (the rows on the box) last, so
-// that S_l^-1 reaches the box through the factor's last rows only. Returns their number; nh: the
-// hip's.
-int leg_rows(const SpatialRobot &robot, const FeetHold &hold, int l, int *idx, int &nh) {
-  const RobotLeg &L = robot.leg[l];
-  const int nf = foot_rows(hold, l), f0 = foot_row(robot, l);
-  int n = 0;
-  for (int i = 0; i < L.foot_slot; ++i) idx[n++] = L.order[i];
-  for (int k = 0; k < nf; ++k) idx[n++] = f0 + k;
-  for (int i = L.foot_slot; i < L.norder; ++i) idx[n++] = L.order[i];
-  nh = L.nrows - L.norder;
-  for (int k = 0; k < nh; ++k) idx[n++] = L.row0 + k;  // the hip's: its joint's, the leg's first
-  return n;
-}
-
 // Row r's two bodies (a foot row: the foot's bar and the world).
 inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
   if (r < robot.m) {
@@ -34,6 +16,45 @@ inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
   }
 }
 }  // namespace
+
+// The rows in RobotLeg::order with the foot's in their slot, then the hip's (the rows on the
+// box) last, so that S_l^-1 reaches the box through the factor's last rows only.
+void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
+  static_assert(kMaxLegRows <= 64 && kMaxLegBodies <= 127, "a leg's rows and bodies");
+  const RobotLeg &L = robot.leg[l];
+  const int f0 = foot_row(robot, l), b_lo = L.yoke, nbl = 1 + L.nbars;
+  int *idx = out.row, n = 0;
+  for (int i = 0; i < L.foot_slot; ++i) idx[n++] = L.order[i];
+  for (int k = 0; k < nf; ++k) idx[n++] = f0 + k;
+  for (int i = L.foot_slot; i < L.norder; ++i) idx[n++] = L.order[i];
+  out.nh = L.nrows - L.norder;
+  for (int k = 0; k < out.nh; ++k) idx[n++] = L.row0 + k;  // the hip's: its joint's, the leg's first
+  out.n = n;
+  // each row's leg bodies and envelope (from the first row on either body); each body's rows
+  int fb[kMaxLegBodies], non[kMaxLegBodies] = {}, size = 0;
+  for (int b = 0; b < nbl; ++b) fb[b] = n;
+  for (int i = 0; i < n; ++i) {
+    int ab[2];
+    bodies_of(robot, idx[i], ab[0], ab[1]);
+    int f = i;
+    for (int s = 0; s < 2; ++s) {
+      const int body = ab[s] < 0 ? -1 : ab[s] - b_lo;
+      out.body[i][s] = int8_t(body >= 0 && body < nbl ? body : -1);
+      if (out.body[i][s] < 0) continue;
+      fb[body] = std::min(fb[body], i);
+      f = std::min(f, fb[body]);
+      ++non[body];
+    }
+    out.first[i] = f, out.off[i] = size - f;
+    size += i - f + 1;
+  }
+  out.size = size;
+  out.on0[0] = 0;
+  for (int b = 0; b < nbl; ++b) out.on0[b + 1] = out.on0[b] + non[b], non[b] = out.on0[b];
+  for (int i = 0; i < n; ++i)
+    for (int s = 0; s < 2; ++s)
+      if (out.body[i][s] >= 0) out.on[non[out.body[i][s]]++] = int16_t(2 * i + s);
+}
 
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows) {
   robot_rows(robot, q, v, rows);
@@ -57,61 +78,41 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
   for (int i = 0; i < kBodyDof * kBodyDof; ++i) A0[i] = 0;
   if (box)
     for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
-  static_assert(kMaxLegRows <= 64 && kMaxLegBodies <= 127, "a leg's rows and bodies");
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars;
-    int *ix = F.idx[l], *first = F.first[l], *off = F.off[l];
-    int8_t(*rb)[2] = F.body[l];
-    int nh;
-    const int n = F.nrow[l] = leg_rows(robot, hold, l, ix, nh);
-    F.nhip[l] = nh;
+    const LegLayout &Y = leg_layout(robot, hold, l);
+    F.layout[l] = &Y;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *first = Y.first, *off = Y.off;
     real *S = F.L[l];
-    // each row's leg bodies and its envelope (from the first row on either body); each body's
-    // rows (local index, and the row's coefficients on it scaled by M^-1)
-    int on[kMaxLegBodies][kMaxLegRows], non[kMaxLegBodies], fb[kMaxLegBodies];
-    for (int b = 0; b < nbl; ++b) non[b] = 0, fb[b] = n;
-    real scaled[kMaxLegRows][2][kBodyDof];
-    const real *coef[kMaxLegBodies][kMaxLegRows], *scl[kMaxLegBodies][kMaxLegRows];
-    int size = 0;
+    // S = J_l M_l^-1 J_l^T in its envelope: the pairs of rows on a common body (its lower
+    // triangle; a body's rows in increasing order), the rest zero
     for (int i = 0; i < n; ++i) {
-      int ab[2];
-      bodies_of(robot, ix[i], ab[0], ab[1]);
-      const Row &ri = rows[ix[i]];
-      int f = i;
-      for (int s = 0; s < 2; ++s) {
-        const int body = ab[s] - b_lo;
-        if (ab[s] < 0 || body < 0 || body >= nbl) {
-          rb[i][s] = -1;
-          continue;
-        }
-        rb[i][s] = int8_t(body);
-        fb[body] = std::min(fb[body], i);
-        f = std::min(f, fb[body]);
-        const real *cf = s == 0 ? ri.ja : ri.jb, *im = robot.inverse_mass[ab[s]];
-        real *sc = scaled[i][s];
-        for (int k = 0; k < kBodyDof; ++k) sc[k] = cf[k] * im[k];
-        coef[body][non[body]] = cf, scl[body][non[body]] = sc;
-        on[body][non[body]++] = i;
-      }
-      first[i] = f, off[i] = size - f;
-      // zeroed row by row: a short loop, not one long memset
-      for (int k = size; k <= size + i - f; ++k) S[k] = 0;
-      size += i - f + 1;
+      // row by row: short loops, not one long memset
+      real *Si = S + off[i];
+      for (int k = first[i]; k <= i; ++k) Si[k] = 0;
     }
-    // S = J_l M_l^-1 J_l^T: the pairs of rows on a common body (its lower triangle)
-    for (int b = 0; b < nbl; ++b)
-      for (int p = 0; p < non[b]; ++p) {
-        const real *sc = scl[b][p];
-        real *Si = S + off[on[b][p]];
+    for (int b = 0; b < nbl; ++b) {
+      const int p0 = Y.on0[b], np = Y.on0[b + 1] - p0;
+      const int16_t *on = Y.on + p0;
+      const real *im = robot.inverse_mass[b_lo + b];
+      const real *coef[2 * kMaxLegRows];
+      for (int p = 0; p < np; ++p) {
+        const Row &r = rows[ix[on[p] >> 1]];
+        coef[p] = on[p] & 1 ? r.jb : r.ja;
+      }
+      for (int p = 0; p < np; ++p) {
+        real sc[kBodyDof];
+        for (int k = 0; k < kBodyDof; ++k) sc[k] = coef[p][k] * im[k];
+        real *Si = S + off[on[p] >> 1];
         for (int q = 0; q <= p; ++q) {
-          // a body's rows in increasing order: j <= i
-          const real *cj = coef[b][q];
+          const real *cj = coef[q];
           real s_ij = 0;
           for (int k = 0; k < kBodyDof; ++k) s_ij += sc[k] * cj[k];
-          Si[on[b][q]] += s_ij;
+          Si[on[q] >> 1] += s_ij;
         }
       }
+    }
     real scale = 0;
     for (int i = 0; i < n; ++i) scale = std::max(scale, S[off[i] + i]);
     if (!envelope_cholesky(n, first, off, S, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
@@ -151,9 +152,10 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
   // per leg y = L^-1 c, c = J_l M_l^-1 f_l - g_l; the box's right-hand side f_0 - W^T y
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = F.nrow[l], nh = F.nhip[l];
-    const int *ix = F.idx[l], *first = F.first[l], *off = F.off[l];
-    const int8_t(*rb)[2] = F.body[l];
+    const LegLayout &Y = *F.layout[l];
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int8_t(*rb)[2] = Y.body;
     const real *S = F.L[l];
     // M_l^-1 f_l
     real mf[kMaxLegBodies][kBodyDof];
@@ -183,9 +185,10 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
   // each leg: lambda = L^-T (y + W a0), then its bodies' a = M^-1 (f - J^T lambda)
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = F.nrow[l], nh = F.nhip[l];
-    const int *ix = F.idx[l], *first = F.first[l], *off = F.off[l];
-    const int8_t(*rb)[2] = F.body[l];
+    const LegLayout &Y = *F.layout[l];
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int8_t(*rb)[2] = Y.body;
     const real *S = F.L[l];
     real *lam = y[l];
     if (box)

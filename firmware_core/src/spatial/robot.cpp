@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "spatial/dynamics.hpp"
+
 namespace legsim::spatial {
 
 namespace {
@@ -252,6 +254,9 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.na = na;
   R.nj = nj;
   R.m = row;
+  // the dynamics' elimination, chosen once per hold of each foot (the foot rows' numbers follow m)
+  for (int l = 0; l < nlegs; ++l)
+    for (int k = 0; k < 3; ++k) leg_layout(R, l, k == 2 ? 3 : k, R.leg[l].layout[k]);
   return LEGSIM_OK;
 }
 
