@@ -49,11 +49,19 @@ void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
     size += i - f + 1;
   }
   out.size = size;
+  // the orientation rows: a revolute's last two, a prismatic's first three
+  bool turn[kMaxRobotRows] = {};
+  for (int j = 0; j < robot.nj; ++j) {
+    const LegJoint &J = robot.joint[j];
+    if (J.kind == LegJointKind::Revolute) turn[J.row + 3] = turn[J.row + 4] = true;
+    if (J.kind == LegJointKind::Prismatic) turn[J.row] = turn[J.row + 1] = turn[J.row + 2] = true;
+  }
   out.on0[0] = 0;
   for (int b = 0; b < nbl; ++b) out.on0[b + 1] = out.on0[b] + non[b], non[b] = out.on0[b];
   for (int i = 0; i < n; ++i)
     for (int s = 0; s < 2; ++s)
-      if (out.body[i][s] >= 0) out.on[non[out.body[i][s]]++] = int16_t(2 * i + s);
+      if (out.body[i][s] >= 0)
+        out.on[non[out.body[i][s]]++] = int16_t(4 * i + (idx[i] < robot.m && turn[idx[i]] ? 2 : 0) + s);
 }
 
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows) {
@@ -98,18 +106,29 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
       const real *im = robot.inverse_mass[b_lo + b];
       const real *coef[2 * kMaxLegRows];
       for (int p = 0; p < np; ++p) {
-        const Row &r = rows[ix[on[p] >> 1]];
+        const Row &r = rows[ix[on[p] >> 2]];
         coef[p] = on[p] & 1 ? r.jb : r.ja;
       }
+      // with an orientation row the products on v are exact zeros: skipped
       for (int p = 0; p < np; ++p) {
         real sc[kBodyDof];
         for (int k = 0; k < kBodyDof; ++k) sc[k] = coef[p][k] * im[k];
-        real *Si = S + off[on[p] >> 1];
+        real *Si = S + off[on[p] >> 2];
+        if (on[p] & 2) {
+          for (int q = 0; q <= p; ++q) {
+            const real *cj = coef[q];
+            Si[on[q] >> 2] += sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+          }
+          continue;
+        }
         for (int q = 0; q <= p; ++q) {
           const real *cj = coef[q];
-          real s_ij = 0;
-          for (int k = 0; k < kBodyDof; ++k) s_ij += sc[k] * cj[k];
-          Si[on[q] >> 1] += s_ij;
+          const real s_w = sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+          if (on[q] & 2) {
+            Si[on[q] >> 2] += s_w;
+          } else {
+            Si[on[q] >> 2] += sc[0] * cj[0] + sc[1] * cj[1] + sc[2] * cj[2] + s_w;
+          }
         }
       }
     }

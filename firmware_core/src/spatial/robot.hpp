@@ -76,7 +76,8 @@ constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 // of its foot's held rows: its joints' but the hip's on a free box in RobotLeg::order, its
 // foot's in their slot, its hip's last; the envelope of S_l's Cholesky factor (row i holds
 // columns first[i] .. i, L(i, j) at off[i] + j; size in all); each leg body's rows (CSR:
-// on[on0[b] ..], a row's local index times 2 plus which of its two bodies, in increasing order).
+// on[on0[b] ..], in increasing order: a row's local index times 4, plus 2 for an orientation
+// row (its coefficients on v zero, rows.hpp's perpendicular), plus which of its two bodies).
 struct LegLayout {
   int n, nh, size;
   int row[kMaxLegRows];  // the system's row numbers
