@@ -64,27 +64,44 @@ inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_re
   for (int i = 0; i < n; ++i) {
     legsim_real *ri = A + off[i];
     const int fi = first[i];
-    int j = fi;
-    // two columns at a time: each ri[k] loaded once for both sums (each still in k's order)
-    for (; j + 1 < i; j += 2) {
-      const legsim_real *r0 = A + off[j], *r1 = A + off[j + 1];
-      const int k0 = fi > first[j] ? fi : first[j], k1 = fi > first[j + 1] ? fi : first[j + 1];
-      const int kc = k0 > k1 ? k0 : k1;
-      legsim_real s0 = ri[j], s1 = ri[j + 1];
-      for (int k = k0; k < kc; ++k) s0 -= ri[k] * r0[k];
-      for (int k = k1; k < kc; ++k) s1 -= ri[k] * r1[k];
-      for (int k = kc; k < j; ++k) {
-        const legsim_real a = ri[k];
-        s0 -= a * r0[k], s1 -= a * r1[k];
+    // the first column of row i's sum with row j (both envelopes)
+    auto from = [&](int j) { return fi > first[j] ? fi : first[j]; };
+    for (int j = fi; j < i;) {
+      const legsim_real *r0 = A + off[j];
+      const int k0 = from(j);
+      // four columns, then two, at a time when their sums start together (then run over
+      // [k0, j) together and each over its own tail, each in k's order): each ri[k] loaded
+      // once for them all
+      if (j + 3 < i && from(j + 1) == k0 && from(j + 2) == k0 && from(j + 3) == k0) {
+        const legsim_real *r1 = A + off[j + 1], *r2 = A + off[j + 2], *r3 = A + off[j + 3];
+        legsim_real s0 = ri[j], s1 = ri[j + 1], s2 = ri[j + 2], s3 = ri[j + 3];
+        for (int k = k0; k < j; ++k) {
+          const legsim_real a = ri[k];
+          s0 -= a * r0[k], s1 -= a * r1[k], s2 -= a * r2[k], s3 -= a * r3[k];
+        }
+        const legsim_real l0 = ri[j] = s0 / r0[j];
+        s1 -= l0 * r1[j], s2 -= l0 * r2[j], s3 -= l0 * r3[j];
+        const legsim_real l1 = ri[j + 1] = s1 / r1[j + 1];
+        s2 -= l1 * r2[j + 1], s3 -= l1 * r3[j + 1];
+        const legsim_real l2 = ri[j + 2] = s2 / r2[j + 2];
+        ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
+        j += 4;
+      } else if (j + 1 < i && from(j + 1) == k0) {
+        const legsim_real *r1 = A + off[j + 1];
+        legsim_real s0 = ri[j], s1 = ri[j + 1];
+        for (int k = k0; k < j; ++k) {
+          const legsim_real a = ri[k];
+          s0 -= a * r0[k], s1 -= a * r1[k];
+        }
+        const legsim_real l0 = ri[j] = s0 / r0[j];
+        ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
+        j += 2;
+      } else {
+        legsim_real s = ri[j];
+        for (int k = k0; k < j; ++k) s -= ri[k] * r0[k];
+        ri[j] = s / r0[j];
+        ++j;
       }
-      ri[j] = s0 / r0[j];
-      ri[j + 1] = (s1 - ri[j] * r1[j]) / r1[j + 1];
-    }
-    for (; j < i; ++j) {
-      const legsim_real *rj = A + off[j];
-      legsim_real s = ri[j];
-      for (int k = fi > first[j] ? fi : first[j]; k < j; ++k) s -= ri[k] * rj[k];
-      ri[j] = s / rj[j];
     }
     legsim_real d = ri[i];
     for (int k = fi; k < i; ++k) d -= ri[k] * ri[k];
