@@ -55,7 +55,7 @@ void order_leg(SpatialRobot &R, int l, int j0, int j1) {
   };
   // the envelope Cholesky's multiplications for the blocks in order seq
   auto cost = [&](const int *seq) {
-    int first[5 * (2 + kMaxLegJoints)], start[kMaxLegJoints + 3], n = 0;
+    int first[kMaxLegRows], start[kMaxLegJoints + 3], n = 0;
     long c = 0;
     for (int p = 0; p < nblk; ++p) {
       const Block &B = blk[seq[p]];

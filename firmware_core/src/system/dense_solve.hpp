@@ -66,6 +66,7 @@ inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_re
     const int fi = first[i];
     // the first column of row i's sum with row j (both envelopes)
     auto from = [&](int j) { return fi > first[j] ? fi : first[j]; };
+    legsim_real d = ri[i];  // less the squares of the row's entries, as they come
     for (int j = fi; j < i;) {
       const legsim_real *r0 = A + off[j];
       const int k0 = from(j);
@@ -84,7 +85,8 @@ inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_re
         const legsim_real l1 = ri[j + 1] = s1 / r1[j + 1];
         s2 -= l1 * r2[j + 1], s3 -= l1 * r3[j + 1];
         const legsim_real l2 = ri[j + 2] = s2 / r2[j + 2];
-        ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
+        const legsim_real l3 = ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
+        d -= l0 * l0, d -= l1 * l1, d -= l2 * l2, d -= l3 * l3;
         j += 4;
       } else if (j + 1 < i && from(j + 1) == k0) {
         const legsim_real *r1 = A + off[j + 1];
@@ -94,17 +96,17 @@ inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_re
           s0 -= a * r0[k], s1 -= a * r1[k];
         }
         const legsim_real l0 = ri[j] = s0 / r0[j];
-        ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
+        const legsim_real l1 = ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
+        d -= l0 * l0, d -= l1 * l1;
         j += 2;
       } else {
         legsim_real s = ri[j];
         for (int k = k0; k < j; ++k) s -= ri[k] * r0[k];
-        ri[j] = s / r0[j];
+        const legsim_real l0 = ri[j] = s / r0[j];
+        d -= l0 * l0;
         ++j;
       }
     }
-    legsim_real d = ri[i];
-    for (int k = fi; k < i; ++k) d -= ri[k] * ri[k];
     if (!(d > floor)) return false;
     ri[i] = std::sqrt(d);
   }
