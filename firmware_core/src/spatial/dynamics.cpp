@@ -7,30 +7,6 @@
 namespace legsim::spatial {
 
 namespace {
-constexpr int kMaxLegBodies = 1 + kMaxLegBars;
-
-// The rows of leg l in its elimination order: its own joints' and its stuck foot's first, its
-// hip's (the rows on the box) last, so that S_l^-1 reaches the box through the factor's last
-// rows only. Returns their number; nh: the hip's.
-int leg_rows(const SpatialRobot &robot, const FeetHold &hold, int l, int *idx, int &nh) {
-  const RobotLeg &L = robot.leg[l];
-  int n = 0;
-  nh = 0;
-  for (int pass = 0; pass < 2; ++pass)
-    for (int r = L.row0; r < L.row0 + L.nrows; ++r) {
-      const bool hip = robot.row_body[r][1] == 0 && robot.free_box;
-      if (hip != (pass == 1)) continue;
-      if (pass == 0 || !hip) {
-        idx[n++] = r;
-      } else {
-        idx[n++] = r, ++nh;
-      }
-      if (pass == 0 && r == L.row0 + L.nrows - 1)
-        for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
-    }
-  return n;
-}
-
 // Row r's two bodies (a foot row: the foot's bar and the world).
 inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
   if (r < robot.m) {
@@ -40,6 +16,53 @@ inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
   }
 }
 }  // namespace
+
+// The rows in RobotLeg::order with the foot's in their slot, then the hip's (the rows on the
+// box) last, so that S_l^-1 reaches the box through the factor's last rows only.
+void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
+  static_assert(kMaxLegRows <= 64 && kMaxLegBodies <= 127, "a leg's rows and bodies");
+  const RobotLeg &L = robot.leg[l];
+  const int f0 = foot_row(robot, l), b_lo = L.yoke, nbl = 1 + L.nbars;
+  int *idx = out.row, n = 0;
+  for (int i = 0; i < L.foot_slot; ++i) idx[n++] = L.order[i];
+  for (int k = 0; k < nf; ++k) idx[n++] = f0 + k;
+  for (int i = L.foot_slot; i < L.norder; ++i) idx[n++] = L.order[i];
+  out.nh = L.nrows - L.norder;
+  for (int k = 0; k < out.nh; ++k) idx[n++] = L.row0 + k;  // the hip's: its joint's, the leg's first
+  out.n = n;
+  // each row's leg bodies and envelope (from the first row on either body); each body's rows
+  int fb[kMaxLegBodies], non[kMaxLegBodies] = {}, size = 0;
+  for (int b = 0; b < nbl; ++b) fb[b] = n;
+  for (int i = 0; i < n; ++i) {
+    int ab[2];
+    bodies_of(robot, idx[i], ab[0], ab[1]);
+    int f = i;
+    for (int s = 0; s < 2; ++s) {
+      const int body = ab[s] < 0 ? -1 : ab[s] - b_lo;
+      out.body[i][s] = int8_t(body >= 0 && body < nbl ? body : -1);
+      if (out.body[i][s] < 0) continue;
+      fb[body] = std::min(fb[body], i);
+      f = std::min(f, fb[body]);
+      ++non[body];
+    }
+    out.first[i] = f, out.off[i] = size - f;
+    size += i - f + 1;
+  }
+  out.size = size;
+  // the orientation rows: a revolute's last two, a prismatic's first three
+  bool turn[kMaxRobotRows] = {};
+  for (int j = 0; j < robot.nj; ++j) {
+    const LegJoint &J = robot.joint[j];
+    if (J.kind == LegJointKind::Revolute) turn[J.row + 3] = turn[J.row + 4] = true;
+    if (J.kind == LegJointKind::Prismatic) turn[J.row] = turn[J.row + 1] = turn[J.row + 2] = true;
+  }
+  out.on0[0] = 0;
+  for (int b = 0; b < nbl; ++b) out.on0[b + 1] = out.on0[b] + non[b], non[b] = out.on0[b];
+  for (int i = 0; i < n; ++i)
+    for (int s = 0; s < 2; ++s)
+      if (out.body[i][s] >= 0)
+        out.on[non[out.body[i][s]]++] = int16_t(4 * i + (idx[i] < robot.m && turn[idx[i]] ? 2 : 0) + s);
+}
 
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows) {
   robot_rows(robot, q, v, rows);
@@ -63,65 +86,66 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
   for (int i = 0; i < kBodyDof * kBodyDof; ++i) A0[i] = 0;
   if (box)
     for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
-  static_assert(kMaxLegRows <= 64, "a leg's rows");
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars;
-    int *ix = F.idx[l];
-    int nh;
-    const int n = F.nrow[l] = leg_rows(robot, hold, l, ix, nh);
-    F.nhip[l] = nh;
+    const LegLayout &Y = leg_layout(robot, hold, l);
+    F.layout[l] = &Y;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *first = Y.first, *off = Y.off;
     real *S = F.L[l];
-    // each leg body's rows (local index, and the row's coefficients on it scaled by M^-1)
-    int on[kMaxLegBodies][2 * kMaxLegRows], non[kMaxLegBodies] = {};
-    real scaled[kMaxLegRows][2][kBodyDof];
-    const real *coef[kMaxLegRows][2];
+    // S = J_l M_l^-1 J_l^T in its envelope: the pairs of rows on a common body (its lower
+    // triangle; a body's rows in increasing order), the rest zero
     for (int i = 0; i < n; ++i) {
-      int ab[2];
-      bodies_of(robot, ix[i], ab[0], ab[1]);
-      const Row &ri = rows[ix[i]];
-      for (int s = 0; s < 2; ++s) {
-        const int body = ab[s] - b_lo;
-        if (body < 0 || body >= nbl) continue;
-        const real *cf = s == 0 ? ri.ja : ri.jb, *im = robot.inverse_mass[ab[s]];
-        real *sc = scaled[i][s];
-        for (int k = 0; k < kBodyDof; ++k) sc[k] = cf[k] * im[k];
-        coef[i][s] = cf;
-        on[body][non[body]++] = 2 * i + s;
-      }
+      // row by row: short loops, not one long memset
+      real *Si = S + off[i];
+      for (int k = first[i]; k <= i; ++k) Si[k] = 0;
     }
-    // S = J_l M_l^-1 J_l^T: the pairs of rows on a common body (its lower triangle)
-    for (int i = 0; i < n; ++i)
-      for (int j = 0; j <= i; ++j) S[n * i + j] = 0;
-    for (int b = 0; b < nbl; ++b)
-      for (int p = 0; p < non[b]; ++p) {
-        const int i = on[b][p] >> 1, si = on[b][p] & 1;
-        const real *sc = scaled[i][si];
+    for (int b = 0; b < nbl; ++b) {
+      const int p0 = Y.on0[b], np = Y.on0[b + 1] - p0;
+      const int16_t *on = Y.on + p0;
+      const real *im = robot.inverse_mass[b_lo + b];
+      const real *coef[2 * kMaxLegRows];
+      for (int p = 0; p < np; ++p) {
+        const Row &r = rows[ix[on[p] >> 2]];
+        coef[p] = on[p] & 1 ? r.jb : r.ja;
+      }
+      // with an orientation row the products on v are exact zeros: skipped
+      for (int p = 0; p < np; ++p) {
+        real sc[kBodyDof];
+        for (int k = 0; k < kBodyDof; ++k) sc[k] = coef[p][k] * im[k];
+        real *Si = S + off[on[p] >> 2];
+        if (on[p] & 2) {
+          for (int q = 0; q <= p; ++q) {
+            const real *cj = coef[q];
+            Si[on[q] >> 2] += sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+          }
+          continue;
+        }
         for (int q = 0; q <= p; ++q) {
-          const int j = on[b][q] >> 1, sj = on[b][q] & 1;
-          const real *cj = coef[j][sj];
-          real s_ij = 0;
-          for (int k = 0; k < kBodyDof; ++k) s_ij += sc[k] * cj[k];
-          if (i >= j) {
-            S[n * i + j] += s_ij;
+          const real *cj = coef[q];
+          const real s_w = sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+          if (on[q] & 2) {
+            Si[on[q] >> 2] += s_w;
           } else {
-            S[n * j + i] += s_ij;
+            Si[on[q] >> 2] += sc[0] * cj[0] + sc[1] * cj[1] + sc[2] * cj[2] + s_w;
           }
         }
       }
+    }
     real scale = 0;
-    for (int i = 0; i < n; ++i) scale = std::max(scale, S[n * i + i]);
-    if (!dense_cholesky(n, S, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
+    for (int i = 0; i < n; ++i) scale = std::max(scale, S[off[i] + i]);
+    if (!envelope_cholesky(n, first, off, S, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
     if (!box) continue;
     // W = L^-1 B: B is zero above the hip's rows, so W is too; B^T S^-1 B = W^T W
     const int h0 = n - nh;
     real *Wl = F.W[l];
     for (int i = 0; i < nh; ++i) {
       const real *cb = rows[ix[h0 + i]].jb;  // the hip's rows: the box is their second body
+      const real *Li = S + off[h0 + i];
       for (int k = 0; k < kBodyDof; ++k) {
         real t = cb[k];
-        for (int m = 0; m < i; ++m) t -= S[n * (h0 + i) + h0 + m] * Wl[kBodyDof * m + k];
-        Wl[kBodyDof * i + k] = t / S[n * (h0 + i) + h0 + i];
+        for (int m = 0; m < i; ++m) t -= Li[h0 + m] * Wl[kBodyDof * m + k];
+        Wl[kBodyDof * i + k] = t / Li[h0 + i];
       }
     }
     for (int i = 0; i < nh; ++i) {
@@ -147,22 +171,26 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
   // per leg y = L^-1 c, c = J_l M_l^-1 f_l - g_l; the box's right-hand side f_0 - W^T y
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars, n = F.nrow[l], nh = F.nhip[l];
-    const int *ix = F.idx[l];
+    const LegLayout &Y = *F.layout[l];
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int8_t(*rb)[2] = Y.body;
     const real *S = F.L[l];
+    // M_l^-1 f_l
+    real mf[kMaxLegBodies][kBodyDof];
+    for (int b = 0; b < nbl; ++b)
+      for (int k = 0; k < kBodyDof; ++k) mf[b][k] = robot.inverse_mass[b_lo + b][k] * f[kBodyDof * (b_lo + b) + k];
     real *c = y[l];
     for (int i = 0; i < n; ++i) {
-      int a, b;
-      bodies_of(robot, ix[i], a, b);
+      const Row &ri = rows[ix[i]];
       real ci = -g[ix[i]];
-      for (int s = 0; s < 2; ++s) {
-        const int body = s == 0 ? a : b;
-        if (body < b_lo || body >= b_hi) continue;
-        const real *cf = s == 0 ? rows[ix[i]].ja : rows[ix[i]].jb, *im = robot.inverse_mass[body];
-        for (int k = 0; k < kBodyDof; ++k) ci += cf[k] * im[k] * f[kBodyDof * body + k];
-      }
-      for (int k = 0; k < i; ++k) ci -= S[n * i + k] * c[k];
-      c[i] = ci / S[n * i + i];
+      if (rb[i][0] >= 0)
+        for (int k = 0; k < kBodyDof; ++k) ci += ri.ja[k] * mf[rb[i][0]][k];
+      if (rb[i][1] >= 0)
+        for (int k = 0; k < kBodyDof; ++k) ci += ri.jb[k] * mf[rb[i][1]][k];
+      const real *Li = S + off[i];
+      for (int k = first[i]; k < i; ++k) ci -= Li[k] * c[k];
+      c[i] = ci / Li[i];
     }
     if (!box) continue;
     for (int i = 0; i < nh; ++i)
@@ -176,33 +204,40 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
   // each leg: lambda = L^-T (y + W a0), then its bodies' a = M^-1 (f - J^T lambda)
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
-    const int b_lo = L.yoke, b_hi = L.yoke + 1 + L.nbars, n = F.nrow[l], nh = F.nhip[l];
+    const LegLayout &Y = *F.layout[l];
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int8_t(*rb)[2] = Y.body;
     const real *S = F.L[l];
     real *lam = y[l];
     if (box)
       for (int i = 0; i < nh; ++i)
         for (int k = 0; k < kBodyDof; ++k) lam[n - nh + i] += F.W[l][kBodyDof * i + k] * a0[k];
+    // L^T by columns of L's rows: row i's envelope is its column's reach upward
     for (int i = n - 1; i >= 0; --i) {
-      real t = lam[i];
-      for (int k = i + 1; k < n; ++k) t -= S[n * k + i] * lam[k];
-      lam[i] = t / S[n * i + i];
+      const real *Li = S + off[i];
+      const real t = lam[i] /= Li[i];
+      for (int k = first[i]; k < i; ++k) lam[k] -= Li[k] * t;
     }
-    for (int b = b_lo; b < b_hi; ++b)
-      for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] = f[kBodyDof * b + k];
+    // f - J^T lambda in a local array (no aliasing with the rows: kept in registers)
+    real xb[kMaxLegBodies][kBodyDof];
+    for (int b = 0; b < nbl; ++b)
+      for (int k = 0; k < kBodyDof; ++k) xb[b][k] = f[kBodyDof * (b_lo + b) + k];
     for (int i = 0; i < n; ++i) {
-      const int r = F.idx[l][i];
-      mu[r] = lam[i];
-      int a, b;
-      bodies_of(robot, r, a, b);
-      for (int s2 = 0; s2 < 2; ++s2) {
-        const int body = s2 == 0 ? a : b;
-        if (body < b_lo || body >= b_hi) continue;
-        const real *cf = s2 == 0 ? rows[r].ja : rows[r].jb;
-        for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * body + k] -= cf[k] * lam[i];
+      const Row &ri = rows[ix[i]];
+      const real li = lam[i];
+      mu[ix[i]] = li;
+      if (rb[i][0] >= 0) {
+        real *xa = xb[rb[i][0]];
+        for (int k = 0; k < kBodyDof; ++k) xa[k] -= ri.ja[k] * li;
+      }
+      if (rb[i][1] >= 0) {
+        real *xa = xb[rb[i][1]];
+        for (int k = 0; k < kBodyDof; ++k) xa[k] -= ri.jb[k] * li;
       }
     }
-    for (int b = b_lo; b < b_hi; ++b)
-      for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * b + k] *= robot.inverse_mass[b][k];
+    for (int b = 0; b < nbl; ++b)
+      for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * (b_lo + b) + k] = xb[b][k] * robot.inverse_mass[b_lo + b][k];
   }
 }
 

@@ -39,22 +39,26 @@ inline int foot_rows(const FeetHold &hold, int l) {
 }
 inline int foot_row(const SpatialRobot &robot, int l) { return robot.m + 3 * l; }
 
+// Leg l's LegLayout with nf rows of its foot held (robot_lift's, once per count).
+void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out);
+inline const LegLayout &leg_layout(const SpatialRobot &robot, const FeetHold &hold, int l) {
+  const int nf = foot_rows(hold, l);
+  return robot.leg[l].layout[nf == 3 ? 2 : nf];
+}
+
 // Every row of the system at (q, v): the joints' (robot_rows) and the feet's on the ground.
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows);
 
-constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
-
 // The factor of [M J^T; J 0] for the rows of system_rows at one q with the feet of `stuck`: per
-// leg its rows in elimination order (its own and its stuck foot's, then its hip's), the
-// Cholesky factor L_l of S_l = J_l M_l^-1 J_l^T, W_l = L_l^-1 B_l on its hip rows; the box's
+// leg its rows in elimination order (RobotLeg::layout for its foot's hold), the Cholesky
+// factor L_l of S_l = J_l M_l^-1 J_l^T, W_l = L_l^-1 B_l on its hip rows; the box's
 // complement's factor. Built once, solved for several right-hand sides (the stages'
 // accelerations, the projections, a sliding foot's friction columns).
 struct RobotFactor {
   uint32_t stuck, sliding;
   const Row *rows;  // the rows it was built from (system_rows'), read by the solves
-  int nrow[kMaxLegs], nhip[kMaxLegs];
-  int idx[kMaxLegs][kMaxLegRows];
-  real L[kMaxLegs][kMaxLegRows * kMaxLegRows];
+  const LegLayout *layout[kMaxLegs];  // each leg's rows and L_l's envelope (its foot's hold's)
+  real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];  // L_l in its envelope
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
 };

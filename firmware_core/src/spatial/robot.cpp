@@ -1,5 +1,9 @@
 #include "spatial/robot.hpp"
 
+#include <algorithm>
+
+#include "spatial/dynamics.hpp"
+
 namespace legsim::spatial {
 
 namespace {
@@ -24,6 +28,111 @@ void put(real *q, real *v, const V3 &r, const Quat &p, const V3 &vr, const V3 &w
   const real s[kBodyDof] = {vr.x, vr.y, vr.z, w.x, w.y, w.z};
   for (int i = 0; i < kBodyConfig; ++i) q[i] = c[i];
   for (int i = 0; i < kBodyDof; ++i) v[i] = s[i];
+}
+// Leg l's elimination order (RobotLeg::order) over its joints [j0, j1). S_l = J_l M_l^-1 J_l^T
+// couples two rows on a common body, and the Cholesky factor of S_l fills only within each
+// row's envelope (from its first coupled row on): the joints, and the foot as a block of three
+// rows on its bar, are ordered by Cuthill-McKee (next the block coupled to the earliest placed
+// one, the fewer rows first) from each block in turn, the smallest factoring cost kept, then
+// bettered by moving one block at a time.
+void order_leg(SpatialRobot &R, int l, int j0, int j1) {
+  RobotLeg &L = R.leg[l];
+  const int lo = L.yoke, hi = L.yoke + 1 + L.nbars;
+  struct Block {
+    int a, b, n, row;  // its bodies in the leg (-1: none), rows, first row (-1: the foot)
+  };
+  Block blk[kMaxLegJoints + 3];
+  int nblk = 0, hip = -1;
+  auto in_leg = [&](int b) { return b >= lo && b < hi ? b : -1; };
+  for (int j = j0; j < j1; ++j) {
+    const LegJoint &J = R.joint[j];
+    if (R.free_box && J.b == 0) hip = nblk;
+    blk[nblk++] = {in_leg(J.a), in_leg(J.b), J.nrows, J.row};
+  }
+  if (L.foot_body >= 0) blk[nblk++] = {L.foot_body, -1, 3, -1};
+  auto shares = [&](const Block &p, const Block &q) {
+    return (p.a >= 0 && (p.a == q.a || p.a == q.b)) || (p.b >= 0 && (p.b == q.a || p.b == q.b));
+  };
+  // the envelope Cholesky's multiplications for the blocks in order seq
+  auto cost = [&](const int *seq) {
+    int first[kMaxLegRows], start[kMaxLegJoints + 3], n = 0;
+    long c = 0;
+    for (int p = 0; p < nblk; ++p) {
+      const Block &B = blk[seq[p]];
+      int f = n;
+      for (int q = 0; q < p; ++q)
+        if (shares(B, blk[seq[q]])) f = std::min(f, start[q]);
+      start[p] = n;
+      for (int k = 0; k < B.n; ++k, ++n) {
+        first[n] = f;
+        for (int j = f; j <= n; ++j) c += j - std::max(f, first[j]);
+      }
+    }
+    return c;
+  };
+  int best[kMaxLegJoints + 3], seq[kMaxLegJoints + 3];
+  long best_cost = -1;
+  if (nblk == 1) best[0] = 0;
+  for (int s0 = 0; s0 < nblk && nblk > 1; ++s0) {
+    if (s0 == hip) continue;
+    bool placed[kMaxLegJoints + 3] = {};
+    int np = 0;
+    seq[np++] = s0, placed[s0] = true;
+    while (np < nblk - (hip >= 0 ? 1 : 0)) {
+      int pick = -1, pick_at = 0;
+      for (int c = 0; c < nblk; ++c) {
+        if (placed[c] || c == hip) continue;
+        int at = np;
+        for (int q = 0; q < np; ++q)
+          if (shares(blk[c], blk[seq[q]])) {
+            at = q;
+            break;
+          }
+        if (pick < 0 || at < pick_at || (at == pick_at && blk[c].n < blk[pick].n)) pick = c, pick_at = at;
+      }
+      seq[np++] = pick, placed[pick] = true;
+    }
+    if (hip >= 0) seq[np++] = hip;
+    const long c = cost(seq);
+    if (best_cost < 0 || c < best_cost) {
+      best_cost = c;
+      std::copy(seq, seq + nblk, best);
+    }
+  }
+  // then one block moved at a time while that lowers the cost (the hip's kept last)
+  for (bool better = true; better && nblk > 2;) {
+    better = false;
+    const int nm = nblk - (hip >= 0 ? 1 : 0);
+    for (int i = 0; i < nm; ++i)
+      for (int j = 0; j < nm; ++j) {
+        if (i == j) continue;
+        std::copy(best, best + nblk, seq);
+        const int moved = seq[i];
+        if (i < j) {
+          std::copy(seq + i + 1, seq + j + 1, seq + i);
+        } else {
+          std::copy_backward(seq + j, seq + i, seq + i + 1);
+        }
+        seq[j] = moved;
+        const long c = cost(seq);
+        if (c < best_cost) {
+          best_cost = c, better = true;
+          std::copy(seq, seq + nblk, best);
+        }
+      }
+  }
+  L.norder = 0;
+  L.foot_slot = -1;
+  for (int p = 0; p < nblk; ++p) {
+    const Block &B = blk[best[p]];
+    if (best[p] == hip) continue;
+    if (B.row < 0) {
+      L.foot_slot = L.norder;
+      continue;
+    }
+    for (int k = 0; k < B.n; ++k) L.order[L.norder++] = B.row + k;
+  }
+  if (L.foot_slot < 0) L.foot_slot = L.norder;
 }
 }  // namespace
 
@@ -99,6 +208,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     for (int i = y; i < nb; ++i) parent[i] = i;
     L.row0 = row;
     // the yoke about the box's z through the hip: its axis point is -com in its frame
+    const int j0 = nj;
     add({LegJointKind::Revolute, y, box_body, -1 * R.yoke_com, L.hip, kZ, kX, kY, 0, 0}, 5);
     for (int k = 0; k < desc.n_joints; ++k) {
       const legsim_joint_desc &jd = desc.joint[k];
@@ -143,6 +253,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
       }
     }
     L.nrows = row - L.row0;
+    order_leg(R, l, j0, nj);
   }
   R.nb = nb;
   for (int b = 0; b < nb; ++b) {
@@ -153,6 +264,9 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.na = na;
   R.nj = nj;
   R.m = row;
+  // the dynamics' elimination, chosen once per hold of each foot (the foot rows' numbers follow m)
+  for (int l = 0; l < nlegs; ++l)
+    for (int k = 0; k < 3; ++k) leg_layout(R, l, k == 2 ? 3 : k, R.leg[l].layout[k]);
   return LEGSIM_OK;
 }
 

@@ -71,6 +71,25 @@ struct LegJoint {
   int row, nrows;
 };
 
+// A leg's rows: its joints' and its foot's three.
+constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
+constexpr int kMaxLegBodies = 1 + kMaxLegBars;
+
+// A leg's rows as the constrained dynamics eliminates them (spatial/dynamics.cpp), for one count
+// of its foot's held rows: its joints' but the hip's on a free box in RobotLeg::order, its
+// foot's in their slot, its hip's last; the envelope of S_l's Cholesky factor (row i holds
+// columns first[i] .. i, L(i, j) at off[i] + j; size in all); each leg body's rows (CSR:
+// on[on0[b] ..], in increasing order: a row's local index times 4, plus 2 for an orientation
+// row (its coefficients on v zero, rows.hpp's perpendicular), plus which of its two bodies).
+struct LegLayout {
+  int n, nh, size;
+  int row[kMaxLegRows];  // the system's row numbers
+  int first[kMaxLegRows], off[kMaxLegRows];
+  int8_t body[kMaxLegRows][2];  // a row's two bodies from the leg's yoke (-1: off the leg)
+  int on0[kMaxLegBodies + 1];
+  int16_t on[2 * kMaxLegRows];
+};
+
 struct RobotLeg {
   int yoke, nbars;  // the yoke's body; its bars follow it
   int first_actuator, nactuators;  // its linear actuators in SpatialRobot::act
@@ -79,6 +98,12 @@ struct RobotLeg {
   V3 foot_point;    // on it, body frame
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
   real yaw;         // rad
+  // The order its rows are eliminated in (spatial/dynamics.cpp), chosen at lift: its joints'
+  // rows but the hip's on a free box (those go last), the foot's held rows before
+  // order[foot_slot] (after the last when foot_slot == norder).
+  int order[5 * (1 + kMaxLegJoints)];
+  int norder, foot_slot;
+  LegLayout layout[3];  // by its foot's held rows: none, the normal's (sliding), three (stuck)
 };
 
 // A linear actuator: its length (m) is (r_rod - r_cyl) . u_cyl + offset, the planar model's,

@@ -1,7 +1,8 @@
 // Small dense linear systems (the system layer's): the Woodbury correction's few columns
 // (coupled_solve, dynamics.cpp), the 3D contact problem's generalized Jacobian
-// (spatial/friction_cone.cpp), a spatial leg's rows (spatial/dynamics.cpp). No Eigen: a header the element modules can take alone;
-// inline, since its callers' sizes are small.
+// (spatial/friction_cone.cpp), a spatial leg's rows (spatial/dynamics.cpp, in envelope form).
+// No Eigen: a header the element modules can take alone; inline, since its callers' sizes are
+// small.
 #pragma once
 
 #include <cmath>
@@ -52,6 +53,62 @@ inline bool dense_cholesky(int n, legsim_real *A, legsim_real floor) {
       for (int k = 0; k < j; ++k) s -= A[i * n + k] * A[j * n + k];
       A[i * n + j] = s / d;
     }
+  }
+  return true;
+}
+
+// dense_cholesky in envelope storage: row i of A holds its columns first[i] .. i at A + off[i]
+// (A(i, j) = A[off[i] + j]), L there on return. Row i of L is zero left of first[i] (no fill
+// outside the envelope), so the sums skip only zeros: dense_cholesky's result.
+inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_real *A, legsim_real floor) {
+  for (int i = 0; i < n; ++i) {
+    legsim_real *ri = A + off[i];
+    const int fi = first[i];
+    // the first column of row i's sum with row j (both envelopes)
+    auto from = [&](int j) { return fi > first[j] ? fi : first[j]; };
+    legsim_real d = ri[i];  // less the squares of the row's entries, as they come
+    for (int j = fi; j < i;) {
+      const legsim_real *r0 = A + off[j];
+      const int k0 = from(j);
+      // four columns, then two, at a time when their sums start together (then run over
+      // [k0, j) together and each over its own tail, each in k's order): each ri[k] loaded
+      // once for them all
+      if (j + 3 < i && from(j + 1) == k0 && from(j + 2) == k0 && from(j + 3) == k0) {
+        const legsim_real *r1 = A + off[j + 1], *r2 = A + off[j + 2], *r3 = A + off[j + 3];
+        legsim_real s0 = ri[j], s1 = ri[j + 1], s2 = ri[j + 2], s3 = ri[j + 3];
+        for (int k = k0; k < j; ++k) {
+          const legsim_real a = ri[k];
+          s0 -= a * r0[k], s1 -= a * r1[k], s2 -= a * r2[k], s3 -= a * r3[k];
+        }
+        const legsim_real l0 = ri[j] = s0 / r0[j];
+        s1 -= l0 * r1[j], s2 -= l0 * r2[j], s3 -= l0 * r3[j];
+        const legsim_real l1 = ri[j + 1] = s1 / r1[j + 1];
+        s2 -= l1 * r2[j + 1], s3 -= l1 * r3[j + 1];
+        const legsim_real l2 = ri[j + 2] = s2 / r2[j + 2];
+        const legsim_real l3 = ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
+        d -= l0 * l0, d -= l1 * l1, d -= l2 * l2, d -= l3 * l3;
+        j += 4;
+      } else if (j + 1 < i && from(j + 1) == k0) {
+        const legsim_real *r1 = A + off[j + 1];
+        legsim_real s0 = ri[j], s1 = ri[j + 1];
+        for (int k = k0; k < j; ++k) {
+          const legsim_real a = ri[k];
+          s0 -= a * r0[k], s1 -= a * r1[k];
+        }
+        const legsim_real l0 = ri[j] = s0 / r0[j];
+        const legsim_real l1 = ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
+        d -= l0 * l0, d -= l1 * l1;
+        j += 2;
+      } else {
+        legsim_real s = ri[j];
+        for (int k = k0; k < j; ++k) s -= ri[k] * r0[k];
+        const legsim_real l0 = ri[j] = s / r0[j];
+        d -= l0 * l0;
+        ++j;
+      }
+    }
+    if (!(d > floor)) return false;
+    ri[i] = std::sqrt(d);
   }
   return true;
 }
