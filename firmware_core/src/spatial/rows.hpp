@@ -53,15 +53,19 @@ inline void axis_coefficients(const BodyState &B, const V3 &c, const V3 &y, real
 }
 inline Row row_zero() { return {0, 0, {0, 0, 0, 0, 0, 0}, {0, 0, 0, 0, 0, 0}}; }
 
-// e . (p_a - p_b): point s_a of body a and s_b of body b along the world direction e.
-inline Row row_along(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &e) {
-  const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb);
+// e . (p_a - p_b): point s_a of body a and s_b of body b along the world direction e (pa, pb
+// their jets: a joint's rows on the same two points share them).
+inline Row row_along(const BodyState &A, const V3 &sa, const PointJet &pa, const BodyState &B, const V3 &sb,
+                     const PointJet &pb, const V3 &e) {
   Row r = row_zero();
   r.phi = dot(e, pa.p - pb.p);
   r.gamma = -dot(e, pa.pq - pb.pq);
   point_coefficients(A, sa, e, 1, r.ja);
   point_coefficients(B, sb, e, -1, r.jb);
   return r;
+}
+inline Row row_along(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &e) {
+  return row_along(A, sa, point_jet(A, sa), B, sb, point_jet(B, sb), e);
 }
 
 // (R_a c_a) . (R_b c_b): axis c_a of body a and c_b of body b.
@@ -75,9 +79,11 @@ inline Row row_perpendicular(const BodyState &A, const V3 &ca, const BodyState &
   return r;
 }
 
-// (p_a - p_b) . (R_b c): point s_a of body a less point s_b of body b along body b's axis c.
-inline Row row_along_axis(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &c) {
-  const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb), y = axis_jet(B, c);
+// (p_a - p_b) . (R_b c): point s_a of body a less point s_b of body b along body b's axis c (pa,
+// pb their jets, as row_along's).
+inline Row row_along_axis(const BodyState &A, const V3 &sa, const PointJet &pa, const BodyState &B, const V3 &sb,
+                          const PointJet &pb, const V3 &c) {
+  const PointJet y = axis_jet(B, c);
   const V3 d = pa.p - pb.p, dd = pa.pd - pb.pd, dq = pa.pq - pb.pq;
   Row r = row_zero();
   r.phi = dot(d, y.p);
@@ -86,6 +92,9 @@ inline Row row_along_axis(const BodyState &A, const V3 &sa, const BodyState &B, 
   point_coefficients(B, sb, y.p, -1, r.jb);
   axis_coefficients(B, c, d, r.jb);
   return r;
+}
+inline Row row_along_axis(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &c) {
+  return row_along_axis(A, sa, point_jet(A, sa), B, sb, point_jet(B, sb), c);
 }
 
 // The same row with its two bodies' coefficients exchanged (a unit written with b first).
@@ -100,7 +109,8 @@ constexpr V3 kWorldAxes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 
 // A spherical joint: point s_a of body a on point s_b of body b (3 rows, world x, y, z).
 inline void spherical_rows(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, Row *out) {
-  for (int k = 0; k < 3; ++k) out[k] = row_along(A, sa, B, sb, kWorldAxes[k]);
+  const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb);
+  for (int k = 0; k < 3; ++k) out[k] = row_along(A, sa, pa, B, sb, pb, kWorldAxes[k]);
 }
 
 // A revolute joint about body a's axis k_a (unit, body-fixed) at point s_a, on body b's point s_b
@@ -125,8 +135,9 @@ inline void prismatic_rows(const BodyState &A, const V3 &sa, const V3 &ua, const
   out[2] = row_perpendicular(A, na, B, kb);
   // (p_b - p_a) . (R_a n_a): row_along_axis with the rod first, its coefficients put back in
   // (a, b) order
-  out[3] = swapped(row_along_axis(B, sb, A, sa, na));
-  out[4] = swapped(row_along_axis(B, sb, A, sa, ka));
+  const PointJet pb = point_jet(B, sb), pa = point_jet(A, sa);
+  out[3] = swapped(row_along_axis(B, sb, pb, A, sa, pa, na));
+  out[4] = swapped(row_along_axis(B, sb, pb, A, sa, pa, ka));
 }
 
 // A joint that closes a planar loop: point s_a of body a on point s_b of body b in the plane
@@ -134,8 +145,9 @@ inline void prismatic_rows(const BodyState &A, const V3 &sa, const V3 &ua, const
 // tree's joints (a full 3D joint here would add 3 redundant rows).
 inline void planar_cut_rows(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &ub,
                             const V3 &nb, Row *out) {
-  out[0] = row_along_axis(A, sa, B, sb, ub);
-  out[1] = row_along_axis(A, sa, B, sb, nb);
+  const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb);
+  out[0] = row_along_axis(A, sa, pa, B, sb, pb, ub);
+  out[1] = row_along_axis(A, sa, pa, B, sb, pb, nb);
 }
 
 }  // namespace legsim::spatial
