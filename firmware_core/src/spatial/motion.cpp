@@ -81,7 +81,7 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
 // The accelerations, multipliers and sliding feet's normal forces at (q, v) under d's commands.
 // report: the state is data's own (the forces kept as its report).
 legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a, real *mu,
-                       real *N, bool factored, bool report = false) {
+                       real *N, bool factored, bool report = false, const V3 *fixed_dir = nullptr) {
   real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
   command_forces(robot, d.command, q, v, F, T);
   robot_forces(robot, q, v, F, T, Q);
@@ -89,8 +89,8 @@ legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, c
     std::copy(F, F + robot.na, d.actuator_force);
     std::copy(T, T + robot.nlegs, d.rowing_torque);
   }
-  return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, d.slip_dir, q, v, Q, a, mu, N, d.rows, d.factor,
-                               factored);
+  return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, fixed_dir ? fixed_dir : d.slip_dir, q, v, Q, a, mu,
+                               N, d.rows, d.factor, factored, fixed_dir != nullptr);
 }
 
 // The state a step starts from and returns to when it fails.
@@ -190,29 +190,42 @@ legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
   std::copy(d.acc_aux, d.acc_aux + nv, x0);
   real vd1[kMaxRobotDof], x1[kMaxRobotDof], th[kMaxRobotDof], f[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
   std::copy(a0, a0 + nv, vd1);  // the predictor: the acceleration held
-  // q1 = q0 (+) H (v0 + H ((1/2 - beta) x0 + beta x1)), v1 = v0 + H ((1 - gamma) vd0 + gamma vd1),
+  // q1 = q0 (+) H (v0 + H ((1/2 - beta) x0 + beta x1)), v1 = v0 + H ((1 - gamma) x0 + gamma x1),
   // (1 - am) x1 + am x0 = (1 - af) vd1 + af vd0
   auto state = [&](real *q, real *v) {
     for (int k = 0; k < nv; ++k) {
       x1[k] = ((1 - af) * vd1[k] + af * a0[k] - am * x0[k]) / (1 - am);
       th[k] = H * (v0[k] + H * ((real(0.5) - beta) * x0[k] + beta * x1[k]));
-      v[k] = v0[k] + H * ((1 - gam) * a0[k] + gam * vd1[k]);
+      v[k] = v0[k] + H * ((1 - gam) * x0[k] + gam * x1[k]);
     }
     for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, th + kBodyDof * b, q + kBodyConfig * b);
   };
+  // the iterations with each sliding foot's friction along its slip at the iterate; when they
+  // do not contract (a slip turning back within the step: its direction flips between
+  // iterates), again from the predictor with the directions at the part's start
   bool converged = false;
-  for (int it = 0; it < kGalphaMaxIterations && !converged; ++it) {
-    state(d.q, d.v);
-    const legsim_status st = evaluate(robot, d, d.q, d.v, f, mu, N, false);
-    if (st != LEGSIM_OK) return st;
-    real change = 0, size = 1;
-    for (int k = 0; k < nv; ++k) {
-      change = std::max(change, std::abs(f[k] - vd1[k]));
-      size = std::max(size, std::abs(f[k]));
-      vd1[k] = f[k];
+  for (int pass = 0; pass < 2 && !converged; ++pass) {
+    const V3 *fixed = pass == 1 ? d.slip_ref : nullptr;
+    if (pass == 1) {
+      if (!d.hold.sliding) break;
+      std::copy(a0, a0 + nv, vd1);
     }
-    if (!(change == change)) return LEGSIM_ERR_DIVERGED;
-    converged = change <= kGalphaTolerance * size;
+    real last = kNone;
+    for (int it = 0; it < kGalphaMaxIterations && !converged; ++it) {
+      state(d.q, d.v);
+      const legsim_status st = evaluate(robot, d, d.q, d.v, f, mu, N, false, false, fixed);
+      if (st != LEGSIM_OK) return st;
+      real change = 0, size = 1;
+      for (int k = 0; k < nv; ++k) {
+        change = std::max(change, std::abs(f[k] - vd1[k]));
+        size = std::max(size, std::abs(f[k]));
+        vd1[k] = f[k];
+      }
+      if (!(change == change)) return LEGSIM_ERR_DIVERGED;
+      converged = change <= kGalphaTolerance * size;
+      if (!converged && it >= 2 && change > real(0.5) * last && d.hold.sliding && pass == 0) break;
+      last = change;
+    }
   }
   if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
   state(d.q, d.v);
@@ -411,6 +424,8 @@ legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
   s = evaluate(robot, data, data.q, data.v, a, mu, N, false);
   if (s != LEGSIM_OK) return s;
   command_forces(robot, data.command, data.q, data.v, data.actuator_force, data.rowing_torque);
+  // generalized-alpha's history shifted by the jump (its lead over the accelerations kept)
+  for (int k = 0; k < kBodyDof * robot.nb; ++k) data.acc_aux[k] += a[k] - data.a[k];
   std::copy(a, a + kBodyDof * robot.nb, data.a);
   std::copy(mu, mu + kMaxSystemRows, data.mu);
   std::copy(N, N + kMaxLegs, data.normal_force);
