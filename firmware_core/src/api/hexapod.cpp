@@ -317,8 +317,10 @@ legsim_status legsim_hexapod_set_integrator(legsim_hexapod_sim *sim, legsim_inte
   const spatial::Integrator next =
       integrator == LEGSIM_INTEGRATOR_RK4 ? spatial::Integrator::Rk4 : spatial::Integrator::GeneralizedAlpha;
   // generalized-alpha's history starts at the accelerations when it takes over
-  if (next != sim->integrator)
+  if (next != sim->integrator) {
     std::copy(sim->data.a, sim->data.a + spatial::kBodyDof * sim->robot.nb, sim->data.acc_aux);
+    sim->data.acc_aux_h = 0;
+  }
   sim->integrator = next;
   return LEGSIM_OK;
 }

@@ -11,8 +11,8 @@
 // with numerical damping of what the step does not resolve (rho_inf); no Jacobian of the
 // contact problem needed, so the contact modes and their events are RK4's. Its history (the
 // auxiliary acceleration) is RobotData's, restarted at the accelerations whenever the modes are
-// settled (an event, an impact); a part of changed length keeps it (an O(h^2) local error at
-// each change: the order holds when such changes are few, as events are). A contact event inside the step (a touchdown, a
+// settled (an event, an impact); for a part of another length its lead over the accelerations
+// ((alpha_m - alpha_f) h a') is scaled to it. A contact event inside the step (a touchdown, a
 // lift-off, stick to slip, slip to stick) is located by retaking the step from its start to a
 // fraction of it (regula falsi with the Illinois rule on the event's function), applied there,
 // and the rest of the step taken after it.
@@ -42,6 +42,7 @@ struct RobotData {
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
   real a[kMaxRobotDof];       // at (t, q, v)
   real acc_aux[kMaxRobotDof];  // generalized-alpha's auxiliary acceleration (its history)
+  real acc_aux_h;              // s: the part it was taken over (0: none, acc_aux = a)
   real mu[kMaxSystemRows];    // the multipliers at (t, q, v)
   real normal_force[kMaxLegs];  // N: each sliding foot's at (t, q, v)
   FeetHold hold;              // the feet's modes (and the ground's frame)
