@@ -239,14 +239,16 @@ void fig7_converges(Integrator integrator, double order_lo, double order_hi, dou
     }
     box[run] = {d->q[0], d->q[1], d->q[2]};
     dE[run] = energy(R, *d) - E0;
-    printf("%sFig. 7 on six feet, h = %.1e s: box at (%.9f, %.9f, %.9f) m, feet off their places %.1e m, energy %+.2e J\n",
+    printf("%sFig. 7 on six feet, h = %.1e s: box at (%.9f, %.9f, %.9f) m, feet off their places %.1e m, "
+           "energy %+.2e J\n",
            label(integrator), hs[run], box[run].x, box[run].y, box[run].z, feet, dE[run]);
     TEST_ASSERT_TRUE(feet < 1e-12);
   }
   TEST_ASSERT_TRUE(norm(box[3] - V3{s.q[0], s.q[1], s.q[2]}) > 0.05);  // the box moves
   for (int k = 0; k < 2; ++k) {
     const double order = std::log2(norm(box[k] - box[k + 1]) / norm(box[k + 1] - box[k + 2]));
-    printf("%sorder between h = %.1e and %.1e s: %.2f (differences %.2e, %.2e m)\n", label(integrator), hs[k], hs[k + 2], order,
+    printf("%sorder between h = %.1e and %.1e s: %.2f (differences %.2e, %.2e m)\n", label(integrator), hs[k],
+           hs[k + 2], order,
            norm(box[k] - box[k + 1]), norm(box[k + 1] - box[k + 2]));
     TEST_ASSERT_TRUE(order > order_lo && order < order_hi);
   }
@@ -321,7 +323,8 @@ void drop_onto_the_ground(Integrator integrator) {
   printf("%sdrop from 2 cm: %d events, %d impacts, last impact's contact problem %s in %d iterations (residual "
          "%.1e); feet on the ground at 0.3 s: %d; deepest %.1e m; energy rise at most %.1e J; cone excess %.1e N, "
          "pull %.1e N; kinetic at the end %.2e J\n",
-         label(integrator), c.events, c.impacts, d->impact.converged ? "converged" : "NOT converged", d->impact.iterations,
+         label(integrator), c.events, c.impacts, d->impact.converged ? "converged" : "NOT converged",
+         d->impact.iterations,
          d->impact.residual, on, c.worst_under, c.energy_rise, c.worst_cone, c.worst_pull,
          robot_kinetic_energy(R, d->v));
   TEST_ASSERT_TRUE(c.impacts >= 1 && d->impact.converged);
