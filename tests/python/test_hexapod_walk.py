@@ -3,7 +3,8 @@ statics of the planned pose as feed-forward; the feet on the ground's cones, eve
 against the gait's own plan and the invariants of contact:
 
 - straight, two periods (RK4 and generalized-alpha): the box advances the gait's distance
-  (step_length / duty a period) to 10 %, keeps its height to 2 cm, its heading to 1 degree and its tilt under 3 degrees;
+  (step_length / duty a period) to 10 %, keeps its height to 2 cm, its heading to 1 degree and
+  its tilt under 3 degrees;
 - turning on the spot: the box turns by the gait's angle to 10 % and stays within 3 cm of its
   place;
 - throughout: no foot below the ground (1e-9 m), every foot on the ground pushes and a stuck one
