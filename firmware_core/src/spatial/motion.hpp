@@ -76,7 +76,7 @@ constexpr int kMaxStepEvents = 64;
 // fixed-point iterations stop when the acceleration changes by at most this relative to the
 // largest (at least 1 m/s^2, rad/s^2), else LEGSIM_ERR_NOT_CONVERGED after kGalphaMaxIterations.
 constexpr real kGalphaRhoInf = real(0.8);
-constexpr real kGalphaTolerance = real(sizeof(real) == sizeof(float) ? 1e-4 : 1e-9);
+constexpr real kGalphaTolerance = real(sizeof(real) == sizeof(float) ? 1e-4 : 1e-8);
 constexpr int kGalphaMaxIterations = 40;
 
 enum class Integrator : uint8_t { Rk4, GeneralizedAlpha };
