@@ -4,7 +4,7 @@
  * feet 8.6 cm up) or on six feet, under its statics' commands with 20 N more on
  * every upper actuator (so that it moves), stepped at h = 1 ms through legsim_hexapod_step.
  *
- *     hexapod_step_cost CASE INTEGRATOR STEPS [REPS]     CASE: tripod | six; INTEGRATOR: rk4
+ *     hexapod_step_cost CASE INTEGRATOR STEPS [REPS]     CASE: tripod | six; INTEGRATOR: rk4 | galpha
  *
  * Prints robot_step_cost's lines: the count of steps of each kind (all "stuck": the feet held)
  * and, with REPS, the min over REPS repetitions of the median step's wall time. Runs from the
@@ -38,7 +38,7 @@ static int cmp(const void *a, const void *b) {
 /* callgrind's inclusive cost of this function over the count of steps is a step's */
 __attribute__((noinline)) legsim_status step_stuck(legsim_hexapod_sim *sim) { return legsim_hexapod_step(sim, 1e-3, 1); }
 
-static legsim_status set_up(uint32_t stance, legsim_hexapod_sim **out) {
+static legsim_status set_up(uint32_t stance, legsim_integrator integrator, legsim_hexapod_sim **out) {
   legsim_sim *leg = NULL;
   legsim_options opt = legsim_default_options();
   legsim_status st = legsim_init(work, sizeof work, &desc.leg[0].leg, &opt, &leg);
@@ -54,14 +54,16 @@ static legsim_status set_up(uint32_t stance, legsim_hexapod_sim **out) {
   legsim_hexapod_standing s;
   st = legsim_hexapod_statics(&desc, &pose, stance, NULL, work, sizeof work, &s);
   if (st == LEGSIM_OK) st = legsim_hexapod_sim_init(storage, sizeof storage, &desc, &pose, stance, out);
+  if (st == LEGSIM_OK) st = legsim_hexapod_set_integrator(*out, integrator);
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) s.actuator_force_n[l][0] += 20.0;
   if (st == LEGSIM_OK) st = legsim_hexapod_command(*out, s.actuator_force_n, s.rowing_torque_nm);
   return st;
 }
 
 int main(int argc, char **argv) {
-  if (argc < 4 || (strcmp(argv[1], "tripod") && strcmp(argv[1], "six")) || strcmp(argv[2], "rk4")) {
-    fprintf(stderr, "usage: hexapod_step_cost tripod|six rk4 STEPS [REPS]\n");
+  if (argc < 4 || (strcmp(argv[1], "tripod") && strcmp(argv[1], "six")) ||
+      (strcmp(argv[2], "rk4") && strcmp(argv[2], "galpha"))) {
+    fprintf(stderr, "usage: hexapod_step_cost tripod|six rk4|galpha STEPS [REPS]\n");
     return 2;
   }
   const long n = atol(argv[3]), reps = argc > 4 ? atol(argv[4]) : 0;
@@ -76,7 +78,7 @@ int main(int argc, char **argv) {
   double best = 0;
   legsim_hexapod_sim *sim = NULL;
   for (long r = 0; r < (reps > 0 ? reps : 1) && st == LEGSIM_OK; ++r) {
-    st = set_up(stance, &sim);
+    st = set_up(stance, strcmp(argv[2], "rk4") ? LEGSIM_INTEGRATOR_GENERALIZED_ALPHA : LEGSIM_INTEGRATOR_RK4, &sim);
     for (long i = 0; i < n && st == LEGSIM_OK; ++i) {
       const double t0 = now_s();
       st = step_stuck(sim);

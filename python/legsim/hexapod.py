@@ -103,7 +103,7 @@ class Hexapod:
 
     def walk(self, *, period_s: float, duty: float, step_length_m: float, step_height_m: float,
              box_height_m: float, turn_rad: float = 0.0, t_end_s: float, h_s: float = 1e-3,
-             every: int = 10, feedforward: bool = True) -> dict:
+             every: int = 10, feedforward: bool = True, integrator: str = "rk4") -> dict:
         """The robot walking on the tripod gait: it starts at rest at the gait's pose at t = 0
         (the box level box_height_m over the origin, the standing feet stuck on the ground of the
         file, the others free), and before every step of h_s its servos get the gait's set-points
@@ -113,13 +113,14 @@ class Hexapod:
         start included): t_s, box_m (n, 3), box_quat (n, 4), foot_m (n, 6, 3), foot_force_n
         (n, 6, 3), foot_state (n, 6: 0 free, 1 stuck, 2 sliding), set_foot_box_m (n, 6, 3: the
         gait's targets in the box's frame), body_pose (n, bodies, 7), events (each sample's
-        count since the last), impacts (touchdowns so far), kinetic_energy_j."""
+        count since the last), impacts (touchdowns so far), kinetic_energy_j. ``integrator``: as
+        HexapodSim.set_integrator."""
         gait = dict(period_s=period_s, duty=duty, step_length_m=step_length_m, step_height_m=step_height_m,
                     turn_rad=turn_rad, box_height_m=box_height_m)
         sp = self.gait_setpoints(0.0, **gait)
         pose = {"box_m": [0.0, 0.0, float(box_height_m)], "box_quat": [1.0, 0.0, 0.0, 0.0],
                 "rowing_rad": list(sp["rowing_rad"]), "length_m": sp["length_m"].tolist()}
-        m = self.sim(pose, stuck=[k for k in range(LEGS) if sp["stance"][k]])
+        m = self.sim(pose, stuck=[k for k in range(LEGS) if sp["stance"][k]], integrator=integrator)
 
         def command(sp):
             ff = fm = None
@@ -156,10 +157,13 @@ class Hexapod:
                 events = 0
         return {k: np.array(v) for k, v in out.items()}
 
-    def sim(self, pose: dict, stuck=range(LEGS)) -> "HexapodSim":
+    def sim(self, pose: dict, stuck=range(LEGS), integrator: str = "rk4") -> "HexapodSim":
         """The robot moving from ``pose`` (as statics'), at rest, the feet of ``stuck`` (leg
-        indices) held where the pose puts them, the commands zero (legsim_hexapod_sim_init)."""
-        return HexapodSim(self, pose, _mask(stuck, "stuck"))
+        indices) held where the pose puts them, the commands zero (legsim_hexapod_sim_init),
+        stepped by ``integrator`` (HexapodSim.set_integrator)."""
+        m = HexapodSim(self, pose, _mask(stuck, "stuck"))
+        m.set_integrator(integrator)
+        return m
 
     def statics(self, pose: dict, stance=range(LEGS), box_force_n=None) -> dict:
         """The robot standing at ``pose`` (keys box_m, box_quat (w, x, y, z), rowing_rad,
@@ -193,7 +197,7 @@ def _mask(legs, what: str) -> int:
 
 
 class HexapodSim:
-    """The hexapod moving (``legsim_hexapod_sim``): RK4 on the rotation group, the stuck feet
+    """The hexapod moving (``legsim_hexapod_sim``): RK4 (or generalized-alpha) on the rotation group, the stuck feet
     held; each linear actuator's force and each rowing torque held as commanded."""
 
     def __init__(self, hexapod: Hexapod, pose: dict, mask: int):
@@ -235,6 +239,15 @@ class HexapodSim:
         self.library.check(self.library.cdll.legsim_hexapod_body_poses(self._sim, buf, cap, C.byref(n)),
                            "legsim_hexapod_body_poses")
         return np.array(buf[:7 * n.value]).reshape(n.value, 7)
+
+    def set_integrator(self, integrator: str) -> None:
+        """The steps' integrator from the next on: "rk4" (order 4) or "galpha" (generalized-alpha,
+        order 2, numerically damped: legsim_hexapod_set_integrator)."""
+        codes = {"rk4": 0, "galpha": 1}
+        if integrator not in codes:
+            raise ValueError(f"integrator: {integrator!r} is not one of {sorted(codes)}")
+        self.library.check(self.library.cdll.legsim_hexapod_set_integrator(self._sim, codes[integrator]),
+                           "legsim_hexapod_set_integrator")
 
     def step(self, n: int = 1, *, h_s: float = 1e-3) -> None:
         self.library.check(self.library.cdll.legsim_hexapod_step(self._sim, float(h_s), int(n)),

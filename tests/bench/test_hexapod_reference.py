@@ -260,9 +260,9 @@ def test_leg_foot_inverse_kinematics(ref):
     assert worst < 1e-12
 
 
-def core_scene(core, scene, h_s):
-    """The core's forward dynamics (legsim.HexapodSim, RK4 on the rotation group) on scene_a's or
-    scene_b's set-up to 0.2 s at step h_s: its state at the end."""
+def core_scene(core, scene, h_s, integrator="rk4"):
+    """The core's forward dynamics (legsim.HexapodSim, RK4 or generalized-alpha on the rotation
+    group) on scene_a's or scene_b's set-up to 0.2 s at step h_s: its state at the end."""
     if scene is scene_a:
         pose, stance, push = core.stand_pose(1.0), tuple(range(6)), (0, 1, 2)
     else:
@@ -270,7 +270,7 @@ def core_scene(core, scene, h_s):
     s = core.statics(pose, stance=stance)
     Fa = np.array(s["actuator_force_n"])
     Fa[list(push), 0] += 50.0
-    m = core.sim(pose, stuck=stance)
+    m = core.sim(pose, stuck=stance, integrator=integrator)
     m.command(Fa, s["rowing_torque_nm"])
     m.step(int(round(0.2 / h_s)), h_s=h_s)
     return m.state()
@@ -302,3 +302,31 @@ def test_core_motion_against_reference(ref, core, scene):
     assert errors[-1]["quat"] < 1e-9 and errors[-1]["rowing"] < 1e-9
     assert errors[-1]["force"] < 1e-6 * np.abs(res.foot_force[-1]).max()
     assert min(orders) > 3.5
+
+
+@pytest.mark.parametrize("scene", [scene_a, scene_b], ids=["a_six", "b_tripod"])
+def test_core_galpha_against_reference(ref, core, scene):
+    """The core's generalized-alpha on the rotation group against this reference at 0.2 s: the
+    box's place and rotation, the rowing angles and the lengths converge at order 2 over h = 4, 2,
+    1 ms (each error's order, the larger of the rotation's and the lengths' asserted), the stuck
+    feet's ground forces with them."""
+    res = scene(ref)
+    errors = []
+    for h in (4e-3, 2e-3, 1e-3):
+        st = core_scene(core, scene, h, integrator="galpha")
+        e = {"box": np.abs(st["box_m"] - res.box_q[-1, :3]).max(),
+             "quat": np.abs(st["box_quat"] - res.box_q[-1, 3:]).max(),
+             "rowing": np.abs(st["rowing_rad"] - res.rowing[-1]).max(),
+             "lengths": np.abs(st["length_m"] - res.lengths[-1]).max(),
+             "force": np.abs(st["foot_force_n"] - res.foot_force[-1]).max()}
+        errors.append(e)
+        print(f"galpha {scene.__name__}, h = {h:.0e} s: " + ", ".join(f"{k} {v:.2e}" for k, v in e.items()))
+    orders = {k: [np.log2(errors[j][k] / errors[j + 1][k]) for j in range(2)] for k in errors[0]}
+    print("  orders " + ", ".join(f"{k} {v[0]:.2f} {v[1]:.2f}" for k, v in orders.items()))
+    size = [max(e["quat"], e["lengths"]) for e in errors]
+    size_orders = [np.log2(size[k] / size[k + 1]) for k in range(2)]
+    assert all(1.8 < o < 2.3 for o in size_orders)
+    assert all(1.8 < o < 2.3 for k in ("box", "force") for o in orders[k])
+    # at 1 ms: 2.8e-8 m, 9.3e-7, 6.1e-7 m, 2.4e-4 N (a_six); 1.7e-8 m, 5.9e-7, 4.3e-7 m, 3.9e-4 N (b_tripod)
+    assert errors[-1]["box"] < 5e-8 and errors[-1]["lengths"] < 1e-6 and errors[-1]["quat"] < 2e-6
+    assert errors[-1]["force"] < 1e-3

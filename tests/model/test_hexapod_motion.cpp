@@ -9,8 +9,9 @@
 //   the linear and angular momenta stay constant, and the energy (kinetic, less the work the
 //   constant forces would do back) at RK4's order;
 // - the paper's Fig. 7 on six feet (the stand's statics plus 50 N on the three right legs' upper
-//   actuators): the box's path converges at order 4 over h = 4 .. 0.5 ms, the feet stay where they
+//   actuators): the box's path converges at order 4 over h = 8 .. 1 ms, the feet stay where they
 //   stand, the energy holds;
+// - with generalized-alpha: statics is rest, Fig. 7 at order 2, the drop's invariants;
 // - bad input refused, data unchanged.
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
 #include <Eigen/Dense>
@@ -103,6 +104,8 @@ std::unique_ptr<RobotData> standing_data(const Standing &s, uint32_t stance) {
 }
 }  // namespace
 
+const char *label(Integrator integrator) { return integrator == Integrator::Rk4 ? "" : "generalized-alpha: "; }
+
 void test_solve_is_the_dense_kkt(void) {
   const Standing &s = standing();
   const SpatialRobot &R = s.robot;
@@ -152,7 +155,7 @@ void test_solve_is_the_dense_kkt(void) {
   }
 }
 
-void test_statics_is_rest(void) {
+void statics_is_rest(Integrator integrator) {
   const Standing &s = standing();
   const SpatialRobot &R = s.robot;
   for (uint32_t stance : {kSix, kTripod}) {
@@ -168,17 +171,19 @@ void test_statics_is_rest(void) {
       fmax = std::fmax(fmax, norm(f));
     }
     double drift = 0;
-    for (int n = 0; n < 200; ++n) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, 1e-3));
+    for (int n = 0; n < 200; ++n) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, *d, 1e-3, integrator));
     for (int k = 0; k < kBodyConfig * R.nb; ++k) drift = std::fmax(drift, std::fabs(d->q[k] - s.q[k]));
-    printf("stance 0x%02x: largest acceleration %.2e, feet's forces off the statics by %.2e N of %.1f N; "
+    printf("%sstance 0x%02x: largest acceleration %.2e, feet's forces off the statics by %.2e N of %.1f N; "
            "after 0.2 s moved %.2e\n",
-           stance, amax, fdiff, fmax, drift);
+           label(integrator), stance, amax, fdiff, fmax, drift);
     TEST_ASSERT_TRUE(fmax > 50);
     TEST_ASSERT_TRUE(amax < 1e-10);
     TEST_ASSERT_TRUE(fdiff < 1e-10 * fmax);
     TEST_ASSERT_TRUE(drift < 1e-12);
   }
 }
+void test_statics_is_rest(void) { statics_is_rest(Integrator::Rk4); }
+void test_statics_is_rest_galpha(void) { statics_is_rest(Integrator::GeneralizedAlpha); }
 
 void test_flight_keeps_momentum_and_energy(void) {
   const Standing &s = standing();
@@ -213,7 +218,9 @@ void test_flight_keeps_momentum_and_energy(void) {
   TEST_ASSERT_TRUE(dE[0] / dE[1] > 12);
 }
 
-void test_fig7_on_six_feet_converges_at_order_4(void) {
+// The orders expected: RK4's 4, generalized-alpha's 2; the energy's drift at h = 2 ms bounded by
+// each one's error there.
+void fig7_converges(Integrator integrator, double order_lo, double order_hi, double energy_at_2ms) {
   const Standing &s = standing();
   const SpatialRobot &R = s.robot;
   const double hs[4] = {8e-3, 4e-3, 2e-3, 1e-3}, T = 0.4;
@@ -227,23 +234,29 @@ void test_fig7_on_six_feet_converges_at_order_4(void) {
     const int n = int(std::lround(T / hs[run]));
     double feet = 0;
     for (int k = 0; k < n; ++k) {
-      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, hs[run]));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, *d, hs[run], integrator));
       for (int l = 0; l < 6; ++l) feet = std::fmax(feet, norm(robot_foot_position(R, l, d->q) - d->hold.anchor[l]));
     }
     box[run] = {d->q[0], d->q[1], d->q[2]};
     dE[run] = energy(R, *d) - E0;
-    printf("Fig. 7 on six feet, h = %.1e s: box at (%.9f, %.9f, %.9f) m, feet off their places %.1e m, energy %+.2e J\n",
-           hs[run], box[run].x, box[run].y, box[run].z, feet, dE[run]);
+    printf("%sFig. 7 on six feet, h = %.1e s: box at (%.9f, %.9f, %.9f) m, feet off their places %.1e m, "
+           "energy %+.2e J\n",
+           label(integrator), hs[run], box[run].x, box[run].y, box[run].z, feet, dE[run]);
     TEST_ASSERT_TRUE(feet < 1e-12);
   }
   TEST_ASSERT_TRUE(norm(box[3] - V3{s.q[0], s.q[1], s.q[2]}) > 0.05);  // the box moves
   for (int k = 0; k < 2; ++k) {
     const double order = std::log2(norm(box[k] - box[k + 1]) / norm(box[k + 1] - box[k + 2]));
-    printf("order between h = %.1e and %.1e s: %.2f (differences %.2e, %.2e m)\n", hs[k], hs[k + 2], order,
+    printf("%sorder between h = %.1e and %.1e s: %.2f (differences %.2e, %.2e m)\n", label(integrator), hs[k],
+           hs[k + 2], order,
            norm(box[k] - box[k + 1]), norm(box[k + 1] - box[k + 2]));
-    TEST_ASSERT_TRUE(order > 3.5 && order < 4.5);
+    TEST_ASSERT_TRUE(order > order_lo && order < order_hi);
   }
-  TEST_ASSERT_TRUE(std::fabs(dE[2]) < 1e-7);
+  TEST_ASSERT_TRUE(std::fabs(dE[2]) < energy_at_2ms);
+}
+void test_fig7_on_six_feet_converges_at_order_4(void) { fig7_converges(Integrator::Rk4, 3.5, 4.5, 1e-7); }
+void test_fig7_on_six_feet_converges_at_order_2_galpha(void) {
+  fig7_converges(Integrator::GeneralizedAlpha, 1.8, 2.3, 5e-5);
 }
 
 namespace {
@@ -265,12 +278,12 @@ struct Checked {
 // Steps d to T (s) at h, checking at every step: no foot under the ground; the energy (kinetic,
 // gravity's, less the commands' work) not rising by more than the integrator's error; every
 // stuck foot inside its cone and every foot on the ground pushing.
-Checked run_checked(const SpatialRobot &R, RobotData &d, double T, double h) {
+Checked run_checked(const SpatialRobot &R, RobotData &d, double T, double h, Integrator integrator) {
   Checked c = {0, 0, 0, 0, 0, 0};
   const GroundPlane &g = d.ground;
   double E = energy(R, d);
   for (int n = 0; n < int(std::lround(T / h)); ++n) {
-    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, d, h));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, d, h, integrator));
     c.events += d.events;
     const double E1 = energy(R, d);
     c.energy_rise = std::fmax(c.energy_rise, E1 - E);
@@ -289,7 +302,7 @@ Checked run_checked(const SpatialRobot &R, RobotData &d, double T, double h) {
 }
 }  // namespace
 
-void test_drop_onto_the_ground(void) {
+void drop_onto_the_ground(Integrator integrator) {
   // Six feet 2 cm above the ground, the legs held by the stand's statics forces: the robot falls,
   // its feet touch down (impacts on their cones) and it stands.
   const Standing &s = standing();
@@ -304,13 +317,14 @@ void test_drop_onto_the_ground(void) {
   for (int a = 0; a < R.na; ++a) d->command.actuator[a] = st.actuator_force[a];
   for (int l = 0; l < R.nlegs; ++l) d->command.rowing[l] = st.rowing_torque[l];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
-  const Checked c = run_checked(R, *d, 0.3, 1e-3);
+  const Checked c = run_checked(R, *d, 0.3, 1e-3, integrator);
   int on = 0;
   for (int l = 0; l < 6; ++l) on += (d->hold.stuck | d->hold.sliding) >> l & 1u;
-  printf("drop from 2 cm: %d events, %d impacts, last impact's contact problem %s in %d iterations (residual "
+  printf("%sdrop from 2 cm: %d events, %d impacts, last impact's contact problem %s in %d iterations (residual "
          "%.1e); feet on the ground at 0.3 s: %d; deepest %.1e m; energy rise at most %.1e J; cone excess %.1e N, "
          "pull %.1e N; kinetic at the end %.2e J\n",
-         c.events, c.impacts, d->impact.converged ? "converged" : "NOT converged", d->impact.iterations,
+         label(integrator), c.events, c.impacts, d->impact.converged ? "converged" : "NOT converged",
+         d->impact.iterations,
          d->impact.residual, on, c.worst_under, c.energy_rise, c.worst_cone, c.worst_pull,
          robot_kinetic_energy(R, d->v));
   TEST_ASSERT_TRUE(c.impacts >= 1 && d->impact.converged);
@@ -319,6 +333,8 @@ void test_drop_onto_the_ground(void) {
   TEST_ASSERT_TRUE(c.energy_rise < 1e-6);
   TEST_ASSERT_TRUE(c.worst_cone < 1e-6 && c.worst_pull < 1e-6);
 }
+void test_drop_onto_the_ground(void) { drop_onto_the_ground(Integrator::Rk4); }
+void test_drop_onto_the_ground_galpha(void) { drop_onto_the_ground(Integrator::GeneralizedAlpha); }
 
 void test_refuses_bad_input(void) {
   const Standing &s = standing();
@@ -345,5 +361,8 @@ int main(void) {
   RUN_TEST(test_fig7_on_six_feet_converges_at_order_4);
   RUN_TEST(test_drop_onto_the_ground);
   RUN_TEST(test_refuses_bad_input);
+  RUN_TEST(test_statics_is_rest_galpha);
+  RUN_TEST(test_fig7_on_six_feet_converges_at_order_2_galpha);
+  RUN_TEST(test_drop_onto_the_ground_galpha);
   return UNITY_END();
 }

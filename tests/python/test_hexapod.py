@@ -133,15 +133,17 @@ def test_gait_out_of_reach(hexapod):
         hexapod.gait_setpoints(0.0, **dict(GAIT, duty=0.3))
 
 
-def test_sim_stands_on_its_statics(hexapod):
-    """Moving (legsim.HexapodSim): on a tripod's statics the robot stays at rest, the stuck feet's
-    ground forces the statics' (another solve: the whole robot's balance, then each leg's), its
-    lengths and rowing angles the pose's; with 20 N more on every upper actuator the box rises
-    while the stuck feet keep their places, and the swinging legs' lengths change."""
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+def test_sim_stands_on_its_statics(hexapod, integrator):
+    """Moving (legsim.HexapodSim, either integrator): on a tripod's statics the robot stays at
+    rest, the stuck feet's ground forces the statics' (another solve: the whole robot's balance,
+    then each leg's), its lengths and rowing angles the pose's; with 20 N more on every upper
+    actuator the box rises while the stuck feet keep their places, and the swinging legs' lengths
+    change."""
     pose = hexapod.stand_pose(1.0, ROWING)
     tripod = (0, 2, 4)
     s = hexapod.statics(pose, stance=tripod)
-    m = hexapod.sim(pose, stuck=tripod)
+    m = hexapod.sim(pose, stuck=tripod, integrator=integrator)
     m.command(s["actuator_force_n"], s["rowing_torque_nm"])
     m.step(200, h_s=1e-3)
     st = m.state()
@@ -154,7 +156,7 @@ def test_sim_stands_on_its_statics(hexapod):
     assert st["foot_state"] == ["stuck", "free"] * 3
     assert st["kinetic_energy_j"] < 1e-20
 
-    m = hexapod.sim(pose, stuck=tripod)
+    m = hexapod.sim(pose, stuck=tripod, integrator=integrator)
     forces = np.array(s["actuator_force_n"])
     forces[:, 0] += 20.0
     m.command(forces, s["rowing_torque_nm"])
@@ -177,5 +179,9 @@ def test_sim_refuses(hexapod):
         m.step(1, h_s=0.0)
     with pytest.raises(ValueError):
         hexapod.sim(pose, stuck=(6,))
+    with pytest.raises(ValueError):
+        m.set_integrator("euler")
+    with pytest.raises(legsim.BadInputError):  # the C call's own check
+        m.library.check(m.library.cdll.legsim_hexapod_set_integrator(m._sim, 2), "legsim_hexapod_set_integrator")
     after = m.state()
     assert all(np.array_equal(np.asarray(before[k]), np.asarray(after[k])) for k in before)

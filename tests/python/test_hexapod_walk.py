@@ -2,8 +2,9 @@
 statics of the planned pose as feed-forward; the feet on the ground's cones, events located),
 against the gait's own plan and the invariants of contact:
 
-- straight, two periods: the box advances the gait's distance (step_length / duty a period) to
-  10 %, keeps its height to 2 cm, its heading to 1 degree and its tilt under 3 degrees;
+- straight, two periods (RK4 and generalized-alpha): the box advances the gait's distance
+  (step_length / duty a period) to 10 %, keeps its height to 2 cm, its heading to 1 degree and
+  its tilt under 3 degrees;
 - turning on the spot: the box turns by the gait's angle to 10 % and stays within 3 cm of its
   place;
 - throughout: no foot below the ground (1e-9 m), every foot on the ground pushes and a stuck one
@@ -45,12 +46,13 @@ def contact_invariants(h, w):
     assert np.all(free.any(axis=0))
 
 
-def test_walks_straight(hexapod):
-    w = hexapod.walk(**GAIT, step_length_m=0.12, t_end_s=2.4)
+@pytest.mark.parametrize("integrator", ["rk4", "galpha"])
+def test_walks_straight(hexapod, integrator):
+    w = hexapod.walk(**GAIT, step_length_m=0.12, t_end_s=2.4, integrator=integrator)
     yaw, tilt = yaw_tilt(w["box_quat"])
     planned = 2 * 0.12 / GAIT["duty"]
     x, y, z = w["box_m"][-1]
-    print(f"straight: box at ({x:.4f}, {y:.4f}, {z:.4f}) m (planned x {planned:.3f}), heading "
+    print(f"straight ({integrator}): box at ({x:.4f}, {y:.4f}, {z:.4f}) m (planned x {planned:.3f}), heading "
           f"{np.degrees(np.abs(yaw).max()):.2f} deg, tilt {np.degrees(tilt.max()):.2f} deg, height "
           f"{w['box_m'][:, 2].min():.4f} .. {w['box_m'][:, 2].max():.4f} m, {w['impacts'][-1]} impacts, "
           f"{w['events'].sum()} events")

@@ -128,7 +128,7 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
  * multipliers) or sliding (its normal row; friction mu_kinetic N against its slip), changing at
  * events located inside the step: a touchdown (an impact on the feet's circular cones), a lift-off
  * (N reaches 0), stick to slip (|F_t| reaches mu_static N), slip to stick. Each linear actuator's
- * axial force and each rowing torque held over a step as commanded; RK4 on the rotation group,
+ * axial force and each rowing torque held over a step as commanded; RK4 (or generalized-alpha) on the rotation group,
  * the positions and velocities projected onto the rows at each step's end. A step is all or
  * nothing. */
 typedef struct legsim_hexapod_sim legsim_hexapod_sim;
@@ -169,6 +169,12 @@ legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double 
  * that of the last step taken: LEGSIM_ERR_SINGULAR (a leg at a dead centre), _NOT_CONVERGED (the
  * projection), _DIVERGED (a non-finite result). */
 legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n_steps);
+
+/* The integrator of the steps from the next on: LEGSIM_INTEGRATOR_RK4 (legsim_hexapod_sim_init's)
+ * or LEGSIM_INTEGRATOR_GENERALIZED_ALPHA (second order, rho_inf 0.8, its iterations explicit in
+ * the rows: docs/design/spatial.md; a step may also fail with _NOT_CONVERGED when they do not
+ * converge). LEGSIM_ERR_BAD_INPUT for another value (nothing changed). */
+legsim_status legsim_hexapod_set_integrator(legsim_hexapod_sim *sim, legsim_integrator integrator);
 
 typedef struct legsim_hexapod_state {
   double t_s;

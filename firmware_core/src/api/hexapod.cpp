@@ -95,6 +95,7 @@ struct legsim_hexapod_sim {
   uint32_t magic;
   spatial::SpatialRobot robot;
   spatial::RobotData data;
+  spatial::Integrator integrator;
 };
 
 namespace {
@@ -219,6 +220,7 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
   auto *sim = new (static_cast<unsigned char *>(storage) + hexapod_sim_offset()) legsim_hexapod_sim;
   sim->magic = 0;
   sim->robot = w.robot;
+  sim->integrator = spatial::Integrator::Rk4;
   spatial::FeetHold hold;
   hold.stuck = stuck_mask;
   hold.sliding = 0;
@@ -301,9 +303,25 @@ legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n
   if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
   if (!(h_s > 0 && h_s <= 0.1) || n_steps < 1) return LEGSIM_ERR_BAD_INPUT;
   for (int32_t k = 0; k < n_steps; ++k) {
-    const legsim_status st = spatial::robot_step_rk4(sim->robot, sim->data, real(h_s));
+    const legsim_status st = spatial::robot_step(sim->robot, sim->data, real(h_s), sim->integrator);
     if (st != LEGSIM_OK) return st;
   }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_set_integrator(legsim_hexapod_sim *sim, legsim_integrator integrator) {
+  if (!sim) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  if (integrator != LEGSIM_INTEGRATOR_RK4 && integrator != LEGSIM_INTEGRATOR_GENERALIZED_ALPHA)
+    return LEGSIM_ERR_BAD_INPUT;
+  const spatial::Integrator next =
+      integrator == LEGSIM_INTEGRATOR_RK4 ? spatial::Integrator::Rk4 : spatial::Integrator::GeneralizedAlpha;
+  // generalized-alpha's history starts at the accelerations when it takes over
+  if (next != sim->integrator) {
+    std::copy(sim->data.a, sim->data.a + spatial::kBodyDof * sim->robot.nb, sim->data.acc_aux);
+    sim->data.acc_aux_h = 0;
+  }
+  sim->integrator = next;
   return LEGSIM_OK;
 }
 

@@ -57,7 +57,7 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
                                     const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
-                                    real *normal_force, Row *rows, RobotFactor &F, bool factored) {
+                                    real *normal_force, Row *rows, RobotFactor &F, bool factored, bool fixed_dir) {
   if (!factored) {
     system_rows(robot, hold, q, v, rows);
     const legsim_status st = robot_factor(robot, hold, rows, F);
@@ -77,7 +77,7 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
   real x[kMaxLegs][kMaxRobotDof], m[kMaxLegs][kMaxSystemRows], col[kMaxRobotDof];
   static const real zero_g[kMaxSystemRows] = {};
   for (int j = 0; j < s; ++j) {
-    const V3 dir = slip_direction(robot, hold, feet[j], q, v, slip_dir[feet[j]]);
+    const V3 dir = fixed_dir ? slip_dir[feet[j]] : slip_direction(robot, hold, feet[j], q, v, slip_dir[feet[j]]);
     foot_force_column(robot, feet[j], q, -mu_kinetic * dir, col);
     robot_solve(robot, F, col, zero_g, x[j], m[j]);
   }

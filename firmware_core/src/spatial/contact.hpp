@@ -39,10 +39,13 @@ constexpr real kSlipHold = real(1e-4);
 // and a small system for the N's (their friction moves their own multipliers). normal_force[l]:
 // each sliding foot's N. factored: rows and F are already those at (q, v) (the projections'),
 // else they are built here. LEGSIM_ERR_CONTACT when that system is singular (Painleve: friction
-// can make the normal force arbitrary); else as robot_factor.
+// can make the normal force arbitrary); else as robot_factor. fixed_dir: slip_dir[l] is the
+// direction whatever the slip (an implicit step's iterations, where a slip turning back within
+// the step would flip it between iterates: that reversal is an event of its own).
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
                                     const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
-                                    real *normal_force, Row *rows, RobotFactor &F, bool factored = false);
+                                    real *normal_force, Row *rows, RobotFactor &F, bool factored = false,
+                                    bool fixed_dir = false);
 
 // Sliding foot l's friction direction at (q, v) (unit, tangential): its slip velocity's, or
 // fallback's below kSlipHold.

@@ -81,7 +81,7 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
 // The accelerations, multipliers and sliding feet's normal forces at (q, v) under d's commands.
 // report: the state is data's own (the forces kept as its report).
 legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a, real *mu,
-                       real *N, bool factored, bool report = false) {
+                       real *N, bool factored, bool report = false, const V3 *fixed_dir = nullptr) {
   real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
   command_forces(robot, d.command, q, v, F, T);
   robot_forces(robot, q, v, F, T, Q);
@@ -89,14 +89,15 @@ legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, c
     std::copy(F, F + robot.na, d.actuator_force);
     std::copy(T, T + robot.nlegs, d.rowing_torque);
   }
-  return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, d.slip_dir, q, v, Q, a, mu, N, d.rows, d.factor,
-                               factored);
+  return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, fixed_dir ? fixed_dir : d.slip_dir, q, v, Q, a, mu,
+                               N, d.rows, d.factor, factored, fixed_dir != nullptr);
 }
 
 // The state a step starts from and returns to when it fails.
 struct Core {
   real t;
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], a[kMaxRobotDof], mu[kMaxSystemRows];
+  real acc_aux[kMaxRobotDof], acc_aux_h;
   real N[kMaxLegs];
   FeetHold hold;
   V3 slip_dir[kMaxLegs];
@@ -106,6 +107,8 @@ void save(const SpatialRobot &robot, const RobotData &d, Core &c) {
   std::copy(d.q, d.q + kBodyConfig * robot.nb, c.q);
   std::copy(d.v, d.v + kBodyDof * robot.nb, c.v);
   std::copy(d.a, d.a + kBodyDof * robot.nb, c.a);
+  std::copy(d.acc_aux, d.acc_aux + kBodyDof * robot.nb, c.acc_aux);
+  c.acc_aux_h = d.acc_aux_h;
   std::copy(d.mu, d.mu + kMaxSystemRows, c.mu);
   std::copy(d.normal_force, d.normal_force + kMaxLegs, c.N);
   c.hold = d.hold;
@@ -116,6 +119,8 @@ void load(const SpatialRobot &robot, const Core &c, RobotData &d) {
   std::copy(c.q, c.q + kBodyConfig * robot.nb, d.q);
   std::copy(c.v, c.v + kBodyDof * robot.nb, d.v);
   std::copy(c.a, c.a + kBodyDof * robot.nb, d.a);
+  std::copy(c.acc_aux, c.acc_aux + kBodyDof * robot.nb, d.acc_aux);
+  d.acc_aux_h = c.acc_aux_h;
   std::copy(c.mu, c.mu + kMaxSystemRows, d.mu);
   std::copy(c.N, c.N + kMaxLegs, d.normal_force);
   d.hold = c.hold;
@@ -169,6 +174,91 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
   return LEGSIM_OK;
 }
 
+// One generalized-alpha step of H on d in place (Bruls, Cardona, Arnold 2012 on the group; the
+// Chung-Hulbert parameters of kGalphaRhoInf), with the rows explicit: the unknown is the true
+// acceleration vd1 at the step's end, found by fixed-point iterations vd1 <- f(q1(vd1), v1(vd1))
+// (f: the constrained accelerations, contact_accelerations), then q1 and v1 projected onto the
+// rows as RK4's are. d.a must be the accelerations at d's state and d.acc_aux the history;
+// d part-way on failure.
+legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
+  const int nb = robot.nb, nv = kBodyDof * nb;
+  const real rho = kGalphaRhoInf;
+  const real am = (2 * rho - 1) / (rho + 1), af = rho / (rho + 1);
+  const real gam = real(0.5) + af - am, beta = real(0.25) * (gam + real(0.5)) * (gam + real(0.5));
+  real q0[kBodyConfig * kMaxRobotBodies], v0[kMaxRobotDof], a0[kMaxRobotDof], x0[kMaxRobotDof];
+  std::copy(d.q, d.q + kBodyConfig * nb, q0);
+  std::copy(d.v, d.v + nv, v0);
+  std::copy(d.a, d.a + nv, a0);
+  // the history's lead over the accelerations, (am - af) h vd', to this part's length
+  const real scale = d.acc_aux_h > 0 ? H / d.acc_aux_h : real(1);
+  for (int k = 0; k < nv; ++k) x0[k] = a0[k] + scale * (d.acc_aux[k] - a0[k]);
+  real vd1[kMaxRobotDof], x1[kMaxRobotDof], th[kMaxRobotDof], f[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
+  // the predictor: the acceleration's rate from the history's lead, x0 - vd0 ~ (am - af) H vd'
+  // (0.6 fewer iterations a step than the acceleration held; none at rho_inf = 1, where am = af)
+  const real lead = am != af ? 1 / (am - af) : real(0);
+  for (int k = 0; k < nv; ++k) vd1[k] = a0[k] + lead * (x0[k] - a0[k]);
+  // q1 = q0 (+) H (v0 + H ((1/2 - beta) x0 + beta x1)), v1 = v0 + H ((1 - gamma) x0 + gamma x1),
+  // (1 - am) x1 + am x0 = (1 - af) vd1 + af vd0
+  auto state = [&](real *q, real *v) {
+    for (int k = 0; k < nv; ++k) {
+      x1[k] = ((1 - af) * vd1[k] + af * a0[k] - am * x0[k]) / (1 - am);
+      th[k] = H * (v0[k] + H * ((real(0.5) - beta) * x0[k] + beta * x1[k]));
+      v[k] = v0[k] + H * ((1 - gam) * x0[k] + gam * x1[k]);
+    }
+    for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, th + kBodyDof * b, q + kBodyConfig * b);
+  };
+  // the iterations with each sliding foot's friction along its slip at the iterate; when they
+  // do not contract (a slip turning back within the step: its direction flips between
+  // iterates), again from the predictor with the directions at the part's start
+  bool converged = false;
+  for (int pass = 0; pass < 2 && !converged; ++pass) {
+    const V3 *fixed = pass == 1 ? d.slip_ref : nullptr;
+    if (pass == 1) {
+      if (!d.hold.sliding) break;
+      std::copy(a0, a0 + nv, vd1);
+    }
+    real last = kNone;
+    for (int it = 0; it < kGalphaMaxIterations && !converged; ++it) {
+      state(d.q, d.v);
+      const legsim_status st = evaluate(robot, d, d.q, d.v, f, mu, N, false, false, fixed);
+      if (st != LEGSIM_OK) return st;
+      real change = 0, size = 1;
+      for (int k = 0; k < nv; ++k) {
+        change = std::max(change, std::abs(f[k] - vd1[k]));
+        size = std::max(size, std::abs(f[k]));
+        vd1[k] = f[k];
+      }
+      if (!(change == change)) return LEGSIM_ERR_DIVERGED;
+      converged = change <= kGalphaTolerance * size;
+      if (!converged && it >= 2 && change > real(0.5) * last && d.hold.sliding && pass == 0) break;
+      last = change;
+    }
+  }
+  if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
+  state(d.q, d.v);
+  for (int l = 0; l < robot.nlegs; ++l) {
+    d.slip_stage_min[l] = kNone;
+    if (!((d.hold.sliding >> l) & 1u)) continue;
+    V3 p, pv;
+    foot_motion(robot, l, d.q, d.v, p, pv);
+    d.slip_stage_min[l] = dot(tangential(d.hold, pv), d.slip_ref[l]);
+  }
+  std::copy(x1, x1 + nv, d.acc_aux);
+  d.acc_aux_h = H;
+  legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
+  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
+  if (st != LEGSIM_OK) return st;
+  for (int k = 0; k < nv; ++k)
+    if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
+  d.t += H;
+  return LEGSIM_OK;
+}
+
+// One part of H by the integrator.
+legsim_status take(const SpatialRobot &robot, RobotData &d, real H, Integrator integrator) {
+  return integrator == Integrator::GeneralizedAlpha ? galpha(robot, d, H) : rk4(robot, d, H);
+}
+
 // ---- contact events -------------------------------------------------------------------------
 // Per foot two functions, each >= 0 while its mode holds: a free foot's height above the
 // ground (m) and none; a stuck foot's normal force (N) and its cone's margin mu_s N - |F_t|
@@ -219,6 +309,8 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
     if (st != LEGSIM_OK) return st;
+    std::copy(d.a, d.a + kBodyDof * robot.nb, d.acc_aux);  // generalized-alpha's history restarts
+    d.acc_aux_h = 0;
     if (!d.has_ground) return LEGSIM_OK;
     const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
@@ -341,13 +433,15 @@ legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
   s = evaluate(robot, data, data.q, data.v, a, mu, N, false);
   if (s != LEGSIM_OK) return s;
   command_forces(robot, data.command, data.q, data.v, data.actuator_force, data.rowing_torque);
+  // generalized-alpha's history shifted by the jump (its lead over the accelerations kept)
+  for (int k = 0; k < kBodyDof * robot.nb; ++k) data.acc_aux[k] += a[k] - data.a[k];
   std::copy(a, a + kBodyDof * robot.nb, data.a);
   std::copy(mu, mu + kMaxSystemRows, data.mu);
   std::copy(N, N + kMaxLegs, data.normal_force);
   return LEGSIM_OK;
 }
 
-legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
+legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integrator integrator) {
   if (!(h > 0) || !std::isfinite(h)) return LEGSIM_ERR_BAD_INPUT;
   Core start, s0;
   save(robot, d, start);
@@ -388,7 +482,7 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
     event_values(robot, d, ref, e0);
     // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
     const real part = std::min(remaining, std::max(slip_part(robot, d), h / 256));
-    legsim_status st = rk4(robot, d, part);
+    legsim_status st = take(robot, d, part, integrator);
     if (st != LEGSIM_OK) return fail(st);
     event_values(robot, d, ref, e1);
     // the crossings: the earliest by the line through the two ends first
@@ -416,7 +510,7 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
       real lo = 0, hi = window, flo = std::max(e0[el][ek], real(0)), fhi = e1[el][ek];
       if (guard > 0) {  // the new event's value at the window's end
         load(robot, s0, d);
-        if ((st = rk4(robot, d, hi * part)) != LEGSIM_OK) return fail(st);
+        if ((st = take(robot, d, hi * part, integrator)) != LEGSIM_OK) return fail(st);
         real e[kMaxLegs][2];
         event_values(robot, d, ref, e);
         fhi = e[el][ek];
@@ -426,7 +520,7 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
         real th = (lo * fhi - hi * flo) / (fhi - flo);
         if (!(th > lo && th < hi)) th = real(0.5) * (lo + hi);
         load(robot, s0, d);
-        if ((st = rk4(robot, d, th * part)) != LEGSIM_OK) return fail(st);
+        if ((st = take(robot, d, th * part, integrator)) != LEGSIM_OK) return fail(st);
         real e[kMaxLegs][2];
         event_values(robot, d, ref, e);
         const real f = e[el][ek];
@@ -445,7 +539,7 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
         }
       }
       load(robot, s0, d);
-      if ((st = rk4(robot, d, hi * part)) != LEGSIM_OK) return fail(st);
+      if ((st = take(robot, d, hi * part, integrator)) != LEGSIM_OK) return fail(st);
       real e[kMaxLegs][2];
       event_values(robot, d, ref, e);
       int nl = -1, nk = -1;
@@ -467,6 +561,13 @@ legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
   d.t = start.t + h;
   d.events = events;
   return LEGSIM_OK;
+}
+
+legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &d, real h) {
+  return robot_step(robot, d, h, Integrator::Rk4);
+}
+legsim_status robot_step_generalized_alpha(const SpatialRobot &robot, RobotData &d, real h) {
+  return robot_step(robot, d, h, Integrator::GeneralizedAlpha);
 }
 
 void command_forces(const SpatialRobot &robot, const RobotCommands &c, const real *q, const real *v, real *force_n,

@@ -4,7 +4,15 @@
 // group (Munthe-Kaas: each body's local coordinates start at 0, theta' = dexp^-1(theta) omega),
 // then the positions and velocities projected onto the rows (M-orthogonal: the least
 // kinetic-energy correction), then the accelerations and multipliers at its end (the reactions
-// it reports, and the next step's first stage). A contact event inside the step (a touchdown, a
+// it reports, and the next step's first stage). Or generalized-alpha on the group (Bruls,
+// Cardona, Arnold 2012: q1 = q0 (+) h dq, the Chung-Hulbert parameters of rho_inf), explicit in
+// the rows: its unknown is the constrained acceleration at the step's end (contact_accelerations,
+// the index-1 form), found by fixed-point iterations, then the same projections. Second order,
+// with numerical damping of what the step does not resolve (rho_inf); no Jacobian of the
+// contact problem needed, so the contact modes and their events are RK4's. Its history (the
+// auxiliary acceleration) is RobotData's, restarted at the accelerations whenever the modes are
+// settled (an event, an impact); for a part of another length its lead over the accelerations
+// ((alpha_m - alpha_f) h a') is scaled to it. A contact event inside the step (a touchdown, a
 // lift-off, stick to slip, slip to stick) is located by retaking the step from its start to a
 // fraction of it (regula falsi with the Illinois rule on the event's function), applied there,
 // and the rest of the step taken after it.
@@ -33,6 +41,8 @@ struct RobotData {
   real t;  // s
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
   real a[kMaxRobotDof];       // at (t, q, v)
+  real acc_aux[kMaxRobotDof];  // generalized-alpha's auxiliary acceleration (its history)
+  real acc_aux_h;              // s: the part it was taken over (0: none, acc_aux = a)
   real mu[kMaxSystemRows];    // the multipliers at (t, q, v)
   real normal_force[kMaxLegs];  // N: each sliding foot's at (t, q, v)
   FeetHold hold;              // the feet's modes (and the ground's frame)
@@ -62,6 +72,14 @@ constexpr real kProjectionTolerance = real(sizeof(real) == sizeof(float) ? 1e-5 
 constexpr int kProjectionMaxIterations = 8;
 // The most events located in one step: more is a Zeno cascade or modes that do not settle.
 constexpr int kMaxStepEvents = 64;
+// Generalized-alpha: the spectral radius at infinity (legsim_options.rho_inf's default); its
+// fixed-point iterations stop when the acceleration changes by at most this relative to the
+// largest (at least 1 m/s^2, rad/s^2), else LEGSIM_ERR_NOT_CONVERGED after kGalphaMaxIterations.
+constexpr real kGalphaRhoInf = real(0.8);
+constexpr real kGalphaTolerance = real(sizeof(real) == sizeof(float) ? 1e-4 : 1e-8);
+constexpr int kGalphaMaxIterations = 40;
+
+enum class Integrator : uint8_t { Rk4, GeneralizedAlpha };
 
 // data at (q, v) with the feet of hold (stuck and sliding; free feet may not be below the
 // ground), the ground (nullptr: none) and zero forces commanded: projected, its modes checked against
@@ -79,12 +97,15 @@ void command_forces(const SpatialRobot &robot, const RobotCommands &c, const rea
                     real *rowing_nm);
 legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data);
 
-// One step of h (s, > 0): RK4 on the group with the contact events inside it located. Statuses:
+// One step of h (s, > 0): RK4 (or generalized-alpha) on the group with the contact events inside it located. Statuses:
 // LEGSIM_ERR_BAD_INPUT for h not positive and finite; LEGSIM_ERR_SINGULAR (a leg at a dead
 // centre); LEGSIM_ERR_NOT_CONVERGED (the projection, an impact's contact problem);
 // LEGSIM_ERR_CONTACT (friction making a normal force arbitrary, modes that do not settle, more
 // than kMaxStepEvents events); LEGSIM_ERR_DIVERGED (a non-finite result).
+// LEGSIM_ERR_NOT_CONVERGED also for generalized-alpha's iterations.
+legsim_status robot_step(const SpatialRobot &robot, RobotData &data, real h, Integrator integrator);
 legsim_status robot_step_rk4(const SpatialRobot &robot, RobotData &data, real h);
+legsim_status robot_step_generalized_alpha(const SpatialRobot &robot, RobotData &data, real h);
 
 // The robot's kinetic energy (J) at v, and gravity's potential (J, from z = 0) at q.
 real robot_kinetic_energy(const SpatialRobot &robot, const real *v);
