@@ -22,14 +22,6 @@ void foot_force_column(const SpatialRobot &robot, int l, const real *q, const V3
                      col + kBodyDof * fb);
 }
 
-// The used rows' indices (the joints', the feet's of hold): a sum over them touches no unused slot.
-int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
-  int n = 0;
-  for (int r = 0; r < robot.m; ++r) idx[n++] = r;
-  for (int l = 0; l < robot.nlegs; ++l)
-    for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
-  return n;
-}
 }  // namespace
 
 void ground_frame(const GroundPlane &g, FeetHold &hold) {
@@ -64,7 +56,7 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
     if (st != LEGSIM_OK) return st;
   }
   int idx[kMaxSystemRows];
-  const int n = used_rows(robot, hold, idx);
+  const int n = system_used_rows(robot, hold, idx);
   real g[kMaxSystemRows];
   for (int i = 0; i < n; ++i) g[idx[i]] = rows[idx[i]].gamma;
   robot_solve(robot, F, Q, g, a, mu);

@@ -46,6 +46,16 @@ inline const LegLayout &leg_layout(const SpatialRobot &robot, const FeetHold &ho
   return robot.leg[l].layout[nf == 3 ? 2 : nf];
 }
 
+// The indices of the rows in use with hold's feet (the joints', then each foot's on the ground):
+// their number; a sum over them reads no unused foot slot.
+inline int system_used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
+  int n = 0;
+  for (int r = 0; r < robot.m; ++r) idx[n++] = r;
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
+  return n;
+}
+
 // Every row of the system at (q, v): the joints' (robot_rows) and the feet's on the ground.
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows);
 

@@ -9,14 +9,6 @@ namespace {
 constexpr real kNone = real(sizeof(real) == sizeof(float) ? 1e30 : 1e300);  // no event function
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
-int used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
-  int n = 0;
-  for (int r = 0; r < robot.m; ++r) idx[n++] = r;
-  for (int l = 0; l < robot.nlegs; ++l)
-    for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
-  return n;
-}
-
 real row_rate(const SpatialRobot &robot, const Row &row, int r, const real *v) {
   const int a = r < robot.m ? robot.row_body[r][0] : robot.leg[(r - robot.m) / 3].foot_body;
   const int b = r < robot.m ? robot.row_body[r][1] : -1;
@@ -41,7 +33,7 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
   static const real zero_f[kMaxRobotDof] = {};
   real g[kMaxSystemRows], dx[kMaxRobotDof], mu[kMaxSystemRows];
   int idx[kMaxSystemRows];
-  const int n = used_rows(robot, d.hold, idx);
+  const int n = system_used_rows(robot, d.hold, idx);
   bool factored = false;
   iterations = 0;
   for (;;) {
