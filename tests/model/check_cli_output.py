@@ -52,6 +52,9 @@ def check_good(cli, scene, outdir):
         return
     with open(js, encoding="utf-8") as f:
         d = json.load(f)  # raises (test fails) if it is not JSON
+    if d.get("kind") == "hexapod":
+        check_hexapod(cli, scene, spec, d, name)
+        return
     for key in ("scene", "model", "analysis", "integrator", "step_s", "record_every", "status", "status_code", "bodies",
                 "joints", "actuators", "samples"):
         check(key in d, f"{name}: JSON lacks '{key}'")
@@ -153,6 +156,43 @@ def check_good(cli, scene, outdir):
     # stdout and --format
     r = run(cli, scene, None, "csv")
     check(r.returncode == 0 and r.stdout.startswith("t_s,"), f"{name}: CSV on stdout")
+
+
+def check_hexapod(cli, scene, spec, d, name):
+    """A hexapod scene's JSON (scenes/README.md, "The hexapod"): its keys, the statics' balance,
+    the run's samples on the step grid, the feet on or above the ground (the file's: z = 0 here),
+    the stuck ones on it and inside their cones; CSV refused."""
+    legs = d["legs"]
+    check(len(legs) == 6 and d["status"] == "ok" and d["status_code"] == "LEGSIM_OK", f"{name}: status {d['status']}")
+    check(d["analysis"] == spec.get("analysis", "dynamics"), f"{name}: analysis {d['analysis']}")
+    mu = d["ground"]["mu_static"]
+    if d["analysis"] == "statics":
+        st = d["statics"]
+        stance = set(d["stance"])
+        check(stance == set(spec.get("stance", legs)), f"{name}: stance {d['stance']}")
+        fz = sum(st["feet"][k]["force"][2] for k in legs)
+        check(fz > 0 and all(st["feet"][k]["force"] == [0, 0, 0] for k in legs if k not in stance),
+              f"{name}: forces off the stance")
+        check(st["margin"] > 0, f"{name}: margin {st['margin']}")
+    else:
+        n, every = d["n_steps"], d["record_every"]
+        samples = d["samples"]
+        check(len(samples) == n // every + 1 + (1 if n % every else 0), f"{name}: {len(samples)} samples")
+        check(abs(samples[-1]["t"] - spec["duration"]) < 1e-9, f"{name}: last t {samples[-1]['t']}")
+        for s in samples:
+            for k in legs:
+                f = s["feet"][k]
+                check(f["x"][2] > -1e-9, f"{name}: {k} under the ground at t = {s['t']}")
+                if f["state"] == "stuck":
+                    check(abs(f["x"][2]) < 1e-9, f"{name}: stuck {k} off the ground at t = {s['t']}")
+                    if s["t"] > 0:
+                        check(math.hypot(f["force"][0], f["force"][1]) <= mu * f["force"][2] + 1e-6,
+                              f"{name}: stuck {k} outside its cone at t = {s['t']}")
+            check(all(math.isfinite(v) for v in s["box"] + s["box_quat"]), f"{name}: box at t = {s['t']}")
+    r = run(cli, scene, None, "csv")
+    check(r.returncode == 2 and "JSON only" in r.stderr, f"{name}: CSV not refused: {r.stderr.strip()}")
+    r = subprocess.run([cli, scene, "--check"], capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and json.loads(r.stdout)["kind"] == "hexapod", f"{name}: --check")
 
 
 def check_bad(cli, table, outdir):
