@@ -434,7 +434,7 @@ std::string legs_json(uint32_t mask, const legsim_hexapod_desc &h) {
 // the header both the resolved scene and the results begin with
 void write_head(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h) {
   o << "{\"scene\": " << jstr(s.path) << ", \"name\": " << jstr(s.name) << ", \"kind\": \"hexapod\""
-    << ", \"description\": " << jstr(s.description) << ", \"model\": " << jstr(s.model)
+    << ", \"description\": " << jstr(s.description) << ", \"demo\": false, \"model\": " << jstr(s.model)
     << ", \"model_path\": " << jstr(s.model_path) << ", \"model_name\": " << jstr(name_of(h.name))
     << ", \"analysis\": " << jstr(s.analysis == HexAnalysis::kStatics ? "statics" : "dynamics") << ",\n  \"legs\": [";
   for (int k = 0; k < L; ++k) o << (k ? ", " : "") << jstr(name_of(h.leg[k].name));
