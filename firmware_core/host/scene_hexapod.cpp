@@ -573,6 +573,18 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
         if (off.which < 2) f[off.leg.index][off.which] += off.value;
         else tau[off.leg.index] += off.value;
       }
+      for (int k = 0; k < L; ++k) {
+        const std::string leg = name_of(h.leg[k].name);
+        for (int j = 0; j < 2; ++j) {
+          const double mf = h.leg[k].leg.actuator[j].max_force_n;
+          if (std::fabs(f[k][j]) > mf)
+            throw RunFail{LEGSIM_ERR_BAD_INPUT, leg + "'s " + kWhich[j] + ": the statics' force with its offset, " +
+                                                    num(f[k][j]) + " N, exceeds max_force " + num(mf) + " N"};
+        }
+        if (std::fabs(tau[k]) > h.rowing_max_torque_nm)
+          throw RunFail{LEGSIM_ERR_BAD_INPUT, leg + "'s rowing: the statics' torque with its offset, " + num(tau[k]) +
+                                                  " N m, exceeds max_torque " + num(h.rowing_max_torque_nm) + " N m"};
+      }
       r = s.force_control ? legsim_hexapod_command(sim, f, tau)
                           : legsim_hexapod_command_pose(sim, p.length_m, p.rowing_rad, f, tau);
       if (r != LEGSIM_OK)
