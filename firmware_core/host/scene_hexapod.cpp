@@ -177,12 +177,65 @@ struct HexScene {
   std::vector<Offset> offsets;
   bool has_gait = false;
   legsim_hexapod_gait gait{};
+  std::string checks_json = "null";  // [checks] resolved (tests/model/check_cli_output.py runs them)
+  std::vector<LegRef> stuck_at_end;   // [checks] stuck_at_end, as written
   // bound against the file
   uint32_t stance_mask = 0x3f, stuck_mask = 0;
 };
 
 const std::vector<std::string> kCommonKeys = {"description", "name", "model", "analysis", "box_height", "rowing",
-                                              "lengths"};
+                                              "lengths", "checks"};
+
+// [checks]: a target `{ value, tolerance > 0 }` (the result within tolerance of value) or a bound.
+std::string target_json(Node v, const std::string &what) {
+  Table t = v ? v->as_table() : nullptr;
+  if (!t) fail(what + " must be { value, tolerance }");
+  check_keys(t, {"value", "tolerance"}, what + ": ");
+  if (!t->get("value") || !t->get("tolerance")) fail(what + " must be { value, tolerance }");
+  const double x = real_of(t->get("value"), what + ": 'value'");
+  const double tol = real_of(t->get("tolerance"), what + ": 'tolerance'");
+  if (!(tol > 0)) fail(what + ": 'tolerance' must be > 0 (got " + num(tol) + ")");
+  return "{\"value\": " + jnum(x) + ", \"tolerance\": " + jnum(tol) + "}";
+}
+
+std::string checks_of(Node v, bool statics, std::vector<LegRef> &stuck_at_end) {
+  Table t = v->as_table();
+  if (!t) fail("'checks' must be a table");
+  const std::vector<std::string> targets =
+      statics ? std::vector<std::string>{"margin_m"}
+              : std::vector<std::string>{"box_x_m", "box_y_m", "box_z_m", "yaw_rad", "roll_rad", "touchdown_s"};
+  const std::vector<std::string> bounds =
+      statics ? std::vector<std::string>{} : std::vector<std::string>{"height_off_m", "tilt_max_rad", "settle_m"};
+  std::vector<std::string> allowed = targets;
+  allowed.insert(allowed.end(), bounds.begin(), bounds.end());
+  if (!statics) {
+    allowed.push_back("impacts_min");
+    allowed.push_back("stuck_at_end");
+  }
+  check_keys(t, allowed, "checks: ");
+  if (t->empty()) fail("checks: name something to check");
+  std::string o = "{";
+  for (auto &&kv : *t) {
+    const std::string key(kv.first.str());
+    const std::string what = "checks: " + q(key);
+    o += (o.size() > 1 ? ", " : "") + jstr(key) + ": ";
+    if (std::find(targets.begin(), targets.end(), key) != targets.end()) {
+      o += target_json(&kv.second, what);
+    } else if (key == "impacts_min") {
+      if (!kv.second.is_integer() || *kv.second.value<int64_t>() < 0 || *kv.second.value<int64_t>() > 1000000000)
+        fail(what + " must be an integer in 0..1000000000");
+      o += std::to_string(*kv.second.value<int64_t>());
+    } else if (key == "stuck_at_end") {
+      stuck_at_end = leg_list(&kv.second, what);
+      o += "@STUCK_AT_END@";  // the names, once bound against the file
+    } else {
+      const double x = real_of(&kv.second, what);
+      if (!(x > 0)) fail(what + " must be > 0 (got " + num(x) + ")");
+      o += jnum(x);
+    }
+  }
+  return o + "}";
+}
 const std::vector<std::string> kStaticsKeys = {"stance", "box_load"};
 const std::vector<std::string> kDynamicsKeys = {"step_s", "duration", "record_every", "stuck",  "lift",
                                                 "control", "offset",     "gait"};
@@ -249,6 +302,7 @@ HexScene parse(const toml::table &doc, const std::string &path) {
     for (int i = 0; i < 3; ++i)
       s.box_load[i] = ranged(a->get(i), "'box_load'[" + std::to_string(i) + "]", -kMaxBoxLoadN, kMaxBoxLoadN);
   }
+  if (Node v = t->get("checks")) s.checks_json = checks_of(v, s.analysis == HexAnalysis::kStatics, s.stuck_at_end);
   if (s.analysis == HexAnalysis::kStatics) return s;
 
   if (Node v = t->get("step_s")) {
@@ -445,7 +499,7 @@ void write_head(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h
 }
 
 void write_settings(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h, const legsim_hexapod_pose &p) {
-  o << ",\n  \"pose\": ";
+  o << ",\n  \"checks\": " << s.checks_json << ",\n  \"pose\": ";
   write_pose(o, p);
   if (s.analysis == HexAnalysis::kStatics) {
     o << ",\n  \"stance\": " << legs_json(s.stance_mask, h) << ", \"box_load\": " << jarr(s.box_load);
@@ -660,6 +714,9 @@ int run_hexapod_scene(const std::string &text, const std::string &path, bool che
     }
     if (s.has_stance) s.stance_mask = bind_legs(s.stance, *h, "'stance'");
     if (s.has_stuck) s.stuck_mask = bind_legs(s.stuck, *h, "'stuck'");
+    const size_t at = s.checks_json.find("@STUCK_AT_END@");
+    if (at != std::string::npos)
+      s.checks_json.replace(at, 14, legs_json(bind_legs(s.stuck_at_end, *h, "checks: 'stuck_at_end'"), *h));
     for (size_t i = 0; i < s.offsets.size(); ++i) {
       Offset &off = s.offsets[i];
       const uint32_t m = bind_legs({off.leg}, *h, "offset[" + std::to_string(i) + "]: 'leg'");

@@ -158,6 +158,39 @@ def check_good(cli, scene, outdir):
     check(r.returncode == 0 and r.stdout.startswith("t_s,"), f"{name}: CSV on stdout")
 
 
+def hexapod_check(d, key, want):
+    """A hexapod scene's [checks] key against its JSON (scenes/README.md, "The hexapod"):
+    (what the run gave, passed)."""
+    if key == "margin_m":
+        got = d["statics"]["margin"]
+        return got, abs(got - want["value"]) <= want["tolerance"]
+    samples, last = d["samples"], d["samples"][-1]
+    w, x, y, z = last["box_quat"]
+    final = {"box_x_m": last["box"][0], "box_y_m": last["box"][1], "box_z_m": last["box"][2],
+             "yaw_rad": math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
+             "roll_rad": math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))}
+    if key in final:
+        return final[key], abs(final[key] - want["value"]) <= want["tolerance"]
+    if key == "touchdown_s":
+        got = next((s["t"] for s in samples if s["impacts"] > 0), None)
+        return got, got is not None and abs(got - want["value"]) <= want["tolerance"]
+    height = d["gait"]["box_height_m"] if d["gait"] else d["pose"]["box"][2] - d["lift"]
+    if key == "height_off_m":
+        got = max(abs(s["box"][2] - height) for s in samples)
+    elif key == "settle_m":
+        got = abs(last["box"][2] - height)
+    elif key == "tilt_max_rad":
+        got = max(2 * math.asin(min(1.0, math.hypot(*s["box_quat"][1:3]))) for s in samples)
+    elif key == "impacts_min":
+        return last["impacts"], last["impacts"] >= want
+    elif key == "stuck_at_end":
+        got = [k for k in d["legs"] if last["feet"][k]["state"] == "stuck"]
+        return got, set(want) <= set(got)
+    else:
+        return None, False
+    return got, got <= want
+
+
 def check_hexapod(cli, scene, spec, d, name):
     """A hexapod scene's JSON (scenes/README.md, "The hexapod"): its keys, the statics' balance,
     the run's samples on the step grid, the feet on or above the ground (the file's: z = 0 here),
@@ -189,6 +222,10 @@ def check_hexapod(cli, scene, spec, d, name):
                         check(math.hypot(f["force"][0], f["force"][1]) <= mu * f["force"][2] + 1e-6,
                               f"{name}: stuck {k} outside its cone at t = {s['t']}")
             check(all(math.isfinite(v) for v in s["box"] + s["box_quat"]), f"{name}: box at t = {s['t']}")
+    check(d["checks"] == (None if "checks" not in spec else d["checks"]), f"{name}: checks")
+    for key, want in (d["checks"] or {}).items():
+        got, ok = hexapod_check(d, key, want)
+        check(ok, f"{name}: checks.{key}: got {got}, want {want}")
     r = run(cli, scene, None, "csv")
     check(r.returncode == 2 and "JSON only" in r.stderr, f"{name}: CSV not refused: {r.stderr.strip()}")
     r = subprocess.run([cli, scene, "--check"], capture_output=True, text=True, timeout=60)
