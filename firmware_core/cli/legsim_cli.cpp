@@ -44,7 +44,9 @@ const char *kUsage =
     "  follows --format, else the extension of --out, else JSON.\n"
     "  --check: read the scene and its model, print the resolved scene as JSON, run nothing.\n"
     "  -: read the scene's text from stdin, as if it were the file --as PATH (its name, and\n"
-    "  its folder for a relative model path; default \"stdin\").\n";
+    "  its folder for a relative model path; default \"stdin\").\n"
+    "  A hexapod scene (its model a hexapod file, scenes/README.md \"The hexapod\") writes\n"
+    "  JSON only: the statics on its stance, or per sample the box, legs, feet and contacts.\n";
 
 int usage_error(const std::string &msg) {
   std::cerr << "legsim_cli: " << msg << "\n" << kUsage;

@@ -4,6 +4,7 @@
 #include "scene_hexapod.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
@@ -243,7 +244,6 @@ const std::vector<std::string> kDynamicsKeys = {"step_s", "duration", "record_ev
 HexScene parse(const toml::table &doc, const std::string &path) {
   HexScene s;
   s.path = path;
-  const std::string w = "";
   Table t = &doc;
   s.model = string_of(t->get("model"), "'model'");
   s.model_path = s.model[0] == '/' ? s.model : dirname_of(path) + s.model;
@@ -268,7 +268,7 @@ HexScene parse(const toml::table &doc, const std::string &path) {
     if (t->get(k)) fail(q(k) + " applies to a hexapod's " + (s.analysis == HexAnalysis::kStatics ? "dynamics" : "statics") +
                         " only");
   allowed.insert(allowed.end(), own.begin(), own.end());
-  check_keys(t, allowed, w);
+  check_keys(t, allowed, "");
 
   if (Node v = t->get("box_height")) {
     s.has_box_height = true;
@@ -415,8 +415,9 @@ struct Storage {
 };
 
 // The scene's pose (statics, and dynamics without a gait): the stand's lengths, the box level
-// with the stand's feet on the ground unless box_height says otherwise.
-legsim_hexapod_pose scene_pose(const HexScene &s, const legsim_hexapod_desc &h, Storage &st, double *foot_drop) {
+// over the origin with the stand's lowest foot at the ground point's height unless box_height
+// says otherwise.
+legsim_hexapod_pose scene_pose(const HexScene &s, const legsim_hexapod_desc &h, Storage &st) {
   legsim_hexapod_pose p{};
   p.box_quat[0] = 1;
   for (int k = 0; k < L; ++k) {
@@ -463,7 +464,6 @@ legsim_hexapod_pose scene_pose(const HexScene &s, const legsim_hexapod_desc &h, 
   // on the file's ground (a plane through ground_point; the box level over the origin)
   const double ground_z = h.ground_point_m[2];
   p.box_m[2] = s.has_box_height ? s.box_height : ground_z + drop;
-  if (foot_drop) *foot_drop = drop;
   return p;
 }
 
@@ -741,7 +741,7 @@ int run_hexapod_scene(const std::string &text, const std::string &path, bool che
         if (sp.stance[k]) s.stuck_mask |= 1u << k;
       }
     } else {
-      pose = scene_pose(s, *h, st, nullptr);
+      pose = scene_pose(s, *h, st);
       if (s.analysis == HexAnalysis::kDynamics) {
         if (!s.has_stuck) s.stuck_mask = s.lift > 0 ? 0u : 0x3fu;
         pose.box_m[2] += s.lift;

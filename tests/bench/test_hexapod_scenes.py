@@ -84,9 +84,10 @@ def test_the_tripod_stand_is_the_python_api_s_statics(hexapod):
     assert total > 0 and abs(got_f[:, :2]).max() < 1e-9
 
 
-def test_the_walk_advances_as_the_gait_plans():
+def test_the_walk_advances_as_the_gait_plans(hexapod):
     """hexapod_walk: two periods straight, the box's final x the plan's 2 step_length / duty to
-    10 %; its height within 2 cm of the gait's, its heading and side drift small."""
+    10 %; its height within 2 cm of the gait's, its heading and side drift small; and the run is
+    legsim.Hexapod.walk's (the same driving through the Python API), sample for sample."""
     d = _run("hexapod_walk")
     g = d["gait"]
     plan = 2 * g["step_length_m"] / g["duty"]
@@ -97,6 +98,10 @@ def test_the_walk_advances_as_the_gait_plans():
     q = last["box_quat"]
     assert abs(2 * math.atan2(q[3], q[0])) < math.radians(1)
     assert last["impacts"] >= 6  # each foot touched down at least once a period
+    w = hexapod.walk(**{k: g[k] for k in g}, t_end_s=d["duration"], h_s=d["step_s"], every=d["record_every"])
+    assert np.array_equal(np.array([s["box"] for s in d["samples"]]), w["box_m"])
+    assert np.array_equal(np.array([[s["feet"][k]["x"] for k in d["legs"]] for s in d["samples"]]), w["foot_m"])
+    assert [s["impacts"] for s in d["samples"]] == list(w["impacts"])
 
 
 def test_the_turn_turns_as_the_gait_plans():
