@@ -35,9 +35,10 @@ import shlex
 import subprocess
 import sys
 import time
+import tomllib
 from pathlib import Path
 
-from .scene import RootNotFound, SceneError, find_root, load_scene, shipped_scenes
+from .scene import RootNotFound, SceneError, find_root, is_hexapod_scene, load_scene, shipped_scenes
 
 EXIT_OK, EXIT_FAIL, EXIT_SETUP = 0, 1, 2
 DEFAULT_TIMEOUT_S = 5.0   # the link's answer timeout (s) unless --timeout
@@ -97,7 +98,14 @@ def cmd_scenes(args) -> int:
 
     root = _root(args)
     rows = []
-    for p in shipped_scenes(root):
+    for p in shipped_scenes(root, hexapod=True):
+        if is_hexapod_scene(p):  # legsim_cli's to run: no CAN node, no reference model
+            try:
+                desc = tomllib.loads(p.read_text()).get("description", "")
+            except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
+                desc = str(e)
+            rows.append((p.stem, "legsim_cli", desc))
+            continue
         try:
             sc = load_scene(p, root)
             rows.append((sc.name, "demo" if sc.demo else "", sc.description))
@@ -118,7 +126,8 @@ def cmd_scenes(args) -> int:
                 print(f"  check {k} <= {v:g}")
             for inj in sc.injections:
                 print(f"  inject at {sc.t(inj.step):g} s: {inj.label} -> {inj.expect}")
-    print(f"\n({len(rows)} scenes in {root / 'scenes'}; run one: legsim-bench run NAME)")
+    print(f"\n({len(rows)} scenes in {root / 'scenes'}; run one: legsim-bench run NAME; a hexapod's "
+          "(legsim_cli): legsim_cli scenes/NAME.toml)")
     return EXIT_OK
 
 

@@ -27,12 +27,13 @@ import math
 import os
 import re
 import subprocess
+import tomllib
 from dataclasses import dataclass, field
 from pathlib import Path
 
 __all__ = ["Scene", "ModelInfo", "SceneError", "RootNotFound", "Schedule", "ActuatorCommand", "Injection",
            "Checks", "StrokeCheck", "load_scene", "parse_scene", "scene_from_resolved", "find_root", "cli_path",
-           "shipped_scenes", "resolve_scene", "fault_codes", "scenes_dir", "ACTUATORS", "VARIANTS",
+           "shipped_scenes", "is_hexapod_scene", "resolve_scene", "fault_codes", "scenes_dir", "ACTUATORS", "VARIANTS",
            "BUILTIN_MODEL", "DEFAULT_CHECKS", "ROBOT_DEFAULT_CHECKS", "DISABLE_FLAGS", "SEQ_SIGNALS"]
 
 ACTUATORS = ("upper", "lower")
@@ -549,6 +550,9 @@ def scene_from_resolved(d: dict, path: str | os.PathLike | None = None, source: 
     cannot run it (its CAN link or its reference model cannot carry what the scene asks)."""
     path = Path(path) if path is not None else None
     where = str(path) if path else d["name"]
+    if d.get("kind") == "hexapod":
+        raise SceneError(f"{where}: a hexapod scene: legsim_cli runs it (legsim_cli {path or where}); the bench "
+                         "has no hexapod (hil_sim has none; legsim-bench hexapod walks it in process)")
     mi = d["model_info"]
     if d["model"].startswith("builtin:"):
         try:
@@ -658,9 +662,29 @@ def load_scene(spec: str | os.PathLike, root: Path | None = None) -> Scene:
     return scene_from_resolved(d, path, source, root=root)
 
 
-def shipped_scenes(root: Path | None = None) -> list[Path]:
+def is_hexapod_scene(path: str | os.PathLike) -> bool:
+    """The scene's `model` is a hexapod file ([yoke] or [rowing], as legsim_cli and the model
+    loader tell one): legsim_cli runs it (scenes/README.md, "The hexapod"); the bench has no
+    hexapod (hil_sim has none, the reference models are planar). False for a file that does not
+    parse (legsim_cli then says why)."""
+    try:
+        spec = tomllib.loads(Path(path).read_text())
+        model = spec.get("model")
+        if not isinstance(model, str) or not model or model.startswith("builtin:"):
+            return False
+        mp = Path(model) if Path(model).is_absolute() else Path(path).parent / model
+        m = tomllib.loads(mp.read_text())
+        return "yoke" in m or "rowing" in m
+    except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
+        return False
+
+
+def shipped_scenes(root: Path | None = None, *, hexapod: bool = False) -> list[Path]:
+    """The scenes of scenes/ the bench runs; with hexapod=True the hexapod's too (legsim_cli's
+    only: is_hexapod_scene)."""
     d = scenes_dir(root)
-    return sorted(d.glob("*.toml")) if d.is_dir() else []
+    paths = sorted(d.glob("*.toml")) if d.is_dir() else []
+    return paths if hexapod else [p for p in paths if not is_hexapod_scene(p)]
 
 
 def resolve_scene(spec: str | os.PathLike, root: Path | None = None) -> Path:
@@ -670,9 +694,9 @@ def resolve_scene(spec: str | os.PathLike, root: Path | None = None) -> Path:
         if not p.is_file():
             raise SceneError(f"{p}: no such scene file")
         return p
-    ships = shipped_scenes(root)
+    ships = shipped_scenes(root, hexapod=True)
     if str(spec) == "demo":
-        for s in ships:
+        for s in shipped_scenes(root):
             try:
                 if _check([str(s)], str(s), None, root)["demo"]:
                     return s

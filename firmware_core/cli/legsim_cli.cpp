@@ -8,7 +8,8 @@
 // The scene names the model file (loaded at run time, host/model_toml.cpp) or
 // "builtin:leg" (the default: the leg compiled in from models/leg.toml; "builtin:robot"
 // the two-leg robot of models/robot.toml when the build holds it), the analysis
-// and its inputs. Exit status: 0 ok, 1 the run failed (the output holds the samples up
+// and its inputs; a hexapod file (models/hexapod.toml) has its own keys and JSON
+// (host/scene_hexapod.hpp). Exit status: 0 ok, 1 the run failed (the output holds the samples up
 // to the failure; JSON also the status), 2 bad usage or a bad scene or model (nothing
 // is written).
 #include <cstdio>
@@ -29,6 +30,7 @@
 #include "model_toml.hpp"
 #include "toml_limits.hpp"
 #include "scene_toml.hpp"
+#include "scene_hexapod.hpp"
 
 namespace {
 
@@ -42,7 +44,9 @@ const char *kUsage =
     "  follows --format, else the extension of --out, else JSON.\n"
     "  --check: read the scene and its model, print the resolved scene as JSON, run nothing.\n"
     "  -: read the scene's text from stdin, as if it were the file --as PATH (its name, and\n"
-    "  its folder for a relative model path; default \"stdin\").\n";
+    "  its folder for a relative model path; default \"stdin\").\n"
+    "  A hexapod scene (its model a hexapod file, scenes/README.md \"The hexapod\") writes\n"
+    "  JSON only: the statics on its stance, or per sample the box, legs, feet and contacts.\n";
 
 int usage_error(const std::string &msg) {
   std::cerr << "legsim_cli: " << msg << "\n" << kUsage;
@@ -93,19 +97,43 @@ int main(int argc, char **argv) {
 
   if (!as_path.empty() && scene_path != "-") return usage_error("--as names a scene read from stdin (-)");
   legsim_host::Scene scene;
-  std::string err;
-  bool loaded;
+  std::string err, text;
   if (scene_path == "-") {
     // read at most one byte past the TOML limit: a larger text is refused without being held
-    std::string text;
     std::istreambuf_iterator<char> it(std::cin), end;
     for (; it != end && text.size() <= kTomlMaxBytes; ++it) text.push_back(*it);
     scene_path = as_path.empty() ? "stdin" : as_path;
-    loaded = legsim_host::load_scene_text(text, scene_path, scene, err);
-  } else {
-    loaded = legsim_host::load_scene(scene_path, scene, err);
+  } else if (!read_toml_file(scene_path.c_str(), text, err)) {
+    std::cerr << "legsim_cli: error: " << err << "\n";
+    return 2;
   }
-  if (!loaded) {
+  // A hexapod's scene (its model a hexapod file) has keys of its own: its reader and runner.
+  if (legsim_host::scene_is_hexapod(text, scene_path)) {
+    if (format != "json") return usage_error("a hexapod scene writes JSON only (--format csv)");
+    struct Out : legsim_host::HexapodOutput {
+      std::string path;
+      std::ofstream file;
+      std::ostream *open() override {
+        if (path.empty() || path == "-") return &std::cout;
+        file.open(path, std::ios::binary);
+        if (!file) {
+          std::cerr << "legsim_cli: error: cannot write " << path << "\n";
+          return nullptr;
+        }
+        return &file;
+      }
+    } hex_out;
+    hex_out.path = check_only ? "" : out_path;
+    const int rc = legsim_host::run_hexapod_scene(text, scene_path, check_only, hex_out, std::cerr);
+    std::ostream &o = hex_out.file.is_open() ? static_cast<std::ostream &>(hex_out.file) : std::cout;
+    o.flush();
+    if (rc != 2 && !o) {
+      std::cerr << "legsim_cli: error: cannot write " << (hex_out.file.is_open() ? out_path : "stdout") << "\n";
+      return 2;
+    }
+    return rc;
+  }
+  if (!legsim_host::load_scene_text(text, scene_path, scene, err)) {
     std::cerr << "legsim_cli: error: " << err << "\n";
     return 2;
   }

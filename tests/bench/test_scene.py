@@ -399,7 +399,8 @@ def _cli_check(path):
     return r.returncode, (json.loads(r.stdout) if r.returncode == 0 else None), r.stderr
 
 
-SCENE_FILES = sorted(ROOT.glob("scenes/*.toml")) + sorted(FIXTURES.glob("*.toml"))
+# the bench's scenes: a hexapod's are legsim_cli's only (tests/bench/test_hexapod_scenes.py)
+SCENE_FILES = shipped_scenes(ROOT) + sorted(FIXTURES.glob("*.toml"))
 
 
 @pytest.mark.parametrize("path", SCENE_FILES, ids=lambda p: p.stem)

@@ -52,6 +52,9 @@ def check_good(cli, scene, outdir):
         return
     with open(js, encoding="utf-8") as f:
         d = json.load(f)  # raises (test fails) if it is not JSON
+    if d.get("kind") == "hexapod":
+        check_hexapod(cli, scene, spec, d, name)
+        return
     for key in ("scene", "model", "analysis", "integrator", "step_s", "record_every", "status", "status_code", "bodies",
                 "joints", "actuators", "samples"):
         check(key in d, f"{name}: JSON lacks '{key}'")
@@ -155,6 +158,81 @@ def check_good(cli, scene, outdir):
     check(r.returncode == 0 and r.stdout.startswith("t_s,"), f"{name}: CSV on stdout")
 
 
+def hexapod_check(d, key, want):
+    """A hexapod scene's [checks] key against its JSON (scenes/README.md, "The hexapod"):
+    (what the run gave, passed)."""
+    if key == "margin_m":
+        got = d["statics"]["margin"]
+        return got, abs(got - want["value"]) <= want["tolerance"]
+    samples, last = d["samples"], d["samples"][-1]
+    w, x, y, z = last["box_quat"]
+    final = {"box_x_m": last["box"][0], "box_y_m": last["box"][1], "box_z_m": last["box"][2],
+             "yaw_rad": math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)),
+             "roll_rad": math.atan2(2 * (w * x + y * z), 1 - 2 * (x * x + y * y))}
+    if key in final:
+        return final[key], abs(final[key] - want["value"]) <= want["tolerance"]
+    if key == "touchdown_s":
+        got = next((s["t"] for s in samples if s["impacts"] > 0), None)
+        return got, got is not None and abs(got - want["value"]) <= want["tolerance"]
+    height = d["gait"]["box_height_m"] if d["gait"] else d["pose"]["box"][2] - d["lift"]
+    if key == "height_off_m":
+        got = max(abs(s["box"][2] - height) for s in samples)
+    elif key == "settle_m":
+        got = abs(last["box"][2] - height)
+    elif key == "tilt_max_rad":
+        got = max(2 * math.asin(min(1.0, math.hypot(*s["box_quat"][1:3]))) for s in samples)
+    elif key == "impacts_min":
+        return last["impacts"], last["impacts"] >= want
+    elif key == "stuck_at_end":
+        got = [k for k in d["legs"] if last["feet"][k]["state"] == "stuck"]
+        return got, set(want) <= set(got)
+    else:
+        return None, False
+    return got, got <= want
+
+
+def check_hexapod(cli, scene, spec, d, name):
+    """A hexapod scene's JSON (scenes/README.md, "The hexapod"): its keys, the statics' balance,
+    the run's samples on the step grid, the feet on or above the ground (the file's: z = 0 here),
+    the stuck ones on it and inside their cones; CSV refused."""
+    legs = d["legs"]
+    check(len(legs) == 6 and d["status"] == "ok" and d["status_code"] == "LEGSIM_OK", f"{name}: status {d['status']}")
+    check(d["analysis"] == spec.get("analysis", "dynamics"), f"{name}: analysis {d['analysis']}")
+    mu = d["ground"]["mu_static"]
+    if d["analysis"] == "statics":
+        st = d["statics"]
+        stance = set(d["stance"])
+        check(stance == set(spec.get("stance", legs)), f"{name}: stance {d['stance']}")
+        fz = sum(st["feet"][k]["force"][2] for k in legs)
+        check(fz > 0 and all(st["feet"][k]["force"] == [0, 0, 0] for k in legs if k not in stance),
+              f"{name}: forces off the stance")
+        check(st["margin"] > 0, f"{name}: margin {st['margin']}")
+    else:
+        n, every = d["n_steps"], d["record_every"]
+        samples = d["samples"]
+        check(len(samples) == n // every + 1 + (1 if n % every else 0), f"{name}: {len(samples)} samples")
+        check(abs(samples[-1]["t"] - spec["duration"]) < 1e-9, f"{name}: last t {samples[-1]['t']}")
+        for s in samples:
+            for k in legs:
+                f = s["feet"][k]
+                check(f["x"][2] > -1e-9, f"{name}: {k} under the ground at t = {s['t']}")
+                if f["state"] == "stuck":
+                    check(abs(f["x"][2]) < 1e-9, f"{name}: stuck {k} off the ground at t = {s['t']}")
+                    if s["t"] > 0:
+                        check(math.hypot(f["force"][0], f["force"][1]) <= mu * f["force"][2] + 1e-6,
+                              f"{name}: stuck {k} outside its cone at t = {s['t']}")
+            check(all(math.isfinite(v) for v in s["box"] + s["box_quat"]), f"{name}: box at t = {s['t']}")
+    check((d["checks"] is None) == ("checks" not in spec) and set(d["checks"] or {}) == set(spec.get("checks", {})),
+          f"{name}: checks {d['checks']}")
+    for key, want in (d["checks"] or {}).items():
+        got, ok = hexapod_check(d, key, want)
+        check(ok, f"{name}: checks.{key}: got {got}, want {want}")
+    r = run(cli, scene, None, "csv")
+    check(r.returncode == 2 and "JSON only" in r.stderr, f"{name}: CSV not refused: {r.stderr.strip()}")
+    r = subprocess.run([cli, scene, "--check"], capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and json.loads(r.stdout)["kind"] == "hexapod", f"{name}: --check")
+
+
 def check_bad(cli, table, outdir):
     base = os.path.dirname(table)
     with open(table, encoding="utf-8") as f:
@@ -176,6 +254,8 @@ def check_bad(cli, table, outdir):
                     d = json.load(f)
                 check(d["status"] == "error" and d["status_code"].startswith("LEGSIM_ERR_") and d["error"],
                       f"{scene}: JSON status {d.get('status')}")
+            if d.get("kind") == "hexapod":  # JSON only (its CSV is refused: check_hexapod)
+                continue
             # The same failed run as CSV: the samples up to the failure, every field a number
             # (no row of empty fields for the failure: that is in the exit status and stderr).
             cs = out[:-len(".json")] + ".csv"
