@@ -170,6 +170,7 @@ struct HexScene {
   double box_load[3] = {0, 0, 0};
   // dynamics
   double step_s = 0.001;
+  legsim_integrator integrator = LEGSIM_INTEGRATOR_RK4;
   int64_t step_ns = 1000000, n_steps = 0, record_every = 1;
   double duration = 0, lift = 0;
   bool has_stuck = false;
@@ -238,8 +239,8 @@ std::string checks_of(Node v, bool statics, std::vector<LegRef> &stuck_at_end) {
   return o + "}";
 }
 const std::vector<std::string> kStaticsKeys = {"stance", "box_load"};
-const std::vector<std::string> kDynamicsKeys = {"step_s", "duration", "record_every", "stuck",  "lift",
-                                                "control", "offset",     "gait"};
+const std::vector<std::string> kDynamicsKeys = {"step_s",  "duration", "record_every", "stuck", "lift",
+                                                "control", "offset",   "gait",         "integrator"};
 
 HexScene parse(const toml::table &doc, const std::string &path) {
   HexScene s;
@@ -310,6 +311,16 @@ HexScene parse(const toml::table &doc, const std::string &path) {
     const double ns = s.step_s * 1e9;
     if (std::fabs(ns - std::round(ns)) > 1e-6) fail("'step_s' must be a whole number of nanoseconds (got " + num(s.step_s) + ")");
     s.step_ns = static_cast<int64_t>(std::llround(ns));
+  }
+  if (Node v = t->get("integrator")) {
+    const std::string in = string_of(v, "'integrator'");
+    if (in == "rk4") {
+      s.integrator = LEGSIM_INTEGRATOR_RK4;
+    } else if (in == "generalized_alpha") {
+      s.integrator = LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
+    } else {
+      fail("'integrator' of a hexapod must be rk4 or generalized_alpha (got " + q(in) + ")");
+    }
   }
   Node dv = t->get("duration");
   if (!dv) fail("missing key 'duration'");
@@ -505,6 +516,7 @@ void write_settings(std::ostream &o, const HexScene &s, const legsim_hexapod_des
     o << ",\n  \"stance\": " << legs_json(s.stance_mask, h) << ", \"box_load\": " << jarr(s.box_load);
     return;
   }
+  o << ",\n  \"integrator\": \"" << (s.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA ? "generalized_alpha" : "rk4") << "\"";
   o << ",\n  \"step_s\": " << jnum(s.step_s) << ", \"step_ns\": " << s.step_ns << ", \"duration\": " << jnum(s.duration)
     << ", \"n_steps\": " << s.n_steps << ", \"record_every\": " << s.record_every << ", \"lift\": " << jnum(s.lift)
     << ", \"stuck\": " << legs_json(s.stuck_mask, h) << ", \"control\": "
@@ -598,6 +610,8 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
   try {
     legsim_status r = legsim_hexapod_sim_init(sim_st.p, sim_st.bytes, &h, &p, s.stuck_mask, &sim);
     if (r != LEGSIM_OK) throw RunFail{r, "the start (legsim_hexapod_sim_init): " + status_text(r)};
+    r = legsim_hexapod_set_integrator(sim, s.integrator);
+    if (r != LEGSIM_OK) throw RunFail{r, "the integrator (legsim_hexapod_set_integrator): " + status_text(r)};
     double f[L][2], tau[L];
     // what a step commands: the gait's set-points at its end with their statics, or the fixed
     // commands of the start pose
