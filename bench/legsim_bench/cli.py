@@ -51,8 +51,6 @@ BENCHMARKS = {
     "mcu": ("legsim_bench.benchmarks.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
     "robot-peers": ("legsim_bench.benchmarks.peers.robot_results",
                     "the two-leg robot in legsim, MuJoCo and Siconos: errors against the bench's reference and cost"),
-    "hexapod": ("legsim_bench.hexapod_walk",
-                "the hexapod walking on its tripod gait (in process): checks, plot, 3D animation"),
 }
 
 
@@ -537,6 +535,14 @@ def cmd_demo(args) -> int:
     return rc
 
 
+# ---- the hexapod ---------------------------------------------------------------------------------
+
+def cmd_hexapod(args) -> int:
+    from .hexapod_walk import run
+
+    return run(args)
+
+
 # ---- benchmarks (lazy) ---------------------------------------------------------------------------
 
 def _benchmark(name: str):
@@ -646,6 +652,16 @@ def build_parser() -> argparse.ArgumentParser:
     out_opts(s, "output directory")
     check_opts(s)
     s.set_defaults(func=cmd_demo)
+
+    s = sub.add_parser("hexapod", help="the hexapod walking on its tripod gait (in process: no bus), checked, "
+                       "with its plot and 3D animation")
+    s.add_argument("--step-length", type=float, default=0.12, help="m a step (default 0.12)")
+    s.add_argument("--turn", type=float, default=0.0, help="rad a step about the box's z (default 0)")
+    s.add_argument("--periods", type=int, default=2, help="gait periods of 1.2 s (default 2)")
+    s.add_argument("--out", "-o", metavar="DIR", default=None,
+                   help="output directory (default out/hexapod_walk under the repository)")
+    s.add_argument("--no-plots", action="store_true", help="no GIF, no PNG")
+    s.set_defaults(func=cmd_hexapod)
 
     for name, (module, help_) in BENCHMARKS.items():
         s = sub.add_parser(name, help=f"{help_} ({module}; its options: legsim-bench {name} --help)",

@@ -1,6 +1,6 @@
 """The hexapod walking on its tripod gait (legsim.Hexapod.walk), checked against the gait's plan
 and the contact's invariants, with its 3D animation and summary plot: `legsim-bench hexapod`
-and the demo's last part. In process (no bus: the hexapod has no CAN node yet).
+(its options: cli.py) and the demo's last part. In process (no bus: the hexapod has no CAN node yet).
 
 Checks (the same as tests/python/test_hexapod_walk.py): the box's advance (or turn) against the
 plan (step_length / duty, turn / duty a period) to 10 %, its height within 2 cm of the gait's and
@@ -14,15 +14,6 @@ from pathlib import Path
 import numpy as np
 
 GAIT = dict(period_s=1.2, duty=0.6, step_height_m=0.05, box_height_m=1.0)
-
-
-def configure_parser(p) -> None:
-    p.add_argument("--step-length", type=float, default=0.12, help="m a step (default 0.12)")
-    p.add_argument("--turn", type=float, default=0.0, help="rad a step about the box's z (default 0)")
-    p.add_argument("--periods", type=int, default=2, help="gait periods of 1.2 s (default 2)")
-    p.add_argument("--out", "-o", metavar="DIR", default=None,
-                   help="output directory (default out/hexapod_walk under the repository)")
-    p.add_argument("--no-plots", action="store_true", help="no GIF, no PNG")
 
 
 def walk_checks(hexapod, walk: dict, step_length: float, turn: float, periods: int) -> list[tuple[str, str, bool]]:
