@@ -15,6 +15,7 @@ the steps.
 from __future__ import annotations
 
 import argparse
+import shutil
 import sys
 from pathlib import Path
 
@@ -25,12 +26,13 @@ from . import mujoco_hexapod as mh
 
 H = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)
 ERRS = ("box", "rot", "rowing", "lengths", "force")
+CALLGRIND_H = 1e-3
 COMMAND = "legsim-bench hexapod-peers --update-results"
 MODULE_COMMAND = ("LEGSIM_ROOT=$PWD PYTHONPATH=$PWD/python:$PWD/bench "
                   "python -m legsim_bench.benchmarks.peers.hexapod_results --update-results")
 
 
-def collect(scenes=mh.SCENES, hs=H, repeats: int = 3) -> list[dict]:
+def collect(scenes=mh.SCENES, hs=H, repeats: int = 3, callgrind: bool = True) -> list[dict]:
     from ...reference.hexapod import HexapodModel
     ref = HexapodModel.from_toml(mh.default_path())
     rows = []
@@ -50,9 +52,14 @@ def collect(scenes=mh.SCENES, hs=H, repeats: int = 3) -> list[dict]:
                 continue
             for h in hs:
                 c = mh.compare(sc, ref, h, res, engine=engine, repeats=repeats, hexapod=hexapod)
+                ir = mh.instructions_per_step(engine, name, h) if callgrind and h == CALLGRIND_H else None
                 rows.append({"engine": c["engine"], "scene": name, "method": c["method"], "h": h, "ok": c["ok"],
-                             "per_step_s": c["per_step_s"], **c["err"]})
+                             "per_step_s": c["per_step_s"], "instructions": ir, **c["err"]})
     return rows
+
+
+def _count(ir) -> str:
+    return "-" if ir is None else f"{ir:,.0f}"
 
 
 def markdown(rows: list[dict], before: dict, after: dict | None = None) -> str:
@@ -72,19 +79,22 @@ def markdown(rows: list[dict], before: dict, after: dict | None = None) -> str:
               "spanning trees with loops and held feet as `connect` equalities, soft: solref "
               "(2h, 1), solimp 0.9999; RK4, mujoco.rollout. Cost: wall time of the stepping "
               "loop / steps, the smallest of the repeats, set-up excluded; per simulated "
-              "second = per step / h. Model: bench/legsim_bench/benchmarks/peers/mujoco_hexapod.py.",
+              "second = per step / h. Instructions (at h = 1 ms): valgrind callgrind over one run, "
+              "collecting only inside MuJoCo's mj_step (mujoco.rollout calls it once a step) or "
+              "legsim's robot_step_rk4 (legsim_hexapod_step calls it once a step). Model: bench/legsim_bench/benchmarks/peers/mujoco_hexapod.py.",
               "",
               "| scene | engine | method | h (s) | box (m) | rotation (rad) | rowing (rad) | lengths (m) "
-              "| forces (N) | cost per step (us) | cost per simulated s (ms) |",
-              "|---|---|---|---|---|---|---|---|---|---|---|"]
+              "| forces (N) | cost per step (us) | cost per simulated s (ms) | instructions per step |",
+              "|---|---|---|---|---|---|---|---|---|---|---|---|"]
     for r in rows:
         if not r["ok"]:
             lines.append(f"| {r['scene']} | {r['engine']} | {r['method']} | {r['h']:g} | failed "
-                         f"| {r.get('note', '')} | | | | | |")
+                         f"| {r.get('note', '')} | | | | | | |")
             continue
         errs = " | ".join(f"{r[k]:.2e}" for k in ERRS)
         lines.append(f"| {r['scene']} | {r['engine']} | {r['method']} | {r['h']:g} | {errs} "
-                     f"| {r['per_step_s'] * 1e6:.1f} | {r['per_step_s'] / r['h'] * 1e3:.1f} |")
+                     f"| {r['per_step_s'] * 1e6:.1f} | {r['per_step_s'] / r['h'] * 1e3:.1f} "
+                     f"| {_count(r.get('instructions'))} |")
     return "\n".join(lines) + "\n"
 
 
@@ -105,13 +115,15 @@ def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
     p.add_argument("--repeats", type=int, default=3,
                    help="timing repeats of every engine (the smallest cost is kept)")
     p.add_argument("--scenes", nargs="+", choices=mh.SCENES, default=list(mh.SCENES))
+    p.add_argument("--no-callgrind", action="store_true", help="no instruction counts (valgrind)")
     return p
 
 
 def run(a) -> int:
     if a.repeats < 1:
         raise SystemExit("hexapod-peers: --repeats must be at least 1")
-    print(write(results.output_dir(a), scenes=tuple(a.scenes), repeats=a.repeats))
+    print(write(results.output_dir(a), scenes=tuple(a.scenes), repeats=a.repeats,
+                     callgrind=not a.no_callgrind and shutil.which("valgrind") is not None))
     return 0
 
 

@@ -49,6 +49,7 @@ from __future__ import annotations
 import math
 import time
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -391,3 +392,51 @@ def compare(sc: Scene, ref: HexapodModel, h: float, res=None, *, engine: str = "
             best = out
     best["err"] = errors(best, res, sc.stance)
     return best
+
+
+# ------------------------------------------------------------------ instructions
+def _run_once(engine: str, name: str, h: float) -> None:
+    """One run of a scene (the process callgrind counts)."""
+    ref = HexapodModel.from_toml(default_path())
+    sc = setup(name, ref)
+    if engine == "mujoco":
+        MujocoHexapod(sc, ref, h).simulate()
+    else:
+        legsim_run(sc, h)
+
+
+# legsim_hexapod_step is entered from libffi, which callgrind does not name: count inside the
+# step it calls once a step
+TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step_rk4*"}
+
+
+def instructions_per_step(engine: str, name: str, h: float) -> float:
+    """Instructions per step (valgrind callgrind, collecting only inside mj_step, which
+    mujoco.rollout calls once a step, or inside legsim's robot_step_rk4, which
+    legsim_hexapod_step calls once a step): one run of the scene, set-up and Python outside
+    the count."""
+    import os
+    import re
+    import subprocess
+    import sys
+    import tempfile
+
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "cg.out"
+        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
+               f"--toggle-collect={TOGGLE[engine]}", sys.executable, "-m", __name__, engine, name, repr(h)]
+        for _ in range(2):              # one retry: valgrind's python now and then exits 1
+            run = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ))
+            if run.returncode == 0:
+                break
+        else:
+            raise RuntimeError(f"callgrind of {engine} {name} h={h}: {run.stderr[-2000:]}")
+        text = out.read_text()
+    m = re.search(r"^totals:\s*(\d+)", text, re.M) or re.search(r"^summary:\s*(\d+)", text, re.M)
+    return int(m.group(1)) / int(round(T_END / h))
+
+
+if __name__ == "__main__":
+    import sys
+
+    _run_once(sys.argv[1], sys.argv[2], float(sys.argv[3]))
