@@ -51,6 +51,8 @@ BENCHMARKS = {
     "mcu": ("legsim_bench.benchmarks.mcu_cost", "Cortex-M images under QEMU: flash, RAM, instructions per step"),
     "robot-peers": ("legsim_bench.benchmarks.peers.robot_results",
                     "the two-leg robot in legsim, MuJoCo and Siconos: errors against the bench's reference and cost"),
+    "hexapod-peers": ("legsim_bench.benchmarks.peers.hexapod_results",
+                      "the hexapod in legsim and MuJoCo: errors against the bench's reference and cost"),
 }
 
 
