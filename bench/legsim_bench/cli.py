@@ -10,7 +10,7 @@
                                                 README's main command
     legsim-bench hexapod [--turn R] [--periods N]  the hexapod walking (in process), checked,
                                                 with its plot and 3D animation
-    legsim-bench workprecision|options|stress|mcu   the benchmarks (their own options; results
+    legsim-bench workprecision|options|stress|mcu|robot-peers|hexapod-peers   the benchmarks (their own options; results
                                                 in out/bench-results/, --update-results for
                                                 the committed bench/results/)
 
