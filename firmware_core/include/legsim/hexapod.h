@@ -139,7 +139,7 @@ size_t legsim_hexapod_sim_size(void);
 /* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l) stuck where the pose
  * puts them (on the ground or not: the caller's pose says), the others free, the commands zero.
  * Statuses as legsim_hexapod_statics' (its pose checks, a leg's assembly; LEGSIM_ERR_BAD_INPUT
- * also for a free foot more than 1e-9 m under the ground), LEGSIM_ERR_SINGULAR /
+ * also for a free foot more than 1e-9 m (float: 1e-5 m) under the ground), LEGSIM_ERR_SINGULAR /
  * _NOT_CONVERGED (the rows with the stuck feet cannot be met or solved). *out is written only on
  * LEGSIM_OK. The commands zero, the stuck feet's modes are checked at the first command. */
 legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const legsim_hexapod_desc *h,
@@ -167,7 +167,9 @@ legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double 
 
 /* n_steps (>= 1) steps of h_s (s, in (0, 0.1]). Stops at the first step that fails, the state
  * that of the last step taken: LEGSIM_ERR_SINGULAR (a leg at a dead centre), _NOT_CONVERGED (the
- * projection), _DIVERGED (a non-finite result). */
+ * projection, an impact's contact problem, generalized-alpha's iterations), _DIVERGED (a
+ * non-finite result), _CONTACT (friction making a normal force arbitrary, modes that do not
+ * settle, more than 64 events in a step). */
 legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n_steps);
 
 /* The integrator of the steps from the next on: LEGSIM_INTEGRATOR_RK4 (legsim_hexapod_sim_init's)

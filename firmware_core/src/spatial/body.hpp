@@ -23,6 +23,12 @@ namespace legsim::spatial {
 
 using real = legsim_real;
 
+// A tolerance in double, and its float build's (the round-off of float is 1e-7 where double's
+// is 2e-16: a tolerance tied to round-off is looser there).
+constexpr real by_precision(double in_double, double in_float) {
+  return real(sizeof(real) == sizeof(float) ? in_float : in_double);
+}
+
 constexpr int kBodyDof = 6;     // velocity coordinates per body: v (3), omega (3)
 constexpr int kBodyConfig = 7;  // configuration numbers per body: r (3), quaternion (w, x, y, z)
 

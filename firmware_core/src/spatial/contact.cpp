@@ -83,7 +83,7 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
       scale = std::max(scale, std::abs(A[s * k + j]));
     }
   }
-  if (!dense_solve(s, A, N, real(1e-9) * scale)) return LEGSIM_ERR_CONTACT;
+  if (!dense_solve(s, A, N, by_precision(1e-9, 1e-5) * scale)) return LEGSIM_ERR_CONTACT;
   for (int j = 0; j < s; ++j) {
     for (int k = 0; k < nv; ++k) a[k] += N[j] * x[j][k];
     for (int i = 0; i < n; ++i) mu[idx[i]] += N[j] * m[j][idx[i]];
@@ -144,9 +144,11 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
   real mus[kConeMaxContacts], scale = 0;
   for (int i = 0; i < n; ++i) mus[i] = ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
   for (int c = 0; c < nr; ++c) scale = std::max(scale, std::abs(q0[c]));
-  const real tol = real(1e-9) * (1 + scale);
-  // which stick (on mu_static), then the others' slip on mu_kinetic (at most two passes more)
-  for (int pass = 0; pass < 3; ++pass) {
+  const real tol = by_precision(1e-9, 1e-4) * (1 + scale);
+  // which stick (on mu_static), then the others' slip on mu_kinetic: until the coefficients
+  // are those the solution's modes ask (a foot changes once at most: n + 1 passes)
+  bool settled = false;
+  for (int pass = 0; pass <= n && !settled; ++pass) {
     st = cone_solve(n, W, q0, mus, r, u, report);
     if (st != LEGSIM_OK) return st;
     bool changed = false;
@@ -155,17 +157,24 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
       const real want = slips || ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
       if (want != mus[i]) mus[i] = want, changed = true;
     }
-    if (!changed) break;
+    settled = !changed;
   }
+  if (!settled) return LEGSIM_ERR_CONTACT;
   for (int i = 0; i < n; ++i) {
     const int l = feet[i];
     const uint32_t bit = 1u << l;
     const V3 ut = u[3 * i + 1] * axes[1] + u[3 * i + 2] * axes[2];
+    const V3 rt = r[3 * i + 1] * axes[1] + r[3 * i + 2] * axes[2];
     if (u[3 * i] > tol) {
       hold.stuck &= ~bit;  // its force gone, its point leaving the ground
     } else if (norm(ut) > tol) {
       hold.stuck &= ~bit, hold.sliding |= bit;
       slip_dir[l] = (1 / norm(ut)) * ut;
+    } else if (((slipping >> l) & 1u) && norm(rt) > 0) {
+      // at its cone's edge and leaving it (a located stick to slip), held on mu_kinetic = mu_static
+      // at the edge: it slips, against the ground's force
+      hold.stuck &= ~bit, hold.sliding |= bit;
+      slip_dir[l] = (-1 / norm(rt)) * rt;
     }
   }
   return LEGSIM_OK;
@@ -224,7 +233,7 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
     for (int k = 0; k < nv; ++k) v[k] += r[c] * X[c][k];
   real scale_u = 0;
   for (int c = 0; c < nr; ++c) scale_u = std::max(scale_u, std::abs(u0[c]));
-  const real tol_u = real(1e-8) * (1 + scale_u);
+  const real tol_u = by_precision(1e-8, 1e-4) * (1 + scale_u);
   for (int i = 0; i < n; ++i) {
     const int l = feet[i];
     const uint32_t bit = 1u << l;

@@ -68,9 +68,11 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
 // coupled in), by cone_solve: first on mu_static (which stick), then with mu_kinetic on those that
 // slip (which way: slip_dir, their acceleration's tangential direction). The feet of `slipping`
 // (their force at the mu_static cone's edge and leaving it: a located stick to slip) are on
-// mu_kinetic from the start: the acceleration level alone would keep them at the edge. A foot
-// whose force vanishes and whose point accelerates off the ground is let go.
-// LEGSIM_ERR_NOT_CONVERGED with the contact problem unsolved; else as contact_accelerations.
+// mu_kinetic from the start: the acceleration level alone would keep them at the edge (and one
+// still at the edge, mu_kinetic = mu_static, slips against its force). A foot whose force
+// vanishes and whose point accelerates off the ground is let go. LEGSIM_ERR_NOT_CONVERGED with
+// the contact problem unsolved, LEGSIM_ERR_CONTACT when the modes and the coefficients do not
+// agree within a pass a foot; else as contact_accelerations.
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
                             Row *rows, RobotFactor &F);

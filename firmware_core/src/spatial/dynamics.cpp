@@ -134,7 +134,7 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     }
     real scale = 0;
     for (int i = 0; i < n; ++i) scale = std::max(scale, S[off[i] + i]);
-    if (!envelope_cholesky(n, first, off, S, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
+    if (!envelope_cholesky(n, first, off, S, by_precision(1e-12, 1e-6) * scale)) return LEGSIM_ERR_SINGULAR;
     if (!box) continue;
     // W = L^-1 B: B is zero above the hip's rows, so W is too; B^T S^-1 B = W^T W
     const int h0 = n - nh;
@@ -157,7 +157,7 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
   if (box) {
     real scale = 0;
     for (int i = 0; i < kBodyDof; ++i) scale = std::max(scale, A0[7 * i]);
-    if (!dense_cholesky(kBodyDof, A0, real(1e-12) * scale)) return LEGSIM_ERR_SINGULAR;
+    if (!dense_cholesky(kBodyDof, A0, by_precision(1e-12, 1e-6) * scale)) return LEGSIM_ERR_SINGULAR;
   }
   return LEGSIM_OK;
 }

@@ -41,9 +41,10 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
     real worst = 0;
     for (int i = 0; i < n; ++i) {
       g[idx[i]] = -d.rows_work[idx[i]].phi;
-      worst = std::max(worst, std::abs(g[idx[i]]));
+      const real e = std::abs(g[idx[i]]);
+      if (!(e <= worst)) worst = e;  // a NaN too
     }
-    if (!(worst == worst)) return LEGSIM_ERR_DIVERGED;
+    if (!std::isfinite(worst)) return LEGSIM_ERR_DIVERGED;
     if (worst <= kProjectionTolerance) break;
     if (iterations == kProjectionMaxIterations) return LEGSIM_ERR_NOT_CONVERGED;
     if (!factored) {
@@ -92,7 +93,13 @@ struct Core {
   real acc_aux[kMaxRobotDof], acc_aux_h;
   real N[kMaxLegs];
   FeetHold hold;
-  V3 slip_dir[kMaxLegs];
+  V3 slip_dir[kMaxLegs], slip_ref[kMaxLegs];
+  real slip_stage_min[kMaxLegs];
+  // the report a failed step must leave as it was
+  real actuator_force[kMaxRobotActuators], rowing_torque[kMaxLegs];
+  V3 impulse[kMaxLegs];
+  ConeReport impact, modes;
+  int projection_iterations, impacts;
 };
 void save(const SpatialRobot &robot, const RobotData &d, Core &c) {
   c.t = d.t;
@@ -105,6 +112,13 @@ void save(const SpatialRobot &robot, const RobotData &d, Core &c) {
   std::copy(d.normal_force, d.normal_force + kMaxLegs, c.N);
   c.hold = d.hold;
   std::copy(d.slip_dir, d.slip_dir + kMaxLegs, c.slip_dir);
+  std::copy(d.slip_ref, d.slip_ref + kMaxLegs, c.slip_ref);
+  std::copy(d.slip_stage_min, d.slip_stage_min + kMaxLegs, c.slip_stage_min);
+  std::copy(d.actuator_force, d.actuator_force + kMaxRobotActuators, c.actuator_force);
+  std::copy(d.rowing_torque, d.rowing_torque + kMaxLegs, c.rowing_torque);
+  std::copy(d.impulse, d.impulse + kMaxLegs, c.impulse);
+  c.impact = d.impact, c.modes = d.modes;
+  c.projection_iterations = d.projection_iterations, c.impacts = d.impacts;
 }
 void load(const SpatialRobot &robot, const Core &c, RobotData &d) {
   d.t = c.t;
@@ -117,6 +131,13 @@ void load(const SpatialRobot &robot, const Core &c, RobotData &d) {
   std::copy(c.N, c.N + kMaxLegs, d.normal_force);
   d.hold = c.hold;
   std::copy(c.slip_dir, c.slip_dir + kMaxLegs, d.slip_dir);
+  std::copy(c.slip_ref, c.slip_ref + kMaxLegs, d.slip_ref);
+  std::copy(c.slip_stage_min, c.slip_stage_min + kMaxLegs, d.slip_stage_min);
+  std::copy(c.actuator_force, c.actuator_force + kMaxRobotActuators, d.actuator_force);
+  std::copy(c.rowing_torque, c.rowing_torque + kMaxLegs, d.rowing_torque);
+  std::copy(c.impulse, c.impulse + kMaxLegs, d.impulse);
+  d.impact = c.impact, d.modes = c.modes;
+  d.projection_iterations = c.projection_iterations, d.impacts = c.impacts;
 }
 
 // One RK4 step of H on d in place (d.a must be the accelerations at d's state); d part-way on
@@ -216,11 +237,12 @@ legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
       if (st != LEGSIM_OK) return st;
       real change = 0, size = 1;
       for (int k = 0; k < nv; ++k) {
-        change = std::max(change, std::abs(f[k] - vd1[k]));
+        const real e = std::abs(f[k] - vd1[k]);
+        if (!(e <= change)) change = e;  // a NaN too
         size = std::max(size, std::abs(f[k]));
         vd1[k] = f[k];
       }
-      if (!(change == change)) return LEGSIM_ERR_DIVERGED;
+      if (!std::isfinite(change)) return LEGSIM_ERR_DIVERGED;
       converged = change <= kGalphaTolerance * size;
       if (!converged && it >= 2 && change > real(0.5) * last && d.hold.sliding && pass == 0) break;
       last = change;
@@ -283,10 +305,11 @@ void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, 
 real force_tolerance(const SpatialRobot &robot) {
   real mass = 1;
   for (int b = 0; b < robot.nb; ++b) mass += robot.mass[b];
-  return real(1e-10) * mass;
+  return by_precision(1e-10, 1e-4) * mass;
 }
 real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k) {
-  if (!((d.hold.stuck | d.hold.sliding) >> l & 1u) || (k == 1 && ((d.hold.sliding >> l) & 1u))) return real(1e-12);
+  if (!((d.hold.stuck | d.hold.sliding) >> l & 1u) || (k == 1 && ((d.hold.sliding >> l) & 1u)))
+    return by_precision(1e-12, 1e-5);
   return force_tolerance(robot);
 }
 
@@ -301,6 +324,8 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
     if (st != LEGSIM_OK) return st;
+    for (int k = 0; k < kBodyDof * robot.nb; ++k)
+      if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
     std::copy(d.a, d.a + kBodyDof * robot.nb, d.acc_aux);  // generalized-alpha's history restarts
     d.acc_aux_h = 0;
     if (!d.has_ground) return LEGSIM_OK;
@@ -321,7 +346,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
       command_forces(robot, d.command, d.q, d.v, F, T);
       robot_forces(robot, d.q, d.v, F, T, Q);
-      st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.impact,
+      st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
                          d.rows, d.factor);
       if (st != LEGSIM_OK) return st;
       changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
@@ -399,12 +424,16 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
     for (int l = 0; l < robot.nlegs; ++l) {
       if (robot.leg[l].foot_body < 0 || foot_rows(hold, l)) continue;
       const V3 p = robot_foot_position(robot, l, q);
-      if (dot(p - ground->point, ground->normal) < -real(1e-9)) return LEGSIM_ERR_BAD_INPUT;  // a free foot under it
+      if (dot(p - ground->point, ground->normal) < -by_precision(1e-9, 1e-5))
+        return LEGSIM_ERR_BAD_INPUT;  // a free foot under it
     }
   } else {
     d.ground = {{0, 0, 0}, {0, 0, 1}, 0, 0};
   }
-  for (int l = 0; l < kMaxLegs; ++l) d.slip_dir[l] = d.hold.t1, d.normal_force[l] = 0, d.impulse[l] = {0, 0, 0};
+  for (int l = 0; l < kMaxLegs; ++l) {
+    d.slip_dir[l] = d.slip_ref[l] = d.hold.t1, d.slip_stage_min[l] = kNone;
+    d.normal_force[l] = 0, d.impulse[l] = {0, 0, 0};
+  }
   for (int a = 0; a < kMaxRobotActuators; ++a)
     d.command.actuator_mode[a] = CommandMode::Force, d.command.actuator[a] = d.command.actuator_ff[a] = 0;
   for (int l = 0; l < kMaxLegs; ++l)
@@ -413,7 +442,7 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
   std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
   std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
   d.projection_iterations = d.events = d.impacts = 0;
-  d.impact = {true, ConeMethod::Newton, 0, 0};
+  d.impact = d.modes = {true, ConeMethod::Newton, 0, 0};
   return settle(robot, d);
 }
 
@@ -454,22 +483,22 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
       }
     }
   }
-  const int events_before = d.impacts;
   int events = 0;
   real remaining = h;
   auto fail = [&](legsim_status st) {
     load(robot, start, d);
-    d.impacts = events_before;
     return st;
   };
   for (;;) {
-    save(robot, d, s0);
+    // the part's slip directions (kept below kSlipHold), set before its snapshot: its retakes
+    // start from them
     V3 ref[kMaxLegs];
     for (int l = 0; l < robot.nlegs; ++l) {
       ref[l] = ((d.hold.sliding >> l) & 1u) ? slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]) : V3{0, 0, 0};
-      if ((d.hold.sliding >> l) & 1u) d.slip_dir[l] = ref[l];  // the direction kept below kSlipHold
+      if ((d.hold.sliding >> l) & 1u) d.slip_dir[l] = ref[l];
       d.slip_ref[l] = ref[l], d.slip_stage_min[l] = kNone;
     }
+    save(robot, d, s0);
     real e0[kMaxLegs][2], e1[kMaxLegs][2];
     event_values(robot, d, ref, e0);
     // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
@@ -492,7 +521,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
       }
     if (el < 0) {
       remaining -= part;
-      if (remaining <= real(1e-14) * h) break;
+      if (remaining <= by_precision(1e-14, 1e-6) * h) break;
       continue;
     }
     // locate it: regula falsi (Illinois) on the fraction of the step; then check that no other
@@ -508,7 +537,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
         fhi = e[el][ek];
       }
       int side = 0;
-      for (int it = 0; it < 60 && (hi - lo) * part > real(1e-13) * (1 + part); ++it) {
+      for (int it = 0; it < 60 && (hi - lo) * part > by_precision(1e-13, 1e-6) * (1 + part); ++it) {
         real th = (lo * fhi - hi * flo) / (fhi - flo);
         if (!(th > lo && th < hi)) th = real(0.5) * (lo + hi);
         load(robot, s0, d);
@@ -542,13 +571,14 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
             nl = l, nk = k;
       window = hi;
       if (nl < 0) break;
+      if (guard == 2 * kMaxLegs - 1) return fail(LEGSIM_ERR_CONTACT);  // still one before it: not located
       el = nl, ek = nk;
     }
     st = apply_event(robot, d, el, ek);
     if (st != LEGSIM_OK) return fail(st);
     remaining -= window * part;
     if (++events > kMaxStepEvents) return fail(LEGSIM_ERR_CONTACT);
-    if (remaining <= real(1e-14) * h) break;
+    if (remaining <= by_precision(1e-14, 1e-6) * h) break;
   }
   d.t = start.t + h;
   d.events = events;

@@ -59,8 +59,9 @@ struct RobotData {
   // the last step's report
   int projection_iterations;  // its last position projection's Newton iterations
   int events;                 // contact events located in it
-  int impacts;                // touchdowns among them
+  int impacts;                // touchdowns since data_init
   ConeReport impact;          // the last impact's contact problem
+  ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
   V3 impulse[kMaxLegs];       // N s, world: the ground's on each foot at the last impact
   // work space: the rows at the last evaluation and their factor
   Row rows[kMaxSystemRows], rows_work[kMaxSystemRows];
@@ -68,7 +69,7 @@ struct RobotData {
 };
 
 // The projection's tolerance: every row's |Phi| (m, or a cosine) at most this.
-constexpr real kProjectionTolerance = real(sizeof(real) == sizeof(float) ? 1e-5 : 1e-12);
+constexpr real kProjectionTolerance = by_precision(1e-12, 1e-5);
 constexpr int kProjectionMaxIterations = 8;
 // The most events located in one step: more is a Zeno cascade or modes that do not settle.
 constexpr int kMaxStepEvents = 64;
@@ -76,7 +77,7 @@ constexpr int kMaxStepEvents = 64;
 // fixed-point iterations stop when the acceleration changes by at most this relative to the
 // largest (at least 1 m/s^2, rad/s^2), else LEGSIM_ERR_NOT_CONVERGED after kGalphaMaxIterations.
 constexpr real kGalphaRhoInf = real(0.8);
-constexpr real kGalphaTolerance = real(sizeof(real) == sizeof(float) ? 1e-4 : 1e-8);
+constexpr real kGalphaTolerance = by_precision(1e-8, 1e-4);
 constexpr int kGalphaMaxIterations = 40;
 
 enum class Integrator : uint8_t { Rk4, GeneralizedAlpha };
@@ -85,7 +86,7 @@ enum class Integrator : uint8_t { Rk4, GeneralizedAlpha };
 // ground), the ground (nullptr: none) and zero forces commanded: projected, its modes checked against
 // the cone (a stuck foot pulling or past mu_s N is let go), its accelerations and multipliers.
 // LEGSIM_ERR_BAD_INPUT for a foot mode on a leg without a foot or the robot does not have, a
-// foot both stuck and sliding, a free foot more than 1e-9 m under the ground; LEGSIM_ERR_CONTACT when no modes hold; else as robot_step_rk4.
+// foot both stuck and sliding, a free foot more than 1e-9 m (float: 1e-5 m) under the ground; LEGSIM_ERR_CONTACT when no modes hold; else as robot_step_rk4.
 legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const real *v, const FeetHold &hold,
                               const GroundPlane *ground, RobotData &data);
 
