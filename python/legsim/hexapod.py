@@ -182,9 +182,22 @@ class Hexapod:
         return {"com_m": np.array(out.com_m[:]), "foot_m": np.array([out.foot_m[k][:] for k in range(LEGS)]),
                 "foot_force_n": np.array([out.foot_force_n[k][:] for k in range(LEGS)]),
                 "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
-                "rowing_torque_nm": np.array(out.rowing_torque_nm[:]),
-                "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
                 "rowing_torque_nm": np.array(out.rowing_torque_nm[:]), "margin_m": float(out.margin_m)}
+
+
+def _pairs(x, what: str):
+    """A 6 x 2 table as ctypes (ValueError for another shape: ctypes would fill it with zeros)."""
+    a = np.asarray(x, dtype=float)
+    if a.shape != (LEGS, 2):
+        raise ValueError(f"{what}: 6 x 2 values (one pair per leg), got shape {a.shape}")
+    return ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*row) for row in a.tolist()])
+
+
+def _six(x, what: str):
+    a = np.asarray(x, dtype=float)
+    if a.shape != (LEGS,):
+        raise ValueError(f"{what}: 6 values (one per leg), got shape {a.shape}")
+    return (C.c_double * LEGS)(*a.tolist())
 
 
 def _mask(legs, what: str) -> int:
@@ -213,20 +226,16 @@ class HexapodSim:
 
     def command(self, actuator_force_n, rowing_torque_nm) -> None:
         """Each leg's two actuators' axial forces (N, 6 x 2) and rowing torques (N m, 6)."""
-        f = ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*map(float, row)) for row in actuator_force_n])
-        t = (C.c_double * LEGS)(*map(float, rowing_torque_nm))
+        f, t = _pairs(actuator_force_n, "actuator_force_n"), _six(rowing_torque_nm, "rowing_torque_nm")
         self.library.check(self.library.cdll.legsim_hexapod_command(self._sim, f, t), "legsim_hexapod_command")
 
     def command_pose(self, length_m, rowing_rad, feedforward_n=None, feedforward_nm=None) -> None:
         """The servos' set-points: each leg's two actuator lengths (m, 6 x 2) and rowing angles
         (rad, 6), e.g. a gait's (Hexapod.gait_setpoints), with feed-forward forces (N, 6 x 2) and
         torques (N m, 6) added to the servos' (None: 0). Raises OutOfStrokeError past a stroke."""
-        def pairs(x):
-            return ((C.c_double * 2) * LEGS)(*[(C.c_double * 2)(*map(float, row)) for row in x])
-
-        f, t = pairs(length_m), (C.c_double * LEGS)(*map(float, rowing_rad))
-        ff = None if feedforward_n is None else pairs(feedforward_n)
-        fm = None if feedforward_nm is None else (C.c_double * LEGS)(*map(float, feedforward_nm))
+        f, t = _pairs(length_m, "length_m"), _six(rowing_rad, "rowing_rad")
+        ff = None if feedforward_n is None else _pairs(feedforward_n, "feedforward_n")
+        fm = None if feedforward_nm is None else _six(feedforward_nm, "feedforward_nm")
         self.library.check(self.library.cdll.legsim_hexapod_command_pose(self._sim, f, t, ff, fm),
                            "legsim_hexapod_command_pose")
 

@@ -179,9 +179,32 @@ def test_sim_refuses(hexapod):
         m.step(1, h_s=0.0)
     with pytest.raises(ValueError):
         hexapod.sim(pose, stuck=(6,))
+    with pytest.raises(ValueError):  # five legs' forces: not filled with zeros
+        m.command([[0.0, 0.0]] * 5, [0.0] * 6)
     with pytest.raises(ValueError):
         m.set_integrator("euler")
     with pytest.raises(legsim.BadInputError):  # the C call's own check
         m.library.check(m.library.cdll.legsim_hexapod_set_integrator(m._sim, 2), "legsim_hexapod_set_integrator")
     after = m.state()
     assert all(np.array_equal(np.asarray(before[k]), np.asarray(after[k])) for k in before)
+
+
+@pytest.mark.parametrize("field,value", [("ground_normal", (0.0, 0.0, 0.0)), ("ground_normal", (0.0, 0.0, 2.0)),
+                                         ("mu_kinetic", -0.1), ("mu_static", 0.1),  # below mu_kinetic 0.5
+                                         ("box_mass_kg", float("nan")), ("yoke_mass_kg", 0.0),
+                                         ("rowing_servo_kd_nms_per_rad", -1.0), ("ground_point_m", (0.0, 0.0, float("inf")))])
+def test_a_description_out_of_range_is_refused(field, value):
+    """A description changed past its documented ranges (legsim/hexapod.h) is refused by every
+    call that takes it, not only by the loader."""
+    h = legsim.Hexapod.from_toml(HEXAPOD)
+    pose = h.stand_pose(1.0, ROWING)
+    if isinstance(value, tuple):
+        arr = getattr(h.desc, field)
+        for i, x in enumerate(value):
+            arr[i] = x
+    else:
+        setattr(h.desc, field, value)
+    with pytest.raises(legsim.BadInputError):
+        h.sim(pose, stuck=range(6))
+    with pytest.raises(legsim.BadInputError):
+        h.statics(pose)

@@ -32,11 +32,57 @@ bool finite_within(const double *x, int n, double bound) {
   return true;
 }
 
+bool within(double x, double lo, double hi) { return x >= lo && x <= hi; }  // false for NaN
+
+// The description's numbers in the ranges legsim/hexapod.h states (the loader's, checked again
+// here: a caller may build or change a description), each leg by legsim_model_check.
+legsim_status desc_check(const legsim_hexapod_desc &h) {
+  constexpr double pi = 3.14159265358979323846;
+  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  if (h.gravity_mps2[0] != 0 || h.gravity_mps2[1] != 0 ||
+      !within(h.gravity_mps2[2], -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2))
+    return LEGSIM_ERR_BAD_INPUT;
+  const double masses[2] = {h.box_mass_kg, h.yoke_mass_kg};
+  for (double m : masses)
+    if (!within(m, LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG)) return LEGSIM_ERR_BAD_INPUT;
+  for (int i = 0; i < 3; ++i) {
+    if (!within(h.box_inertia_kgm2[i], LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2) ||
+        !within(h.yoke_inertia_kgm2[i], LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2) ||
+        !within(h.box_size_m[i], LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
+        !within(h.yoke_com_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD) ||
+        !within(h.ground_point_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD))
+      return LEGSIM_ERR_BAD_INPUT;
+  }
+  if (!within(h.hip_offset_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
+      !within(h.bar_radius_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) || !within(h.rowing_gear_ratio, 1, 1e4) ||
+      !within(h.rowing_max_torque_nm, LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N) ||
+      !(h.rowing_stroke_rad[0] > -pi && h.rowing_stroke_rad[0] < 0 && h.rowing_stroke_rad[1] > 0 &&
+        h.rowing_stroke_rad[1] < pi) ||
+      !within(h.rowing_servo_kp_nm_per_rad, 0, LEGSIM_MAX_STIFFNESS_N_PER_M) ||
+      !within(h.rowing_servo_kd_nms_per_rad, 0, LEGSIM_MAX_DAMPING_NS_PER_M))
+    return LEGSIM_ERR_BAD_INPUT;
+  const double *n = h.ground_normal;
+  const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+  if (!(std::abs(len - 1) <= 1e-9) || !(n[2] >= std::cos(LEGSIM_MAX_SLOPE_RAD))) return LEGSIM_ERR_BAD_INPUT;
+  if (!within(h.mu_kinetic, 0, LEGSIM_MAX_FRICTION) || !within(h.mu_static, h.mu_kinetic, LEGSIM_MAX_FRICTION))
+    return LEGSIM_ERR_BAD_INPUT;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    const legsim_hexapod_leg_desc &L = h.leg[l];
+    for (int i = 0; i < 3; ++i)
+      if (!within(L.hip_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
+    if (!within(L.heading_rad, -pi, pi)) return LEGSIM_ERR_BAD_INPUT;
+    if (legsim_model_check(&L.leg, nullptr, 0) != LEGSIM_OK) return LEGSIM_ERR_BAD_INPUT;
+    if (L.leg.gravity_mps2[0] != 0 || L.leg.gravity_mps2[1] != h.gravity_mps2[2]) return LEGSIM_ERR_BAD_INPUT;
+  }
+  return LEGSIM_OK;
+}
+
 // The storage checked and its work part built, the robot lifted from h.
 legsim_status work_begin(const legsim_hexapod_desc &h, void *storage, size_t bytes, HexapodWork *&w) {
   if (bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
     return LEGSIM_ERR_STORAGE;
-  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  const legsim_status st = desc_check(h);
+  if (st != LEGSIM_OK) return st;
   w = new (static_cast<unsigned char *>(storage) + sim_bytes()) HexapodWork;
   return spatial::robot_lift_hexapod(h, w->robot);
 }
