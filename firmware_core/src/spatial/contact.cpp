@@ -49,7 +49,8 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
                                     const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
-                                    real *normal_force, Row *rows, RobotFactor &F, bool factored, bool fixed_dir) {
+                                    real *normal_force, Row *rows, RobotFactor &F, ContactWork &w, bool factored,
+                                    bool fixed_dir) {
   if (!factored) {
     system_rows(robot, hold, q, v, rows);
     const legsim_status st = robot_factor(robot, hold, rows, F);
@@ -66,7 +67,9 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
   int feet[kMaxLegs], s = 0;
   for (int l = 0; l < robot.nlegs; ++l)
     if ((hold.sliding >> l) & 1u) feet[s++] = l;
-  real x[kMaxLegs][kMaxRobotDof], m[kMaxLegs][kMaxSystemRows], col[kMaxRobotDof];
+  real(&x)[kMaxLegs][kMaxRobotDof] = w.x;
+  real(&m)[kMaxLegs][kMaxSystemRows] = w.m;
+  real col[kMaxRobotDof];
   static const real zero_g[kMaxSystemRows] = {};
   for (int j = 0; j < s; ++j) {
     const V3 dir = fixed_dir ? slip_dir[feet[j]] : slip_direction(robot, hold, feet[j], q, v, slip_dir[feet[j]]);
@@ -105,7 +108,7 @@ V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real
 
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
-                            Row *rows, RobotFactor &F) {
+                            Row *rows, RobotFactor &F, ContactWork &w) {
   int feet[kMaxLegs], n = 0;
   for (int l = 0; l < robot.nlegs; ++l)
     if ((hold.stuck >> l) & 1u) feet[n++] = l;
@@ -121,7 +124,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
   // q: the feet's accelerations released; W: their change per newton along each axis (the
   // solve is affine in the applied forces: the differences are exact)
   real W[kConeMaxRows * kConeMaxRows], q0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows];
-  st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Q, a, mu, N, rows, F, true);
+  st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Q, a, mu, N, rows, F, w, true);
   if (st != LEGSIM_OK) return st;
   for (int i = 0; i < n; ++i) {
     const V3 pa = foot_acceleration(robot, feet[i], q, v, a);
@@ -131,7 +134,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
     for (int m = 0; m < 3; ++m) {
       foot_force_column(robot, feet[j], q, axes[m], col);
       for (int k = 0; k < nv; ++k) Qc[k] = Q[k] + col[k];
-      st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Qc, a, mu, N, rows, F, true);
+      st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Qc, a, mu, N, rows, F, w, true);
       if (st != LEGSIM_OK) return st;
       for (int i = 0; i < n; ++i) {
         const V3 pa = foot_acceleration(robot, feet[i], q, v, a);
@@ -182,7 +185,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
 
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
                              real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
-                             RobotFactor &F) {
+                             RobotFactor &F, ContactWork &w) {
   FeetHold none = hold;
   none.stuck = none.sliding = 0;
   system_rows(robot, none, q, v, rows);
@@ -194,7 +197,7 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
     if ((touching >> l) & 1u) feet[n++] = l;
   const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
   // the velocity change per unit impulse along each contact's axes, and the Delassus matrix
-  real X[3 * kMaxLegs][kMaxRobotDof];
+  real(&X)[3 * kMaxLegs][kMaxRobotDof] = w.X;
   real mu_tmp[kMaxSystemRows], col[kMaxRobotDof];
   static const real zero_g[kMaxSystemRows] = {};
   real W[kConeMaxRows * kConeMaxRows], u0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows], mus[kConeMaxContacts];

@@ -12,6 +12,12 @@
 
 namespace legsim::spatial {
 
+// The contact solves' columns, too large for a stack (about 80 KB in double): kept in the data.
+struct ContactWork {
+  real x[kMaxLegs][kMaxRobotDof], m[kMaxLegs][kMaxSystemRows];  // a sliding foot's friction's response
+  real X[3 * kMaxLegs][kMaxRobotDof];  // an impact's velocity change per unit impulse
+};
+
 // The ground: a point on it and its upward unit normal (world, m), friction coefficients.
 struct GroundPlane {
   V3 point, normal;
@@ -44,7 +50,7 @@ constexpr real kSlipHold = real(1e-4);
 // the step would flip it between iterates: that reversal is an event of its own).
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
                                     const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
-                                    real *normal_force, Row *rows, RobotFactor &F, bool factored = false,
+                                    real *normal_force, Row *rows, RobotFactor &F, ContactWork &w, bool factored = false,
                                     bool fixed_dir = false);
 
 // Sliding foot l's friction direction at (q, v) (unit, tangential): its slip velocity's, or
@@ -60,7 +66,7 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 // with cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor.
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
                              real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
-                             RobotFactor &F);
+                             RobotFactor &F, ContactWork &w);
 
 // The modes of the stuck feet decided on their cones at (q, v) under Q: the acceleration-level
 // contact problem of those feet (u = W r + q: r their ground forces, u their points'
@@ -75,6 +81,6 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
 // agree within a pass a foot; else as contact_accelerations.
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
-                            Row *rows, RobotFactor &F);
+                            Row *rows, RobotFactor &F, ContactWork &w);
 
 }  // namespace legsim::spatial

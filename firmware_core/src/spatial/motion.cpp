@@ -83,25 +83,10 @@ legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, c
     std::copy(T, T + robot.nlegs, d.rowing_torque);
   }
   return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, fixed_dir ? fixed_dir : d.slip_dir, q, v, Q, a, mu,
-                               N, d.rows, d.factor, factored, fixed_dir != nullptr);
+                               N, d.rows, d.factor, d.contact_work, factored, fixed_dir != nullptr);
 }
 
-// The state a step starts from and returns to when it fails.
-struct Core {
-  real t;
-  real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], a[kMaxRobotDof], mu[kMaxSystemRows];
-  real acc_aux[kMaxRobotDof], acc_aux_h;
-  real N[kMaxLegs];
-  FeetHold hold;
-  V3 slip_dir[kMaxLegs], slip_ref[kMaxLegs];
-  real slip_stage_min[kMaxLegs];
-  // the report a failed step must leave as it was
-  real actuator_force[kMaxRobotActuators], rowing_torque[kMaxLegs];
-  V3 impulse[kMaxLegs];
-  ConeReport impact, modes;
-  int projection_iterations, impacts;
-};
-void save(const SpatialRobot &robot, const RobotData &d, Core &c) {
+void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   c.t = d.t;
   std::copy(d.q, d.q + kBodyConfig * robot.nb, c.q);
   std::copy(d.v, d.v + kBodyDof * robot.nb, c.v);
@@ -120,7 +105,7 @@ void save(const SpatialRobot &robot, const RobotData &d, Core &c) {
   c.impact = d.impact, c.modes = d.modes;
   c.projection_iterations = d.projection_iterations, c.impacts = d.impacts;
 }
-void load(const SpatialRobot &robot, const Core &c, RobotData &d) {
+void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   d.t = c.t;
   std::copy(c.q, c.q + kBodyConfig * robot.nb, d.q);
   std::copy(c.v, c.v + kBodyDof * robot.nb, d.v);
@@ -347,7 +332,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       command_forces(robot, d.command, d.q, d.v, F, T);
       robot_forces(robot, d.q, d.v, F, T, Q);
       st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
-                         d.rows, d.factor);
+                         d.rows, d.factor, d.contact_work);
       if (st != LEGSIM_OK) return st;
       changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
       if (!changed && !(decide && round == 0)) return LEGSIM_ERR_CONTACT;  // the cone keeps what the multipliers refuse
@@ -376,7 +361,7 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
     const uint32_t touching = d.hold.stuck | d.hold.sliding | bit;
     for (int j = 0; j < robot.nlegs; ++j) d.impulse[j] = {0, 0, 0};
     const legsim_status st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse,
-                                            d.impact, d.rows, d.factor);
+                                            d.impact, d.rows, d.factor, d.contact_work);
     if (st != LEGSIM_OK) return st;
     ++d.impacts;
   }
@@ -464,7 +449,7 @@ legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
 
 legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integrator integrator) {
   if (!(h > 0) || !std::isfinite(h)) return LEGSIM_ERR_BAD_INPUT;
-  Core start, s0;
+  RobotSnapshot &start = d.snapshot[0], &s0 = d.snapshot[1];
   save(robot, d, start);
   // new commands (or a new state) may leave a foot pulling or off its cone: its modes first
   if (d.has_ground) {

@@ -37,6 +37,23 @@ struct RobotCommands {
   real rowing[kMaxLegs], rowing_ff[kMaxLegs];
 };
 
+// What a step starts from and returns to when it fails (and a located event's retakes from the
+// start of their part).
+struct RobotSnapshot {
+  real t;
+  real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], a[kMaxRobotDof], mu[kMaxSystemRows];
+  real acc_aux[kMaxRobotDof], acc_aux_h;
+  real N[kMaxLegs];
+  FeetHold hold;
+  V3 slip_dir[kMaxLegs], slip_ref[kMaxLegs];
+  real slip_stage_min[kMaxLegs];
+  // the report a failed step must leave as it was
+  real actuator_force[kMaxRobotActuators], rowing_torque[kMaxLegs];
+  V3 impulse[kMaxLegs];
+  ConeReport impact, modes;
+  int projection_iterations, impacts;
+};
+
 struct RobotData {
   real t;  // s
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
@@ -63,9 +80,12 @@ struct RobotData {
   ConeReport impact;          // the last impact's contact problem
   ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
   V3 impulse[kMaxLegs];       // N s, world: the ground's on each foot at the last impact
-  // work space: the rows at the last evaluation and their factor
+  // work space: the rows at the last evaluation and their factor, the contact solves' columns,
+  // the step's snapshots (not on the stack: about 110 KB together in double)
   Row rows[kMaxSystemRows], rows_work[kMaxSystemRows];
   RobotFactor factor;
+  ContactWork contact_work;
+  RobotSnapshot snapshot[2];
 };
 
 // The projection's tolerance: every row's |Phi| (m, or a cosine) at most this.
