@@ -20,6 +20,7 @@
 #include "legsim/legsim.h"
 #include "model_toml.hpp"
 #include "scene_text.hpp"
+#include "scene_read.hpp"
 #include "scene_toml.hpp"
 #include "toml_limits.hpp"
 
@@ -42,13 +43,13 @@ constexpr int64_t kMaxSamples = 1000000;    // as the planar scenes (scene_parse
 constexpr const char *kWhich[3] = {"upper", "lower", "rowing"};
 constexpr const char *kFootState[3] = {"free", "stuck", "sliding"};  // legsim_contact_state
 
-struct Fail {
-  std::string message;
-};
-[[noreturn]] void fail(const std::string &m) { throw Fail{m}; }
-
-using Node = const toml::node *;
-using Table = const toml::table *;
+using scene_read::check_keys;
+using scene_read::fail;
+using scene_read::is_number;
+using scene_read::Node;
+using scene_read::real_of;
+using scene_read::Table;
+using Fail = scene_read::SceneError;
 
 std::string dirname_of(const std::string &path) {
   const size_t p = path.find_last_of('/');
@@ -87,27 +88,6 @@ std::string jarr(const double (&v)[N]) {
   std::string o = "[";
   for (size_t i = 0; i < N; ++i) o += (i ? ", " : "") + jnum(v[i]);
   return o + "]";
-}
-
-bool is_number(Node v) { return v && (v->is_integer() || v->is_floating_point()); }
-double real_of(Node v, const std::string &what) {
-  if (!is_number(v)) fail(what + " must be a number");
-  const double x = v->is_integer() ? static_cast<double>(*v->value<int64_t>()) : v->as_floating_point()->get();
-  if (!std::isfinite(x)) fail(what + " is not finite");
-  return x;
-}
-
-void check_keys(Table t, const std::vector<std::string> &allowed, const std::string &where) {
-  for (auto &&kv : *t) {
-    const std::string key(kv.first.str());
-    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-      std::vector<std::string> sorted = allowed;
-      std::sort(sorted.begin(), sorted.end());
-      std::string list;
-      for (size_t i = 0; i < sorted.size(); ++i) list += (i ? ", " : "") + sorted[i];
-      fail(where + "unknown key " + q(key) + " (allowed: " + list + ")");
-    }
-  }
 }
 
 std::string string_of(Node v, const std::string &what) {

@@ -1,6 +1,7 @@
 // Scene files: parsing (toml++) and checking a scene, and binding it to a model.
 // Host only; uses the C API only.
 #include "scene_text.hpp"
+#include "scene_read.hpp"
 #include "scene_toml.hpp"
 #include "toml_limits.hpp"
 
@@ -49,40 +50,14 @@ const EventName kSwitchEvents[] = {{"touchdown", LEGSIM_EVENT_TOUCHDOWN},
                                    {"stick_to_slip", LEGSIM_EVENT_STICK_TO_SLIP},
                                    {"slip_to_stick", LEGSIM_EVENT_SLIP_TO_STICK}};
 
-struct SceneError {
-  std::string message;
-};
-
-[[noreturn]] void fail(const std::string &problem) { throw SceneError{problem}; }
-
-using Node = const toml::node *;
-using Table = const toml::table *;
-
-bool is_number(Node v) { return v && (v->is_integer() || v->is_floating_point()); }
-double to_double(Node v) {
-  if (v->is_integer()) return static_cast<double>(*v->value<int64_t>());
-  return v->as_floating_point()->get();
-}
-
-void check_keys(Table t, const std::vector<std::string> &allowed, const std::string &where) {
-  for (auto &&kv : *t) {
-    const std::string key(kv.first.str());
-    if (std::find(allowed.begin(), allowed.end(), key) == allowed.end()) {
-      std::vector<std::string> sorted = allowed;
-      std::sort(sorted.begin(), sorted.end());
-      std::string list;
-      for (size_t i = 0; i < sorted.size(); ++i) list += (i ? ", " : "") + sorted[i];
-      fail(where + "unknown key " + q(key) + " (allowed: " + list + ")");
-    }
-  }
-}
-
-double real_of(Node v, const std::string &what) {
-  if (!is_number(v)) fail(what + " must be a number");
-  const double x = to_double(v);
-  if (!std::isfinite(x)) fail(what + " is not finite");
-  return x;
-}
+using scene_read::check_keys;
+using scene_read::fail;
+using scene_read::is_number;
+using scene_read::Node;
+using scene_read::real_of;
+using scene_read::SceneError;
+using scene_read::Table;
+using scene_read::to_double;
 
 double get_real(Table t, const std::string &key, const std::string &where, bool required,
                 double dflt) {
