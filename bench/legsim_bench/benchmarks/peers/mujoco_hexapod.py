@@ -57,19 +57,9 @@ from ...reference.hexapod import LEGS, HexapodModel, _rz, quat_matrix
 from ...reference.model import n as _n, u as _u
 from ...scene import find_root
 
-try:
-    import mujoco
-    import mujoco.rollout as _rollout
-
-    VERSION = mujoco.__version__
-except ImportError:  # pragma: no cover - mujoco is in the bench's [peers] extra
-    mujoco = None
-    _rollout = None
-    VERSION = None
-
-METHODS = ("rk4", "euler", "implicitfast")
-_INTEGRATOR = {"rk4": "RK4", "euler": "Euler", "implicitfast": "implicitfast"}
-SOLIMP = (0.9999, 0.9999, 0.001, 0.5, 2.0)
+# MuJoCo (optional: the bench's [peers] extra), its methods and the loop closures' stiffest
+# equality settings: the two-leg robot peer's
+from .mujoco_robot import _INTEGRATOR, METHODS, SOLIMP, VERSION, _rollout, mujoco  # noqa: F401
 ROW = (0.3, 0.1, -0.2, 0.0, 0.25, -0.15)      # scene b's rowing angles (test_hexapod_reference's)
 T_END = 0.2
 SCENES = ("a_six", "b_tripod")
