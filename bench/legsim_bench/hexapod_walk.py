@@ -5,7 +5,8 @@ and the contact's invariants, with its 3D animation and summary plot: `legsim-be
 Checks (the same as tests/python/test_hexapod_walk.py): the box's advance (or turn) against the
 plan (step_length / duty, turn / duty a period) to 10 %, its height within 2 cm of the gait's and
 its tilt under 3 degrees; no foot below the ground (1e-9 m); every foot on the ground pushing and
-every stuck one inside its cone.
+every stuck one inside its cone; every contact problem on the cones solved to the solver's
+tolerance (1e-10), with how many there were and how hard they were.
 """
 from __future__ import annotations
 
@@ -45,6 +46,10 @@ def walk_checks(hexapod, walk: dict, step_length: float, turn: float, periods: i
     rows.append(("a stuck foot's force past its cone (N)", f"{excess:.1e}", excess < 1e-6))
     rows.append(("touchdowns (impacts), events", f"{int(walk['impacts'][-1])}, {int(walk['events'].sum())}",
                  walk["impacts"][-1] >= 3 * periods))
+    c = walk["cone"]
+    rows.append(("contact problems: solved, by sweeps, most iterations, largest residual",
+                 f"{c['solved']}, {c['by_sweeps']}, {c['max_iterations']}, {c['max_residual']:.1e}",
+                 c["max_residual"] <= 1e-10))
     return rows
 
 

@@ -145,7 +145,8 @@ class Hexapod:
             out["body_pose"].append(m.body_poses())
             out["events"].append(events)
 
-        sample(m.state(), sp["foot_box_m"])
+        st = m.state()
+        sample(st, sp["foot_box_m"])
         for i in range(n):
             sp = self.gait_setpoints((i + 1) * float(h_s), **gait)
             command(sp)
@@ -155,7 +156,9 @@ class Hexapod:
             if (i + 1) % every == 0 or i + 1 == n:
                 sample(st, sp["foot_box_m"])
                 events = 0
-        return {k: np.array(v) for k, v in out.items()}
+        res = {k: np.array(v) for k, v in out.items()}
+        res["cone"] = st["cone"]
+        return res
 
     def sim(self, pose: dict, stuck=range(LEGS), integrator: str = "rk4") -> "HexapodSim":
         """The robot moving from ``pose`` (as statics'), at rest, the feet of ``stuck`` (leg
@@ -267,7 +270,8 @@ class HexapodSim:
         rowing_rad (6), length_m (6 x 2), foot_m (6 x 3, world), foot_force_n (6 x 3: the ground's
         on each foot), actuator_force_n (6 x 2), rowing_torque_nm (6), foot_state (6: "free", "stuck"
         or "sliding"), kinetic_energy_j, events (located
-        in the last step), impacts (touchdowns since the start)."""
+        in the last step), impacts (touchdowns since the start), cone (the contact problems on the
+        cones since the start: solved, by_sweeps, max_iterations, max_residual)."""
         out = self.library.HexapodState()
         self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
                            "legsim_hexapod_get_state")
@@ -280,4 +284,6 @@ class HexapodSim:
                 "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
                 "rowing_torque_nm": np.array(out.rowing_torque_nm[:]),
                 "foot_state": [_FOOT_STATES[out.foot_state[k]] for k in range(LEGS)],
-                "kinetic_energy_j": out.kinetic_energy_j, "events": out.events, "impacts": out.impacts}
+                "kinetic_energy_j": out.kinetic_energy_j, "events": out.events, "impacts": out.impacts,
+                "cone": {"solved": out.cone_solved, "by_sweeps": out.cone_by_sweeps,
+                         "max_iterations": out.cone_max_iterations, "max_residual": out.cone_max_residual}}

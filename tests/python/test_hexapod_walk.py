@@ -9,7 +9,8 @@ against the gait's own plan and the invariants of contact:
   place;
 - throughout: no foot below the ground (1e-9 m), every foot on the ground pushes and a stuck one
   stays inside its cone, the two tripods alternate (each foot free in each period, the tripods'
-  feet never free together), every touchdown an impact.
+  feet never free together), every touchdown an impact, every contact problem on the cones
+  solved to the solver's tolerance (1e-10).
 """
 from __future__ import annotations
 
@@ -61,6 +62,9 @@ def test_walks_straight(hexapod, integrator):
     assert np.degrees(np.abs(yaw).max()) < 1 and np.degrees(tilt.max()) < 3
     assert w["impacts"][-1] >= 6  # at least one touchdown per swing
     contact_invariants(hexapod, w)
+    cone = w["cone"]
+    print(f"  the contact problems on the cones: {cone}")
+    assert cone["solved"] >= w["impacts"][-1] and cone["max_residual"] <= 1e-10
 
 
 def test_turns_on_the_spot(hexapod):

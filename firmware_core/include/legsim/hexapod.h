@@ -192,6 +192,12 @@ typedef struct legsim_hexapod_state {
   double kinetic_energy_j;
   int32_t events;                                /* contact events located in the last step */
   int32_t impacts;                               /* touchdowns since the start */
+  /* the contact problems on the cones since the start (each impact's, each decision of the stuck
+   * feet's modes): how many, how many the projected Gauss-Seidel fallback finished, the most
+   * iterations and the largest residual (the natural map's, / (1 + |q|)); every one converged
+   * (one that does not fails its step with LEGSIM_ERR_NOT_CONVERGED) */
+  int32_t cone_solved, cone_by_sweeps, cone_max_iterations;
+  double cone_max_residual;
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

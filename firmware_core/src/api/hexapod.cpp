@@ -401,6 +401,8 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
   r.kinetic_energy_j = spatial::robot_kinetic_energy(R, d.v);
   r.events = d.events;
   r.impacts = d.impacts;
+  r.cone_solved = d.cone_stats.solved, r.cone_by_sweeps = d.cone_stats.by_sweeps;
+  r.cone_max_iterations = d.cone_stats.max_iterations, r.cone_max_residual = d.cone_stats.max_residual;
   *out = r;
   return LEGSIM_OK;
 }

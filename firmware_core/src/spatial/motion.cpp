@@ -102,7 +102,7 @@ void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   std::copy(d.actuator_force, d.actuator_force + kMaxRobotActuators, c.actuator_force);
   std::copy(d.rowing_torque, d.rowing_torque + kMaxLegs, c.rowing_torque);
   std::copy(d.impulse, d.impulse + kMaxLegs, c.impulse);
-  c.impact = d.impact, c.modes = d.modes;
+  c.impact = d.impact, c.modes = d.modes, c.cone_stats = d.cone_stats;
   c.projection_iterations = d.projection_iterations, c.impacts = d.impacts;
 }
 void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
@@ -121,7 +121,7 @@ void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   std::copy(c.actuator_force, c.actuator_force + kMaxRobotActuators, d.actuator_force);
   std::copy(c.rowing_torque, c.rowing_torque + kMaxLegs, d.rowing_torque);
   std::copy(c.impulse, c.impulse + kMaxLegs, d.impulse);
-  d.impact = c.impact, d.modes = c.modes;
+  d.impact = c.impact, d.modes = c.modes, d.cone_stats = c.cone_stats;
   d.projection_iterations = c.projection_iterations, d.impacts = c.impacts;
 }
 
@@ -298,6 +298,13 @@ real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k
   return force_tolerance(robot);
 }
 
+void tally(ConeStats &s, const ConeReport &r) {
+  ++s.solved;
+  s.by_sweeps += r.method == ConeMethod::Sweeps ? 1 : 0;
+  s.max_iterations = std::max(s.max_iterations, r.iterations);
+  s.max_residual = std::max(s.max_residual, r.residual);
+}
+
 // The modes checked against the cone at d's state (after an event or at the start): when a stuck
 // foot pulls or its force leaves its mu_s cone, the stuck feet's modes are decided on their cones
 // at once (contact_modes: stick, slip and which way, or leave); a sliding foot pulling is let go;
@@ -334,6 +341,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
                          d.rows, d.factor, d.contact_work);
       if (st != LEGSIM_OK) return st;
+      if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
       changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
       if (!changed && !(decide && round == 0)) return LEGSIM_ERR_CONTACT;  // the cone keeps what the multipliers refuse
     }
@@ -364,6 +372,7 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
                                             d.impact, d.rows, d.factor, d.contact_work);
     if (st != LEGSIM_OK) return st;
     ++d.impacts;
+    tally(d.cone_stats, d.impact);
   }
   return settle(robot, d);
 }
@@ -428,6 +437,7 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
   std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
   d.projection_iterations = d.events = d.impacts = 0;
   d.impact = d.modes = {true, ConeMethod::Newton, 0, 0};
+  d.cone_stats = {0, 0, 0, 0};
   return settle(robot, d);
 }
 

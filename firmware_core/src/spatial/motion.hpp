@@ -37,6 +37,14 @@ struct RobotCommands {
   real rowing[kMaxLegs], rowing_ff[kMaxLegs];
 };
 
+// The contact problems solved since data_init (each impact's, each decision of the stuck feet's
+// modes): how many, how many the projected Gauss-Seidel fallback finished, the most iterations
+// (Newton's plus sweeps) and the largest residual (friction_cone.hpp's natural map).
+struct ConeStats {
+  int solved, by_sweeps, max_iterations;
+  real max_residual;
+};
+
 // What a step starts from and returns to when it fails (and a located event's retakes from the
 // start of their part).
 struct RobotSnapshot {
@@ -51,6 +59,7 @@ struct RobotSnapshot {
   real actuator_force[kMaxRobotActuators], rowing_torque[kMaxLegs];
   V3 impulse[kMaxLegs];
   ConeReport impact, modes;
+  ConeStats cone_stats;
   int projection_iterations, impacts;
 };
 
@@ -79,6 +88,7 @@ struct RobotData {
   int impacts;                // touchdowns since data_init
   ConeReport impact;          // the last impact's contact problem
   ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
+  ConeStats cone_stats;       // every contact problem's since data_init
   V3 impulse[kMaxLegs];       // N s, world: the ground's on each foot at the last impact
   // work space: the rows at the last evaluation and their factor, the contact solves' columns,
   // the step's snapshots (not on the stack: about 110 KB together in double)
