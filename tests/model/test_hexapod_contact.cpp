@@ -7,7 +7,10 @@
 //   is inside its static cone;
 // - the friction's work is the energy lost: the robot's energy (kinetic, gravity's, less the
 //   commands' work) falls by the integral of the sliding feet's friction power, to the
-//   quadrature's error.
+//   quadrature's error;
+// - on frictionless ground (mu 0) the feet slide without loss: with no impact the energy holds at
+//   the integrator's order (RK4 4, generalized-alpha 2), and the horizontal momentum, which no
+//   force changes there, stays to round-off.
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
 #include <cmath>
 #include <cstdio>
@@ -107,8 +110,71 @@ void test_feet_slip_on_a_slippery_ground(void) {
   TEST_ASSERT_TRUE(std::fabs(lost + work) < 1e-6 * lost);  // the trapezoid rule's error
 }
 
+void frictionless_ground_keeps_energy(Integrator integrator, double ratio_lo, double ratio_hi, double at_1ms) {
+  // The stand on six feet on ice, sliding forward and turning as one body, under the stand's
+  // statics forces less 20 N on every lower actuator: the knees give, the feet slide out.
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  static RobotStatics st;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_statics(R, s.q, 0x3F, nullptr, st));
+  const V3 foot0 = robot_foot_position(R, 0, s.q);
+  const GroundPlane g = {{0, 0, foot0.z}, {0, 0, 1}, 0.0, 0.0};
+  double dE[2], dp[2];
+  int impacts = 0;
+  for (int run = 0; run < 2; ++run) {
+    const double h = run == 0 ? 2e-3 : 1e-3;
+    static double q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof];
+    static const double zero[3 * LEGSIM_MAX_BODIES] = {};
+    const double *qs[6], *vs[6];
+    double psi[6], psid[6] = {0};
+    for (int l = 0; l < 6; ++l) qs[l] = s.leg_q, vs[l] = zero, psi[l] = robot_rowing_angle(R, l, s.q);
+    const double box_q[7] = {0, 0, 0, 1, 0, 0, 0}, box_v[6] = {0.3, 0.1, 0, 0, 0, 0.5};
+    robot_state(R, box_q, box_v, qs, vs, psi, psid, q, v);
+    FeetHold hold;
+    hold.stuck = 0, hold.sliding = 0x3F;
+    for (int l = 0; l < 6; ++l) hold.anchor[l] = robot_foot_position(R, l, q);
+    auto d = std::make_unique<RobotData>();
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold, &g, *d));
+    for (int a = 0; a < R.na; ++a) d->command.actuator[a] = st.actuator_force[a] - (a % 2 ? 20.0 : 0.0);
+    for (int l = 0; l < R.nlegs; ++l) d->command.rowing[l] = st.rowing_torque[l];
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
+    TEST_ASSERT_EQUAL_INT(0x3F, int(d->hold.sliding));  // no foot sticks on ice
+    const double E0 = energy(R, *d);
+    V3 p0 = {0, 0, 0};
+    for (int b = 0; b < R.nb; ++b) p0 = p0 + R.mass[b] * V3{d->v[kBodyDof * b], d->v[kBodyDof * b + 1], 0};
+    double E_worst = 0, p_worst = 0;
+    for (int n = 0; n < int(std::lround(0.2 / h)); ++n) {
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, *d, h, integrator));
+      E_worst = std::fmax(E_worst, std::fabs(energy(R, *d) - E0));
+      V3 p = {0, 0, 0};
+      for (int b = 0; b < R.nb; ++b) p = p + R.mass[b] * V3{d->v[kBodyDof * b], d->v[kBodyDof * b + 1], 0};
+      p_worst = std::fmax(p_worst, norm(p - p0));
+    }
+    impacts += d->impacts;
+    TEST_ASSERT_EQUAL_INT(0x3F, int(d->hold.sliding));  // on the ice throughout
+    dE[run] = E_worst, dp[run] = p_worst;
+    V3 p, pv;
+    foot_motion(R, 0, d->q, d->v, p, pv);
+    printf("%sice, h = %.0e s: %d impacts, energy off by at most %.2e J, horizontal momentum %.1e kg m/s, feet "
+           "sliding 0x%02x, foot 0 at %.2f m/s, box down %.4f m\n",
+           integrator == Integrator::Rk4 ? "" : "generalized-alpha: ", h, d->impacts, E_worst, p_worst,
+           int(d->hold.sliding), norm(pv), s.q[2] - d->q[2]);
+  }
+  printf("ice: energy error ratio over a halved step %.1f\n", dE[0] / dE[1]);
+  TEST_ASSERT_EQUAL_INT(0, impacts);
+  TEST_ASSERT_TRUE(dp[0] < 1e-12 * 50 && dp[1] < 1e-12 * 50);  // of about 50 kg m/s
+  TEST_ASSERT_TRUE(dE[1] < at_1ms);
+  TEST_ASSERT_TRUE(dE[0] / dE[1] > ratio_lo && dE[0] / dE[1] < ratio_hi);
+}
+void test_frictionless_ground_keeps_energy(void) { frictionless_ground_keeps_energy(Integrator::Rk4, 12, 20, 1e-6); }
+void test_frictionless_ground_keeps_energy_galpha(void) {
+  frictionless_ground_keeps_energy(Integrator::GeneralizedAlpha, 3, 5, 1e-2);
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_feet_slip_on_a_slippery_ground);
+  RUN_TEST(test_frictionless_ground_keeps_energy);
+  RUN_TEST(test_frictionless_ground_keeps_energy_galpha);
   return UNITY_END();
 }
