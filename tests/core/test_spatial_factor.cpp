@@ -5,7 +5,7 @@
 // sliding and stuck, the same leg with its joints in another order, and six legs on a free box
 // with stuck, sliding and free feet. Each leg's layout (robot_lift's) holds each of its rows
 // once, its foot's held ones and, on a free box, its hip's last.
-#include <Eigen/Dense>
+
 #include <cmath>
 #include <cstdio>
 #include <cstring>
@@ -13,6 +13,7 @@
 #include "legsim/legsim.h"
 #include "legsim/models.h"
 #include "spatial/dynamics.hpp"
+#include "spatial_kkt.hpp"
 #include "unity.h"
 
 void setUp(void) {}
@@ -20,7 +21,6 @@ void tearDown(void) {}
 
 namespace {
 using namespace legsim::spatial;
-using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 alignas(16) unsigned char storage[1 << 20];
@@ -67,26 +67,10 @@ void check_against_dense(const SpatialRobot &R, const double *q, const int *mode
   for (int i = 0; i < m; ++i) g[idx[i]] = std::cos(1.3 * i);
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_factor(R, hold, rows, F));
   robot_solve(R, F, f, g, x, mu);
-  MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
   VectorXd rhs(nv + m);
-  for (int b = 0; b < R.nb; ++b) {
-    const double I[3] = {R.inertia[b].x, R.inertia[b].y, R.inertia[b].z};
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = R.mass[b];
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
-  }
   for (int k = 0; k < nv; ++k) rhs[k] = f[k];
-  for (int i = 0; i < m; ++i) {
-    const int r = idx[i];
-    const int ba = r < R.m ? R.row_body[r][0] : R.leg[(r - R.m) / 3].foot_body;
-    const int bb = r < R.m ? R.row_body[r][1] : -1;
-    for (int k = 0; k < kBodyDof; ++k) {
-      K(nv + i, kBodyDof * ba + k) += rows[r].ja[k];
-      if (bb >= 0) K(nv + i, kBodyDof * bb + k) += rows[r].jb[k];
-    }
-    rhs[nv + i] = g[r];
-  }
-  K.topRightCorner(nv, m) = K.bottomLeftCorner(m, nv).transpose();
-  const VectorXd y = K.fullPivLu().solve(rhs);
+  for (int i = 0; i < m; ++i) rhs[nv + i] = g[idx[i]];
+  const VectorXd y = spatial_kkt::matrix(R, rows, idx, m).fullPivLu().solve(rhs);
   double dx = 0, sx = 0, dl = 0, sl = 0;
   for (int k = 0; k < nv; ++k) dx = std::fmax(dx, std::fabs(x[k] - y[k])), sx = std::fmax(sx, std::fabs(y[k]));
   for (int i = 0; i < m; ++i)

@@ -23,6 +23,7 @@
 #include "legsim/legsim.h"
 #include "legsim/models.h"
 #include "spatial/robot.hpp"
+#include "spatial_kkt.hpp"
 #include "unity.h"
 
 void setUp(void) {}
@@ -80,19 +81,7 @@ void leg_state(const SpatialRobot &leg, const double *qp, const double *qdp, dou
 }
 void leg_rows(const SpatialRobot &leg, const double *q, const double *v, Row *rows) { robot_rows(leg, q, v, rows); }
 
-// J (m x 6 nb) from the rows.
-MatrixXd jacobian(const SpatialRobot &leg, const Row *rows) {
-  MatrixXd J = MatrixXd::Zero(leg.m, kBodyDof * leg.nb);
-  for (int k = 0; k < leg.nj; ++k) {
-    const LegJoint &j = leg.joint[k];
-    for (int r = j.row; r < j.row + j.nrows; ++r)
-      for (int i = 0; i < kBodyDof; ++i) {
-        J(r, kBodyDof * j.a + i) += rows[r].ja[i];
-        if (j.b >= 0) J(r, kBodyDof * j.b + i) += rows[r].jb[i];
-      }
-  }
-  return J;
-}
+using spatial_kkt::jacobian;
 // [M J^T; J 0] [a; lambda] = [Q; gamma] at (q, v) with Q from robot_forces.
 VectorXd accelerations(const SpatialRobot &robot, const double *q, const double *v, const double *force_n,
                        const double *rowing_nm) {
@@ -101,19 +90,10 @@ VectorXd accelerations(const SpatialRobot &robot, const double *q, const double 
   robot_rows(robot, q, v, rows);
   robot_forces(robot, q, v, force_n, rowing_nm, Q);
   const int nv = kBodyDof * robot.nb, m = robot.m;
-  MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
   VectorXd rhs = VectorXd::Zero(nv + m);
-  for (int b = 0; b < robot.nb; ++b) {
-    const double I[3] = {robot.inertia[b].x, robot.inertia[b].y, robot.inertia[b].z};
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = robot.mass[b];
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
-  }
   for (int i = 0; i < nv; ++i) rhs[i] = Q[i];
-  const MatrixXd J = jacobian(robot, rows);
-  K.topRightCorner(nv, m) = J.transpose();
-  K.bottomLeftCorner(m, nv) = J;
   for (int r = 0; r < m; ++r) rhs[nv + r] = rows[r].gamma;
-  return K.fullPivLu().solve(rhs);
+  return spatial_kkt::matrix(robot, rows).fullPivLu().solve(rhs);
 }
 
 // The largest difference between the spatial accelerations x of the one leg on its yoke at
@@ -197,14 +177,11 @@ void test_dynamics_is_the_planar_leg_lifted(void) {
   leg_state(leg, p.q, p.qd, psi, 0.0, q, v);
   leg_rows(leg, q, v, rows);
   // [M J^T; J 0] [a; lambda] = [Q; gamma]: Q the weights and the gyroscopic forces
-  MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
+  const MatrixXd K = spatial_kkt::matrix(leg, rows);
   VectorXd rhs = VectorXd::Zero(nv + m);
-  const MatrixXd J = jacobian(leg, rows);
   for (int b = 0; b < leg.nb; ++b) {
     const double I[3] = {leg.inertia[b].x, leg.inertia[b].y, leg.inertia[b].z};
     const double *w = v + kBodyDof * b + 3;
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = leg.mass[b];
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
     rhs[kBodyDof * b + 2] = leg.mass[b] * leg.gravity.z;
     // -omega x (I omega)
     const double Iw[3] = {I[0] * w[0], I[1] * w[1], I[2] * w[2]};
@@ -212,8 +189,6 @@ void test_dynamics_is_the_planar_leg_lifted(void) {
     rhs[kBodyDof * b + 4] = -(w[2] * Iw[0] - w[0] * Iw[2]);
     rhs[kBodyDof * b + 5] = -(w[0] * Iw[1] - w[1] * Iw[0]);
   }
-  K.topRightCorner(nv, m) = J.transpose();
-  K.bottomLeftCorner(m, nv) = J;
   for (int r = 0; r < m; ++r) rhs[nv + r] = rows[r].gamma;
   const VectorXd x = K.fullPivLu().solve(rhs);
   // the planar accelerations lifted: linear along the plane's axes, angular about its normal
@@ -393,19 +368,10 @@ void test_hexapod_falls_freely(void) {
   const double box_q[7] = {0.1, 0.2, 0.8, tilt.w, tilt.x, tilt.y, tilt.z}, box_v[6] = {0, 0, 0, 0, 0, 0};
   hexapod_state(robot, p, false, box_q, box_v, q, v);
   robot_rows(robot, q, v, rows);
-  MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
   VectorXd rhs = VectorXd::Zero(nv + m);
-  const MatrixXd J = jacobian(robot, rows);
-  for (int b = 0; b < robot.nb; ++b) {
-    const double I[3] = {robot.inertia[b].x, robot.inertia[b].y, robot.inertia[b].z};
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = robot.mass[b];
-    for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
-    rhs[kBodyDof * b + 2] = robot.mass[b] * robot.gravity.z;
-  }
-  K.topRightCorner(nv, m) = J.transpose();
-  K.bottomLeftCorner(m, nv) = J;
+  for (int b = 0; b < robot.nb; ++b) rhs[kBodyDof * b + 2] = robot.mass[b] * robot.gravity.z;
   for (int r = 0; r < m; ++r) rhs[nv + r] = rows[r].gamma;
-  const VectorXd x = K.fullPivLu().solve(rhs);
+  const VectorXd x = spatial_kkt::matrix(robot, rows).fullPivLu().solve(rhs);
   double worst = 0;
   for (int b = 0; b < robot.nb; ++b)
     for (int i = 0; i < 6; ++i) worst = std::fmax(worst, std::fabs(x[kBodyDof * b + i] - (i == 2 ? robot.gravity.z : 0.0)));

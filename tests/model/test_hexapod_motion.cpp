@@ -14,13 +14,13 @@
 // - with generalized-alpha: statics is rest, Fig. 7 at order 2, the drop's invariants;
 // - bad input refused, data unchanged.
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
-#include <Eigen/Dense>
 #include <cmath>
 #include <cstdio>
 #include <cstring>
 #include <memory>
 
 #include "hexapod_standing.hpp"
+#include "spatial_kkt.hpp"
 #include "spatial/motion.hpp"
 #include "spatial/statics.hpp"
 
@@ -29,7 +29,6 @@ void tearDown(void) {}
 
 namespace {
 using namespace legsim::spatial;
-using Eigen::MatrixXd;
 using Eigen::VectorXd;
 
 constexpr uint32_t kTripod = 0x15;  // legs 0, 2, 4
@@ -123,26 +122,10 @@ void test_solve_is_the_dense_kkt(void) {
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_accelerations(R, hold, q, v, Q, a, mu, rows, F));
     int idx[kMaxSystemRows];
     const int m = used(R, stuck, idx), nv = kBodyDof * R.nb;
-    MatrixXd K = MatrixXd::Zero(nv + m, nv + m);
-    VectorXd rhs = VectorXd::Zero(nv + m);
-    for (int b = 0; b < R.nb; ++b) {
-      const double I[3] = {R.inertia[b].x, R.inertia[b].y, R.inertia[b].z};
-      for (int i = 0; i < 3; ++i) K(kBodyDof * b + i, kBodyDof * b + i) = R.mass[b];
-      for (int i = 0; i < 3; ++i) K(kBodyDof * b + 3 + i, kBodyDof * b + 3 + i) = I[i];
-    }
+    VectorXd rhs(nv + m);
     for (int i = 0; i < nv; ++i) rhs[i] = Q[i];
-    for (int i = 0; i < m; ++i) {
-      const int r = idx[i];
-      const int ba = r < R.m ? R.row_body[r][0] : R.leg[(r - R.m) / 3].foot_body;
-      const int bb = r < R.m ? R.row_body[r][1] : -1;
-      for (int k = 0; k < kBodyDof; ++k) {
-        K(nv + i, kBodyDof * ba + k) += rows[r].ja[k];
-        if (bb >= 0) K(nv + i, kBodyDof * bb + k) += rows[r].jb[k];
-      }
-      rhs[nv + i] = rows[r].gamma;
-    }
-    K.topRightCorner(nv, m) = K.bottomLeftCorner(m, nv).transpose();
-    const VectorXd x = K.fullPivLu().solve(rhs);
+    for (int i = 0; i < m; ++i) rhs[nv + i] = rows[idx[i]].gamma;
+    const VectorXd x = spatial_kkt::matrix(R, rows, idx, m).fullPivLu().solve(rhs);
     double da = 0, sa = 0, dl = 0, sl = 0;
     for (int k = 0; k < nv; ++k) da = std::fmax(da, std::fabs(a[k] - x[k])), sa = std::fmax(sa, std::fabs(x[k]));
     for (int i = 0; i < m; ++i)
