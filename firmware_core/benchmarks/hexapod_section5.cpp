@@ -4,8 +4,8 @@
 // moved along its hip's heading on the ground: per foot distance from the hip axis, the ground
 // reaction of each stance foot, leg 1's actuator forces and rowing torque (robot_statics), the
 // closed form of the tripod's vertical reactions (the centre of mass in the support triangle)
-// beside them, and the stability margin. The other two stance feet stay where the stand puts
-// them; leg 1's lengths come from its inverse kinematics (legsim_assemble_foot).
+// beside them, and the stability margin: legsim_hexapod_reaction_sweep (legsim/hexapod.h), the
+// sweep users call, with the closed form computed here from its centre of mass and feet.
 //
 //   build/host/firmware_core/benchmarks/hexapod_section5 [POINTS] [CHUNK/CHUNKS] > part.csv
 //
@@ -18,17 +18,13 @@
 #include <cstdio>
 #include <cstdlib>
 #include <memory>
+#include <vector>
 
-#include "legsim/legsim.h"
+#include "legsim/hexapod.h"
 #include "model_toml.hpp"
-#include "spatial/gait.hpp"
-#include "spatial/robot.hpp"
-#include "spatial/statics.hpp"
-
-using namespace legsim::spatial;
 
 namespace {
-alignas(16) unsigned char storage[1 << 20];
+alignas(LEGSIM_STORAGE_ALIGN) unsigned char storage[1 << 20];
 constexpr int kTripod[3] = {0, 2, 4};
 constexpr double kLo = 0.40, kHi = 0.62, kHeight = 1.0;  // m
 }  // namespace
@@ -47,66 +43,43 @@ int main(int argc, char **argv) {
     std::fprintf(stderr, "%s\n", msg);
     return 2;
   }
-  static SpatialRobot robot;
-  if (robot_lift_hexapod(*h, robot) != LEGSIM_OK) return 2;
-  // the planar leg: its stand, and a sim for leg 1's inverse kinematics
-  legsim_options opt = legsim_default_options();
-  legsim_sim *sim = nullptr;
-  if (legsim_init(storage, sizeof storage, &h->leg[0].leg, &opt, &sim) != LEGSIM_OK ||
-      legsim_assemble_pose(sim, 0) != LEGSIM_OK)
-    return 2;
-  static double q_stand[3 * LEGSIM_MAX_BODIES], q_leg1[3 * LEGSIM_MAX_BODIES], zero[3 * LEGSIM_MAX_BODIES];
-  legsim_get_q(sim, q_stand);
-  const double box_q[7] = {0, 0, kHeight, 1, 0, 0, 0}, box_v[6] = {0, 0, 0, 0, 0, 0};
+  if (sizeof storage < legsim_hexapod_storage_size()) return 2;
+  const legsim_hexapod_sweep sweep = {0, 1u << 0 | 1u << 2 | 1u << 4, kHeight, {kLo, kHi}, points, {0, 0}, 1};
+  const int first = (chunk - 1) * points / chunks, last = chunk * points / chunks;
   std::printf("index,foot_distance_m,status,leg1_fz_n,leg1_fx_n,leg1_fy_n,leg3_fz_n,leg5_fz_n,closed_form_leg1_fz_n,"
               "upper_force_n,lower_force_n,rowing_torque_nm,upper_length_m,lower_length_m,margin_m\n");
+  if (last == first) return 0;
+  std::vector<legsim_hexapod_sweep_point> out(last - first);
+  const legsim_status st =
+      legsim_hexapod_reaction_sweep(h.get(), &sweep, first, last - first, storage, sizeof storage, out.data());
+  if (st != LEGSIM_OK) {
+    std::fprintf(stderr, "legsim_hexapod_reaction_sweep: %s\n", legsim_status_str(st));
+    return 2;
+  }
   bool agree = true;
-  const int first = (chunk - 1) * points / chunks, last = chunk * points / chunks;
-  for (int i = first; i < last; ++i) {
-    const double rho = kLo + (kHi - kLo) * i / (points - 1);
-    const RobotLeg &L = robot.leg[0];
-    const V3 foot = {L.hip.x + rho * std::cos(L.yaw), L.hip.y + rho * std::sin(L.yaw), -kHeight};
-    double psi0, xy[2];
-    leg_plane_target(robot, 0, foot, psi0, xy);
-    legsim_assemble_pose(sim, 0);  // from the stand's branch
-    legsim_status st = legsim_assemble_foot(sim, xy);
-    double len[2] = {NAN, NAN};
-    if (st == LEGSIM_OK) {
-      legsim_get_q(sim, q_leg1);
-      legsim_actuator_lengths(sim, len, nullptr);
-    }
-    static double q[kBodyConfig * kMaxRobotBodies], v[kBodyDof * kMaxRobotBodies];
-    static RobotStatics s;
-    if (st == LEGSIM_OK) {
-      const double *qs[6], *vs[6];
-      double psi[6] = {psi0, 0, 0, 0, 0, 0}, psid[6] = {0};
-      for (int l = 0; l < 6; ++l) qs[l] = l == 0 ? q_leg1 : q_stand, vs[l] = zero;
-      robot_state(robot, box_q, box_v, qs, vs, psi, psid, q, v);
-      st = robot_statics(robot, q, 1u << 0 | 1u << 2 | 1u << 4, nullptr, s);
-    }
-    if (st != LEGSIM_OK) {
-      std::printf("%d,%.6f,%s,,,,,,,,,,,,\n", i, rho, legsim_status_str(st));
+  for (const legsim_hexapod_sweep_point &p : out) {
+    if (p.status != LEGSIM_OK) {
+      std::printf("%d,%.6f,%s,,,,,,,,,,,,\n", p.index, p.distance_m, legsim_status_str(p.status));
       continue;
     }
-    // the closed form: the weight shared by the centre of mass's barycentric coordinates
-    double M = 0, cx = 0, cy = 0;
-    for (int b = 0; b < robot.nb; ++b) {
-      M += robot.mass[b];
-      cx += robot.mass[b] * q[kBodyConfig * b];
-      cy += robot.mass[b] * q[kBodyConfig * b + 1];
-    }
-    cx /= M, cy /= M;
-    V3 f[3];
-    for (int k = 0; k < 3; ++k) f[k] = robot_foot_position(robot, kTripod[k], q);
-    const double det = (f[1].x - f[0].x) * (f[2].y - f[0].y) - (f[2].x - f[0].x) * (f[1].y - f[0].y);
-    const double wb = ((cx - f[0].x) * (f[2].y - f[0].y) - (f[2].x - f[0].x) * (cy - f[0].y)) / det;
-    const double wc = ((f[1].x - f[0].x) * (cy - f[0].y) - (cx - f[0].x) * (f[1].y - f[0].y)) / det;
-    const double W = -M * robot.gravity.z, closed = (1 - wb - wc) * W;
-    agree = agree && std::fabs(s.foot_force[0].z - closed) <= 1e-9 * W &&
-            std::fabs(s.foot_force[2].z - wb * W) <= 1e-9 * W && std::fabs(s.foot_force[4].z - wc * W) <= 1e-9 * W;
-    std::printf("%d,%.6f,OK,%.6f,%.3e,%.3e,%.6f,%.6f,%.6f,%.6f,%.6f,%.9f,%.6f,%.6f,%.6f\n", i, rho, s.foot_force[0].z,
-                s.foot_force[0].x, s.foot_force[0].y, s.foot_force[2].z, s.foot_force[4].z, closed, s.actuator_force[0],
-                s.actuator_force[1], s.rowing_torque[0], len[0], len[1], support_margin(f, 3, cx, cy));
+    // the closed form: the weight shared by the centre of mass's barycentric coordinates in the
+    // support triangle (on level ground a tripod's vertical forces need nothing else)
+    const legsim_hexapod_standing &s = p.standing;
+    const double(*f)[3] = s.foot_m;
+    const double cx = s.com_m[0], cy = s.com_m[1];
+    const double *a = f[kTripod[0]], *b = f[kTripod[1]], *c = f[kTripod[2]];
+    const double det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
+    const double wb = ((cx - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (cy - a[1])) / det;
+    const double wc = ((b[0] - a[0]) * (cy - a[1]) - (cx - a[0]) * (b[1] - a[1])) / det;
+    double W = 0;
+    for (int k = 0; k < 3; ++k) W += s.foot_force_n[kTripod[k]][2];
+    const double closed = (1 - wb - wc) * W;
+    agree = agree && std::fabs(s.foot_force_n[0][2] - closed) <= 1e-9 * W &&
+            std::fabs(s.foot_force_n[2][2] - wb * W) <= 1e-9 * W && std::fabs(s.foot_force_n[4][2] - wc * W) <= 1e-9 * W;
+    std::printf("%d,%.6f,OK,%.6f,%.3e,%.3e,%.6f,%.6f,%.6f,%.6f,%.6f,%.9f,%.6f,%.6f,%.6f\n", p.index, p.distance_m,
+                s.foot_force_n[0][2], s.foot_force_n[0][0], s.foot_force_n[0][1], s.foot_force_n[2][2],
+                s.foot_force_n[4][2], closed, s.actuator_force_n[0][0], s.actuator_force_n[0][1], s.rowing_torque_nm[0],
+                p.length_m[0], p.length_m[1], s.margin_m);
   }
   return agree ? 0 : 1;
 }

@@ -290,6 +290,14 @@ class Library:
                         ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6),
                         ("margin_m", d)]
 
+        class HexapodSweep(C.Structure):
+            _fields_ = [("leg", i32), ("stance_mask", C.c_uint32), ("box_height_m", d), ("distance_m", d * 2),
+                        ("n_distance", i32), ("heading_rad", d * 2), ("n_heading", i32)]
+
+        class HexapodSweepPoint(C.Structure):
+            _fields_ = [("index", i32), ("status", C.c_int), ("distance_m", d), ("heading_rad", d),
+                        ("rowing_rad", d), ("length_m", d * 2), ("standing", HexapodStanding)]
+
         class HexapodGait(C.Structure):
             _fields_ = [("period_s", d), ("duty", d), ("step_length_m", d), ("step_height_m", d),
                         ("turn_rad", d), ("box_height_m", d)]
@@ -309,6 +317,7 @@ class Library:
         self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding
         self.HexapodGait, self.HexapodSetpoint = HexapodGait, HexapodSetpoint
+        self.HexapodSweep, self.HexapodSweepPoint = HexapodSweep, HexapodSweepPoint
         self.ModelDesc, self.Options, self.Report = ModelDesc, Options, Report
         self.Reaction, self.WorstCase = Reaction, WorstCase
         self.Contact = Contact
@@ -322,6 +331,7 @@ class Library:
                  ("legsim_contact", self.Contact), ("legsim_hexapod_desc", self.HexapodDesc),
                  ("legsim_hexapod_pose", self.HexapodPose),
                  ("legsim_hexapod_standing", self.HexapodStanding),
+                 ("legsim_hexapod_sweep", self.HexapodSweep), ("legsim_hexapod_sweep_point", self.HexapodSweepPoint),
                  ("legsim_hexapod_gait", self.HexapodGait), ("legsim_hexapod_setpoint", self.HexapodSetpoint),
                  ("legsim_hexapod_state", self.HexapodState)]
         bad = [f"{n}: library {cfg[f'sizeof({n})']} bytes, binding {C.sizeof(t)}"
@@ -400,6 +410,11 @@ class Library:
             "legsim_hexapod_statics": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
                                             C.c_uint32, C.POINTER(C.c_double), P, C.c_size_t,
                                             C.POINTER(self.HexapodStanding)]),
+            "legsim_hexapod_leg_reach": (st, [C.POINTER(self.HexapodDesc), C.c_int32, C.POINTER(C.c_double), P,
+                                              C.c_size_t, C.POINTER(C.c_double), C.POINTER(C.c_double)]),
+            "legsim_hexapod_reaction_sweep": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodSweep),
+                                                   C.c_int32, C.c_int32, P, C.c_size_t,
+                                                   C.POINTER(self.HexapodSweepPoint)]),
             "legsim_hexapod_gait_setpoints": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodGait),
                                                    C.c_double, P, C.c_size_t, C.POINTER(self.HexapodSetpoint)]),
             "legsim_hexapod_sim_size": (C.c_size_t, []),

@@ -188,6 +188,65 @@ class Hexapod:
                 "rowing_torque_nm": np.array(out.rowing_torque_nm[:]), "margin_m": float(out.margin_m)}
 
 
+    def leg_reach(self, leg: int, foot_box_m) -> tuple[float, np.ndarray]:
+        """Leg ``leg``'s rowing angle (rad) and two actuator lengths (m) that put its foot at
+        ``foot_box_m`` (m, the box's frame), from its file's stand (legsim_hexapod_leg_reach).
+        Raises OutOfStrokeError / UnreachableError (LegsimError) for a point it cannot reach."""
+        lib = self.library
+        foot = np.asarray(foot_box_m, dtype=float)
+        if foot.shape != (3,):
+            raise ValueError(f"foot_box_m: 3 values, got shape {foot.shape}")
+        psi, length = C.c_double(), (C.c_double * 2)()
+        st = lib.cdll.legsim_hexapod_leg_reach(C.byref(self.desc), int(leg), (C.c_double * 3)(*foot.tolist()),
+                                               C.c_void_p(self._addr), self._size, C.byref(psi), length)
+        lib.check(st, "legsim_hexapod_leg_reach")
+        return psi.value, np.array(length[:])
+
+    def reaction_sweep(self, *, leg: int = 0, stance=(0, 2, 4), box_height_m: float = 1.0,
+                       distance_m=(0.40, 0.62), n_distance: int = 23, heading_rad=(0.0, 0.0), n_heading: int = 1,
+                       first: int = 0, count: int | None = None) -> dict:
+        """The paper's Section V (legsim_hexapod_reaction_sweep): the robot on ``stance`` with its
+        box level ``box_height_m`` above the stance feet's plane, leg ``leg``'s foot moved about
+        its hip over distance x direction (from the leg's heading) grids; the points ``first`` ..
+        ``first + count - 1`` (all by default), so that parts run anywhere concatenate. Returns
+        numpy arrays per point: index, status (0: LEGSIM_OK), distance_m, heading_rad, rowing_rad,
+        length_m (n, 2), foot_force_n (n, 6, 3), actuator_force_n (n, 6, 2), rowing_torque_nm
+        (n, 6), margin_m, com_m (n, 3), foot_m (n, 6, 3); a point without statics has NaN values."""
+        lib = self.library
+        total = int(n_distance) * int(n_heading)
+        count = max(total - int(first), 1) if count is None else int(count)  # (the library refuses an empty grid)
+        sw = lib.HexapodSweep(leg=int(leg), stance_mask=_mask(stance, "stance"), box_height_m=float(box_height_m),
+                              distance_m=(C.c_double * 2)(*[float(x) for x in distance_m]),
+                              n_distance=int(n_distance),
+                              heading_rad=(C.c_double * 2)(*[float(x) for x in heading_rad]),
+                              n_heading=int(n_heading))
+        if count < 1:
+            raise ValueError(f"count: at least one point (first {first} of {total})")
+        out = (lib.HexapodSweepPoint * count)()
+        st = lib.cdll.legsim_hexapod_reaction_sweep(C.byref(self.desc), C.byref(sw), int(first), count,
+                                                    C.c_void_p(self._addr), self._size, out)
+        lib.check(st, "legsim_hexapod_reaction_sweep")
+        def table(get, shape):
+            a = np.full((count,) + shape, np.nan)
+            for k, p in enumerate(out):
+                if p.status == 0:
+                    a[k] = np.array(get(p), dtype=float).reshape(shape)
+            return a
+
+        def rows(x):
+            return [r[:] for r in x]
+        return {"index": np.array([p.index for p in out]), "status": np.array([p.status for p in out]),
+                "distance_m": np.array([p.distance_m for p in out]),
+                "heading_rad": np.array([p.heading_rad for p in out]),
+                "rowing_rad": table(lambda p: p.rowing_rad, ()), "length_m": table(lambda p: p.length_m[:], (2,)),
+                "foot_force_n": table(lambda p: rows(p.standing.foot_force_n), (LEGS, 3)),
+                "actuator_force_n": table(lambda p: rows(p.standing.actuator_force_n), (LEGS, 2)),
+                "rowing_torque_nm": table(lambda p: p.standing.rowing_torque_nm[:], (LEGS,)),
+                "margin_m": table(lambda p: p.standing.margin_m, ()),
+                "com_m": table(lambda p: p.standing.com_m[:], (3,)),
+                "foot_m": table(lambda p: rows(p.standing.foot_m), (LEGS, 3))}
+
+
 def _pairs(x, what: str):
     """A 6 x 2 table as ctypes (ValueError for another shape: ctypes would fill it with zeros)."""
     a = np.asarray(x, dtype=float)

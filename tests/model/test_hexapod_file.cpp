@@ -322,6 +322,32 @@ void test_api_refuses_and_leaves_out(void) {
   g.box_height_m = 1.0;
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_gait_setpoints(&s.desc, &g, NAN, big, n, &sp));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_gait_setpoints(&s.desc, &g, 0.3, big, n, &sp));
+  // one leg's reach and the Section V sweep: refused calls write nothing
+  double psi = 7, len[2] = {7, 7};
+  const double foot[3] = {0.8, -0.6, -1.0}, far[3] = {5.0, 0, -1.0}, nan_foot[3] = {0.8, NAN, -1.0};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_leg_reach(&s.desc, 0, nullptr, big, n, &psi, len));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STORAGE, legsim_hexapod_leg_reach(&s.desc, 0, foot, big, n - 1, &psi, len));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_leg_reach(&s.desc, -1, foot, big, n, &psi, len));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_leg_reach(&s.desc, 0, nan_foot, big, n, &psi, len));
+  TEST_ASSERT_TRUE(legsim_hexapod_leg_reach(&s.desc, 0, far, big, n, &psi, len) != LEGSIM_OK);
+  TEST_ASSERT_TRUE(psi == 7 && len[0] == 7 && len[1] == 7);
+  legsim_hexapod_sweep sw = {0, 0x15, 1.0, {0.4, 0.6}, 3, {0, 0}, 1};
+  legsim_hexapod_sweep_point pts[3];
+  std::memset(pts, 0x5a, sizeof pts);
+  unsigned char untouched[sizeof pts];
+  std::memcpy(untouched, pts, sizeof pts);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_reaction_sweep(&s.desc, nullptr, 0, 3, big, n, pts));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STORAGE, legsim_hexapod_reaction_sweep(&s.desc, &sw, 0, 3, big + 8, n, pts));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_reaction_sweep(&s.desc, &sw, 1, 3, big, n, pts));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_reaction_sweep(&s.desc, &sw, 0, 0, big, n, pts));
+  sw.stance_mask = 0x2A;  // a stance without the moving leg
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_reaction_sweep(&s.desc, &sw, 0, 3, big, n, pts));
+  sw.stance_mask = 0x15, sw.heading_rad[1] = NAN;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_reaction_sweep(&s.desc, &sw, 0, 3, big, n, pts));
+  sw.heading_rad[1] = 0;
+  TEST_ASSERT_EQUAL_INT(0, std::memcmp(untouched, pts, sizeof pts));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_reaction_sweep(&s.desc, &sw, 0, 3, big, n, pts));
+  for (int k = 0; k < 3; ++k) TEST_ASSERT_TRUE(pts[k].index == k && pts[k].status == LEGSIM_OK);
 }
 
 void test_refusals(void) {

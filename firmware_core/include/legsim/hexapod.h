@@ -122,6 +122,57 @@ typedef struct legsim_hexapod_setpoint {
 legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
                                             void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out);
 
+/* ---- one leg's reach, and the Section V sweep ------------------------------- */
+/* Leg leg's (0 .. 5) rowing angle (rad) and its two actuators' lengths (m) that put its foot at
+ * foot_box_m (m, in the box's frame, |x| <= LEGSIM_MAX_COORD), from its file's stand (the branch
+ * nearest it): the inverse kinematics a leg controller needs. LEGSIM_ERR_BAD_INPUT for another
+ * leg or a point not finite or out of range; LEGSIM_ERR_OUT_OF_STROKE past the rowing or a linear
+ * stroke; LEGSIM_ERR_UNREACHABLE / _NOT_CONVERGED / _SINGULAR for a point the leg cannot reach;
+ * storage as legsim_hexapod_statics'. The outputs are written only on LEGSIM_OK. */
+legsim_status legsim_hexapod_leg_reach(const legsim_hexapod_desc *h, int32_t leg, const double foot_box_m[3],
+                                       void *storage, size_t storage_bytes, double *rowing_rad, double length_m[2]);
+
+/* The paper's Section V on the hexapod: the robot standing on stance_mask (at least three feet)
+ * with its box level, its centre box_height_m above the stance feet's plane; every leg at its
+ * file's stand (rowing 0) but the stance ones, whose feet stand on that plane under their stand's
+ * places, and leg `leg` (one of the stance), whose foot moves about its hip axis over a grid: its
+ * horizontal distance from the axis (distance_m[0] .. [1], n_distance points) by its direction
+ * from the leg's heading (heading_rad[0] .. [1], n_heading points; one point: the first value).
+ * Point i (0 <= i < n_distance n_heading) is distance i / n_heading, direction i % n_heading.
+ * Ranges: box_height_m (0, LEGSIM_MAX_COORD]; distances [LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD];
+ * |heading| <= pi; 1 <= n_distance, n_heading and their product <= 1,000,000. */
+typedef struct legsim_hexapod_sweep {
+  int32_t leg;
+  uint32_t stance_mask;
+  double box_height_m;
+  double distance_m[2];
+  int32_t n_distance;
+  double heading_rad[2];
+  int32_t n_heading;
+} legsim_hexapod_sweep;
+
+/* One point of the sweep: its place, its status (LEGSIM_OK, or why it has no statics: out of a
+ * stroke, unreachable, no equilibrium (a foot that would pull, the centre of mass out of the
+ * stance)), and on LEGSIM_OK its pose's rowing angle and lengths of the moving leg and the
+ * standing robot (every stance foot's ground force, every actuator's force and rowing torque,
+ * the stability margin). */
+typedef struct legsim_hexapod_sweep_point {
+  int32_t index;
+  legsim_status status;
+  double distance_m, heading_rad;
+  double rowing_rad, length_m[2];
+  legsim_hexapod_standing standing;
+} legsim_hexapod_sweep_point;
+
+/* Points first .. first + count - 1 of the sweep into out[0 .. count - 1]: a part of the whole, so
+ * that parts computed anywhere concatenate into it. LEGSIM_ERR_NULL, LEGSIM_ERR_BAD_INPUT (a
+ * sweep value out of range, a part outside the grid, count < 1), storage as
+ * legsim_hexapod_statics'; each point's own failure is its status. out is written only on
+ * LEGSIM_OK. */
+legsim_status legsim_hexapod_reaction_sweep(const legsim_hexapod_desc *h, const legsim_hexapod_sweep *sweep,
+                                            int32_t first, int32_t count, void *storage, size_t storage_bytes,
+                                            legsim_hexapod_sweep_point *out);
+
 /* ---- the hexapod moving --------------------------------------------------- */
 /* Forward dynamics (docs/design/spatial.md): the whole robot in absolute spatial coordinates on
  * the file's ground plane, each foot free, stuck (three rows hold it: its ground force is their

@@ -157,6 +157,35 @@ legsim_status command_apply(legsim_hexapod_sim &sim, const spatial::RobotCommand
   return st;
 }
 size_t hexapod_sim_offset() { return sim_bytes() + round_up(sizeof(HexapodWork)); }
+
+// Leg l's rowing angle and lengths that put its foot at foot (box frame): its planar sim (the
+// storage's first part) assembled there from its file's stand.
+legsim_status reach(const legsim_hexapod_desc &h, const spatial::SpatialRobot &robot, int l, const spatial::V3 &foot,
+                    void *storage, real &psi, legsim_real len[2]) {
+  real xy[2];
+  spatial::leg_plane_target(robot, l, foot, psi, xy);
+  if (!(psi >= h.rowing_stroke_rad[0] && psi <= h.rowing_stroke_rad[1])) return LEGSIM_ERR_OUT_OF_STROKE;
+  legsim_sim *sim = nullptr;
+  legsim_status st = leg_at_stand(h, l, storage, sim);
+  if (st == LEGSIM_OK) st = legsim_assemble_foot(sim, xy);
+  if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, nullptr);
+  return st;
+}
+
+legsim_status sweep_check(const legsim_hexapod_sweep &s) {
+  int stance = 0;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) stance += (s.stance_mask >> l) & 1u;
+  const bool ok = s.leg >= 0 && s.leg < LEGSIM_HEXAPOD_LEGS && !(s.stance_mask >> LEGSIM_HEXAPOD_LEGS) &&
+                  ((s.stance_mask >> s.leg) & 1u) && stance >= 3 && within(s.box_height_m, 0, LEGSIM_MAX_COORD) &&
+                  s.box_height_m > 0 && within(s.distance_m[0], LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) &&
+                  within(s.distance_m[1], LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) &&
+                  within(s.heading_rad[0], -M_PI, M_PI) && within(s.heading_rad[1], -M_PI, M_PI) &&
+                  s.n_distance >= 1 && s.n_heading >= 1 && int64_t(s.n_distance) * s.n_heading <= 1000000;
+  return ok ? LEGSIM_OK : LEGSIM_ERR_BAD_INPUT;
+}
+
+// The grid's value k of n from v[0] to v[1] (one point: v[0]).
+double grid_at(const double v[2], int k, int n) { return n == 1 ? v[0] : v[0] + (v[1] - v[0]) * k / (n - 1); }
 }  // namespace
 
 extern "C" {
@@ -248,6 +277,84 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
     r.length_m[l][0] = len[0], r.length_m[l][1] = len[1];
   }
   *out = r;
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_leg_reach(const legsim_hexapod_desc *h, int32_t leg, const double foot_box_m[3],
+                                       void *storage, size_t storage_bytes, double *rowing_rad, double length_m[2]) {
+  if (!h || !foot_box_m || !storage || !rowing_rad || !length_m) return LEGSIM_ERR_NULL;
+  if (leg < 0 || leg >= LEGSIM_HEXAPOD_LEGS || !finite_within(foot_box_m, 3, LEGSIM_MAX_COORD))
+    return LEGSIM_ERR_BAD_INPUT;
+  HexapodWork *wp = nullptr;
+  legsim_status st = work_begin(*h, storage, storage_bytes, wp);
+  if (st != LEGSIM_OK) return st;
+  real psi;
+  legsim_real len[2];
+  st = reach(*h, wp->robot, leg, {real(foot_box_m[0]), real(foot_box_m[1]), real(foot_box_m[2])}, storage, psi, len);
+  if (st != LEGSIM_OK) return st;
+  *rowing_rad = psi, length_m[0] = len[0], length_m[1] = len[1];
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_reaction_sweep(const legsim_hexapod_desc *h, const legsim_hexapod_sweep *sweep,
+                                            int32_t first, int32_t count, void *storage, size_t storage_bytes,
+                                            legsim_hexapod_sweep_point *out) {
+  if (!h || !sweep || !storage || !out) return LEGSIM_ERR_NULL;
+  const legsim_hexapod_sweep &s = *sweep;
+  if (sweep_check(s) != LEGSIM_OK || first < 0 || count < 1 ||
+      int64_t(first) + count > int64_t(s.n_distance) * s.n_heading)
+    return LEGSIM_ERR_BAD_INPUT;
+  HexapodWork *wp = nullptr;
+  legsim_status st = work_begin(*h, storage, storage_bytes, wp);
+  if (st != LEGSIM_OK) return st;
+  // the stand (rowing 0, the box level at the origin): the free legs' lengths, the stance feet's places
+  legsim_hexapod_pose stand;
+  spatial::V3 stand_foot[LEGSIM_HEXAPOD_LEGS], hip[LEGSIM_HEXAPOD_LEGS];
+  real yaw[LEGSIM_HEXAPOD_LEGS];
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+    legsim_sim *sim = nullptr;
+    legsim_real len[2] = {0, 0};
+    st = leg_at_stand(*h, l, storage, sim);
+    if (st == LEGSIM_OK) st = legsim_get_q(sim, wp->leg_q[l]);
+    if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, nullptr);
+    if (st != LEGSIM_OK) return st;
+    stand.length_m[l][0] = len[0], stand.length_m[l][1] = len[1], stand.rowing_rad[l] = 0;
+  }
+  const real origin[7] = {0, 0, 0, 1, 0, 0, 0}, zero[LEGSIM_HEXAPOD_LEGS] = {};
+  place_at_rest(*wp, origin, zero);
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    stand_foot[l] = spatial::robot_foot_position(wp->robot, l, wp->q), hip[l] = wp->robot.leg[l].hip,
+    yaw[l] = wp->robot.leg[l].yaw;
+  const real H = real(s.box_height_m);
+  for (int k = 0; k < count; ++k) {
+    legsim_hexapod_sweep_point &p = out[k];
+    const int i = first + k, id = i / s.n_heading, ia = i % s.n_heading;
+    p = legsim_hexapod_sweep_point{};
+    p.index = i;
+    p.distance_m = grid_at(s.distance_m, id, s.n_distance), p.heading_rad = grid_at(s.heading_rad, ia, s.n_heading);
+    legsim_hexapod_pose pose = stand;
+    pose.box_m[0] = 0, pose.box_m[1] = 0, pose.box_m[2] = H;
+    pose.box_quat[0] = 1, pose.box_quat[1] = 0, pose.box_quat[2] = 0, pose.box_quat[3] = 0;
+    legsim_status ps = LEGSIM_OK;
+    for (int l = 0; l < LEGSIM_HEXAPOD_LEGS && ps == LEGSIM_OK; ++l) {
+      if (!((s.stance_mask >> l) & 1u)) continue;
+      const real d = real(p.distance_m), a = yaw[l] + real(p.heading_rad);
+      const spatial::V3 foot = l == s.leg ? spatial::V3{hip[l].x + d * std::cos(a), hip[l].y + d * std::sin(a), -H}
+                                          : spatial::V3{stand_foot[l].x, stand_foot[l].y, -H};
+      real psi;
+      legsim_real len[2];
+      ps = reach(*h, wp->robot, l, foot, storage, psi, len);
+      pose.rowing_rad[l] = psi, pose.length_m[l][0] = len[0], pose.length_m[l][1] = len[1];
+    }
+    if (ps == LEGSIM_OK)
+      ps = legsim_hexapod_statics(h, &pose, s.stance_mask, nullptr, storage, storage_bytes, &p.standing);
+    p.status = ps;
+    if (ps == LEGSIM_OK) {
+      p.rowing_rad = pose.rowing_rad[s.leg];
+      p.length_m[0] = pose.length_m[s.leg][0], p.length_m[1] = pose.length_m[s.leg][1];
+    }
+    // statics rebuilt the work part in place: the same robot lifted from the same h
+  }
   return LEGSIM_OK;
 }
 
