@@ -182,39 +182,47 @@ def below_z(d, x, y):
     return p[2] - (n[0] * (x - p[0]) + n[1] * (y - p[1])) / n[2]
 
 
-def hexapod_energy(d, s):
-    """The robot's energy at a sample under constant commands: kinetic, gravity's (its centre of
-    mass), less the commands' work (force x length, torque x angle), as
-    tests/model/test_hexapod_contact.cpp's."""
-    E = s["kinetic_energy"] - d["mass"] * _dot(d["gravity"], s["com"])
-    for k in range(6):
-        E -= _dot(s["actuator_forces"][k], s["lengths"][k]) + s["rowing_torques"][k] * s["rowing"][k]
-    return E
-
-
 def hexapod_slip(d):
     """The sliding feet between consecutive samples (record_every 1): the worst | |F_t| - mu_k N |
     / N, the worst angle between the friction and the slip (the foot's displacement, against the
-    mean of the tangential forces at both ends), and the friction's work (the trapezoid rule)
-    against the energy lost: | dE - W | / |W|."""
+    mean of the tangential forces at both ends; from the fourth step in a row it slides faster than
+    0.1 mm/s: slower, the core keeps a slip's direction (docs/design/spatial.md "Moving"), and a
+    slip from rest turns onto its velocity over its first steps), and
+    the energy balance as
+    tests/model/test_hexapod_contact.cpp's: the robot's energy (kinetic and gravity's, less the
+    commands' work) changes by the friction's work, | dE - W | / |W|, both works by the
+    trapezoid rule."""
     mu_k, n = d["ground"]["mu_kinetic"], d["ground"]["normal"]
-    mu_off = angle = work = 0.0
+    mu_off = angle = work = commands = 0.0
     samples = d["samples"]
+    slow = 1e-4 * d["step_s"] * d["record_every"]  # m a sample at 0.1 mm/s
+    fast = {k: 0 for k in d["legs"]}  # steps in a row it slid faster than that
     for a, b in zip(samples, samples[1:]):
+        for j in range(6):
+            for i in range(2):
+                commands += (a["actuator_forces"][j][i] + b["actuator_forces"][j][i]) / 2 * \
+                    (b["lengths"][j][i] - a["lengths"][j][i])
+            commands += (a["rowing_torques"][j] + b["rowing_torques"][j]) / 2 * (b["rowing"][j] - a["rowing"][j])
         for k in d["legs"]:
             fa, fb = a["feet"][k], b["feet"][k]
             dx = [q - p for p, q in zip(fa["x"], fb["x"])]
-            work += _dot([(p + q) / 2 for p, q in zip(fa["force"], fb["force"])], dx)
+            f = [(p + q) / 2 for p, q in zip(fa["force"], fb["force"])]
+            work += _dot(f, dx)
+            moving = fa["state"] == fb["state"] == "sliding" and math.sqrt(_dot(dx, dx)) > slow
+            fast[k] = fast[k] + 1 if moving else 0
             if fb["state"] != "sliding":
                 continue
             N, Ft = ground_split(d, fb["force"])
             mu_off = max(mu_off, abs(Ft - mu_k * N) / N)
-            if fa["state"] == "sliding" and math.sqrt(_dot(dx, dx)) > 1e-4 * d["step_s"] * d["record_every"]:
-                f = [(p + q) / 2 for p, q in zip(fa["force"], fb["force"])]
+            if fast[k] >= 4:
                 ft = [x - _dot(f, n) * m for x, m in zip(f, n)]
                 c = -_dot(ft, dx) / math.sqrt(_dot(ft, ft) * _dot(dx, dx))
                 angle = max(angle, math.acos(max(-1.0, min(1.0, c))))
-    lost = hexapod_energy(d, samples[-1]) - hexapod_energy(d, samples[0])
+
+    def mechanical(s):
+        return s["kinetic_energy"] - d["mass"] * _dot(d["gravity"], s["com"])
+
+    lost = mechanical(samples[-1]) - mechanical(samples[0]) - commands
     return mu_off, angle, abs(lost - work) / abs(work) if work else math.inf
 
 
