@@ -7,6 +7,9 @@
     >>> m = h.sim(pose, stuck=(0, 2, 4))               # moving, the tripod's feet held
     >>> m.command(s["actuator_force_n"], s["rowing_torque_nm"])
     >>> m.step(100, h_s=1e-3); m.state()["box_m"]
+    >>> slope = dict(slope_rad=0.26, uphill_rad=0.0)       # 15 degrees, rising along x
+    >>> w = h.walk(period_s=1.2, duty=0.6, step_length_m=0.12, step_height_m=0.05,
+    ...            box_height_m=1.0, t_end_s=2.4, ground=slope)   # up the fall line, the box level
 
 Units SI, the world's z up. What the file holds and its ranges: firmware_core/include/legsim/hexapod.h;
 the formulation and the rule statics takes for what it leaves free: docs/design/spatial.md.
@@ -70,6 +73,15 @@ class Hexapod:
             lengths.append(list(s.actuator_lengths()[0]))
         return {"box_m": [0.0, 0.0, float(box_height)], "box_quat": [1.0, 0.0, 0.0, 0.0],
                 "rowing_rad": list(rowing), "length_m": lengths}
+
+    def ground_stand_pose(self, box_height: float) -> dict:
+        """The stand on the ground plane (level or not): the box level box_height over the ground
+        below the origin, each foot where the stand puts it seen from above, on the plane (the
+        gait's set-points standing still; legsim_cli's pose on a sloped ground)."""
+        sp = self.gait_setpoints(0.0, period_s=1.0, duty=0.75, step_length_m=0.0, step_height_m=0.0,
+                                 box_height_m=box_height)
+        return {"box_m": list(sp["box_m"]), "box_quat": [1.0, 0.0, 0.0, 0.0], "rowing_rad": list(sp["rowing_rad"]),
+                "length_m": sp["length_m"].tolist()}
 
     @property
     def ground(self) -> dict:
@@ -180,8 +192,8 @@ class Hexapod:
         4), foot_m (n, 6, 3), foot_force_n (n, 6, 3), foot_state (n, 6: 0 free, 1 stuck, 2
         sliding), set_foot_box_m (n, 6, 3: the gait's targets in the box's frame), set_box_m (n,
         3: the box's planned centre), com_m (n, 3: the centre of mass), margin_m (n: the static
-        stability margin of the feet on the ground about it, support_margin), plan_margin_m (n:
-        the planned pose's, its statics'), body_pose (n, bodies, 7), events (each sample's count
+        stability margin of the gait's stance feet, where they are, about it: support_margin),
+        plan_margin_m (n: the planned pose's, its statics'), body_pose (n, bodies, 7), events (each sample's count
         since the last), impacts (touchdowns so far), kinetic_energy_j. ``integrator``: as
         HexapodSim.set_integrator."""
         if ground is not None:
@@ -226,7 +238,9 @@ class Hexapod:
             bodies = m.body_poses()
             com = masses @ bodies[:, :3] / masses.sum()
             out["com_m"].append(com)
-            on = [k for k in range(LEGS) if st["foot_state"][k] != "free"]
+            # the feet the gait stands on, where they are (a foot bouncing inside a step is no
+            # less the stance's)
+            on = [k for k in range(LEGS) if sp["stance"][k]]
             out["margin_m"].append(self.support_margin(st["foot_m"][on], com))
             out["plan_margin_m"].append(plan_margin[0])
             out["body_pose"].append(bodies)
