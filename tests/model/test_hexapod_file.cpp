@@ -322,6 +322,18 @@ void test_api_refuses_and_leaves_out(void) {
   g.box_height_m = 1.0;
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_gait_setpoints(&s.desc, &g, NAN, big, n, &sp));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_gait_setpoints(&s.desc, &g, 0.3, big, n, &sp));
+  // the box's planned pose: 0.3 s at step_length / (duty period) along x, level, 1 m up
+  TEST_ASSERT_TRUE(std::fabs(sp.box_m[0] - 0.3 * 0.12 / 0.72) < 1e-15 && sp.box_m[1] == 0 && sp.box_m[2] == 1.0);
+  TEST_ASSERT_TRUE(sp.box_quat[0] == 1 && sp.box_quat[1] == 0 && sp.box_quat[2] == 0 && sp.box_quat[3] == 0);
+  // the margin's refusals; an equilateral triangle's inradius about its centre
+  const double tri[3][3] = {{1, 0, 0.5}, {-0.5, 0.8660254037844386, 0}, {-0.5, -0.8660254037844386, 0}};
+  const double centre[3] = {0, 0, 1}, far[3] = {1e9, 0, 0};
+  double margin = 0;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_support_margin(tri, 3, centre, nullptr));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_support_margin(tri, 7, centre, &margin));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_support_margin(tri, 3, far, &margin));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_support_margin(tri, 3, centre, &margin));
+  TEST_ASSERT_TRUE(std::fabs(margin - 0.5) < 1e-15);
 }
 
 void test_refusals(void) {
