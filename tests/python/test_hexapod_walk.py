@@ -26,6 +26,10 @@ it):
   box advances the plan's distance to 5 % (drifting sideways less than 10 % of it), stays within 2 cm of its height over the ground below
   it, tilts under 3 degrees, every stuck foot inside its cone about the plane's normal, the
   stance's static stability margin (the centre of mass projected along gravity) above 8 cm;
+- the attitude chosen, measured: the box parallel to the slope (the level ground's set-points,
+  the box turned with the ground) tips the tripod over walking up the fall line at 10 and 15
+  degrees (the margin negative), the level box keeps it (0.128 m) and reaches 15 degrees up the
+  fall line at 1.0 m and across it at 0.85 m (at 1.0 m unreachable);
 - a slope its friction cannot hold (0.3 rad, mu 0.2 / 0.15), the servos holding the stand: every
   foot slides, |F_t| = mu_k N about the plane's normal, the friction against each step's slip, and
   the friction's work is the energy lost (kinetic and gravity's, less the servos' work: both by
@@ -266,3 +270,49 @@ def test_feet_slip_on_a_slope_too_steep(hexapod):
     assert a["box_m"][0] < -0.005  # downhill
     assert mu_off < 1e-9 and angle < 1e-3 and work < 0
     assert abs(lost - work) < 1e-3 * abs(work)
+
+
+def test_the_level_box_against_the_box_parallel_to_the_slope(hexapod):
+    """The box's planned attitude on a slope, measured over one period of the straight gait (every
+    10 ms): level (this gait: its set-points through the legs' inverse kinematics, which refuse a
+    target past a stroke or the reach), or parallel to the slope (the level ground's set-points,
+    reachable wherever those are, the box turned with the ground, its centre box_height_m along
+    the normal): the least static stability margin of the stance about the centre of mass
+    projected along gravity. Parallel leans the centre of mass downhill by about its height times
+    the slope's sine and loses the tripod walking up the fall line at 10 degrees; level keeps the
+    margin and reaches 15 degrees up the fall line at 1.0 m, across it at 0.85 m."""
+    ts = np.arange(0, GAIT["period_s"], 0.01)
+    flat = [hexapod.gait_setpoints(t, **GAIT, step_length_m=0.12) for t in ts]
+    rows = {}
+    for deg in (10, 15):
+        s = np.radians(deg)
+        for name, uphill in (("up", 0.0), ("across", np.pi / 2)):
+            h = hexapod.on_ground(slope_rad=s, uphill_rad=uphill)
+            level = {}
+            for height in (1.0, 0.85):
+                try:
+                    sps = [h.gait_setpoints(t, **dict(GAIT, box_height_m=height), step_length_m=0.12) for t in ts]
+                except legsim.UnreachableError:
+                    level[height] = None
+                    continue
+                level[height] = min(h.statics({"box_m": sp["box_m"], "box_quat": [1, 0, 0, 0],
+                                               "rowing_rad": sp["rowing_rad"], "length_m": sp["length_m"]},
+                                              stance=np.flatnonzero(sp["stance"]))["margin_m"] for sp in sps)
+            # parallel: the box's z along the ground's normal (a turn about its x or y by the slope)
+            n = np.array(h.desc.ground_normal[:])
+            q = [np.cos(s / 2), 0, -np.sin(s / 2), 0] if uphill == 0 else [np.cos(s / 2), np.sin(s / 2), 0, 0]
+            parallel = np.inf
+            for sp in flat:
+                pose = {"box_m": GAIT["box_height_m"] * n, "box_quat": q, "rowing_rad": sp["rowing_rad"],
+                        "length_m": sp["length_m"]}
+                six = h.statics(pose)  # the centre of mass and the feet, on all six
+                on = np.flatnonzero(sp["stance"])
+                assert np.abs(over_ground(h, six["foot_m"][on])).max() < 1e-9  # the legs' inverse kinematics
+                parallel = min(parallel, h.support_margin(six["foot_m"][on], six["com_m"]))
+            rows[deg, name] = (level[1.0], level[0.85], parallel)
+            fmt = lambda m: "unreachable" if m is None else f"{m:.4f} m"  # noqa: E731
+            print(f"{deg} deg {name:6s}: level box at 1.0 m {fmt(level[1.0])}, at 0.85 m {fmt(level[0.85])}; "
+                  f"parallel at 1.0 m {parallel:.4f} m")
+    assert rows[10, "up"][2] < 0 and rows[15, "up"][2] < 0  # parallel tips the tripod over
+    assert all(r[1] > 0.1 for r in rows.values())            # level at 0.85 m reaches all and keeps its margin
+    assert rows[15, "up"][0] > 0.1 and rows[15, "across"][0] is None
