@@ -23,9 +23,10 @@ it):
   statics at the planned pose itself, turned and moved (1e-9 of the weight); its feet push into
   the plane inside their cones, and they carry the weight;
 - walking 15 degrees up the fall line (box 1.0 m) and across it (0.85 m) for two periods: the
-  box advances the plan's distance to 5 % (drifting sideways less than 10 % of it), stays within 2 cm of its height over the ground below
-  it, tilts under 3 degrees, every stuck foot inside its cone about the plane's normal, the
-  stance's static stability margin (the centre of mass projected along gravity) above 8 cm;
+  box advances the plan's distance to 5 % (drifting sideways less than 10 % of it), stays
+  within 2 cm of its height over the ground below it, tilts under 3 degrees, every stuck foot
+  inside its cone about the plane's normal, the stance's static stability margin (the centre
+  of mass projected along gravity) above 8 cm;
 - the attitude chosen, measured: the box parallel to the slope (the level ground's set-points,
   the box turned with the ground) tips the tripod over walking up the fall line at 10 and 15
   degrees (the margin negative), the level box keeps it (0.128 m) and reaches 15 degrees up the
@@ -216,7 +217,8 @@ def test_walks_on_a_slope(hexapod, uphill, height):
     off = np.abs(box[:, 2] - below_z(h, box[:, :2]) - height)
     stuck = w["foot_state"] == 1
     N, Ft = split(h, w["foot_force_n"])
-    print(f"slope 15 deg, uphill {uphill:.2f}: box at {np.round(box[-1], 4)} (planned {np.round(w['set_box_m'][-1], 4)}), "
+    print(f"slope 15 deg, uphill {uphill:.2f}: box at {np.round(box[-1], 4)} "
+          f"(planned {np.round(w['set_box_m'][-1], 4)}), "
           f"height off {off.max():.4f} m, tilt {np.degrees(tilt.max()):.2f} deg, heading {np.degrees(yaw[-1]):.2f} deg, "
           f"|F_t|/N stuck {(Ft[stuck] / N[stuck]).max():.3f}, margin {w['margin_m'].min():.4f} m "
           f"(planned {w['plan_margin_m'].min():.4f}), {w['impacts'][-1]} impacts")
