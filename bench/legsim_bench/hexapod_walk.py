@@ -104,7 +104,8 @@ def run(args) -> int:
     ok, rows, files = run_walk(root, out, args.step_length, args.turn, args.periods, plots=not args.no_plots,
                                slope_deg=args.slope_deg, uphill_deg=args.uphill_deg, box_height=args.box_height)
     on = f", on a {args.slope_deg} deg slope rising toward {args.uphill_deg} deg" if args.slope_deg else ""
-    print_rows(f"the hexapod walking {args.periods} periods (step {args.step_length} m, turn {args.turn} rad{on})", rows)
+    print_rows(f"the hexapod walking {args.periods} periods (step {args.step_length} m, turn {args.turn} rad{on})",
+               rows)
     if files:
         print(f"  files: {out}/ ({', '.join(p.name for p in files)})")
     return 0 if ok else 1

@@ -219,7 +219,8 @@ def test_walks_on_a_slope(hexapod, uphill, height):
     N, Ft = split(h, w["foot_force_n"])
     print(f"slope 15 deg, uphill {uphill:.2f}: box at {np.round(box[-1], 4)} "
           f"(planned {np.round(w['set_box_m'][-1], 4)}), "
-          f"height off {off.max():.4f} m, tilt {np.degrees(tilt.max()):.2f} deg, heading {np.degrees(yaw[-1]):.2f} deg, "
+          f"height off {off.max():.4f} m, tilt {np.degrees(tilt.max()):.2f} deg, "
+          f"heading {np.degrees(yaw[-1]):.2f} deg, "
           f"|F_t|/N stuck {(Ft[stuck] / N[stuck]).max():.3f}, margin {w['margin_m'].min():.4f} m "
           f"(planned {w['plan_margin_m'].min():.4f}), {w['impacts'][-1]} impacts")
     assert np.abs(w["set_box_m"][-1] - [0.4, 0, height + 0.4 * np.tan(SLOPE) * np.cos(uphill)]).max() < 1e-12
