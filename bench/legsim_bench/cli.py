@@ -9,7 +9,8 @@
                                                 record, check, then the hexapod's walk: the
                                                 README's main command
     legsim-bench hexapod [--turn R] [--periods N]  the hexapod walking (in process), checked,
-                                                with its plot and 3D animation
+                                                with its plot and 3D animation (--slope-deg D:
+                                                on a slope)
     legsim-bench workprecision|options|stress|mcu|robot-peers|hexapod-peers   the benchmarks (their own options; results
                                                 in out/bench-results/, --update-results for
                                                 the committed bench/results/)
@@ -660,6 +661,13 @@ def build_parser() -> argparse.ArgumentParser:
     s.add_argument("--step-length", type=float, default=0.12, help="m a step (default 0.12)")
     s.add_argument("--turn", type=float, default=0.0, help="rad a step about the box's z (default 0)")
     s.add_argument("--periods", type=int, default=2, help="gait periods of 1.2 s (default 2)")
+    s.add_argument("--slope-deg", type=float, default=0.0,
+                   help="the ground's slope (deg, default 0: level); the box stays level")
+    s.add_argument("--uphill-deg", type=float, default=0.0,
+                   help="the direction the slope rises toward, about z from the walk's heading (deg; default 0: "
+                        "up the fall line, 90: across it)")
+    s.add_argument("--box-height", type=float, default=None,
+                   help="m over the ground below the box (default 1.0; 15 deg across needs 0.85)")
     s.add_argument("--out", "-o", metavar="DIR", default=None,
                    help="output directory (default out/hexapod_walk under the repository)")
     s.add_argument("--no-plots", action="store_true", help="no GIF, no PNG")

@@ -159,6 +159,10 @@ struct HexScene {
   std::vector<Offset> offsets;
   bool has_gait = false;
   legsim_hexapod_gait gait{};
+  // [ground]: the file's plane turned to slope (rad) rising toward uphill (rad about z from x),
+  // its friction replaced; each key left out keeps the file's
+  bool has_slope = false, has_mu_static = false, has_mu_kinetic = false;
+  double slope = 0, uphill = 0, mu_static = 0, mu_kinetic = 0;
   std::string checks_json = "null";  // [checks] resolved (tests/model/check_cli_output.py runs them)
   std::vector<LegRef> stuck_at_end;   // [checks] stuck_at_end, as written
   // bound against the file
@@ -166,7 +170,7 @@ struct HexScene {
 };
 
 const std::vector<std::string> kCommonKeys = {"description", "name", "model", "analysis", "box_height", "rowing",
-                                              "lengths", "checks"};
+                                              "lengths", "ground", "checks"};
 
 // [checks]: a target `{ value, tolerance > 0 }` (the result within tolerance of value) or a bound.
 std::string target_json(Node v, const std::string &what) {
@@ -187,7 +191,9 @@ std::string checks_of(Node v, bool statics, std::vector<LegRef> &stuck_at_end) {
       statics ? std::vector<std::string>{"margin_m"}
               : std::vector<std::string>{"box_x_m", "box_y_m", "box_z_m", "yaw_rad", "roll_rad", "touchdown_s"};
   const std::vector<std::string> bounds =
-      statics ? std::vector<std::string>{} : std::vector<std::string>{"height_off_m", "tilt_max_rad", "settle_m"};
+      statics ? std::vector<std::string>{}
+              : std::vector<std::string>{"height_off_m", "tilt_max_rad", "settle_m", "margin_min_m", "friction_use_max",
+                                         "slip_mu_off", "slip_angle_max_rad", "friction_work_off"};
   std::vector<std::string> allowed = targets;
   allowed.insert(allowed.end(), bounds.begin(), bounds.end());
   if (!statics) {
@@ -282,6 +288,21 @@ HexScene parse(const toml::table &doc, const std::string &path) {
     s.has_box_load = true;
     for (int i = 0; i < 3; ++i)
       s.box_load[i] = ranged(a->get(i), "'box_load'[" + std::to_string(i) + "]", -kMaxBoxLoadN, kMaxBoxLoadN);
+  }
+  if (Node v = t->get("ground")) {
+    Table g = v->as_table();
+    const std::string gw = "ground: ";
+    if (!g) fail("'ground' must be a table {slope, uphill, mu_static, mu_kinetic}");
+    check_keys(g, {"slope", "uphill", "mu_static", "mu_kinetic"}, gw);
+    if (Node x = g->get("slope")) s.has_slope = true, s.slope = ranged(x, gw + "'slope'", 0, LEGSIM_MAX_SLOPE_RAD);
+    if (Node x = g->get("uphill")) {
+      if (!s.has_slope) fail(gw + "'uphill' needs 'slope'");
+      s.uphill = ranged(x, gw + "'uphill'", -kPi, kPi);
+    }
+    if (Node x = g->get("mu_static"))
+      s.has_mu_static = true, s.mu_static = ranged(x, gw + "'mu_static'", 0, LEGSIM_MAX_FRICTION);
+    if (Node x = g->get("mu_kinetic"))
+      s.has_mu_kinetic = true, s.mu_kinetic = ranged(x, gw + "'mu_kinetic'", 0, LEGSIM_MAX_FRICTION);
   }
   if (Node v = t->get("checks")) s.checks_json = checks_of(v, s.analysis == HexAnalysis::kStatics, s.stuck_at_end);
   if (s.analysis == HexAnalysis::kStatics) return s;
@@ -405,9 +426,13 @@ struct Storage {
   unsigned char *p;
 };
 
+bool sloped(const legsim_hexapod_desc &h) { return h.ground_normal[0] != 0 || h.ground_normal[1] != 0; }
+
 // The scene's pose (statics, and dynamics without a gait): the stand's lengths, the box level
 // over the origin with the stand's lowest foot at the ground point's height unless box_height
-// says otherwise.
+// says otherwise. On a sloped ground, without lengths and rowing: the box level box_height (else
+// the stand's height) over the ground below the origin, each foot where the stand puts it seen
+// from above, on the plane (the gait's set-points standing still).
 legsim_hexapod_pose scene_pose(const HexScene &s, const legsim_hexapod_desc &h, Storage &st) {
   legsim_hexapod_pose p{};
   p.box_quat[0] = 1;
@@ -452,6 +477,19 @@ legsim_hexapod_pose scene_pose(const HexScene &s, const legsim_hexapod_desc &h, 
   if (r != LEGSIM_OK) fail("the pose: " + status_text(r));
   double drop = 0;
   for (int k = 0; k < L; ++k) drop = std::max(drop, 1.0 - sd.foot_m[k][2]);
+  if (sloped(h) && !s.has_lengths && !s.has_rowing) {
+    const legsim_hexapod_gait still = {1.0, 0.75, 0, 0, 0, s.has_box_height ? s.box_height : drop};
+    legsim_hexapod_setpoint sp{};
+    const legsim_status g = legsim_hexapod_gait_setpoints(&h, &still, 0.0, st.p, st.bytes, &sp);
+    if (g != LEGSIM_OK) fail("the stand on the sloped ground: " + status_text(g));
+    for (int k = 0; k < L; ++k) {
+      p.rowing_rad[k] = sp.rowing_rad[k];
+      p.length_m[k][0] = sp.length_m[k][0];
+      p.length_m[k][1] = sp.length_m[k][1];
+    }
+    for (int i = 0; i < 3; ++i) p.box_m[i] = sp.box_m[i];
+    return p;
+  }
   // on the file's ground (a plane through ground_point; the box level over the origin)
   const double ground_z = h.ground_point_m[2];
   p.box_m[2] = s.has_box_height ? s.box_height : ground_z + drop;
@@ -476,6 +514,25 @@ std::string legs_json(uint32_t mask, const legsim_hexapod_desc &h) {
   return o + "]";
 }
 
+// every body's mass in legsim_hexapod_body_poses' order: the box, then per leg its yoke and bars
+int body_masses(const legsim_hexapod_desc &h, double *m) {
+  int n = 0;
+  m[n++] = h.box_mass_kg;
+  for (int k = 0; k < L; ++k) {
+    m[n++] = h.yoke_mass_kg;
+    for (int b = 0; b < h.leg[k].leg.n_bodies; ++b) m[n++] = h.leg[k].leg.body[b].mass_kg;
+  }
+  return n;
+}
+constexpr int kMaxBodies = 1 + L * (1 + LEGSIM_HEXAPOD_MAX_LEG_BARS);
+
+double total_mass(const legsim_hexapod_desc &h) {
+  double m[kMaxBodies], M = 0;
+  const int n = body_masses(h, m);
+  for (int b = 0; b < n; ++b) M += m[b];
+  return M;
+}
+
 // the header both the resolved scene and the results begin with
 void write_head(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h) {
   o << "{\"scene\": " << jstr(s.path) << ", \"name\": " << jstr(s.name) << ", \"kind\": \"hexapod\""
@@ -486,7 +543,8 @@ void write_head(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h
   o << "], \"leg_actuators\": [" << jstr(name_of(h.leg[0].leg.actuator[0].name)) << ", "
     << jstr(name_of(h.leg[0].leg.actuator[1].name)) << "], \"ground\": {\"point\": " << jarr(h.ground_point_m)
     << ", \"normal\": " << jarr(h.ground_normal) << ", \"mu_static\": " << jnum(h.mu_static)
-    << ", \"mu_kinetic\": " << jnum(h.mu_kinetic) << "}";
+    << ", \"mu_kinetic\": " << jnum(h.mu_kinetic) << "}, \"gravity\": " << jarr(h.gravity_mps2)
+    << ", \"mass\": " << jnum(total_mass(h));
 }
 
 void write_settings(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h, const legsim_hexapod_pose &p) {
@@ -517,8 +575,35 @@ void write_settings(std::ostream &o, const HexScene &s, const legsim_hexapod_des
   }
 }
 
+// The centre of mass (world) of the sim's bodies and the static stability margin about it of the
+// feet of support (bit l: leg l) where they are.
+void com_margin(const legsim_hexapod_sim *sim, const legsim_hexapod_desc &h, const legsim_hexapod_state &x,
+                uint32_t support, double com[3], double &margin) {
+  double m[kMaxBodies], pose[7 * kMaxBodies], M = 0;
+  const int nm = body_masses(h, m);
+  int32_t nb = 0;
+  com[0] = com[1] = com[2] = 0;
+  if (legsim_hexapod_body_poses(sim, pose, kMaxBodies, &nb) != LEGSIM_OK || nb != nm) {
+    com[0] = com[1] = com[2] = margin = NAN;
+    return;
+  }
+  for (int b = 0; b < nb; ++b) {
+    M += m[b];
+    for (int i = 0; i < 3; ++i) com[i] += m[b] * pose[7 * b + i];
+  }
+  for (int i = 0; i < 3; ++i) com[i] /= M;
+  double feet[L][3];
+  int n = 0;
+  for (int k = 0; k < L; ++k)
+    if (support >> k & 1u) {
+      for (int i = 0; i < 3; ++i) feet[n][i] = x.foot_m[k][i];
+      ++n;
+    }
+  if (legsim_hexapod_support_margin(feet, n, com, &margin) != LEGSIM_OK) margin = NAN;
+}
+
 void write_state_sample(std::ostream &o, const legsim_hexapod_state &x, const legsim_hexapod_desc &h, int64_t events,
-                        bool first) {
+                        bool first, const double com[3], double margin) {
   o << (first ? "\n    " : ",\n    ") << "{\"t\": " << jnum(x.t_s) << ", \"box\": " << jarr(x.box_m)
     << ", \"box_quat\": " << jarr(x.box_quat) << ", \"box_velocity\": " << jarr(x.box_velocity_mps)
     << ", \"box_omega\": " << jarr(x.box_omega_radps) << ", \"rowing\": " << jarr(x.rowing_rad) << ", \"lengths\": [";
@@ -532,7 +617,8 @@ void write_state_sample(std::ostream &o, const legsim_hexapod_state &x, const le
       << jstr(fs >= 0 && fs < 3 ? kFootState[fs] : "unknown") << ", \"x\": " << jarr(x.foot_m[k])
       << ", \"force\": " << jarr(x.foot_force_n[k]) << "}";
   }
-  o << "}, \"kinetic_energy\": " << jnum(x.kinetic_energy_j) << ", \"events\": " << events
+  o << "}, \"com\": [" << jnum(com[0]) << ", " << jnum(com[1]) << ", " << jnum(com[2]) << "], \"margin\": "
+    << jnum(margin) << ", \"kinetic_energy\": " << jnum(x.kinetic_energy_j) << ", \"events\": " << events
     << ", \"impacts\": " << x.impacts << "}";
 }
 
@@ -593,6 +679,7 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
     r = legsim_hexapod_set_integrator(sim, s.integrator);
     if (r != LEGSIM_OK) throw RunFail{r, "the integrator (legsim_hexapod_set_integrator): " + status_text(r)};
     double f[L][2], tau[L];
+    uint32_t plan_stance = s.stuck_mask;  // the gait's stance at the last set-points
     // what a step commands: the gait's set-points at its end with their statics, or the fixed
     // commands of the start pose
     auto command_gait = [&](double t) {
@@ -608,6 +695,7 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
         if (sp.stance[k]) stance |= 1u << k;
       }
       feedforward(h, at, stance, st, f, tau, "t = " + num(t) + " s");
+      plan_stance = stance;
       g = legsim_hexapod_command_pose(sim, sp.length_m, sp.rowing_rad, f, tau);
       if (g != LEGSIM_OK) throw RunFail{g, "the gait's commands at t = " + num(t) + " s: " + status_text(g)};
     };
@@ -641,7 +729,18 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
     }
     legsim_hexapod_state x{};
     legsim_hexapod_get_state(sim, &x);
-    write_state_sample(o, x, h, 0, true);
+    // the margin's feet: the gait's stance (a foot bouncing inside a step is no less the
+    // stance's), else the feet on the ground
+    auto support = [&]() {
+      if (s.has_gait) return plan_stance;
+      uint32_t m = 0;
+      for (int k = 0; k < L; ++k)
+        if (x.foot_state[k] != LEGSIM_CONTACT_FREE) m |= 1u << k;
+      return m;
+    };
+    double com[3], margin;
+    com_margin(sim, h, x, s.has_gait ? s.stuck_mask : support(), com, margin);
+    write_state_sample(o, x, h, 0, true, com, margin);
     int64_t events = 0;
     for (int64_t i = 1; i <= s.n_steps; ++i) {
       if (s.has_gait && i > 1) command_gait(static_cast<double>(i) * s.step_s);
@@ -651,7 +750,8 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
       legsim_hexapod_get_state(sim, &x);
       events += x.events;
       if (i % s.record_every == 0 || i == s.n_steps) {
-        write_state_sample(o, x, h, events, false);
+        com_margin(sim, h, x, support(), com, margin);
+        write_state_sample(o, x, h, events, false, com, margin);
         events = 0;
       }
     }
@@ -706,6 +806,16 @@ int run_hexapod_scene(const std::string &text, const std::string &path, bool che
       err << "legsim_cli: error: " << msg << " (model of " << path << ")\n";
       return 2;
     }
+    // the scene's ground over the file's
+    if (s.has_slope) {
+      h->ground_normal[0] = -std::sin(s.slope) * std::cos(s.uphill);
+      h->ground_normal[1] = -std::sin(s.slope) * std::sin(s.uphill);
+      h->ground_normal[2] = std::cos(s.slope);
+    }
+    if (s.has_mu_static) h->mu_static = s.mu_static;
+    if (s.has_mu_kinetic) h->mu_kinetic = s.mu_kinetic;
+    if (!(h->mu_kinetic <= h->mu_static))
+      fail("ground: mu_kinetic " + num(h->mu_kinetic) + " must be at most mu_static " + num(h->mu_static));
     if (s.has_stance) s.stance_mask = bind_legs(s.stance, *h, "'stance'");
     if (s.has_stuck) s.stuck_mask = bind_legs(s.stuck, *h, "'stuck'");
     const size_t at = s.checks_json.find("@STUCK_AT_END@");
@@ -721,11 +831,12 @@ int run_hexapod_scene(const std::string &text, const std::string &path, bool che
                " has an offset already");
     }
     if (s.has_gait) {
-      // the gait's pose at t = 0: its set-points, the box level at its height over the origin
+      // the gait's pose at t = 0: its set-points, the box level at its height over the ground
+      // below the origin
       legsim_hexapod_setpoint sp{};
       const legsim_status g = legsim_hexapod_gait_setpoints(h.get(), &s.gait, 0.0, st.p, st.bytes, &sp);
       if (g != LEGSIM_OK) fail("gait: its set-points at t = 0: " + status_text(g));
-      pose.box_m[2] = s.gait.box_height_m;
+      for (int i = 0; i < 3; ++i) pose.box_m[i] = sp.box_m[i];
       pose.box_quat[0] = 1;
       s.stuck_mask = 0;
       for (int k = 0; k < L; ++k) {

@@ -304,7 +304,7 @@ class Library:
 
         class HexapodSetpoint(C.Structure):
             _fields_ = [("foot_box_m", (d * 3) * 6), ("stance", i32 * 6), ("rowing_rad", d * 6),
-                        ("length_m", (d * 2) * 6)]
+                        ("length_m", (d * 2) * 6), ("box_m", d * 3), ("box_quat", d * 4)]
 
         class HexapodState(C.Structure):
             _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
@@ -417,6 +417,8 @@ class Library:
                                                    C.POINTER(self.HexapodSweepPoint)]),
             "legsim_hexapod_gait_setpoints": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodGait),
                                                    C.c_double, P, C.c_size_t, C.POINTER(self.HexapodSetpoint)]),
+            "legsim_hexapod_support_margin": (st, [C.POINTER(C.c_double * 3), C.c_int32, C.POINTER(C.c_double),
+                                                   C.POINTER(C.c_double)]),
             "legsim_hexapod_sim_size": (C.c_size_t, []),
             "legsim_hexapod_sim_init": (st, [P, C.c_size_t, C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
                                              C.c_uint32, C.POINTER(P)]),

@@ -7,6 +7,9 @@
     >>> m = h.sim(pose, stuck=(0, 2, 4))               # moving, the tripod's feet held
     >>> m.command(s["actuator_force_n"], s["rowing_torque_nm"])
     >>> m.step(100, h_s=1e-3); m.state()["box_m"]
+    >>> slope = dict(slope_rad=0.26, uphill_rad=0.0)       # 15 degrees, rising along x
+    >>> w = h.walk(period_s=1.2, duty=0.6, step_length_m=0.12, step_height_m=0.05,
+    ...            box_height_m=1.0, t_end_s=2.4, ground=slope)   # up the fall line, the box level
 
 Units SI, the world's z up. What the file holds and its ranges: firmware_core/include/legsim/hexapod.h;
 the formulation and the rule statics takes for what it leaves free: docs/design/spatial.md.
@@ -71,12 +74,64 @@ class Hexapod:
         return {"box_m": [0.0, 0.0, float(box_height)], "box_quat": [1.0, 0.0, 0.0, 0.0],
                 "rowing_rad": list(rowing), "length_m": lengths}
 
+    def ground_stand_pose(self, box_height: float) -> dict:
+        """The stand on the ground plane (level or not): the box level box_height over the ground
+        below the origin, each foot where the stand puts it seen from above, on the plane (the
+        gait's set-points standing still; legsim_cli's pose on a sloped ground)."""
+        sp = self.gait_setpoints(0.0, period_s=1.0, duty=0.75, step_length_m=0.0, step_height_m=0.0,
+                                 box_height_m=box_height)
+        return {"box_m": list(sp["box_m"]), "box_quat": [1.0, 0.0, 0.0, 0.0], "rowing_rad": list(sp["rowing_rad"]),
+                "length_m": sp["length_m"].tolist()}
+
+    @property
+    def ground(self) -> dict:
+        """The file's ground plane: point (m), upward unit normal, mu_static, mu_kinetic."""
+        d = self.desc
+        return {"point": list(d.ground_point_m), "normal": list(d.ground_normal),
+                "mu_static": d.mu_static, "mu_kinetic": d.mu_kinetic}
+
+    def on_ground(self, *, slope_rad: float | None = None, uphill_rad: float = 0.0, normal=None, point=None,
+                  mu_static: float | None = None, mu_kinetic: float | None = None) -> "Hexapod":
+        """This hexapod over another ground plane (each value left out keeps the file's): tilted by
+        slope_rad from level, rising toward the heading uphill_rad (about the world's z from its x:
+        0 rises along x, pi/2 along y), or with the upward unit ``normal`` itself; through
+        ``point`` (m). Its gait, statics and sims are on that plane."""
+        if slope_rad is not None and normal is not None:
+            raise ValueError("give slope_rad (with uphill_rad) or normal, not both")
+        h = Hexapod(type(self.desc).from_buffer_copy(self.desc), self.library, self.source)
+        d = h.desc
+        if slope_rad is not None:
+            s = float(slope_rad)
+            normal = (-np.sin(s) * np.cos(uphill_rad), -np.sin(s) * np.sin(uphill_rad), np.cos(s))
+        if normal is not None:
+            for i in range(3):
+                d.ground_normal[i] = float(normal[i])
+        if point is not None:
+            for i in range(3):
+                d.ground_point_m[i] = float(point[i])
+        if mu_static is not None:
+            d.mu_static = float(mu_static)
+        if mu_kinetic is not None:
+            d.mu_kinetic = float(mu_kinetic)
+        return h
+
+    def _on(self, ground) -> "Hexapod":
+        """self, or self on_ground(**ground) (a dict of on_ground's keywords)."""
+        return self if ground is None else self.on_ground(**ground)
+
     def gait_setpoints(self, t_s: float, *, period_s: float, duty: float, step_length_m: float,
-                       step_height_m: float, turn_rad: float = 0.0, box_height_m: float) -> dict:
-        """The tripod gait's set-points at ``t_s`` (legsim_hexapod_gait_setpoints): each foot's
-        target in the box's frame (foot_box_m, 6 x 3), whether it stands (stance, 6 bools), and
-        the rowing angles (rowing_rad) and actuator lengths (length_m, 6 x 2) that put it there.
-        Raises OutOfStrokeError (or UnreachableError, ...) for a target the leg cannot reach."""
+                       step_height_m: float, turn_rad: float = 0.0, box_height_m: float, ground=None) -> dict:
+        """The tripod gait's set-points at ``t_s`` (legsim_hexapod_gait_setpoints) on the file's ground
+        (or ``ground``: a dict of on_ground's keywords): each foot's target in the box's frame
+        (foot_box_m, 6 x 3), whether it stands (stance, 6 bools), the rowing angles (rowing_rad)
+        and actuator lengths (length_m, 6 x 2) that put it there, and the box's planned pose
+        (box_m, box_quat: world; on a slope the box stays level, box_height_m over the ground
+        below it). Raises OutOfStrokeError (or UnreachableError, ...) for a target the leg cannot
+        reach."""
+        if ground is not None:
+            return self._on(ground).gait_setpoints(t_s, period_s=period_s, duty=duty, step_length_m=step_length_m,
+                                                   step_height_m=step_height_m, turn_rad=turn_rad,
+                                                   box_height_m=box_height_m)
         lib = self.library
         g = lib.HexapodGait(float(period_s), float(duty), float(step_length_m), float(step_height_m),
                             float(turn_rad), float(box_height_m))
@@ -87,7 +142,29 @@ class Hexapod:
         return {"foot_box_m": np.array([out.foot_box_m[k][:] for k in range(LEGS)]),
                 "stance": np.array([bool(out.stance[k]) for k in range(LEGS)]),
                 "rowing_rad": np.array(out.rowing_rad[:]),
-                "length_m": np.array([out.length_m[k][:] for k in range(LEGS)])}
+                "length_m": np.array([out.length_m[k][:] for k in range(LEGS)]),
+                "box_m": np.array(out.box_m[:]), "box_quat": np.array(out.box_quat[:])}
+
+    def body_masses(self) -> np.ndarray:
+        """Every body's mass (kg) in body_poses' order: the box, then per leg its yoke and its bars."""
+        d = self.desc
+        m = [d.box_mass_kg]
+        for k in range(LEGS):
+            leg = d.leg[k].leg
+            m += [d.yoke_mass_kg] + [leg.body[b].mass_kg for b in range(leg.n_bodies)]
+        return np.array(m)
+
+    def support_margin(self, foot_m, com_m) -> float:
+        """The static stability margin (m) of the feet at foot_m (n x 3, world) about com_m:
+        legsim_hexapod_support_margin (both projected along gravity; -inf for fewer than three
+        feet or feet on one line)."""
+        f = np.asarray(foot_m, dtype=float).reshape(-1, 3)
+        arr = (C.c_double * 3 * LEGS)(*[(C.c_double * 3)(*row) for row in f.tolist()])
+        com = (C.c_double * 3)(*[float(x) for x in com_m])
+        out = C.c_double()
+        self.library.check(self.library.cdll.legsim_hexapod_support_margin(arr, len(f), com, C.byref(out)),
+                           "legsim_hexapod_support_margin")
+        return out.value
 
     def _pose(self, pose: dict):
         p = self.library.HexapodPose()
@@ -103,24 +180,37 @@ class Hexapod:
 
     def walk(self, *, period_s: float, duty: float, step_length_m: float, step_height_m: float,
              box_height_m: float, turn_rad: float = 0.0, t_end_s: float, h_s: float = 1e-3,
-             every: int = 10, feedforward: bool = True, integrator: str = "rk4") -> dict:
-        """The robot walking on the tripod gait: it starts at rest at the gait's pose at t = 0
-        (the box level box_height_m over the origin, the standing feet stuck on the ground of the
-        file, the others free), and before every step of h_s its servos get the gait's set-points
-        at the step's end (HexapodSim.command_pose) with, by default, the statics of the planned
-        pose on its planned stance as feed-forward (the load the servos' gains alone would sag
-        under); the feet touch down, stick, slip and lift off as the ground's cones decide. Returns numpy arrays sampled every `every` steps (the
-        start included): t_s, box_m (n, 3), box_quat (n, 4), foot_m (n, 6, 3), foot_force_n
-        (n, 6, 3), foot_state (n, 6: 0 free, 1 stuck, 2 sliding), set_foot_box_m (n, 6, 3: the
-        gait's targets in the box's frame), body_pose (n, bodies, 7), events (each sample's
-        count since the last), impacts (touchdowns so far), kinetic_energy_j. ``integrator``: as
+             every: int = 10, feedforward: bool = True, integrator: str = "rk4", ground=None) -> dict:
+        """The robot walking on the tripod gait over the file's ground (or ``ground``: a dict of
+        on_ground's keywords): it starts at rest at the gait's pose at t = 0 (the box level
+        box_height_m over the ground below the origin, the standing feet stuck on the ground, the
+        others free), and before every step of h_s its servos get the gait's set-points at the
+        step's end (HexapodSim.command_pose) with, by default, the statics of the planned pose on
+        its planned stance as feed-forward (the load the servos' gains alone would sag under); the
+        feet touch down, stick, slip and lift off as the ground's cones decide. Returns numpy
+        arrays sampled every `every` steps (the start included): t_s, box_m (n, 3), box_quat (n,
+        4), foot_m (n, 6, 3), foot_force_n (n, 6, 3), foot_state (n, 6: 0 free, 1 stuck, 2
+        sliding), set_foot_box_m (n, 6, 3: the gait's targets in the box's frame), set_box_m (n,
+        3: the box's planned centre), com_m (n, 3: the centre of mass), margin_m (n: the static
+        stability margin of the gait's stance feet, where they are, about it: support_margin),
+        plan_margin_m (n: the planned pose's, its statics'), body_pose (n, bodies, 7), events (each sample's count
+        since the last), impacts (touchdowns so far), kinetic_energy_j. ``integrator``: as
         HexapodSim.set_integrator."""
+        if ground is not None:
+            return self._on(ground).walk(period_s=period_s, duty=duty, step_length_m=step_length_m,
+                                         step_height_m=step_height_m, box_height_m=box_height_m, turn_rad=turn_rad,
+                                         t_end_s=t_end_s, h_s=h_s, every=every, feedforward=feedforward,
+                                         integrator=integrator)
         gait = dict(period_s=period_s, duty=duty, step_length_m=step_length_m, step_height_m=step_height_m,
                     turn_rad=turn_rad, box_height_m=box_height_m)
         sp = self.gait_setpoints(0.0, **gait)
-        pose = {"box_m": [0.0, 0.0, float(box_height_m)], "box_quat": [1.0, 0.0, 0.0, 0.0],
+        # the box level over the origin: gravity acts along its z at every planned pose, so the
+        # statics there are the planned pose's (its place and heading change none of them)
+        pose = {"box_m": list(sp["box_m"]), "box_quat": [1.0, 0.0, 0.0, 0.0],
                 "rowing_rad": list(sp["rowing_rad"]), "length_m": sp["length_m"].tolist()}
         m = self.sim(pose, stuck=[k for k in range(LEGS) if sp["stance"][k]], integrator=integrator)
+        masses = self.body_masses()
+        plan_margin = [np.nan]
 
         def command(sp):
             ff = fm = None
@@ -128,25 +218,36 @@ class Hexapod:
                 at = dict(pose, rowing_rad=list(sp["rowing_rad"]), length_m=sp["length_m"].tolist())
                 s = self.statics(at, stance=[k for k in range(LEGS) if sp["stance"][k]])
                 ff, fm = s["actuator_force_n"], s["rowing_torque_nm"]
+                plan_margin[0] = s["margin_m"]
             m.command_pose(sp["length_m"], sp["rowing_rad"], ff, fm)
 
         command(sp)
         n = int(round(float(t_end_s) / float(h_s)))
         out = {k: [] for k in ("t_s", "box_m", "box_quat", "foot_m", "foot_force_n", "foot_state",
-                               "set_foot_box_m", "body_pose", "events", "impacts", "kinetic_energy_j")}
+                               "set_foot_box_m", "set_box_m", "com_m", "margin_m", "plan_margin_m", "body_pose",
+                               "events", "impacts", "kinetic_energy_j")}
         events = 0
 
-        def sample(st, target):
+        def sample(st, sp):
             out["t_s"].append(st["t_s"])
             for k in ("box_m", "box_quat", "foot_m", "foot_force_n", "impacts", "kinetic_energy_j"):
                 out[k].append(st[k])
             out["foot_state"].append([_FOOT_STATES.index(x) for x in st["foot_state"]])
-            out["set_foot_box_m"].append(target)
-            out["body_pose"].append(m.body_poses())
+            out["set_foot_box_m"].append(sp["foot_box_m"])
+            out["set_box_m"].append(sp["box_m"])
+            bodies = m.body_poses()
+            com = masses @ bodies[:, :3] / masses.sum()
+            out["com_m"].append(com)
+            # the feet the gait stands on, where they are (a foot bouncing inside a step is no
+            # less the stance's)
+            on = [k for k in range(LEGS) if sp["stance"][k]]
+            out["margin_m"].append(self.support_margin(st["foot_m"][on], com))
+            out["plan_margin_m"].append(plan_margin[0])
+            out["body_pose"].append(bodies)
             out["events"].append(events)
 
         st = m.state()
-        sample(st, sp["foot_box_m"])
+        sample(st, sp)
         for i in range(n):
             sp = self.gait_setpoints((i + 1) * float(h_s), **gait)
             command(sp)
@@ -154,7 +255,7 @@ class Hexapod:
             st = m.state()
             events += st["events"]
             if (i + 1) % every == 0 or i + 1 == n:
-                sample(st, sp["foot_box_m"])
+                sample(st, sp)
                 events = 0
         res = {k: np.array(v) for k, v in out.items()}
         res["cone"] = st["cone"]

@@ -1,7 +1,8 @@
 """The hexapod's scenes (scenes/hexapod_*.toml, scenes/README.md "The hexapod"): legsim_cli runs
 them through the hexapod's C API; here its JSON against the Python API run independently
-(legsim.Hexapod.statics) and against the gait's plan, and the bench's handling of them (it lists
-them as legsim_cli's and refuses to run them: hil_sim has no hexapod)."""
+(legsim.Hexapod.statics, .walk, .sim on the scene's ground) and against the gait's plan, and the
+bench's handling of them (it lists them as legsim_cli's and refuses to run them: hil_sim has no
+hexapod)."""
 import json
 import math
 import subprocess
@@ -20,7 +21,8 @@ except ImportError:  # the bench is not installed: use the source tree
 from legsim_bench.scene import SceneError, cli_path, is_hexapod_scene, load_scene, shipped_scenes  # noqa: E402
 
 SCENES = ROOT / "scenes"
-HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop"}
+HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop",
+                  "hexapod_slope_up", "hexapod_slope_across", "hexapod_slip"}
 
 
 def _cli():
@@ -112,3 +114,59 @@ def test_the_turn_turns_as_the_gait_plans():
     yaw = 2 * math.atan2(q[3], q[0])
     assert abs(yaw - plan) <= 0.1 * plan, (yaw, plan)
     assert max(math.hypot(*s["box"][:2]) for s in d["samples"]) < 0.05  # on the spot
+
+
+def _ground(d):
+    """The scene's [ground] as Hexapod.on_ground's keywords (the header's resolved plane)."""
+    g = d["ground"]
+    return dict(normal=g["normal"], point=g["point"], mu_static=g["mu_static"], mu_kinetic=g["mu_kinetic"])
+
+
+def _scene_checks(d):
+    sys.path.insert(0, str(ROOT / "tests" / "model"))
+    import check_cli_output
+    return {k: check_cli_output.hexapod_check(d, k, w) for k, w in d["checks"].items()}
+
+
+@pytest.mark.parametrize("name", ["hexapod_slope_up", "hexapod_slope_across"])
+def test_the_slope_walks_are_the_python_api_s(hexapod, name):
+    """hexapod_slope_up / _across (15 degrees, up the fall line and across it): the scene's checks
+    pass (progress against the plan, height over the ground below the box, tilt, the stuck feet
+    inside their cones, the stance's margin), and the run is legsim.Hexapod.walk's on the scene's
+    ground, sample for sample."""
+    d = _run(name)
+    got = _scene_checks(d)
+    print(name, {k: v[0] for k, v in got.items()})
+    assert all(ok for _, ok in got.values()), got
+    g = d["gait"]
+    n = d["ground"]["normal"]
+    assert abs(math.acos(n[2]) - math.radians(15)) < 1e-12
+    w = hexapod.walk(**g, t_end_s=d["duration"], h_s=d["step_s"], every=d["record_every"], ground=_ground(d))
+    assert np.array_equal(np.array([s["box"] for s in d["samples"]]), w["box_m"])
+    assert np.array_equal(np.array([[s["feet"][k]["x"] for k in d["legs"]] for s in d["samples"]]), w["foot_m"])
+    assert np.allclose(np.array([s["com"] for s in d["samples"]]), w["com_m"], rtol=0, atol=1e-12)
+    assert np.allclose(np.array([s["margin"] for s in d["samples"]]), w["margin_m"], rtol=0, atol=1e-12)
+
+
+def test_the_slip_is_the_python_api_s(hexapod):
+    """hexapod_slip: its checks pass (|F_t| = mu_k N, the friction against the slip, its work the
+    energy lost), and the run is the Python API's: the stand on the scene's ground, the servos
+    holding it with its six feet's statics as feed-forward, step for step."""
+    d = _run("hexapod_slip")
+    got = _scene_checks(d)
+    print("hexapod_slip", {k: v[0] for k, v in got.items()})
+    assert all(ok for _, ok in got.values()), got
+    assert all(f["state"] == "sliding" for s in d["samples"][1:] for f in s["feet"].values())
+    h = hexapod.on_ground(**_ground(d))
+    p = d["pose"]
+    pose = {"box_m": p["box"], "box_quat": p["box_quat"], "rowing_rad": p["rowing"], "length_m": p["lengths"]}
+    ref = h.ground_stand_pose(p["box"][2] - h.ground["point"][2])
+    assert np.abs(np.array(p["lengths"]) - ref["length_m"]).max() < 1e-12
+    s = h.statics(pose)
+    m = h.sim(pose)
+    m.command_pose(pose["length_m"], pose["rowing_rad"], s["actuator_force_n"], s["rowing_torque_nm"])
+    for k, sample in enumerate(d["samples"][1:]):
+        m.step(1, h_s=d["step_s"])
+        st = m.state()
+        assert np.array_equal(st["box_m"], sample["box"]), k
+    assert np.array_equal(st["foot_m"], [sample["feet"][k]["x"] for k in d["legs"]])

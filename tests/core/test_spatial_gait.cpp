@@ -9,6 +9,10 @@
 // - the margin of an equilateral support triangle about its centre is its inradius, of a point
 //   outside minus its distance to the nearest edge; the hexagon of six feet; fewer than three
 //   feet or feet on one line give -inf;
+// - on a slope (the ground's grade), the box level: a standing foot holds its place in the world
+//   in 3D and lies on the plane (1e-12 m), a swinging one rises by the step height over the
+//   ground directly below it; the box's planned motion (gait_box) is the closed form's, its rise
+//   the grade's along it;
 // - gaits outside their ranges are refused.
 #include <cmath>
 #include <cstdio>
@@ -103,6 +107,49 @@ void test_standing_feet_hold_and_swings_join(void) {
   }
 }
 
+void test_gait_on_a_slope(void) {
+  for (const real turn : {real(0.0), real(0.3)}) {
+    TripodGait g = gait(turn);
+    g.grade[0] = 0.2, g.grade[1] = -0.15;  // the plane z = 0.2 X - 0.15 Y, the box 1 m over it at t = 0
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, gait_check(g));
+    double held[6][3], worst_hold = 0, worst_plane = 0, worst_box = 0, peak = 0;
+    bool was[6] = {false, false, false, false, false, false};
+    for (int k = 0; k <= 3000; ++k) {  // 2.5 periods
+      const double t = k * 1e-3;
+      V3 f[6], d;
+      bool st[6];
+      real yaw;
+      gait_feet(g, t, f, st);
+      gait_box(g, t, d, yaw);
+      double bx, by, byaw;
+      box_pose(g, t, bx, by, byaw);
+      const double bz = 1.0 + 0.2 * bx - 0.15 * by;  // level, 1 m over the ground below it
+      worst_box = std::fmax(worst_box, std::fabs(d.x - bx) + std::fabs(d.y - by) + std::fabs(1.0 + d.z - bz) +
+                                           std::fabs(yaw - byaw));
+      for (int l = 0; l < 6; ++l) {
+        double X, Y;
+        world(g, t, f[l], X, Y);
+        const double Z = bz + f[l].z, ground = 0.2 * X - 0.15 * Y;
+        if (st[l]) {
+          worst_plane = std::fmax(worst_plane, std::fabs(Z - ground));
+          if (was[l]) worst_hold = std::fmax(worst_hold, std::fabs(X - held[l][0]) + std::fabs(Y - held[l][1]) +
+                                                            std::fabs(Z - held[l][2]));
+          else held[l][0] = X, held[l][1] = Y, held[l][2] = Z;
+        } else {
+          TEST_ASSERT_TRUE(Z - ground > -1e-12 && Z - ground < g.step_height_m + 1e-12);
+          peak = std::fmax(peak, Z - ground);
+        }
+        was[l] = st[l];
+      }
+    }
+    printf("slope (grade 0.2, -0.15), turn %+.1f: standing feet on the plane to %.1e m, held to %.1e m; "
+           "the box's motion off the closed form %.1e; swing peak %.6f m\n",
+           turn, worst_plane, worst_hold, worst_box, peak);
+    TEST_ASSERT_TRUE(worst_plane < 1e-12 && worst_hold < 1e-12 && worst_box < 1e-12);
+    TEST_ASSERT_TRUE(std::fabs(peak - g.step_height_m) < 1e-6);
+  }
+}
+
 void test_support_margin(void) {
   // an equilateral triangle of side a about the origin: the inradius a / (2 sqrt 3)
   const double a = 0.9, R = a / std::sqrt(3.0);
@@ -154,11 +201,17 @@ void test_gait_ranges(void) {
   g = gait(0);
   g.step_height_m = NAN;
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, gait_check(g));
+  g = gait(0);
+  g.grade[0] = 20;  // steeper than LEGSIM_MAX_SLOPE_RAD
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, gait_check(g));
+  g.grade[0] = NAN;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, gait_check(g));
 }
 
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_standing_feet_hold_and_swings_join);
+  RUN_TEST(test_gait_on_a_slope);
   RUN_TEST(test_support_margin);
   RUN_TEST(test_gait_ranges);
   return UNITY_END();

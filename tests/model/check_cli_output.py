@@ -158,6 +158,74 @@ def check_good(cli, scene, outdir):
     check(r.returncode == 0 and r.stdout.startswith("t_s,"), f"{name}: CSV on stdout")
 
 
+def _dot(a, b):
+    return sum(x * y for x, y in zip(a, b))
+
+
+def ground_split(d, force):
+    """A ground force on a foot: (N along the header's ground normal, |F_t| along the plane)."""
+    n = d["ground"]["normal"]
+    N = _dot(force, n)
+    return N, math.sqrt(max(0.0, _dot(force, force) - N * N))
+
+
+def over_ground(d, x):
+    """A point's height over the header's ground plane, along its normal."""
+    g = d["ground"]
+    return _dot([a - b for a, b in zip(x, g["point"])], g["normal"])
+
+
+def below_z(d, x, y):
+    """The ground's z directly below (x, y)."""
+    g = d["ground"]
+    p, n = g["point"], g["normal"]
+    return p[2] - (n[0] * (x - p[0]) + n[1] * (y - p[1])) / n[2]
+
+
+def hexapod_slip(d):
+    """The sliding feet between consecutive samples (record_every 1): the worst | |F_t| - mu_k N |
+    / N, the worst angle between the friction and the slip (the foot's displacement, against the
+    mean of the tangential forces at both ends; from the fourth step in a row it slides faster than
+    0.1 mm/s: slower, the core keeps a slip's direction (docs/design/spatial.md "Moving"), and a
+    slip from rest turns onto its velocity over its first steps), and
+    the energy balance as
+    tests/model/test_hexapod_contact.cpp's: the robot's energy (kinetic and gravity's, less the
+    commands' work) changes by the friction's work, | dE - W | / |W|, both works by the
+    trapezoid rule."""
+    mu_k, n = d["ground"]["mu_kinetic"], d["ground"]["normal"]
+    mu_off = angle = work = commands = 0.0
+    samples = d["samples"]
+    slow = 1e-4 * d["step_s"] * d["record_every"]  # m a sample at 0.1 mm/s
+    fast = {k: 0 for k in d["legs"]}  # steps in a row it slid faster than that
+    for a, b in zip(samples, samples[1:]):
+        for j in range(6):
+            for i in range(2):
+                commands += (a["actuator_forces"][j][i] + b["actuator_forces"][j][i]) / 2 * \
+                    (b["lengths"][j][i] - a["lengths"][j][i])
+            commands += (a["rowing_torques"][j] + b["rowing_torques"][j]) / 2 * (b["rowing"][j] - a["rowing"][j])
+        for k in d["legs"]:
+            fa, fb = a["feet"][k], b["feet"][k]
+            dx = [q - p for p, q in zip(fa["x"], fb["x"])]
+            f = [(p + q) / 2 for p, q in zip(fa["force"], fb["force"])]
+            work += _dot(f, dx)
+            moving = fa["state"] == fb["state"] == "sliding" and math.sqrt(_dot(dx, dx)) > slow
+            fast[k] = fast[k] + 1 if moving else 0
+            if fb["state"] != "sliding":
+                continue
+            N, Ft = ground_split(d, fb["force"])
+            mu_off = max(mu_off, abs(Ft - mu_k * N) / N)
+            if fast[k] >= 4:
+                ft = [x - _dot(f, n) * m for x, m in zip(f, n)]
+                c = -_dot(ft, dx) / math.sqrt(_dot(ft, ft) * _dot(dx, dx))
+                angle = max(angle, math.acos(max(-1.0, min(1.0, c))))
+
+    def mechanical(s):
+        return s["kinetic_energy"] - d["mass"] * _dot(d["gravity"], s["com"])
+
+    lost = mechanical(samples[-1]) - mechanical(samples[0]) - commands
+    return mu_off, angle, abs(lost - work) / abs(work) if work else math.inf
+
+
 def hexapod_check(d, key, want):
     """A hexapod scene's [checks] key against its JSON (scenes/README.md, "The hexapod"):
     (what the run gave, passed)."""
@@ -174,11 +242,23 @@ def hexapod_check(d, key, want):
     if key == "touchdown_s":
         got = next((s["t"] for s in samples if s["impacts"] > 0), None)
         return got, got is not None and abs(got - want["value"]) <= want["tolerance"]
-    height = d["gait"]["box_height_m"] if d["gait"] else d["pose"]["box"][2] - d["lift"]
+    # the box's height over the ground directly below it, against the gait's (else the start's)
+    p0 = d["pose"]["box"]
+    height = d["gait"]["box_height_m"] if d["gait"] else p0[2] - d["lift"] - below_z(d, p0[0], p0[1])
+    off = [abs(s["box"][2] - below_z(d, s["box"][0], s["box"][1]) - height) for s in samples]
     if key == "height_off_m":
-        got = max(abs(s["box"][2] - height) for s in samples)
+        got = max(off)
     elif key == "settle_m":
-        got = abs(last["box"][2] - height)
+        got = off[-1]
+    elif key == "margin_min_m":
+        got = min(s["margin"] for s in samples)
+        return got, got >= want
+    elif key == "friction_use_max":
+        use = [Ft / N for s in samples if s["t"] > 0 for f in s["feet"].values() if f["state"] == "stuck"
+               for N, Ft in [ground_split(d, f["force"])]]
+        got = max(use) if use else 0.0
+    elif key in ("slip_mu_off", "slip_angle_max_rad", "friction_work_off"):
+        got = hexapod_slip(d)[("slip_mu_off", "slip_angle_max_rad", "friction_work_off").index(key)]
     elif key == "tilt_max_rad":
         got = max(2 * math.asin(min(1.0, math.hypot(*s["box_quat"][1:3]))) for s in samples)
     elif key == "impacts_min":
@@ -193,8 +273,8 @@ def hexapod_check(d, key, want):
 
 def check_hexapod(cli, scene, spec, d, name):
     """A hexapod scene's JSON (scenes/README.md, "The hexapod"): its keys, the statics' balance,
-    the run's samples on the step grid, the feet on or above the ground (the file's: z = 0 here),
-    the stuck ones on it and inside their cones; CSV refused."""
+    the run's samples on the step grid, the feet on or above the ground (the header's plane), the
+    stuck ones on it and inside their cones; CSV refused."""
     legs = d["legs"]
     check(len(legs) == 6 and d["status"] == "ok" and d["status_code"] == "LEGSIM_OK", f"{name}: status {d['status']}")
     check(d["analysis"] == spec.get("analysis", "dynamics"), f"{name}: analysis {d['analysis']}")
@@ -215,12 +295,12 @@ def check_hexapod(cli, scene, spec, d, name):
         for s in samples:
             for k in legs:
                 f = s["feet"][k]
-                check(f["x"][2] > -1e-9, f"{name}: {k} under the ground at t = {s['t']}")
+                check(over_ground(d, f["x"]) > -1e-9, f"{name}: {k} under the ground at t = {s['t']}")
                 if f["state"] == "stuck":
-                    check(abs(f["x"][2]) < 1e-9, f"{name}: stuck {k} off the ground at t = {s['t']}")
+                    check(abs(over_ground(d, f["x"])) < 1e-9, f"{name}: stuck {k} off the ground at t = {s['t']}")
                     if s["t"] > 0:
-                        check(math.hypot(f["force"][0], f["force"][1]) <= mu * f["force"][2] + 1e-6,
-                              f"{name}: stuck {k} outside its cone at t = {s['t']}")
+                        N, Ft = ground_split(d, f["force"])
+                        check(Ft <= mu * N + 1e-6, f"{name}: stuck {k} outside its cone at t = {s['t']}")
             check(all(math.isfinite(v) for v in s["box"] + s["box_quat"]), f"{name}: box at t = {s['t']}")
     check((d["checks"] is None) == ("checks" not in spec) and set(d["checks"] or {}) == set(spec.get("checks", {})),
           f"{name}: checks {d['checks']}")

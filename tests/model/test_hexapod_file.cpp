@@ -322,14 +322,26 @@ void test_api_refuses_and_leaves_out(void) {
   g.box_height_m = 1.0;
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_gait_setpoints(&s.desc, &g, NAN, big, n, &sp));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_gait_setpoints(&s.desc, &g, 0.3, big, n, &sp));
+  // the box's planned pose: 0.3 s at step_length / (duty period) along x, level, 1 m up
+  TEST_ASSERT_TRUE(std::fabs(sp.box_m[0] - 0.3 * 0.12 / 0.72) < 1e-15 && sp.box_m[1] == 0 && sp.box_m[2] == 1.0);
+  TEST_ASSERT_TRUE(sp.box_quat[0] == 1 && sp.box_quat[1] == 0 && sp.box_quat[2] == 0 && sp.box_quat[3] == 0);
+  // the margin's refusals; an equilateral triangle's inradius about its centre
+  const double tri[3][3] = {{1, 0, 0.5}, {-0.5, 0.8660254037844386, 0}, {-0.5, -0.8660254037844386, 0}};
+  const double centre[3] = {0, 0, 1}, far[3] = {1e9, 0, 0};
+  double margin = 0;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_support_margin(tri, 3, centre, nullptr));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_support_margin(tri, 7, centre, &margin));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_support_margin(tri, 3, far, &margin));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_support_margin(tri, 3, centre, &margin));
+  TEST_ASSERT_TRUE(std::fabs(margin - 0.5) < 1e-15);
   // one leg's reach and the Section V sweep: refused calls write nothing
   double psi = 7, len[2] = {7, 7};
-  const double foot[3] = {0.8, -0.6, -1.0}, far[3] = {5.0, 0, -1.0}, nan_foot[3] = {0.8, NAN, -1.0};
+  const double foot[3] = {0.8, -0.6, -1.0}, beyond[3] = {5.0, 0, -1.0}, nan_foot[3] = {0.8, NAN, -1.0};
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_NULL, legsim_hexapod_leg_reach(&s.desc, 0, nullptr, big, n, &psi, len));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_STORAGE, legsim_hexapod_leg_reach(&s.desc, 0, foot, big, n - 1, &psi, len));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_leg_reach(&s.desc, -1, foot, big, n, &psi, len));
   TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_leg_reach(&s.desc, 0, nan_foot, big, n, &psi, len));
-  TEST_ASSERT_TRUE(legsim_hexapod_leg_reach(&s.desc, 0, far, big, n, &psi, len) != LEGSIM_OK);
+  TEST_ASSERT_TRUE(legsim_hexapod_leg_reach(&s.desc, 0, beyond, big, n, &psi, len) != LEGSIM_OK);
   TEST_ASSERT_TRUE(psi == 7 && len[0] == 7 && len[1] == 7);
   legsim_hexapod_sweep sw = {0, 0x15, 1.0, {0.4, 0.6}, 3, {0, 0}, 1};
   legsim_hexapod_sweep_point pts[3];

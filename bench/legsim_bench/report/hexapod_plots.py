@@ -77,6 +77,13 @@ def write_hexapod_animation(walk: dict, hexapod, path, fps: float = 20.0) -> Pat
     hi = np.maximum(feet.max(axis=(0, 1)), walk["box_m"].max(axis=0)) + 0.3
     span = (hi - lo).max()
     mid = 0.5 * (hi + lo)
+    # the ground plane: its z below (x, y)
+    n, p0 = np.array(hexapod.desc.ground_normal[:]), np.array(hexapod.desc.ground_point_m[:])
+
+    def ground_z(x, y):
+        return p0[2] - (n[0] * (np.asarray(x) - p0[0]) + n[1] * (np.asarray(y) - p0[1])) / n[2]
+
+    z0 = min(0.0, min(ground_z(mid[0] + a * span / 2, mid[1] + b * span / 2) for a in (-1, 1) for b in (-1, 1)))
 
     fig = plt.figure(figsize=(6.4, 5.2))
     ax = fig.add_subplot(projection="3d")
@@ -86,16 +93,16 @@ def write_hexapod_animation(walk: dict, hexapod, path, fps: float = 20.0) -> Pat
         k = frames[i]
         ax.set_xlim(mid[0] - span / 2, mid[0] + span / 2)
         ax.set_ylim(mid[1] - span / 2, mid[1] + span / 2)
-        ax.set_zlim(0, span)
+        ax.set_zlim(z0, z0 + span)
         ax.set_xlabel("x (m)")
         ax.set_ylabel("y (m)")
         ax.set_zlabel("z (m)")
         gx = np.linspace(mid[0] - span / 2, mid[0] + span / 2, 7)
         gy = np.linspace(mid[1] - span / 2, mid[1] + span / 2, 7)
         for x in gx:
-            ax.plot([x, x], [gy[0], gy[-1]], [0, 0], color="#dddddd", lw=0.6)
+            ax.plot([x, x], [gy[0], gy[-1]], ground_z([x, x], [gy[0], gy[-1]]), color="#dddddd", lw=0.6)
         for y in gy:
-            ax.plot([gx[0], gx[-1]], [y, y], [0, 0], color="#dddddd", lw=0.6)
+            ax.plot([gx[0], gx[-1]], [y, y], ground_z([gx[0], gx[-1]], [y, y]), color="#dddddd", lw=0.6)
         for a, b in _box_edges(walk["body_pose"][k][0], size):
             ax.plot(*zip(a, b), color="#37474f", lw=1.2)
         for a, b in _bars(walk["body_pose"][k], lengths):
@@ -103,8 +110,8 @@ def write_hexapod_animation(walk: dict, hexapod, path, fps: float = 20.0) -> Pat
         for leg in range(6):
             s = int(walk["foot_state"][k][leg])
             ax.scatter(*feet[k][leg], color=STATE_COLOURS[s], s=18, depthshade=False)
-        ax.plot(walk["box_m"][:k + 1, 0], walk["box_m"][:k + 1, 1], 0 * walk["box_m"][:k + 1, 2],
-                color="#c62828", lw=0.8)
+        ax.plot(walk["box_m"][:k + 1, 0], walk["box_m"][:k + 1, 1],
+                ground_z(walk["box_m"][:k + 1, 0], walk["box_m"][:k + 1, 1]), color="#c62828", lw=0.8)
         ax.set_title(f"hexapod walking (tripod gait)   t = {t[k]:.2f} s\n"
                      "feet: grey free, green stuck, orange sliding", fontsize=9)
         return []

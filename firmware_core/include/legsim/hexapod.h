@@ -100,27 +100,43 @@ legsim_status legsim_hexapod_statics(const legsim_hexapod_desc *h, const legsim_
 /* Two tripods (legs 0, 2, 4 and 1, 3, 5) take turns: each foot stands for the fraction duty
  * (in [0.5, 1)) of period_s (> 0) while the box moves forward by step_length_m (>= 0) and turns by
  * turn_rad (|turn| < pi / 2) about its z, then swings, rising by step_height_m (>= 0). Each
- * foot's neutral point (its place at the middle of its stance) is the stand's foot, on the ground
- * box_height_m (> 0) below the box's centre. (docs/design/spatial.md; lengths <= LEGSIM_MAX_COORD.) */
+ * foot's neutral point (its place at the middle of its stance) is the stand's foot (x, y in the
+ * box's frame), on the ground. The ground is the description's plane: on a slope the box stays
+ * level, its path seen from above the level ground's, its centre box_height_m (> 0) over the
+ * ground directly below it; the standing feet are on the plane and a swinging foot rises by
+ * step_height_m over the ground directly below it (docs/design/spatial.md, "The gait on a
+ * slope"; lengths <= LEGSIM_MAX_COORD). */
 typedef struct legsim_hexapod_gait {
   double period_s, duty, step_length_m, step_height_m, turn_rad, box_height_m;
 } legsim_hexapod_gait;
 
 /* The set-points of the gait at a time: each foot's target (box frame, m), whether it stands,
- * and the rowing angle (rad) and actuator lengths (m) that put it there. */
+ * the rowing angle (rad) and actuator lengths (m) that put it there, and the box's planned pose
+ * (world: its centre, m, and unit quaternion w, x, y, z; at t = 0 level over the world's origin,
+ * heading along x, box_height_m over the ground). */
 typedef struct legsim_hexapod_setpoint {
   double foot_box_m[LEGSIM_HEXAPOD_LEGS][3];
   int32_t stance[LEGSIM_HEXAPOD_LEGS];
   double rowing_rad[LEGSIM_HEXAPOD_LEGS];
   double length_m[LEGSIM_HEXAPOD_LEGS][2];
+  double box_m[3], box_quat[4];
 } legsim_hexapod_setpoint;
 
-/* The set-points at t_s (s; the gait repeats). LEGSIM_ERR_BAD_INPUT for a gait out of range;
- * LEGSIM_ERR_OUT_OF_STROKE for a target past a rowing or linear stroke, LEGSIM_ERR_UNREACHABLE /
- * _NOT_CONVERGED / _SINGULAR for one the leg cannot reach (each leg's inverse kinematics from its
- * file's stand); storage as legsim_hexapod_statics'. *out is written only on LEGSIM_OK. */
+/* The set-points at t_s (s; the gait repeats, in the box's frame, on level ground and walking
+ * straight on a slope). LEGSIM_ERR_BAD_INPUT for a gait out of range; LEGSIM_ERR_OUT_OF_STROKE
+ * for a target past a rowing or linear stroke, LEGSIM_ERR_UNREACHABLE / _NOT_CONVERGED /
+ * _SINGULAR for one the leg cannot reach (each leg's inverse kinematics from its file's stand);
+ * storage as legsim_hexapod_statics'. *out is written only on LEGSIM_OK. */
 legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
                                             void *storage, size_t storage_bytes, legsim_hexapod_setpoint *out);
+
+/* The static stability margin (m) of the n feet at foot_m (world) about the centre of mass com_m
+ * (world): both projected along gravity (the world's z) onto a level plane, the least distance from
+ * the centre of mass to the edges of the feet's convex hull, positive inside, negative outside;
+ * -INFINITY for fewer than three feet or feet on one line. LEGSIM_ERR_NULL, LEGSIM_ERR_BAD_INPUT
+ * (n outside 0..LEGSIM_HEXAPOD_LEGS, a value not finite or beyond LEGSIM_MAX_COORD). */
+legsim_status legsim_hexapod_support_margin(const double foot_m[][3], int32_t n, const double com_m[3],
+                                            double *margin_m);
 
 /* ---- one leg's reach, and the Section V sweep ------------------------------- */
 /* Leg leg's (0 .. 5) rowing angle (rad) and its two actuators' lengths (m) that put its foot at

@@ -1,5 +1,6 @@
 // The C API, the hexapod (legsim/hexapod.h): standing at a pose, on the spatial module
-// (spatial/robot, spatial/statics) with each leg assembled by the planar core.
+// (spatial/robot, spatial/statics) with each leg assembled by the planar core; the tripod gait's
+// set-points on the description's ground (spatial/gait).
 #include <cmath>
 #include <new>
 
@@ -256,20 +257,25 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
     const spatial::V3 f = spatial::robot_foot_position(w.robot, l, w.q);
     g.neutral[l] = {f.x, f.y, -real(gait->box_height_m)};
   }
+  // the ground's grade along the world's x and y: the box's frame at t = 0
+  const double *n = h->ground_normal, *p0 = h->ground_point_m;
+  g.grade[0] = real(-n[0] / n[2]), g.grade[1] = real(-n[1] / n[2]);
   if (spatial::gait_check(g) != LEGSIM_OK) return LEGSIM_ERR_BAD_INPUT;
   spatial::V3 feet[LEGSIM_HEXAPOD_LEGS];
   bool stance[LEGSIM_HEXAPOD_LEGS];
   spatial::gait_feet(g, t_s, feet, stance);
   legsim_hexapod_setpoint r;
+  // the box's planned pose: from over the world's origin, box_height_m above the ground there
+  spatial::V3 d;
+  real yaw;
+  spatial::gait_box(g, t_s, d, yaw);
+  const double z0 = p0[2] + (n[0] * p0[0] + n[1] * p0[1]) / n[2];
+  r.box_m[0] = d.x, r.box_m[1] = d.y, r.box_m[2] = z0 + gait->box_height_m + d.z;
+  r.box_quat[0] = std::cos(yaw / 2), r.box_quat[1] = 0, r.box_quat[2] = 0, r.box_quat[3] = std::sin(yaw / 2);
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    real angle, xy[2];
-    spatial::leg_plane_target(w.robot, l, feet[l], angle, xy);
-    if (!(angle >= h->rowing_stroke_rad[0] && angle <= h->rowing_stroke_rad[1])) return LEGSIM_ERR_OUT_OF_STROKE;
-    legsim_sim *sim = nullptr;
-    st = leg_at_stand(*h, l, storage, sim);
-    if (st == LEGSIM_OK) st = legsim_assemble_foot(sim, xy);
+    real angle;
     legsim_real len[2] = {0, 0};
-    if (st == LEGSIM_OK) st = legsim_actuator_lengths(sim, len, nullptr);
+    st = reach(*h, w.robot, l, feet[l], storage, angle, len);
     if (st != LEGSIM_OK) return st;
     r.foot_box_m[l][0] = feet[l].x, r.foot_box_m[l][1] = feet[l].y, r.foot_box_m[l][2] = feet[l].z;
     r.stance[l] = stance[l] ? 1 : 0;
@@ -355,6 +361,19 @@ legsim_status legsim_hexapod_reaction_sweep(const legsim_hexapod_desc *h, const 
     }
     // statics rebuilt the work part in place: the same robot lifted from the same h
   }
+  return LEGSIM_OK;
+}
+
+legsim_status legsim_hexapod_support_margin(const double foot_m[][3], int32_t n, const double com_m[3],
+                                            double *margin_m) {
+  if (!foot_m || !com_m || !margin_m) return LEGSIM_ERR_NULL;
+  if (n < 0 || n > LEGSIM_HEXAPOD_LEGS || !finite_within(com_m, 3, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
+  spatial::V3 feet[LEGSIM_HEXAPOD_LEGS];
+  for (int k = 0; k < n; ++k) {
+    if (!finite_within(foot_m[k], 3, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
+    feet[k] = {real(foot_m[k][0]), real(foot_m[k][1]), real(foot_m[k][2])};
+  }
+  *margin_m = spatial::support_margin(feet, n, real(com_m[0]), real(com_m[1]));
   return LEGSIM_OK;
 }
 

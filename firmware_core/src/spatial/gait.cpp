@@ -9,18 +9,24 @@ constexpr real kPi = real(3.14159265358979323846);
 
 bool finite(real x) { return std::isfinite(x); }
 
-// A world-fixed point seen from the box sigma seconds after the stance's middle (where it is at
-// p_mid): the box moved by the constant twist (v forward, w about z) meanwhile. Its place and
-// its velocity in the box's frame.
-void stance_point(const V3 &p_mid, real v, real w, real sigma, V3 &p, V3 &pd) {
-  const real th = w * sigma, c = std::cos(th), s = std::sin(th);
-  // the box's displacement over sigma, in the middle's frame
-  real dx, dy;
+// The box's displacement (x, y) over sigma seconds at the constant twist (v forward, w about
+// z), in its frame at the start.
+void displacement(real v, real w, real sigma, real &dx, real &dy) {
+  const real th = w * sigma;
   if (std::abs(th) < real(1e-8)) {
     dx = v * sigma, dy = v * sigma * th / 2;
   } else {
-    dx = v / w * s, dy = v / w * (1 - c);
+    dx = v / w * std::sin(th), dy = v / w * (1 - std::cos(th));
   }
+}
+
+// A world-fixed point seen from the box sigma seconds after the stance's middle (where it is at
+// p_mid): the box moved by the constant twist (v forward, w about z) meanwhile. Its place and
+// its velocity in the box's frame (x, y; z kept).
+void stance_point(const V3 &p_mid, real v, real w, real sigma, V3 &p, V3 &pd) {
+  const real th = w * sigma, c = std::cos(th), s = std::sin(th);
+  real dx, dy;
+  displacement(v, w, sigma, dx, dy);
   const real x = p_mid.x - dx, y = p_mid.y - dy;
   p = {c * x + s * y, -s * x + c * y, p_mid.z};
   pd = {-v + w * p.y, -w * p.x, 0};  // -(v x) - w z x p
@@ -45,12 +51,17 @@ legsim_status gait_check(const TripodGait &g) {
     if (!(std::abs(p.x) <= real(LEGSIM_MAX_COORD) && std::abs(p.y) <= real(LEGSIM_MAX_COORD) &&
           std::abs(p.z) <= real(LEGSIM_MAX_COORD)))
       return LEGSIM_ERR_BAD_INPUT;
+  if (!(std::hypot(g.grade[0], g.grade[1]) <= std::tan(real(LEGSIM_MAX_SLOPE_RAD)))) return LEGSIM_ERR_BAD_INPUT;
   return LEGSIM_OK;
 }
 
 void gait_feet(const TripodGait &g, double t_s, V3 *feet, bool *stance) {
   const real T = g.period_s, Ts = g.duty * T, Tw = T - Ts;
   const real v = g.step_length_m / Ts, w = g.turn_rad / Ts;
+  // the grade in the box's frame now (it turned by w t since t = 0): a point p of the box's
+  // frame is over the ground at -neutral.z + gx p.x + gy p.y
+  const real th = w * real(t_s), c = std::cos(th), s = std::sin(th);
+  const real gx = c * g.grade[0] + s * g.grade[1], gy = -s * g.grade[0] + c * g.grade[1];
   for (int l = 0; l < 6; ++l) {
     const double offset = (l % 2) ? 0.5 * double(T) : 0.0;  // tripod B half a period on
     double tau = std::fmod(t_s - offset, double(T));
@@ -59,6 +70,7 @@ void gait_feet(const TripodGait &g, double t_s, V3 *feet, bool *stance) {
     if (real(tau) < Ts) {
       stance[l] = true;
       stance_point(g.neutral[l], v, w, real(tau) - Ts / 2, feet[l], pd);
+      feet[l].z = g.neutral[l].z + (gx * feet[l].x + gy * feet[l].y);
       continue;
     }
     stance[l] = false;
@@ -68,10 +80,17 @@ void gait_feet(const TripodGait &g, double t_s, V3 *feet, bool *stance) {
     V3 p0, d0, p1, d1;
     stance_point(g.neutral[l], v, w, Ts / 2, p0, d0);
     stance_point(g.neutral[l], v, w, -Ts / 2, p1, d1);
-    const real s = (real(tau) - Ts) / Tw;
-    feet[l] = {hermite(p0.x, Tw * d0.x, p1.x, Tw * d1.x, s), hermite(p0.y, Tw * d0.y, p1.y, Tw * d1.y, s),
-               g.neutral[l].z + g.step_height_m * (1 - std::cos(2 * kPi * s)) / 2};
+    const real u = (real(tau) - Ts) / Tw;
+    const real x = hermite(p0.x, Tw * d0.x, p1.x, Tw * d1.x, u), y = hermite(p0.y, Tw * d0.y, p1.y, Tw * d1.y, u);
+    feet[l] = {x, y, (g.neutral[l].z + (gx * x + gy * y)) + g.step_height_m * (1 - std::cos(2 * kPi * u)) / 2};
   }
+}
+
+void gait_box(const TripodGait &g, double t_s, V3 &d, real &yaw) {
+  const real Ts = g.duty * g.period_s, v = g.step_length_m / Ts, w = g.turn_rad / Ts;
+  displacement(v, w, real(t_s), d.x, d.y);
+  d.z = g.grade[0] * d.x + g.grade[1] * d.y;
+  yaw = w * real(t_s);
 }
 
 real support_margin(const V3 *feet, int n, real com_x, real com_y) {
