@@ -6,6 +6,10 @@
 //   mass's acceleration from second differences of the plan's assembled positions (independent
 //   of the rows' accelerations): the ground forces' sum is M (a_com - g);
 // - the rows hold along the plan: J v = 0 and J a = gamma with the stance feet stuck;
+// - the forward dynamics' accelerations and ground forces at the plan's state under the computed
+//   forces are the plan's and the computed ones;
+// - a closed form: the tripod's box accelerating straight up from rest, the ground forces' sum
+//   M (a_com - g), a_com = a_z d(com)/dz from assemblies with the box raised;
 // - the computed forces fed to the forward dynamics (RK4 from the plan's state, the stance feet
 //   stuck) follow the plan: the commands are held over a step (at its middle), so the error
 //   falls as h^2 (the held commands' midpoint rule; RK4's own error is h^4, below it).
@@ -239,6 +243,102 @@ void test_forward_dynamics_follows_the_plan(void) {
   TEST_ASSERT_TRUE(e[3] < 1e-5);
 }
 
+// The forward dynamics' accelerations at the plan's state under the computed forces (the stance
+// feet stuck) are the plan's, and its stance feet's forces the computed ones: with the actuators
+// and motors given, the forward problem has one solution.
+void test_forward_accelerations_are_the_plan(void) {
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  const legsim_hexapod_gait g = walk_gait();
+  double da = 0, amax = 0, df = 0, fmax = 0;
+  for (double t : {0.05, 0.3, 0.62, 0.9}) {
+    const Plan p = plan_at(s.desc, g, t);
+    const legsim_hexapod_inverse u = inverse_at(s.desc, g, t);
+    FeetHold hold;
+    hold.stuck = 0, hold.sliding = 0;
+    for (int l = 0; l < 6; ++l) {
+      if (u.stance[l]) hold.stuck |= 1u << l;
+      hold.anchor[l] = robot_foot_position(R, l, p.q);
+    }
+    double force[kMaxRobotActuators] = {}, torque[kMaxLegs] = {};
+    for (int l = 0; l < 6; ++l) {
+      for (int a = 0; a < 2; ++a) force[R.leg[l].first_actuator + a] = u.actuator_force_n[l][a];
+      torque[l] = u.rowing_torque_nm[l];
+    }
+    static double Q[kMaxRobotDof], a[kMaxRobotDof], mu[kMaxSystemRows];
+    static Row rows[kMaxSystemRows];
+    static RobotFactor F;
+    robot_forces(R, p.q, p.v, force, torque, Q);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_accelerations(R, hold, p.q, p.v, Q, a, mu, rows, F));
+    for (int i = 0; i < kBodyDof * p.nb; ++i) da = std::fmax(da, std::fabs(a[i] - p.a[i])), amax = std::fmax(amax, std::fabs(p.a[i]));
+    for (int l = 0; l < 6; ++l) {
+      df = std::fmax(df, norm(foot_force(R, hold, mu, l) - v3(u.foot_force_n[l])));
+      fmax = std::fmax(fmax, norm(v3(u.foot_force_n[l])));
+    }
+  }
+  std::printf("forward dynamics at the plan under the computed forces: accelerations %.1e of %.1f, feet's forces %.1e "
+              "of %.0f N\n", da, amax, df, fmax);
+  TEST_ASSERT_TRUE(da < 1e-9 * amax);
+  TEST_ASSERT_TRUE(df < 1e-9 * fmax);
+}
+
+// The closed form of the centre of mass: the box of the standing tripod accelerating straight up
+// from rest, the feet stuck. The centre of mass then accelerates at a_z d(com)/dz (its velocity
+// zero), d(com)/dz by central differences of the robot assembled with the box raised (each leg
+// by its planar inverse kinematics to its foot, as the gait's set-points), and the ground's
+// vertical forces sum to M (g + a_com,z), the horizontal ones to M a_com,xy.
+void test_tripod_box_accelerating_up(void) {
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  alignas(16) static unsigned char leg_storage[1 << 16];
+  auto assemble_raised = [&](double dz, double *q) {
+    const double *qs[6], *vs[6];
+    static double leg_q[6][3 * LEGSIM_MAX_BODIES], zero[3 * LEGSIM_MAX_BODIES];
+    double psi[6], psid[6] = {}, v[kBodyDof * kMaxRobotBodies];
+    for (int l = 0; l < 6; ++l) {
+      const V3 foot = robot_foot_position(R, l, s.q) - V3{0, 0, dz};  // held in the world: the box rose by dz
+      double xy[2];
+      leg_plane_target(R, l, foot, psi[l], xy);
+      legsim_options opt = legsim_default_options();
+      legsim_sim *sim = nullptr;
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(leg_storage, sizeof leg_storage, &s.desc.leg[l].leg, &opt, &sim));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_foot(sim, xy));
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_get_q(sim, leg_q[l]));
+      qs[l] = leg_q[l], vs[l] = zero;
+    }
+    const double box_q[7] = {0, 0, dz, 1, 0, 0, 0}, box_v[6] = {};
+    robot_state(R, box_q, box_v, qs, vs, psi, psid, q, v);
+  };
+  auto com = [&](const double *q) {
+    V3 c = {0, 0, 0};
+    for (int b = 0; b < R.nb; ++b) c = c + R.mass[b] * v3(q + kBodyConfig * b);
+    return (1 / s.M) * c;
+  };
+  static double q0[kBodyConfig * kMaxRobotBodies], qp[kBodyConfig * kMaxRobotBodies],
+      qm[kBodyConfig * kMaxRobotBodies];
+  const double d = 1e-4;
+  assemble_raised(0, q0);
+  assemble_raised(d, qp);
+  assemble_raised(-d, qm);
+  const V3 dcom = (1 / (2 * d)) * (com(qp) - com(qm));
+  for (double az : {0.0, 2.0, -3.0}) {
+    static double v[kMaxRobotDof], a[kMaxRobotDof];
+    const double box_v[6] = {}, box_a[6] = {0, 0, az, 0, 0, 0};
+    V3 feet_v[6] = {}, feet_a[6] = {};
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_prescribed_motion(R, q0, box_v, box_a, feet_v, feet_a, v, a));
+    RobotStatics out;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_inverse_dynamics(R, q0, v, a, kTripod, out));
+    V3 sum = {0, 0, 0};
+    for (int l = 0; l < 6; ++l) sum = sum + out.foot_force[l];
+    const V3 closed = s.M * (az * dcom - R.gravity);
+    std::printf("tripod, box at %+.1f m/s^2 up: sum of the ground forces (%.6f, %.6f, %.6f) N, closed form (%.6f, "
+                "%.6f, %.6f) N (%.1e N apart); d(com)/dz = (%.4f, %.4f, %.4f)\n",
+                az, sum.x, sum.y, sum.z, closed.x, closed.y, closed.z, norm(sum - closed), dcom.x, dcom.y, dcom.z);
+    TEST_ASSERT_TRUE(norm(sum - closed) < 1e-6 * s.M * 9.81);
+  }
+}
+
 void test_bad_input(void) {
   const Standing &s = standing();
   legsim_hexapod_gait g = walk_gait();
@@ -258,6 +358,8 @@ int main(void) {
   RUN_TEST(test_rest_is_statics);
   RUN_TEST(test_newton_euler_along_the_gait);
   RUN_TEST(test_rows_hold_along_the_plan);
+  RUN_TEST(test_forward_accelerations_are_the_plan);
+  RUN_TEST(test_tripod_box_accelerating_up);
   RUN_TEST(test_forward_dynamics_follows_the_plan);
   RUN_TEST(test_bad_input);
   return UNITY_END();
