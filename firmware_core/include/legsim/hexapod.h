@@ -216,10 +216,10 @@ legsim_status legsim_hexapod_body_poses(const legsim_hexapod_sim *sim, double *p
  * the gait's constant twist: forward at step_length / (duty period), turning at turn / (duty
  * period)), the standing feet stuck where they are, the swinging feet on their curves; its
  * velocities and accelerations from the rows (the box's and the standing feet's motion exact, a
- * swinging foot's rates in the box's frame by five-point differences of its curve over
- * 1e-4 periods); then M a + J^T lambda = Q + B u solved by statics' rule with the inertial forces
- * -M a as loads: the stance feet take the resultant with the least sum of squares of their forces,
- * each leg then its own equilibrium. */
+ * swinging foot's rates in the box's frame by five-point differences of its curve over 3e-4
+ * periods: 3e-8 m/s^2 from the exact curve); then M a + J^T lambda = Q + B u solved by statics'
+ * rule with the inertial forces -M a as loads: the stance feet take the resultant with the least
+ * sum of squares of their forces, each leg then its own equilibrium. */
 #define LEGSIM_HEXAPOD_MAX_LEG_JOINTS 11 /* the hip's, then the leg file's (at most 10) */
 
 typedef struct legsim_hexapod_inverse {

@@ -102,7 +102,7 @@ legsim_status plan(const legsim_hexapod_desc &h, const legsim_hexapod_gait &g, d
   const spatial::Rot R = spatial::rotation({box_q[3], box_q[4], box_q[5], box_q[6]});
   const V3 vb = {box_v[0], box_v[1], box_v[2]}, ab = {box_a[0], box_a[1], box_a[2]};
   const V3 wb = spatial::rotate(R, V3{box_v[3], box_v[4], box_v[5]});
-  const double step = double(spatial::by_precision(1e-4, 1e-2)) * g.period_s;
+  const double step = double(spatial::by_precision(3e-4, 1e-2)) * g.period_s;
   for (int k = 0; k < 9; ++k) w.have[k] = false;
   w.stance = 0;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
