@@ -20,7 +20,8 @@ except ImportError:  # the bench is not installed: use the source tree
 from legsim_bench.scene import SceneError, cli_path, is_hexapod_scene, load_scene, shipped_scenes  # noqa: E402
 
 SCENES = ROOT / "scenes"
-HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop"}
+HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop",
+                  "hexapod_inverse_walk"}
 
 
 def _cli():
