@@ -11,10 +11,13 @@
 // - a closed form: the tripod's box accelerating straight up from rest, the ground forces' sum
 //   M (a_com - g), a_com = a_z d(com)/dz from assemblies with the box raised;
 // - the computed forces fed to the forward dynamics (RK4 from the plan's state, the stance feet
-//   stuck) follow the plan: the commands are held over a step (at its middle), so the error
-//   falls as h^2 (the held commands' midpoint rule; RK4's own error is h^4, below it).
+//   stuck) follow the plan: through robot_step_rk4 the commands are held over a step (at its
+//   middle), so the error falls as h^2 (the held commands' midpoint rule; RK4's own error is h^4,
+//   below it); with the commands at RK4's stages (RK4 on the group written here, on the core's
+//   forward solve) it falls as h^4.
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
 #include <cmath>
+#include <algorithm>
 #include <cstdio>
 #include <vector>
 
@@ -226,6 +229,85 @@ double tracking_error(const Standing &s, const legsim_hexapod_gait &g, double t0
   return e;
 }
 
+// The same with the commands at RK4's stages: classical RK4 on the group written here (the
+// tableau on (dr, theta, v, omega), theta' = dexp^-1(theta) omega, as spatial/motion.cpp's; no
+// projection) on the core's forward solve (robot_accelerations) with the inverse dynamics' forces
+// at each stage's time. The plan is then followed at RK4's order.
+double stage_commands_error(const Standing &s, const legsim_hexapod_gait &g, double t0, double T, double h) {
+  const SpatialRobot &R = s.robot;
+  const int nb = R.nb, nv = kBodyDof * nb;
+  const Plan p0 = plan_at(s.desc, g, t0);
+  const legsim_hexapod_inverse i0 = inverse_at(s.desc, g, t0);
+  FeetHold hold;
+  hold.stuck = 0, hold.sliding = 0;
+  for (int l = 0; l < 6; ++l) {
+    if (i0.stance[l]) hold.stuck |= 1u << l;
+    hold.anchor[l] = robot_foot_position(R, l, p0.q);
+  }
+  static double q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], qs[kBodyConfig * kMaxRobotBodies],
+      vs[kMaxRobotDof], d[kMaxRobotDof], kq[4][kMaxRobotDof], kv[4][kMaxRobotDof], Q[kMaxRobotDof], mu[kMaxSystemRows];
+  static Row rows[kMaxSystemRows];
+  static RobotFactor F;
+  std::copy(p0.q, p0.q + kBodyConfig * nb, q);
+  std::copy(p0.v, p0.v + nv, v);
+  const int n = int(std::lround(T / h));
+  const double c[4] = {0, 0.5, 0.5, 1}, w[4] = {1, 2, 2, 1};
+  for (int k = 0; k < n; ++k) {
+    const double t = t0 + k * h;
+    std::fill(d, d + nv, 0.0);
+    for (int st = 0; st < 4; ++st) {
+      // the stage's state: q (+) c h k_{st-1} on the group, v + c h kv_{st-1}
+      for (int i = 0; i < nv; ++i) d[i] = st ? c[st] * h * kq[st - 1][i] : 0, vs[i] = v[i] + (st ? c[st] * h * kv[st - 1][i] : 0);
+      for (int b = 0; b < nb; ++b) config_add(q + kBodyConfig * b, d + kBodyDof * b, qs + kBodyConfig * b);
+      const legsim_hexapod_inverse u = inverse_at(s.desc, g, t + c[st] * h);
+      double force[kMaxRobotActuators] = {}, torque[kMaxLegs] = {};
+      for (int l = 0; l < 6; ++l) {
+        for (int a = 0; a < 2; ++a) force[R.leg[l].first_actuator + a] = u.actuator_force_n[l][a];
+        torque[l] = u.rowing_torque_nm[l];
+      }
+      robot_forces(R, qs, vs, force, torque, Q);
+      TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_accelerations(R, hold, qs, vs, Q, kv[st], mu, rows, F));
+      for (int b = 0; b < nb; ++b) {
+        const double *db = d + kBodyDof * b, *vb = vs + kBodyDof * b;
+        const V3 th = dexp_inv({db[3], db[4], db[5]}, {vb[3], vb[4], vb[5]});
+        const double r[kBodyDof] = {vb[0], vb[1], vb[2], th.x, th.y, th.z};
+        for (int i = 0; i < kBodyDof; ++i) kq[st][kBodyDof * b + i] = r[i];
+      }
+    }
+    for (int i = 0; i < nv; ++i) {
+      double sq = 0, sv = 0;
+      for (int st = 0; st < 4; ++st) sq += w[st] * kq[st][i], sv += w[st] * kv[st][i];
+      d[i] = h / 6 * sq, v[i] += h / 6 * sv;
+    }
+    for (int b = 0; b < nb; ++b) {
+      double qb[kBodyConfig];
+      config_add(q + kBodyConfig * b, d + kBodyDof * b, qb);
+      std::copy(qb, qb + kBodyConfig, q + kBodyConfig * b);
+    }
+  }
+  const Plan p1 = plan_at(s.desc, g, t0 + n * h);
+  double e = norm(v3(q) - v3(p1.q));
+  for (int l = 0; l < 6; ++l) e = std::fmax(e, norm(robot_foot_position(R, l, q) - robot_foot_position(R, l, p1.q)));
+  return e;
+}
+
+void test_stage_commands_follow_the_plan_at_order_4(void) {
+  const Standing &s = standing();
+  const legsim_hexapod_gait g = walk_gait();
+  const double hs[4] = {40e-3, 20e-3, 10e-3, 5e-3};
+  double e[4];
+  for (int k = 0; k < 4; ++k) {
+    e[k] = stage_commands_error(s, g, 0.15, 0.2, hs[k]);
+    std::printf("commands at RK4's stages, 0.2 s of a stance, h = %g ms: %.3e m\n", hs[k] * 1e3, e[k]);
+  }
+  for (int k = 1; k < 4; ++k) {
+    const double order = std::log2(e[k - 1] / e[k]);
+    std::printf("  order %.2f\n", order);
+    TEST_ASSERT_TRUE(order > 3.7 && order < 4.6);
+  }
+  TEST_ASSERT_TRUE(e[3] < 2e-9);
+}
+
 void test_forward_dynamics_follows_the_plan(void) {
   const Standing &s = standing();
   const legsim_hexapod_gait g = walk_gait();
@@ -361,6 +443,7 @@ int main(void) {
   RUN_TEST(test_forward_accelerations_are_the_plan);
   RUN_TEST(test_tripod_box_accelerating_up);
   RUN_TEST(test_forward_dynamics_follows_the_plan);
+  RUN_TEST(test_stage_commands_follow_the_plan_at_order_4);
   RUN_TEST(test_bad_input);
   return UNITY_END();
 }
