@@ -248,7 +248,8 @@ typedef struct legsim_hexapod_inverse {
 size_t legsim_hexapod_inverse_storage_size(void);
 
 /* The inverse dynamics at t_s (s; the gait repeats, the box's plan does not). Statuses as
- * legsim_hexapod_gait_setpoints' (the gait, its targets, a leg's assembly), LEGSIM_ERR_SINGULAR (a
+ * legsim_hexapod_gait_setpoints' (the gait, its targets, a leg's assembly; LEGSIM_ERR_BAD_INPUT
+ * also for a swing shorter than the stencil: a duty within 1.2e-3 of 1), LEGSIM_ERR_SINGULAR (a
  * leg at a dead centre), LEGSIM_ERR_NO_EQUILIBRIUM (a stance foot that would have to pull: its
  * force not against gravity). *out is written only on LEGSIM_OK. */
 legsim_status legsim_hexapod_inverse_dynamics(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait,

@@ -60,7 +60,7 @@ legsim_status swing_rates(const legsim_hexapod_desc &h, const legsim_hexapod_gai
     d1 = {d[0][0], d[0][1], d[0][2]}, d2 = {d[1][0], d[1][1], d[1][2]};
     return LEGSIM_OK;
   }
-  return LEGSIM_ERR_BAD_INPUT;  // a swing shorter than the stencil (a duty within 4e-4 of 1)
+  return LEGSIM_ERR_BAD_INPUT;  // a swing shorter than the stencil (a duty within 1.2e-3 of 1)
 }
 
 // The plan at t: the robot's q, v, a, the stance and each foot's rates (world) in w.
