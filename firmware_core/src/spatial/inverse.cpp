@@ -128,10 +128,10 @@ void robot_joint_reactions(const SpatialRobot &robot, const real *q, const real 
 }
 
 void twist_motion(real height, real speed, real rate, double t_s, real *box_q, real *box_v, real *box_a) {
-  const real th = real(rate * t_s), c = std::cos(th), s = std::sin(th);
+  const real th = real(double(rate) * t_s), c = std::cos(th), s = std::sin(th);
   real x, y;  // the same closed form as the gait's stance points (spatial/gait.cpp)
   if (std::abs(th) < real(1e-8)) {
-    x = real(speed * t_s), y = real(speed * t_s) * th / 2;
+    x = real(double(speed) * t_s), y = x * th / 2;
   } else {
     x = speed / rate * s, y = speed / rate * (1 - c);
   }
