@@ -2,6 +2,7 @@
 // JSON. The keys, units, defaults and ranges: scenes/README.md, "The hexapod". Host only; the
 // hexapod's C API only (legsim/hexapod.h), the walk driven as legsim.Hexapod.walk drives it.
 #include "scene_hexapod.hpp"
+#include "scene_hexapod_inverse.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -788,6 +789,7 @@ bool scene_is_hexapod(const std::string &text, const std::string &path) {
 
 int run_hexapod_scene(const std::string &text, const std::string &path, bool check_only, HexapodOutput &out,
                       std::ostream &err) {
+  if (scene_is_hexapod_inverse(text, path)) return run_hexapod_inverse_scene(text, path, check_only, out, err);
   HexScene s;
   auto h = std::make_unique<legsim_hexapod_desc>();
   legsim_hexapod_pose pose{};

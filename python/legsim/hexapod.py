@@ -288,6 +288,70 @@ class Hexapod:
                 "actuator_force_n": np.array([out.actuator_force_n[k][:] for k in range(LEGS)]),
                 "rowing_torque_nm": np.array(out.rowing_torque_nm[:]), "margin_m": float(out.margin_m)}
 
+    def inverse_dynamics(self, t_s, *, period_s: float, duty: float, step_length_m: float,
+                         step_height_m: float, turn_rad: float = 0.0, box_height_m: float) -> dict:
+        """The forces that make the robot follow the tripod gait exactly, at each time of ``t_s``
+        (s, a number or a sequence; legsim_hexapod_inverse_dynamics): the robot where the gait's
+        set-points put it, the box on its plan (level at box_height_m, over the origin at t = 0,
+        at the gait's constant twist), the standing feet stuck, the swinging ones on their curves;
+        the stance feet take the loads and the inertial forces with the least sum of squares of
+        their forces (statics' rule). Returns numpy arrays, one row per time: t_s (n),
+        actuator_force_n (n, 6, 2), rowing_torque_nm (n, 6), foot_force_n (n, 6, 3: the ground's
+        on each foot, world; 0 swinging), cone_ratio (n, 6: |F_t| / N on the file's ground, 0
+        swinging; compare with desc.mu_static), stance (n, 6 bools), foot_m, foot_velocity_mps,
+        foot_acceleration_mps2 (n, 6, 3, world; a swinging foot's rates by five-point differences
+        of its curve), box_m (n, 3), box_quat (n, 4), joint_force_n and joint_moment_nm (n, 6, 11, 3: per leg its hip's
+        reaction on its yoke, then its file's joints' on their first bodies; the force in the
+        world, the moment about the joint's point; n_joints (6) of each leg's rows are used)."""
+        lib = self.library
+        f = _inverse_functions(lib)
+        g = lib.HexapodGait(float(period_s), float(duty), float(step_length_m), float(step_height_m),
+                            float(turn_rad), float(box_height_m))
+        size = int(lib.cdll.legsim_hexapod_inverse_storage_size())
+        buf = C.create_string_buffer(size + STORAGE_ALIGN)
+        addr = C.addressof(buf) + (-C.addressof(buf)) % STORAGE_ALIGN
+        keys = ("t_s", "actuator_force_n", "rowing_torque_nm", "foot_force_n", "cone_ratio", "stance",
+                "foot_m", "foot_velocity_mps", "foot_acceleration_mps2", "box_m", "box_quat", "joint_force_n",
+                "joint_moment_nm")
+        out = {k: [] for k in keys}
+        r = f.Inverse()
+        n_joints = None
+        for t in np.atleast_1d(np.asarray(t_s, dtype=float)):
+            st = lib.cdll.legsim_hexapod_inverse_dynamics(C.byref(self.desc), C.byref(g), float(t),
+                                                          C.c_void_p(addr), size, C.byref(r))
+            lib.check(st, "legsim_hexapod_inverse_dynamics")
+            out["t_s"].append(r.t_s)
+            for k in keys[1:]:
+                out[k].append(np.ctypeslib.as_array(getattr(r, k)).copy())
+            n_joints = np.array(r.n_joints[:])
+        res = {k: np.array(v) for k, v in out.items()}
+        res["stance"] = res["stance"].astype(bool)
+        res["n_joints"] = n_joints
+        return res
+
+    def gait_state(self, t_s: float, *, period_s: float, duty: float, step_length_m: float,
+                   step_height_m: float, turn_rad: float = 0.0, box_height_m: float) -> dict:
+        """The plan's state that inverse_dynamics solves at (legsim_hexapod_gait_state): every
+        body's pose q (bodies x 7: centre, quaternion w, x, y, z), velocity v and acceleration a
+        (bodies x 6: world, then angular in the body's frame), bodies as HexapodSim.body_poses'."""
+        lib = self.library
+        _inverse_functions(lib)
+        g = lib.HexapodGait(float(period_s), float(duty), float(step_length_m), float(step_height_m),
+                            float(turn_rad), float(box_height_m))
+        size = int(lib.cdll.legsim_hexapod_inverse_storage_size())
+        buf = C.create_string_buffer(size + STORAGE_ALIGN)
+        addr = C.addressof(buf) + (-C.addressof(buf)) % STORAGE_ALIGN
+        cap = 1 + LEGS * (1 + 8)
+        q, v, a = (C.c_double * (7 * cap))(), (C.c_double * (6 * cap))(), (C.c_double * (6 * cap))()
+        n = C.c_int32()
+        st = lib.cdll.legsim_hexapod_gait_state(C.byref(self.desc), C.byref(g), float(t_s), C.c_void_p(addr),
+                                                size, q, v, a, cap, C.byref(n))
+        lib.check(st, "legsim_hexapod_gait_state")
+        nb = n.value
+        return {"q": np.array(q[:7 * nb]).reshape(nb, 7), "v": np.array(v[:6 * nb]).reshape(nb, 6),
+                "a": np.array(a[:6 * nb]).reshape(nb, 6)}
+
+
 
     def leg_reach(self, leg: int, foot_box_m) -> tuple[float, np.ndarray]:
         """Leg ``leg``'s rowing angle (rad) and two actuator lengths (m) that put its foot at
@@ -346,6 +410,46 @@ class Hexapod:
                 "margin_m": table(lambda p: p.standing.margin_m, ()),
                 "com_m": table(lambda p: p.standing.com_m[:], (3,)),
                 "foot_m": table(lambda p: rows(p.standing.foot_m), (LEGS, 3))}
+
+
+_MAX_LEG_JOINTS = 11  # LEGSIM_HEXAPOD_MAX_LEG_JOINTS
+
+
+def _inverse_functions(lib: Library):
+    """legsim_hexapod_inverse's mirror and the inverse dynamics' prototypes, made once per library."""
+    f = getattr(lib, "_hexapod_inverse", None)
+    if f is not None:
+        return f
+    d, i32 = C.c_double, C.c_int32
+
+    class Inverse(C.Structure):
+        _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
+                    ("box_omega_radps", d * 3), ("stance", i32 * LEGS), ("foot_m", (d * 3) * LEGS),
+                    ("foot_velocity_mps", (d * 3) * LEGS), ("foot_acceleration_mps2", (d * 3) * LEGS),
+                    ("actuator_force_n", (d * 2) * LEGS), ("rowing_torque_nm", d * LEGS),
+                    ("foot_force_n", (d * 3) * LEGS), ("cone_ratio", d * LEGS), ("n_joints", i32 * LEGS),
+                    ("joint_force_n", ((d * 3) * _MAX_LEG_JOINTS) * LEGS),
+                    ("joint_moment_nm", ((d * 3) * _MAX_LEG_JOINTS) * LEGS)]
+
+    P, st = C.c_void_p, C.c_int
+    cd = lib.cdll
+    cd.legsim_hexapod_inverse_storage_size.restype = C.c_size_t
+    cd.legsim_hexapod_inverse_storage_size.argtypes = []
+    cd.legsim_hexapod_inverse_dynamics.restype = st
+    cd.legsim_hexapod_inverse_dynamics.argtypes = [C.POINTER(lib.HexapodDesc), C.POINTER(lib.HexapodGait), d, P,
+                                                   C.c_size_t, C.POINTER(Inverse)]
+    cd.legsim_hexapod_gait_state.restype = st
+    DP = C.POINTER(d)
+    cd.legsim_hexapod_gait_state.argtypes = [C.POINTER(lib.HexapodDesc), C.POINTER(lib.HexapodGait), d, P,
+                                             C.c_size_t, DP, DP, DP, i32, C.POINTER(i32)]
+
+    class Functions:
+        pass
+
+    f = Functions()
+    f.Inverse = Inverse
+    lib._hexapod_inverse = f
+    return f
 
 
 def _pairs(x, what: str):

@@ -275,6 +275,62 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
  * room in bodies (LEGSIM_ERR_CAPACITY, nothing written, when short). */
 legsim_status legsim_hexapod_body_poses(const legsim_hexapod_sim *sim, double *pose, int32_t capacity, int32_t *n);
 
+/* ---- inverse dynamics along the gait ------------------------------------------ */
+/* The forces that make the hexapod follow the tripod gait exactly (docs/design/spatial.md,
+ * "Inverse dynamics along the gait"): at a time, the robot where the gait's set-points put it
+ * (legsim_hexapod_gait_setpoints, each leg assembled at its lengths from its file's stand), the box
+ * on its plan (level at box_height_m, over the world's origin heading along x at t = 0, moving at
+ * the gait's constant twist: forward at step_length / (duty period), turning at turn / (duty
+ * period)), the standing feet stuck where they are, the swinging feet on their curves; its
+ * velocities and accelerations from the rows (the box's and the standing feet's motion exact, a
+ * swinging foot's rates in the box's frame by five-point differences of its curve over 3e-4
+ * periods: 3e-8 m/s^2 from the exact curve); then M a + J^T lambda = Q + B u solved by statics'
+ * rule with the inertial forces -M a as loads: the stance feet take the resultant with the least
+ * sum of squares of their forces, each leg then its own equilibrium. */
+#define LEGSIM_HEXAPOD_MAX_LEG_JOINTS 11 /* the hip's, then the leg file's (at most 10) */
+
+typedef struct legsim_hexapod_inverse {
+  double t_s;
+  double box_m[3], box_quat[4];                   /* the plan's box (world; w, x, y, z) */
+  double box_velocity_mps[3], box_omega_radps[3];  /* world; box frame */
+  int32_t stance[LEGSIM_HEXAPOD_LEGS];            /* the gait's: 1 standing (stuck), 0 swinging */
+  double foot_m[LEGSIM_HEXAPOD_LEGS][3];          /* each foot (world) */
+  double foot_velocity_mps[LEGSIM_HEXAPOD_LEGS][3];     /* world: 0 standing */
+  double foot_acceleration_mps2[LEGSIM_HEXAPOD_LEGS][3]; /* world: 0 standing */
+  double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2];  /* each leg's two actuators' axial forces */
+  double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS];     /* each yoke's, about its hip axis */
+  double foot_force_n[LEGSIM_HEXAPOD_LEGS][3];      /* the ground's force on each foot (world; 0 swinging) */
+  /* |F_t| / N on the file's ground plane (its normal): above the ground's mu_static the gait needs
+   * more friction than the ground has; 0 swinging */
+  double cone_ratio[LEGSIM_HEXAPOD_LEGS];
+  /* every joint's reaction on its first body: per leg the hip (on its yoke; the box takes the
+   * opposite), then its file's joints in order (on the joint's first body); the force (world) and
+   * the moment about the joint's point (world) */
+  int32_t n_joints[LEGSIM_HEXAPOD_LEGS];
+  double joint_force_n[LEGSIM_HEXAPOD_LEGS][LEGSIM_HEXAPOD_MAX_LEG_JOINTS][3];
+  double joint_moment_nm[LEGSIM_HEXAPOD_LEGS][LEGSIM_HEXAPOD_MAX_LEG_JOINTS][3];
+} legsim_hexapod_inverse;
+
+/* Bytes of storage legsim_hexapod_inverse_dynamics needs (aligned to LEGSIM_STORAGE_ALIGN). */
+size_t legsim_hexapod_inverse_storage_size(void);
+
+/* The inverse dynamics at t_s (s; the gait repeats, the box's plan does not). Statuses as
+ * legsim_hexapod_gait_setpoints' (the gait, its targets, a leg's assembly; LEGSIM_ERR_BAD_INPUT
+ * also for a swing shorter than the stencil: a duty within 1.2e-3 of 1), LEGSIM_ERR_SINGULAR (a
+ * leg at a dead centre), LEGSIM_ERR_NO_EQUILIBRIUM (a stance foot that would have to pull: its
+ * force not against gravity). *out is written only on LEGSIM_OK. */
+legsim_status legsim_hexapod_inverse_dynamics(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait,
+                                              double t_s, void *storage, size_t storage_bytes,
+                                              legsim_hexapod_inverse *out);
+
+/* The plan's state at t_s that legsim_hexapod_inverse_dynamics solves at: every body's pose (7
+ * numbers: centre, unit quaternion), velocity and acceleration (6 each: world, then angular in the
+ * body's frame), bodies as legsim_hexapod_body_poses'. *n: their number; capacity: room in bodies
+ * (LEGSIM_ERR_CAPACITY when short). Statuses otherwise as legsim_hexapod_inverse_dynamics'. */
+legsim_status legsim_hexapod_gait_state(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait, double t_s,
+                                        void *storage, size_t storage_bytes, double *q, double *v, double *a,
+                                        int32_t capacity, int32_t *n);
+
 #ifdef __cplusplus
 }
 #endif

@@ -11,8 +11,8 @@ constexpr int kLegBodiesMax = 1 + kMaxLegBars;
 constexpr int kLegUnknownsMax = kBodyDof * kLegBodiesMax;  // a leg's equations, as many unknowns
 
 // The whole robot's stance forces: the least-norm f with A f = b, A (6 x 3n) the equilibrium of
-// the forces f_k at the feet p_k about the centre of mass c, b = -(the weight and the box load,
-// and the load's moment about c). f = A^T y, (A A^T) y = b.
+// the forces f_k at the feet p_k about the centre of mass c, b = -(the loads' resultant and
+// their moment about c). f = A^T y, (A A^T) y = b.
 legsim_status stance_forces(int n, const V3 *p, const V3 &c, const V3 &load, const V3 &load_moment, V3 *f) {
   real AAt[36] = {}, y[6] = {-load.x, -load.y, -load.z, -load_moment.x, -load_moment.y, -load_moment.z};
   real scale = 0;
@@ -49,7 +49,23 @@ legsim_status stance_forces(int n, const V3 *p, const V3 &c, const V3 &load, con
 legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t stance_mask, const real *box_force_n,
                             RobotStatics &out) {
   if (!robot.free_box || (stance_mask >> robot.nlegs) != 0) return LEGSIM_ERR_BAD_INPUT;
-  // the centre of mass and the weight
+  // the weights, and the load on the box's centre
+  real Q[kBodyDof * kMaxRobotBodies];
+  for (int b = 0; b < robot.nb; ++b) {
+    const real m = robot.mass[b];
+    const real f[kBodyDof] = {m * robot.gravity.x, m * robot.gravity.y, m * robot.gravity.z, 0, 0, 0};
+    for (int i = 0; i < kBodyDof; ++i) Q[kBodyDof * b + i] = f[i];
+  }
+  if (box_force_n)
+    for (int i = 0; i < 3; ++i) Q[i] += box_force_n[i];
+  return robot_statics_applied(robot, q, stance_mask, Q, out);
+}
+
+legsim_status robot_statics_applied(const SpatialRobot &robot, const real *q, uint32_t stance_mask, const real *Q,
+                                    RobotStatics &out) {
+  if (!robot.free_box || (stance_mask >> robot.nlegs) != 0) return LEGSIM_ERR_BAD_INPUT;
+  // the centre of mass, and the loads' resultant and moment about it (a body's moment is in its
+  // frame)
   real M = 0;
   V3 c = {0, 0, 0};
   for (int b = 0; b < robot.nb; ++b) {
@@ -57,9 +73,14 @@ legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t s
     c = c + robot.mass[b] * V3{q[kBodyConfig * b], q[kBodyConfig * b + 1], q[kBodyConfig * b + 2]};
   }
   c = (1 / M) * c;
-  const V3 box_force = box_force_n ? V3{box_force_n[0], box_force_n[1], box_force_n[2]} : V3{0, 0, 0};
-  const V3 load = M * robot.gravity + box_force;
-  const V3 load_moment = cross(V3{q[0], q[1], q[2]} - c, box_force);
+  V3 load = {0, 0, 0}, load_moment = {0, 0, 0};
+  for (int b = 0; b < robot.nb; ++b) {
+    const real *qb = q + kBodyConfig * b, *Qb = Q + kBodyDof * b;
+    const V3 f = {Qb[0], Qb[1], Qb[2]};
+    load = load + f;
+    load_moment = load_moment + cross(V3{qb[0], qb[1], qb[2]} - c, f) +
+                  rotate(rotation({qb[3], qb[4], qb[5], qb[6]}), V3{Qb[3], Qb[4], Qb[5]});
+  }
   V3 p[kMaxLegs], f[kMaxLegs];
   int leg_of[kMaxLegs], n = 0;
   for (int l = 0; l < robot.nlegs; ++l) {
@@ -121,12 +142,8 @@ legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t s
     }
     const real tau_col[kBodyDof] = {0, 0, 0, 0, 0, 1};  // about the yoke's z: the hip axis
     put(b0, neq - 1, tau_col, -1);
-    // Q: the weights, and the foot's force at its point
-    for (int b = b0; b < b0 + nbl; ++b) {
-      real *xb = x + kBodyDof * (b - b0);
-      xb[0] = robot.mass[b] * robot.gravity.x, xb[1] = robot.mass[b] * robot.gravity.y;
-      xb[2] = robot.mass[b] * robot.gravity.z;
-    }
+    // Q, and the foot's force at its point
+    for (int i = 0; i < neq; ++i) x[i] = Q[kBodyDof * b0 + i];
     if (L.foot_body >= 0) {
       const V3 &ff = out.foot_force[l];
       real fq[kBodyDof] = {};

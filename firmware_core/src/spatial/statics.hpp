@@ -36,4 +36,11 @@ struct RobotStatics {
 legsim_status robot_statics(const SpatialRobot &robot, const real *q, uint32_t stance_mask, const real *box_force_n,
                             RobotStatics &out);
 
+// The same under any applied forces Q (6 per body, robot_forces' convention: a force in the world
+// on v, a moment in the body's frame on omega): the weights and the box's load above are one
+// such Q; with -M a added (d'Alembert's inertial forces) it is inverse dynamics
+// (spatial/inverse.hpp). A foot "pulls" when its force is not against gravity.
+legsim_status robot_statics_applied(const SpatialRobot &robot, const real *q, uint32_t stance_mask, const real *Q,
+                                    RobotStatics &out);
+
 }  // namespace legsim::spatial
