@@ -1,0 +1,349 @@
+// CTest hil_sim_hexapod: the hexapod's node (hil_sim --hexapod) in memory against its C API:
+// the tripod walk's set-points with the statics' feed-forward sent as frames step by step give
+// the C API's own run of the same commands bit for bit (box and feet in float64, the legs'
+// float32 values its float32 rounding); bad frames are refused with one FAULT naming the signal
+// and change nothing; each leg's command watchdog trips alone, its safe action the C API's
+// command with that leg's feed-forward zero.
+#include <cmath>
+#include <cstring>
+#include <vector>
+
+#include "hexapod_node.h"
+#include "model_toml.hpp"
+#include "test_support.hpp"
+
+extern "C" {
+#include "legsim_can.h"
+#include "legsim_can_layout.h"
+}
+
+using hil::Frame;
+using hil_test::Recorder;
+
+namespace {
+
+constexpr int L = LEGSIM_HEXAPOD_LEGS;
+const legsim_hexapod_gait kGait = {1.2, 0.6, 0.12, 0.05, 0.0, 1.0};  // tests/python/test_hexapod.py's
+
+legsim_hexapod_desc g_desc;
+std::vector<unsigned char> g_work;  // gait and statics storage
+void *work() {
+  const size_t a = LEGSIM_STORAGE_ALIGN;
+  if (g_work.empty()) g_work.resize(legsim_hexapod_storage_size() + a);
+  uintptr_t p = reinterpret_cast<uintptr_t>(g_work.data());
+  return reinterpret_cast<void *>((p + a - 1) / a * a);
+}
+
+// The walk's command at t: the gait's set-points, the statics of the planned pose on its
+// planned stance as feed-forward (Hexapod.walk's command()).
+struct WalkCmd {
+  legsim_hexapod_setpoint sp;
+  double ff[L][2], fm[L];
+  uint32_t stance;
+};
+WalkCmd walk_command(double t) {
+  WalkCmd c;
+  CHECK(legsim_hexapod_gait_setpoints(&g_desc, &kGait, t, work(), legsim_hexapod_storage_size(), &c.sp) ==
+        LEGSIM_OK);
+  legsim_hexapod_pose at = {};
+  at.box_m[2] = kGait.box_height_m;
+  at.box_quat[0] = 1;
+  c.stance = 0;
+  for (int l = 0; l < L; ++l) {
+    at.rowing_rad[l] = c.sp.rowing_rad[l];
+    at.length_m[l][0] = c.sp.length_m[l][0], at.length_m[l][1] = c.sp.length_m[l][1];
+    if (c.sp.stance[l]) c.stance |= 1u << l;
+  }
+  legsim_hexapod_standing s;
+  CHECK(legsim_hexapod_statics(&g_desc, &at, c.stance, nullptr, work(), legsim_hexapod_storage_size(), &s) ==
+        LEGSIM_OK);
+  for (int l = 0; l < L; ++l) c.ff[l][0] = s.actuator_force_n[l][0], c.ff[l][1] = s.actuator_force_n[l][1];
+  for (int l = 0; l < L; ++l) c.fm[l] = s.rowing_torque_nm[l];
+  return c;
+}
+
+Frame hex_cmd(int leg, uint32_t seq, const uint8_t mode[3], const double set[3], const double ff[3]) {
+  legsim_can_hex_cmd_h0_t m;
+  legsim_can_hex_cmd_h0_init(&m);
+  m.hc_seq = seq;
+  m.hc_mode_upper = mode[0], m.hc_mode_lower = mode[1], m.hc_mode_rowing = mode[2];
+  m.hc_setpoint_upper = set[0], m.hc_setpoint_lower = set[1], m.hc_setpoint_rowing = set[2];
+  m.hc_ff_upper = ff[0], m.hc_ff_lower = ff[1], m.hc_ff_rowing = ff[2];
+  // every leg's frame has leg 0's layout (the DBC's template): leg 0's pack at leg j's id
+  Frame f = hil_test::fd_frame(hil::kHexCmdFrameId[leg]);
+  legsim_can_hex_cmd_h0_pack(f.data, &m, 64);
+  return f;
+}
+std::vector<Frame> servo_frames(const WalkCmd &c, uint32_t seq) {
+  std::vector<Frame> out;
+  const uint8_t servo[3] = {2, 2, 2};
+  for (int l = 0; l < L; ++l) {
+    const double set[3] = {c.sp.length_m[l][0], c.sp.length_m[l][1], c.sp.rowing_rad[l]};
+    const double ff[3] = {c.ff[l][0], c.ff[l][1], c.fm[l]};
+    out.push_back(hex_cmd(l, seq, servo, set, ff));
+  }
+  return out;
+}
+
+Frame reset(uint32_t seq, bool servo, bool use_held, uint32_t stance, float height, uint16_t timeout = 65535) {
+  legsim_can_control_t m = hil_test::control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_act_init = servo ? 1 : 0;
+  m.ctrl_use_lengths = use_held ? 1 : 0;
+  m.ctrl_hex_stance = static_cast<uint8_t>(stance);
+  m.ctrl_hex_box_height = height;
+  m.ctrl_cmd_timeout = timeout;
+  return hil_test::pack(m);
+}
+
+// The C API's run: its own storage, stepped as the walk steps it.
+struct Reference {
+  std::vector<unsigned char> buf;
+  legsim_hexapod_sim *sim = nullptr;
+  legsim_status init(const WalkCmd &c, float height) {
+    const size_t a = LEGSIM_STORAGE_ALIGN;
+    buf.assign(legsim_hexapod_sim_size() + a, 0);
+    uintptr_t p = reinterpret_cast<uintptr_t>(buf.data());
+    legsim_hexapod_pose pose = {};
+    pose.box_m[2] = height;
+    pose.box_quat[0] = 1;
+    for (int l = 0; l < L; ++l) {
+      pose.rowing_rad[l] = c.sp.rowing_rad[l];
+      pose.length_m[l][0] = c.sp.length_m[l][0], pose.length_m[l][1] = c.sp.length_m[l][1];
+    }
+    legsim_status st = legsim_hexapod_sim_init(reinterpret_cast<void *>((p + a - 1) / a * a),
+                                               legsim_hexapod_sim_size(), &g_desc, &pose, c.stance, &sim);
+    return st == LEGSIM_OK ? command(c) : st;
+  }
+  legsim_status command(const WalkCmd &c) {
+    double len[L][2], row[L];
+    for (int l = 0; l < L; ++l)
+      len[l][0] = c.sp.length_m[l][0], len[l][1] = c.sp.length_m[l][1], row[l] = c.sp.rowing_rad[l];
+    return legsim_hexapod_command_pose(sim, len, row, c.ff, c.fm);
+  }
+  legsim_hexapod_state state() const {
+    legsim_hexapod_state s;
+    legsim_hexapod_get_state(sim, &s);
+    return s;
+  }
+};
+
+// A sample's frames decoded, and compared with the C API's state.
+struct Decoded {
+  int frames = 0;
+  legsim_can_hex_box_pose_t box;
+  legsim_can_hex_box_vel_t vel;
+  legsim_can_hex_leg_h0_t leg[L];
+  legsim_can_hex_foot_h0_t foot[L];
+  legsim_can_st_status_t status;
+};
+Decoded decode(const std::vector<Frame> &v) {
+  Decoded d;
+  std::memset(&d, 0, sizeof d);
+  for (const Frame &f : v) {
+    ++d.frames;
+    if (f.id == LEGSIM_CAN_HEX_BOX_POSE_FRAME_ID) legsim_can_hex_box_pose_unpack(&d.box, f.data, 64);
+    if (f.id == LEGSIM_CAN_HEX_BOX_VEL_FRAME_ID) legsim_can_hex_box_vel_unpack(&d.vel, f.data, 64);
+    if (f.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) legsim_can_st_status_unpack(&d.status, f.data, 64);
+    for (int l = 0; l < L; ++l) {
+      if (f.id == LEGSIM_CAN_HEX_LEG_H0_FRAME_ID + static_cast<uint32_t>(l))
+        legsim_can_hex_leg_h0_unpack(&d.leg[l], f.data, 64);
+      if (f.id == LEGSIM_CAN_HEX_FOOT_H0_FRAME_ID + static_cast<uint32_t>(l))
+        legsim_can_hex_foot_h0_unpack(&d.foot[l], f.data, 64);
+    }
+  }
+  return d;
+}
+bool same(const Decoded &d, const legsim_hexapod_state &s) {
+  bool ok = d.box.hb_x == s.box_m[0] && d.box.hb_y == s.box_m[1] && d.box.hb_z == s.box_m[2] &&
+            d.box.hb_qw == s.box_quat[0] && d.box.hb_qx == s.box_quat[1] && d.box.hb_qy == s.box_quat[2] &&
+            d.box.hb_qz == s.box_quat[3] && d.vel.hv_vx == s.box_velocity_mps[0] &&
+            d.vel.hv_vy == s.box_velocity_mps[1] && d.vel.hv_vz == s.box_velocity_mps[2] &&
+            d.vel.hv_wx == s.box_omega_radps[0] && d.vel.hv_wy == s.box_omega_radps[1] &&
+            d.vel.hv_wz == s.box_omega_radps[2] && d.vel.hv_energy == s.kinetic_energy_j &&
+            d.status.st_time == s.t_s;
+  for (int l = 0; l < L; ++l) {
+    ok = ok && d.foot[l].hf_x == s.foot_m[l][0] && d.foot[l].hf_y == s.foot_m[l][1] &&
+         d.foot[l].hf_z == s.foot_m[l][2] && d.foot[l].hf_fx == s.foot_force_n[l][0] &&
+         d.foot[l].hf_fy == s.foot_force_n[l][1] && d.foot[l].hf_fz == s.foot_force_n[l][2];
+    ok = ok && d.leg[l].hl_length_upper == static_cast<float>(s.length_m[l][0]) &&
+         d.leg[l].hl_length_lower == static_cast<float>(s.length_m[l][1]) &&
+         d.leg[l].hl_force_upper == static_cast<float>(s.actuator_force_n[l][0]) &&
+         d.leg[l].hl_force_lower == static_cast<float>(s.actuator_force_n[l][1]) &&
+         d.leg[l].hl_rowing == static_cast<float>(s.rowing_rad[l]) &&
+         d.leg[l].hl_rowing_torque == static_cast<float>(s.rowing_torque_nm[l]) &&
+         d.leg[l].hl_foot_state == s.foot_state[l];
+  }
+  return ok;
+}
+
+void send(hil::HexapodNode &node, const std::vector<Frame> &v) {
+  for (const Frame &f : v) node.on_frame(f, 0);
+}
+// A STEP worked to its end, as the run loop does in slices.
+void step(hil::HexapodNode &node, uint32_t seq, uint32_t n) {
+  node.on_frame(hil_test::step(seq, n), 0);
+  node.finish_step();
+}
+
+// The walk over the bus equals the C API's walk; bad frames change nothing.
+void test_walk() {
+  Recorder rec;
+  hil::HexConfig cfg;
+  hil::HexapodNode node(g_desc, rec, cfg);
+  std::string err;
+  CHECK(node.init(&err));
+  const float height = static_cast<float>(kGait.box_height_m);
+  WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));  // held for the RESET: the walk's pose at t = 0
+  CHECK(rec.take().empty());
+  node.on_frame(reset(1, true, true, c.stance, height), 0);
+  Reference ref;
+  CHECK(ref.init(c, height) == LEGSIM_OK);
+  std::vector<Frame> out = rec.take();
+  CHECK(static_cast<int>(out.size()) == hil::kHexSampleFrames);
+  CHECK(!out.empty() && out.back().id == LEGSIM_CAN_ST_STATUS_FRAME_ID);
+  CHECK(same(decode(out), ref.state()));
+  const int n = 300;  // a quarter period: the first tripod swings, its feet leave the ground
+  int equal = 0, free_feet = 0;
+  uint32_t ctrl = 2;
+  for (int i = 0; i < n; ++i) {
+    c = walk_command((i + 1) * 1e-3);
+    send(node, servo_frames(c, static_cast<uint32_t>(i + 2)));
+    step(node, ctrl++, 1);
+    CHECK(ref.command(c) == LEGSIM_OK);
+    CHECK(legsim_hexapod_step(ref.sim, 1e-3, 1) == LEGSIM_OK);
+    const Decoded d = decode(rec.take());
+    if (d.frames == hil::kHexSampleFrames && same(d, ref.state())) ++equal;
+    for (int l = 0; l < L; ++l) free_feet += d.leg[l].hl_foot_state == LEGSIM_CONTACT_FREE;
+    if (i == 100) {
+      // bad frames: one FAULT each naming the signal, no sample, nothing applied
+      uint8_t servo[3] = {2, 2, 2};
+      double set[3] = {c.sp.length_m[0][0], c.sp.length_m[0][1], c.sp.rowing_rad[0]};
+      double ff[3] = {0, 0, 0};
+      const uint32_t seq = 10000;
+      struct Bad {
+        Frame f;
+        uint8_t code;
+        uint32_t detail;
+      };
+      std::vector<Bad> bad;
+      double nan_set[3] = {set[0], NAN, set[2]};
+      bad.push_back({hex_cmd(0, seq, servo, nan_set, ff), 3, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_LOWER_START_BIT});
+      double nan_ff[3] = {0, 0, NAN};
+      bad.push_back({hex_cmd(1, seq, servo, set, nan_ff), 3, LEGSIM_CAN_HEX_CMD_H0_HC_FF_ROWING_START_BIT});
+      double past[3] = {g_desc.leg[2].leg.actuator[0].stroke_max_m + 1e-9, set[1], set[2]};
+      bad.push_back({hex_cmd(2, seq, servo, past, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_UPPER_START_BIT});
+      double row_past[3] = {set[0], set[1], g_desc.rowing_stroke_rad[1] + 1e-9};
+      bad.push_back({hex_cmd(3, seq, servo, row_past, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_ROWING_START_BIT});
+      uint8_t mixed[3] = {2, 1, 2};  // a FORCE slot in the SERVO robot
+      bad.push_back({hex_cmd(4, seq, mixed, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT});
+      uint8_t wrong[3] = {3, 2, 2};
+      bad.push_back({hex_cmd(5, seq, wrong, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_UPPER_START_BIT});
+      double big_ff[3] = {g_desc.leg[0].leg.actuator[0].max_force_n * 1.01, 0, 0};
+      bad.push_back({hex_cmd(0, seq, servo, set, big_ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_FF_UPPER_START_BIT});
+      Frame short_frame = hex_cmd(1, seq, servo, set, ff);
+      short_frame.len = 48;
+      bad.push_back({short_frame, 2, 64});
+      bad.push_back({hex_cmd(2, 5, servo, set, ff), 5, static_cast<uint32_t>(i + 2)});  // stale counter
+      Frame act = hil_test::fd_frame(LEGSIM_CAN_ACT_CMD_FRAME_ID);  // the one leg's: not the hexapod's
+      bad.push_back({act, 1, 0});
+      legsim_can_control_t r = hil_test::control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+      r.ctrl_hex_box_height = NAN;
+      bad.push_back({hil_test::pack(r), 3, LEGSIM_CAN_CONTROL_CTRL_HEX_BOX_HEIGHT_START_BIT});
+      for (const Bad &b : bad) {
+        node.on_frame(b.f, 0);
+        const std::vector<Frame> got = rec.take();
+        const legsim_can_fault_t f = hil_test::fault_of(got);
+        CHECK(got.size() == 1 && f.fault_code == b.code && f.fault_detail == b.detail &&
+              f.fault_frame_id == b.f.id);
+        if (!(f.fault_code == b.code && f.fault_detail == b.detail))
+          std::fprintf(stderr, "  bad frame 0x%x: fault %u detail %u, expected %u %u\n", b.f.id, f.fault_code,
+                       f.fault_detail, b.code, b.detail);
+      }
+    }
+  }
+  std::printf("walk over frames: %d of %d samples equal to the C API's, %d free-foot samples\n", equal, n,
+              free_feet);
+  CHECK(equal == n);
+  CHECK(free_feet > 0);  // the swing legs' feet left the ground
+}
+
+// Each leg's watchdog: leg 2 silent trips alone (its feed-forward zero, set-points held), the
+// others fed on; a FORCE robot's safe action is zero force.
+void test_watchdog() {
+  Recorder rec;
+  hil::HexConfig cfg;
+  hil::HexapodNode node(g_desc, rec, cfg);
+  std::string err;
+  CHECK(node.init(&err));
+  const float height = 1.0f;
+  WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));
+  node.on_frame(reset(1, true, true, c.stance, height, 10), 0);  // 10 ms: 10 steps
+  Reference ref;
+  CHECK(ref.init(c, height) == LEGSIM_OK);
+  rec.take();
+  uint32_t ctrl = 2;
+  int faults = 0;
+  for (int i = 0; i < 30; ++i) {
+    std::vector<Frame> f = servo_frames(c, static_cast<uint32_t>(i + 2));
+    if (i > 0) f.erase(f.begin() + 2);  // leg 2 stops after the first
+    send(node, f);
+    step(node, ctrl++, 1);
+    WalkCmd given = c;  // leg 2's 10 steps are up before step 10: its feed-forward zero
+    if (i >= 10) given.ff[2][0] = given.ff[2][1] = given.fm[2] = 0;
+    CHECK(ref.command(given) == LEGSIM_OK);
+    CHECK(legsim_hexapod_step(ref.sim, 1e-3, 1) == LEGSIM_OK);
+    const std::vector<Frame> got = rec.take();
+    const legsim_can_fault_t fault = hil_test::fault_of(got);
+    if (fault.fault_code == 7) {
+      ++faults;
+      CHECK(i == 10 && fault.fault_frame_id == hil::kHexCmdFrameId[2] && fault.fault_detail == 10 &&
+            fault.fault_seq == 2);
+    }
+    const Decoded d = decode(got);
+    CHECK(same(d, ref.state()));
+    if (i >= 10) {
+      CHECK((d.leg[2].hl_status & hil::kStatusSafeState) != 0);
+      CHECK((d.leg[1].hl_status & hil::kStatusSafeState) == 0 && (d.leg[1].hl_status & hil::kStatusCmdWatchdog));
+      CHECK((d.status.st_status & hil::kStatusSafeState) != 0);
+    }
+  }
+  CHECK(faults == 1);
+  // a FORCE robot at the stand: the silent legs' forces go to zero
+  const uint8_t force[3] = {1, 1, 1};
+  node.on_frame(reset(1, false, false, 0x3F, 1.0f, 5), 0);
+  Decoded d = decode(rec.take());
+  for (int l = 0; l < L; ++l) {
+    CHECK(d.leg[l].hl_mode == 1);
+    CHECK(d.leg[l].hl_length_upper == static_cast<float>(node.stand_length(l, 0)));
+  }
+  const double push[3] = {100, -50, 2};
+  const double zero[3] = {0, 0, 0};
+  node.on_frame(hex_cmd(0, 1, force, push, zero), 0);
+  step(node, 2, 4);
+  d = decode(rec.take());
+  CHECK(d.leg[0].hl_force_upper == 100.0f && d.leg[0].hl_force_lower == -50.0f && d.leg[0].hl_rowing_torque == 2.0f);
+  step(node, 3, 2);  // 5 ms after the command: tripped before the 6th step
+  const std::vector<Frame> got = rec.take();
+  CHECK(hil_test::fault_of(got).fault_code == 7 && hil_test::fault_of(got).fault_frame_id == hil::kHexCmdFrameId[0]);
+  d = decode(got);
+  CHECK(d.leg[0].hl_force_upper == 0.0f && d.leg[0].hl_rowing_torque == 0.0f);
+  // a SERVO slot in a FORCE robot is refused
+  const uint8_t servo[3] = {0, 2, 0};
+  node.on_frame(hex_cmd(1, 1, servo, zero, zero), 0);
+  CHECK(hil_test::fault_of(rec.take()).fault_detail == LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT);
+}
+
+}  // namespace
+
+int main() {
+  char msg[512] = "";
+  if (legsim_hexapod_load_toml(HIL_SIM_HEXAPOD_FILE, &g_desc, msg, sizeof msg) != LEGSIM_OK) {
+    std::fprintf(stderr, "%s: %s\n", HIL_SIM_HEXAPOD_FILE, msg);
+    return 1;
+  }
+  test_walk();
+  test_watchdog();
+  return hil_test::report();
+}
