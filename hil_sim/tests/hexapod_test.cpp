@@ -3,12 +3,23 @@
 // the C API's own run of the same commands bit for bit (box and feet in float64, the legs'
 // float32 values its float32 rounding); bad frames are refused with one FAULT naming the signal
 // and change nothing; each leg's command watchdog trips alone, its safe action the C API's
-// command with that leg's feed-forward zero.
+// command with that leg's feed-forward zero; in the real run loop (an in-memory bus) a long
+// STEP keeps the heartbeat and gives the same answer as in one go.
+#include <algorithm>
 #include <cmath>
+#include <csignal>
 #include <cstring>
+#include <deque>
 #include <vector>
 
+#include <sys/eventfd.h>
+#include <sys/signalfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "can_io.h"
 #include "hexapod_node.h"
+#include "run_loop.h"
 #include "model_toml.hpp"
 #include "test_support.hpp"
 
@@ -335,6 +346,141 @@ void test_watchdog() {
   CHECK(hil_test::fault_of(rec.take()).fault_detail == LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT);
 }
 
+
+int64_t mono_ns() {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+// Nanoseconds this thread has waited for a CPU while runnable (the machine's time, not the
+// loop's: liveness_test.cpp's accounting); 0 if not available.
+int64_t run_delay_ns() {
+  long long on_cpu = 0, waited = 0;
+  FILE *f = std::fopen("/proc/thread-self/schedstat", "r");
+  if (f == nullptr) return 0;
+  if (std::fscanf(f, "%lld %lld", &on_cpu, &waited) != 2) waited = 0;
+  std::fclose(f);
+  return waited;
+}
+
+// The socket in memory (an eventfd says when frames are pending), as liveness_test.cpp's.
+class MemoryBus : public hil::Bus {
+ public:
+  struct Sent {
+    int64_t t_ns, waited_ns;
+    Frame frame;
+  };
+  MemoryBus() : efd_(eventfd(0, EFD_SEMAPHORE | EFD_NONBLOCK | EFD_CLOEXEC)) {}
+  ~MemoryBus() override { ::close(efd_); }
+  void push(const Frame &f) {
+    in_.push_back(f);
+    uint64_t one = 1;
+    if (::write(efd_, &one, sizeof one) != sizeof one) std::perror("eventfd write");
+  }
+  int fd() const override { return efd_; }
+  int receive(Frame *out) override {
+    uint64_t v;
+    if (in_.empty() || ::read(efd_, &v, sizeof v) != sizeof v) return 0;
+    *out = in_.front();
+    in_.pop_front();
+    return 1;
+  }
+  bool send(const Frame &f) override {
+    sent.push_back({mono_ns(), run_delay_ns(), f});
+    if (f.id == LEGSIM_CAN_ST_STATUS_FRAME_ID && ++samples == stop_after) ::kill(::getpid(), SIGTERM);
+    return true;
+  }
+  void set_send_block_ms(int) override {}
+  uint32_t tx_errors() const override { return 0; }
+  std::vector<Sent> sent;
+  int samples = 0, stop_after = 0;
+
+ private:
+  int efd_;
+  std::deque<Frame> in_;
+};
+
+// A STEP of about 0.5 s of CPU in the real loop: heartbeats all along (state LOCKSTEP, bit
+// STEPPING, the simulated time moving on), gaps within the period plus the leg's liveness
+// slack (200 ms, less the time spent waiting for a CPU), and the answer bit-identical to the
+// same STEP worked in one go; SIGTERM after it puts every leg in its safe action.
+void test_liveness() {
+  const float height = 1.0f;
+  const WalkCmd c = walk_command(0.0);
+  std::vector<Frame> in = servo_frames(c, 1);
+  in.push_back(reset(1, true, true, c.stance, height));
+  // the step's cost here, to size the STEP in CPU time
+  Recorder rec;
+  hil::HexapodNode ref(g_desc, rec, hil::HexConfig{});
+  std::string err;
+  CHECK(ref.init(&err));
+  send(ref, in);
+  struct timespec a, b;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  step(ref, 2, 50);
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+  const double per_step = ((b.tv_sec - a.tv_sec) + (b.tv_nsec - a.tv_nsec) / 1e9) / 50;
+  const uint32_t n = static_cast<uint32_t>(std::clamp(0.5 / per_step, 200.0, 100000.0));
+  rec.take();
+  step(ref, 3, n);
+  const std::vector<Frame> expected = rec.take();
+
+  MemoryBus bus;
+  hil::HexapodNode node(g_desc, bus, hil::HexConfig{});
+  CHECK(node.init(&err));
+  for (const Frame &f : in) bus.push(f);
+  bus.push(hil_test::step(2, 50));
+  bus.push(hil_test::step(3, n));
+  bus.stop_after = 3;  // RESET's, STEP 50's, the long STEP's samples
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGTERM);
+  sigprocmask(SIG_BLOCK, &mask, nullptr);
+  const int sfd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+  hil::LoopConfig cfg;
+  cfg.heartbeat_ms = 100;
+  hil::JitterStats stats;
+  const int64_t t0 = mono_ns();
+  const hil::LoopResult res = hil::run_loop(bus, node, sfd, cfg, &stats);
+  const double secs = (mono_ns() - t0) / 1e9;
+  ::close(sfd);
+  CHECK(res.signal == SIGTERM && res.shutdown.safe_applied && !res.shutdown.step_cut);
+  // the long STEP's window: from the STEP 50's answer to the long STEP's
+  std::vector<MemoryBus::Sent> w;
+  std::vector<Frame> answer;
+  int statuses = 0, stepping = 0;
+  for (const auto &s : bus.sent) {
+    if (s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) ++statuses;
+    if (statuses == 2 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) w.push_back(s);
+    if (statuses == 2 && s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID) {
+      w.push_back(s);
+      legsim_can_heartbeat_t h;
+      legsim_can_heartbeat_unpack(&h, s.frame.data, 64);
+      stepping += h.hb_state == 1 && (h.hb_status & hil::kStatusStepping) && h.hb_sim_time > 0.05;
+    }
+    // the long STEP's answer: what hil_sim sent after the STEP 50's, heartbeats aside
+    if (statuses == 2 && s.frame.id != LEGSIM_CAN_HEARTBEAT_FRAME_ID && s.frame.id != LEGSIM_CAN_ST_STATUS_FRAME_ID)
+      answer.push_back(s.frame);
+    if (statuses == 3 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) answer.push_back(s.frame);
+    if (statuses == 3 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) w.push_back(s);
+  }
+  double max_wall = 0, max_own = 0;
+  for (size_t i = 1; i < w.size(); ++i) {
+    const double wall = (w[i].t_ns - w[i - 1].t_ns) / 1e6;
+    max_wall = std::max(max_wall, wall);
+    max_own = std::max(max_own, wall - (w[i].waited_ns - w[i - 1].waited_ns) / 1e6);
+  }
+  const double step_s = (w.size() >= 2 ? (w.back().t_ns - w.front().t_ns) / 1e9 : 0);
+  std::printf("hexapod STEP %u (%.1f us a step) in the loop: %.2f s, %d heartbeats while stepping, max gap %.1f ms "
+              "(%.1f ms less CPU waits); loop %.2f s\n",
+              n, per_step * 1e6, step_s, stepping, max_wall, max_own, secs);
+  CHECK(stepping >= 3);
+  CHECK(max_own <= 100 + 200);
+  bool same_answer = answer.size() == expected.size();
+  for (size_t i = 0; same_answer && i < answer.size(); ++i)
+    same_answer = answer[i].id == expected[i].id && std::memcmp(answer[i].data, expected[i].data, 64) == 0;
+  CHECK(same_answer);
+}
 }  // namespace
 
 int main() {
@@ -345,5 +491,6 @@ int main() {
   }
   test_walk();
   test_watchdog();
+  test_liveness();
   return hil_test::report();
 }
