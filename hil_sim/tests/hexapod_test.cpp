@@ -347,6 +347,48 @@ void test_watchdog() {
 }
 
 
+// Real time: a leg silent for more than the timeout of wall time trips alone, at the first tick
+// past it; a sample every decimation ticks; STOP_RT answers with one and goes back to lockstep.
+void test_realtime_watchdog() {
+  Recorder rec;
+  hil::HexConfig cfg;  // decimation 10
+  hil::HexapodNode node(g_desc, rec, cfg);
+  std::string err;
+  CHECK(node.init(&err));
+  const WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));
+  node.on_frame(reset(1, true, true, c.stance, 1.0f, 10), 0);
+  send(node, servo_frames(c, 2));  // at 0 ms: every leg's watchdog armed (the RESET's held ones are not)
+  legsim_can_control_t go = hil_test::control(2, LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_RT_CHOICE);
+  node.on_frame(hil_test::pack(go), 0);
+  CHECK(node.state() == hil::SimState::kRealtime && node.rt_period_ns() == 1000000);
+  rec.take();
+  const int64_t ms = 1000000;
+  int trip_tick = -1, samples = 0;
+  for (int k = 1; k <= 30; ++k) {
+    const int64_t now = k * ms;
+    for (int l = 0; l < L; ++l)
+      if (l != 5) node.on_frame(servo_frames(c, static_cast<uint32_t>(k + 2))[l], now);  // leg 5 silent
+    node.rt_tick(now);
+    const std::vector<Frame> got = rec.take();
+    const legsim_can_fault_t f = hil_test::fault_of(got);
+    if (f.fault_code == 7) {
+      CHECK(trip_tick < 0 && f.fault_frame_id == hil::kHexCmdFrameId[5]);
+      trip_tick = k;
+    }
+    if (hil_test::find(got, LEGSIM_CAN_ST_STATUS_FRAME_ID)) ++samples;
+  }
+  std::printf("real time: leg 5 tripped at tick %d (timeout 10 ms, its command at 0 ms), %d samples in 30 ticks\n",
+              trip_tick, samples);
+  CHECK(trip_tick == 11);  // 11 ms > 10 ms since its command
+  CHECK(samples == 3);
+  legsim_can_control_t stop = hil_test::control(3, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STOP_RT_CHOICE);
+  node.on_frame(hil_test::pack(stop), 31 * ms);
+  const Decoded d = decode(rec.take());
+  CHECK(d.frames == hil::kHexSampleFrames && d.status.st_state == 1 && node.step_count() == 30);
+  CHECK((d.leg[5].hl_status & hil::kStatusSafeState) && !(d.leg[4].hl_status & hil::kStatusSafeState));
+}
+
 int64_t mono_ns() {
   struct timespec ts;
   clock_gettime(CLOCK_MONOTONIC, &ts);
@@ -491,6 +533,7 @@ int main() {
   }
   test_walk();
   test_watchdog();
+  test_realtime_watchdog();
   test_liveness();
   return hil_test::report();
 }
