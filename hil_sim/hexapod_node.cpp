@@ -366,9 +366,7 @@ void HexapodNode::handle_control(const Frame &frame, int64_t now_ns) {
   Fault f;
   Checks k(id, m.ctrl_seq, &f);
   const Command command = static_cast<Command>(m.ctrl_command);
-  k.range(legsim_can_control_ctrl_command_is_in_range(m.ctrl_command), LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_BIT,
-          m.ctrl_command);
-  if (!k.ok()) return reject(f);
+  // the counter first (a RESET starts it anew), then the values, then the state
   if (command != Command::kReset && ctrl_seq_.have && m.ctrl_seq <= ctrl_seq_.last) {
     f = Fault{};
     f.code = FaultCode::kStaleSeq;
@@ -379,6 +377,9 @@ void HexapodNode::handle_control(const Frame &frame, int64_t now_ns) {
     f.value = static_cast<float>(m.ctrl_seq);
     return reject(f);
   }
+  k.range(legsim_can_control_ctrl_command_is_in_range(m.ctrl_command), LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_BIT,
+          m.ctrl_command);
+  if (!k.ok()) return reject(f);
   HexReset r;
   switch (command) {
     case Command::kReset:

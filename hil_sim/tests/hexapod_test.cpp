@@ -256,6 +256,7 @@ void test_walk() {
       short_frame.len = 48;
       bad.push_back({short_frame, 2, 64});
       bad.push_back({hex_cmd(2, 5, servo, set, ff), 5, static_cast<uint32_t>(i + 2)});  // stale counter
+      bad.push_back({hil_test::step(1, 1), 5, static_cast<uint32_t>(i + 2)});  // a stale STEP
       Frame act = hil_test::fd_frame(LEGSIM_CAN_ACT_CMD_FRAME_ID);  // the one leg's: not the hexapod's
       bad.push_back({act, 1, 0});
       legsim_can_control_t r = hil_test::control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
