@@ -12,10 +12,12 @@ The template is a DBC whose lines are copied as they are, except these (none is 
                              frame's own comment becomes @leg_comment
     @each{ ... @}            the lines between, once per leg k = 0 .. N-1
     @rest{ ... @}            the lines between, once per leg k = 1 .. N-1
+    @hex{ ... @}             the lines between, once per hexapod leg j = 0 .. 5 (hil_sim --hexapod:
+                             its per-leg frames), H its suffix ("_Hj")
     @once TEXT               TEXT, once
 In @each, @rest, @once and @leg_comment, {{EXPR}} is the value of a Python expression of
 k (the leg), N (the legs), side (k's side), L ("" for leg 0, "_Lk" else), hil ("HIL" for leg 0,
-"HIL_Lk" else), nodes ("HIL HIL_L1 ..."); in @leg_comment also frame (leg 0's name), id0
+"HIL_Lk" else), nodes ("HIL HIL_L1 ..."), and in @hex j and H; in @leg_comment also frame (leg 0's name), id0
 (its id, hex) and route ("bench -> hil_sim leg k (side)" or "leg k (side) -> bench").
 tests/bench/test_dbc.py checks that the committed can/legsim.dbc is this script's output.
 """
@@ -28,6 +30,7 @@ from pathlib import Path
 
 HERE = Path(__file__).resolve().parent
 LEG_OFFSET = 0x20
+HEXAPOD_LEGS = 6
 SECTIONS = ("BO_", "CM_", "BA_", "VAL_", "SIG_VALTYPE_")
 _FIELD = re.compile(r"\{\{(.+?)\}\}")
 
@@ -105,17 +108,23 @@ def generate(template: str, legs: int | None = None) -> str:
     out: list[str] = []
     block: list[str] | None = None
     block_legs: range | None = None
+    block_hex = False
     for ln in lines:
         if block is not None:
             if ln == "@}":
                 for k in block_legs:
-                    out.extend(_fill(b, _leg_env(k, sides)) for b in block)
+                    env = _leg_env(0 if block_hex else k, sides)
+                    if block_hex:
+                        env.update(j=k, H=f"_H{k}")
+                    out.extend(_fill(b, env) for b in block)
                 block = None
             else:
                 block.append(ln)
             continue
         if ln in ("@each{", "@rest{"):
-            block, block_legs = [], range(0 if ln == "@each{" else 1, len(sides))
+            block, block_legs, block_hex = [], range(0 if ln == "@each{" else 1, len(sides)), False
+        elif ln == "@hex{":
+            block, block_legs, block_hex = [], range(HEXAPOD_LEGS), True
         elif ln.startswith("@once "):
             out.append(_fill(ln[len("@once "):], _leg_env(0, sides)))
         elif ln.startswith("@copy "):
@@ -144,7 +153,7 @@ def generate(template: str, legs: int | None = None) -> str:
         else:
             out.append(ln)
     if block is not None:
-        raise TemplateError("a block (@each{ or @rest{) has no @}")
+        raise TemplateError("a block (@each{, @rest{ or @hex{) has no @}")
     return "\n".join(out)
 
 

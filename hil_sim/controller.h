@@ -36,6 +36,7 @@
 #include <cstdint>
 
 #include "frame.h"
+#include "node.h"
 #include "protocol.h"
 #include "session.h"
 
@@ -48,37 +49,32 @@ struct ControllerConfig {
   bool verbose = false;           // log faults and mode changes on stderr
 };
 
-class Controller {
+class Controller : public Node {
  public:
   Controller(Session &session, FrameSink &sink, const ControllerConfig &config);
 
-  void on_frame(const Frame &frame, int64_t now_ns);
+  void on_frame(const Frame &frame, int64_t now_ns) override;
   // A STEP is accepted and not finished yet.
-  bool stepping() const { return step_left_ > 0; }
+  bool stepping() const override { return step_left_ > 0; }
   uint64_t step_left() const { return step_left_; }
   // Advances the STEP in progress by at most max_steps steps (> 0); when its last step is
   // done (or a step fails) the STEP is answered. Returns the steps done; 0 when idle.
-  uint64_t work(uint64_t max_steps);
+  uint64_t work(uint64_t max_steps) override;
   // Works the STEP in progress to its end (tests, and on_frame during a STEP).
   void finish_step();
   // On exit (signal or socket failure): a STEP in progress is abandoned, unanswered, after
   // the steps already done (the session is at a whole step, as after any STEP); the
   // actuators of an active session are put in the safe state (config safe_mode).
-  struct Shutdown {
-    bool step_cut = false;
-    uint64_t step_done = 0, step_total = 0;
-    bool safe_applied = false;
-    legsim_status safe_status = LEGSIM_OK;
-  };
-  Shutdown shutdown();
+  using Shutdown = NodeShutdown;
+  Shutdown shutdown() override;
   // One real-time tick (steps_per_tick steps); no-op outside REALTIME.
-  void rt_tick(int64_t now_ns);
+  void rt_tick(int64_t now_ns) override;
 
-  SimState state() const { return state_; }
-  int64_t rt_period_ns() const { return rt_period_ns_; }
-  uint32_t rt_epoch() const { return rt_epoch_; }  // +1 at every START_RT
+  SimState state() const override { return state_; }
+  int64_t rt_period_ns() const override { return rt_period_ns_; }
+  uint32_t rt_epoch() const override { return rt_epoch_; }  // +1 at every START_RT
   uint32_t rt_ticks() const { return rt_ticks_; }
-  void fill_heartbeat(HeartbeatInfo *hb) const;
+  void fill_heartbeat(HeartbeatInfo *hb) const override;
 
   uint32_t rx_frames() const { return rx_frames_; }
   uint32_t rx_rejected() const { return rx_rejected_; }

@@ -16,6 +16,7 @@
 
 #include "can_io.h"
 #include "controller.h"
+#include "hexapod_node.h"
 #include "jitter.h"
 #include "protocol.h"
 #include "run_loop.h"
@@ -49,6 +50,10 @@ const char kUsage[] =
     "                        answers with its own frames (leg 1 at the ids + 0x20), plus the\n"
     "                        feet's contacts (ST_CONTACT) and the box (ST_BOX); leg 0's\n"
     "                        LOAD_CMD index 2, 3 set the box load (box.load, box.moment)\n"
+    "  --hexapod             run the hexapod in space (models/hexapod.toml, or --model HEXAPOD.toml):\n"
+    "                        each leg a node with its command (HEX_CMD_Hj: force or servo set-points\n"
+    "                        with feed-forward) and state frames (HEX_LEG_Hj, HEX_FOOT_Hj), the box's\n"
+    "                        (HEX_BOX_POSE, HEX_BOX_VEL); can/README.md, The hexapod\n"
     "  --ground S,MS,MK      the robot's ground instead of its file's: slope S (rad), mu_static\n"
     "                        MS, mu_kinetic MK (a scene's [ground]; the bench passes it)\n"
     "  --decimation N        real time: one state sample every N ticks (default 10)\n"
@@ -70,6 +75,7 @@ struct Options {
   int rt_priority = 0;
   std::string model_file;  // "" = the compiled-in leg
   bool robot = false;       // --robot: the compiled-in robot
+  bool hexapod = false;     // --hexapod, or --model naming a hexapod file
   bool has_ground = false;  // --ground: slope, mu_static, mu_kinetic
   double ground[3] = {0, 0, 0};
 };
@@ -146,6 +152,8 @@ int parse_options(int argc, char **argv, Options *o) {
       o->model_file = v;
     } else if (arg == "--robot") {
       o->robot = true;
+    } else if (arg == "--hexapod") {
+      o->hexapod = true;
     } else if (arg == "--ground") {
       const char *v = need("--ground");
       if (v == nullptr) return 2;
@@ -184,6 +192,53 @@ int parse_options(int argc, char **argv, Options *o) {
   return -1;
 }
 
+void setup_realtime(const Options &opt) {
+  // clock_nanosleep wakes on time: a normal thread's default timer slack is 50 us
+  prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
+  if (opt.rt_priority > 0) {
+    struct sched_param sp = {};
+    sp.sched_priority = opt.rt_priority;
+    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0)
+      std::fprintf(stderr, "hil_sim: warning: SCHED_FIFO %d refused (%s); normal scheduling\n",
+                   opt.rt_priority, std::strerror(errno));
+    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
+      std::fprintf(stderr, "hil_sim: warning: mlockall failed (%s)\n", std::strerror(errno));
+  }
+}
+
+// hil_sim --hexapod: the hexapod's node on the bus, the same loop as the leg's.
+int run_hexapod(const Options &opt, const legsim_hexapod_desc &desc, int sfd) {
+  hil::HexConfig cfg;
+  cfg.cmd_timeout_ms = opt.controller.cmd_timeout_ms;
+  cfg.decimation = opt.controller.decimation;
+  cfg.verbose = opt.controller.verbose;
+  std::string error;
+  hil::SocketCan can;
+  hil::HexapodNode node(desc, can, cfg);
+  if (!node.init(&error)) {
+    std::fprintf(stderr, "hil_sim: %s\n", error.c_str());
+    return 1;
+  }
+  if (!can.open(opt.channel, &error)) {
+    std::fprintf(stderr, "hil_sim: %s\n", error.c_str());
+    return 1;
+  }
+  setup_realtime(opt);
+  hil::JitterStats stats;
+  std::fprintf(stderr, "hil_sim: hexapod listening on %s (protocol %d, cmd timeout %u ms, decimation %u)\n",
+               opt.channel.c_str(), hil::kProtocolVersion, cfg.cmd_timeout_ms, cfg.decimation);
+  hil::LoopResult res = hil::run_loop(can, node, sfd, opt.loop, &stats);
+  if (res.signal != 0)
+    std::fprintf(stderr, "hil_sim: %s, exiting\n", strsignal(res.signal));
+  else
+    std::fprintf(stderr, "hil_sim: CAN socket failed: %s\n", std::strerror(res.socket_errno));
+  std::fprintf(stderr, "hil_sim: %u frames received, %u rejected, %u faults sent, %u frames not sent\n",
+               node.rx_frames(), node.rx_rejected(), node.fault_count(), can.tx_errors());
+  can.close();
+  ::close(sfd);
+  return res.signal != 0 ? 0 : 1;
+}
+
 }  // namespace
 
 int main(int argc, char **argv) {
@@ -206,6 +261,29 @@ int main(int argc, char **argv) {
     std::fprintf(stderr, "hil_sim: signalfd failed: %s\n", std::strerror(errno));
     return 1;
   }
+
+  if (opt.hexapod && opt.robot) {
+    std::fprintf(stderr, "hil_sim: --robot and --hexapod exclude each other (see --help)\n");
+    return 2;
+  }
+  // a hexapod file: --hexapod (this tree's, or --model's), or --model naming one
+  static legsim_hexapod_desc hexapod_desc;  // large: not on the stack
+  if (opt.hexapod || !opt.model_file.empty()) {
+    const std::string path = opt.model_file.empty() ? HIL_SIM_HEXAPOD_FILE : opt.model_file;
+    char msg[512] = "";
+    if (legsim_hexapod_load_toml(path.c_str(), &hexapod_desc, msg, sizeof msg) == LEGSIM_OK) {
+      opt.hexapod = true;
+      std::fprintf(stderr, "hil_sim: hexapod %s (6 legs)\n", path.c_str());
+    } else if (opt.hexapod) {
+      std::fprintf(stderr, "hil_sim: --hexapod: %s\n", msg);
+      return 2;
+    }
+  }
+  if (opt.hexapod && opt.has_ground) {
+    std::fprintf(stderr, "hil_sim: --ground: the hexapod's ground is its file's\n");
+    return 2;
+  }
+  if (opt.hexapod) return run_hexapod(opt, hexapod_desc, sfd);
 
   // --model: both variants of the file, checked by the loader (and by session.init below
   // against the DBC's leg); they live to the end of main, past every session.
@@ -292,17 +370,7 @@ int main(int argc, char **argv) {
     std::fprintf(stderr, "hil_sim: %s\n", error.c_str());
     return 1;
   }
-  // clock_nanosleep wakes on time: a normal thread's default timer slack is 50 us
-  prctl(PR_SET_TIMERSLACK, 1UL, 0UL, 0UL, 0UL);
-  if (opt.rt_priority > 0) {
-    struct sched_param sp = {};
-    sp.sched_priority = opt.rt_priority;
-    if (sched_setscheduler(0, SCHED_FIFO, &sp) != 0)
-      std::fprintf(stderr, "hil_sim: warning: SCHED_FIFO %d refused (%s); normal scheduling\n",
-                   opt.rt_priority, std::strerror(errno));
-    if (mlockall(MCL_CURRENT | MCL_FUTURE) != 0)
-      std::fprintf(stderr, "hil_sim: warning: mlockall failed (%s)\n", std::strerror(errno));
-  }
+  setup_realtime(opt);
 
   hil::Controller controller(session, can, opt.controller);
   hil::JitterStats stats;

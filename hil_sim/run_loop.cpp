@@ -29,7 +29,7 @@ void sleep_until(int64_t t_ns) {
 
 class Loop {
  public:
-  Loop(Bus &can, Controller &ctl, int signal_fd, const LoopConfig &cfg, JitterStats *stats)
+  Loop(Bus &can, Node &ctl, int signal_fd, const LoopConfig &cfg, JitterStats *stats)
       : can_(can), ctl_(ctl), signal_fd_(signal_fd), cfg_(cfg), stats_(*stats) {}
 
   LoopResult run() {
@@ -90,7 +90,7 @@ class Loop {
     }
     if (in_rt) print_rt_stats("real-time run (stopped by exit)", stats_, period > 0 ? 1e9 / period : 0.0);
     result_.shutdown = ctl_.shutdown();
-    const Controller::Shutdown &sd = result_.shutdown;
+    const NodeShutdown &sd = result_.shutdown;
     if (sd.step_cut)
       std::fprintf(stderr, "hil_sim: STEP of %llu steps cut short after %llu (not answered)\n",
                    static_cast<unsigned long long>(sd.step_total),
@@ -184,7 +184,7 @@ class Loop {
   }
 
   Bus &can_;
-  Controller &ctl_;
+  Node &ctl_;
   int signal_fd_;
   LoopConfig cfg_;
   JitterStats &stats_;
@@ -197,7 +197,7 @@ class Loop {
 
 }  // namespace
 
-LoopResult run_loop(Bus &can, Controller &controller, int signal_fd, const LoopConfig &config,
+LoopResult run_loop(Bus &can, Node &controller, int signal_fd, const LoopConfig &config,
                     JitterStats *stats) {
   return Loop(can, controller, signal_fd, config, stats).run();
 }

@@ -12,14 +12,14 @@
 //   heartbeat and after a frame that starts a STEP;
 // - a real-time sleep is cut at a due heartbeat and at least every kStopCheckMs.
 // On a signal the STEP in progress is abandoned (unanswered) and the actuators are put in
-// the safe state (Controller::shutdown).
+// the safe state (Node::shutdown).
 #ifndef HIL_SIM_RUN_LOOP_H
 #define HIL_SIM_RUN_LOOP_H
 
 #include <cstdint>
 
 #include "can_io.h"
-#include "controller.h"
+#include "node.h"
 #include "jitter.h"
 
 namespace hil {
@@ -36,10 +36,10 @@ struct LoopConfig {
 struct LoopResult {
   int signal = 0;       // the signal that stopped the loop, 0 if the socket failed
   int socket_errno = 0;
-  Controller::Shutdown shutdown;  // what the exit did (STEP cut short, safe state)
+  NodeShutdown shutdown;  // what the exit did (STEP cut short, safe state)
 };
 
-LoopResult run_loop(Bus &can, Controller &controller, int signal_fd, const LoopConfig &config,
+LoopResult run_loop(Bus &can, Node &controller, int signal_fd, const LoopConfig &config,
                     JitterStats *stats);
 
 // "real-time run: N ticks at R Hz, O overruns, wake-up lateness max/mean/p99 ..."

@@ -14,6 +14,7 @@ import numpy as np
 import pytest
 
 from legsim_bench.hil import can_link as cl
+from legsim_bench.hil import hexapod_link as hx
 from legsim_bench.hil.can_link import ActMode, FaultCode, HilFault, HilLink, SimState, Status
 
 
@@ -35,7 +36,11 @@ def test_every_frame_is_64_byte_fd_with_an_11_bit_id(db):
     robot = {f"{n}_L1": leg[n] + 0x20 for n in per_leg}
     robot.update(ST_CONTACT=cl.ST_CONTACT, ST_CONTACT_L1=cl.ST_CONTACT + 0x20, ST_BOX=cl.ST_BOX,
                   START_CMD=cl.START_CMD)
-    assert names == {**leg, **robot}
+    # the hexapod (hil_sim --hexapod): per leg its command, actuators and foot; the box
+    hexapod = {f"HEX_{n}_H{k}": base + k for k in range(6)
+               for n, base in (("CMD", hx.HEX_CMD), ("LEG", hx.HEX_LEG), ("FOOT", hx.HEX_FOOT))}
+    hexapod.update(HEX_BOX_POSE=hx.HEX_BOX_POSE, HEX_BOX_VEL=hx.HEX_BOX_VEL)
+    assert names == {**leg, **robot, **hexapod}
     for n in per_leg:   # the same signals at the same places
         a, b = db.get_message_by_name(n), db.get_message_by_name(n + "_L1")
         assert [(s.name, s.start, s.length, s.is_float, s.minimum, s.maximum) for s in a.signals] == \

@@ -1,0 +1,540 @@
+// CTest hil_sim_hexapod: the hexapod's node (hil_sim --hexapod) in memory against its C API:
+// the tripod walk's set-points with the statics' feed-forward sent as frames step by step give
+// the C API's own run of the same commands bit for bit (box and feet in float64, the legs'
+// float32 values its float32 rounding); bad frames are refused with one FAULT naming the signal
+// and change nothing; each leg's command watchdog trips alone, its safe action the C API's
+// command with that leg's feed-forward zero; in the real run loop (an in-memory bus) a long
+// STEP keeps the heartbeat and gives the same answer as in one go.
+#include <algorithm>
+#include <cmath>
+#include <csignal>
+#include <cstring>
+#include <deque>
+#include <vector>
+
+#include <sys/eventfd.h>
+#include <sys/signalfd.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "can_io.h"
+#include "hexapod_node.h"
+#include "run_loop.h"
+#include "model_toml.hpp"
+#include "test_support.hpp"
+
+extern "C" {
+#include "legsim_can.h"
+#include "legsim_can_layout.h"
+}
+
+using hil::Frame;
+using hil_test::Recorder;
+
+namespace {
+
+constexpr int L = LEGSIM_HEXAPOD_LEGS;
+const legsim_hexapod_gait kGait = {1.2, 0.6, 0.12, 0.05, 0.0, 1.0};  // tests/python/test_hexapod.py's
+
+legsim_hexapod_desc g_desc;
+std::vector<unsigned char> g_work;  // gait and statics storage
+void *work() {
+  const size_t a = LEGSIM_STORAGE_ALIGN;
+  if (g_work.empty()) g_work.resize(legsim_hexapod_storage_size() + a);
+  uintptr_t p = reinterpret_cast<uintptr_t>(g_work.data());
+  return reinterpret_cast<void *>((p + a - 1) / a * a);
+}
+
+// The walk's command at t: the gait's set-points, the statics of the planned pose on its
+// planned stance as feed-forward (Hexapod.walk's command()).
+struct WalkCmd {
+  legsim_hexapod_setpoint sp;
+  double ff[L][2], fm[L];
+  uint32_t stance;
+};
+WalkCmd walk_command(double t) {
+  WalkCmd c;
+  CHECK(legsim_hexapod_gait_setpoints(&g_desc, &kGait, t, work(), legsim_hexapod_storage_size(), &c.sp) ==
+        LEGSIM_OK);
+  legsim_hexapod_pose at = {};
+  at.box_m[2] = kGait.box_height_m;
+  at.box_quat[0] = 1;
+  c.stance = 0;
+  for (int l = 0; l < L; ++l) {
+    at.rowing_rad[l] = c.sp.rowing_rad[l];
+    at.length_m[l][0] = c.sp.length_m[l][0], at.length_m[l][1] = c.sp.length_m[l][1];
+    if (c.sp.stance[l]) c.stance |= 1u << l;
+  }
+  legsim_hexapod_standing s;
+  CHECK(legsim_hexapod_statics(&g_desc, &at, c.stance, nullptr, work(), legsim_hexapod_storage_size(), &s) ==
+        LEGSIM_OK);
+  for (int l = 0; l < L; ++l) c.ff[l][0] = s.actuator_force_n[l][0], c.ff[l][1] = s.actuator_force_n[l][1];
+  for (int l = 0; l < L; ++l) c.fm[l] = s.rowing_torque_nm[l];
+  return c;
+}
+
+Frame hex_cmd(int leg, uint32_t seq, const uint8_t mode[3], const double set[3], const double ff[3]) {
+  legsim_can_hex_cmd_h0_t m;
+  legsim_can_hex_cmd_h0_init(&m);
+  m.hc_seq = seq;
+  m.hc_mode_upper = mode[0], m.hc_mode_lower = mode[1], m.hc_mode_rowing = mode[2];
+  m.hc_setpoint_upper = set[0], m.hc_setpoint_lower = set[1], m.hc_setpoint_rowing = set[2];
+  m.hc_ff_upper = ff[0], m.hc_ff_lower = ff[1], m.hc_ff_rowing = ff[2];
+  // every leg's frame has leg 0's layout (the DBC's template): leg 0's pack at leg j's id
+  Frame f = hil_test::fd_frame(hil::kHexCmdFrameId[leg]);
+  legsim_can_hex_cmd_h0_pack(f.data, &m, 64);
+  return f;
+}
+std::vector<Frame> servo_frames(const WalkCmd &c, uint32_t seq) {
+  std::vector<Frame> out;
+  const uint8_t servo[3] = {2, 2, 2};
+  for (int l = 0; l < L; ++l) {
+    const double set[3] = {c.sp.length_m[l][0], c.sp.length_m[l][1], c.sp.rowing_rad[l]};
+    const double ff[3] = {c.ff[l][0], c.ff[l][1], c.fm[l]};
+    out.push_back(hex_cmd(l, seq, servo, set, ff));
+  }
+  return out;
+}
+
+Frame reset(uint32_t seq, bool servo, bool use_held, uint32_t stance, float height, uint16_t timeout = 65535) {
+  legsim_can_control_t m = hil_test::control(seq, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+  m.ctrl_act_init = servo ? 1 : 0;
+  m.ctrl_use_lengths = use_held ? 1 : 0;
+  m.ctrl_hex_stance = static_cast<uint8_t>(stance);
+  m.ctrl_hex_box_height = height;
+  m.ctrl_cmd_timeout = timeout;
+  return hil_test::pack(m);
+}
+
+// The C API's run: its own storage, stepped as the walk steps it.
+struct Reference {
+  std::vector<unsigned char> buf;
+  legsim_hexapod_sim *sim = nullptr;
+  legsim_status init(const WalkCmd &c, float height) {
+    const size_t a = LEGSIM_STORAGE_ALIGN;
+    buf.assign(legsim_hexapod_sim_size() + a, 0);
+    uintptr_t p = reinterpret_cast<uintptr_t>(buf.data());
+    legsim_hexapod_pose pose = {};
+    pose.box_m[2] = height;
+    pose.box_quat[0] = 1;
+    for (int l = 0; l < L; ++l) {
+      pose.rowing_rad[l] = c.sp.rowing_rad[l];
+      pose.length_m[l][0] = c.sp.length_m[l][0], pose.length_m[l][1] = c.sp.length_m[l][1];
+    }
+    legsim_status st = legsim_hexapod_sim_init(reinterpret_cast<void *>((p + a - 1) / a * a),
+                                               legsim_hexapod_sim_size(), &g_desc, &pose, c.stance, &sim);
+    return st == LEGSIM_OK ? command(c) : st;
+  }
+  legsim_status command(const WalkCmd &c) {
+    double len[L][2], row[L];
+    for (int l = 0; l < L; ++l)
+      len[l][0] = c.sp.length_m[l][0], len[l][1] = c.sp.length_m[l][1], row[l] = c.sp.rowing_rad[l];
+    return legsim_hexapod_command_pose(sim, len, row, c.ff, c.fm);
+  }
+  legsim_hexapod_state state() const {
+    legsim_hexapod_state s;
+    legsim_hexapod_get_state(sim, &s);
+    return s;
+  }
+};
+
+// A sample's frames decoded, and compared with the C API's state.
+struct Decoded {
+  int frames = 0;
+  legsim_can_hex_box_pose_t box;
+  legsim_can_hex_box_vel_t vel;
+  legsim_can_hex_leg_h0_t leg[L];
+  legsim_can_hex_foot_h0_t foot[L];
+  legsim_can_st_status_t status;
+};
+Decoded decode(const std::vector<Frame> &v) {
+  Decoded d;
+  std::memset(&d, 0, sizeof d);
+  for (const Frame &f : v) {
+    ++d.frames;
+    if (f.id == LEGSIM_CAN_HEX_BOX_POSE_FRAME_ID) legsim_can_hex_box_pose_unpack(&d.box, f.data, 64);
+    if (f.id == LEGSIM_CAN_HEX_BOX_VEL_FRAME_ID) legsim_can_hex_box_vel_unpack(&d.vel, f.data, 64);
+    if (f.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) legsim_can_st_status_unpack(&d.status, f.data, 64);
+    for (int l = 0; l < L; ++l) {
+      if (f.id == LEGSIM_CAN_HEX_LEG_H0_FRAME_ID + static_cast<uint32_t>(l))
+        legsim_can_hex_leg_h0_unpack(&d.leg[l], f.data, 64);
+      if (f.id == LEGSIM_CAN_HEX_FOOT_H0_FRAME_ID + static_cast<uint32_t>(l))
+        legsim_can_hex_foot_h0_unpack(&d.foot[l], f.data, 64);
+    }
+  }
+  return d;
+}
+bool same(const Decoded &d, const legsim_hexapod_state &s) {
+  bool ok = d.box.hb_x == s.box_m[0] && d.box.hb_y == s.box_m[1] && d.box.hb_z == s.box_m[2] &&
+            d.box.hb_qw == s.box_quat[0] && d.box.hb_qx == s.box_quat[1] && d.box.hb_qy == s.box_quat[2] &&
+            d.box.hb_qz == s.box_quat[3] && d.vel.hv_vx == s.box_velocity_mps[0] &&
+            d.vel.hv_vy == s.box_velocity_mps[1] && d.vel.hv_vz == s.box_velocity_mps[2] &&
+            d.vel.hv_wx == s.box_omega_radps[0] && d.vel.hv_wy == s.box_omega_radps[1] &&
+            d.vel.hv_wz == s.box_omega_radps[2] && d.vel.hv_energy == s.kinetic_energy_j &&
+            d.status.st_time == s.t_s;
+  for (int l = 0; l < L; ++l) {
+    ok = ok && d.foot[l].hf_x == s.foot_m[l][0] && d.foot[l].hf_y == s.foot_m[l][1] &&
+         d.foot[l].hf_z == s.foot_m[l][2] && d.foot[l].hf_fx == s.foot_force_n[l][0] &&
+         d.foot[l].hf_fy == s.foot_force_n[l][1] && d.foot[l].hf_fz == s.foot_force_n[l][2];
+    ok = ok && d.leg[l].hl_length_upper == static_cast<float>(s.length_m[l][0]) &&
+         d.leg[l].hl_length_lower == static_cast<float>(s.length_m[l][1]) &&
+         d.leg[l].hl_force_upper == static_cast<float>(s.actuator_force_n[l][0]) &&
+         d.leg[l].hl_force_lower == static_cast<float>(s.actuator_force_n[l][1]) &&
+         d.leg[l].hl_rowing == static_cast<float>(s.rowing_rad[l]) &&
+         d.leg[l].hl_rowing_torque == static_cast<float>(s.rowing_torque_nm[l]) &&
+         d.leg[l].hl_foot_state == s.foot_state[l];
+  }
+  return ok;
+}
+
+void send(hil::HexapodNode &node, const std::vector<Frame> &v) {
+  for (const Frame &f : v) node.on_frame(f, 0);
+}
+// A STEP worked to its end, as the run loop does in slices.
+void step(hil::HexapodNode &node, uint32_t seq, uint32_t n) {
+  node.on_frame(hil_test::step(seq, n), 0);
+  node.finish_step();
+}
+
+// The walk over the bus equals the C API's walk; bad frames change nothing.
+void test_walk() {
+  Recorder rec;
+  hil::HexConfig cfg;
+  hil::HexapodNode node(g_desc, rec, cfg);
+  std::string err;
+  CHECK(node.init(&err));
+  const float height = static_cast<float>(kGait.box_height_m);
+  WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));  // held for the RESET: the walk's pose at t = 0
+  CHECK(rec.take().empty());
+  node.on_frame(reset(1, true, true, c.stance, height), 0);
+  Reference ref;
+  CHECK(ref.init(c, height) == LEGSIM_OK);
+  std::vector<Frame> out = rec.take();
+  CHECK(static_cast<int>(out.size()) == hil::kHexSampleFrames);
+  CHECK(!out.empty() && out.back().id == LEGSIM_CAN_ST_STATUS_FRAME_ID);
+  CHECK(same(decode(out), ref.state()));
+  const int n = 300;  // a quarter period: the first tripod swings, its feet leave the ground
+  int equal = 0, free_feet = 0;
+  uint32_t ctrl = 2;
+  for (int i = 0; i < n; ++i) {
+    c = walk_command((i + 1) * 1e-3);
+    send(node, servo_frames(c, static_cast<uint32_t>(i + 2)));
+    step(node, ctrl++, 1);
+    CHECK(ref.command(c) == LEGSIM_OK);
+    CHECK(legsim_hexapod_step(ref.sim, 1e-3, 1) == LEGSIM_OK);
+    const Decoded d = decode(rec.take());
+    if (d.frames == hil::kHexSampleFrames && same(d, ref.state())) ++equal;
+    for (int l = 0; l < L; ++l) free_feet += d.leg[l].hl_foot_state == LEGSIM_CONTACT_FREE;
+    if (i == 100) {
+      // bad frames: one FAULT each naming the signal, no sample, nothing applied
+      uint8_t servo[3] = {2, 2, 2};
+      double set[3] = {c.sp.length_m[0][0], c.sp.length_m[0][1], c.sp.rowing_rad[0]};
+      double ff[3] = {0, 0, 0};
+      const uint32_t seq = 10000;
+      struct Bad {
+        Frame f;
+        uint8_t code;
+        uint32_t detail;
+      };
+      std::vector<Bad> bad;
+      double nan_set[3] = {set[0], NAN, set[2]};
+      bad.push_back({hex_cmd(0, seq, servo, nan_set, ff), 3, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_LOWER_START_BIT});
+      double nan_ff[3] = {0, 0, NAN};
+      bad.push_back({hex_cmd(1, seq, servo, set, nan_ff), 3, LEGSIM_CAN_HEX_CMD_H0_HC_FF_ROWING_START_BIT});
+      double past[3] = {g_desc.leg[2].leg.actuator[0].stroke_max_m + 1e-9, set[1], set[2]};
+      bad.push_back({hex_cmd(2, seq, servo, past, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_UPPER_START_BIT});
+      double row_past[3] = {set[0], set[1], g_desc.rowing_stroke_rad[1] + 1e-9};
+      bad.push_back({hex_cmd(3, seq, servo, row_past, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_ROWING_START_BIT});
+      uint8_t mixed[3] = {2, 1, 2};  // a FORCE slot in the SERVO robot
+      bad.push_back({hex_cmd(4, seq, mixed, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT});
+      uint8_t wrong[3] = {3, 2, 2};
+      bad.push_back({hex_cmd(5, seq, wrong, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_UPPER_START_BIT});
+      double big_ff[3] = {g_desc.leg[0].leg.actuator[0].max_force_n * 1.01, 0, 0};
+      bad.push_back({hex_cmd(0, seq, servo, set, big_ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_FF_UPPER_START_BIT});
+      Frame short_frame = hex_cmd(1, seq, servo, set, ff);
+      short_frame.len = 48;
+      bad.push_back({short_frame, 2, 64});
+      bad.push_back({hex_cmd(2, 5, servo, set, ff), 5, static_cast<uint32_t>(i + 2)});  // stale counter
+      bad.push_back({hil_test::step(1, 1), 5, static_cast<uint32_t>(i + 2)});  // a stale STEP
+      Frame act = hil_test::fd_frame(LEGSIM_CAN_ACT_CMD_FRAME_ID);  // the one leg's: not the hexapod's
+      bad.push_back({act, 1, 0});
+      legsim_can_control_t r = hil_test::control(1, LEGSIM_CAN_CONTROL_CTRL_COMMAND_RESET_CHOICE);
+      r.ctrl_hex_box_height = NAN;
+      bad.push_back({hil_test::pack(r), 3, LEGSIM_CAN_CONTROL_CTRL_HEX_BOX_HEIGHT_START_BIT});
+      for (const Bad &b : bad) {
+        node.on_frame(b.f, 0);
+        const std::vector<Frame> got = rec.take();
+        const legsim_can_fault_t f = hil_test::fault_of(got);
+        CHECK(got.size() == 1 && f.fault_code == b.code && f.fault_detail == b.detail &&
+              f.fault_frame_id == b.f.id);
+        if (!(f.fault_code == b.code && f.fault_detail == b.detail))
+          std::fprintf(stderr, "  bad frame 0x%x: fault %u detail %u, expected %u %u\n", b.f.id, f.fault_code,
+                       f.fault_detail, b.code, b.detail);
+      }
+    }
+  }
+  std::printf("walk over frames: %d of %d samples equal to the C API's, %d free-foot samples\n", equal, n,
+              free_feet);
+  CHECK(equal == n);
+  CHECK(free_feet > 0);  // the swing legs' feet left the ground
+}
+
+// Each leg's watchdog: leg 2 silent trips alone (its feed-forward zero, set-points held), the
+// others fed on; a FORCE robot's safe action is zero force.
+void test_watchdog() {
+  Recorder rec;
+  hil::HexConfig cfg;
+  hil::HexapodNode node(g_desc, rec, cfg);
+  std::string err;
+  CHECK(node.init(&err));
+  const float height = 1.0f;
+  WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));
+  node.on_frame(reset(1, true, true, c.stance, height, 10), 0);  // 10 ms: 10 steps
+  Reference ref;
+  CHECK(ref.init(c, height) == LEGSIM_OK);
+  rec.take();
+  uint32_t ctrl = 2;
+  int faults = 0;
+  for (int i = 0; i < 30; ++i) {
+    std::vector<Frame> f = servo_frames(c, static_cast<uint32_t>(i + 2));
+    if (i > 0) f.erase(f.begin() + 2);  // leg 2 stops after the first
+    send(node, f);
+    step(node, ctrl++, 1);
+    WalkCmd given = c;  // leg 2's 10 steps are up before step 10: its feed-forward zero
+    if (i >= 10) given.ff[2][0] = given.ff[2][1] = given.fm[2] = 0;
+    CHECK(ref.command(given) == LEGSIM_OK);
+    CHECK(legsim_hexapod_step(ref.sim, 1e-3, 1) == LEGSIM_OK);
+    const std::vector<Frame> got = rec.take();
+    const legsim_can_fault_t fault = hil_test::fault_of(got);
+    if (fault.fault_code == 7) {
+      ++faults;
+      CHECK(i == 10 && fault.fault_frame_id == hil::kHexCmdFrameId[2] && fault.fault_detail == 10 &&
+            fault.fault_seq == 2);
+    }
+    const Decoded d = decode(got);
+    CHECK(same(d, ref.state()));
+    if (i >= 10) {
+      CHECK((d.leg[2].hl_status & hil::kStatusSafeState) != 0);
+      CHECK((d.leg[1].hl_status & hil::kStatusSafeState) == 0 && (d.leg[1].hl_status & hil::kStatusCmdWatchdog));
+      CHECK((d.status.st_status & hil::kStatusSafeState) != 0);
+    }
+  }
+  CHECK(faults == 1);
+  // a FORCE robot at the stand: the silent legs' forces go to zero
+  const uint8_t force[3] = {1, 1, 1};
+  node.on_frame(reset(1, false, false, 0x3F, 1.0f, 5), 0);
+  Decoded d = decode(rec.take());
+  for (int l = 0; l < L; ++l) {
+    CHECK(d.leg[l].hl_mode == 1);
+    CHECK(d.leg[l].hl_length_upper == static_cast<float>(node.stand_length(l, 0)));
+  }
+  const double push[3] = {100, -50, 2};
+  const double zero[3] = {0, 0, 0};
+  node.on_frame(hex_cmd(0, 1, force, push, zero), 0);
+  step(node, 2, 4);
+  d = decode(rec.take());
+  CHECK(d.leg[0].hl_force_upper == 100.0f && d.leg[0].hl_force_lower == -50.0f && d.leg[0].hl_rowing_torque == 2.0f);
+  step(node, 3, 2);  // 5 ms after the command: tripped before the 6th step
+  const std::vector<Frame> got = rec.take();
+  CHECK(hil_test::fault_of(got).fault_code == 7 && hil_test::fault_of(got).fault_frame_id == hil::kHexCmdFrameId[0]);
+  d = decode(got);
+  CHECK(d.leg[0].hl_force_upper == 0.0f && d.leg[0].hl_rowing_torque == 0.0f);
+  // a SERVO slot in a FORCE robot is refused
+  const uint8_t servo[3] = {0, 2, 0};
+  node.on_frame(hex_cmd(1, 1, servo, zero, zero), 0);
+  CHECK(hil_test::fault_of(rec.take()).fault_detail == LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT);
+}
+
+
+// Real time: a leg silent for more than the timeout of wall time trips alone, at the first tick
+// past it; a sample every decimation ticks; STOP_RT answers with one and goes back to lockstep.
+void test_realtime_watchdog() {
+  Recorder rec;
+  hil::HexConfig cfg;  // decimation 10
+  hil::HexapodNode node(g_desc, rec, cfg);
+  std::string err;
+  CHECK(node.init(&err));
+  const WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));
+  node.on_frame(reset(1, true, true, c.stance, 1.0f, 10), 0);
+  send(node, servo_frames(c, 2));  // at 0 ms: every leg's watchdog armed (the RESET's held ones are not)
+  legsim_can_control_t go = hil_test::control(2, LEGSIM_CAN_CONTROL_CTRL_COMMAND_START_RT_CHOICE);
+  node.on_frame(hil_test::pack(go), 0);
+  CHECK(node.state() == hil::SimState::kRealtime && node.rt_period_ns() == 1000000);
+  rec.take();
+  const int64_t ms = 1000000;
+  int trip_tick = -1, samples = 0;
+  for (int k = 1; k <= 30; ++k) {
+    const int64_t now = k * ms;
+    for (int l = 0; l < L; ++l)
+      if (l != 5) node.on_frame(servo_frames(c, static_cast<uint32_t>(k + 2))[l], now);  // leg 5 silent
+    node.rt_tick(now);
+    const std::vector<Frame> got = rec.take();
+    const legsim_can_fault_t f = hil_test::fault_of(got);
+    if (f.fault_code == 7) {
+      CHECK(trip_tick < 0 && f.fault_frame_id == hil::kHexCmdFrameId[5]);
+      trip_tick = k;
+    }
+    if (hil_test::find(got, LEGSIM_CAN_ST_STATUS_FRAME_ID)) ++samples;
+  }
+  std::printf("real time: leg 5 tripped at tick %d (timeout 10 ms, its command at 0 ms), %d samples in 30 ticks\n",
+              trip_tick, samples);
+  CHECK(trip_tick == 11);  // 11 ms > 10 ms since its command
+  CHECK(samples == 3);
+  legsim_can_control_t stop = hil_test::control(3, LEGSIM_CAN_CONTROL_CTRL_COMMAND_STOP_RT_CHOICE);
+  node.on_frame(hil_test::pack(stop), 31 * ms);
+  const Decoded d = decode(rec.take());
+  CHECK(d.frames == hil::kHexSampleFrames && d.status.st_state == 1 && node.step_count() == 30);
+  CHECK((d.leg[5].hl_status & hil::kStatusSafeState) && !(d.leg[4].hl_status & hil::kStatusSafeState));
+}
+
+int64_t mono_ns() {
+  struct timespec ts;
+  clock_gettime(CLOCK_MONOTONIC, &ts);
+  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
+}
+// Nanoseconds this thread has waited for a CPU while runnable (the machine's time, not the
+// loop's: liveness_test.cpp's accounting); 0 if not available.
+int64_t run_delay_ns() {
+  long long on_cpu = 0, waited = 0;
+  FILE *f = std::fopen("/proc/thread-self/schedstat", "r");
+  if (f == nullptr) return 0;
+  if (std::fscanf(f, "%lld %lld", &on_cpu, &waited) != 2) waited = 0;
+  std::fclose(f);
+  return waited;
+}
+
+// The socket in memory (an eventfd says when frames are pending), as liveness_test.cpp's.
+class MemoryBus : public hil::Bus {
+ public:
+  struct Sent {
+    int64_t t_ns, waited_ns;
+    Frame frame;
+  };
+  MemoryBus() : efd_(eventfd(0, EFD_SEMAPHORE | EFD_NONBLOCK | EFD_CLOEXEC)) {}
+  ~MemoryBus() override { ::close(efd_); }
+  void push(const Frame &f) {
+    in_.push_back(f);
+    uint64_t one = 1;
+    if (::write(efd_, &one, sizeof one) != sizeof one) std::perror("eventfd write");
+  }
+  int fd() const override { return efd_; }
+  int receive(Frame *out) override {
+    uint64_t v;
+    if (in_.empty() || ::read(efd_, &v, sizeof v) != sizeof v) return 0;
+    *out = in_.front();
+    in_.pop_front();
+    return 1;
+  }
+  bool send(const Frame &f) override {
+    sent.push_back({mono_ns(), run_delay_ns(), f});
+    if (f.id == LEGSIM_CAN_ST_STATUS_FRAME_ID && ++samples == stop_after) ::kill(::getpid(), SIGTERM);
+    return true;
+  }
+  void set_send_block_ms(int) override {}
+  uint32_t tx_errors() const override { return 0; }
+  std::vector<Sent> sent;
+  int samples = 0, stop_after = 0;
+
+ private:
+  int efd_;
+  std::deque<Frame> in_;
+};
+
+// A STEP of about 0.5 s of CPU in the real loop: heartbeats all along (state LOCKSTEP, bit
+// STEPPING, the simulated time moving on), gaps within the period plus the leg's liveness
+// slack (200 ms, less the time spent waiting for a CPU), and the answer bit-identical to the
+// same STEP worked in one go; SIGTERM after it puts every leg in its safe action.
+void test_liveness() {
+  const float height = 1.0f;
+  const WalkCmd c = walk_command(0.0);
+  std::vector<Frame> in = servo_frames(c, 1);
+  in.push_back(reset(1, true, true, c.stance, height));
+  // the step's cost here, to size the STEP in CPU time
+  Recorder rec;
+  hil::HexapodNode ref(g_desc, rec, hil::HexConfig{});
+  std::string err;
+  CHECK(ref.init(&err));
+  send(ref, in);
+  struct timespec a, b;
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &a);
+  step(ref, 2, 50);
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &b);
+  const double per_step = ((b.tv_sec - a.tv_sec) + (b.tv_nsec - a.tv_nsec) / 1e9) / 50;
+  const uint32_t n = static_cast<uint32_t>(std::clamp(0.5 / per_step, 200.0, 100000.0));
+  rec.take();
+  step(ref, 3, n);
+  const std::vector<Frame> expected = rec.take();
+
+  MemoryBus bus;
+  hil::HexapodNode node(g_desc, bus, hil::HexConfig{});
+  CHECK(node.init(&err));
+  for (const Frame &f : in) bus.push(f);
+  bus.push(hil_test::step(2, 50));
+  bus.push(hil_test::step(3, n));
+  bus.stop_after = 3;  // RESET's, STEP 50's, the long STEP's samples
+  sigset_t mask;
+  sigemptyset(&mask);
+  sigaddset(&mask, SIGTERM);
+  sigprocmask(SIG_BLOCK, &mask, nullptr);
+  const int sfd = signalfd(-1, &mask, SFD_NONBLOCK | SFD_CLOEXEC);
+  hil::LoopConfig cfg;
+  cfg.heartbeat_ms = 100;
+  hil::JitterStats stats;
+  const int64_t t0 = mono_ns();
+  const hil::LoopResult res = hil::run_loop(bus, node, sfd, cfg, &stats);
+  const double secs = (mono_ns() - t0) / 1e9;
+  ::close(sfd);
+  CHECK(res.signal == SIGTERM && res.shutdown.safe_applied && !res.shutdown.step_cut);
+  // the long STEP's window: from the STEP 50's answer to the long STEP's
+  std::vector<MemoryBus::Sent> w;
+  std::vector<Frame> answer;
+  int statuses = 0, stepping = 0;
+  for (const auto &s : bus.sent) {
+    if (s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) ++statuses;
+    if (statuses == 2 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) w.push_back(s);
+    if (statuses == 2 && s.frame.id == LEGSIM_CAN_HEARTBEAT_FRAME_ID) {
+      w.push_back(s);
+      legsim_can_heartbeat_t h;
+      legsim_can_heartbeat_unpack(&h, s.frame.data, 64);
+      stepping += h.hb_state == 1 && (h.hb_status & hil::kStatusStepping) && h.hb_sim_time > 0.05;
+    }
+    // the long STEP's answer: what hil_sim sent after the STEP 50's, heartbeats aside
+    if (statuses == 2 && s.frame.id != LEGSIM_CAN_HEARTBEAT_FRAME_ID && s.frame.id != LEGSIM_CAN_ST_STATUS_FRAME_ID)
+      answer.push_back(s.frame);
+    if (statuses == 3 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) answer.push_back(s.frame);
+    if (statuses == 3 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) w.push_back(s);
+  }
+  double max_wall = 0, max_own = 0;
+  for (size_t i = 1; i < w.size(); ++i) {
+    const double wall = (w[i].t_ns - w[i - 1].t_ns) / 1e6;
+    max_wall = std::max(max_wall, wall);
+    max_own = std::max(max_own, wall - (w[i].waited_ns - w[i - 1].waited_ns) / 1e6);
+  }
+  const double step_s = (w.size() >= 2 ? (w.back().t_ns - w.front().t_ns) / 1e9 : 0);
+  std::printf("hexapod STEP %u (%.1f us a step) in the loop: %.2f s, %d heartbeats while stepping, max gap %.1f ms "
+              "(%.1f ms less CPU waits); loop %.2f s\n",
+              n, per_step * 1e6, step_s, stepping, max_wall, max_own, secs);
+  CHECK(stepping >= 3);
+  CHECK(max_own <= 100 + 200);
+  bool same_answer = answer.size() == expected.size();
+  for (size_t i = 0; same_answer && i < answer.size(); ++i)
+    same_answer = answer[i].id == expected[i].id && std::memcmp(answer[i].data, expected[i].data, 64) == 0;
+  CHECK(same_answer);
+}
+}  // namespace
+
+int main() {
+  char msg[512] = "";
+  if (legsim_hexapod_load_toml(HIL_SIM_HEXAPOD_FILE, &g_desc, msg, sizeof msg) != LEGSIM_OK) {
+    std::fprintf(stderr, "%s: %s\n", HIL_SIM_HEXAPOD_FILE, msg);
+    return 1;
+  }
+  test_walk();
+  test_watchdog();
+  test_realtime_watchdog();
+  test_liveness();
+  return hil_test::report();
+}
