@@ -2,6 +2,7 @@
 // JSON. The keys, units, defaults and ranges: scenes/README.md, "The hexapod". Host only; the
 // hexapod's C API only (legsim/hexapod.h), the walk driven as legsim.Hexapod.walk drives it.
 #include "scene_hexapod.hpp"
+#include "scene_hexapod_common.hpp"
 #include "scene_hexapod_inverse.hpp"
 
 #include <algorithm>
@@ -28,19 +29,16 @@
 namespace legsim_host {
 namespace {
 
+using namespace hexapod_scene;
 using scene_text::name_of;
 using scene_text::num;
 using scene_text::q;
 
-constexpr int L = LEGSIM_HEXAPOD_LEGS;
-constexpr double kPi = 3.14159265358979323846;
 constexpr double kMaxBoxHeightM = 10.0;
 constexpr double kMaxLiftM = 1.0;
 constexpr double kMaxBoxLoadN = 1e6;
-constexpr double kGridTolS = 1e-9;          // a duration is a whole number of steps within 1 ns
 constexpr int64_t kMaxSteps = 100000000;    // 1e8 steps
 constexpr int64_t kMaxRecordEvery = 10000000;
-constexpr int64_t kMaxSamples = 1000000;    // as the planar scenes (scene_parse.cpp)
 constexpr const char *kWhich[3] = {"upper", "lower", "rowing"};
 constexpr const char *kFootState[3] = {"free", "stuck", "sliding"};  // legsim_contact_state
 
@@ -62,47 +60,6 @@ std::string stem_of(const std::string &path) {
   std::string b = s == std::string::npos ? path : path.substr(s + 1);
   const size_t d = b.find_last_of('.');
   return d == std::string::npos ? b : b.substr(0, d);
-}
-
-std::string jstr(const std::string &s) {
-  std::string o = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char b[8];
-      std::snprintf(b, sizeof b, "\\u%04x", c);
-      o += b;
-    } else {
-      o += static_cast<char>(c);
-    }
-  }
-  return o + "\"";
-}
-
-// a number as JSON: non-finite ones as strings, as the planar writers do
-std::string jnum(double x) { return std::isfinite(x) ? num(x) : "\"" + num(x) + "\""; }
-
-template <size_t N>
-std::string jarr(const double (&v)[N]) {
-  std::string o = "[";
-  for (size_t i = 0; i < N; ++i) o += (i ? ", " : "") + jnum(v[i]);
-  return o + "]";
-}
-
-std::string string_of(Node v, const std::string &what) {
-  if (!v || !v->is_string()) fail(what + " must be a string");
-  return std::string(*v->value<std::string_view>());
-}
-
-// a real in [lo, hi] (open ends where the flags say)
-double ranged(Node v, const std::string &what, double lo, double hi, bool lo_open = false, bool hi_open = false) {
-  const double x = real_of(v, what);
-  if ((lo_open ? x <= lo : x < lo) || (hi_open ? x >= hi : x > hi))
-    fail(what + " must be in " + (lo_open ? "(" : "[") + num(lo) + ", " + num(hi) + (hi_open ? ")" : "]") +
-         " (got " + num(x) + ")");
-  return x;
 }
 
 // A leg as written: a name of the file's [[leg]]s or an index 0..5 (bound once the file is read).
@@ -415,18 +372,8 @@ uint32_t bind_legs(const std::vector<LegRef> &legs, const legsim_hexapod_desc &h
   return mask;
 }
 
-std::string status_text(legsim_status st) { return std::string(status_enum_name(st)) + " (" + legsim_status_str(st) + ")"; }
 
 // legsim_hexapod_statics' storage, aligned as the API asks
-struct Storage {
-  explicit Storage(size_t n) : bytes(n), p(static_cast<unsigned char *>(::operator new(n, std::align_val_t(LEGSIM_STORAGE_ALIGN)))) {}
-  ~Storage() { ::operator delete(p, std::align_val_t(LEGSIM_STORAGE_ALIGN)); }
-  Storage(const Storage &) = delete;
-  Storage &operator=(const Storage &) = delete;
-  size_t bytes;
-  unsigned char *p;
-};
-
 bool sloped(const legsim_hexapod_desc &h) { return h.ground_normal[0] != 0 || h.ground_normal[1] != 0; }
 
 // The scene's pose (statics, and dynamics without a gait): the stand's lengths, the box level

@@ -15,6 +15,7 @@
 
 #include "legsim/hexapod.h"
 #include "model_toml.hpp"
+#include "scene_hexapod_common.hpp"
 #include "scene_read.hpp"
 #include "scene_text.hpp"
 #include "scene_toml.hpp"
@@ -23,6 +24,7 @@
 namespace legsim_host {
 namespace {
 
+using namespace hexapod_scene;
 using scene_read::check_keys;
 using scene_read::fail;
 using scene_read::Node;
@@ -32,10 +34,6 @@ using scene_text::name_of;
 using scene_text::num;
 using scene_text::q;
 
-constexpr int L = LEGSIM_HEXAPOD_LEGS;
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kGridTolS = 1e-9;  // a duration is a whole number of samples within 1 ns
-constexpr int64_t kMaxSamples = 1000000;
 
 struct InverseScene {
   std::string path, name, description, model, model_path;
@@ -43,42 +41,6 @@ struct InverseScene {
   double step_s = 0.01, duration = 0;
   int64_t n = 0;  // samples after t = 0
 };
-
-std::string jstr(const std::string &s) {
-  std::string o = "\"";
-  for (unsigned char c : s) {
-    if (c == '"' || c == '\\') {
-      o += '\\';
-      o += static_cast<char>(c);
-    } else if (c < 0x20) {
-      char b[8];
-      std::snprintf(b, sizeof b, "\\u%04x", c);
-      o += b;
-    } else {
-      o += static_cast<char>(c);
-    }
-  }
-  return o + "\"";
-}
-std::string jnum(double x) { return std::isfinite(x) ? num(x) : "\"" + num(x) + "\""; }
-std::string jarr(const double *v, int n) {
-  std::string o = "[";
-  for (int i = 0; i < n; ++i) o += (i ? ", " : "") + jnum(v[i]);
-  return o + "]";
-}
-
-std::string string_of(Node v, const std::string &what) {
-  if (!v || !v->is_string()) fail(what + " must be a string");
-  return std::string(*v->value<std::string_view>());
-}
-
-double ranged(Node v, const std::string &what, double lo, double hi, bool lo_open = false, bool hi_open = false) {
-  const double x = real_of(v, what);
-  if ((lo_open ? x <= lo : x < lo) || (hi_open ? x >= hi : x > hi))
-    fail(what + " must be in " + (lo_open ? "(" : "[") + num(lo) + ", " + num(hi) + (hi_open ? ")" : "]") +
-         " (got " + num(x) + ")");
-  return x;
-}
 
 InverseScene parse(const toml::table &doc, const std::string &path) {
   InverseScene s;
@@ -115,15 +77,6 @@ InverseScene parse(const toml::table &doc, const std::string &path) {
   if (s.n + 1 > kMaxSamples) fail("'duration' / 'step_s' asks for more than " + std::to_string(kMaxSamples) + " samples");
   return s;
 }
-
-struct Storage {
-  explicit Storage(size_t n) : bytes(n), p(static_cast<unsigned char *>(::operator new(n, std::align_val_t(LEGSIM_STORAGE_ALIGN)))) {}
-  ~Storage() { ::operator delete(p, std::align_val_t(LEGSIM_STORAGE_ALIGN)); }
-  Storage(const Storage &) = delete;
-  Storage &operator=(const Storage &) = delete;
-  size_t bytes;
-  unsigned char *p;
-};
 
 // the header (as the other hexapod scenes', analysis "inverse_gait") and the settings
 void write_head(std::ostream &o, const InverseScene &s, const legsim_hexapod_desc &h) {
@@ -165,7 +118,6 @@ void write_sample(std::ostream &o, const legsim_hexapod_inverse &r, const legsim
   o << "}}";
 }
 
-std::string status_text(legsim_status st) { return std::string(status_enum_name(st)) + " (" + legsim_status_str(st) + ")"; }
 }  // namespace
 
 bool scene_is_hexapod_inverse(const std::string &text, const std::string &path) {

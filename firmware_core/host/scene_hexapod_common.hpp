@@ -1,0 +1,92 @@
+// What the hexapod's scene readers and writers share (scene_hexapod.cpp, scene_hexapod_inverse.cpp,
+// scene_hexapod_sweep.cpp): the strings' and numbers' JSON, the TOML values' checks, the C API's
+// aligned storage and a status's text. Host only; internal to them.
+#ifndef LEGSIM_HOST_SCENE_HEXAPOD_COMMON_HPP
+#define LEGSIM_HOST_SCENE_HEXAPOD_COMMON_HPP
+
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <new>
+#include <string>
+
+#include "legsim/hexapod.h"
+#include "scene_read.hpp"
+#include "scene_text.hpp"
+#include "scene_toml.hpp"
+
+namespace legsim_host {
+namespace hexapod_scene {
+
+constexpr int L = LEGSIM_HEXAPOD_LEGS;
+constexpr double kPi = 3.14159265358979323846;
+constexpr double kGridTolS = 1e-9;        // a duration is a whole number of steps within 1 ns
+constexpr int64_t kMaxSamples = 1000000;  // as the planar scenes (scene_parse.cpp)
+
+inline std::string jstr(const std::string &s) {
+  std::string o = "\"";
+  for (unsigned char c : s) {
+    if (c == '"' || c == '\\') {
+      o += '\\';
+      o += static_cast<char>(c);
+    } else if (c < 0x20) {
+      char b[8];
+      std::snprintf(b, sizeof b, "\\u%04x", c);
+      o += b;
+    } else {
+      o += static_cast<char>(c);
+    }
+  }
+  return o + "\"";
+}
+
+// a number as JSON: non-finite ones as strings ("nan", "inf", "-inf")
+inline std::string jnum(double x) {
+  return std::isfinite(x) ? scene_text::num(x) : "\"" + scene_text::num(x) + "\"";
+}
+
+inline std::string jarr(const double *v, int n) {
+  std::string o = "[";
+  for (int i = 0; i < n; ++i) o += (i ? ", " : "") + jnum(v[i]);
+  return o + "]";
+}
+template <size_t N>
+std::string jarr(const double (&v)[N]) {
+  return jarr(v, int(N));
+}
+
+inline std::string string_of(scene_read::Node v, const std::string &what) {
+  if (!v || !v->is_string()) scene_read::fail(what + " must be a string");
+  return std::string(*v->value<std::string_view>());
+}
+
+// a real in [lo, hi] (open ends where the flags say)
+inline double ranged(scene_read::Node v, const std::string &what, double lo, double hi, bool lo_open = false,
+                     bool hi_open = false) {
+  using scene_text::num;
+  const double x = scene_read::real_of(v, what);
+  if ((lo_open ? x <= lo : x < lo) || (hi_open ? x >= hi : x > hi))
+    scene_read::fail(what + " must be in " + (lo_open ? "(" : "[") + num(lo) + ", " + num(hi) + (hi_open ? ")" : "]") +
+                     " (got " + num(x) + ")");
+  return x;
+}
+
+// The C API's storage, aligned as it asks.
+struct Storage {
+  explicit Storage(size_t n)
+      : bytes(n), p(static_cast<unsigned char *>(::operator new(n, std::align_val_t(LEGSIM_STORAGE_ALIGN)))) {}
+  ~Storage() { ::operator delete(p, std::align_val_t(LEGSIM_STORAGE_ALIGN)); }
+  Storage(const Storage &) = delete;
+  Storage &operator=(const Storage &) = delete;
+  size_t bytes;
+  unsigned char *p;
+};
+
+inline std::string status_text(legsim_status st) {
+  return std::string(status_enum_name(st)) + " (" + legsim_status_str(st) + ")";
+}
+
+}  // namespace hexapod_scene
+}  // namespace legsim_host
+
+#endif  // LEGSIM_HOST_SCENE_HEXAPOD_COMMON_HPP
