@@ -4,6 +4,7 @@
 #include "scene_hexapod.hpp"
 #include "scene_hexapod_common.hpp"
 #include "scene_hexapod_inverse.hpp"
+#include "scene_hexapod_sweep.hpp"
 
 #include <algorithm>
 #include <cctype>
@@ -737,6 +738,7 @@ bool scene_is_hexapod(const std::string &text, const std::string &path) {
 int run_hexapod_scene(const std::string &text, const std::string &path, bool check_only, HexapodOutput &out,
                       std::ostream &err) {
   if (scene_is_hexapod_inverse(text, path)) return run_hexapod_inverse_scene(text, path, check_only, out, err);
+  if (scene_is_hexapod_sweep(text, path)) return run_hexapod_sweep_scene(text, path, check_only, out, err);
   HexScene s;
   auto h = std::make_unique<legsim_hexapod_desc>();
   legsim_hexapod_pose pose{};
