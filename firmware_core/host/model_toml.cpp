@@ -1233,7 +1233,7 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
                           "bar_radius", "yoke");
 
   Table rt = req_table(doc, "rowing", label0);
-  check_keys(rt, {"gear_ratio", "max_torque", "stroke", "servo_kp", "servo_kd"}, "rowing");
+  check_keys(rt, {"gear_ratio", "max_torque", "stroke", "servo_kp", "servo_kd", "rotor_inertia_kg_m2"}, "rowing");
   h.rowing_gear_ratio = ranged(get_positive(rt, "gear_ratio", "rowing"), 1.0, 1e4, "gear_ratio", "rowing");
   h.rowing_max_torque_nm = ranged(get_positive(rt, "max_torque", "rowing"), LEGSIM_MIN_FORCE_N,
                                   LEGSIM_MAX_FORCE_N, "max_torque", "rowing");
@@ -1247,6 +1247,9 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
       ranged(get_nonnegative(rt, "servo_kp", "rowing"), 0.0, LEGSIM_MAX_STIFFNESS_N_PER_M, "servo_kp", "rowing");
   h.rowing_servo_kd_nms_per_rad =
       ranged(get_nonnegative(rt, "servo_kd", "rowing"), 0.0, LEGSIM_MAX_DAMPING_NS_PER_M, "servo_kd", "rowing");
+  h.rowing_rotor_inertia_kgm2 = ranged(get_nonnegative(rt, "rotor_inertia_kg_m2", "rowing"), 0.0,
+                                       LEGSIM_MAX_INERTIA_KGM2 / (h.rowing_gear_ratio * h.rowing_gear_ratio),
+                                       "rotor_inertia_kg_m2", "rowing");
 
   auto leg_tables = get_table_array(doc, "leg", label0);
   if (leg_tables.size() != LEGSIM_HEXAPOD_LEGS)

@@ -279,7 +279,7 @@ class Library:
                         ("rowing_stroke_rad", d * 2), ("rowing_servo_kp_nm_per_rad", d),
                         ("rowing_servo_kd_nms_per_rad", d), ("n_legs", i32), ("leg", HexapodLegDesc * 6),
                         ("ground_point_m", d * 3), ("ground_normal", d * 3), ("mu_static", d),
-                        ("mu_kinetic", d)]
+                        ("mu_kinetic", d), ("rowing_rotor_inertia_kgm2", d)]
 
         class HexapodPose(C.Structure):
             _fields_ = [("box_m", d * 3), ("box_quat", d * 4), ("rowing_rad", d * 6),
@@ -304,7 +304,8 @@ class Library:
                         ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6),
                         ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6), ("foot_state", i32 * 6),
                         ("kinetic_energy_j", d), ("events", i32), ("impacts", i32), ("cone_solved", i32),
-                        ("cone_by_sweeps", i32), ("cone_max_iterations", i32), ("cone_max_residual", d)]
+                        ("cone_by_sweeps", i32), ("cone_max_iterations", i32), ("cone_max_residual", d),
+                        ("actuator_stop", (i32 * 2) * 6), ("rowing_stop", i32 * 6), ("stop_impacts", i32)]
 
         self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding

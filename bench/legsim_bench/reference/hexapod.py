@@ -151,6 +151,9 @@ class HexapodModel:
         self.yoke_mass = float(yoke["mass"])
         self.yoke_com = np.array(yoke["com"], float)
         self.yoke_inertia = np.array(yoke["inertia"], float)
+        # the rowing motor's rotor reflected to the yoke (rotor ratio^2), about the hip axis
+        rowing = data.get("rowing", {})
+        self.yoke_inertia[2] += float(rowing.get("rotor_inertia_kg_m2", 0.0)) * float(rowing.get("gear_ratio", 1.0)) ** 2
         self.hip_offset = float(yoke["hip_offset"])
         self.bar_radius = float(yoke["bar_radius"])
         models = {}

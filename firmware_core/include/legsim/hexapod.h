@@ -9,7 +9,8 @@
  *   masses [LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG]; principal inertias
  *   [LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2]; sizes, the hip offset and the bar radius
  *   [LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD]; points |x| <= LEGSIM_MAX_COORD; headings |h| <= pi;
- *   the rowing stroke -pi < min < 0 < max < pi rad; gear ratio [1, 1e4]; max torque
+ *   the rowing stroke -pi < min < 0 < max < pi rad; gear ratio [1, 1e4]; the rotor's inertia
+ *   [0, LEGSIM_MAX_INERTIA_KGM2] kg m^2, reflected (times the ratio squared) at most that; max torque
  *   [LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N] N m; servo kp [0, LEGSIM_MAX_STIFFNESS_N_PER_M] N m/rad,
  *   kd [0, LEGSIM_MAX_DAMPING_NS_PER_M] N m s/rad; each leg file at most
  *   LEGSIM_HEXAPOD_MAX_LEG_BARS bodies and no slot joint (the spatial rows have none), its force
@@ -54,6 +55,9 @@ typedef struct legsim_hexapod_desc {
   legsim_hexapod_leg_desc leg[LEGSIM_HEXAPOD_LEGS];
   /* the ground plane: a point, its upward unit normal, Coulomb friction */
   double ground_point_m[3], ground_normal[3], mu_static, mu_kinetic;
+  /* the rowing gear motor's rotor inertia (kg m^2, about its own axis): reflected to the yoke as
+   * rotor * gear_ratio^2, added to the yoke's inertia about the hip axis */
+  double rowing_rotor_inertia_kgm2;
 } legsim_hexapod_desc;
 
 /* ---- standing (statics) ------------------------------------------------ */
@@ -128,6 +132,9 @@ legsim_status legsim_hexapod_gait_setpoints(const legsim_hexapod_desc *h, const 
  * multipliers) or sliding (its normal row; friction mu_kinetic N against its slip), changing at
  * events located inside the step: a touchdown (an impact on the feet's circular cones), a lift-off
  * (N reaches 0), stick to slip (|F_t| reaches mu_static N), slip to stick. Each linear actuator's
+ * length and each rowing angle stays within its stroke: its arrival at an end is an event too (an
+ * inelastic impact on the stop), the stop then holds it while it pushes and lets go when it would
+ * pull. Each linear actuator's
  * axial force and each rowing torque held over a step as commanded; RK4 (or generalized-alpha) on the rotation group,
  * the positions and velocities projected onto the rows at each step's end. A step is all or
  * nothing. */
@@ -198,6 +205,11 @@ typedef struct legsim_hexapod_state {
    * (one that does not fails its step with LEGSIM_ERR_NOT_CONVERGED) */
   int32_t cone_solved, cone_by_sweeps, cone_max_iterations;
   double cone_max_residual;
+  /* which strokes sit on a stop: -1 at its min, 1 at its max, 0 inside; arrivals on a stop (each
+   * an inelastic impact) since the start */
+  int32_t actuator_stop[LEGSIM_HEXAPOD_LEGS][2];
+  int32_t rowing_stop[LEGSIM_HEXAPOD_LEGS];
+  int32_t stop_impacts;
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

@@ -59,7 +59,9 @@ legsim_status desc_check(const legsim_hexapod_desc &h) {
       !(h.rowing_stroke_rad[0] > -pi && h.rowing_stroke_rad[0] < 0 && h.rowing_stroke_rad[1] > 0 &&
         h.rowing_stroke_rad[1] < pi) ||
       !within(h.rowing_servo_kp_nm_per_rad, 0, LEGSIM_MAX_STIFFNESS_N_PER_M) ||
-      !within(h.rowing_servo_kd_nms_per_rad, 0, LEGSIM_MAX_DAMPING_NS_PER_M))
+      !within(h.rowing_servo_kd_nms_per_rad, 0, LEGSIM_MAX_DAMPING_NS_PER_M) ||
+      !within(h.rowing_rotor_inertia_kgm2, 0,
+              LEGSIM_MAX_INERTIA_KGM2 / (h.rowing_gear_ratio * h.rowing_gear_ratio)))
     return LEGSIM_ERR_BAD_INPUT;
   const double *n = h.ground_normal;
   const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
@@ -403,6 +405,14 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
   r.impacts = d.impacts;
   r.cone_solved = d.cone_stats.solved, r.cone_by_sweeps = d.cone_stats.by_sweeps;
   r.cone_max_iterations = d.cone_stats.max_iterations, r.cone_max_residual = d.cone_stats.max_residual;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    for (int k = 0; k < spatial::kLegStops; ++k) {
+      const uint32_t bit = 1u << (spatial::kLegStops * l + k);
+      const int32_t at = (d.hold.stops & bit) ? ((d.hold.upper & bit) ? 1 : -1) : 0;
+      if (k < 2) r.actuator_stop[l][k] = at;
+      else r.rowing_stop[l] = at;
+    }
+  r.stop_impacts = d.stop_impacts;
   *out = r;
   return LEGSIM_OK;
 }

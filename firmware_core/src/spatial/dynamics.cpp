@@ -1,41 +1,37 @@
 #include "spatial/dynamics.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "system/dense_solve.hpp"
 
 namespace legsim::spatial {
 
-namespace {
-// Row r's two bodies (a foot row: the foot's bar and the world).
-inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
-  if (r < robot.m) {
-    a = robot.row_body[r][0], b = robot.row_body[r][1];
-  } else {
-    a = robot.leg[(r - robot.m) / 3].foot_body, b = -1;
-  }
-}
-}  // namespace
-
-// The rows in RobotLeg::order with the foot's in their slot, then the hip's (the rows on the
-// box) last, so that S_l^-1 reaches the box through the factor's last rows only.
-void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
+// The rows in RobotLeg::order with the foot's (and the actuators' stops') in their slot, then
+// the hip's (the rows on the box, a rowing stop's too) last, so that S_l^-1 reaches the box
+// through the factor's last rows only.
+void leg_layout(const SpatialRobot &robot, int l, int nf, uint32_t stops, LegLayout &out) {
   static_assert(kMaxLegRows <= 64 && kMaxLegBodies <= 127, "a leg's rows and bodies");
   const RobotLeg &L = robot.leg[l];
   const int f0 = foot_row(robot, l), b_lo = L.yoke, nbl = 1 + L.nbars;
   int *idx = out.row, n = 0;
   for (int i = 0; i < L.foot_slot; ++i) idx[n++] = L.order[i];
   for (int k = 0; k < nf; ++k) idx[n++] = f0 + k;
+  // a rowing stop on a fixed box is on the leg's bodies alone
+  const bool row_on_box = robot.free_box;
+  for (int k = 0; k < kLegStops; ++k)
+    if (((stops >> k) & 1u) && (k < 2 || !row_on_box)) idx[n++] = stop_row(robot, l, k);
   for (int i = L.foot_slot; i < L.norder; ++i) idx[n++] = L.order[i];
   out.nh = L.nrows - L.norder;
   for (int k = 0; k < out.nh; ++k) idx[n++] = L.row0 + k;  // the hip's: its joint's, the leg's first
+  if (((stops >> 2) & 1u) && row_on_box) idx[n++] = stop_row(robot, l, 2), ++out.nh;
   out.n = n;
   // each row's leg bodies and envelope (from the first row on either body); each body's rows
   int fb[kMaxLegBodies], non[kMaxLegBodies] = {}, size = 0;
   for (int b = 0; b < nbl; ++b) fb[b] = n;
   for (int i = 0; i < n; ++i) {
     int ab[2];
-    bodies_of(robot, idx[i], ab[0], ab[1]);
+    row_bodies(robot, idx[i], ab[0], ab[1]);
     int f = i;
     for (int s = 0; s < 2; ++s) {
       const int body = ab[s] < 0 ? -1 : ab[s] - b_lo;
@@ -76,6 +72,35 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
     for (int k = 0; k < n; ++k)
       rows[foot_row(robot, l) + k] = row_along(foot, robot.leg[l].foot_point, world, hold.anchor[l], axes[k]);
   }
+  if (!hold.stops) return;
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < kLegStops; ++k)
+      if ((leg_stops(hold, l) >> k) & 1u) rows[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, v);
+}
+
+Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v) {
+  const RobotLeg &L = robot.leg[l];
+  Row r;
+  if (k < 2) {
+    // the actuator's length row less its end: L - L_min, or L_max - L (all negated)
+    const RobotActuator &ac = robot.act[L.first_actuator + k];
+    r = actuator_row(body_state(q + kBodyConfig * ac.rod, v + kBodyDof * ac.rod),
+                     body_state(q + kBodyConfig * ac.cyl, v + kBodyDof * ac.cyl));
+    r.phi += ac.offset - ac.stroke[upper ? 1 : 0];
+  } else {
+    // the yoke's x against the box's direction at the end, turned by pi / 2: sin(psi - psi_min),
+    // or -sin(psi - psi_max)
+    const int y = L.yoke;
+    const BodyState yoke = body_state(q + kBodyConfig * y, v + kBodyDof * y);
+    const BodyState box = robot.free_box ? body_state(q, v) : ground_state();
+    const real th = L.yaw + robot.rowing_stroke[upper ? 1 : 0];
+    r = row_perpendicular(yoke, {1, 0, 0}, box, {-std::sin(th), std::cos(th), 0});
+  }
+  if (upper) {
+    r.phi = -r.phi, r.gamma = -r.gamma;
+    for (int i = 0; i < kBodyDof; ++i) r.ja[i] = -r.ja[i], r.jb[i] = -r.jb[i];
+  }
+  return r;
 }
 
 legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
@@ -245,9 +270,9 @@ legsim_status robot_accelerations(const SpatialRobot &robot, const FeetHold &hol
                                   const real *Q, real *a, real *mu, Row *rows, RobotFactor &F) {
   system_rows(robot, hold, q, v, rows);
   real g[kMaxSystemRows];
-  for (int r = 0; r < robot.m; ++r) g[r] = rows[r].gamma;
-  for (int l = 0; l < robot.nlegs; ++l)
-    for (int k = 0; k < foot_rows(hold, l); ++k) g[foot_row(robot, l) + k] = rows[foot_row(robot, l) + k].gamma;
+  int idx[kMaxSystemRows];
+  const int n = system_used_rows(robot, hold, idx);
+  for (int i = 0; i < n; ++i) g[idx[i]] = rows[idx[i]].gamma;
   const legsim_status s = robot_factor(robot, hold, rows, F);
   if (s == LEGSIM_OK) robot_solve(robot, F, Q, g, a, mu);
   return s;

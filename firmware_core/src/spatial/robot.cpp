@@ -178,7 +178,8 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     L.hip = {real(hips[l].point_m[0]), real(hips[l].point_m[1]), real(hips[l].point_m[2])};
     L.yaw = real(hips[l].yaw_rad);
     R.mass[y] = real(yoke.mass_kg);
-    R.inertia[y] = {real(yoke.inertia_kgm2[0]), real(yoke.inertia_kgm2[1]), real(yoke.inertia_kgm2[2])};
+    R.inertia[y] = {real(yoke.inertia_kgm2[0]), real(yoke.inertia_kgm2[1]),
+                    real(yoke.inertia_kgm2[2] + yoke.rowing_reflected_inertia_kgm2)};
     for (int b = 0; b < nbar; ++b) {
       const legsim_body_desc &bd = desc.body[b];
       R.mass[y + 1 + b] = real(bd.mass_kg);
@@ -264,9 +265,15 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.na = na;
   R.nj = nj;
   R.m = row;
-  // the dynamics' elimination, chosen once per hold of each foot (the foot rows' numbers follow m)
+  // the dynamics' elimination, chosen once per hold of each foot and set of stops (the foot and
+  // stop rows' numbers follow m)
   for (int l = 0; l < nlegs; ++l)
-    for (int k = 0; k < 3; ++k) leg_layout(R, l, k == 2 ? 3 : k, R.leg[l].layout[k]);
+    for (int k = 0; k < 3; ++k) {
+      leg_layout(R, l, k == 2 ? 3 : k, 0, R.leg[l].layout[k]);
+      for (uint32_t s = 1; s < 8; ++s)
+        if (!(s & 3u) || R.leg[l].nactuators >= (s & 2u ? 2 : 1))
+          leg_layout(R, l, k == 2 ? 3 : k, s, R.leg[l].stop_layout[k][s - 1]);
+    }
   return LEGSIM_OK;
 }
 
@@ -281,6 +288,7 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out
   yoke.rowing_stroke_rad[0] = h.rowing_stroke_rad[0], yoke.rowing_stroke_rad[1] = h.rowing_stroke_rad[1];
   yoke.rowing_kp_nm_per_rad = h.rowing_servo_kp_nm_per_rad;
   yoke.rowing_kd_nms_per_rad = h.rowing_servo_kd_nms_per_rad;
+  yoke.rowing_reflected_inertia_kgm2 = h.rowing_rotor_inertia_kgm2 * h.rowing_gear_ratio * h.rowing_gear_ratio;
   const BoxDesc box = {h.box_mass_kg, {h.box_inertia_kgm2[0], h.box_inertia_kgm2[1], h.box_inertia_kgm2[2]}};
   const legsim_model_desc *legs[LEGSIM_HEXAPOD_LEGS];
   HipDesc hips[LEGSIM_HEXAPOD_LEGS];

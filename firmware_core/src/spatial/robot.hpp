@@ -43,6 +43,9 @@ struct YokeDesc {
   // the rowing motor: its torque at the yoke saturates; its angle's stroke; its angle servo
   double rowing_max_torque_nm = 30.0, rowing_stroke_rad[2] = {-0.6, 0.6};
   double rowing_kp_nm_per_rad = 2000.0, rowing_kd_nms_per_rad = 40.0;
+  // the gear motor's rotor reflected to the yoke (rotor inertia times the gear ratio squared),
+  // added to the yoke's inertia about the hip axis
+  double rowing_reflected_inertia_kgm2 = 0.0;
 };
 
 // The box (body 0 when free): mass and principal inertia (box frame, about its centre).
@@ -71,8 +74,8 @@ struct LegJoint {
   int row, nrows;
 };
 
-// A leg's rows: its joints' and its foot's three.
-constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
+// A leg's rows: its joints', its foot's three and its stops' three.
+constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3 + 3;
 constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 
 // A leg's rows as the constrained dynamics eliminates them (spatial/dynamics.cpp), for one count
@@ -104,6 +107,7 @@ struct RobotLeg {
   int order[5 * (1 + kMaxLegJoints)];
   int norder, foot_slot;
   LegLayout layout[3];  // by its foot's held rows: none, the normal's (sliding), three (stuck)
+  LegLayout stop_layout[3][7];  // the same with its stops held (bit k of the set less 1)
 };
 
 // A linear actuator: its length (m) is (r_rod - r_cyl) . u_cyl + offset, the planar model's,
