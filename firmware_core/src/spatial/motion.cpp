@@ -37,9 +37,13 @@ real stroke_value(const SpatialRobot &robot, int l, int k, const real *q, real &
     lo = robot.rowing_stroke[0], hi = robot.rowing_stroke[1];
     return robot_rowing_angle(robot, l, q);
   }
-  const int a = robot.leg[l].first_actuator + k;
-  lo = robot.act[a].stroke[0], hi = robot.act[a].stroke[1];
-  return robot_actuator_length(robot, a, q);
+  // robot_actuator_length's, without the row's coefficients: (r_rod - r_cyl) . u_cyl + offset
+  const RobotActuator &ac = robot.act[robot.leg[l].first_actuator + k];
+  lo = ac.stroke[0], hi = ac.stroke[1];
+  const real *c = q + kBodyConfig * ac.cyl, *r = q + kBodyConfig * ac.rod;
+  const real w = c[3], x = c[4], y = c[5], z = c[6];
+  return (r[0] - c[0]) * (1 - 2 * (y * y + z * z)) + (r[1] - c[1]) * 2 * (x * y + w * z) +
+         (r[2] - c[2]) * 2 * (x * z - w * y) + ac.offset;
 }
 
 // q and v onto the rows: q by simplified Newton iterations of the M-orthogonal correction (the
