@@ -7,24 +7,18 @@
 
 namespace legsim::spatial {
 
-// The rows in RobotLeg::order with the foot's (and the actuators' stops') in their slot, then
-// the hip's (the rows on the box, a rowing stop's too) last, so that S_l^-1 reaches the box
-// through the factor's last rows only.
-void leg_layout(const SpatialRobot &robot, int l, int nf, uint32_t stops, LegLayout &out) {
+// The rows in RobotLeg::order with the foot's in their slot, then the hip's (the rows on the
+// box) last, so that S_l^-1 reaches the box through the factor's last rows only.
+void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
   static_assert(kMaxLegRows <= 64 && kMaxLegBodies <= 127, "a leg's rows and bodies");
   const RobotLeg &L = robot.leg[l];
   const int f0 = foot_row(robot, l), b_lo = L.yoke, nbl = 1 + L.nbars;
   int *idx = out.row, n = 0;
   for (int i = 0; i < L.foot_slot; ++i) idx[n++] = L.order[i];
   for (int k = 0; k < nf; ++k) idx[n++] = f0 + k;
-  // a rowing stop on a fixed box is on the leg's bodies alone
-  const bool row_on_box = robot.free_box;
-  for (int k = 0; k < kLegStops; ++k)
-    if (((stops >> k) & 1u) && (k < 2 || !row_on_box)) idx[n++] = stop_row(robot, l, k);
   for (int i = L.foot_slot; i < L.norder; ++i) idx[n++] = L.order[i];
   out.nh = L.nrows - L.norder;
   for (int k = 0; k < out.nh; ++k) idx[n++] = L.row0 + k;  // the hip's: its joint's, the leg's first
-  if (((stops >> 2) & 1u) && row_on_box) idx[n++] = stop_row(robot, l, 2), ++out.nh;
   out.n = n;
   // each row's leg bodies and envelope (from the first row on either body); each body's rows
   int fb[kMaxLegBodies], non[kMaxLegBodies] = {}, size = 0;
@@ -103,9 +97,70 @@ Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real
   return r;
 }
 
+namespace {
+void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu);
+
+// Row r's rate at x (its coefficients on its two bodies' velocity coordinates).
+real row_dot(const SpatialRobot &robot, const Row &row, int r, const real *x) {
+  int a, b;
+  row_bodies(robot, r, a, b);
+  real s = 0;
+  for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * x[kBodyDof * a + k];
+  if (b >= 0)
+    for (int k = 0; k < kBodyDof; ++k) s += row.jb[k] * x[kBodyDof * b + k];
+  return s;
+}
+
+// The held stops' columns and their Delassus matrix D = -J_s X_s (positive semi-definite),
+// factored by Cholesky with a zero pivot's stop left out (its row implied by the others).
+void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
+  static const real zero_g[kMaxSystemRows] = {};
+  int n = 0;
+  for (int s = 0; s < kLegStops * robot.nlegs; ++s)
+    if ((hold.stops >> s) & 1u) F.stop[n++] = stop_row(robot, s / kLegStops, s % kLegStops);
+  F.nstops = n;
+  const int nv = kBodyDof * robot.nb;
+  for (int j = 0; j < n; ++j) {
+    real f[kMaxRobotDof];
+    std::fill(f, f + nv, real(0));
+    int a, b;
+    const Row &r = rows[F.stop[j]];
+    row_bodies(robot, F.stop[j], a, b);
+    for (int k = 0; k < kBodyDof; ++k) f[kBodyDof * a + k] = -r.ja[k];
+    if (b >= 0)
+      for (int k = 0; k < kBodyDof; ++k) f[kBodyDof * b + k] -= r.jb[k];
+    std::fill(F.stop_mu[j], F.stop_mu[j] + kMaxSystemRows, real(0));  // the unused slots' too
+    solve_rows(robot, F, f, zero_g, F.stop_x[j], F.stop_mu[j]);
+  }
+  real *D = F.D;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) D[n * i + j] = -row_dot(robot, rows[F.stop[i]], F.stop[i], F.stop_x[j]);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < i; ++j) D[n * i + j] = D[n * j + i] = real(0.5) * (D[n * i + j] + D[n * j + i]);
+  // in place, lower triangle; a pivot below 1e-10 of its diagonal: that stop dropped
+  for (int j = 0; j < n; ++j) {
+    const real d0 = D[n * j + j];
+    real d = d0;
+    for (int k = 0; k < j; ++k)
+      if (F.live[k]) d -= D[n * j + k] * D[n * j + k];
+    F.live[j] = d > by_precision(1e-10, 1e-5) * d0 && d0 > 0;
+    if (!F.live[j]) continue;
+    d = std::sqrt(d);
+    D[n * j + j] = d;
+    for (int i = j + 1; i < n; ++i) {
+      real t = D[n * i + j];
+      for (int k = 0; k < j; ++k)
+        if (F.live[k]) t -= D[n * i + k] * D[n * j + k];
+      D[n * i + j] = t / d;
+    }
+  }
+}
+}  // namespace
+
 legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
   const bool box = robot.free_box;
   F.stuck = hold.stuck, F.sliding = hold.sliding;
+  F.nstops = 0;
   F.rows = rows;
   real *A0 = F.A0;
   for (int i = 0; i < kBodyDof * kBodyDof; ++i) A0[i] = 0;
@@ -184,10 +239,47 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     for (int i = 0; i < kBodyDof; ++i) scale = std::max(scale, A0[7 * i]);
     if (!dense_cholesky(kBodyDof, A0, by_precision(1e-12, 1e-6) * scale)) return LEGSIM_ERR_SINGULAR;
   }
+  if (hold.stops) factor_stops(robot, hold, rows, F);
   return LEGSIM_OK;
 }
 
 void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
+  solve_rows(robot, F, f, g, x, mu);
+  const int n = F.nstops;
+  if (!n) return;
+  // the stops' multipliers: D lambda = -(g_s - J_s x), then x and mu moved by their columns
+  real lam[kMaxHeldStops];
+  for (int i = 0; i < n; ++i) lam[i] = row_dot(robot, F.rows[F.stop[i]], F.stop[i], x) - g[F.stop[i]];
+  const real *D = F.D;
+  for (int i = 0; i < n; ++i) {
+    if (!F.live[i]) {
+      lam[i] = 0;
+      continue;
+    }
+    for (int k = 0; k < i; ++k)
+      if (F.live[k]) lam[i] -= D[n * i + k] * lam[k];
+    lam[i] /= D[n * i + i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    if (!F.live[i]) continue;
+    for (int k = i + 1; k < n; ++k)
+      if (F.live[k]) lam[i] -= D[n * k + i] * lam[k];
+    lam[i] /= D[n * i + i];
+  }
+  const int nv = kBodyDof * robot.nb;
+  for (int j = 0; j < n; ++j) {
+    if (!F.live[j]) {
+      mu[F.stop[j]] = 0;
+      continue;
+    }
+    for (int k = 0; k < nv; ++k) x[k] += lam[j] * F.stop_x[j][k];
+    for (int r = 0; r < kMaxSystemRows; ++r) mu[r] += lam[j] * F.stop_mu[j][r];
+    mu[F.stop[j]] = lam[j];
+  }
+}
+
+namespace {
+void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
   const bool box = robot.free_box;
   const Row *rows = F.rows;
   real y[kMaxLegs][kMaxLegRows], b0[kBodyDof] = {};
@@ -265,6 +357,7 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
       for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * (b_lo + b) + k] = xb[b][k] * robot.inverse_mass[b_lo + b][k];
   }
 }
+}  // namespace
 
 legsim_status robot_accelerations(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v,
                                   const real *Q, real *a, real *mu, Row *rows, RobotFactor &F) {

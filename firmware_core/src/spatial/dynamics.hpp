@@ -16,8 +16,12 @@
 // lambda_1 t1 + lambda_2 t2), its normal force N = -lambda_n.
 //
 // A stroke's stop (a linear actuator's length or a rowing angle at its end) held is one more
-// row, its gap: L - L_min, L_max - L, psi - psi_min or sin(psi_max - psi) (>= 0 inside the
+// row, its gap: L - L_min, L_max - L, sin(psi - psi_min) or sin(psi_max - psi) (>= 0 inside the
 // stroke); it pushes while its multiplier is <= 0 (the force -lambda along the gap's gradient).
+// The held stops are not in the legs' factors (a leg with its foot stuck has no freedom of its own
+// left for one: its stop holds the box through the foot): the solve takes each as a column, its
+// response to a unit multiplier, and their multipliers from a small system (the stops' Delassus
+// matrix): the rows' solve with the stops' rows met.
 #pragma once
 
 #include "spatial/robot.hpp"
@@ -46,6 +50,7 @@ inline int foot_rows(const FeetHold &hold, int l) {
 }
 inline int foot_row(const SpatialRobot &robot, int l) { return robot.m + 3 * l; }
 constexpr int kLegStops = 3;
+constexpr int kMaxHeldStops = kLegStops * kMaxLegs;
 inline int stop_row(const SpatialRobot &robot, int l, int k) { return robot.m + 3 * kMaxLegs + kLegStops * l + k; }
 // Leg l's held stops (bit k).
 inline uint32_t leg_stops(const FeetHold &hold, int l) { return (hold.stops >> (kLegStops * l)) & 7u; }
@@ -68,14 +73,11 @@ inline void row_bodies(const SpatialRobot &robot, int r, int &a, int &b) {
   }
 }
 
-// Leg l's LegLayout with nf rows of its foot held and its stops of `stops` (bit k) (robot_lift's,
-// once per count and set): the actuators' stop rows after the foot's, the rowing angle's (on
-// the box) after the hip's.
-void leg_layout(const SpatialRobot &robot, int l, int nf, uint32_t stops, LegLayout &out);
+// Leg l's LegLayout with nf rows of its foot held (robot_lift's, once per count).
+void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out);
 inline const LegLayout &leg_layout(const SpatialRobot &robot, const FeetHold &hold, int l) {
-  const int nf = foot_rows(hold, l), f = nf == 3 ? 2 : nf;
-  const uint32_t s = leg_stops(hold, l);
-  return s ? robot.leg[l].stop_layout[f][s - 1] : robot.leg[l].layout[f];
+  const int nf = foot_rows(hold, l);
+  return robot.leg[l].layout[nf == 3 ? 2 : nf];
 }
 
 // The indices of the rows in use with hold's feet (the joints', each foot's on the ground, each
@@ -109,8 +111,16 @@ struct RobotFactor {
   const Row *rows;  // the rows it was built from (system_rows'), read by the solves
   const LegLayout *layout[kMaxLegs];  // each leg's rows and L_l's envelope (its foot's hold's)
   real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];  // L_l in its envelope
-  real W[kMaxLegs][6 * kBodyDof];  // the hip's 5 rows and a rowing stop's
+  real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
+  // the held stops: their rows, their responses to a unit multiplier (accelerations and the
+  // other rows' multipliers), their Delassus matrix -J_s x_s factored (a stop whose row the others
+  // already imply, a zero pivot, carries nothing: live 0)
+  int nstops;
+  int stop[kMaxHeldStops];
+  real stop_x[kMaxHeldStops][kMaxRobotDof], stop_mu[kMaxHeldStops][kMaxSystemRows];
+  real D[kMaxHeldStops * kMaxHeldStops];
+  bool live[kMaxHeldStops];
 };
 
 // Factor the system for rows (kept by pointer: they must outlive the solves). LEGSIM_ERR_SINGULAR
@@ -119,7 +129,7 @@ struct RobotFactor {
 legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F);
 
 // [M J^T; J 0] [x; mu] = [f; g] with F's factor: f one force per velocity coordinate (6 per
-// body), g one value per system row (the unused foot slots ignored); x, mu out.
+// body), g one value per system row (the unused foot and stop slots ignored); x, mu out.
 void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu);
 
 // The accelerations a (6 per body: v' world, omega' body frame) and multipliers mu (per system

@@ -265,15 +265,9 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   R.na = na;
   R.nj = nj;
   R.m = row;
-  // the dynamics' elimination, chosen once per hold of each foot and set of stops (the foot and
-  // stop rows' numbers follow m)
+  // the dynamics' elimination, chosen once per hold of each foot (the foot rows' numbers follow m)
   for (int l = 0; l < nlegs; ++l)
-    for (int k = 0; k < 3; ++k) {
-      leg_layout(R, l, k == 2 ? 3 : k, 0, R.leg[l].layout[k]);
-      for (uint32_t s = 1; s < 8; ++s)
-        if (!(s & 3u) || R.leg[l].nactuators >= (s & 2u ? 2 : 1))
-          leg_layout(R, l, k == 2 ? 3 : k, s, R.leg[l].stop_layout[k][s - 1]);
-    }
+    for (int k = 0; k < 3; ++k) leg_layout(R, l, k == 2 ? 3 : k, R.leg[l].layout[k]);
   return LEGSIM_OK;
 }
 

@@ -74,8 +74,8 @@ struct LegJoint {
   int row, nrows;
 };
 
-// A leg's rows: its joints', its foot's three and its stops' three.
-constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3 + 3;
+// A leg's rows: its joints' and its foot's three.
+constexpr int kMaxLegRows = 5 * (1 + kMaxLegJoints) + 3;
 constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 
 // A leg's rows as the constrained dynamics eliminates them (spatial/dynamics.cpp), for one count
@@ -107,7 +107,6 @@ struct RobotLeg {
   int order[5 * (1 + kMaxLegJoints)];
   int norder, foot_slot;
   LegLayout layout[3];  // by its foot's held rows: none, the normal's (sliding), three (stuck)
-  LegLayout stop_layout[3][7];  // the same with its stops held (bit k of the set less 1)
 };
 
 // A linear actuator: its length (m) is (r_rod - r_cyl) . u_cyl + offset, the planar model's,
