@@ -58,14 +58,19 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
   iterations = 0;
   for (;;) {
     system_rows(robot, d.hold, q, zero_v, d.rows_work);
-    real worst = 0;
+    real worst = 0, worst_stop = 0;
     for (int i = 0; i < n; ++i) {
       g[idx[i]] = -d.rows_work[idx[i]].phi;
       const real e = std::abs(g[idx[i]]);
       if (!(e <= worst)) worst = e;  // a NaN too
+      if (idx[i] >= robot.m + 3 * kMaxLegs) worst_stop = std::max(worst_stop, e);
     }
     if (!std::isfinite(worst)) return LEGSIM_ERR_DIVERGED;
-    if (worst <= kProjectionTolerance) break;
+    // a stop's gap to round-off (while the others allow): one released with a gap at -tolerance
+    // would cross its event's tolerance at once, again and again
+    if (worst <= kProjectionTolerance &&
+        (worst_stop <= kProjectionTolerance / 100 || (iterations > 0 && iterations == kProjectionMaxIterations)))
+      break;
     if (iterations == kProjectionMaxIterations) return LEGSIM_ERR_NOT_CONVERGED;
     if (!factored) {
       system_rows(robot, d.hold, q, zero_v, d.rows);
@@ -357,40 +362,40 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     d.acc_aux_h = 0;
     const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
-    // a stop that would pull lets go (the one pulling most; the others again without it)
+    // the stop pulling most, let go once the feet's modes hold (a foot's mode changes the stops'
+    // multipliers: a stop decided before the feet would be let go and hit again)
     int pull = -1;
     real most = tol;
     for (int s = 0; s < kLegStops * robot.nlegs; ++s) {
       const real m = ((d.hold.stops >> s) & 1u) ? d.mu[stop_row(robot, s / kLegStops, s % kLegStops)] : 0;
       if (m > most) most = m, pull = s;
     }
-    if (pull >= 0) d.hold.stops &= ~(1u << pull), d.hold.upper &= ~(1u << pull), changed = true;
-    if (!d.has_ground) {
-      if (!changed) return LEGSIM_OK;
-      continue;
-    }
-    for (int l = 0; l < robot.nlegs; ++l) {
-      const uint32_t bit = 1u << l;
-      const real *m = d.mu + foot_row(robot, l);
-      if (d.hold.stuck & bit) {
-        const real N = -m[0], Ft = std::hypot(m[1], m[2]);
-        if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
-      } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
-        d.hold.sliding &= ~bit, changed = true;
+    if (d.has_ground) {
+      for (int l = 0; l < robot.nlegs; ++l) {
+        const uint32_t bit = 1u << l;
+        const real *m = d.mu + foot_row(robot, l);
+        if (d.hold.stuck & bit) {
+          const real N = -m[0], Ft = std::hypot(m[1], m[2]);
+          if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
+        } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
+          d.hold.sliding &= ~bit, changed = true;
+        }
+      }
+      if (off_cone) {
+        const FeetHold before = d.hold;
+        real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
+        command_forces(robot, d.command, d.q, d.v, F, T);
+        robot_forces(robot, d.q, d.v, F, T, Q);
+        st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
+                           d.rows, d.factor, d.contact_work);
+        if (st != LEGSIM_OK) return st;
+        if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
+        changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
+        // the cone keeps what the multipliers refuse (unless a stop pulling is why)
+        if (!changed && !(decide && round == 0) && pull < 0) return LEGSIM_ERR_CONTACT;
       }
     }
-    if (off_cone) {
-      const FeetHold before = d.hold;
-      real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
-      command_forces(robot, d.command, d.q, d.v, F, T);
-      robot_forces(robot, d.q, d.v, F, T, Q);
-      st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
-                         d.rows, d.factor, d.contact_work);
-      if (st != LEGSIM_OK) return st;
-      if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
-      changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
-      if (!changed && !(decide && round == 0)) return LEGSIM_ERR_CONTACT;  // the cone keeps what the multipliers refuse
-    }
+    if (!changed && pull >= 0) d.hold.stops &= ~(1u << pull), d.hold.upper &= ~(1u << pull), changed = true;
     if (!changed) return LEGSIM_OK;
   }
   return LEGSIM_ERR_CONTACT;
