@@ -339,8 +339,8 @@ void test_touchdown_and_stop_in_one_step(void) {
 void test_rotor_inertia_reflected_and_checked(void) {
   const Standing &s = standing();
   const legsim_hexapod_desc &h = s.desc;
-  // the file's: 1e-6 kg m^2 at 100:1, 0.01 kg m^2 at the yoke, on its inertia about its z
-  TEST_ASSERT_EQUAL_DOUBLE(1e-6, h.rowing_rotor_inertia_kgm2);
+  // the file's: 3.3e-6 kg m^2 at 100:1, 0.033 kg m^2 at the yoke, on its inertia about its z
+  TEST_ASSERT_EQUAL_DOUBLE(3.3e-6, h.rowing_rotor_inertia_kgm2);
   const double reflected = h.rowing_rotor_inertia_kgm2 * h.rowing_gear_ratio * h.rowing_gear_ratio;
   const int y = s.robot.leg[0].yoke;
   TEST_ASSERT_DOUBLE_WITHIN(1e-15, h.yoke_inertia_kgm2[2] + reflected, s.robot.inertia[y].z);
@@ -376,10 +376,10 @@ void test_rotor_inertia_reflected_and_checked(void) {
     std::fclose(out);
   };
   std::string text = read("models/hexapod.toml");
-  const std::string key = "rotor_inertia_kg_m2 = 1.0e-6";
+  const std::string key = "rotor_inertia_kg_m2 = 3.3e-6";
   const size_t at = text.find(key);
   TEST_ASSERT_TRUE(at != std::string::npos);
-  text.replace(at, key.size(), "rotor_inertia_kg_m2 = -1.0e-6");
+  text.replace(at, key.size(), "rotor_inertia_kg_m2 = -3.3e-6");
   char dir[] = "/tmp/legsim_stops_XXXXXX";
   TEST_ASSERT_NOT_NULL(mkdtemp(dir));
   const std::string hex = std::string(dir) + "/hexapod.toml", leg = std::string(dir) + "/leg.toml";
