@@ -151,9 +151,10 @@ class HexapodModel:
         self.yoke_mass = float(yoke["mass"])
         self.yoke_com = np.array(yoke["com"], float)
         self.yoke_inertia = np.array(yoke["inertia"], float)
-        # the rowing motor's rotor reflected to the yoke (rotor ratio^2), about the hip axis
+        # the rowing motor's rotor reflected to the yoke (rotor ratio^2), added to the yoke's
+        # inertia about the hip axis in the dynamics (not a rigid body's: the yoke's own is apart)
         rowing = data.get("rowing", {})
-        self.yoke_inertia[2] += float(rowing.get("rotor_inertia_kg_m2", 0.0)) * float(rowing.get("gear_ratio", 1.0)) ** 2
+        self.rotor_reflected = float(rowing.get("rotor_inertia_kg_m2", 0.0)) * float(rowing.get("gear_ratio", 1.0)) ** 2
         self.hip_offset = float(yoke["hip_offset"])
         self.bar_radius = float(yoke["bar_radius"])
         models = {}
@@ -172,7 +173,7 @@ class HexapodModel:
         self._leg_m, self._leg_I = [], []
         for leg in self.legs:
             mm = [self.yoke_mass] + [b.mass for b in leg.model.bodies]
-            II = [self.yoke_inertia] + [np.array([0.5 * b.mass * self.bar_radius ** 2, b.inertia, b.inertia])
+            II = [self.yoke_inertia + np.array([0.0, 0.0, self.rotor_reflected])] + [np.array([0.5 * b.mass * self.bar_radius ** 2, b.inertia, b.inertia])
                                         for b in leg.model.bodies]
             self._leg_m.append(np.array(mm))
             self._leg_I.append(np.array(II))
