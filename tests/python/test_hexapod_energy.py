@@ -6,7 +6,7 @@ touchdowns, slips and lift-offs among them. And driven past the strokes (--past:
 more on four actuators, 10 to 20 N m on two rowing motors; h = 0.5 ms, where RK4's own error
 under those forces stays below the round-off tolerance: at 1 ms it reaches 7e-6 J a step, falling
 30-fold a halving): every OK step leaves every length and rowing angle inside its stroke
-(1e-12), with arrivals on the stops."""
+(1e-12), with arrivals on the stops, and a stroke the state reports on a stop is at its end."""
 from __future__ import annotations
 
 import importlib.util
@@ -43,3 +43,6 @@ def test_driven_past_the_strokes_stops_hold_and_create_no_energy():
     assert sum(r["stop_impacts"] for r in res) >= 30
     assert all(r["over"] == 0 for r in res)
     assert max(r["past"] for r in res) <= 1e-12
+    # the state's report: strokes held on their stops at some steps' ends, each at its end
+    assert sum(r["on_stop"] for r in res) >= 100
+    assert max(r["off_stop"] for r in res) <= 1e-12
