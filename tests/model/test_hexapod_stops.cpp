@@ -75,8 +75,6 @@ double stroke_min(const SpatialRobot &R, int k) {
 }
 uint32_t stop_bit(int k) { return 1u << k; }  // leg 0's
 
-// The stand in the air (no ground), at rest, leg 0's stroke k driven by `push` (N or N m), the
-// other commands zero.
 // A robot at rest in the air: the hexapod on its free box, or one of its legs on a fixed stand
 // (its hip axis the world's z at the origin), its legs at their stand, every rowing angle 0.
 struct Scene {
@@ -114,6 +112,8 @@ const Scene &scene(bool stand) {
   return o;
 }
 
+// The scene in the air (no ground), leg 0's stroke k driven by `push` (N or N m), its other
+// actuator by `other` (N), the other commands zero.
 std::unique_ptr<RobotData> driven(const Scene &sc, int k, double push, double other) {
   const SpatialRobot &R = sc.R;
   FeetHold hold;
@@ -142,8 +142,8 @@ double first_arrival(const Scene &sc, int k, double push, double other, double h
   }
   TEST_ASSERT_TRUE(d->stop_impacts > 0);
   if (d->hold.stops != stop_bit(k))
-    printf("  first on a stop at t = %.4f s: stops 0x%x upper 0x%x, leg 0's strokes %.6f %.6f %.6f\n", d->t, d->hold.stops,
-           d->hold.upper, stroke_of(sc.R, 0, d->q), stroke_of(sc.R, 1, d->q), stroke_of(sc.R, 2, d->q));
+    printf("  first on a stop at t = %.4f s: stops 0x%x upper 0x%x, leg 0's strokes %.6f %.6f %.6f\n", d->t,
+           d->hold.stops, d->hold.upper, stroke_of(sc.R, 0, d->q), stroke_of(sc.R, 1, d->q), stroke_of(sc.R, 2, d->q));
   TEST_ASSERT_TRUE_MESSAGE(d->hold.stops == stop_bit(k), "the first stop reached is the driven one");
   double lo = 0, hi = h;
   auto e = std::make_unique<RobotData>();
@@ -178,7 +178,7 @@ double impact_loss(const SpatialRobot &R, const RobotData &d, int k, bool upper)
 struct Run {
   double arrival_drop, expected_drop, held_drift, worst_past;
   int arrivals;
-  bool released, reached_min;
+  bool released, reached_other;
 };
 
 // Leg 0's stroke k driven by push into its stop (its max for push > 0, else its min) at h; held for
@@ -235,8 +235,9 @@ Run drive_hold_release(const Scene &sc, int k, double push, double other, double
       E = energy(R, *d);
     }
     if (r.released && (d->hold.stops & stop_bit(k))) {
-      r.reached_min = push > 0 ? !(d->hold.upper & stop_bit(k)) && std::fabs(stroke_of(R, k, d->q) - stroke_min(R, k)) < 1e-12
-                               : (d->hold.upper & stop_bit(k)) && std::fabs(stroke_of(R, k, d->q) - stroke_max(R, k)) < 1e-12;
+      const bool at_max = d->hold.upper & stop_bit(k);
+      r.reached_other = push > 0 ? !at_max && std::fabs(stroke_of(R, k, d->q) - stroke_min(R, k)) < 1e-12
+                               : at_max && std::fabs(stroke_of(R, k, d->q) - stroke_max(R, k)) < 1e-12;
       break;
     }
   }
@@ -266,13 +267,13 @@ void stop_scene(bool stand, int k, double push, double other, bool other_end, co
     printf("  %s, h = 1 ms: energy lost at the arrival %.6e J (the impact's own loss %.6e J), drift while "
            "held %.1e J; furthest past a stroke %.1e; released %s, at its other end's stop %s\n",
            g == 0 ? "RK4" : "generalized-alpha", r.arrival_drop, r.expected_drop, r.held_drift, r.worst_past,
-           r.released ? "yes" : "no", r.reached_min ? "yes" : "no");
+           r.released ? "yes" : "no", r.reached_other ? "yes" : "no");
     TEST_ASSERT_TRUE(r.worst_past <= 1e-12);
     TEST_ASSERT_TRUE(r.expected_drop > 0);
     // the step's energy change is the impact's loss and the integrator's error over the step
     TEST_ASSERT_TRUE(std::fabs(r.arrival_drop - r.expected_drop) < (g == 0 ? 1e-6 : 1e-3) * (1 + r.expected_drop));
     TEST_ASSERT_TRUE(r.held_drift < (g == 0 ? 1e-7 : 1e-4));
-    TEST_ASSERT_TRUE(r.released && (r.reached_min || !other_end));
+    TEST_ASSERT_TRUE(r.released && (r.reached_other || !other_end));
   }
 }
 }  // namespace

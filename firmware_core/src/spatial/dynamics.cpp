@@ -69,7 +69,8 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
   if (!hold.stops) return;
   for (int l = 0; l < robot.nlegs; ++l)
     for (int k = 0; k < kLegStops; ++k)
-      if ((leg_stops(hold, l) >> k) & 1u) rows[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, v);
+      if ((leg_stops(hold, l) >> k) & 1u)
+        rows[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, v);
 }
 
 Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v) {
