@@ -312,7 +312,8 @@ class Library:
                         ("foot_m", (d * 3) * 6), ("foot_force_n", (d * 3) * 6),
                         ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6), ("foot_state", i32 * 6),
                         ("kinetic_energy_j", d), ("events", i32), ("impacts", i32), ("cone_solved", i32),
-                        ("cone_by_sweeps", i32), ("cone_max_iterations", i32), ("cone_max_residual", d)]
+                        ("cone_by_sweeps", i32), ("cone_max_iterations", i32), ("cone_max_residual", d),
+                        ("actuator_stop", (i32 * 2) * 6), ("rowing_stop", i32 * 6), ("stop_impacts", i32)]
 
         self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding

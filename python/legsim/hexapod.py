@@ -535,7 +535,9 @@ class HexapodSim:
         on each foot), actuator_force_n (6 x 2), rowing_torque_nm (6), foot_state (6: "free", "stuck"
         or "sliding"), kinetic_energy_j, events (located
         in the last step), impacts (touchdowns since the start), cone (the contact problems on the
-        cones since the start: solved, by_sweeps, max_iterations, max_residual)."""
+        cones since the start: solved, by_sweeps, max_iterations, max_residual), actuator_stop (6 x
+        2) and rowing_stop (6): -1 on the stroke's min stop, 1 on its max, 0 inside; stop_impacts
+        (arrivals on a stop since the start)."""
         out = self.library.HexapodState()
         self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
                            "legsim_hexapod_get_state")
@@ -550,4 +552,6 @@ class HexapodSim:
                 "foot_state": [_FOOT_STATES[out.foot_state[k]] for k in range(LEGS)],
                 "kinetic_energy_j": out.kinetic_energy_j, "events": out.events, "impacts": out.impacts,
                 "cone": {"solved": out.cone_solved, "by_sweeps": out.cone_by_sweeps,
-                         "max_iterations": out.cone_max_iterations, "max_residual": out.cone_max_residual}}
+                         "max_iterations": out.cone_max_iterations, "max_residual": out.cone_max_residual},
+                "actuator_stop": np.array([out.actuator_stop[k][:] for k in range(LEGS)]),
+                "rowing_stop": np.array(out.rowing_stop[:]), "stop_impacts": out.stop_impacts}

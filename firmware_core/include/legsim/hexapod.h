@@ -195,6 +195,9 @@ legsim_status legsim_hexapod_reaction_sweep(const legsim_hexapod_desc *h, const 
  * multipliers) or sliding (its normal row; friction mu_kinetic N against its slip), changing at
  * events located inside the step: a touchdown (an impact on the feet's circular cones), a lift-off
  * (N reaches 0), stick to slip (|F_t| reaches mu_static N), slip to stick. Each linear actuator's
+ * length and each rowing angle stays within its stroke: its arrival at an end is an event too (an
+ * inelastic impact on the stop), the stop then holds it while it pushes and lets go when it would
+ * pull. Each linear actuator's
  * axial force and each rowing torque held over a step as commanded; RK4 (or generalized-alpha) on the rotation group,
  * the positions and velocities projected onto the rows at each step's end. A step is all or
  * nothing. */
@@ -265,6 +268,11 @@ typedef struct legsim_hexapod_state {
    * (one that does not fails its step with LEGSIM_ERR_NOT_CONVERGED) */
   int32_t cone_solved, cone_by_sweeps, cone_max_iterations;
   double cone_max_residual;
+  /* which strokes sit on a stop: -1 at its min, 1 at its max, 0 inside; arrivals on a stop (each
+   * an inelastic impact) since the start */
+  int32_t actuator_stop[LEGSIM_HEXAPOD_LEGS][2];
+  int32_t rowing_stop[LEGSIM_HEXAPOD_LEGS];
+  int32_t stop_impacts;
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

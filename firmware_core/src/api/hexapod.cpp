@@ -529,6 +529,14 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
   r.impacts = d.impacts;
   r.cone_solved = d.cone_stats.solved, r.cone_by_sweeps = d.cone_stats.by_sweeps;
   r.cone_max_iterations = d.cone_stats.max_iterations, r.cone_max_residual = d.cone_stats.max_residual;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    for (int k = 0; k < spatial::kLegStops; ++k) {
+      const uint32_t bit = 1u << (spatial::kLegStops * l + k);
+      const int32_t at = (d.hold.stops & bit) ? ((d.hold.upper & bit) ? 1 : -1) : 0;
+      if (k < 2) r.actuator_stop[l][k] = at;
+      else r.rowing_stop[l] = at;
+    }
+  r.stop_impacts = d.stop_impacts;
   *out = r;
   return LEGSIM_OK;
 }

@@ -1,21 +1,11 @@
 #include "spatial/dynamics.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "system/dense_solve.hpp"
 
 namespace legsim::spatial {
-
-namespace {
-// Row r's two bodies (a foot row: the foot's bar and the world).
-inline void bodies_of(const SpatialRobot &robot, int r, int &a, int &b) {
-  if (r < robot.m) {
-    a = robot.row_body[r][0], b = robot.row_body[r][1];
-  } else {
-    a = robot.leg[(r - robot.m) / 3].foot_body, b = -1;
-  }
-}
-}  // namespace
 
 // The rows in RobotLeg::order with the foot's in their slot, then the hip's (the rows on the
 // box) last, so that S_l^-1 reaches the box through the factor's last rows only.
@@ -35,7 +25,7 @@ void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
   for (int b = 0; b < nbl; ++b) fb[b] = n;
   for (int i = 0; i < n; ++i) {
     int ab[2];
-    bodies_of(robot, idx[i], ab[0], ab[1]);
+    row_bodies(robot, idx[i], ab[0], ab[1]);
     int f = i;
     for (int s = 0; s < 2; ++s) {
       const int body = ab[s] < 0 ? -1 : ab[s] - b_lo;
@@ -76,11 +66,102 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
     for (int k = 0; k < n; ++k)
       rows[foot_row(robot, l) + k] = row_along(foot, robot.leg[l].foot_point, world, hold.anchor[l], axes[k]);
   }
+  if (!hold.stops) return;
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < kLegStops; ++k)
+      if ((leg_stops(hold, l) >> k) & 1u)
+        rows[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, v);
 }
+
+Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v) {
+  const RobotLeg &L = robot.leg[l];
+  Row r;
+  if (k < 2) {
+    // the actuator's length row less its end: L - L_min, or L_max - L (all negated)
+    const RobotActuator &ac = robot.act[L.first_actuator + k];
+    r = actuator_row(body_state(q + kBodyConfig * ac.rod, v + kBodyDof * ac.rod),
+                     body_state(q + kBodyConfig * ac.cyl, v + kBodyDof * ac.cyl));
+    r.phi += ac.offset - ac.stroke[upper ? 1 : 0];
+  } else {
+    // the yoke's x against the box's direction at the end, turned by pi / 2: sin(psi - psi_min),
+    // or -sin(psi - psi_max)
+    const int y = L.yoke;
+    const BodyState yoke = body_state(q + kBodyConfig * y, v + kBodyDof * y);
+    const BodyState box = robot.free_box ? body_state(q, v) : ground_state();
+    const real th = L.yaw + robot.rowing_stroke[upper ? 1 : 0];
+    r = row_perpendicular(yoke, {1, 0, 0}, box, {-std::sin(th), std::cos(th), 0});
+  }
+  if (upper) {
+    r.phi = -r.phi, r.gamma = -r.gamma;
+    for (int i = 0; i < kBodyDof; ++i) r.ja[i] = -r.ja[i], r.jb[i] = -r.jb[i];
+  }
+  return r;
+}
+
+namespace {
+void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu);
+
+// Row r's rate at x (its coefficients on its two bodies' velocity coordinates).
+real row_dot(const SpatialRobot &robot, const Row &row, int r, const real *x) {
+  int a, b;
+  row_bodies(robot, r, a, b);
+  real s = 0;
+  for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * x[kBodyDof * a + k];
+  if (b >= 0)
+    for (int k = 0; k < kBodyDof; ++k) s += row.jb[k] * x[kBodyDof * b + k];
+  return s;
+}
+
+// The held stops' columns and their Delassus matrix D = -J_s X_s (positive semi-definite),
+// factored by Cholesky with a zero pivot's stop left out (its row implied by the others).
+void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
+  static const real zero_g[kMaxSystemRows] = {};
+  int n = 0;
+  for (int s = 0; s < kLegStops * robot.nlegs; ++s)
+    if ((hold.stops >> s) & 1u) F.stop[n++] = stop_row(robot, s / kLegStops, s % kLegStops);
+  F.nstops = n;
+  const int nv = kBodyDof * robot.nb;
+  for (int j = 0; j < n; ++j) {
+    real f[kMaxRobotDof];
+    std::fill(f, f + nv, real(0));
+    int a, b;
+    const Row &r = rows[F.stop[j]];
+    row_bodies(robot, F.stop[j], a, b);
+    for (int k = 0; k < kBodyDof; ++k) f[kBodyDof * a + k] = -r.ja[k];
+    if (b >= 0)
+      for (int k = 0; k < kBodyDof; ++k) f[kBodyDof * b + k] -= r.jb[k];
+    std::fill(F.stop_mu[j], F.stop_mu[j] + kMaxSystemRows, real(0));  // the unused slots' too
+    solve_rows(robot, F, f, zero_g, F.stop_x[j], F.stop_mu[j]);
+  }
+  real *D = F.D;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < n; ++j) D[n * i + j] = -row_dot(robot, rows[F.stop[i]], F.stop[i], F.stop_x[j]);
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < i; ++j) D[n * i + j] = D[n * j + i] = real(0.5) * (D[n * i + j] + D[n * j + i]);
+  // in place, lower triangle; a pivot below 1e-10 of its diagonal: that stop dropped
+  for (int j = 0; j < n; ++j) {
+    const real d0 = D[n * j + j];
+    real d = d0;
+    for (int k = 0; k < j; ++k)
+      if (F.live[k]) d -= D[n * j + k] * D[n * j + k];
+    F.live[j] = d > by_precision(1e-10, 1e-5) * d0 && d0 > 0;
+    if (!F.live[j]) continue;
+    d = std::sqrt(d);
+    D[n * j + j] = d;
+    for (int i = j + 1; i < n; ++i) {
+      real t = D[n * i + j];
+      for (int k = 0; k < j; ++k)
+        if (F.live[k]) t -= D[n * i + k] * D[n * j + k];
+      D[n * i + j] = t / d;
+    }
+  }
+}
+}  // namespace
 
 legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
   const bool box = robot.free_box;
   F.stuck = hold.stuck, F.sliding = hold.sliding;
+  F.nstops = 0;
   F.rows = rows;
   real *A0 = F.A0;
   for (int i = 0; i < kBodyDof * kBodyDof; ++i) A0[i] = 0;
@@ -159,10 +240,47 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     for (int i = 0; i < kBodyDof; ++i) scale = std::max(scale, A0[7 * i]);
     if (!dense_cholesky(kBodyDof, A0, by_precision(1e-12, 1e-6) * scale)) return LEGSIM_ERR_SINGULAR;
   }
+  if (hold.stops) factor_stops(robot, hold, rows, F);
   return LEGSIM_OK;
 }
 
 void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
+  solve_rows(robot, F, f, g, x, mu);
+  const int n = F.nstops;
+  if (!n) return;
+  // the stops' multipliers: D lambda = -(g_s - J_s x), then x and mu moved by their columns
+  real lam[kMaxHeldStops];
+  for (int i = 0; i < n; ++i) lam[i] = row_dot(robot, F.rows[F.stop[i]], F.stop[i], x) - g[F.stop[i]];
+  const real *D = F.D;
+  for (int i = 0; i < n; ++i) {
+    if (!F.live[i]) {
+      lam[i] = 0;
+      continue;
+    }
+    for (int k = 0; k < i; ++k)
+      if (F.live[k]) lam[i] -= D[n * i + k] * lam[k];
+    lam[i] /= D[n * i + i];
+  }
+  for (int i = n - 1; i >= 0; --i) {
+    if (!F.live[i]) continue;
+    for (int k = i + 1; k < n; ++k)
+      if (F.live[k]) lam[i] -= D[n * k + i] * lam[k];
+    lam[i] /= D[n * i + i];
+  }
+  const int nv = kBodyDof * robot.nb;
+  for (int j = 0; j < n; ++j) {
+    if (!F.live[j]) {
+      mu[F.stop[j]] = 0;
+      continue;
+    }
+    for (int k = 0; k < nv; ++k) x[k] += lam[j] * F.stop_x[j][k];
+    for (int r = 0; r < kMaxSystemRows; ++r) mu[r] += lam[j] * F.stop_mu[j][r];
+    mu[F.stop[j]] = lam[j];
+  }
+}
+
+namespace {
+void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
   const bool box = robot.free_box;
   const Row *rows = F.rows;
   real y[kMaxLegs][kMaxLegRows], b0[kBodyDof] = {};
@@ -240,14 +358,15 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
       for (int k = 0; k < kBodyDof; ++k) x[kBodyDof * (b_lo + b) + k] = xb[b][k] * robot.inverse_mass[b_lo + b][k];
   }
 }
+}  // namespace
 
 legsim_status robot_accelerations(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v,
                                   const real *Q, real *a, real *mu, Row *rows, RobotFactor &F) {
   system_rows(robot, hold, q, v, rows);
   real g[kMaxSystemRows];
-  for (int r = 0; r < robot.m; ++r) g[r] = rows[r].gamma;
-  for (int l = 0; l < robot.nlegs; ++l)
-    for (int k = 0; k < foot_rows(hold, l); ++k) g[foot_row(robot, l) + k] = rows[foot_row(robot, l) + k].gamma;
+  int idx[kMaxSystemRows];
+  const int n = system_used_rows(robot, hold, idx);
+  for (int i = 0; i < n; ++i) g[idx[i]] = rows[idx[i]].gamma;
   const legsim_status s = robot_factor(robot, hold, rows, F);
   if (s == LEGSIM_OK) robot_solve(robot, F, Q, g, a, mu);
   return s;

@@ -14,6 +14,14 @@
 // ground has its rows along the ground's frame (normal, t1, t2): e_k . (p_foot - anchor), three
 // when stuck, the normal's alone when sliding; the ground's force on it is -(lambda_n n +
 // lambda_1 t1 + lambda_2 t2), its normal force N = -lambda_n.
+//
+// A stroke's stop (a linear actuator's length or a rowing angle at its end) held is one more
+// row, its gap: L - L_min, L_max - L, sin(psi - psi_min) or sin(psi_max - psi) (>= 0 inside the
+// stroke); it pushes while its multiplier is <= 0 (the force -lambda along the gap's gradient).
+// The held stops are not in the legs' factors (a leg with its foot stuck has no freedom of its own
+// left for one: its stop holds the box through the foot): the solve takes each as a column, its
+// response to a unit multiplier, and their multipliers from a small system (the stops' Delassus
+// matrix): the rows' solve with the stops' rows met.
 #pragma once
 
 #include "spatial/robot.hpp"
@@ -21,23 +29,49 @@
 namespace legsim::spatial {
 
 // The system's rows: the robot's joints' [0, robot.m), then three slots per leg for its foot
-// (robot.m + 3 l ..: the normal's, t1's, t2's), used as its mode says.
-constexpr int kMaxSystemRows = kMaxRobotRows + 3 * kMaxLegs;
+// (robot.m + 3 l ..: the normal's, t1's, t2's), used as its mode says, then three per leg for
+// its stops (robot.m + 3 kMaxLegs + 3 l + k: its actuators' k = 0, 1, its rowing angle's k = 2).
+constexpr int kMaxSystemRows = kMaxRobotRows + 6 * kMaxLegs;
 constexpr int kMaxRobotDof = kBodyDof * kMaxRobotBodies;
 
 // Which feet the ground holds (bit l: leg l) and how: stuck (held at anchor[l], world, m) or
 // sliding (held on the plane through anchor[l]); the ground's frame (world: unit normal, up, and
-// two unit tangents, right-handed).
+// two unit tangents, right-handed). Which strokes sit on a stop (bit 3 l + k: leg l's actuator k
+// = 0, 1 or its rowing angle k = 2) and at which end (upper's bit: the max).
 struct FeetHold {
   uint32_t stuck, sliding;
   V3 anchor[kMaxLegs];
   V3 normal = {0, 0, 1}, t1 = {1, 0, 0}, t2 = {0, 1, 0};
+  uint32_t stops = 0, upper = 0;
 };
 // The number of rows foot l has in hold.
 inline int foot_rows(const FeetHold &hold, int l) {
   return ((hold.stuck >> l) & 1u) ? 3 : ((hold.sliding >> l) & 1u) ? 1 : 0;
 }
 inline int foot_row(const SpatialRobot &robot, int l) { return robot.m + 3 * l; }
+constexpr int kLegStops = 3;
+constexpr int kMaxHeldStops = kLegStops * kMaxLegs;
+inline int stop_row(const SpatialRobot &robot, int l, int k) { return robot.m + 3 * kMaxLegs + kLegStops * l + k; }
+// Leg l's held stops (bit k).
+inline uint32_t leg_stops(const FeetHold &hold, int l) { return (hold.stops >> (kLegStops * l)) & 7u; }
+
+// System row r's two bodies (-1: the world): a joint's, a foot's (its bar), a stop's (an
+// actuator's rod and cylinder; a rowing angle's yoke and box).
+inline void row_bodies(const SpatialRobot &robot, int r, int &a, int &b) {
+  if (r < robot.m) {
+    a = robot.row_body[r][0], b = robot.row_body[r][1];
+  } else if (r < robot.m + 3 * kMaxLegs) {
+    a = robot.leg[(r - robot.m) / 3].foot_body, b = -1;
+  } else {
+    const int s = r - robot.m - 3 * kMaxLegs, l = s / kLegStops, k = s % kLegStops;
+    const RobotLeg &L = robot.leg[l];
+    if (k < 2) {
+      a = robot.act[L.first_actuator + k].rod, b = robot.act[L.first_actuator + k].cyl;
+    } else {
+      a = L.yoke, b = robot.free_box ? 0 : -1;
+    }
+  }
+}
 
 // Leg l's LegLayout with nf rows of its foot held (robot_lift's, once per count).
 void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out);
@@ -46,18 +80,26 @@ inline const LegLayout &leg_layout(const SpatialRobot &robot, const FeetHold &ho
   return robot.leg[l].layout[nf == 3 ? 2 : nf];
 }
 
-// The indices of the rows in use with hold's feet (the joints', then each foot's on the ground):
+// The indices of the rows in use with hold's feet (the joints', each foot's on the ground, each
+// stop's held):
 // their number; a sum over them reads no unused foot slot.
 inline int system_used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
   int n = 0;
   for (int r = 0; r < robot.m; ++r) idx[n++] = r;
   for (int l = 0; l < robot.nlegs; ++l)
     for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
+  if (hold.stops)
+    for (int l = 0; l < robot.nlegs; ++l)
+      for (int k = 0; k < kLegStops; ++k)
+        if ((leg_stops(hold, l) >> k) & 1u) idx[n++] = stop_row(robot, l, k);
   return n;
 }
 
-// Every row of the system at (q, v): the joints' (robot_rows) and the feet's on the ground.
+// Every row of the system at (q, v): the joints' (robot_rows), the feet's on the ground, the
+// stops' held.
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows);
+// Leg l's stop k's row at its lower or upper end (its gap, >= 0 inside the stroke).
+Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v);
 
 // The factor of [M J^T; J 0] for the rows of system_rows at one q with the feet of `stuck`: per
 // leg its rows in elimination order (RobotLeg::layout for its foot's hold), the Cholesky
@@ -71,6 +113,14 @@ struct RobotFactor {
   real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];  // L_l in its envelope
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
+  // the held stops: their rows, their responses to a unit multiplier (accelerations and the
+  // other rows' multipliers), their Delassus matrix -J_s x_s factored (a stop whose row the others
+  // already imply, a zero pivot, carries nothing: live 0)
+  int nstops;
+  int stop[kMaxHeldStops];
+  real stop_x[kMaxHeldStops][kMaxRobotDof], stop_mu[kMaxHeldStops][kMaxSystemRows];
+  real D[kMaxHeldStops * kMaxHeldStops];
+  bool live[kMaxHeldStops];
 };
 
 // Factor the system for rows (kept by pointer: they must outlive the solves). LEGSIM_ERR_SINGULAR
@@ -79,7 +129,7 @@ struct RobotFactor {
 legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F);
 
 // [M J^T; J 0] [x; mu] = [f; g] with F's factor: f one force per velocity coordinate (6 per
-// body), g one value per system row (the unused foot slots ignored); x, mu out.
+// body), g one value per system row (the unused foot and stop slots ignored); x, mu out.
 void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu);
 
 // The accelerations a (6 per body: v' world, omega' body frame) and multipliers mu (per system

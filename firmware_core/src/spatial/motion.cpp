@@ -10,8 +10,8 @@ constexpr real kNone = real(sizeof(real) == sizeof(float) ? 1e30 : 1e300);  // n
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
 real row_rate(const SpatialRobot &robot, const Row &row, int r, const real *v) {
-  const int a = r < robot.m ? robot.row_body[r][0] : robot.leg[(r - robot.m) / 3].foot_body;
-  const int b = r < robot.m ? robot.row_body[r][1] : -1;
+  int a, b;
+  row_bodies(robot, r, a, b);
   real s = 0;
   for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * v[kBodyDof * a + k];
   if (b >= 0)
@@ -21,9 +21,29 @@ real row_rate(const SpatialRobot &robot, const Row &row, int r, const real *v) {
 
 legsim_status hold_check(const SpatialRobot &robot, const FeetHold &hold) {
   if ((hold.stuck | hold.sliding) >> robot.nlegs || (hold.stuck & hold.sliding)) return LEGSIM_ERR_BAD_INPUT;
-  for (int l = 0; l < robot.nlegs; ++l)
+  for (int l = 0; l < robot.nlegs; ++l) {
     if (foot_rows(hold, l) && robot.leg[l].foot_body < 0) return LEGSIM_ERR_BAD_INPUT;
+    const uint32_t s = leg_stops(hold, l);
+    if (((s & 1u) && robot.leg[l].nactuators < 1) || ((s & 2u) && robot.leg[l].nactuators < 2))
+      return LEGSIM_ERR_BAD_INPUT;
+  }
+  if (hold.stops >> (kLegStops * robot.nlegs) || (hold.upper & ~hold.stops)) return LEGSIM_ERR_BAD_INPUT;
   return LEGSIM_OK;
+}
+
+// Leg l's stroke k (its actuators' k = 0, 1, its rowing angle's 2) at q: its value and ends.
+real stroke_value(const SpatialRobot &robot, int l, int k, const real *q, real &lo, real &hi) {
+  if (k == 2) {
+    lo = robot.rowing_stroke[0], hi = robot.rowing_stroke[1];
+    return robot_rowing_angle(robot, l, q);
+  }
+  // robot_actuator_length's, without the row's coefficients: (r_rod - r_cyl) . u_cyl + offset
+  const RobotActuator &ac = robot.act[robot.leg[l].first_actuator + k];
+  lo = ac.stroke[0], hi = ac.stroke[1];
+  const real *c = q + kBodyConfig * ac.cyl, *r = q + kBodyConfig * ac.rod;
+  const real w = c[3], x = c[4], y = c[5], z = c[6];
+  return (r[0] - c[0]) * (1 - 2 * (y * y + z * z)) + (r[1] - c[1]) * 2 * (x * y + w * z) +
+         (r[2] - c[2]) * 2 * (x * z - w * y) + ac.offset;
 }
 
 // q and v onto the rows: q by simplified Newton iterations of the M-orthogonal correction (the
@@ -38,14 +58,19 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
   iterations = 0;
   for (;;) {
     system_rows(robot, d.hold, q, zero_v, d.rows_work);
-    real worst = 0;
+    real worst = 0, worst_stop = 0;
     for (int i = 0; i < n; ++i) {
       g[idx[i]] = -d.rows_work[idx[i]].phi;
       const real e = std::abs(g[idx[i]]);
       if (!(e <= worst)) worst = e;  // a NaN too
+      if (idx[i] >= robot.m + 3 * kMaxLegs) worst_stop = std::max(worst_stop, e);
     }
     if (!std::isfinite(worst)) return LEGSIM_ERR_DIVERGED;
-    if (worst <= kProjectionTolerance) break;
+    // a stop's gap to round-off (while the others allow): one released with a gap at -tolerance
+    // would cross its event's tolerance at once, again and again
+    if (worst <= kProjectionTolerance &&
+        (worst_stop <= kProjectionTolerance / 100 || (iterations > 0 && iterations == kProjectionMaxIterations)))
+      break;
     if (iterations == kProjectionMaxIterations) return LEGSIM_ERR_NOT_CONVERGED;
     if (!factored) {
       system_rows(robot, d.hold, q, zero_v, d.rows);
@@ -103,7 +128,7 @@ void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   std::copy(d.rowing_torque, d.rowing_torque + kMaxLegs, c.rowing_torque);
   std::copy(d.impulse, d.impulse + kMaxLegs, c.impulse);
   c.impact = d.impact, c.modes = d.modes, c.cone_stats = d.cone_stats;
-  c.projection_iterations = d.projection_iterations, c.impacts = d.impacts;
+  c.projection_iterations = d.projection_iterations, c.impacts = d.impacts, c.stop_impacts = d.stop_impacts;
 }
 void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   d.t = c.t;
@@ -122,7 +147,7 @@ void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   std::copy(c.rowing_torque, c.rowing_torque + kMaxLegs, d.rowing_torque);
   std::copy(c.impulse, c.impulse + kMaxLegs, d.impulse);
   d.impact = c.impact, d.modes = c.modes, d.cone_stats = c.cone_stats;
-  d.projection_iterations = c.projection_iterations, d.impacts = c.impacts;
+  d.projection_iterations = c.projection_iterations, d.impacts = c.impacts, d.stop_impacts = c.stop_impacts;
 }
 
 // One RK4 step of H on d in place (d.a must be the accelerations at d's state); d part-way on
@@ -258,13 +283,27 @@ legsim_status take(const SpatialRobot &robot, RobotData &d, real H, Integrator i
   return integrator == Integrator::GeneralizedAlpha ? galpha(robot, d, H) : rk4(robot, d, H);
 }
 
-// ---- contact events -------------------------------------------------------------------------
+// ---- contact and stop events -----------------------------------------------------------------
 // Per foot two functions, each >= 0 while its mode holds: a free foot's height above the
 // ground (m) and none; a stuck foot's normal force (N) and its cone's margin mu_s N - |F_t|
 // (N); a sliding foot's normal force and its slip velocity along its direction at the step's
-// start (m/s).
-void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, real (*e)[2]) {
+// start (m/s). Then per stroke (its actuators', its rowing angle's) one: free, its distance to
+// the nearer end (m, rad); on a stop, the stop's push -lambda (N, N m).
+constexpr int kLegEvents = 2 + kLegStops;
+void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, real (*e)[kLegEvents]) {
   for (int l = 0; l < robot.nlegs; ++l) {
+    for (int k = 0; k < kLegStops; ++k) {
+      real &f = e[l][2 + k];
+      f = kNone;
+      if (k < 2 && k >= robot.leg[l].nactuators) continue;
+      if ((leg_stops(d.hold, l) >> k) & 1u) {
+        f = -d.mu[stop_row(robot, l, k)];
+      } else {
+        real lo, hi;
+        const real x = stroke_value(robot, l, k, d.q, lo, hi);
+        f = std::min(x - lo, hi - x);
+      }
+    }
     e[l][0] = e[l][1] = kNone;
     if (!d.has_ground || robot.leg[l].foot_body < 0) continue;
     const uint32_t bit = 1u << l;
@@ -293,6 +332,7 @@ real force_tolerance(const SpatialRobot &robot) {
   return by_precision(1e-10, 1e-4) * mass;
 }
 real event_tolerance(const SpatialRobot &robot, const RobotData &d, int l, int k) {
+  if (k >= 2) return ((leg_stops(d.hold, l) >> (k - 2)) & 1u) ? force_tolerance(robot) : by_precision(1e-12, 1e-5);
   if (!((d.hold.stuck | d.hold.sliding) >> l & 1u) || (k == 1 && ((d.hold.sliding >> l) & 1u)))
     return by_precision(1e-12, 1e-5);
   return force_tolerance(robot);
@@ -312,7 +352,7 @@ void tally(ConeStats &s, const ConeReport &r) {
 // decide: the stuck feet's modes decided on their cones in the first round whatever their forces
 // (a located stick to slip, its function at its root: slipping, that foot's bit).
 legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false, uint32_t slipping = 0) {
-  for (int round = 0; round <= 2 * robot.nlegs + 1; ++round) {
+  for (int round = 0; round <= (2 + kLegStops) * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
     if (st != LEGSIM_OK) return st;
@@ -320,38 +360,89 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
     std::copy(d.a, d.a + kBodyDof * robot.nb, d.acc_aux);  // generalized-alpha's history restarts
     d.acc_aux_h = 0;
-    if (!d.has_ground) return LEGSIM_OK;
     const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
-    for (int l = 0; l < robot.nlegs; ++l) {
-      const uint32_t bit = 1u << l;
-      const real *m = d.mu + foot_row(robot, l);
-      if (d.hold.stuck & bit) {
-        const real N = -m[0], Ft = std::hypot(m[1], m[2]);
-        if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
-      } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
-        d.hold.sliding &= ~bit, changed = true;
+    // the stop pulling most, let go once the feet's modes hold (a foot's mode changes the stops'
+    // multipliers: a stop decided before the feet would be let go and hit again)
+    int pull = -1;
+    real most = tol;
+    for (int s = 0; s < kLegStops * robot.nlegs; ++s) {
+      const real m = ((d.hold.stops >> s) & 1u) ? d.mu[stop_row(robot, s / kLegStops, s % kLegStops)] : 0;
+      if (m > most) most = m, pull = s;
+    }
+    if (d.has_ground) {
+      for (int l = 0; l < robot.nlegs; ++l) {
+        const uint32_t bit = 1u << l;
+        const real *m = d.mu + foot_row(robot, l);
+        if (d.hold.stuck & bit) {
+          const real N = -m[0], Ft = std::hypot(m[1], m[2]);
+          if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
+        } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
+          d.hold.sliding &= ~bit, changed = true;
+        }
+      }
+      if (off_cone) {
+        const FeetHold before = d.hold;
+        real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
+        command_forces(robot, d.command, d.q, d.v, F, T);
+        robot_forces(robot, d.q, d.v, F, T, Q);
+        st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
+                           d.rows, d.factor, d.contact_work);
+        if (st != LEGSIM_OK) return st;
+        if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
+        changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
+        // the cone keeps what the multipliers refuse (unless a stop pulling is why)
+        if (!changed && !(decide && round == 0) && pull < 0) return LEGSIM_ERR_CONTACT;
       }
     }
-    if (off_cone) {
-      const FeetHold before = d.hold;
-      real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
-      command_forces(robot, d.command, d.q, d.v, F, T);
-      robot_forces(robot, d.q, d.v, F, T, Q);
-      st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
-                         d.rows, d.factor, d.contact_work);
-      if (st != LEGSIM_OK) return st;
-      if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
-      changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
-      if (!changed && !(decide && round == 0)) return LEGSIM_ERR_CONTACT;  // the cone keeps what the multipliers refuse
-    }
+    if (!changed && pull >= 0) d.hold.stops &= ~(1u << pull), d.hold.upper &= ~(1u << pull), changed = true;
     if (!changed) return LEGSIM_OK;
   }
   return LEGSIM_ERR_CONTACT;
 }
 
+// A stroke reaching its stop at d's state: the stop's row held from now on and an inelastic impact
+// on it. The stop joins the joints' rows: v projected onto them with the feet free (the stop's
+// impulse), then the feet on the ground take their impacts on their cones with the stop holding
+// (contact_impact): together the impact of the stop and the feet with the stop's row as a joint's.
+legsim_status stop_arrival(const SpatialRobot &robot, RobotData &d, int l, int k) {
+  static const real zero_f[kMaxRobotDof] = {};
+  real lo, hi;
+  const real x = stroke_value(robot, l, k, d.q, lo, hi);
+  const uint32_t bit = 1u << (kLegStops * l + k);
+  d.hold.stops |= bit;
+  if (hi - x < x - lo) d.hold.upper |= bit;
+  FeetHold none = d.hold;
+  none.stuck = none.sliding = 0;
+  system_rows(robot, none, d.q, d.v, d.rows);
+  legsim_status st = robot_factor(robot, none, d.rows, d.factor);
+  if (st != LEGSIM_OK) return st;
+  int idx[kMaxSystemRows];
+  real g[kMaxSystemRows], dv[kMaxRobotDof], mu[kMaxSystemRows];
+  const int n = system_used_rows(robot, none, idx);
+  for (int i = 0; i < n; ++i) g[idx[i]] = -row_rate(robot, d.rows[idx[i]], idx[i], d.v);
+  robot_solve(robot, d.factor, zero_f, g, dv, mu);
+  for (int i = 0; i < kBodyDof * robot.nb; ++i) d.v[i] += dv[i];
+  const uint32_t touching = d.hold.stuck | d.hold.sliding;
+  if (d.has_ground && touching) {
+    for (int j = 0; j < robot.nlegs; ++j) d.impulse[j] = {0, 0, 0};
+    st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse, d.impact, d.rows,
+                        d.factor, d.contact_work);
+    if (st != LEGSIM_OK) return st;
+    tally(d.cone_stats, d.impact);
+  }
+  ++d.stop_impacts;
+  return settle(robot, d);
+}
+
 // Event (l, k) applied at d's state.
 legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k) {
+  if (k >= 2) {
+    const uint32_t bit = 1u << (kLegStops * l + k - 2);
+    if (!(d.hold.stops & bit)) return stop_arrival(robot, d, l, k - 2);
+    d.hold.stops &= ~bit, d.hold.upper &= ~bit;  // its push at 0 and falling: released
+    return settle(robot, d);
+  }
   const uint32_t bit = 1u << l;
   V3 p, pv;
   foot_motion(robot, l, d.q, d.v, p, pv);
@@ -435,7 +526,7 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
   std::fill(d.actuator_force, d.actuator_force + kMaxRobotActuators, real(0));
   std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
   std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
-  d.projection_iterations = d.events = d.impacts = 0;
+  d.projection_iterations = d.events = d.impacts = d.stop_impacts = 0;
   d.impact = d.modes = {true, ConeMethod::Newton, 0, 0};
   d.cone_stats = {0, 0, 0, 0};
   return settle(robot, d);
@@ -462,14 +553,17 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
   RobotSnapshot &start = d.snapshot[0], &s0 = d.snapshot[1];
   save(robot, d, start);
   // new commands (or a new state) may leave a foot pulling or off its cone: its modes first
-  if (d.has_ground) {
+  if (d.has_ground || d.hold.stops) {
     V3 ref[kMaxLegs] = {};
-    real e[kMaxLegs][2];
+    real e[kMaxLegs][kLegEvents];
     event_values(robot, d, ref, e);
     bool off = false;
-    for (int l = 0; l < robot.nlegs; ++l)
+    for (int l = 0; l < robot.nlegs; ++l) {
       off = off || ((d.hold.stuck | d.hold.sliding) >> l & 1u && (e[l][0] < -force_tolerance(robot) ||
                                                                   ((d.hold.stuck >> l) & 1u && e[l][1] < -force_tolerance(robot))));
+      for (int k = 0; k < kLegStops; ++k)
+        off = off || (((leg_stops(d.hold, l) >> k) & 1u) && e[l][2 + k] < -force_tolerance(robot));
+    }
     if (off) {
       const legsim_status st = settle(robot, d);
       if (st != LEGSIM_OK) {
@@ -494,7 +588,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
       d.slip_ref[l] = ref[l], d.slip_stage_min[l] = kNone;
     }
     save(robot, d, s0);
-    real e0[kMaxLegs][2], e1[kMaxLegs][2];
+    real e0[kMaxLegs][kLegEvents], e1[kMaxLegs][kLegEvents];
     event_values(robot, d, ref, e0);
     // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
     const real part = std::min(remaining, std::max(slip_part(robot, d), h / 256));
@@ -505,7 +599,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
     int el = -1, ek = -1;
     real best = 2;
     for (int l = 0; l < robot.nlegs; ++l)
-      for (int k = 0; k < 2; ++k) {
+      for (int k = 0; k < kLegEvents; ++k) {
         const real tol = event_tolerance(robot, d, l, k);
         // a crossing; or a function already below at the start still falling (a free foot
         // under the ground, rising from an impact, is left to rise)
@@ -522,12 +616,12 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
     // locate it: regula falsi (Illinois) on the fraction of the step; then check that no other
     // event crossed before it, else locate that one within the shorter window
     real window = 1;
-    for (int guard = 0; guard < 2 * kMaxLegs; ++guard) {
+    for (int guard = 0; guard < kLegEvents * kMaxLegs; ++guard) {
       real lo = 0, hi = window, flo = std::max(e0[el][ek], real(0)), fhi = e1[el][ek];
       if (guard > 0) {  // the new event's value at the window's end
         load(robot, s0, d);
         if ((st = take(robot, d, hi * part, integrator)) != LEGSIM_OK) return fail(st);
-        real e[kMaxLegs][2];
+        real e[kMaxLegs][kLegEvents];
         event_values(robot, d, ref, e);
         fhi = e[el][ek];
       }
@@ -537,7 +631,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
         if (!(th > lo && th < hi)) th = real(0.5) * (lo + hi);
         load(robot, s0, d);
         if ((st = take(robot, d, th * part, integrator)) != LEGSIM_OK) return fail(st);
-        real e[kMaxLegs][2];
+        real e[kMaxLegs][kLegEvents];
         event_values(robot, d, ref, e);
         const real f = e[el][ek];
         if (f < 0) {
@@ -556,17 +650,17 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
       }
       load(robot, s0, d);
       if ((st = take(robot, d, hi * part, integrator)) != LEGSIM_OK) return fail(st);
-      real e[kMaxLegs][2];
+      real e[kMaxLegs][kLegEvents];
       event_values(robot, d, ref, e);
       int nl = -1, nk = -1;
       for (int l = 0; l < robot.nlegs; ++l)
-        for (int k = 0; k < 2; ++k)
+        for (int k = 0; k < kLegEvents; ++k)
           if ((l != el || k != ek) && e[l][k] < -event_tolerance(robot, d, l, k) &&
               (e0[l][k] >= -event_tolerance(robot, d, l, k) || e[l][k] < e0[l][k] - event_tolerance(robot, d, l, k)))
             nl = l, nk = k;
       window = hi;
       if (nl < 0) break;
-      if (guard == 2 * kMaxLegs - 1) return fail(LEGSIM_ERR_CONTACT);  // still one before it: not located
+      if (guard == kLegEvents * kMaxLegs - 1) return fail(LEGSIM_ERR_CONTACT);  // still one before it: not located
       el = nl, ek = nk;
     }
     st = apply_event(robot, d, el, ek);

@@ -15,7 +15,10 @@
 // ((alpha_m - alpha_f) h a') is scaled to it. A contact event inside the step (a touchdown, a
 // lift-off, stick to slip, slip to stick) is located by retaking the step from its start to a
 // fraction of it (regula falsi with the Illinois rule on the event's function), applied there,
-// and the rest of the step taken after it.
+// and the rest of the step taken after it. So is a stroke's arrival at its stop (a linear
+// actuator's length or a rowing angle at its end: an inelastic impact, then the stop's row held,
+// FeetHold::stops) and a stop's release (its push falling to 0: decided at the acceleration level
+// as a stuck foot's lift-off).
 //
 // (model, data): the robot (SpatialRobot, robot.hpp) is the model; RobotData the data. A step is
 // all or nothing: data changes only when it returns LEGSIM_OK.
@@ -60,7 +63,7 @@ struct RobotSnapshot {
   V3 impulse[kMaxLegs];
   ConeReport impact, modes;
   ConeStats cone_stats;
-  int projection_iterations, impacts;
+  int projection_iterations, impacts, stop_impacts;
 };
 
 struct RobotData {
@@ -86,6 +89,7 @@ struct RobotData {
   int projection_iterations;  // its last position projection's Newton iterations
   int events;                 // contact events located in it
   int impacts;                // touchdowns since data_init
+  int stop_impacts;           // arrivals on a stroke's stop since data_init
   ConeReport impact;          // the last impact's contact problem
   ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
   ConeStats cone_stats;       // every contact problem's since data_init
