@@ -22,6 +22,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import results
+from . import peer_tables
 from . import mujoco_hexapod as mh
 
 H = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)
@@ -99,14 +100,7 @@ def markdown(rows: list[dict], before: dict, after: dict | None = None) -> str:
 
 
 def write(out: Path, **kw) -> Path:
-    before = results.snapshot()
-    rows = collect(**kw)
-    after = results.snapshot()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "hexapod_peers.md"
-    path.write_text(markdown(rows, before, after))
-    return path
+    return peer_tables.write(out, "hexapod_peers.md", collect, markdown, **kw)
 
 
 def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
