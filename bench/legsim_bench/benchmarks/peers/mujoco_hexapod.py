@@ -419,13 +419,14 @@ def _run_once(engine: str, name: str, h: float) -> None:
 
 
 # legsim_hexapod_step is entered from libffi, which callgrind does not name: count inside the
-# step it calls once a step
-TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step_rk4*"}
+# step it calls once a step (its events and contact problems inside; the pattern leaves out its
+# [clone .part.0], whose nested toggle would stop the count)
+TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step(*Integrator)"}
 
 
 def instructions_per_step(engine: str, name: str, h: float) -> float:
     """Instructions per step (valgrind callgrind, collecting only inside mj_step, which
-    mujoco.rollout calls once a step, or inside legsim's robot_step_rk4, which
+    mujoco.rollout calls once a step, or inside legsim's robot_step, which
     legsim_hexapod_step calls once a step): one run of the scene, set-up and Python outside
     the count."""
     import os
