@@ -38,7 +38,7 @@ import numpy as np
 from ...reference.hexapod import LEGS, HexapodModel
 from ...scene import find_root
 from . import mujoco_hexapod as mh
-from .mujoco_hexapod import VERSION, _rollout, mujoco
+from .mujoco_hexapod import TOGGLE, VERSION, _rollout, mujoco
 
 SAMPLE_S = 4e-3                 # the errors' grid: a multiple of every step h used
 FOOT_RADIUS = 1e-4              # m
@@ -293,16 +293,16 @@ def cone_margin(out: dict, mu: float) -> float:
 
 
 def default_setup(t_end: float | None = None, h_plan: float | None = None, hexapod=None):
-    """(ref model, plan) for the walking scene (its duration by default)."""
+    """(ref model, plan) for the walking scene: its duration and its step_s as the command period
+    by default."""
     sc = walk_scene()
     ref = HexapodModel.from_toml(mh.default_path())
-    pl = plan(h_plan or 6.25e-5, t_end if t_end is not None else sc["duration"], sc["gait"], hexapod)
+    pl = plan(h_plan or sc["step_s"], t_end if t_end is not None else sc["duration"], sc["gait"], hexapod)
     return ref, pl
 
 
 
 # ------------------------------------------------------------------ instructions
-from .mujoco_hexapod import TOGGLE  # noqa: E402  (callgrind's counted function per engine)
 
 
 def _run_once(engine: str, h: float, t_end: float, plan_path: str) -> None:
