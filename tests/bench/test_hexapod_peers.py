@@ -3,7 +3,9 @@ coordinates, DOP853 at rtol 1e-12) on scene b (a tripod held, three legs free), 
 the errors bench/results/hexapod_peers.md gives, within a factor; MuJoCo's positional errors
 falling at order 2 (its soft equalities, solref (2h, 1)) and its ground forces on their
 h-independent floor (about 4e-3 N: the equalities' stabilisation b v + k r times the feet's
-effective mass); legsim's RK4 at h = 1 ms three to six orders of magnitude closer.
+effective mass); legsim's RK4 at h = 1 ms three to six orders of magnitude closer. Then the walking scene's
+short form (hexapod_walk.py): the same commands as legsim.Hexapod.walk, MuJoCo's feet inside
+their cones, its walk beside legsim's within its soft contacts' error, legsim's order.
 """
 import sys
 from pathlib import Path

@@ -11,6 +11,11 @@ cost per step and per simulated second, each the smallest over ``--repeats`` run
 set-up outside the clock: MuJoCo, ``mujoco.rollout`` (compiled mj_step loop, one thread);
 legsim, one ``HexapodSim.step(n)`` call (compiled loop); both through Python, each divided by
 the steps.
+
+Then the walking scene (hexapod_walk.py, ``--no-walk`` leaves it out): legsim and MuJoCo walking
+two periods on the same commands at several steps, their box and feet errors against the rigid
+reference (legsim at WALK_REF_H) and against each one's own finest run, MuJoCo's cone margins, the
+costs, and legsim's cost at the errors MuJoCo reaches (equal_error).
 """
 from __future__ import annotations
 
@@ -77,6 +82,9 @@ def collect_held(scenes=mh.SCENES, hs=H, repeats: int = 3, callgrind: bool = Tru
 WALK_LEGSIM_H = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)
 WALK_MUJOCO_H = (4e-3, 2e-3, 1e-3, 5e-4, 2.5e-4, 1.25e-4)
 WALK_REF_H = 6.25e-5          # legsim's finest run: the rigid model's reference; MuJoCo's own finest
+# callgrind over the whole walk at these steps (a finer step's count per step taken as 1 ms's: legsim's
+# per-step work falls with h, fewer events a step, so that overstates its cost there)
+WALK_CALLGRIND_H = (4e-3, 2e-3, 1e-3)
 
 
 def collect_walk(legsim_h=WALK_LEGSIM_H, mujoco_h=WALK_MUJOCO_H, ref_h=WALK_REF_H, t_end=None,
@@ -96,7 +104,7 @@ def collect_walk(legsim_h=WALK_LEGSIM_H, mujoco_h=WALK_MUJOCO_H, ref_h=WALK_REF_
     for engine, hs in (("legsim", legsim_h), ("mujoco", mujoco_h)):
         for h in hs:
             out = hw.legsim_walk(pl, h, hexapod=hx) if engine == "legsim" else hw.MujocoWalk(pl, ref, h).simulate()
-            ir = hw.instructions_per_step(engine, pl, h, pl.t_end) if callgrind and h == CALLGRIND_H else None
+            ir = hw.instructions_per_step(engine, pl, h, pl.t_end) if callgrind and h in WALK_CALLGRIND_H else None
             e, es = hw.errors(out, rigid), hw.errors(out, own[engine])
             rows.append({"engine": out["engine"], "method": out["method"], "h": h, "ok": out["ok"],
                          "box": e["box"], "feet": e["feet"], "box_self": es["box"], "feet_self": es["feet"],
@@ -128,15 +136,15 @@ def _interp_cost(err, rows, key, cost) -> tuple:
 
 def equal_error(walk: dict) -> list[dict]:
     """Per MuJoCo run: legsim's cost at MuJoCo's error (box, against the rigid reference; and each
-    against its own finest run), in wall time and in instructions per simulated second (each
-    engine's instructions per step at CALLGRIND_H times the steps)."""
+    against its own finest run), in wall time and in instructions per simulated second (each run's
+    instructions per step over h; a run not counted takes its engine's count at CALLGRIND_H)."""
     rows = walk["rows"]
     ls = [r for r in rows if r["engine"].startswith("legsim")]
     mj = [r for r in rows if r["engine"].startswith("mujoco") and r["ok"]]
-    ir = {e: next((r["instructions"] for r in rows if r["engine"].startswith(e) and r["instructions"]), None)
-          for e in ("legsim", "mujoco")}
+    ir = {e: next((r["instructions"] for r in rows if r["engine"].startswith(e) and r["instructions"]
+                   and r["h"] == CALLGRIND_H), None) for e in ("legsim", "mujoco")}
     wall = lambda r: r["per_step_s"] / r["h"]                                   # noqa: E731
-    instr = lambda e: (lambda r: ir[e] / r["h"]) if ir[e] else None             # noqa: E731
+    instr = lambda e: (lambda r: (r["instructions"] or ir[e]) / r["h"]) if ir[e] else None   # noqa: E731
     out = []
     for r in mj:
         o = {"h": r["h"]}
@@ -185,8 +193,8 @@ def markdown_walk(w: dict) -> list[str]:
              f"{w['ref_h'] * 1e3:g} ms against the rigid reference): box {_e(w['model_error']['box'])} m, "
              f"feet {_e(w['model_error']['feet'])} m. Cone: min over samples and loaded feet of "
              "mu N - |T| (N, >= 0 inside). Cost: one run's stepping (legsim: the step(1) calls; MuJoCo: "
-             "rollout) / steps; instructions per step at h = 1 ms over the whole walk (callgrind, inside "
-             "robot_step / mj_step).", "",
+             "rollout) / steps; instructions per step over the whole walk (callgrind, inside robot_step / "
+             "mj_step) at h = 4, 2 and 1 ms.", "",
              "| engine | method | h (s) | box (m) | feet (m) | box, self (m) | feet, self (m) | cone (N) "
              "| cost per step (us) | cost per simulated s (ms) | instructions per step |",
              "|---|---|---|---|---|---|---|---|---|---|---|"]
@@ -202,7 +210,8 @@ def markdown_walk(w: dict) -> list[str]:
     lines += ["", "Equal error: legsim's cost at each MuJoCo run's box error, interpolated (log-log) on "
               "legsim's (error, cost) points; '<=' where MuJoCo's error is above legsim's largest (legsim's "
               "coarsest run is cheaper and closer), 'n/a' below its smallest. Ratio = legsim / MuJoCo "
-              "(target <= 0.1). Instructions per simulated second: the count per step at 1 ms / h.", "",
+              "(target <= 0.1). Instructions per simulated second: the run's count per step / h (a run finer than "
+              "1 ms: the count at 1 ms, which overstates legsim's: its wall time per step falls with h).", "",
               "| MuJoCo h (s) | MuJoCo box err (rigid ref) | legsim / MuJoCo, wall | legsim / MuJoCo, "
               "instructions | MuJoCo box err (self) | legsim / MuJoCo at it, wall | ..., instructions |",
               "|---|---|---|---|---|---|---|"]
