@@ -118,7 +118,8 @@ def plan(h_plan: float, t_end: float, gait: dict | None = None, hexapod=None) ->
     gait = gait or walk_scene()["gait"]
     n = int(round(t_end / h_plan))
     sp0 = hx.gait_setpoints(0.0, **gait)
-    pose = {"box_m": [0.0, 0.0, float(gait["box_height_m"])], "box_quat": [1.0, 0.0, 0.0, 0.0],
+    box = sp0["box_m"] if "box_m" in sp0 else [0.0, 0.0, float(gait["box_height_m"])]   # walk()'s start
+    pose = {"box_m": [float(x) for x in box], "box_quat": [1.0, 0.0, 0.0, 0.0],
             "rowing_rad": list(sp0["rowing_rad"]), "length_m": sp0["length_m"].tolist()}
     L, P, F, M, S = [], [], [], [], []
     for i in range(n + 1):
