@@ -112,7 +112,7 @@ def test_walk_mujoco_model(walk):
     hw, _, ref, pl, _, _ = walk
     p = hw.MujocoWalk(pl, ref, 1e-3)
     assert p.m.nv == 6 + 6 * 7 and p.m.neq == 2 * 6 and p.m.nu == 18
-    assert p.m.ngeom == 7 and p.m.opt.cone == 1                                   # mjCONE_ELLIPTIC
+    assert p.m.ngeom == 7 and p.m.opt.cone == 1 and p.m.opt.impratio == 100.0    # mjCONE_ELLIPTIC
     assert np.allclose(p.m.geom_friction[p.foot_geoms, 0], 0.6)
     assert np.allclose(p.m.actuator_gainprm[:12, 0], 20000.0) and np.allclose(p.m.actuator_gainprm[12:, 0], 2000.0)
     assert np.allclose(p.m.actuator_biasprm[:12, 2], -400.0) and np.allclose(p.m.actuator_forcerange[12:, 1], 30.0)

@@ -252,7 +252,8 @@ def markdown(data: dict, before: dict, after: dict | None = None) -> str:
               "loop / steps, the smallest of the repeats, set-up excluded; per simulated "
               "second = per step / h. Instructions (at h = 1 ms): valgrind callgrind over one run, "
               "collecting only inside MuJoCo's mj_step (mujoco.rollout calls it once a step) or "
-              "legsim's robot_step (legsim_hexapod_step calls it once a step). Model: bench/legsim_bench/benchmarks/peers/mujoco_hexapod.py.",
+              "legsim's robot_step (legsim_hexapod_step calls it once a step). "
+              "Model: bench/legsim_bench/benchmarks/peers/mujoco_hexapod.py.",
               "",
               "| scene | engine | method | h (s) | box (m) | rotation (rad) | rowing (rad) | lengths (m) "
               "| forces (N) | cost per step (us) | cost per simulated s (ms) | instructions per step |",

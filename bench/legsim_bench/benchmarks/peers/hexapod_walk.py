@@ -170,7 +170,7 @@ def legsim_walk(pl: Plan, h: float, t_end: float | None = None, hexapod=None, in
     out = {"t": np.array(t), "box": np.array(box), "feet": np.array(feet), "force": np.array(force),
            "foot_state": state, "ok": ok, "per_step_s": wall / max(1, n), "n_steps": n, "h": h,
            "impacts": st["impacts"], "cone": st["cone"], "engine": "legsim double",
-           "method": f"{integrator.upper() if integrator == 'rk4' else 'generalized-alpha'} (rotation group), events located"}
+           "method": f"{'RK4' if integrator == 'rk4' else 'generalized-alpha'} (rotation group), events located"}
     if not ok:
         out["note"] = note
     return out

@@ -268,13 +268,15 @@ def build_xml(sc: Scene, ref: HexapodModel, h: float, method: str = "rk4", *, so
     ground = "" if walk is None else (
         f'    <geom name="ground" type="plane" size="0 0 1" pos="0 0 {-walk["foot_radius"]!r}" '
         f'contype="0" conaffinity="1" condim="3" friction="{walk["mu"]!r} 0 0"/>\n')
+    geom_default = "" if walk is None else \
+        f'    <geom solref="{_f(solref)}" solimp="{_f(walk["contact_solimp"])}"/>\n'
     xml = f"""<mujoco model="{ref.name}-{sc.name}">
   <compiler angle="radian" autolimits="true"/>
 {option_block(h, _INTEGRATOR[method], ref.gravity, tolerance=tolerance, iterations=iterations,
               flags={"contact": "disable"} if walk is None else {}, **opts)}
   <default>
     <equality solref="{_f(solref)}" solimp="{_f(solimp)}"/>
-{"" if walk is None else f'    <geom solref="{_f(solref)}" solimp="{_f(walk["contact_solimp"])}"/>{chr(10)}'}  </default>
+{geom_default}  </default>
   <worldbody>
 {ground}{chr(10).join(box)}
   </worldbody>
