@@ -23,8 +23,8 @@ radius, condim 3, cone elliptic, one mu (``mu``: the file's mu_static by default
 static/kinetic pair), margin = gap = 0. Servos as legsim's (motion.cpp command_forces): a
 ``general`` actuator on each slide and yoke hinge, gain kp, bias (0, -kp, -kd), ctrl = set-point -
 start value + feed-forward / kp, forcerange +-max_force (max_torque): kp (cmd - q) + ff - kd q',
-saturated, the same law and the same saturation of the sum. The controls of step i are the plan's
-at t_(i+1), held over the step (mujoco.rollout). Soft constraints: solref (2 h, 1) for the loops
+saturated, the same law and the same saturation of the sum. Each step's controls are the plan's
+entry legsim's step takes (Plan.index), held over the step (mujoco.rollout). Soft constraints: solref (2 h, 1) for the loops
 and the contacts (the stiffest ``refsafe`` admits: the contact stiffens as h falls, so the runs
 tend to the rigid model), solimp 0.9999 for the loops, CONTACT_SOLIMP for the contacts, impratio
 IMPRATIO (the friction rows' impedance over the normal's: stiffer sticking), RK4.
@@ -137,6 +137,8 @@ def legsim_walk(pl: Plan, h: float, t_end: float | None = None, hexapod=None, in
     """legsim walking by the plan at step h to t_end: box (n, 3) and feet (n, 6, 3) every
     SAMPLE_S (the start included), the feet's forces and states there, the cone's statistics,
     ``per_step_s`` (the step calls' wall time over the steps)."""
+    import legsim
+
     hx = hexapod or _hexapod()
     t_end = pl.t_end if t_end is None else t_end
     n = int(round(t_end / h))
@@ -158,7 +160,7 @@ def legsim_walk(pl: Plan, h: float, t_end: float | None = None, hexapod=None, in
         t0 = time.perf_counter()
         try:
             sim.step(1, h_s=h)
-        except Exception as e:          # a failed step ends the run (ok False)
+        except legsim.LegsimError as e:     # a failed step ends the run (ok False)
             ok = False
             note = str(e)
             break
