@@ -60,6 +60,7 @@ from ...scene import find_root
 # MuJoCo (optional: the bench's [peers] extra), its methods and the loop closures' stiffest
 # equality settings: the two-leg robot peer's
 from .mujoco_robot import _INTEGRATOR, METHODS, SOLIMP, VERSION, _rollout, mujoco  # noqa: F401
+from .peer_tables import option_block
 ROW = (0.3, 0.1, -0.2, 0.0, 0.25, -0.15)      # scene b's rowing angles (test_hexapod_reference's)
 T_END = 0.2
 SCENES = ("a_six", "b_tripod")
@@ -154,9 +155,10 @@ def _tree(model) -> tuple:
 
 
 def build_xml(sc: Scene, ref: HexapodModel, h: float, method: str = "rk4", *, solref=None,
-              solimp=SOLIMP, tolerance: float = 1e-12, iterations: int = 100) -> tuple:
+              solimp=SOLIMP, tolerance: float = 1e-12, iterations: int = 100, walk: dict | None = None) -> tuple:
     """(MJCF, layout): the hexapod at the scene's start pose; layout names the slides, yokes and
-    held feet. ``solref`` None: (2 h, 1)."""
+    held feet. ``solref`` None: (2 h, 1). ``walk`` (hexapod_walk.mjcf_walk's keys): the feet as
+    spheres on the ground plane with contacts (no held feet), the actuators as servos."""
     if method not in _INTEGRATOR:
         raise ValueError(f"unknown method {method!r}; known: {METHODS}")
     if not (h > 0 and math.isfinite(h)):
@@ -192,7 +194,14 @@ def build_xml(sc: Scene, ref: HexapodModel, h: float, method: str = "rk4", *, so
             jt = lm.joints[j]
             parent = "Y" if jt.kind == "revolute_to_frame" else (jt.bodies[0] if jt.bodies[1] == b else jt.bodies[1])
             children[parent].append(b)
-        slide = {}
+        slide, foot_geom = {}, {}
+        if walk is not None:
+            # the foot point the sphere's centre: on the ground (moved down by the radius) when it touches
+            fp = lm._foot_pt
+            foot_geom[lm._shank] = (f'<geom name="{nm}_foot" type="sphere" size="{walk["foot_radius"]!r}" '
+                                    f'pos="{_f((fp[0], fp[1], 0.0))}" contype="1" conaffinity="0" condim="3" '
+                                    f'friction="{walk["mu"]!r} 0 0"/>')
+            lay["feet"].append((k, f"{nm}_foot"))
 
         def bar(b, parent, ind):
             pos = Rw[parent].T @ (Xw[b] - Xw[parent])
@@ -213,6 +222,8 @@ def build_xml(sc: Scene, ref: HexapodModel, h: float, method: str = "rk4", *, so
             out = [f'{ind}<body name="{nm}_{bd.name}" pos="{_f(pos)}" quat="{_f(_quat(rel))}">',
                    f'{ind}  <inertial pos="0 0 0" mass="{bd.mass!r}" diaginertia="{_f(I)}"/>',
                    f'{ind}  {joint}']
+            if b in foot_geom:
+                out.append(f"{ind}  {foot_geom[b]}")
             for c in children[b]:
                 out += bar(c, b, ind + "  ")
             out.append(f"{ind}</body>")
@@ -231,7 +242,7 @@ def build_xml(sc: Scene, ref: HexapodModel, h: float, method: str = "rk4", *, so
             pt = jt.points[0]
             eqs.append(f'    <connect name="{nm}_{jt.name}" body1="{nm}_{lm.bodies[b1].name}" '
                        f'body2="{nm}_{lm.bodies[b2].name}" anchor="{_f((pt[0], pt[1], 0.0))}"/>')
-        if k in sc.stance:
+        if walk is None and k in sc.stance:
             fp = lm._foot_pt
             eqs.append(f'    <connect name="{nm}_foot" body1="{nm}_{lm.bodies[lm._shank].name}" '
                        f'anchor="{_f((fp[0], fp[1], 0.0))}"/>')
@@ -242,18 +253,32 @@ def build_xml(sc: Scene, ref: HexapodModel, h: float, method: str = "rk4", *, so
             lay["slides"].append(slide[(a.cylinder, a.rod)])
         lay["yokes"].append(f"{nm}_row")
     box.append("    </body>")
-    acts = [f'    <motor name="{j}" joint="{j}" gear="1"/>' for j in lay["slides"] + lay["yokes"]]
+    if walk is None:
+        acts = [f'    <motor name="{j}" joint="{j}" gear="1"/>' for j in lay["slides"] + lay["yokes"]]
+    else:
+        # servos: kp ctrl - kp q - kd q' with ctrl = set-point + feed-forward / kp (hexapod_walk.controls),
+        # the sum saturated as legsim's
+        gains = [walk["actuator"][i % 2] for i in range(len(lay["slides"]))] + [walk["rowing"]] * LEGS
+        acts = [f'    <general name="{j}" joint="{j}" gear="1" gaintype="fixed" gainprm="{kp!r}" '
+                f'biastype="affine" biasprm="0 {-kp!r} {-kd!r}" forcelimited="true" '
+                f'forcerange="{-fmax!r} {fmax!r}"/>'
+                for j, (kp, kd, fmax) in zip(lay["slides"] + lay["yokes"], gains)]
+    opts = {} if walk is None else {"cone": "elliptic", "impratio": walk["impratio"],
+                                    "noslip_iterations": walk["noslip_iterations"]}
+    ground = "" if walk is None else (
+        f'    <geom name="ground" type="plane" size="0 0 1" pos="0 0 {-walk["foot_radius"]!r}" '
+        f'contype="0" conaffinity="1" condim="3" friction="{walk["mu"]!r} 0 0"/>\n')
+    geom_default = "" if walk is None else \
+        f'    <geom solref="{_f(solref)}" solimp="{_f(walk["contact_solimp"])}"/>\n'
     xml = f"""<mujoco model="{ref.name}-{sc.name}">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{h!r}" integrator="{_INTEGRATOR[method]}" gravity="{_f(ref.gravity)}"
-          solver="Newton" iterations="{iterations}" tolerance="{tolerance!r}" ls_iterations="50">
-    <flag autoreset="disable" island="disable" contact="disable"/>
-  </option>
+{option_block(h, _INTEGRATOR[method], ref.gravity, tolerance=tolerance, iterations=iterations,
+              flags={"contact": "disable"} if walk is None else {}, **opts)}
   <default>
     <equality solref="{_f(solref)}" solimp="{_f(solimp)}"/>
-  </default>
+{geom_default}  </default>
   <worldbody>
-{chr(10).join(box)}
+{ground}{chr(10).join(box)}
   </worldbody>
   <equality>
 {chr(10).join(eqs)}
@@ -396,13 +421,14 @@ def _run_once(engine: str, name: str, h: float) -> None:
 
 
 # legsim_hexapod_step is entered from libffi, which callgrind does not name: count inside the
-# step it calls once a step
-TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step_rk4*"}
+# step it calls once a step (its events and contact problems inside; the pattern leaves out its
+# [clone .part.0], whose nested toggle would stop the count)
+TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step(*Integrator)"}
 
 
 def instructions_per_step(engine: str, name: str, h: float) -> float:
     """Instructions per step (valgrind callgrind, collecting only inside mj_step, which
-    mujoco.rollout calls once a step, or inside legsim's robot_step_rk4, which
+    mujoco.rollout calls once a step, or inside legsim's robot_step, which
     legsim_hexapod_step calls once a step): one run of the scene, set-up and Python outside
     the count."""
     import os

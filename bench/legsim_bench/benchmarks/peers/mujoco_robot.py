@@ -57,6 +57,7 @@ import time
 import numpy as np
 
 from . import robot_scenes as rs
+from .peer_tables import option_block
 
 try:
     import mujoco
@@ -238,10 +239,8 @@ def build_xml(scene: rs.Scene, h: float, method: str = "rk4", *, solref=None, so
     grav = [*robot.gravity, 0.0]
     return f"""<mujoco model="{robot.name}-{scene.name}">
   <compiler angle="radian" autolimits="true"/>
-  <option timestep="{h!r}" integrator="{_INTEGRATOR[method]}" gravity="{_f(grav)}" cone="{cone}"
-          solver="Newton" iterations="{iterations}" tolerance="{tolerance!r}" ls_iterations="50">
-    <flag autoreset="disable" island="disable" refsafe="{'enable' if refsafe else 'disable'}"/>
-  </option>
+{option_block(h, _INTEGRATOR[method], grav, tolerance=tolerance, iterations=iterations, cone=cone,
+              flags={"refsafe": "enable" if refsafe else "disable"})}
   <default>
     <equality solref="{_f(solref)}" solimp="{_f(solimp)}"/>
     <geom solref="{_f(solref)}" solimp="{_f(contact_solimp)}"/>

@@ -28,6 +28,7 @@ from pathlib import Path
 import numpy as np
 
 from .. import results
+from . import peer_tables
 from . import legsim_robot as lr
 from . import mujoco_robot as mr
 from . import robot_scenes as rs
@@ -110,14 +111,7 @@ def markdown(rows: list[dict], before: dict, after: dict | None = None) -> str:
 
 
 def write(out: Path, **kw) -> Path:
-    before = results.snapshot()
-    rows = collect(**kw)
-    after = results.snapshot()
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    path = out / "robot_peers.md"
-    path.write_text(markdown(rows, before, after))
-    return path
+    return peer_tables.write(out, "robot_peers.md", collect, markdown, **kw)
 
 
 def configure_parser(p: argparse.ArgumentParser) -> argparse.ArgumentParser:
