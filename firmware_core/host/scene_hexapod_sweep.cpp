@@ -124,7 +124,9 @@ void write_head(std::ostream &o, const SweepScene &s, const legsim_hexapod_desc 
     << ", \"analysis\": \"reaction_sweep\",\n  \"legs\": [";
   for (int k = 0; k < L; ++k) o << (k ? ", " : "") << jstr(name_of(h.leg[k].name));
   o << "], \"leg_actuators\": [" << jstr(name_of(h.leg[0].leg.actuator[0].name)) << ", "
-    << jstr(name_of(h.leg[0].leg.actuator[1].name)) << "], \"checks\": null,\n  \"sweep\": {\"leg\": "
+    << jstr(name_of(h.leg[0].leg.actuator[1].name)) << "], \"ground\": {\"point\": " << jarr(h.ground_point_m)
+    << ", \"normal\": " << jarr(h.ground_normal) << ", \"mu_static\": " << jnum(h.mu_static)
+    << ", \"mu_kinetic\": " << jnum(h.mu_kinetic) << "}, \"checks\": null,\n  \"sweep\": {\"leg\": "
     << jstr(name_of(h.leg[w.leg].name)) << ", \"stance\": [";
   for (int k = 0, n = 0; k < L; ++k)
     if ((w.stance_mask >> k) & 1u) o << (n++ ? ", " : "") << jstr(name_of(h.leg[k].name));

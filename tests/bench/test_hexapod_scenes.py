@@ -22,7 +22,8 @@ from legsim_bench.scene import SceneError, cli_path, is_hexapod_scene, load_scen
 
 SCENES = ROOT / "scenes"
 HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop",
-                  "hexapod_slope_up", "hexapod_slope_across", "hexapod_slip", "hexapod_inverse_walk"}
+                  "hexapod_slope_up", "hexapod_slope_across", "hexapod_slip", "hexapod_inverse_walk",
+                  "hexapod_section5"}
 
 
 def _cli():

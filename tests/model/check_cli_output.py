@@ -271,6 +271,33 @@ def hexapod_check(d, key, want):
     return got, got <= want
 
 
+def check_reaction_sweep(d, name):
+    """The Section V sweep's points (scenes/README.md, "Section V"): its part's indices in order;
+    each standing point's stance feet on one level plane carrying the weight, the others' forces
+    zero, and on a tripod the vertical forces the closed form of the centre of mass in the
+    support triangle (to 1e-9 of the weight)."""
+    sw, pts = d["sweep"], d["points"]
+    check([p["index"] for p in pts] == list(range(sw["first"], sw["first"] + sw["count"])), f"{name}: indices")
+    stance = sw["stance"]
+    standing = [p for p in pts if p["status_code"] == "LEGSIM_OK"]
+    check(len(standing) == d["summary"]["standing"] > 0, f"{name}: {len(standing)} standing points")
+    for p in standing:
+        feet = p["feet"]
+        W = sum(feet[k]["force"][2] for k in stance)
+        z = [feet[k]["x"][2] for k in stance]
+        check(W > 0 and max(z) - min(z) < 1e-9, f"{name}: point {p['index']}: weight {W}, feet at z {z}")
+        check(all(feet[k]["force"] == [0, 0, 0] for k in feet if k not in stance), f"{name}: forces off the stance")
+        if len(stance) == 3:
+            (ax, ay, _), (bx, by, _), (cx, cy, _) = (feet[k]["x"] for k in stance)
+            gx, gy = p["com"][0], p["com"][1]
+            det = (ax - cx) * (by - cy) - (bx - cx) * (ay - cy)
+            wa = ((gx - cx) * (by - cy) - (bx - cx) * (gy - cy)) / det
+            wb = ((ax - cx) * (gy - cy) - (gx - cx) * (ay - cy)) / det
+            closed = (wa * W, wb * W, (1 - wa - wb) * W)
+            off = max(abs(feet[k]["force"][2] - c) for k, c in zip(stance, closed))
+            check(off < 1e-9 * W, f"{name}: point {p['index']}: vertical forces off the closed form by {off} N")
+
+
 def check_hexapod(cli, scene, spec, d, name):
     """A hexapod scene's JSON (scenes/README.md, "The hexapod"): its keys, the statics' balance,
     the run's samples on the step grid, the feet on or above the ground (the header's plane), the
@@ -279,7 +306,9 @@ def check_hexapod(cli, scene, spec, d, name):
     check(len(legs) == 6 and d["status"] == "ok" and d["status_code"] == "LEGSIM_OK", f"{name}: status {d['status']}")
     check(d["analysis"] == spec.get("analysis", "dynamics"), f"{name}: analysis {d['analysis']}")
     mu = d["ground"]["mu_static"]
-    if d["analysis"] == "statics":
+    if d["analysis"] == "reaction_sweep":
+        check_reaction_sweep(d, name)
+    elif d["analysis"] == "statics":
         st = d["statics"]
         stance = set(d["stance"])
         check(stance == set(spec.get("stance", legs)), f"{name}: stance {d['stance']}")
