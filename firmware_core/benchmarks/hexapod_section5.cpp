@@ -71,8 +71,15 @@ int main(int argc, char **argv) {
     const double det = (b[0] - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (b[1] - a[1]);
     const double wb = ((cx - a[0]) * (c[1] - a[1]) - (c[0] - a[0]) * (cy - a[1])) / det;
     const double wc = ((b[0] - a[0]) * (cy - a[1]) - (cx - a[0]) * (b[1] - a[1])) / det;
-    double W = 0;
-    for (int k = 0; k < 3; ++k) W += s.foot_force_n[kTripod[k]][2];
+    double M = h->box_mass_kg;
+    for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+      M += h->yoke_mass_kg;
+      for (int b = 0; b < h->leg[l].leg.n_bodies; ++b) M += h->leg[l].leg.body[b].mass_kg;
+    }
+    const double W = -M * h->gravity_mps2[2];
+    double carried = 0;
+    for (int k = 0; k < 3; ++k) carried += s.foot_force_n[kTripod[k]][2];
+    agree = agree && std::fabs(carried - W) <= 1e-9 * W;
     const double closed = (1 - wb - wc) * W;
     agree = agree && std::fabs(s.foot_force_n[0][2] - closed) <= 1e-9 * W &&
             std::fabs(s.foot_force_n[2][2] - wb * W) <= 1e-9 * W && std::fabs(s.foot_force_n[4][2] - wc * W) <= 1e-9 * W;

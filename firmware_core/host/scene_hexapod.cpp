@@ -463,24 +463,6 @@ std::string legs_json(uint32_t mask, const legsim_hexapod_desc &h) {
   return o + "]";
 }
 
-// every body's mass in legsim_hexapod_body_poses' order: the box, then per leg its yoke and bars
-int body_masses(const legsim_hexapod_desc &h, double *m) {
-  int n = 0;
-  m[n++] = h.box_mass_kg;
-  for (int k = 0; k < L; ++k) {
-    m[n++] = h.yoke_mass_kg;
-    for (int b = 0; b < h.leg[k].leg.n_bodies; ++b) m[n++] = h.leg[k].leg.body[b].mass_kg;
-  }
-  return n;
-}
-constexpr int kMaxBodies = 1 + L * (1 + LEGSIM_HEXAPOD_MAX_LEG_BARS);
-
-double total_mass(const legsim_hexapod_desc &h) {
-  double m[kMaxBodies], M = 0;
-  const int n = body_masses(h, m);
-  for (int b = 0; b < n; ++b) M += m[b];
-  return M;
-}
 
 // the header both the resolved scene and the results begin with
 void write_head(std::ostream &o, const HexScene &s, const legsim_hexapod_desc &h) {

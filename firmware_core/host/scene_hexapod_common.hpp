@@ -82,6 +82,25 @@ struct Storage {
   unsigned char *p;
 };
 
+// every body's mass in legsim_hexapod_body_poses' order: the box, then per leg its yoke and bars
+inline int body_masses(const legsim_hexapod_desc &h, double *m) {
+  int n = 0;
+  m[n++] = h.box_mass_kg;
+  for (int k = 0; k < L; ++k) {
+    m[n++] = h.yoke_mass_kg;
+    for (int b = 0; b < h.leg[k].leg.n_bodies; ++b) m[n++] = h.leg[k].leg.body[b].mass_kg;
+  }
+  return n;
+}
+constexpr int kMaxBodies = 1 + L * (1 + LEGSIM_HEXAPOD_MAX_LEG_BARS);
+
+inline double total_mass(const legsim_hexapod_desc &h) {
+  double m[kMaxBodies], M = 0;
+  const int n = body_masses(h, m);
+  for (int b = 0; b < n; ++b) M += m[b];
+  return M;
+}
+
 inline std::string status_text(legsim_status st) {
   return std::string(status_enum_name(st)) + " (" + legsim_status_str(st) + ")";
 }

@@ -32,30 +32,35 @@ using scene_text::q;
 constexpr int64_t kMaxPoints = 1000000;  // legsim_hexapod_reaction_sweep's grid
 constexpr int kChunk = 256;              // points asked of the library at a time
 
+// A leg as written: an index 0..5, or a name bound once the file is read.
+struct LegRef {
+  int index = -1;
+  std::string name;
+};
+
 struct SweepScene {
   std::string path, name, description, model, model_path;
-  std::string leg = "0";                       // a leg's name or index, bound once the file is read
-  std::vector<std::string> stance = {"0", "2", "4"};
+  LegRef leg = {0, ""};
+  std::vector<LegRef> stance = {{0, ""}, {2, ""}, {4, ""}};
   legsim_hexapod_sweep sweep = {0, 0, 1.0, {0.40, 0.62}, 23, {0, 0}, 1};
   int64_t part = 1, parts = 1;                 // this run's part of the grid (1-based)
 };
 
-// A leg as written: an index 0..5 or a name (kept as text until the file's names are known).
-std::string leg_text(Node v, const std::string &what) {
+LegRef leg_ref(Node v, const std::string &what) {
   if (v && v->is_integer()) {
     const int64_t k = *v->value<int64_t>();
     if (k < 0 || k >= L) fail(what + " must be a leg's name or an index 0..5 (got " + std::to_string(k) + ")");
-    return std::to_string(k);
+    return {static_cast<int>(k), ""};
   }
-  if (v && v->is_string()) return std::string(*v->value<std::string_view>());
+  if (v && v->is_string()) return {-1, std::string(*v->value<std::string_view>())};
   fail(what + " must be a leg's name or an index 0..5");
 }
 
-int bind_leg(const std::string &text, const legsim_hexapod_desc &h, const std::string &what) {
-  if (text.size() == 1 && std::isdigit(static_cast<unsigned char>(text[0]))) return text[0] - '0';
+int bind_leg(const LegRef &leg, const legsim_hexapod_desc &h, const std::string &what) {
+  if (leg.index >= 0) return leg.index;
   for (int k = 0; k < L; ++k)
-    if (name_of(h.leg[k].name) == text) return k;
-  fail(what + ": the file has no leg " + q(text));
+    if (name_of(h.leg[k].name) == leg.name) return k;
+  fail(what + ": the file has no leg " + q(leg.name));
 }
 
 // [first, last] of a grid's axis
@@ -89,12 +94,12 @@ SweepScene parse(const toml::table &doc, const std::string &path) {
     if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
       fail("'name' may hold letters, digits, '_', '-' and '.' only (got " + q(s.name) + ")");
   if (t->get("description")) s.description = string_of(t->get("description"), "'description'");
-  if (Node v = t->get("leg")) s.leg = leg_text(v, "'leg'");
+  if (Node v = t->get("leg")) s.leg = leg_ref(v, "'leg'");
   if (Node v = t->get("stance")) {
     const toml::array *a = v->as_array();
     if (!a || a->size() < 3 || a->size() > L) fail("'stance' must list 3 to 6 legs (names or indices 0..5)");
     s.stance.clear();
-    for (size_t i = 0; i < a->size(); ++i) s.stance.push_back(leg_text(a->get(i), "'stance'[" + std::to_string(i) + "]"));
+    for (size_t i = 0; i < a->size(); ++i) s.stance.push_back(leg_ref(a->get(i), "'stance'[" + std::to_string(i) + "]"));
   }
   legsim_hexapod_sweep &w = s.sweep;
   if (Node v = t->get("box_height")) w.box_height_m = ranged(v, "'box_height'", 0, 10, true);
@@ -126,7 +131,8 @@ void write_head(std::ostream &o, const SweepScene &s, const legsim_hexapod_desc 
   o << "], \"leg_actuators\": [" << jstr(name_of(h.leg[0].leg.actuator[0].name)) << ", "
     << jstr(name_of(h.leg[0].leg.actuator[1].name)) << "], \"ground\": {\"point\": " << jarr(h.ground_point_m)
     << ", \"normal\": " << jarr(h.ground_normal) << ", \"mu_static\": " << jnum(h.mu_static)
-    << ", \"mu_kinetic\": " << jnum(h.mu_kinetic) << "}, \"checks\": null,\n  \"sweep\": {\"leg\": "
+    << ", \"mu_kinetic\": " << jnum(h.mu_kinetic) << "}, \"gravity\": " << jarr(h.gravity_mps2)
+    << ", \"mass\": " << jnum(total_mass(h)) << ", \"checks\": null,\n  \"sweep\": {\"leg\": "
     << jstr(name_of(h.leg[w.leg].name)) << ", \"stance\": [";
   for (int k = 0, n = 0; k < L; ++k)
     if ((w.stance_mask >> k) & 1u) o << (n++ ? ", " : "") << jstr(name_of(h.leg[k].name));

@@ -76,6 +76,8 @@ def test_parts_concatenate_into_the_whole(tmp_path):
 @pytest.mark.parametrize("name,extra,drop,message", [
     ("not_in_stance", 'leg = "right_middle"\n', ("leg",), "'leg' must be one of the 'stance'"),
     ("unknown_leg", 'leg = "tail"\n', ("leg",), "the file has no leg 'tail'"),
+    ("digit_name", 'stance = ["right_front", "right_rear", "7"]\n', ("stance",), "the file has no leg '7'"),
+    ("index_7", "leg = 7\n", ("leg",), "'leg' must be a leg's name or an index 0..5 (got 7)"),
     ("unknown_key", "grid = 3\n", (), "unknown key 'grid'"),
     ("bad_part", "part = [4, 3]\n", (), "'part' must be [k, n]"),
     ("two_legs", 'stance = ["right_front", "right_rear"]\n', ("stance",), "'stance' must list 3 to 6 legs"),

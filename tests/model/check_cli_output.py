@@ -281,11 +281,13 @@ def check_reaction_sweep(d, name):
     stance = sw["stance"]
     standing = [p for p in pts if p["status_code"] == "LEGSIM_OK"]
     check(len(standing) == d["summary"]["standing"] > 0, f"{name}: {len(standing)} standing points")
+    weight = -d["mass"] * d["gravity"][2]
     for p in standing:
         feet = p["feet"]
         W = sum(feet[k]["force"][2] for k in stance)
         z = [feet[k]["x"][2] for k in stance]
-        check(W > 0 and max(z) - min(z) < 1e-9, f"{name}: point {p['index']}: weight {W}, feet at z {z}")
+        check(abs(W - weight) < 1e-9 * weight and max(z) - min(z) < 1e-9,
+              f"{name}: point {p['index']}: the feet carry {W} N of the weight {weight} N, feet at z {z}")
         check(all(feet[k]["force"] == [0, 0, 0] for k in feet if k not in stance), f"{name}: forces off the stance")
         if len(stance) == 3:
             (ax, ay, _), (bx, by, _), (cx, cy, _) = (feet[k]["x"] for k in stance)

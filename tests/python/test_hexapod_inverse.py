@@ -175,3 +175,23 @@ def test_up_a_slope_the_plan_climbs_and_the_robot_balances(hexapod):
           f"Newton's law of the whole robot {worst:.1e} N")
     assert worst_v < 1e-6
     assert worst < 1e-8 * masses.sum() * np.linalg.norm(g)
+
+
+def test_a_plan_that_needs_the_ground_to_pull_is_refused(hexapod):
+    """Up 10 degrees with the box 0.8 m up and a fast gait (0.6 s), just after a touchdown a stance
+    foot's force would point into the slope (its normal force negative: the ground pulling) though
+    still up against gravity: refused (NoEquilibriumError), never reported with a negative cone
+    ratio; every time that is answered has every stance foot pushing along the ground's normal."""
+    up = hexapod.on_ground(slope_rad=np.radians(10.0))
+    fast = dict(period_s=0.6, duty=0.6, step_length_m=0.1, step_height_m=0.05, box_height_m=0.8)
+    n = np.array(up.desc.ground_normal[:])
+    refused = 0
+    for t in np.linspace(0.0, 0.6, 31):
+        try:
+            r = up.inverse_dynamics([t], **fast)
+        except legsim.NoEquilibriumError:
+            refused += 1
+            continue
+        on = r["stance"][0]
+        assert (r["foot_force_n"][0][on] @ n > 0).all() and (r["cone_ratio"][0] >= 0).all()
+    assert refused >= 1

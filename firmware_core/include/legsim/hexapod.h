@@ -235,6 +235,26 @@ legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double 
                                           const double feedforward_n[LEGSIM_HEXAPOD_LEGS][2],
                                           const double feedforward_nm[LEGSIM_HEXAPOD_LEGS]);
 
+/* Each command slot on its own (a leg controller's mix: some legs by force, others by servo):
+ * per leg its upper and lower actuators and its rowing motor (slots 0, 1, 2), each
+ * LEGSIM_HEXAPOD_KEEP (its command unchanged), _FORCE (value: N, |F| <= its max_force; N m,
+ * |tau| <= max_torque) or _SERVO (value: the set-point, m or rad, within its stroke; feedforward
+ * N or N m within the same bounds as a force), as legsim_hexapod_command and _command_pose. The
+ * statuses as theirs, and LEGSIM_ERR_BAD_INPUT for another mode; all or nothing. */
+typedef enum legsim_hexapod_mode {
+  LEGSIM_HEXAPOD_KEEP = 0,
+  LEGSIM_HEXAPOD_FORCE = 1,
+  LEGSIM_HEXAPOD_SERVO = 2
+} legsim_hexapod_mode;
+
+typedef struct legsim_hexapod_commands {
+  int32_t mode[LEGSIM_HEXAPOD_LEGS][3];
+  double value[LEGSIM_HEXAPOD_LEGS][3];
+  double feedforward[LEGSIM_HEXAPOD_LEGS][3];
+} legsim_hexapod_commands;
+
+legsim_status legsim_hexapod_command_each(legsim_hexapod_sim *sim, const legsim_hexapod_commands *commands);
+
 /* n_steps (>= 1) steps of h_s (s, in (0, 0.1]). Stops at the first step that fails, the state
  * that of the last step taken: LEGSIM_ERR_SINGULAR (a leg at a dead centre), _NOT_CONVERGED (the
  * projection, an impact's contact problem, generalized-alpha's iterations), _DIVERGED (a
@@ -326,7 +346,8 @@ size_t legsim_hexapod_inverse_storage_size(void);
  * legsim_hexapod_gait_setpoints' (the gait, its targets, a leg's assembly; LEGSIM_ERR_BAD_INPUT
  * also for a swing shorter than the stencil: a duty within 1.2e-3 of 1), LEGSIM_ERR_SINGULAR (a
  * leg at a dead centre), LEGSIM_ERR_NO_EQUILIBRIUM (a stance foot that would have to pull: its
- * force not against gravity). *out is written only on LEGSIM_OK. */
+ * force not against gravity, or not along the ground's normal). *out is written only on
+ * LEGSIM_OK. */
 legsim_status legsim_hexapod_inverse_dynamics(const legsim_hexapod_desc *h, const legsim_hexapod_gait *gait,
                                               double t_s, void *storage, size_t storage_bytes,
                                               legsim_hexapod_inverse *out);

@@ -347,8 +347,8 @@ legsim_status legsim_hexapod_reaction_sweep(const legsim_hexapod_desc *h, const 
       const real d = real(p.distance_m), a = yaw[l] + real(p.heading_rad);
       const spatial::V3 foot = l == s.leg ? spatial::V3{hip[l].x + d * std::cos(a), hip[l].y + d * std::sin(a), -H}
                                           : spatial::V3{stand_foot[l].x, stand_foot[l].y, -H};
-      real psi;
-      legsim_real len[2];
+      real psi = 0;
+      legsim_real len[2] = {0, 0};
       ps = reach(*h, wp->robot, l, foot, storage, psi, len);
       pose.rowing_rad[l] = psi, pose.length_m[l][0] = len[0], pose.length_m[l][1] = len[1];
     }
@@ -409,28 +409,52 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
   return LEGSIM_OK;
 }
 
+legsim_status legsim_hexapod_command_each(legsim_hexapod_sim *sim, const legsim_hexapod_commands *commands) {
+  if (!sim || !commands) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  const spatial::SpatialRobot &R = sim->robot;
+  const legsim_hexapod_commands &in = *commands;
+  // every slot checked before any is taken
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    for (int k = 0; k < 3; ++k) {
+      const int32_t mode = in.mode[l][k];
+      if (mode == LEGSIM_HEXAPOD_KEEP || (k < 2 && k >= R.leg[l].nactuators)) continue;
+      if (mode != LEGSIM_HEXAPOD_FORCE && mode != LEGSIM_HEXAPOD_SERVO) return LEGSIM_ERR_BAD_INPUT;
+      const double bound = k < 2 ? double(R.act[R.leg[l].first_actuator + k].max_force) : double(R.rowing_max_torque);
+      const double x = in.value[l][k];
+      if (mode == LEGSIM_HEXAPOD_FORCE) {
+        if (!finite_within(&x, 1, bound)) return LEGSIM_ERR_BAD_INPUT;
+        continue;
+      }
+      if (!std::isfinite(x) || !finite_within(&in.feedforward[l][k], 1, bound)) return LEGSIM_ERR_BAD_INPUT;
+      const real *stroke = k < 2 ? R.act[R.leg[l].first_actuator + k].stroke : R.rowing_stroke;
+      if (!(x >= stroke[0] && x <= stroke[1])) return LEGSIM_ERR_OUT_OF_STROKE;
+    }
+  spatial::RobotCommands c = sim->data.command;
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    for (int k = 0; k < 3; ++k) {
+      const int32_t mode = in.mode[l][k];
+      if (mode == LEGSIM_HEXAPOD_KEEP || (k < 2 && k >= R.leg[l].nactuators)) continue;
+      const spatial::CommandMode m = mode == LEGSIM_HEXAPOD_FORCE ? spatial::CommandMode::Force : spatial::CommandMode::Servo;
+      const real ff = mode == LEGSIM_HEXAPOD_SERVO ? real(in.feedforward[l][k]) : real(0);
+      if (k < 2) {
+        const int a = R.leg[l].first_actuator + k;
+        c.actuator_mode[a] = m, c.actuator[a] = real(in.value[l][k]), c.actuator_ff[a] = ff;
+      } else {
+        c.rowing_mode[l] = m, c.rowing[l] = real(in.value[l][k]), c.rowing_ff[l] = ff;
+      }
+    }
+  return command_apply(*sim, c);
+}
+
 legsim_status legsim_hexapod_command(legsim_hexapod_sim *sim, const double actuator_force_n[LEGSIM_HEXAPOD_LEGS][2],
                                      const double rowing_torque_nm[LEGSIM_HEXAPOD_LEGS]) {
   if (!sim || !actuator_force_n || !rowing_torque_nm) return LEGSIM_ERR_NULL;
-  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
-  const spatial::SpatialRobot &R = sim->robot;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    for (int a = 0; a < R.leg[l].nactuators && a < 2; ++a)
-      if (!finite_within(&actuator_force_n[l][a], 1, double(R.act[R.leg[l].first_actuator + a].max_force)))
-        return LEGSIM_ERR_BAD_INPUT;
-    if (!finite_within(&rowing_torque_nm[l], 1, double(R.rowing_max_torque))) return LEGSIM_ERR_BAD_INPUT;
-  }
-  spatial::RobotCommands c = sim->data.command;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    const spatial::RobotLeg &L = R.leg[l];
-    for (int a = 0; a < L.nactuators && a < 2; ++a) {
-      c.actuator_mode[L.first_actuator + a] = spatial::CommandMode::Force;
-      c.actuator[L.first_actuator + a] = real(actuator_force_n[l][a]);
-    }
-    c.rowing_mode[l] = spatial::CommandMode::Force;
-    c.rowing[l] = real(rowing_torque_nm[l]);
-  }
-  return command_apply(*sim, c);
+  legsim_hexapod_commands c = {};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    for (int k = 0; k < 3; ++k)
+      c.mode[l][k] = LEGSIM_HEXAPOD_FORCE, c.value[l][k] = k < 2 ? actuator_force_n[l][k] : rowing_torque_nm[l];
+  return legsim_hexapod_command_each(sim, &c);
 }
 
 legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double length_m[LEGSIM_HEXAPOD_LEGS][2],
@@ -438,36 +462,14 @@ legsim_status legsim_hexapod_command_pose(legsim_hexapod_sim *sim, const double 
                                           const double feedforward_n[LEGSIM_HEXAPOD_LEGS][2],
                                           const double feedforward_nm[LEGSIM_HEXAPOD_LEGS]) {
   if (!sim || !length_m || !rowing_rad) return LEGSIM_ERR_NULL;
-  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
-  const spatial::SpatialRobot &R = sim->robot;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    if (feedforward_nm && !finite_within(&feedforward_nm[l], 1, double(R.rowing_max_torque))) return LEGSIM_ERR_BAD_INPUT;
-    for (int a = 0; feedforward_n && a < R.leg[l].nactuators && a < 2; ++a)
-      if (!finite_within(&feedforward_n[l][a], 1, double(R.act[R.leg[l].first_actuator + a].max_force)))
-        return LEGSIM_ERR_BAD_INPUT;
-  }
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    if (!std::isfinite(rowing_rad[l])) return LEGSIM_ERR_BAD_INPUT;
-    if (!(rowing_rad[l] >= R.rowing_stroke[0] && rowing_rad[l] <= R.rowing_stroke[1])) return LEGSIM_ERR_OUT_OF_STROKE;
-    for (int a = 0; a < R.leg[l].nactuators && a < 2; ++a) {
-      const spatial::RobotActuator &ac = R.act[R.leg[l].first_actuator + a];
-      if (!std::isfinite(length_m[l][a])) return LEGSIM_ERR_BAD_INPUT;
-      if (!(length_m[l][a] >= ac.stroke[0] && length_m[l][a] <= ac.stroke[1])) return LEGSIM_ERR_OUT_OF_STROKE;
+  legsim_hexapod_commands c = {};
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    for (int k = 0; k < 3; ++k) {
+      c.mode[l][k] = LEGSIM_HEXAPOD_SERVO;
+      c.value[l][k] = k < 2 ? length_m[l][k] : rowing_rad[l];
+      c.feedforward[l][k] = k < 2 ? (feedforward_n ? feedforward_n[l][k] : 0.0) : (feedforward_nm ? feedforward_nm[l] : 0.0);
     }
-  }
-  spatial::RobotCommands c = sim->data.command;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
-    const spatial::RobotLeg &L = R.leg[l];
-    for (int a = 0; a < L.nactuators && a < 2; ++a) {
-      c.actuator_mode[L.first_actuator + a] = spatial::CommandMode::Servo;
-      c.actuator[L.first_actuator + a] = real(length_m[l][a]);
-      c.actuator_ff[L.first_actuator + a] = feedforward_n ? real(feedforward_n[l][a]) : real(0);
-    }
-    c.rowing_mode[l] = spatial::CommandMode::Servo;
-    c.rowing[l] = real(rowing_rad[l]);
-    c.rowing_ff[l] = feedforward_nm ? real(feedforward_nm[l]) : real(0);
-  }
-  return command_apply(*sim, c);
+  return legsim_hexapod_command_each(sim, &c);
 }
 
 legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n_steps) {

@@ -153,6 +153,10 @@ legsim_status legsim_hexapod_inverse_dynamics(const legsim_hexapod_desc *h, cons
   for (int i = 0; i < 3; ++i) r.box_m[i] = w.q[i], r.box_velocity_mps[i] = w.v[i], r.box_omega_radps[i] = w.v[3 + i];
   for (int i = 0; i < 4; ++i) r.box_quat[i] = w.q[3 + i];
   const V3 n = {real(h->ground_normal[0]), real(h->ground_normal[1]), real(h->ground_normal[2])};
+  // statics' rule keeps each stance force up against gravity; on a sloped ground a foot must also
+  // push along the ground's normal, or the plan needs the ground to hold it (all or nothing)
+  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+    if (((w.stance >> l) & 1u) && !(spatial::dot(w.statics.foot_force[l], n) > 0)) return LEGSIM_ERR_NO_EQUILIBRIUM;
   int j = 0;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
     const spatial::RobotLeg &L = R.leg[l];
