@@ -581,9 +581,7 @@ bool HexapodNode::advance(uint64_t n, bool lockstep_watchdog, uint32_t id, uint3
       if (w.armed && w.steps_since_cmd >= timeout_steps_)
         trip(j, static_cast<double>(w.steps_since_cmd) * step_ns_ / 1e6);
     }
-    legsim_hexapod_state before;
     legsim_status st = apply_commands();
-    if (st == LEGSIM_OK) st = legsim_hexapod_get_state(sim_, &before);
     if (st == LEGSIM_OK) st = legsim_hexapod_step(sim_, h, 1);
     if (st != LEGSIM_OK) {
       state_ = SimState::kHalted;
@@ -592,13 +590,13 @@ bool HexapodNode::advance(uint64_t n, bool lockstep_watchdog, uint32_t id, uint3
     }
     ++steps_;
     for (Watchdog &w : watchdog_) ++w.steps_since_cmd;
-    if (i + 1 == n) {  // the rates over the last step
+    if (i + 1 == n) {  // the rates at the step's end (the state's own)
       legsim_hexapod_state after;
       if (legsim_hexapod_get_state(sim_, &after) == LEGSIM_OK)
         for (int j = 0; j < kHexLegs; ++j) {
-          rate_[j][0] = (after.length_m[j][0] - before.length_m[j][0]) / h;
-          rate_[j][1] = (after.length_m[j][1] - before.length_m[j][1]) / h;
-          rate_[j][2] = (after.rowing_rad[j] - before.rowing_rad[j]) / h;
+          rate_[j][0] = after.length_rate_mps[j][0];
+          rate_[j][1] = after.length_rate_mps[j][1];
+          rate_[j][2] = after.rowing_rate_radps[j];
         }
     }
   }

@@ -125,7 +125,7 @@ class HexapodNode : public Node {
   double value_[kHexLegs][kHexSlots] = {}, ff_[kHexLegs][kHexSlots] = {};
   bool dirty_ = false;  // changed since they were given to the core
   Held held_[kHexLegs];
-  // rates over the last step (the C API gives lengths and angles, not their rates)
+  // the rates at the last step's end (legsim_hexapod_state's), published with the sample
   double rate_[kHexLegs][kHexSlots] = {};
 
   SimState state_ = SimState::kIdle;

@@ -36,6 +36,8 @@ static const struct {
     SIZE(legsim_hexapod_desc),
     SIZE(legsim_hexapod_pose),
     SIZE(legsim_hexapod_standing),
+    SIZE(legsim_hexapod_commands),
+    SIZE(legsim_hexapod_inverse),
     SIZE(legsim_hexapod_sweep),
     SIZE(legsim_hexapod_sweep_point),
     SIZE(legsim_hexapod_gait),

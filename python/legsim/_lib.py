@@ -290,6 +290,19 @@ class Library:
                         ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6),
                         ("margin_m", d)]
 
+        J = 11  # LEGSIM_HEXAPOD_MAX_LEG_JOINTS
+
+        class HexapodInverse(C.Structure):
+            _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
+                        ("box_omega_radps", d * 3), ("stance", i32 * 6), ("foot_m", (d * 3) * 6),
+                        ("foot_velocity_mps", (d * 3) * 6), ("foot_acceleration_mps2", (d * 3) * 6),
+                        ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6),
+                        ("foot_force_n", (d * 3) * 6), ("cone_ratio", d * 6), ("n_joints", i32 * 6),
+                        ("joint_force_n", ((d * 3) * J) * 6), ("joint_moment_nm", ((d * 3) * J) * 6)]
+
+        class HexapodCommands(C.Structure):
+            _fields_ = [("mode", (i32 * 3) * 6), ("value", (d * 3) * 6), ("feedforward", (d * 3) * 6)]
+
         class HexapodSweep(C.Structure):
             _fields_ = [("leg", i32), ("stance_mask", C.c_uint32), ("box_height_m", d), ("distance_m", d * 2),
                         ("n_distance", i32), ("heading_rad", d * 2), ("n_heading", i32)]
@@ -313,12 +326,14 @@ class Library:
                         ("actuator_force_n", (d * 2) * 6), ("rowing_torque_nm", d * 6), ("foot_state", i32 * 6),
                         ("kinetic_energy_j", d), ("events", i32), ("impacts", i32), ("cone_solved", i32),
                         ("cone_by_sweeps", i32), ("cone_max_iterations", i32), ("cone_max_residual", d),
-                        ("actuator_stop", (i32 * 2) * 6), ("rowing_stop", i32 * 6), ("stop_impacts", i32)]
+                        ("actuator_stop", (i32 * 2) * 6), ("rowing_stop", i32 * 6), ("stop_impacts", i32), ("length_rate_mps", (d * 2) * 6),
+                        ("rowing_rate_radps", d * 6)]
 
         self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding
         self.HexapodGait, self.HexapodSetpoint = HexapodGait, HexapodSetpoint
         self.HexapodSweep, self.HexapodSweepPoint = HexapodSweep, HexapodSweepPoint
+        self.HexapodCommands, self.HexapodInverse = HexapodCommands, HexapodInverse
         self.ModelDesc, self.Options, self.Report = ModelDesc, Options, Report
         self.Reaction, self.WorstCase = Reaction, WorstCase
         self.Contact = Contact
@@ -332,7 +347,7 @@ class Library:
                  ("legsim_contact", self.Contact), ("legsim_hexapod_desc", self.HexapodDesc),
                  ("legsim_hexapod_pose", self.HexapodPose),
                  ("legsim_hexapod_standing", self.HexapodStanding),
-                 ("legsim_hexapod_sweep", self.HexapodSweep), ("legsim_hexapod_sweep_point", self.HexapodSweepPoint),
+                 ("legsim_hexapod_commands", self.HexapodCommands), ("legsim_hexapod_inverse", self.HexapodInverse), ("legsim_hexapod_sweep", self.HexapodSweep), ("legsim_hexapod_sweep_point", self.HexapodSweepPoint),
                  ("legsim_hexapod_gait", self.HexapodGait), ("legsim_hexapod_setpoint", self.HexapodSetpoint),
                  ("legsim_hexapod_state", self.HexapodState)]
         bad = [f"{n}: library {cfg[f'sizeof({n})']} bytes, binding {C.sizeof(t)}"
@@ -424,6 +439,13 @@ class Library:
             "legsim_hexapod_sim_init": (st, [P, C.c_size_t, C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodPose),
                                              C.c_uint32, C.POINTER(P)]),
             "legsim_hexapod_command": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
+            "legsim_hexapod_inverse_storage_size": (C.c_size_t, []),
+            "legsim_hexapod_inverse_dynamics": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodGait),
+                                                     C.c_double, P, C.c_size_t, C.POINTER(self.HexapodInverse)]),
+            "legsim_hexapod_gait_state": (st, [C.POINTER(self.HexapodDesc), C.POINTER(self.HexapodGait), C.c_double,
+                                               P, C.c_size_t, C.POINTER(C.c_double), C.POINTER(C.c_double),
+                                               C.POINTER(C.c_double), C.c_int32, C.POINTER(C.c_int32)]),
+            "legsim_hexapod_command_each": (st, [P, C.POINTER(self.HexapodCommands)]),
             "legsim_hexapod_command_pose": (st, [P, C.POINTER(C.c_double * 2), C.POINTER(C.c_double),
                                                  C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
             "legsim_hexapod_step": (st, [P, C.c_double, C.c_int32]),

@@ -304,7 +304,6 @@ class Hexapod:
         reaction on its yoke, then its file's joints' on their first bodies; the force in the
         world, the moment about the joint's point; n_joints (6) of each leg's rows are used)."""
         lib = self.library
-        f = _inverse_functions(lib)
         g = lib.HexapodGait(float(period_s), float(duty), float(step_length_m), float(step_height_m),
                             float(turn_rad), float(box_height_m))
         size = int(lib.cdll.legsim_hexapod_inverse_storage_size())
@@ -314,7 +313,7 @@ class Hexapod:
                 "foot_m", "foot_velocity_mps", "foot_acceleration_mps2", "box_m", "box_quat", "joint_force_n",
                 "joint_moment_nm")
         out = {k: [] for k in keys}
-        r = f.Inverse()
+        r = lib.HexapodInverse()
         n_joints = None
         for t in np.atleast_1d(np.asarray(t_s, dtype=float)):
             st = lib.cdll.legsim_hexapod_inverse_dynamics(C.byref(self.desc), C.byref(g), float(t),
@@ -335,7 +334,6 @@ class Hexapod:
         body's pose q (bodies x 7: centre, quaternion w, x, y, z), velocity v and acceleration a
         (bodies x 6: world, then angular in the body's frame), bodies as HexapodSim.body_poses'."""
         lib = self.library
-        _inverse_functions(lib)
         g = lib.HexapodGait(float(period_s), float(duty), float(step_length_m), float(step_height_m),
                             float(turn_rad), float(box_height_m))
         size = int(lib.cdll.legsim_hexapod_inverse_storage_size())
@@ -412,46 +410,6 @@ class Hexapod:
                 "foot_m": table(lambda p: rows(p.standing.foot_m), (LEGS, 3))}
 
 
-_MAX_LEG_JOINTS = 11  # LEGSIM_HEXAPOD_MAX_LEG_JOINTS
-
-
-def _inverse_functions(lib: Library):
-    """legsim_hexapod_inverse's mirror and the inverse dynamics' prototypes, made once per library."""
-    f = getattr(lib, "_hexapod_inverse", None)
-    if f is not None:
-        return f
-    d, i32 = C.c_double, C.c_int32
-
-    class Inverse(C.Structure):
-        _fields_ = [("t_s", d), ("box_m", d * 3), ("box_quat", d * 4), ("box_velocity_mps", d * 3),
-                    ("box_omega_radps", d * 3), ("stance", i32 * LEGS), ("foot_m", (d * 3) * LEGS),
-                    ("foot_velocity_mps", (d * 3) * LEGS), ("foot_acceleration_mps2", (d * 3) * LEGS),
-                    ("actuator_force_n", (d * 2) * LEGS), ("rowing_torque_nm", d * LEGS),
-                    ("foot_force_n", (d * 3) * LEGS), ("cone_ratio", d * LEGS), ("n_joints", i32 * LEGS),
-                    ("joint_force_n", ((d * 3) * _MAX_LEG_JOINTS) * LEGS),
-                    ("joint_moment_nm", ((d * 3) * _MAX_LEG_JOINTS) * LEGS)]
-
-    P, st = C.c_void_p, C.c_int
-    cd = lib.cdll
-    cd.legsim_hexapod_inverse_storage_size.restype = C.c_size_t
-    cd.legsim_hexapod_inverse_storage_size.argtypes = []
-    cd.legsim_hexapod_inverse_dynamics.restype = st
-    cd.legsim_hexapod_inverse_dynamics.argtypes = [C.POINTER(lib.HexapodDesc), C.POINTER(lib.HexapodGait), d, P,
-                                                   C.c_size_t, C.POINTER(Inverse)]
-    cd.legsim_hexapod_gait_state.restype = st
-    DP = C.POINTER(d)
-    cd.legsim_hexapod_gait_state.argtypes = [C.POINTER(lib.HexapodDesc), C.POINTER(lib.HexapodGait), d, P,
-                                             C.c_size_t, DP, DP, DP, i32, C.POINTER(i32)]
-
-    class Functions:
-        pass
-
-    f = Functions()
-    f.Inverse = Inverse
-    lib._hexapod_inverse = f
-    return f
-
-
 def _pairs(x, what: str):
     """A 6 x 2 table as ctypes (ValueError for another shape: ctypes would fill it with zeros)."""
     a = np.asarray(x, dtype=float)
@@ -506,6 +464,29 @@ class HexapodSim:
         self.library.check(self.library.cdll.legsim_hexapod_command_pose(self._sim, f, t, ff, fm),
                            "legsim_hexapod_command_pose")
 
+    def command_each(self, mode, value, feedforward=None) -> None:
+        """Each command slot on its own (legsim_hexapod_command_each): per leg (6 rows) its upper
+        and lower actuators and its rowing motor (3 columns), mode "keep" (unchanged), "force"
+        (value: N or N m) or "servo" (value: the set-point, m or rad; feedforward: N or N m, None:
+        0). Raises OutOfStrokeError past a stroke, BadInputError for a value out of range; all
+        or nothing."""
+        modes = {"keep": 0, "force": 1, "servo": 2}
+        m = np.asarray(mode, dtype=object)
+        v = np.asarray(value, dtype=float)
+        f = np.zeros((LEGS, 3)) if feedforward is None else np.asarray(feedforward, dtype=float)
+        for name, a in (("mode", m), ("value", v), ("feedforward", f)):
+            if a.shape != (LEGS, 3):
+                raise ValueError(f"{name}: 6 x 3 values (per leg: upper, lower, rowing), got shape {a.shape}")
+        bad = [x for x in m.ravel() if x not in modes]
+        if bad:
+            raise ValueError(f"mode: each one of {sorted(modes)}, got {bad[0]!r}")
+        lib = self.library
+        c = lib.HexapodCommands()
+        for k in range(LEGS):
+            for j in range(3):
+                c.mode[k][j], c.value[k][j], c.feedforward[k][j] = modes[m[k, j]], v[k, j], f[k, j]
+        lib.check(lib.cdll.legsim_hexapod_command_each(self._sim, C.byref(c)), "legsim_hexapod_command_each")
+
     def body_poses(self) -> np.ndarray:
         """Every body's pose (bodies x 7: centre, unit quaternion w, x, y, z; world): the box,
         then per leg its yoke and its bars in its file's order (a bar's axis is its frame's x)."""
@@ -537,7 +518,7 @@ class HexapodSim:
         in the last step), impacts (touchdowns since the start), cone (the contact problems on the
         cones since the start: solved, by_sweeps, max_iterations, max_residual), actuator_stop (6 x
         2) and rowing_stop (6): -1 on the stroke's min stop, 1 on its max, 0 inside; stop_impacts
-        (arrivals on a stop since the start)."""
+        (arrivals on a stop since the start); length_rate_mps (6 x 2) and rowing_rate_radps (6)."""
         out = self.library.HexapodState()
         self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
                            "legsim_hexapod_get_state")
@@ -554,4 +535,6 @@ class HexapodSim:
                 "cone": {"solved": out.cone_solved, "by_sweeps": out.cone_by_sweeps,
                          "max_iterations": out.cone_max_iterations, "max_residual": out.cone_max_residual},
                 "actuator_stop": np.array([out.actuator_stop[k][:] for k in range(LEGS)]),
-                "rowing_stop": np.array(out.rowing_stop[:]), "stop_impacts": out.stop_impacts}
+                "rowing_stop": np.array(out.rowing_stop[:]), "stop_impacts": out.stop_impacts,
+                "length_rate_mps": np.array([out.length_rate_mps[k][:] for k in range(LEGS)]),
+                "rowing_rate_radps": np.array(out.rowing_rate_radps[:])}

@@ -12,6 +12,8 @@ legsim_hexapod_statics), against closed forms and the planar core:
 """
 from __future__ import annotations
 
+import ctypes as C
+
 import numpy as np
 import pytest
 
@@ -185,6 +187,66 @@ def test_sim_refuses(hexapod):
         m.set_integrator("euler")
     with pytest.raises(legsim.BadInputError):  # the C call's own check
         m.library.check(m.library.cdll.legsim_hexapod_set_integrator(m._sim, 2), "legsim_hexapod_set_integrator")
+    after = m.state()
+    assert all(np.array_equal(np.asarray(before[k]), np.asarray(after[k])) for k in before)
+
+
+def test_command_each_mixes_force_and_servo(hexapod):
+    """legsim_hexapod_command_each: the right legs by force, the left ones by servo, leg 5's rowing
+    kept: at rest each force slot is its value, each servo slot ff + kp (set-point - position) at
+    the file's gains, the kept slot its earlier command; its rates are the finite difference of
+    its lengths and angles over a small step; a bad slot changes nothing."""
+    pose = hexapod.stand_pose(1.0, ROWING)
+    m = hexapod.sim(pose, stuck=range(6))
+    m.command(np.full((6, 2), 10.0), np.full(6, 0.5))
+    st0 = m.state()
+    d = hexapod.desc
+    mode = [["force"] * 3] * 3 + [["servo"] * 3] * 2 + [["servo", "servo", "keep"]]
+    value = np.array([[100.0, -50.0, 1.5]] * 3 + [[L[0] + 0.01, L[1] - 0.02, r + 0.005]
+                                                  for L, r in zip(st0["length_m"][3:], st0["rowing_rad"][3:])])
+    ff = np.array([[0.0, 0.0, 0.0]] * 3 + [[30.0, -20.0, 2.0]] * 3)
+    m.command_each(mode, value, ff)
+    st = m.state()
+    for k in range(6):
+        for j in range(3):
+            got = st["actuator_force_n"][k][j] if j < 2 else st["rowing_torque_nm"][k]
+            if mode[k][j] == "force":
+                want = value[k][j]
+            elif mode[k][j] == "keep":
+                want = 0.5
+            elif j < 2:
+                want = ff[k][j] + d.leg[k].leg.actuator[j].servo_kp_n_per_m * (value[k][j] - st0["length_m"][k][j])
+            else:
+                want = ff[k][j] + d.rowing_servo_kp_nm_per_rad * (value[k][j] - st0["rowing_rad"][k])
+            assert got == pytest.approx(want, rel=1e-12, abs=1e-9), (k, j)
+    # the rates: the state's against its positions' difference over 1e-5 s (their curvature's error)
+    m2 = hexapod.sim(pose, stuck=(0, 2, 4))
+    m2.command_each(mode, value, ff)
+    m2.step(20, h_s=1e-3)
+    a = m2.state()
+    m2.step(1, h_s=1e-5)
+    b = m2.state()
+    assert np.abs(a["length_rate_mps"]).max() > 1e-3
+    assert np.abs((b["length_m"] - a["length_m"]) / 1e-5 - (a["length_rate_mps"] + b["length_rate_mps"]) / 2).max() < 1e-6
+    assert np.abs((b["rowing_rad"] - a["rowing_rad"]) / 1e-5 - (a["rowing_rate_radps"] + b["rowing_rate_radps"]) / 2).max() < 1e-6
+    # all or nothing
+    before = m.state()
+    bad_mode = [row[:] for row in mode]
+    bad_mode[0][0] = "push"
+    with pytest.raises(ValueError):
+        m.command_each(bad_mode, value, ff)
+    far = value.copy()
+    far[4][1] = 5.0  # past the lower actuator's stroke
+    with pytest.raises(legsim.OutOfStrokeError):
+        m.command_each(mode, far, ff)
+    big = value.copy()
+    big[0][0] = 1e9  # past the actuator's max_force
+    with pytest.raises(legsim.BadInputError):
+        m.command_each(mode, big, ff)
+    with pytest.raises(legsim.BadInputError):  # the C call's own check of a mode
+        c = m.library.HexapodCommands()
+        c.mode[2][1] = 7
+        m.library.check(m.library.cdll.legsim_hexapod_command_each(m._sim, C.byref(c)), "legsim_hexapod_command_each")
     after = m.state()
     assert all(np.array_equal(np.asarray(before[k]), np.asarray(after[k])) for k in before)
 

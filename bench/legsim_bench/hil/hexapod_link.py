@@ -68,7 +68,7 @@ class HexState:
     kinetic_energy_j: float
     impacts: int
     length_m: np.ndarray          # (6, 2) float32 values
-    rate_mps: np.ndarray          # (6, 2): over the last step
+    rate_mps: np.ndarray          # (6, 2): the state's length rates
     actuator_force_n: np.ndarray  # (6, 2)
     rowing_rad: np.ndarray        # (6,)
     rowing_rate_radps: np.ndarray

@@ -293,6 +293,8 @@ typedef struct legsim_hexapod_state {
   int32_t actuator_stop[LEGSIM_HEXAPOD_LEGS][2];
   int32_t rowing_stop[LEGSIM_HEXAPOD_LEGS];
   int32_t stop_impacts;
+  double length_rate_mps[LEGSIM_HEXAPOD_LEGS][2]; /* each actuator's rate (the servos' l') */
+  double rowing_rate_radps[LEGSIM_HEXAPOD_LEGS];   /* each yoke's angle's rate */
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

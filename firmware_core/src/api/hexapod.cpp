@@ -511,8 +511,11 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
     const spatial::RobotLeg &L = R.leg[l];
     r.rowing_rad[l] = spatial::robot_rowing_angle(R, l, d.q);
-    for (int a = 0; a < 2; ++a)
+    r.rowing_rate_radps[l] = spatial::robot_rowing_rate(R, l, d.q, d.v);
+    for (int a = 0; a < 2; ++a) {
       r.length_m[l][a] = a < L.nactuators ? spatial::robot_actuator_length(R, L.first_actuator + a, d.q) : 0.0;
+      r.length_rate_mps[l][a] = a < L.nactuators ? spatial::robot_actuator_rate(R, L.first_actuator + a, d.q, d.v) : 0.0;
+    }
     const spatial::V3 f = spatial::robot_foot_position(R, l, d.q);
     r.foot_m[l][0] = f.x, r.foot_m[l][1] = f.y, r.foot_m[l][2] = f.z;
     const spatial::V3 F = spatial::robot_foot_force(R, d, l);
