@@ -14,6 +14,7 @@
 #include "scene_read.hpp"
 #include "scene_text.hpp"
 #include "scene_toml.hpp"
+#include "toml_limits.hpp"
 
 namespace legsim_host {
 namespace hexapod_scene {
@@ -99,6 +100,20 @@ inline double total_mass(const legsim_hexapod_desc &h) {
   const int n = body_masses(h, m);
   for (int b = 0; b < n; ++b) M += m[b];
   return M;
+}
+
+// True when the scene text parses and says analysis = `analysis` (false otherwise: the hexapod
+// reader then says what is wrong).
+inline bool scene_analysis_is(const std::string &text, const std::string &path, std::string_view analysis) {
+  try {
+    std::string why;
+    if (!toml_input_within_limits(text, why)) return false;
+    const toml::table doc = toml::parse(text, path);
+    scene_read::Node a = doc.get("analysis");
+    return a && a->is_string() && *a->value<std::string_view>() == analysis;
+  } catch (...) {
+    return false;
+  }
 }
 
 inline std::string status_text(legsim_status st) {

@@ -121,15 +121,7 @@ void write_sample(std::ostream &o, const legsim_hexapod_inverse &r, const legsim
 }  // namespace
 
 bool scene_is_hexapod_inverse(const std::string &text, const std::string &path) {
-  try {
-    std::string why;
-    if (!toml_input_within_limits(text, why)) return false;
-    const toml::table doc = toml::parse(text, path);
-    Node a = doc.get("analysis");
-    return a && a->is_string() && *a->value<std::string_view>() == "inverse_gait";
-  } catch (...) {
-    return false;
-  }
+  return scene_analysis_is(text, path, "inverse_gait");
 }
 
 int run_hexapod_inverse_scene(const std::string &text, const std::string &path, bool check_only, HexapodOutput &out,

@@ -162,15 +162,7 @@ void write_point(std::ostream &o, const legsim_hexapod_sweep_point &p, const leg
 }  // namespace
 
 bool scene_is_hexapod_sweep(const std::string &text, const std::string &path) {
-  try {
-    std::string why;
-    if (!toml_input_within_limits(text, why)) return false;
-    const toml::table doc = toml::parse(text, path);
-    Node a = doc.get("analysis");
-    return a && a->is_string() && *a->value<std::string_view>() == "reaction_sweep";
-  } catch (...) {
-    return false;
-  }
+  return scene_analysis_is(text, path, "reaction_sweep");
 }
 
 int run_hexapod_sweep_scene(const std::string &text, const std::string &path, bool check_only, HexapodOutput &out,

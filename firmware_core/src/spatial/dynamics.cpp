@@ -101,16 +101,7 @@ Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real
 namespace {
 void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu);
 
-// Row r's rate at x (its coefficients on its two bodies' velocity coordinates).
-real row_dot(const SpatialRobot &robot, const Row &row, int r, const real *x) {
-  int a, b;
-  row_bodies(robot, r, a, b);
-  real s = 0;
-  for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * x[kBodyDof * a + k];
-  if (b >= 0)
-    for (int k = 0; k < kBodyDof; ++k) s += row.jb[k] * x[kBodyDof * b + k];
-  return s;
-}
+
 
 // The held stops' columns and their Delassus matrix D = -J_s X_s (positive semi-definite),
 // factored by Cholesky with a zero pivot's stop left out (its row implied by the others).

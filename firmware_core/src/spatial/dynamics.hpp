@@ -73,6 +73,17 @@ inline void row_bodies(const SpatialRobot &robot, int r, int &a, int &b) {
   }
 }
 
+// System row r's rate at x (its coefficients on its two bodies' velocity coordinates): J_r x.
+inline real row_dot(const SpatialRobot &robot, const Row &row, int r, const real *x) {
+  int a, b;
+  row_bodies(robot, r, a, b);
+  real s = 0;
+  for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * x[kBodyDof * a + k];
+  if (b >= 0)
+    for (int k = 0; k < kBodyDof; ++k) s += row.jb[k] * x[kBodyDof * b + k];
+  return s;
+}
+
 // Leg l's LegLayout with nf rows of its foot held (robot_lift's, once per count).
 void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out);
 inline const LegLayout &leg_layout(const SpatialRobot &robot, const FeetHold &hold, int l) {

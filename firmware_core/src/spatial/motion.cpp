@@ -9,15 +9,6 @@ namespace {
 constexpr real kNone = real(sizeof(real) == sizeof(float) ? 1e30 : 1e300);  // no event function
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
-real row_rate(const SpatialRobot &robot, const Row &row, int r, const real *v) {
-  int a, b;
-  row_bodies(robot, r, a, b);
-  real s = 0;
-  for (int k = 0; k < kBodyDof; ++k) s += row.ja[k] * v[kBodyDof * a + k];
-  if (b >= 0)
-    for (int k = 0; k < kBodyDof; ++k) s += row.jb[k] * v[kBodyDof * b + k];
-  return s;
-}
 
 legsim_status hold_check(const SpatialRobot &robot, const FeetHold &hold) {
   if ((hold.stuck | hold.sliding) >> robot.nlegs || (hold.stuck & hold.sliding)) return LEGSIM_ERR_BAD_INPUT;
@@ -89,7 +80,7 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
   system_rows(robot, d.hold, q, v, d.rows);
   const legsim_status s = robot_factor(robot, d.hold, d.rows, d.factor);
   if (s != LEGSIM_OK) return s;
-  for (int i = 0; i < n; ++i) g[idx[i]] = -row_rate(robot, d.rows[idx[i]], idx[i], v);
+  for (int i = 0; i < n; ++i) g[idx[i]] = -row_dot(robot, d.rows[idx[i]], idx[i], v);
   robot_solve(robot, d.factor, zero_f, g, dx, mu);
   for (int k = 0; k < kBodyDof * robot.nb; ++k) v[k] += dx[k];
   system_rows(robot, d.hold, q, v, d.rows);  // gamma at the new v; J is the factor's
@@ -420,7 +411,7 @@ legsim_status stop_arrival(const SpatialRobot &robot, RobotData &d, int l, int k
   int idx[kMaxSystemRows];
   real g[kMaxSystemRows], dv[kMaxRobotDof], mu[kMaxSystemRows];
   const int n = system_used_rows(robot, none, idx);
-  for (int i = 0; i < n; ++i) g[idx[i]] = -row_rate(robot, d.rows[idx[i]], idx[i], d.v);
+  for (int i = 0; i < n; ++i) g[idx[i]] = -row_dot(robot, d.rows[idx[i]], idx[i], d.v);
   robot_solve(robot, d.factor, zero_f, g, dv, mu);
   for (int i = 0; i < kBodyDof * robot.nb; ++i) d.v[i] += dv[i];
   const uint32_t touching = d.hold.stuck | d.hold.sliding;
