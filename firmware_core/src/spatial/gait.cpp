@@ -9,16 +9,6 @@ constexpr real kPi = real(3.14159265358979323846);
 
 bool finite(real x) { return std::isfinite(x); }
 
-// The box's displacement (x, y) over sigma seconds at the constant twist (v forward, w about
-// z), in its frame at the start.
-void displacement(real v, real w, real sigma, real &dx, real &dy) {
-  const real th = w * sigma;
-  if (std::abs(th) < real(1e-8)) {
-    dx = v * sigma, dy = v * sigma * th / 2;
-  } else {
-    dx = v / w * std::sin(th), dy = v / w * (1 - std::cos(th));
-  }
-}
 
 // A world-fixed point seen from the box sigma seconds after the stance's middle (where it is at
 // p_mid): the box moved by the constant twist (v forward, w about z) meanwhile. Its place and
@@ -26,7 +16,7 @@ void displacement(real v, real w, real sigma, real &dx, real &dy) {
 void stance_point(const V3 &p_mid, real v, real w, real sigma, V3 &p, V3 &pd) {
   const real th = w * sigma, c = std::cos(th), s = std::sin(th);
   real dx, dy;
-  displacement(v, w, sigma, dx, dy);
+  twist_displacement(v, w, sigma, dx, dy);
   const real x = p_mid.x - dx, y = p_mid.y - dy;
   p = {c * x + s * y, -s * x + c * y, p_mid.z};
   pd = {-v + w * p.y, -w * p.x, 0};  // -(v x) - w z x p
@@ -88,7 +78,7 @@ void gait_feet(const TripodGait &g, double t_s, V3 *feet, bool *stance) {
 
 void gait_box(const TripodGait &g, double t_s, V3 &d, real &yaw) {
   const real Ts = g.duty * g.period_s, v = g.step_length_m / Ts, w = g.turn_rad / Ts;
-  displacement(v, w, real(t_s), d.x, d.y);
+  twist_displacement(v, w, real(t_s), d.x, d.y);
   d.z = g.grade[0] * d.x + g.grade[1] * d.y;
   yaw = w * real(t_s);
 }
@@ -125,6 +115,15 @@ real support_margin(const V3 *feet, int n, real com_x, real com_y) {
     margin = std::min(margin, (ex * (com_y - a.y) - ey * (com_x - a.x)) / len);
   }
   return margin;
+}
+
+void twist_displacement(real v, real w, real sigma, real &dx, real &dy) {
+  const real th = w * sigma;
+  if (std::abs(th) < real(1e-8)) {
+    dx = v * sigma, dy = v * sigma * th / 2;
+  } else {
+    dx = v / w * std::sin(th), dy = v / w * (1 - std::cos(th));
+  }
 }
 
 }  // namespace legsim::spatial

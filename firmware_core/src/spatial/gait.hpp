@@ -48,6 +48,10 @@ void gait_feet(const TripodGait &gait, double t_s, V3 *feet, bool *stance);
 // (x, y along the path seen from above; z its rise over the ground's grade) and its yaw.
 void gait_box(const TripodGait &gait, double t_s, V3 &displacement, real &yaw);
 
+// The box's displacement (x, y) over sigma seconds at the constant twist (v forward, w about
+// z), in its frame at the start.
+void twist_displacement(real v, real w, real sigma, real &dx, real &dy);
+
 // The static stability margin (m): the least distance from the centre of mass's projection
 // (x, y) to the edges of the support polygon of the n standing feet (their x, y: the convex
 // hull), positive inside, negative outside; -INFINITY for fewer than three feet.

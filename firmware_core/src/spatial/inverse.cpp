@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "spatial/gait.hpp"
 #include "system/dense_solve.hpp"
 
 namespace legsim::spatial {
@@ -129,12 +130,8 @@ void robot_joint_reactions(const SpatialRobot &robot, const real *q, const real 
 
 void twist_motion(real height, real speed, real rate, double t_s, real *box_q, real *box_v, real *box_a) {
   const real th = real(double(rate) * t_s), c = std::cos(th), s = std::sin(th);
-  real x, y;  // the same closed form as the gait's stance points (spatial/gait.cpp)
-  if (std::abs(th) < real(1e-8)) {
-    x = real(double(speed) * t_s), y = x * th / 2;
-  } else {
-    x = speed / rate * s, y = speed / rate * (1 - c);
-  }
+  real x, y;  // the gait's own plan (spatial/gait)
+  twist_displacement(speed, rate, real(t_s), x, y);
   const real q[7] = {x, y, height, std::cos(th / 2), 0, 0, std::sin(th / 2)};
   const real v[6] = {speed * c, speed * s, 0, 0, 0, rate};
   const real a[6] = {-speed * rate * s, speed * rate * c, 0, 0, 0, 0};
