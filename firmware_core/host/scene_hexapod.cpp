@@ -726,19 +726,8 @@ int run_hexapod_scene(const std::string &text, const std::string &path, bool che
   legsim_hexapod_pose pose{};
   Storage st(legsim_hexapod_storage_size());
   try {
-    toml::table doc;
-    try {
-      doc = toml::parse(text, path);
-    } catch (const toml::parse_error &e) {
-      fail(std::string(e.description()));
-    }
-    s = parse(doc, path);
-    char msg[512];
-    const legsim_status r = legsim_hexapod_load_toml(s.model_path.c_str(), h.get(), msg, sizeof msg);
-    if (r != LEGSIM_OK) {
-      err << "legsim_cli: error: " << msg << " (model of " << path << ")\n";
-      return 2;
-    }
+    s = parse(scene_document(text, path), path);
+    if (!load_scene_model(s.model_path, path, *h, err)) return 2;
     // the scene's ground over the file's
     if (s.has_slope) {
       h->ground_normal[0] = -std::sin(s.slope) * std::cos(s.uphill);

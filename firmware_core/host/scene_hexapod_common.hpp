@@ -8,9 +8,11 @@
 #include <cstdint>
 #include <cstdio>
 #include <new>
+#include <ostream>
 #include <string>
 
 #include "legsim/hexapod.h"
+#include "model_toml.hpp"
 #include "scene_read.hpp"
 #include "scene_text.hpp"
 #include "scene_toml.hpp"
@@ -114,6 +116,24 @@ inline bool scene_analysis_is(const std::string &text, const std::string &path, 
   } catch (...) {
     return false;
   }
+}
+
+// The scene's TOML document; a parse error refused as the scene's (scene_read::SceneError).
+inline toml::table scene_document(const std::string &text, const std::string &path) {
+  try {
+    return toml::parse(text, path);
+  } catch (const toml::parse_error &e) {
+    scene_read::fail(std::string(e.description()));
+  }
+}
+
+// The scene's hexapod file into h; false, the loader's message on err, when it is refused.
+inline bool load_scene_model(const std::string &model_path, const std::string &scene_path, legsim_hexapod_desc &h,
+                             std::ostream &err) {
+  char msg[512];
+  if (legsim_hexapod_load_toml(model_path.c_str(), &h, msg, sizeof msg) == LEGSIM_OK) return true;
+  err << "legsim_cli: error: " << msg << " (model of " << scene_path << ")\n";
+  return false;
 }
 
 inline std::string status_text(legsim_status st) {

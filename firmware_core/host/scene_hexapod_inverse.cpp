@@ -129,22 +129,12 @@ int run_hexapod_inverse_scene(const std::string &text, const std::string &path, 
   InverseScene s;
   auto h = std::make_unique<legsim_hexapod_desc>();
   try {
-    toml::table doc;
-    try {
-      doc = toml::parse(text, path);
-    } catch (const toml::parse_error &e) {
-      fail(std::string(e.description()));
-    }
-    s = parse(doc, path);
+    s = parse(scene_document(text, path), path);
   } catch (const scene_read::SceneError &f) {
     err << "legsim_cli: error: " << path << ": " << f.message << "\n";
     return 2;
   }
-  char msg[512];
-  if (legsim_hexapod_load_toml(s.model_path.c_str(), h.get(), msg, sizeof msg) != LEGSIM_OK) {
-    err << "legsim_cli: error: " << msg << " (model of " << path << ")\n";
-    return 2;
-  }
+  if (!load_scene_model(s.model_path, path, *h, err)) return 2;
   Storage st(legsim_hexapod_inverse_storage_size());
   auto r = std::make_unique<legsim_hexapod_inverse>();
   // the gait's start: refused (exit 2) when it asks a leg past its strokes or reach at t = 0

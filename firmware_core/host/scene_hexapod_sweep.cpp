@@ -170,18 +170,8 @@ int run_hexapod_sweep_scene(const std::string &text, const std::string &path, bo
   SweepScene s;
   auto h = std::make_unique<legsim_hexapod_desc>();
   try {
-    toml::table doc;
-    try {
-      doc = toml::parse(text, path);
-    } catch (const toml::parse_error &e) {
-      fail(std::string(e.description()));
-    }
-    s = parse(doc, path);
-    char msg[512];
-    if (legsim_hexapod_load_toml(s.model_path.c_str(), h.get(), msg, sizeof msg) != LEGSIM_OK) {
-      err << "legsim_cli: error: " << msg << " (model of " << path << ")\n";
-      return 2;
-    }
+    s = parse(scene_document(text, path), path);
+    if (!load_scene_model(s.model_path, path, *h, err)) return 2;
     s.sweep.leg = bind_leg(s.leg, *h, "'leg'");
     s.sweep.stance_mask = 0;
     for (size_t i = 0; i < s.stance.size(); ++i) {
