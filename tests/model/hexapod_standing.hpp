@@ -5,6 +5,7 @@
 
 #include "legsim/legsim.h"
 #include "model_toml.hpp"
+#include "spatial/motion.hpp"
 #include "spatial/robot.hpp"
 #include "unity.h"
 
@@ -47,4 +48,14 @@ inline Standing &standing() {
   s.com = {c[0] / s.M, c[1] / s.M, c[2] / s.M};
   built = true;
   return s;
+}
+
+// The robot's energy under constant commands: kinetic, gravity's, less the work the actuators and
+// the motors would do back (-F l, -tau psi): what no OK step may raise beyond its error.
+inline double robot_energy(const legsim::spatial::SpatialRobot &robot, const legsim::spatial::RobotData &d) {
+  using namespace legsim::spatial;
+  double E = robot_kinetic_energy(robot, d.v) + robot_gravity_potential(robot, d.q);
+  for (int a = 0; a < robot.na; ++a) E -= d.actuator_force[a] * robot_actuator_length(robot, a, d.q);
+  for (int l = 0; l < robot.nlegs; ++l) E -= d.rowing_torque[l] * robot_rowing_angle(robot, l, d.q);
+  return E;
 }

@@ -28,13 +28,6 @@ using namespace legsim::spatial;
 
 double norm(const V3 &a) { return std::sqrt(dot(a, a)); }
 
-double energy(const SpatialRobot &R, const RobotData &d) {
-  double E = robot_kinetic_energy(R, d.v) + robot_gravity_potential(R, d.q);
-  for (int a = 0; a < R.na; ++a) E -= d.actuator_force[a] * robot_actuator_length(R, a, d.q);
-  for (int l = 0; l < R.nlegs; ++l) E -= d.rowing_torque[l] * robot_rowing_angle(R, l, d.q);
-  return E;
-}
-
 // The sliding feet's friction power (W) at d's state: the tangential ground force on the slip.
 double friction_power(const SpatialRobot &R, const RobotData &d) {
   double P = 0;
@@ -74,7 +67,7 @@ void test_feet_slip_on_a_slippery_ground(void) {
     if (n == 0) {
       // the first step settles the modes the slippery cones refuse
       TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, h));
-      E0 = energy(R, *d), P0 = friction_power(R, *d);
+      E0 = robot_energy(R, *d), P0 = friction_power(R, *d);
       continue;
     }
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, h));
@@ -97,7 +90,7 @@ void test_feet_slip_on_a_slippery_ground(void) {
       }
     }
   }
-  const double lost = E0 - energy(R, *d);
+  const double lost = E0 - robot_energy(R, *d);
   printf("slippery ground: feet that slid 0x%02x, %d sliding samples; |F_t| off mu_k N by %.1e of N, its "
          "direction off -v_t by %.1e; a stuck foot past its cone by %.1e N; energy lost %.6e J, friction's "
          "work %.6e J (off by %.1e)\n",
@@ -139,13 +132,13 @@ void frictionless_ground_keeps_energy(Integrator integrator, double ratio_lo, do
     for (int l = 0; l < R.nlegs; ++l) d->command.rowing[l] = st.rowing_torque[l];
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
     TEST_ASSERT_EQUAL_INT(0x3F, int(d->hold.sliding));  // no foot sticks on ice
-    const double E0 = energy(R, *d);
+    const double E0 = robot_energy(R, *d);
     V3 p0 = {0, 0, 0};
     for (int b = 0; b < R.nb; ++b) p0 = p0 + R.mass[b] * V3{d->v[kBodyDof * b], d->v[kBodyDof * b + 1], 0};
     double E_worst = 0, p_worst = 0;
     for (int n = 0; n < int(std::lround(0.2 / h)); ++n) {
       TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, *d, h, integrator));
-      E_worst = std::fmax(E_worst, std::fabs(energy(R, *d) - E0));
+      E_worst = std::fmax(E_worst, std::fabs(robot_energy(R, *d) - E0));
       V3 p = {0, 0, 0};
       for (int b = 0; b < R.nb; ++b) p = p + R.mass[b] * V3{d->v[kBodyDof * b], d->v[kBodyDof * b + 1], 0};
       p_worst = std::fmax(p_worst, norm(p - p0));

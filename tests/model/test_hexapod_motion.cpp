@@ -65,15 +65,6 @@ int used(const SpatialRobot &robot, uint32_t stuck, int *idx) {
   return n;
 }
 
-// The energy of the robot under constant commands: kinetic, gravity's, less the work the
-// actuators and the motors would do back (-F l, -tau psi).
-double energy(const SpatialRobot &robot, const RobotData &d) {
-  double E = robot_kinetic_energy(robot, d.v) + robot_gravity_potential(robot, d.q);
-  for (int a = 0; a < robot.na; ++a) E -= d.actuator_force[a] * robot_actuator_length(robot, a, d.q);
-  for (int l = 0; l < robot.nlegs; ++l) E -= d.rowing_torque[l] * robot_rowing_angle(robot, l, d.q);
-  return E;
-}
-
 // Linear and angular (about the world's origin) momentum.
 void momentum(const SpatialRobot &robot, const double *q, const double *v, V3 &p, V3 &L) {
   p = {0, 0, 0}, L = {0, 0, 0};
@@ -190,11 +181,11 @@ void flight_keeps_momentum_and_energy(Integrator integrator, double angular_tol,
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
     V3 p0, L0, p1, L1;
     momentum(R, d->q, d->v, p0, L0);
-    const double E0 = energy(R, *d);
+    const double E0 = robot_energy(R, *d);
     const int n = int(std::lround(0.2 / h));
     for (int k = 0; k < n; ++k) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, *d, h, integrator));
     momentum(R, d->q, d->v, p1, L1);
-    dE[run] = std::fabs(energy(R, *d) - E0);
+    dE[run] = std::fabs(robot_energy(R, *d) - E0);
     printf("%sflight, h = %.0e s: momentum off by %.2e of %.2e kg m/s, angular %.2e of %.2e kg m^2/s; "
            "energy %.3e of kinetic %.3e J\n",
            label(integrator), h, norm(p1 - p0), norm(p0), norm(L1 - L0), norm(L0), dE[run],
@@ -222,7 +213,7 @@ void fig7_converges(Integrator integrator, double order_lo, double order_hi, dou
     auto d = standing_data(s, kSix);
     for (int l = 0; l < 3; ++l) d->command.actuator[R.leg[l].first_actuator] += 50;  // the right legs' upper ones
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
-    const double E0 = energy(R, *d);
+    const double E0 = robot_energy(R, *d);
     const int n = int(std::lround(T / hs[run]));
     double feet = 0;
     for (int k = 0; k < n; ++k) {
@@ -230,7 +221,7 @@ void fig7_converges(Integrator integrator, double order_lo, double order_hi, dou
       for (int l = 0; l < 6; ++l) feet = std::fmax(feet, norm(robot_foot_position(R, l, d->q) - d->hold.anchor[l]));
     }
     box[run] = {d->q[0], d->q[1], d->q[2]};
-    dE[run] = energy(R, *d) - E0;
+    dE[run] = robot_energy(R, *d) - E0;
     printf("%sFig. 7 on six feet, h = %.1e s: box at (%.9f, %.9f, %.9f) m, feet off their places %.1e m, "
            "energy %+.2e J\n",
            label(integrator), hs[run], box[run].x, box[run].y, box[run].z, feet, dE[run]);
@@ -273,11 +264,11 @@ struct Checked {
 Checked run_checked(const SpatialRobot &R, RobotData &d, double T, double h, Integrator integrator) {
   Checked c = {0, 0, 0, 0, 0, 0};
   const GroundPlane &g = d.ground;
-  double E = energy(R, d);
+  double E = robot_energy(R, d);
   for (int n = 0; n < int(std::lround(T / h)); ++n) {
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, d, h, integrator));
     c.events += d.events;
-    const double E1 = energy(R, d);
+    const double E1 = robot_energy(R, d);
     c.energy_rise = std::fmax(c.energy_rise, E1 - E);
     E = E1;
     for (int l = 0; l < R.nlegs; ++l) {

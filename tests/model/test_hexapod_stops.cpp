@@ -37,13 +37,6 @@ using namespace legsim::spatial;
 
 double norm(const V3 &a) { return std::sqrt(dot(a, a)); }
 
-double energy(const SpatialRobot &R, const RobotData &d) {
-  double E = robot_kinetic_energy(R, d.v) + robot_gravity_potential(R, d.q);
-  for (int a = 0; a < R.na; ++a) E -= d.actuator_force[a] * robot_actuator_length(R, a, d.q);
-  for (int l = 0; l < R.nlegs; ++l) E -= d.rowing_torque[l] * robot_rowing_angle(R, l, d.q);
-  return E;
-}
-
 // How far the furthest length or angle is past its stroke (m or rad; negative: all inside).
 double worst_past(const SpatialRobot &R, const double *q) {
   double w = -1;
@@ -188,14 +181,14 @@ Run drive_hold_release(const Scene &sc, int k, double push, double other, double
   auto d = driven(sc, k, push, other);
   auto c = std::make_unique<RobotData>();
   Run r = {0, 0, 0, -1, 0, false, false};
-  double E = energy(R, *d), E_held = 0, t_held = -1;
+  double E = robot_energy(R, *d), E_held = 0, t_held = -1;
   bool reversed = false;
   int n = 0;
   for (; n < 4000 && !(r.released && !other_end && d->t > t_held + 0.3); ++n) {
     *c = *d;
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(R, *d, h, integrator));
     r.worst_past = std::fmax(r.worst_past, worst_past(R, d->q));
-    const double E1 = energy(R, *d);
+    const double E1 = robot_energy(R, *d);
     if (d->stop_impacts > r.arrivals) {
       r.arrivals = d->stop_impacts;
       if (r.arrivals == 1) {
@@ -230,7 +223,7 @@ Run drive_hold_release(const Scene &sc, int k, double push, double other, double
                                                                      stroke_of(R, k, d->q) < stroke_max(R, k)
                                                                  : stroke_rate(R, k, d->q, d->v) > 0 &&
                                                                      stroke_of(R, k, d->q) > stroke_min(R, k));
-      E = energy(R, *d);
+      E = robot_energy(R, *d);
     }
     if (r.released && (d->hold.stops & stop_bit(k))) {
       const bool at_max = d->hold.upper & stop_bit(k);
@@ -311,14 +304,14 @@ void test_touchdown_and_stop_in_one_step(void) {
   for (int a = 0; a < R.na; ++a) d->command.actuator[a] = st.actuator_force[a];
   for (int l = 0; l < R.nlegs; ++l) d->command.rowing[l] = st.rowing_torque[l];
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_refresh(R, *d));
-  double E = energy(R, *d);
+  double E = robot_energy(R, *d);
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, 0.02));
   const int events = d->events, impacts = d->impacts, stops = d->stop_impacts;
-  double rise = energy(R, *d) - E, under = 0, past = worst_past(R, d->q);
-  E = energy(R, *d);
+  double rise = robot_energy(R, *d) - E, under = 0, past = worst_past(R, d->q);
+  E = robot_energy(R, *d);
   for (int n = 0; n < 200; ++n) {
     TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, 1e-3));
-    const double E1 = energy(R, *d);
+    const double E1 = robot_energy(R, *d);
     rise = std::fmax(rise, E1 - E);
     E = E1;
     past = std::fmax(past, worst_past(R, d->q));
