@@ -100,7 +100,7 @@ def cmd_scenes(args) -> int:
     root = _root(args)
     rows = []
     for p in shipped_scenes(root, hexapod=True):
-        if is_hexapod_scene(p):  # legsim_cli's to run: no CAN node, no reference model
+        if is_hexapod_scene(p):  # legsim_cli's to run: the scenes' runner drives the planar frames
             try:
                 desc = tomllib.loads(p.read_text()).get("description", "")
             except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError) as e:
@@ -523,7 +523,7 @@ def cmd_demo(args) -> int:
     args.recordings = [str(p) for p in paths]
     args.out = None
     rc = cmd_check(args)
-    # the hexapod walking (in process: no CAN node for it yet)
+    # the hexapod walking (in process; its CAN node has its own link: hil/hexapod_link.py)
     from .hexapod_walk import print_rows, run_walk
 
     print()
