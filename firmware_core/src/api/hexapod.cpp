@@ -34,11 +34,11 @@ bool finite_within(const double *x, int n, double bound) {
 }
 
 bool within(double x, double lo, double hi) { return x >= lo && x <= hi; }  // false for NaN
+constexpr double pi = 3.14159265358979323846;
 
 // The description's numbers in the ranges legsim/hexapod.h states (the loader's, checked again
 // here: a caller may build or change a description), each leg by legsim_model_check.
 legsim_status desc_check(const legsim_hexapod_desc &h) {
-  constexpr double pi = 3.14159265358979323846;
   if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
   if (h.gravity_mps2[0] != 0 || h.gravity_mps2[1] != 0 ||
       !within(h.gravity_mps2[2], -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2))
@@ -180,7 +180,7 @@ legsim_status sweep_check(const legsim_hexapod_sweep &s) {
                   ((s.stance_mask >> s.leg) & 1u) && stance >= 3 && within(s.box_height_m, 0, LEGSIM_MAX_COORD) &&
                   s.box_height_m > 0 && within(s.distance_m[0], LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) &&
                   within(s.distance_m[1], LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) &&
-                  within(s.heading_rad[0], -M_PI, M_PI) && within(s.heading_rad[1], -M_PI, M_PI) &&
+                  within(s.heading_rad[0], -pi, pi) && within(s.heading_rad[1], -pi, pi) &&
                   s.n_distance >= 1 && s.n_heading >= 1 && int64_t(s.n_distance) * s.n_heading <= 1000000;
   return ok ? LEGSIM_OK : LEGSIM_ERR_BAD_INPUT;
 }
