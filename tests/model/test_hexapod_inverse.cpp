@@ -291,38 +291,32 @@ double stage_commands_error(const Standing &s, const legsim_hexapod_gait &g, dou
   return e;
 }
 
-void test_stage_commands_follow_the_plan_at_order_4(void) {
+// The error over 0.2 s of a stance from t = 0.15 s at each of hs, printed; the observed orders
+// between neighbours in (lo, hi) and the finest error below `finest`.
+void check_orders(const char *what, double (*error)(const Standing &, const legsim_hexapod_gait &, double, double, double),
+                  const double (&hs)[4], double lo, double hi, double finest) {
   const Standing &s = standing();
   const legsim_hexapod_gait g = walk_gait();
-  const double hs[4] = {40e-3, 20e-3, 10e-3, 5e-3};
   double e[4];
   for (int k = 0; k < 4; ++k) {
-    e[k] = stage_commands_error(s, g, 0.15, 0.2, hs[k]);
-    std::printf("commands at RK4's stages, 0.2 s of a stance, h = %g ms: %.3e m\n", hs[k] * 1e3, e[k]);
+    e[k] = error(s, g, 0.15, 0.2, hs[k]);
+    std::printf("%s, 0.2 s of a stance, h = %g ms: %.3e m\n", what, hs[k] * 1e3, e[k]);
   }
   for (int k = 1; k < 4; ++k) {
     const double order = std::log2(e[k - 1] / e[k]);
     std::printf("  order %.2f\n", order);
-    TEST_ASSERT_TRUE(order > 3.7 && order < 4.6);
+    TEST_ASSERT_TRUE(order > lo && order < hi);
   }
-  TEST_ASSERT_TRUE(e[3] < 2e-9);
+  TEST_ASSERT_TRUE(e[3] < finest);
+}
+
+void test_stage_commands_follow_the_plan_at_order_4(void) {
+  check_orders("commands at RK4's stages", stage_commands_error, {40e-3, 20e-3, 10e-3, 5e-3}, 3.7, 4.6, 2e-9);
 }
 
 void test_forward_dynamics_follows_the_plan(void) {
-  const Standing &s = standing();
-  const legsim_hexapod_gait g = walk_gait();
-  const double hs[4] = {8e-3, 4e-3, 2e-3, 1e-3};
-  double e[4];
-  for (int k = 0; k < 4; ++k) {
-    e[k] = tracking_error(s, g, 0.15, 0.2, hs[k]);
-    std::printf("tracking over 0.2 s of a stance, h = %g ms: %.3e m\n", hs[k] * 1e3, e[k]);
-  }
-  for (int k = 1; k < 4; ++k) {
-    const double order = std::log2(e[k - 1] / e[k]);
-    std::printf("  order %.2f\n", order);
-    TEST_ASSERT_TRUE(order > 1.8 && order < 2.3);
-  }
-  TEST_ASSERT_TRUE(e[3] < 1e-5);
+  check_orders("tracking with the commands held over each step", tracking_error, {8e-3, 4e-3, 2e-3, 1e-3}, 1.8, 2.3,
+               1e-5);
 }
 
 // The forward dynamics' accelerations at the plan's state under the computed forces (the stance
