@@ -67,8 +67,12 @@ struct Contact {
   Vec2 point;  // body-fixed (xi, eta)
 };
 
+// The compiled model and its options (as MuJoCo's mjModel holds mjOption): functions over a
+// sim take (const Model &, Data &); legsim_set_options is the one call that writes opt.
 struct Model {
   const legsim_model_desc *desc;
+  legsim_options opt;
+  real step_h;  // opt.step_s as real, set with opt: no conversion in every step (soft-float on a Cortex-M4F)
   int nb, nq, nj, na, nf, nc;
   int m;  // joint equations
   real mass[kMaxCoords];  // diagonal of M: (m, m, J) per body
@@ -327,8 +331,6 @@ constexpr uint32_t kSimMagic = 0x4C454753u;  // "LEGS"
 struct Sim {
   uint32_t magic;
   Model model;
-  legsim_options opt;
-  real step_h;  // opt.step_s as real, set with opt: no conversion in every step (soft-float on a Cortex-M4F)
   Data data;
 };
 
@@ -355,26 +357,26 @@ struct Snapshot {
   bool assembled, derivative_valid, history_valid, forcing_only;
   bool end_projected;  // which way RK4's next end goes: its values differ to round-off
 
-  explicit Snapshot(const Sim &sim);  // the model's coordinates, joints and actuators
-  void restore(Sim &sim) const;
+  explicit Snapshot(const Model &m, const Data &d);  // the model's coordinates, joints and actuators
+  void restore(const Model &m, Data &d) const;
 };
 
 // Runs a call on the live state; on failure, the state is put back as it was.
 // On success the outputs are checked once: a non-finite or absurd result is
 // refused (LEGSIM_ERR_DIVERGED) rather than passed on.
-legsim_status outputs_check(const Sim &sim);
+legsim_status outputs_check(const Model &m, const Data &d);
 template <typename F>
-legsim_status all_or_nothing(Sim &sim, F &&call) {
-  const Snapshot before(sim);
+legsim_status all_or_nothing(const Model &m, Data &d, F &&call) {
+  const Snapshot before(m, d);
   legsim_status s;
   if constexpr (std::is_invocable_v<F, const Snapshot &>)
     s = call(before);  // a call that goes back to its start part-way (a step cut at an event)
   else
     s = call();
-  if (s == LEGSIM_OK) s = outputs_check(sim);
+  if (s == LEGSIM_OK) s = outputs_check(m, d);
   if (s != LEGSIM_OK) {
-    sim.data.failure = sim.data.report;  // where the solver stopped, kept apart
-    before.restore(sim);
+    d.failure = d.report;  // where the solver stopped, kept apart
+    before.restore(m, d);
   }
   return s;
 }
@@ -386,13 +388,13 @@ bool state_finite(const VecQ &q, const VecQ &qd, int n);
 
 // ---- system/step.cpp: the step's stages ----
 // n_steps steps, each all-or-nothing; the sim is assembled, its state finite.
-legsim_status steps_run(Sim &sim, int32_t n_steps);
+legsim_status steps_run(const Model &m, Data &d, int32_t n_steps);
 // The step's first stage alone, all or nothing: the contact modes checked at the current state.
-legsim_status contact_modes_check(Sim &sim);
+legsim_status contact_modes_check(const Model &m, Data &d);
 // After the state changed outside a step: accelerations, multipliers and reactions at the
 // new state, and a fresh start of generalized-alpha's history. forcing_only: only a command
 // or a load changed (the state, its rows and the options as they were).
-legsim_status state_refresh(Sim &sim, bool forcing_only = false);
+legsim_status state_refresh(const Model &m, Data &d, bool forcing_only = false);
 // A changed command or load: both integrators restart from the accelerations under the new
 // forces (the same value sent again changes nothing).
 void commands_changed(Data &d);
@@ -480,15 +482,15 @@ void actuator_forces_update(const Model &model, const legsim_options &opt, Data 
 // tolerance) is put on it `into` s after the step's start d.t (inelastic impact) and held there by a length row
 // in the dynamics; one whose stop would have to pull is let go. changed: the active set
 // changed (derivative anew).
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t arriving = 0);
-legsim_status stroke_stops_release(Sim &sim, bool &changed);
+legsim_status stroke_limits_enforce(const Model &m, Data &d, bool &changed, real into, uint32_t arriving = 0);
+legsim_status stroke_stops_release(const Model &m, Data &d, bool &changed);
 // Data::work for the joints plus length drivers of the actuators in mask (built
 // once per set: analyses called along a motion do not rebuild it).
-legsim_status work_layout(Sim &sim, uint32_t mask);
+legsim_status work_layout(const Model &m, Data &d, uint32_t mask);
 // Actuator a's length at q (m), for the stroke checks and their event functions.
 real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig);
 // Rebuilds Data::dyn for Data::stop_mask and the contacts' states.
-legsim_status stops_layout(Sim &sim);
+legsim_status stops_layout(const Model &m, Data &d);
 
 // ---- contact.cpp ----
 // World position and velocity of contact k's foot point.
@@ -498,14 +500,14 @@ void contact_rows_of_states(const Model &model, const Data &d, uint8_t *rows);
 // Lists the sliding contacts' normal rows in layout (Layout::nslide).
 void contact_slides_mark(const Model &model, const Data &d, Layout &layout);
 // N and T of the stuck contacts from the multipliers of Data::dyn (rows after the stops).
-void contact_forces_update(Sim &sim);
+void contact_forces_update(const Model &m, Data &d);
 // After a step: touchdown, lift-off, stick to slip, slip to stick (docs/design/robot-on-ground.md
 // section 2), each raised as an event; changed: the contact modes or the state changed.
 // located: the events found inside the step, applied first whatever the tolerances say;
 // at: the time the transitions take place (s), kept as each changed contact's event_time.
-legsim_status contact_transitions(Sim &sim, bool &changed, double at, const ContactEvents *located = nullptr);
+legsim_status contact_transitions(const Model &m, Data &d, bool &changed, double at, const ContactEvents *located = nullptr);
 // Every contact free (a state set or assembled from outside).
-void contacts_free(Sim &sim);
+void contacts_free(Data &d);
 // N and T of each contact with rows in layout, from the multipliers lambda (0 for the others).
 void contact_forces_of_layout(const Model &model, const Layout &layout, const VecR &lambda,
                               real *normal, real *tangential);
@@ -517,19 +519,19 @@ void contact_forces_of_layout(const Model &model, const Layout &layout, const Ve
 // layout of the joint rows alone with a generated kernel skips them).
 // reaction not null: the joints' reactions too (reactions_from_multipliers; the fused solve
 // computes them from its locals), for the caller's all-or-nothing to put back on failure.
-legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
+legsim_status dynamics_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready = false, bool keep = true, legsim_reaction *reaction = nullptr);
 // The options' disabled forces for a solve on layout. Driven analyses: the drivers supply the
 // actuator forces. Stops act besides them.
-inline uint32_t layout_disable(const Sim &sim, const Layout &layout) {
-  uint32_t disable = sim.opt.disable;
-  if (layout.m > sim.model.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
+inline uint32_t layout_disable(const Model &m, const Layout &layout) {
+  uint32_t disable = m.opt.disable;
+  if (layout.m > m.m && !layout.stops) disable |= LEGSIM_DISABLE_ACTUATORS;
   return disable;
 }
 // Whether force elements act in a solve with these disabled forces (their forces may depend
 // on the velocities).
-inline bool force_elements_act(const Sim &sim, uint32_t disable) {
-  return LEGSIM_WITH_FORCE_ELEMENTS && sim.data.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
+inline bool force_elements_act(const Data &d, uint32_t disable) {
+  return LEGSIM_WITH_FORCE_ELEMENTS && d.force_active && !(disable & LEGSIM_DISABLE_FORCE_ELEMENTS);
 }
 // RK4's stage solve, qdd alone at (q, qd) on layout: in the reduced system where the
 // layout's kernel has it (reduced_available, kernel.hpp; Kernel::accelerations: the same qdd
@@ -537,11 +539,11 @@ inline bool force_elements_act(const Sim &sim, uint32_t disable) {
 // multipliers or factor), else dynamics_solve without keep.
 // The stages of a step call it through dynamics_stage (kernel.hpp), with what they share
 // decided once.
-legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
-legsim_status dynamics_state_update(Sim &sim);  // qdd, lambda, reactions at the current state
+legsim_status dynamics_stage_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd);
+legsim_status dynamics_state_update(const Model &m, Data &d);  // qdd, lambda, reactions at the current state
 // The same, with d.rows and d.factor (J M^-1 J^T) those of the state, for a caller that reads
 // the factor (the contacts' Delassus matrix): the solve that keeps them, never RK4's reduced end.
-legsim_status dynamics_state_factored(Sim &sim);
+legsim_status dynamics_state_factored(const Model &m, Data &d);
 // The friction of the sliding contacts of layout (contact.cpp): y += sign * sum_i f_i
 // lambda[row_i], f_i the generalized friction force per unit normal multiplier (dir mu_k
 // G_t^T, at q); friction_column: f_i of contact k, its body's kBodyDof entries.
@@ -554,13 +556,13 @@ void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (
 legsim_status coupled_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, VecR &x);
 // The same system again, on the columns and factor of coupled_solve's last call (Data::slide_z).
 legsim_status coupled_resolve(Data &d, const Layout &layout, VecR &x);
-void stop_forces_update(Sim &sim);  // the stops' forces from the multipliers of Data::dyn
+void stop_forces_update(const Model &m, Data &d);  // the stops' forces from the multipliers of Data::dyn
 // lambda and reactions at the current state; the accelerations go to qdd
 // factor_ready: Data::factor already holds J M^-1 J^T of Data::dyn at (or, within
 // the Newton tolerance, near) the current q; only the rows are evaluated anew.
 // keep_factor: Data::rows and Data::factor left those of the state (not RK4's reduced end,
 // which keeps neither: dynamics_state_factored).
-legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready = false, bool keep_factor = false);
+legsim_status dynamics_state_reactions(const Model &m, Data &d, VecQ &qdd, bool factor_ready = false, bool keep_factor = false);
 
 // ---- assembly.cpp ----
 // Project: the per-step projection (stroke stops too): cheap, no polishing, no
@@ -569,15 +571,15 @@ legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready = 
 // rows_ready: data.rows already holds the layout's rows at q (at any velocities: Phi and
 // the Jacobian do not depend on them), so the first iteration does not evaluate them.
 enum class AssemblyMode { Project, Assemble };
-legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &drivers, VecQ &q,
+legsim_status assemble(const Model &m, Data &d, const Layout &layout, const DriverValues &drivers, VecQ &q,
                        const real *w, AssemblyMode mode, bool rows_ready = false);
 
 // ---- kinematics.cpp ----
-legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd);
+legsim_status velocity_solve(const Model &m, Data &d, const Layout &layout, VecQ &qd);
 // The largest |J v| of the rows, J v in jv: the velocities' distance from J v = nu for the rows
 // of forward dynamics, whose rates nu are 0 (joints, stops, closed contacts).
 real velocity_drift(const Layout &layout, const Rows &rows, const VecQ &v, VecR &jv);
-legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd);
+legsim_status acceleration_solve(const Model &m, Data &d, const Layout &layout, VecQ &qdd);
 
 // ---- reactions.cpp ----
 void reactions_from_multipliers(const Model &model, const Rows &rows, const VecR &lambda,
@@ -585,25 +587,26 @@ void reactions_from_multipliers(const Model &model, const Rows &rows, const VecR
 
 // ---- integrators ----
 // One step of h seconds (the options' step_s, or a part of it: a step cut at an event).
-legsim_status rk4_step(Sim &sim, real h);
-legsim_status generalized_alpha_step(Sim &sim, real h);
-legsim_status generalized_alpha_reactions(Sim &sim);
+legsim_status rk4_step(const Model &m, Data &d, real h);
+// tol: the Newton iteration's (the options' newton_tol; a part step's own, step.cpp)
+legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol);
+legsim_status generalized_alpha_reactions(const Model &m, Data &d);
 
 // ---- statics.cpp / inverse_dynamics.cpp ----
-legsim_status statics_solve(Sim &sim, real *actuator_force);
-legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out);
-legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *rate,
+legsim_status statics_solve(const Model &m, Data &d, real *actuator_force);
+legsim_status statics_sweep(const Model &m, Data &d, int n_grid, legsim_worst_case *out);
+legsim_status inverse_dynamics_solve(const Model &m, Data &d, const real *length, const real *rate,
                                      const real *accel, real *actuator_force);
 // With feet on the ground (held contacts) or followers: the actuators in follow are not
 // driven, their length, rate and acceleration follow and are written back (section 8).
-legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *length, real *rate,
+legsim_status inverse_dynamics_ground_solve(const Model &m, Data &d, uint32_t follow, real *length, real *rate,
                                             real *accel, real *actuator_force);
 // Every actuator driven at d.drivers, the contacts that are not free held (two: combined by
 // options.statics_rule), at (d.q, d.qd) whose accelerations must be target: d.lambda, d.rows,
 // each contact's N and T (statics.cpp, shared with the inverse dynamics).
-legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, real *tangential);
+legsim_status held_contacts_solve(const Model &m, Data &d, const VecQ &target, real *normal, real *tangential);
 // Reactions, actuator forces (F = -lambda_driver) and contact forces from that solve.
-legsim_status driven_outputs(Sim &sim, const real *normal, const real *tangential, real *actuator_force);
+legsim_status driven_outputs(const Model &m, Data &d, const real *normal, const real *tangential, real *actuator_force);
 
 // ---- helpers ----
 inline bool finite(real x) { return std::isfinite(x); }

@@ -59,7 +59,7 @@ Sim &moving_leg(const legsim_model_desc *model = &legsim_model_leg_revolute, Dri
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
   Sim &s = *reinterpret_cast<Sim *>(sim);
   TEST_ASSERT_TRUE_MESSAGE(reduced_available(s.data.dyn), "the leg's layout has the reduced solves");
-  TEST_ASSERT_TRUE((stage_plan(s, s.data.dyn).kernel != nullptr) == (drive != PUSH_WEIGHTLESS));
+  TEST_ASSERT_TRUE((stage_plan(s.model, s.data, s.data.dyn).kernel != nullptr) == (drive != PUSH_WEIGHTLESS));
   return s;
 }
 
@@ -123,7 +123,7 @@ void projects_as_the_whole_system(Sim &s, const char *scene) {
   project(m, lay, d.rows, d.factor, m.minv, d.rows.nu, v_ref, tmp);
   rows_eval(m, lay, d.stop_drivers, q, v_ref, d.rows);
   legsim_reaction reaction_ref[NJ];
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_solve(s, lay, q, v_ref, qdd_ref, true, true, reaction_ref));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_solve(s.model, s.data, lay, q, v_ref, qdd_ref, true, true, reaction_ref));
   const VecR lambda_ref = d.lambda;
 
   // the end's
@@ -131,7 +131,7 @@ void projects_as_the_whole_system(Sim &s, const char *scene) {
   legsim_reaction reaction_end[NJ];
   real residual = -1, drift = -1;
   d.lambda.setZero();
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, lay), q, v_end, qdd_end, s.data.lambda, reaction_end, kTol, true,
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s.model, s.data, stage_plan(s.model, s.data, lay), q, v_end, qdd_end, s.data.lambda, reaction_end, kTol, true,
                                                 residual, drift));
   TEST_ASSERT_TRUE(residual <= kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, drift);  // projected
@@ -181,7 +181,7 @@ void test_leaves_alone_unless_it_solves(void) {
   VecQ v_end = v, qdd;
   qdd.setConstant(7);
   real residual, drift;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q, v_end, qdd, d.lambda, nullptr, kTol, false,
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s.model, s.data, stage_plan(s.model, s.data, d.dyn), q, v_end, qdd, d.lambda, nullptr, kTol, false,
                                                 residual, drift));
   TEST_ASSERT_TRUE(residual <= kTol);
   TEST_ASSERT_TRUE(drift > 100 * kTol);
@@ -191,7 +191,7 @@ void test_leaves_alone_unless_it_solves(void) {
   // positions off Phi = 0 (1e-6 m on the foot's link): rk4_step's sequence, not the end
   VecQ q_off = q;
   q_off[15] += real(1e-6);
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, stage_plan(s, d.dyn), q_off, v_end, qdd, d.lambda, nullptr, kTol, true,
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s.model, s.data, stage_plan(s.model, s.data, d.dyn), q_off, v_end, qdd, d.lambda, nullptr, kTol, true,
                                                 residual, drift));
   TEST_ASSERT_TRUE(residual > kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
@@ -206,12 +206,12 @@ void test_no_projection_under_force_elements(void) {
   const int n = s.model.nq;
   const legsim_real load[2] = {20.0, -150.0};
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_set_force(reinterpret_cast<legsim_sim *>(&s), 0, load));
-  const StagePlan plan = stage_plan(s, d.dyn);
+  const StagePlan plan = stage_plan(s.model, s.data, d.dyn);
   TEST_ASSERT_NULL(plan.kernel);
   const VecQ q = d.q, v = drifted(d.qd, n);
   VecQ v_end = v, qdd;
   real residual, drift;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s, plan, q, v_end, qdd, s.data.lambda, nullptr, kTol, true, residual, drift));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_end(s.model, s.data, plan, q, v_end, qdd, s.data.lambda, nullptr, kTol, true, residual, drift));
   TEST_ASSERT_TRUE(drift > 100 * kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
 }

@@ -11,11 +11,11 @@ namespace {
 // The velocity and acceleration analyses drive every actuator of a free mechanism: feet on the
 // ground would over-determine the motion (the driven motion with stuck feet is
 // legsim_inverse_dynamics_on_ground's, which sets q, qd and qdd). Then the input's range.
-legsim_status free_motion_check(const Sim &s, const legsim_real *values, double bound) {
-  if (!s.data.assembled) return LEGSIM_ERR_STATE;
-  for (int k = 0; k < s.model.nc; ++k)
-    if (s.data.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
-  return bounded_array(values, s.model.na, bound) ? LEGSIM_OK : LEGSIM_ERR_BAD_INPUT;
+legsim_status free_motion_check(const Model &m, const Data &d, const legsim_real *values, double bound) {
+  if (!d.assembled) return LEGSIM_ERR_STATE;
+  for (int k = 0; k < m.nc; ++k)
+    if (d.contact[k].state != LEGSIM_CONTACT_FREE) return LEGSIM_ERR_CONTACT;
+  return bounded_array(values, m.na, bound) ? LEGSIM_OK : LEGSIM_ERR_BAD_INPUT;
 }
 }  // namespace
 
@@ -27,10 +27,10 @@ legsim_status legsim_assemble(legsim_sim *sim, const legsim_real *length_m) {
   const Model &m = s.model;
   Data &d = s.data;
   if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
-  legsim_status st = drive_to_lengths(sim, s, length_m);
+  legsim_status st = drive_to_lengths(sim, length_m);
   if (st != LEGSIM_OK) return st;
-  st = drivers_layout(s, all_actuators(m), 0);
-  return st == LEGSIM_OK ? all_or_nothing(s, [&] { return assemble_commit(s); }) : st;
+  st = drivers_layout(s.model, s.data, all_actuators(m), 0);
+  return st == LEGSIM_OK ? all_or_nothing(s.model, s.data, [&] { return assemble_commit(s.model, s.data); }) : st;
 }
 
 legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
@@ -42,12 +42,12 @@ legsim_status legsim_assemble_pose(legsim_sim *sim, int32_t pose) {
   Data &d = s.data;
   d.drivers.ncoord = p.n_drivers;
   for (int k = 0; k < p.n_drivers; ++k) d.drivers.coord[k] = p.driver[k];
-  legsim_status st = drivers_layout(s, 0, p.n_drivers);
+  legsim_status st = drivers_layout(s.model, s.data, 0, p.n_drivers);
   if (st != LEGSIM_OK) return st;
-  return all_or_nothing(s, [&] {
+  return all_or_nothing(s.model, s.data, [&] {
     for (int b = 0; b < s.model.nb; ++b)
       for (int c = 0; c < 3; ++c) d.q[3 * b + c] = real(p.guess[b][c]);
-    return assemble_commit(s);
+    return assemble_commit(s.model, s.data);
   });
 }
 
@@ -67,8 +67,8 @@ legsim_status legsim_assemble_foot(legsim_sim *sim, const legsim_real *foot_xy) 
   legsim_status st = layout_build(m, 0, 0, d.work, nullptr, false, true);
   if (st == LEGSIM_OK) st = layout_finish(d.work, d.drivers);
   if (st != LEGSIM_OK) return st;
-  return all_or_nothing(s, [&] {
-    legsim_status r = assemble_commit(s);
+  return all_or_nothing(s.model, s.data, [&] {
+    legsim_status r = assemble_commit(s.model, s.data);
     if (r != LEGSIM_OK) return r;
     real len[kMaxActuators];
     legsim_actuator_lengths(sim, len, nullptr);
@@ -82,7 +82,7 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
-  const legsim_status c = free_motion_check(s, rate_mps, LEGSIM_MAX_RATE_MPS);
+  const legsim_status c = free_motion_check(s.model, s.data, rate_mps, LEGSIM_MAX_RATE_MPS);
   if (c != LEGSIM_OK) return c;
   legsim_actuator_lengths(sim, d.drivers.length, nullptr);
   for (int a = 0; a < m.na; ++a) {
@@ -90,17 +90,17 @@ legsim_status legsim_velocity_analysis(legsim_sim *sim, const legsim_real *rate_
     d.drivers.accel[a] = 0;
   }
   d.drivers.ncoord = 0;
-  legsim_status st = drivers_layout(s, all_actuators(m), 0);
+  legsim_status st = drivers_layout(s.model, s.data, all_actuators(m), 0);
   if (st != LEGSIM_OK) return st;
-  return all_or_nothing(s, [&] {
+  return all_or_nothing(s.model, s.data, [&] {
     VecQ qd = VecQ::Zero();
-    legsim_status v = stops_clear(s);
-    if (v == LEGSIM_OK) v = velocity_solve(s, d.work, qd);
+    legsim_status v = stops_clear(s.model, s.data);
+    if (v == LEGSIM_OK) v = velocity_solve(s.model, s.data, d.work, qd);
     if (v != LEGSIM_OK) return v;
     // a velocity a state may not hold is refused here, not at the next step
     if (!state_sane(d.q, qd, m.nq)) return LEGSIM_ERR_DIVERGED;
     d.qd = qd;
-    return state_refresh(s);
+    return state_refresh(s.model, s.data);
   });
 }
 
@@ -110,16 +110,16 @@ legsim_status legsim_acceleration_analysis(legsim_sim *sim, const legsim_real *a
   Sim &s = *as_sim(sim);
   const Model &m = s.model;
   Data &d = s.data;
-  const legsim_status c = free_motion_check(s, accel_mps2, LEGSIM_MAX_ACCEL_MPS2);
+  const legsim_status c = free_motion_check(s.model, s.data, accel_mps2, LEGSIM_MAX_ACCEL_MPS2);
   if (c != LEGSIM_OK) return c;
   legsim_actuator_lengths(sim, d.drivers.length, d.drivers.rate);
   for (int a = 0; a < m.na; ++a) d.drivers.accel[a] = accel_mps2[a];
   d.drivers.ncoord = 0;
-  legsim_status st = drivers_layout(s, all_actuators(m), 0);
+  legsim_status st = drivers_layout(s.model, s.data, all_actuators(m), 0);
   if (st != LEGSIM_OK) return st;
-  return all_or_nothing(s, [&] {
+  return all_or_nothing(s.model, s.data, [&] {
     VecQ qdd;
-    const legsim_status r = acceleration_solve(s, d.work, qdd);
+    const legsim_status r = acceleration_solve(s.model, s.data, d.work, qdd);
     if (r != LEGSIM_OK) return r;
     d.qdd = qdd;
     state_changed(d);  // qdd is kinematic, not the dynamics'
@@ -148,11 +148,11 @@ legsim_status legsim_inverse_dynamics(legsim_sim *sim, const legsim_real *length
     rate[a] = rate_mps[a];
     acc[a] = accel_mps2[a];
   }
-  st = all_or_nothing(s, [&] {
-    legsim_status r = stops_clear(s);
+  st = all_or_nothing(s.model, s.data, [&] {
+    legsim_status r = stops_clear(s.model, s.data);
     if (r == LEGSIM_OK)
-      r = held ? inverse_dynamics_ground_solve(s, 0, len, rate, acc, force)
-               : inverse_dynamics_solve(s, length_m, rate_mps, accel_mps2, force);
+      r = held ? inverse_dynamics_ground_solve(s.model, s.data, 0, len, rate, acc, force)
+               : inverse_dynamics_solve(s.model, s.data, length_m, rate_mps, accel_mps2, force);
     state_changed(s.data);  // qdd is the driven motion's
     return r;
   });
@@ -182,9 +182,9 @@ legsim_status legsim_inverse_dynamics_on_ground(legsim_sim *sim, uint32_t follow
   if (!bounded_array(rate, m.na, LEGSIM_MAX_RATE_MPS) || !bounded_array(acc, m.na, LEGSIM_MAX_ACCEL_MPS2))
     return LEGSIM_ERR_BAD_INPUT;
   real force[kMaxActuators];
-  st = all_or_nothing(s, [&] {
-    legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = inverse_dynamics_ground_solve(s, follow_mask, len, rate, acc, force);
+  st = all_or_nothing(s.model, s.data, [&] {
+    legsim_status r = stops_clear(s.model, s.data);
+    if (r == LEGSIM_OK) r = inverse_dynamics_ground_solve(s.model, s.data, follow_mask, len, rate, acc, force);
     state_changed(s.data);  // qdd is the driven motion's
     return r;
   });
@@ -203,9 +203,9 @@ legsim_status legsim_statics(legsim_sim *sim, legsim_real *actuator_force_n) {
   Sim &s = *as_sim(sim);
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
   real force[kMaxActuators];
-  const legsim_status st = all_or_nothing(s, [&] {
-    legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = statics_solve(s, force);
+  const legsim_status st = all_or_nothing(s.model, s.data, [&] {
+    legsim_status r = stops_clear(s.model, s.data);
+    if (r == LEGSIM_OK) r = statics_solve(s.model, s.data, force);
     state_changed(s.data);
     return r;
   });
@@ -221,10 +221,10 @@ legsim_status legsim_statics_sweep(legsim_sim *sim, int32_t n_grid, legsim_worst
   if (!s.data.assembled) return LEGSIM_ERR_STATE;
   if (n_grid < 2 || n_grid > LEGSIM_MAX_GRID) return LEGSIM_ERR_BAD_INPUT;
   legsim_worst_case wc;
-  const legsim_status st = all_or_nothing(s, [&] {
-    legsim_status r = stops_clear(s);
-    if (r == LEGSIM_OK) r = contacts_release(s);
-    if (r == LEGSIM_OK) r = statics_sweep(s, n_grid, &wc);  // leaves the last pose solved
+  const legsim_status st = all_or_nothing(s.model, s.data, [&] {
+    legsim_status r = stops_clear(s.model, s.data);
+    if (r == LEGSIM_OK) r = contacts_release(s.model, s.data);
+    if (r == LEGSIM_OK) r = statics_sweep(s.model, s.data, n_grid, &wc);  // leaves the last pose solved
     state_changed(s.data);
     return r;
   });
@@ -241,7 +241,7 @@ legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *leng
   Data &d = s.data;
   if (m.nc < 1 || !(std::abs(feet_mid_m) <= real(LEGSIM_MAX_COORD))) return LEGSIM_ERR_BAD_INPUT;
   if (!all_finite(d.q, m.nq)) return LEGSIM_ERR_STATE;
-  const legsim_status lc = drive_to_lengths(sim, s, length_m);
+  const legsim_status lc = drive_to_lengths(sim, length_m);
   if (lc != LEGSIM_OK) return lc;
   d.drivers.feet_mid = feet_mid_m;
   // joints, lengths, the outer feet's normal gaps and their midpoint along the line: with
@@ -253,11 +253,11 @@ legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *leng
   legsim_status st = layout_build(m, all_actuators(m), 0, d.work, normal_only, true);
   if (st == LEGSIM_OK) st = layout_finish(d.work, d.drivers);
   if (st != LEGSIM_OK) return st;
-  return all_or_nothing(s, [&] {
-    legsim_status r = stops_clear(s);
+  return all_or_nothing(s.model, s.data, [&] {
+    legsim_status r = stops_clear(s.model, s.data);
     if (r != LEGSIM_OK) return r;
     VecQ q = d.q;
-    r = assemble(s, d.work, d.drivers, q, m.unit_weight, AssemblyMode::Assemble);
+    r = assemble(s.model, s.data, d.work, d.drivers, q, m.unit_weight, AssemblyMode::Assemble);
     if (r != LEGSIM_OK) return r;
     d.q = q;
     d.qd.setZero();
@@ -266,15 +266,15 @@ legsim_status legsim_assemble_on_ground(legsim_sim *sim, const legsim_real *leng
     for (int k = 0; k < m.nc; ++k) {
       Vec2 p, v;
       contact_point(m, k, d.q, zero, p, v);
-      if (k > 0 && k < m.nc - 1 && !(std::abs(m.ground_n.dot(p - m.ground_point)) <= real(s.opt.newton_tol)))
+      if (k > 0 && k < m.nc - 1 && !(std::abs(m.ground_n.dot(p - m.ground_point)) <= real(s.model.opt.newton_tol)))
         return LEGSIM_ERR_STATE;  // a middle foot off the line
       d.contact[k].state = uint8_t(LEGSIM_CONTACT_STUCK);
       d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
     }
-    r = stops_layout(s);
+    r = stops_layout(s.model, s.data);
     if (r != LEGSIM_OK) return r;
     const legsim_report assembly = d.report;
-    r = state_refresh(s);
+    r = state_refresh(s.model, s.data);
     d.report.iterations = assembly.iterations;
     d.report.residual = assembly.residual;
     d.report.condition = assembly.condition;

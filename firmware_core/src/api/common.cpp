@@ -46,9 +46,9 @@ legsim_status lengths_check(const Model &m, const legsim_real *len) {
 
 // The driven lengths of an assembly: the given ones, or the actuators' current ones for
 // NULL; checked, then held still (rate and acceleration 0) as drivers with no coordinate.
-legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *length_m) {
-  const Model &m = s.model;
-  Data &d = s.data;
+legsim_status drive_to_lengths(legsim_sim *sim, const legsim_real *length_m) {
+  const Model &m = as_sim(sim)->model;
+  Data &d = as_sim(sim)->data;
   real len[kMaxActuators];
   if (length_m) {
     for (int a = 0; a < m.na; ++a) len[a] = length_m[a];
@@ -66,43 +66,41 @@ legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *lengt
 }
 
 // A state set from outside rests on no stroke stop (the next step finds any).
-legsim_status stops_clear(Sim &sim) {
-  Data &d = sim.data;
-  for (int a = 0; a < sim.model.na; ++a) d.act[a].stop_force = 0;
+legsim_status stops_clear(const Model &m, Data &d) {
+  for (int a = 0; a < m.na; ++a) d.act[a].stop_force = 0;
   if (!d.stop_mask) return LEGSIM_OK;
   d.stop_mask = 0;
-  return stops_layout(sim);
+  return stops_layout(m, d);
 }
 
 // A state assembled or set from outside rests on no contact (legsim_assemble_on_ground
 // and legsim_set_contact_state put feet on the ground).
-legsim_status contacts_release(Sim &sim) {
+legsim_status contacts_release(const Model &m, Data &d) {
   bool any = false;
-  for (int k = 0; k < sim.model.nc; ++k) any = any || sim.data.contact[k].state != LEGSIM_CONTACT_FREE;
-  contacts_free(sim);
-  return any ? stops_layout(sim) : LEGSIM_OK;
+  for (int k = 0; k < m.nc; ++k) any = any || d.contact[k].state != LEGSIM_CONTACT_FREE;
+  contacts_free(d);
+  return any ? stops_layout(m, d) : LEGSIM_OK;
 }
 
-legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord) {
-  if (ncoord == 0) return work_layout(sim, act_mask);
-  sim.data.work_mask = -1;  // coordinate rows: built for this call only
-  legsim_status s = layout_build(sim.model, act_mask, ncoord, sim.data.work);
-  return s == LEGSIM_OK ? layout_finish(sim.data.work, sim.data.drivers) : s;
+legsim_status drivers_layout(const Model &m, Data &d, uint32_t act_mask, int ncoord) {
+  if (ncoord == 0) return work_layout(m, d, act_mask);
+  d.work_mask = -1;  // coordinate rows: built for this call only
+  legsim_status s = layout_build(m, act_mask, ncoord, d.work);
+  return s == LEGSIM_OK ? layout_finish(d.work, d.drivers) : s;
 }
 
 // Assembles d.work from d.q with geometric weights; commits q (qd = 0) on success.
-legsim_status assemble_commit(Sim &sim) {
-  Data &d = sim.data;
-  if (const legsim_status st = stops_clear(sim); st != LEGSIM_OK) return st;
-  if (const legsim_status st = contacts_release(sim); st != LEGSIM_OK) return st;
+legsim_status assemble_commit(const Model &m, Data &d) {
+  if (const legsim_status st = stops_clear(m, d); st != LEGSIM_OK) return st;
+  if (const legsim_status st = contacts_release(m, d); st != LEGSIM_OK) return st;
   VecQ q = d.q;
-  const legsim_status s = assemble(sim, d.work, d.drivers, q, sim.model.unit_weight, AssemblyMode::Assemble);
+  const legsim_status s = assemble(m, d, d.work, d.drivers, q, m.unit_weight, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
   d.q = q;
   d.qd.setZero();
   d.assembled = true;
   const legsim_report assembly = d.report;
-  const legsim_status st = state_refresh(sim);
+  const legsim_status st = state_refresh(m, d);
   // report the assembly's figures, not those of the free dynamics solved after it
   d.report.iterations = assembly.iterations;
   d.report.residual = assembly.residual;

@@ -61,15 +61,15 @@ bool same_options(const legsim_options &a, const legsim_options &b);
 legsim_status lengths_check(const Model &m, const legsim_real *len);
 // The driven lengths of an assembly: the given ones, or the actuators' current ones for
 // NULL; checked, then held still (rate and acceleration 0) as drivers with no coordinate.
-legsim_status drive_to_lengths(legsim_sim *sim, Sim &s, const legsim_real *length_m);
+legsim_status drive_to_lengths(legsim_sim *sim, const legsim_real *length_m);
 // A state set from outside rests on no stroke stop (the next step finds any).
-legsim_status stops_clear(Sim &sim);
+legsim_status stops_clear(const Model &m, Data &d);
 // A state assembled or set from outside rests on no contact (legsim_assemble_on_ground
 // and legsim_set_contact_state put feet on the ground).
-legsim_status contacts_release(Sim &sim);
+legsim_status contacts_release(const Model &m, Data &d);
 // Data::work for the actuators in act_mask and ncoord coordinate drivers.
-legsim_status drivers_layout(Sim &sim, uint32_t act_mask, int ncoord);
+legsim_status drivers_layout(const Model &m, Data &d, uint32_t act_mask, int ncoord);
 // Assembles d.work from d.q with geometric weights; commits q (qd = 0) on success.
-legsim_status assemble_commit(Sim &sim);
+legsim_status assemble_commit(const Model &m, Data &d);
 
 }  // namespace legsim::api

@@ -41,8 +41,8 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   sim->magic = 0;                // not a sim until complete
   s = model_compile(model, sim->model);
   if (s != LEGSIM_OK) return s;
-  sim->opt = *options;
-  sim->step_h = real(options->step_s);
+  sim->model.opt = *options;
+  sim->model.step_h = real(options->step_s);
   Data &d = sim->data;
   const Model &m = sim->model;
   d.t = 0;
@@ -74,7 +74,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   d.work_mask = -1;
   trig_clear(d.trig);
   trig_clear(*stage_trig(d));
-  contacts_free(*sim);
+  contacts_free(d);
   for (int f = 0; f < m.nf; ++f) {
     d.force_value[f][0] = real(model->force[f].value[0]);
     d.force_value[f][1] = real(model->force[f].value[1]);
@@ -82,7 +82,7 @@ legsim_status legsim_init(void *storage, size_t storage_bytes, const legsim_mode
   force_active_update(m, d);
   s = layout_build(m, 0, 0, d.joints);
   if (s == LEGSIM_OK) s = layout_finish(d.joints, d.drivers);
-  if (s == LEGSIM_OK) s = stops_layout(*sim);
+  if (s == LEGSIM_OK) s = stops_layout(m, d);
   if (s != LEGSIM_OK) return s;
   sim->magic = kSimMagic;
   *out = reinterpret_cast<legsim_sim *>(sim);
@@ -94,9 +94,9 @@ legsim_status legsim_set_options(legsim_sim *sim, const legsim_options *options)
   const legsim_status s = options_check(options);
   if (s != LEGSIM_OK) return s;
   Sim &sm = *as_sim(sim);
-  if (same_options(sm.opt, *options)) return LEGSIM_OK;  // sent again: changes nothing
-  sm.opt = *options;
-  sm.step_h = real(options->step_s);
+  if (same_options(sm.model.opt, *options)) return LEGSIM_OK;  // sent again: changes nothing
+  sm.model.opt = *options;
+  sm.model.step_h = real(options->step_s);
   Data &d = sm.data;
   if (options->step_s != d.origin_step_s) {  // a new step size: the time line starts here
     d.origin_t = d.t;

@@ -99,16 +99,16 @@ legsim_status legsim_set_state(legsim_sim *sim, const legsim_real *q, const legs
     qdn[k] = qd ? qd[k] : real(0);
   }
   if (!state_sane(qn, qdn, n)) return LEGSIM_ERR_BAD_INPUT;  // NaN too
-  return all_or_nothing(s, [&] {
+  return all_or_nothing(s.model, s.data, [&] {
     d.q = qn;
     d.qd = qdn;
     d.t = t_s;
     d.origin_t = t_s;
     d.origin_steps = d.steps;
     d.assembled = true;
-    legsim_status c = stops_clear(s);
-    if (c == LEGSIM_OK) c = contacts_release(s);
-    return c == LEGSIM_OK ? state_refresh(s) : c;
+    legsim_status c = stops_clear(s.model, s.data);
+    if (c == LEGSIM_OK) c = contacts_release(s.model, s.data);
+    return c == LEGSIM_OK ? state_refresh(s.model, s.data) : c;
   });
 }
 
@@ -181,7 +181,7 @@ legsim_status legsim_reactions(const legsim_sim *sim, legsim_reaction *out) {
   CHECK_SIM(sim);
   if (!out) return LEGSIM_ERR_NULL;
   const Sim &s = *as_sim(sim);
-  if (s.opt.disable & LEGSIM_DISABLE_REACTIONS) return LEGSIM_ERR_DISABLED;
+  if (s.model.opt.disable & LEGSIM_DISABLE_REACTIONS) return LEGSIM_ERR_DISABLED;
   for (int j = 0; j < s.model.nj; ++j) out[j] = s.data.reaction[j];
   return LEGSIM_OK;
 }
@@ -235,24 +235,24 @@ legsim_status legsim_set_contact_state(legsim_sim *sim, int32_t k, legsim_contac
   contact_point(m, k, d.q, d.qd, p, v);
   const real gap = m.ground_n.dot(p - m.ground_point);
   const real vt = m.ground_t.dot(v);
-  if (st != LEGSIM_CONTACT_FREE && !(std::abs(gap) <= real(s.opt.newton_tol))) return LEGSIM_ERR_STATE;
-  if (st == LEGSIM_CONTACT_SLIDING && !(std::abs(vt) > real(s.opt.newton_tol))) return LEGSIM_ERR_STATE;
+  if (st != LEGSIM_CONTACT_FREE && !(std::abs(gap) <= real(s.model.opt.newton_tol))) return LEGSIM_ERR_STATE;
+  if (st == LEGSIM_CONTACT_SLIDING && !(std::abs(vt) > real(s.model.opt.newton_tol))) return LEGSIM_ERR_STATE;
   const int8_t dir = vt > 0 ? 1 : -1;
   if (d.contact[k].state == st && (st != LEGSIM_CONTACT_SLIDING || d.contact[k].slip_dir == dir))
     return LEGSIM_OK;  // sent again: changes nothing
-  return all_or_nothing(s, [&] {
+  return all_or_nothing(s.model, s.data, [&] {
     d.contact[k].state = uint8_t(st);
     d.contact[k].slip_dir = dir;
     d.stop_drivers.stick[k] = m.ground_t.dot(p - m.ground_point);
-    legsim_status r = stops_layout(s);
+    legsim_status r = stops_layout(s.model, s.data);
     if (r == LEGSIM_OK && st != LEGSIM_CONTACT_FREE) {
       // the foot stops where it is (stuck) or on the line (sliding): its velocity onto the
       // new rows (an inelastic impact; frictionless: a state set from outside)
       VecQ qd = d.qd;
-      r = velocity_solve(s, d.dyn, qd);
+      r = velocity_solve(s.model, s.data, d.dyn, qd);
       if (r == LEGSIM_OK) d.qd = qd;
     }
-    return r == LEGSIM_OK ? state_refresh(s) : r;
+    return r == LEGSIM_OK ? state_refresh(s.model, s.data) : r;
   });
 }
 

@@ -14,14 +14,14 @@ legsim_status legsim_step(legsim_sim *sim, int32_t n_steps) {
   if (n_steps < 0) return LEGSIM_ERR_BAD_INPUT;
   Sim &s = *as_sim(sim);
   if (!s.data.assembled || !state_finite(s.data.q, s.data.qd, s.model.nq)) return LEGSIM_ERR_STATE;
-  return steps_run(s, n_steps);  // system/step.cpp: the step's stages
+  return steps_run(s.model, s.data, n_steps);  // system/step.cpp: the step's stages
 }
 
 legsim_status legsim_contacts_check(legsim_sim *sim) {
   CHECK_SIM(sim);
   Sim &s = *as_sim(sim);
   if (!s.data.assembled || !state_finite(s.data.q, s.data.qd, s.model.nq)) return LEGSIM_ERR_STATE;
-  return contact_modes_check(s);  // system/step.cpp: the step's first stage
+  return contact_modes_check(s.model, s.data);  // system/step.cpp: the step's first stage
 }
 
 legsim_status legsim_command_force(legsim_sim *sim, int32_t actuator, legsim_real force_n) {

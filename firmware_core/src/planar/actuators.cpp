@@ -4,26 +4,24 @@
 
 namespace legsim {
 
-legsim_status work_layout(Sim &sim, uint32_t mask) {
-  Data &d = sim.data;
+legsim_status work_layout(const Model &m, Data &d, uint32_t mask) {
   if (d.work_mask == int32_t(mask)) return LEGSIM_OK;
   d.work_mask = -1;
-  legsim_status s = layout_build(sim.model, mask, 0, d.work);
+  legsim_status s = layout_build(m, mask, 0, d.work);
   if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
   if (s == LEGSIM_OK) d.work_mask = int32_t(mask);
   return s;
 }
 
-legsim_status stops_layout(Sim &sim) {
-  Data &d = sim.data;
+legsim_status stops_layout(const Model &m, Data &d) {
   uint8_t contacts[kMaxContacts];
-  contact_rows_of_states(sim.model, d, contacts);
-  legsim_status s = layout_build(sim.model, d.stop_mask, 0, d.dyn, contacts);
+  contact_rows_of_states(m, d, contacts);
+  legsim_status s = layout_build(m, d.stop_mask, 0, d.dyn, contacts);
   if (s == LEGSIM_OK) s = layout_finish(d.dyn, d.stop_drivers);
   d.dyn.stops = true;
   // more rows than coordinates: the surplus are dependent (factor_build drops them)
-  d.dyn.surplus = uint8_t(d.dyn.m > sim.model.nq ? d.dyn.m - sim.model.nq : 0);
-  contact_slides_mark(sim.model, d, d.dyn);
+  d.dyn.surplus = uint8_t(d.dyn.m > m.nq ? d.dyn.m - m.nq : 0);
+  contact_slides_mark(m, d, d.dyn);
   return s;
 }
 
@@ -45,10 +43,8 @@ real stroke_length(const Model &m, int a, const VecQ &q, TrigCache *trig) {
 // row takes its share of the impulse. From then on a length row holds it in the dynamics,
 // and its multiplier is the stop's force. Raised as an event, never silent. Putting one
 // actuator on its stop can push another past its end, so the check repeats.
-legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t arriving) {
+legsim_status stroke_limits_enforce(const Model &m, Data &d, bool &changed, real into, uint32_t arriving) {
   changed = false;
-  const Model &m = sim.model;
-  Data &d = sim.data;
   DriverValues &dv = d.stop_drivers;
   for (int pass = 0; pass <= m.na; ++pass) {
     uint32_t added = 0;
@@ -72,9 +68,9 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t
     const legsim_report report0 = d.report;
     d.stop_mask |= added;
     auto project_onto_stops = [&]() {
-      legsim_status r = stops_layout(sim);
-      if (r == LEGSIM_OK) r = assemble(sim, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
-      if (r == LEGSIM_OK) r = velocity_solve(sim, d.dyn, d.qd);
+      legsim_status r = stops_layout(m, d);
+      if (r == LEGSIM_OK) r = assemble(m, d, d.dyn, dv, d.q, m.minv, AssemblyMode::Project);
+      if (r == LEGSIM_OK) r = velocity_solve(m, d, d.dyn, d.qd);
       return r;
     };
     legsim_status s = project_onto_stops();
@@ -85,7 +81,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t
       // lengths tied by one relation, so the fourth follows from the other three and lies a
       // round-off past its end. One stop lets go, the first whose actuator then stays within
       // its stroke (to the assembly's tolerance), as if it had been reached last.
-      const real tol = real(sim.opt.newton_tol);
+      const real tol = real(m.opt.newton_tol);
       for (int b = 0; b < m.na && s != LEGSIM_OK; ++b) {
         if (!(all & (1u << b))) continue;
         d.q = q0;
@@ -120,7 +116,7 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t
       d.report.residual = report0.residual;
       d.report.condition = report0.condition;
       raise_event(d, LEGSIM_EVENT_NEAR_SINGULAR);
-      return stops_layout(sim);
+      return stops_layout(m, d);
     }
     if (s != LEGSIM_OK) return s;
     changed = true;
@@ -130,10 +126,8 @@ legsim_status stroke_limits_enforce(Sim &sim, bool &changed, real into, uint32_t
 
 // A stop only pushes: the shortest-length stop pushes the rod out (force > 0),
 // the longest-length one pushes it in (force < 0). A stop asked to pull lets go.
-legsim_status stroke_stops_release(Sim &sim, bool &changed) {
+legsim_status stroke_stops_release(const Model &m, Data &d, bool &changed) {
   changed = false;
-  const Model &m = sim.model;
-  Data &d = sim.data;
   for (int a = 0; a < m.na; ++a) {
     if (!(d.stop_mask & (1u << a))) continue;
     const bool at_min = d.stop_drivers.length[a] <= m.act[a].lmin;
@@ -143,7 +137,7 @@ legsim_status stroke_stops_release(Sim &sim, bool &changed) {
     d.act[a].stop_force = 0;
     changed = true;
   }
-  return changed ? stops_layout(sim) : LEGSIM_OK;
+  return changed ? stops_layout(m, d) : LEGSIM_OK;
 }
 
 }  // namespace legsim

@@ -42,9 +42,7 @@ void contact_slides_mark(const Model &model, const Data &d, Layout &layout) {
 // The multipliers are the constraint forces with the sign of -J^T lambda: the
 // ground force on the foot is -(lambda_n n + lambda_t t); a sliding foot's friction
 // is dir mu_k lambda_n t (T = -dir mu_k N).
-void contact_forces_update(Sim &sim) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+void contact_forces_update(const Model &m, Data &d) {
   int row = m.m;
   for (int a = 0; a < m.na; ++a) row += (d.stop_mask >> a) & 1u;
   for (int k = 0; k < m.nc; ++k) {
@@ -63,8 +61,7 @@ void contact_forces_update(Sim &sim) {
   }
 }
 
-void contacts_free(Sim &sim) {
-  Data &d = sim.data;
+void contacts_free(Data &d) {
   for (int k = 0; k < kMaxContacts; ++k) d.contact[k] = {uint8_t(LEGSIM_CONTACT_FREE), 0, 0, 0, {0, 0}, 0, 0};
 }
 
@@ -83,9 +80,7 @@ namespace {
 // An inelastic impact onto the rows of Data::dyn (the new modes): the velocity jump
 // v+ = v- - M^-1 (J^T mu - F E^T mu) with J v+ = nu, mu from the coupled system, and
 // per contact with rows its impulse on the foot (normal, tangential), N s.
-legsim_status impact(Sim &sim, const uint32_t hit) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status impact(const Model &m, Data &d, const uint32_t hit) {
   const Layout &lay = d.dyn;
   rows_eval(m, lay, d.stop_drivers, d.q, d.qd, d.rows);
   legsim_status s = factor_build(lay, d.rows, m.minv, d.factor);
@@ -117,10 +112,8 @@ real sign_of(real x) { return x > 0 ? real(1) : real(-1); }
 // approach velocity; a landing foot whose impulse falls outside the static cone
 // (|P_t| > mu_s P_n) slides with mu_k against its approach's tangential velocity, and the
 // impact is taken again from the approach. Leaves d.qd, the modes and the impulses of it.
-legsim_status impact_candidate(Sim &sim, uint32_t hit, uint32_t touch, uint32_t leave, const VecQ &approach,
+legsim_status impact_candidate(const Model &m, Data &d, uint32_t hit, uint32_t touch, uint32_t leave, const VecQ &approach,
                                const ContactData *start) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
   for (int k = 0; k < m.nc; ++k) {
     if (!((hit >> k) & 1u)) continue;
     d.contact[k] = start[k];
@@ -128,9 +121,9 @@ legsim_status impact_candidate(Sim &sim, uint32_t hit, uint32_t touch, uint32_t 
     d.contact[k].impulse[0] = d.contact[k].impulse[1] = 0;
   }
   d.qd = approach;
-  legsim_status s = stops_layout(sim);
+  legsim_status s = stops_layout(m, d);
   if (s != LEGSIM_OK || !(hit & ~leave)) return s;  // nothing closed: no impulse
-  s = impact(sim, hit & ~leave);
+  s = impact(m, d, hit & ~leave);
   if (s != LEGSIM_OK) return s;
   bool slides = false;
   for (int k = 0; k < m.nc; ++k) {
@@ -141,8 +134,8 @@ legsim_status impact_candidate(Sim &sim, uint32_t hit, uint32_t touch, uint32_t 
   }
   if (!slides) return LEGSIM_OK;
   d.qd = approach;
-  s = stops_layout(sim);
-  return s == LEGSIM_OK ? impact(sim, hit & ~leave) : s;
+  s = stops_layout(m, d);
+  return s == LEGSIM_OK ? impact(m, d, hit & ~leave) : s;
 }
 
 // The inelastic impact of the closed contacts `hit` (the landing ones `touch` among them,
@@ -160,9 +153,7 @@ legsim_status impact_candidate(Sim &sim, uint32_t hit, uint32_t touch, uint32_t 
 // order whose impulses do not pull (all leaving always qualifies). So an impulse never
 // pulls, and the solve is bounded: 2^n candidates, at most two impact solves each, and
 // one more for the chosen one.
-legsim_status impact_lcp(Sim &sim, uint32_t hit, uint32_t touch) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status impact_lcp(const Model &m, Data &d, uint32_t hit, uint32_t touch) {
   const VecQ approach = d.qd;
   ContactData start[kMaxContacts];
   real vmax = 0, vn[kMaxContacts];
@@ -184,7 +175,7 @@ legsim_status impact_lcp(Sim &sim, uint32_t hit, uint32_t touch) {
   for (int ndiff = 0; ndiff <= m.nc; ++ndiff) {
     for (uint32_t leave = 0; leave < (1u << m.nc); ++leave) {
       if ((leave & ~hit) || __builtin_popcount(leave ^ guess) != ndiff) continue;
-      legsim_status s = impact_candidate(sim, hit, touch, leave, approach, start);
+      legsim_status s = impact_candidate(m, d, hit, touch, leave, approach, start);
       if (s != LEGSIM_OK) continue;  // a singular candidate is no solution
       real pmax = 0;
       for (int k = 0; k < m.nc; ++k)
@@ -211,7 +202,7 @@ legsim_status impact_lcp(Sim &sim, uint32_t hit, uint32_t touch) {
     raise_event(d, LEGSIM_EVENT_CONTACT_INCONSISTENT);
     chosen = fallback;
   }
-  legsim_status s = impact_candidate(sim, hit, touch, chosen, approach, start);
+  legsim_status s = impact_candidate(m, d, hit, touch, chosen, approach, start);
   if (s != LEGSIM_OK) return s;
   for (int k = 0; k < m.nc; ++k) {
     if (!((hit >> k) & 1u)) continue;
@@ -325,9 +316,7 @@ bool mode_consistent(const Model &m, int n, const real (&W)[2 * kMaxContacts][2 
 // consistent: CONTACT_AMBIGUOUS. The chosen modes are set (events raised, d.contact[k].events
 // too), d.dyn rebuilt and solved. found = false (none consistent, or a singular W): the modes
 // and the solve are put back as they were, for the caller's fallback.
-legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uint32_t &slipped) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status contact_modes_choose(const Model &m, Data &d, bool &found, uint32_t &changes, uint32_t &slipped) {
   found = false;
   changes = 0;
   int idx[kMaxContacts], n = 0;
@@ -344,8 +333,8 @@ legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uin
       d.contact[k] = saved[k];
       d.stop_drivers.stick[k] = saved_stick[k];
     }
-    legsim_status s = stops_layout(sim);
-    return s == LEGSIM_OK ? dynamics_state_update(sim) : s;  // (its factor is read by no one)
+    legsim_status s = stops_layout(m, d);
+    return s == LEGSIM_OK ? dynamics_state_update(m, d) : s;  // (its factor is read by no one)
   };
   for (int i = 0; i < n; ++i) {  // every closed contact stuck where it is, for W and b
     ContactData &c = d.contact[idx[i]];
@@ -355,8 +344,8 @@ legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uin
     c.state = LEGSIM_CONTACT_STUCK;
     d.stop_drivers.stick[idx[i]] = m.ground_t.dot(p - m.ground_point);
   }
-  legsim_status s = stops_layout(sim);
-  if (s == LEGSIM_OK) s = dynamics_state_factored(sim);
+  legsim_status s = stops_layout(m, d);
+  if (s == LEGSIM_OK) s = dynamics_state_factored(m, d);
   if (s != LEGSIM_OK) return s;
   const Layout &lay = d.dyn;
   int row[2 * kMaxContacts];  // the rows of d.dyn of contact i: normal 2i, tangential 2i+1
@@ -470,8 +459,8 @@ legsim_status contact_modes_choose(Sim &sim, bool &found, uint32_t &changes, uin
     }
   }
   if (!changes) return LEGSIM_OK;
-  s = stops_layout(sim);
-  return s == LEGSIM_OK ? dynamics_state_update(sim) : s;
+  s = stops_layout(m, d);
+  return s == LEGSIM_OK ? dynamics_state_update(m, d) : s;
 }
 
 bool all_closed(const Model &m, const Data &d) {
@@ -502,15 +491,13 @@ bool all_closed(const Model &m, const Data &d) {
 // rules above decide.
 // Each pass applies every change at once and solves the dynamics of the new modes; a mode
 // that keeps changing raises CONTACT_INCONSISTENT and keeps the last one.
-legsim_status contact_transitions(Sim &sim, bool &changed, double at, const ContactEvents *located) {
+legsim_status contact_transitions(const Model &m, Data &d, bool &changed, double at, const ContactEvents *located) {
   changed = false;
-  const Model &m = sim.model;
-  Data &d = sim.data;
   // (LEGSIM_WITH_CONTACT 0: no model has contacts; the code below is not compiled in)
   if (!LEGSIM_WITH_CONTACT || m.nc == 0) return LEGSIM_OK;
   uint32_t slipped = 0, stuck_again = 0;  // each once per check
   uint32_t changing = 0;                  // the contacts the last pass changed
-  const real tol = real(sim.opt.newton_tol);
+  const real tol = real(m.opt.newton_tol);
   // mu_s = 0 (so mu_k = 0): a closed foot only slides (sticking needs T = 0 exactly); its
   // slip's direction, which no force depends on, turns with its velocity
   const bool frictionless = !(m.mu_s > 0);
@@ -539,7 +526,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
     bool any = false;
     // contact_law PAPER: while all feet are on the ground the stick-to-slip rule is the
     // paper's (paper_release), lift-off, touchdown and slip to stick are the default's
-    const bool paper = sim.opt.contact_law == LEGSIM_CONTACT_PAPER && all_closed(m, d);
+    const bool paper = m.opt.contact_law == LEGSIM_CONTACT_PAPER && all_closed(m, d);
     const int release = paper ? paper_release(m, d) : -1;
     // the default law: a closed contact whose mode fails (lift-off, stick to slip) is decided
     // with the others by the enumeration (contact_modes_choose) once the impulses are done
@@ -626,7 +613,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
       enumerated = true;
       bool found = false;
       uint32_t chosen = 0;
-      legsim_status s = contact_modes_choose(sim, found, chosen, slipped);
+      legsim_status s = contact_modes_choose(m, d, found, chosen, slipped);
       if (s != LEGSIM_OK) return s;
       if (found && !chosen) {  // the current modes hold after all (round-off)
         stamp();
@@ -646,7 +633,7 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
       return LEGSIM_OK;
     }
     changed = true;
-    legsim_status s = stops_layout(sim);
+    legsim_status s = stops_layout(m, d);
     if (s != LEGSIM_OK) return s;
     // every closed contact takes a share of an impact and reports it (a foot stuck before
     // it reports its own, not its old touchdown's)
@@ -654,18 +641,18 @@ legsim_status contact_transitions(Sim &sim, bool &changed, double at, const Cont
     for (int k = 0; k < m.nc; ++k)
       if (d.contact[k].state != LEGSIM_CONTACT_FREE) closed |= 1u << k;
     if (touch) {  // onto the line, then the impact (its LCP: a foot that would pull leaves)
-      s = assemble(sim, d.dyn, d.stop_drivers, d.q, m.minv, AssemblyMode::Project);
-      if (s == LEGSIM_OK) s = impact_lcp(sim, touch | closed, touch);
+      s = assemble(m, d, d.dyn, d.stop_drivers, d.q, m.minv, AssemblyMode::Project);
+      if (s == LEGSIM_OK) s = impact_lcp(m, d, touch | closed, touch);
       if (s != LEGSIM_OK) return s;
     }
     if (to_stick) {  // the tangential velocity removed, by the same LCP
       uint32_t still = 0;
       for (int k = 0; k < m.nc; ++k)
         if (d.contact[k].state != LEGSIM_CONTACT_FREE) still |= 1u << k;
-      if (to_stick & still) s = impact_lcp(sim, still, 0);
+      if (to_stick & still) s = impact_lcp(m, d, still, 0);
       if (s != LEGSIM_OK) return s;
     }
-    s = dynamics_state_update(sim);  // forces of the new modes
+    s = dynamics_state_update(m, d);  // forces of the new modes
     if (s != LEGSIM_OK) return s;
   }
   for (int k = 0; k < m.nc; ++k)  // the contacts still changing carry it

@@ -7,23 +7,21 @@
 namespace legsim {
 
 #if LEGSIM_WITH_INVERSE_DYNAMICS
-legsim_status inverse_dynamics_solve(Sim &sim, const real *length, const real *rate,
+legsim_status inverse_dynamics_solve(const Model &m, Data &d, const real *length, const real *rate,
                                      const real *accel, real *actuator_force) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
   for (int a = 0; a < m.na; ++a) {
     d.drivers.length[a] = length[a];
     d.drivers.rate[a] = rate[a];
     d.drivers.accel[a] = accel[a];
   }
   d.drivers.ncoord = 0;
-  legsim_status s = work_layout(sim, (1u << m.na) - 1);
+  legsim_status s = work_layout(m, d, (1u << m.na) - 1);
   VecQ q = d.q;
-  if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
+  if (s == LEGSIM_OK) s = assemble(m, d, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
   d.q = q;
-  s = velocity_solve(sim, d.work, d.qd);
-  if (s == LEGSIM_OK) s = dynamics_solve(sim, d.work, d.q, d.qd, d.qdd);
+  s = velocity_solve(m, d, d.work, d.qd);
+  if (s == LEGSIM_OK) s = dynamics_solve(m, d, d.work, d.q, d.qd, d.qdd);
   if (s != LEGSIM_OK) return s;
   reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   for (int a = 0; a < m.na; ++a) {
@@ -42,9 +40,7 @@ constexpr real kDriftTol = real(1e-7);
 
 // The second derivative of each actuator's length at (q, qd, qdd): l_dd = J_a qdd - gamma_a
 // with the driver's own acceleration 0 in gamma_a (its velocity-product term alone).
-void length_accelerations(Sim &sim, const VecQ &qdd, real *accel) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+void length_accelerations(const Model &m, Data &d, const VecQ &qdd, real *accel) {
   for (int a = 0; a < m.na; ++a) d.drivers.accel[a] = 0;
   d.work_mask = -1;  // built for this call only
   layout_build(m, (1u << m.na) - 1, 0, d.work);
@@ -59,10 +55,8 @@ void length_accelerations(Sim &sim, const VecQ &qdd, real *accel) {
 // joints, the driven lengths and each held foot's normal and tangential rows, which must fix
 // it (as many rows as coordinates); the forces from every actuator's driver row and the held
 // feet, two held feet combined by options.statics_rule as in the statics.
-legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *length, real *rate,
+legsim_status inverse_dynamics_ground_solve(const Model &m, Data &d, uint32_t follow, real *length, real *rate,
                                             real *accel, real *actuator_force) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
   const uint32_t all = (1u << m.na) - 1, driven = all & ~follow;
   uint8_t kin[kMaxContacts];
   int held[2] = {0, 0}, nheld = 0;
@@ -92,11 +86,11 @@ legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *len
   if (s != LEGSIM_OK) return s;
   if (d.work.m != m.nq) return LEGSIM_ERR_BAD_INPUT;  // the driven lengths must fix the motion
   VecQ q = d.q;
-  s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
+  s = assemble(m, d, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
   if (s != LEGSIM_OK) return s;
   d.q = q;
-  s = velocity_solve(sim, d.work, d.qd);
-  if (s == LEGSIM_OK) s = acceleration_solve(sim, d.work, d.qdd);
+  s = velocity_solve(m, d, d.work, d.qd);
+  if (s == LEGSIM_OK) s = acceleration_solve(m, d, d.work, d.qdd);
   if (s != LEGSIM_OK) return s;
   if (check_second) {  // the lengths must keep the second foot where it sticks
     Vec2 p, v;
@@ -110,7 +104,7 @@ legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *len
   // the followers' motion, then every actuator driven along it
   real lacc[kMaxActuators];
   const VecQ qdd = d.qdd;
-  length_accelerations(sim, qdd, lacc);
+  length_accelerations(m, d, qdd, lacc);
   for (int a = 0; a < m.na; ++a) {
     if (driven & (1u << a)) {
       d.drivers.accel[a] = accel[a];
@@ -126,16 +120,16 @@ legsim_status inverse_dynamics_ground_solve(Sim &sim, uint32_t follow, real *len
   // the forces (the accelerations the driven rows give must be the motion's: else the
   // lengths' accelerations do not keep the feet stuck, LEGSIM_ERR_NO_EQUILIBRIUM)
   real normal[kMaxContacts], tangential[kMaxContacts];
-  s = held_contacts_solve(sim, qdd, normal, tangential);
+  s = held_contacts_solve(m, d, qdd, normal, tangential);
   if (s != LEGSIM_OK) return s;
   d.qdd = qdd;
-  return driven_outputs(sim, normal, tangential, actuator_force);
+  return driven_outputs(m, d, normal, tangential, actuator_force);
 }
 #else
-legsim_status inverse_dynamics_solve(Sim &, const real *, const real *, const real *, real *) {
+legsim_status inverse_dynamics_solve(const Model &, Data &, const real *, const real *, const real *, real *) {
   return LEGSIM_ERR_DISABLED;
 }
-legsim_status inverse_dynamics_ground_solve(Sim &, uint32_t, real *, real *, real *, real *) {
+legsim_status inverse_dynamics_ground_solve(const Model &, Data &, uint32_t, real *, real *, real *, real *) {
   return LEGSIM_ERR_DISABLED;
 }
 #endif

@@ -19,7 +19,7 @@ extern "C" int legsim_kernel_use(legsim_sim *sim, int on) {
   // rows as before, so this cannot fail where it did not)
   layout_build(s.model, 0, 0, d.joints);
   layout_finish(d.joints, d.drivers);
-  stops_layout(s);
+  stops_layout(s.model, s.data);
   d.work_mask = -1;
   d.factor.of_state = false;  // in the other path's order
   return s.model.kernel ? 1 : 0;

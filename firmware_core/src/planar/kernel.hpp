@@ -189,14 +189,14 @@ struct StagePlan {
   const VecQ *base;
   bool actuators;
 };
-inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
+inline StagePlan stage_plan(const Model &m, Data &d, const Layout &layout) {
   StagePlan p{&layout, nullptr, nullptr, nullptr, false};
   if (!reduced_available(layout)) return p;
-  const uint32_t disable = layout_disable(sim, layout);
-  if (force_elements_act(sim, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
+  const uint32_t disable = layout_disable(m, layout);
+  if (force_elements_act(d, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
   p.kernel = layout.path.reduced;
-  p.dv = layout.stops ? &sim.data.stop_drivers : &sim.data.drivers;
-  p.base = &sim.model.gravity_force;
+  p.dv = layout.stops ? &d.stop_drivers : &d.drivers;
+  p.base = &m.gravity_force;
   p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
   return p;
 }
@@ -206,21 +206,21 @@ inline StagePlan stage_plan(Sim &sim, const Layout &layout) {
 // qd projected onto J qd = 0 and drift 0; unless the residual or the drift is past tol then
 // (no more) qdd, the multipliers (into lambda), the condition estimate into the report and
 // reaction where not null. No rows or factor kept.
-legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd, VecR &lambda,
+legsim_status dynamics_end(const Model &m, Data &d, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd, VecR &lambda,
                            legsim_reaction *reaction, real tol, bool project, real &residual, real &drift);
 // A stage's solve in the reduced system (Kernel::accelerations): neither multipliers nor a
 // factor (the step's end has its own); a singular matrix reports an infinite condition, as
 // dynamics_solve.
-inline legsim_status reduced_stage(Sim &sim, const Kernel &kern, const DriverValues &dv, const VecQ &base,
+inline legsim_status reduced_stage(const Model &m, Data &d, const Kernel &kern, const DriverValues &dv, const VecQ &base,
                                    bool actuators, const VecQ &q, const VecQ &qd, VecQ &qdd) {
-  const legsim_status s = kern.accelerations(sim.model, dv, q, qd, base, sim.data, actuators, stage_trig(sim.data), qdd);
-  if (s == LEGSIM_ERR_SINGULAR) sim.data.report.condition = real(INFINITY);
+  const legsim_status s = kern.accelerations(m, dv, q, qd, base, d, actuators, stage_trig(d), qdd);
+  if (s == LEGSIM_ERR_SINGULAR) d.report.condition = real(INFINITY);
   return s;
 }
 // RK4's stage solve at (q, qd): dynamics_stage_solve's, with the plan's decisions.
-inline legsim_status dynamics_stage(Sim &sim, const StagePlan &plan, const VecQ &q, const VecQ &qd, VecQ &qdd) {
-  if (!plan.kernel) return dynamics_stage_solve(sim, *plan.layout, q, qd, qdd);
-  return reduced_stage(sim, *plan.kernel, *plan.dv, *plan.base, plan.actuators, q, qd, qdd);
+inline legsim_status dynamics_stage(const Model &m, Data &d, const StagePlan &plan, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+  if (!plan.kernel) return dynamics_stage_solve(m, d, *plan.layout, q, qd, qdd);
+  return reduced_stage(m, d, *plan.kernel, *plan.dv, *plan.base, plan.actuators, q, qd, qdd);
 }
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr

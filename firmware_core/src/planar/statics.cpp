@@ -19,9 +19,7 @@ constexpr real kBalanceTol = real(1e-8);
 // contact rows at (d.q, d.qd): the multipliers in d.lambda, the rows in d.rows. Its
 // accelerations must be target (statics: zero; inverse dynamics: the driven motion's),
 // else the system is still a mechanism there, or the motion is not the one these rows allow.
-legsim_status driven_solve(Sim &sim, const uint8_t *contacts, const VecQ &target) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status driven_solve(const Model &m, Data &d, const uint8_t *contacts, const VecQ &target) {
   const uint32_t all = (1u << m.na) - 1;
   legsim_status s;
   if (m.nc > 0) {  // with contact rows: built for this call only
@@ -30,10 +28,10 @@ legsim_status driven_solve(Sim &sim, const uint8_t *contacts, const VecQ &target
     s = layout_build(m, all, 0, d.work, contacts);
     if (s == LEGSIM_OK) s = layout_finish(d.work, d.drivers);
   } else {
-    s = work_layout(sim, all);
+    s = work_layout(m, d, all);
   }
   VecQ qdd;
-  if (s == LEGSIM_OK) s = dynamics_solve(sim, d.work, d.q, d.qd, qdd);
+  if (s == LEGSIM_OK) s = dynamics_solve(m, d, d.work, d.q, d.qd, qdd);
   if (s != LEGSIM_OK) return s;
   // scale: the acceleration the loads alone would cause, or the motion's
   real scale = 1, worst = 0;
@@ -52,9 +50,7 @@ legsim_status driven_solve(Sim &sim, const uint8_t *contacts, const VecQ &target
 // indeterminate by one self-stress (a tangential pair along the line): solve A with
 // the tangential row of the first only, B with that of the second only; every
 // solution is (1 - s) A + s B, and statics_rule picks s (design section 3).
-legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, real *tangential) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status held_contacts_solve(const Model &m, Data &d, const VecQ &target, real *normal, real *tangential) {
   uint8_t rows[kMaxContacts];
   int held[2] = {0, 0}, nheld = 0;
   for (int k = 0; k < m.nc; ++k) {
@@ -66,26 +62,26 @@ legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, re
   }
   legsim_status s;
   if (nheld < 2) {
-    s = driven_solve(sim, rows, target);
+    s = driven_solve(m, d, rows, target);
     if (s != LEGSIM_OK) return s;
     contact_forces_of_layout(m, d.work, d.lambda, normal, tangential);
     return LEGSIM_OK;
   }
   const int k0 = held[0], k1 = held[1];
   rows[k1] = kContactNormal;
-  s = driven_solve(sim, rows, target);
+  s = driven_solve(m, d, rows, target);
   if (s != LEGSIM_OK) return s;
   const VecR lambda_a = d.lambda;
   real na[kMaxContacts], ta[kMaxContacts];
   contact_forces_of_layout(m, d.work, d.lambda, na, ta);
   rows[k1] = kContactStuck;
   rows[k0] = kContactNormal;
-  s = driven_solve(sim, rows, target);
+  s = driven_solve(m, d, rows, target);
   if (s != LEGSIM_OK) return s;
   real nb[kMaxContacts], tb[kMaxContacts];
   contact_forces_of_layout(m, d.work, d.lambda, nb, tb);
   real frac = real(0.5);  // MIN_TANGENTIAL: T_0 = (1 - s) T, T_1 = s T least at s = 1/2
-  if (sim.opt.statics_rule == LEGSIM_STATICS_EQUAL_FRICTION) {
+  if (m.opt.statics_rule == LEGSIM_STATICS_EQUAL_FRICTION) {
     const real sum = na[k0] + na[k1];  // the normal forces do not depend on s
     if (!(sum > 0)) return LEGSIM_ERR_NO_EQUILIBRIUM;
     frac = na[k1] / sum;  // (1 - s) T / N_0 = s T / N_1
@@ -106,9 +102,7 @@ legsim_status held_contacts_solve(Sim &sim, const VecQ &target, real *normal, re
 // The results of a driven solve: joint reactions, actuator forces F = -lambda_driver (the
 // driver pulls back on the rod) and the contacts' N and T. A float that cannot balance the
 // loads is refused, not reported as infinite reactions.
-legsim_status driven_outputs(Sim &sim, const real *normal, const real *tangential, real *actuator_force) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status driven_outputs(const Model &m, Data &d, const real *normal, const real *tangential, real *actuator_force) {
   reactions_from_multipliers(m, d.rows, d.lambda, d.reaction);
   bool finite_result = true;
   for (int j = 0; j < m.nj; ++j)
@@ -130,9 +124,7 @@ legsim_status driven_outputs(Sim &sim, const real *normal, const real *tangentia
 
 #if LEGSIM_WITH_STATICS
 namespace {
-void lock_all_actuators(Sim &sim) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+void lock_all_actuators(const Model &m, Data &d) {
   const VecQ zero = VecQ::Zero();
   for (int a = 0; a < m.na; ++a) {
     real rate;
@@ -143,20 +135,17 @@ void lock_all_actuators(Sim &sim) {
 }
 }  // namespace
 
-legsim_status statics_solve(Sim &sim, real *actuator_force) {
-  Data &d = sim.data;
-  lock_all_actuators(sim);
+legsim_status statics_solve(const Model &m, Data &d, real *actuator_force) {
+  lock_all_actuators(m, d);
   d.qd.setZero();
   real normal[kMaxContacts], tangential[kMaxContacts];
-  const legsim_status s = held_contacts_solve(sim, VecQ::Zero(), normal, tangential);
+  const legsim_status s = held_contacts_solve(m, d, VecQ::Zero(), normal, tangential);
   if (s != LEGSIM_OK) return s;
   d.qdd.setZero();
-  return driven_outputs(sim, normal, tangential, actuator_force);
+  return driven_outputs(m, d, normal, tangential, actuator_force);
 }
 
-legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status statics_sweep(const Model &m, Data &d, int n_grid, legsim_worst_case *out) {
   if (m.na < 2 || n_grid < 2) return LEGSIM_ERR_BAD_INPUT;
   *out = legsim_worst_case{};
   // serpentine order so that each pose starts from its neighbour
@@ -177,16 +166,16 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
       }
       d.drivers.ncoord = 0;
       // a grid point that fails leaves nothing behind (state, report)
-      const Snapshot before(sim);
-      legsim_status s = work_layout(sim, (1u << m.na) - 1);
+      const Snapshot before(m, d);
+      legsim_status s = work_layout(m, d, (1u << m.na) - 1);
       VecQ q = d.q;
-      if (s == LEGSIM_OK) s = assemble(sim, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
+      if (s == LEGSIM_OK) s = assemble(m, d, d.work, d.drivers, q, m.minv, AssemblyMode::Assemble);
       if (s == LEGSIM_OK) {
         d.q = q;
-        s = statics_solve(sim, nullptr);
+        s = statics_solve(m, d, nullptr);
       }
       if (s != LEGSIM_OK) {
-        before.restore(sim);
+        before.restore(m, d);
         ++out->n_failed;
         continue;
       }
@@ -213,8 +202,8 @@ legsim_status statics_sweep(Sim &sim, int n_grid, legsim_worst_case *out) {
   return LEGSIM_OK;
 }
 #else
-legsim_status statics_solve(Sim &, real *) { return LEGSIM_ERR_DISABLED; }
-legsim_status statics_sweep(Sim &, int, legsim_worst_case *) { return LEGSIM_ERR_DISABLED; }
+legsim_status statics_solve(const Model &, Data &, real *) { return LEGSIM_ERR_DISABLED; }
+legsim_status statics_sweep(const Model &, Data &, int, legsim_worst_case *) { return LEGSIM_ERR_DISABLED; }
 #endif
 
 }  // namespace legsim

@@ -6,12 +6,10 @@
 
 namespace legsim {
 
-legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, VecQ &q_io,
+legsim_status assemble(const Model &m, Data &d, const Layout &layout, const DriverValues &dv, VecQ &q_io,
                        const real *w, AssemblyMode mode, bool rows_ready) {
   const bool full = mode == AssemblyMode::Assemble;
-  const Model &m = sim.model;
-  Data &d = sim.data;
-  const real tol = real(sim.opt.newton_tol);
+  const real tol = real(m.opt.newton_tol);
   VecQ q = q_io;
   const VecQ zero = VecQ::Zero();
   real first = -1;
@@ -25,7 +23,7 @@ legsim_status assemble(Sim &sim, const Layout &layout, const DriverValues &dv, V
     if (r <= tol && (it > 0 || !full)) break;
     // Growth far past the start means Newton left the basin: the lengths are not reachable.
     if (r > real(1e3) * (first + 1)) return LEGSIM_ERR_UNREACHABLE;
-    if (it >= sim.opt.max_newton_iter)
+    if (it >= m.opt.max_newton_iter)
       // Close but not there: slow convergence (near a dead centre); far: no solution.
       return r < real(1e-4) ? LEGSIM_ERR_NOT_CONVERGED : LEGSIM_ERR_UNREACHABLE;
     const legsim_status s = factor_build(layout, d.rows, w, d.factor);

@@ -12,8 +12,8 @@ namespace legsim {
 
 namespace {
 // Q at (q, qd) for a solve on layout.
-void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd) {
-  applied_forces(sim.model, layout_disable(sim, layout), sim.data, q, qd, sim.data.force_q);
+void layout_forces(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd) {
+  applied_forces(m, layout_disable(m, layout), d, q, qd, d.force_q);
 }
 
 #if LEGSIM_KERNELS_REDUCED
@@ -21,25 +21,22 @@ void layout_forces(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd
 // unless it is disabled or force elements act (then applied_forces' without the actuators,
 // which the solves apply). actuators: whether they act.
 // elements: whether force elements act (their forces may depend on the velocities).
-const VecQ &reduced_base(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, bool &actuators,
+const VecQ &reduced_base(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd, bool &actuators,
                          bool &elements) {
-  const uint32_t disable = layout_disable(sim, layout);
+  const uint32_t disable = layout_disable(m, layout);
   actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
-  Data &d = sim.data;
-  elements = force_elements_act(sim, disable);
-  if (!(disable & LEGSIM_DISABLE_GRAVITY) && !elements) return sim.model.gravity_force;
-  applied_forces(sim.model, disable | LEGSIM_DISABLE_ACTUATORS, d, q, qd, d.force_q);
+  elements = force_elements_act(d, disable);
+  if (!(disable & LEGSIM_DISABLE_GRAVITY) && !elements) return m.gravity_force;
+  applied_forces(m, disable | LEGSIM_DISABLE_ACTUATORS, d, q, qd, d.force_q);
   return d.force_q;
 }
 #endif
 }  // namespace
 
-legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
+legsim_status dynamics_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd,
                              bool rows_ready, bool keep, legsim_reaction *reaction) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
   const Kernel *kern = layout.path.dynamics;
-  layout_forces(sim, layout, q, qd);
+  layout_forces(m, d, layout, q, qd);
   if (kern && !rows_ready) {
     // the joint rows alone: the generated solve, fused (the same values as below)
     Factor &f = d.factor;
@@ -74,28 +71,27 @@ legsim_status dynamics_solve(Sim &sim, const Layout &layout, const VecQ &q, cons
   return LEGSIM_OK;
 }
 
-legsim_status dynamics_stage_solve(Sim &sim, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
+legsim_status dynamics_stage_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
 #if LEGSIM_KERNELS_REDUCED
   if (reduced_available(layout)) {
     bool actuators, elements;
-    const VecQ &base = reduced_base(sim, layout, q, qd, actuators, elements);
-    return reduced_stage(sim, *layout.path.reduced, layout.stops ? sim.data.stop_drivers : sim.data.drivers, base, actuators,
+    const VecQ &base = reduced_base(m, d, layout, q, qd, actuators, elements);
+    return reduced_stage(m, d, *layout.path.reduced, layout.stops ? d.stop_drivers : d.drivers, base, actuators,
                          q, qd, qdd);
   }
 #endif
-  return dynamics_solve(sim, layout, q, qd, qdd, false, false);
+  return dynamics_solve(m, d, layout, q, qd, qdd, false, false);
 }
 
 #if LEGSIM_KERNELS_REDUCED
-legsim_status dynamics_end(Sim &sim, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd, VecR &lambda,
+legsim_status dynamics_end(const Model &m, Data &d, const StagePlan &plan, const VecQ &q, VecQ &qd, VecQ &qdd, VecR &lambda,
                            legsim_reaction *reaction, real tol, bool project, real &residual, real &drift) {
-  Data &d = sim.data;
   const Layout &layout = *plan.layout;
   bool actuators = plan.actuators, elements = false;
-  const VecQ &base = plan.kernel ? *plan.base : reduced_base(sim, layout, q, qd, actuators, elements);
+  const VecQ &base = plan.kernel ? *plan.base : reduced_base(m, d, layout, q, qd, actuators, elements);
   d.factor.of_state = false;  // it keeps no factor: whatever d.factor holds is not this state's
   // the stages' sin/cos cache: on x86-64 this runs in their copy with FMA (stage_trig)
-  return layout.path.reduced->end(sim.model, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
+  return layout.path.reduced->end(m, layout.stops ? d.stop_drivers : d.drivers, q, qd, base, d, actuators,
                             stage_trig(d), tol, project && !elements, residual, drift, d.report.condition,
                             lambda, qdd, reaction);
 }
@@ -145,55 +141,52 @@ legsim_status coupled_solve(const Model &, Data &, const Layout &, const VecQ &,
 legsim_status coupled_resolve(Data &, const Layout &, VecR &) { return LEGSIM_ERR_DISABLED; }
 #endif
 
-void stop_forces_update(Sim &sim) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+void stop_forces_update(const Model &m, Data &d) {
   int row = m.m;  // the stop rows follow the joints, in actuator order
   for (int a = 0; a < m.na; ++a)
     d.act[a].stop_force = (d.stop_mask & (1u << a)) ? -d.lambda[row++] : real(0);
-  if (m.nc > 0) contact_forces_update(sim);  // the contact rows follow the stops
+  if (m.nc > 0) contact_forces_update(m, d);  // the contact rows follow the stops
 }
 
-legsim_status dynamics_state_update(Sim &sim) { return dynamics_state_reactions(sim, sim.data.qdd); }
+legsim_status dynamics_state_update(const Model &m, Data &d) { return dynamics_state_reactions(m, d, d.qdd); }
 
-legsim_status dynamics_state_factored(Sim &sim) {
-  return dynamics_state_reactions(sim, sim.data.qdd, false, true);
+legsim_status dynamics_state_factored(const Model &m, Data &d) {
+  return dynamics_state_reactions(m, d, d.qdd, false, true);
 }
 
-legsim_status dynamics_state_reactions(Sim &sim, VecQ &qdd, bool factor_ready, bool keep_factor) {
+legsim_status dynamics_state_reactions(const Model &m, Data &d, VecQ &qdd, bool factor_ready, bool keep_factor) {
   (void)keep_factor;  // (a build without the reduced solves always keeps them)
-  Data &d = sim.data;
   const Layout &lay = d.dyn;
   const Kernel *kern = lay.path.factored;
 #if LEGSIM_KERNELS_REDUCED
-  if (sim.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay) && !keep_factor) {
+  if (m.opt.integrator == LEGSIM_INTEGRATOR_RK4 && reduced_available(lay) && !keep_factor) {
     // RK4's restart as its step's end, in the reduced system: the same solve whatever came
     // before (a changed command alone or not), so a refused call changes no later result
-    const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
+    const bool reactions = !(m.opt.disable & LEGSIM_DISABLE_REACTIONS);
     real residual, drift;  // (no projection test here: the report's residual stays the step's)
-    const legsim_status s = dynamics_end(sim, stage_plan(sim, lay), d.q, d.qd, qdd, d.lambda, reactions ? d.reaction : nullptr,
+    const legsim_status s = dynamics_end(m, d, stage_plan(m, d, lay), d.q, d.qd, qdd, d.lambda, reactions ? d.reaction : nullptr,
                                          real(INFINITY), false, residual, drift);
     if (s != LEGSIM_OK) return s;
-    stop_forces_update(sim);
+    stop_forces_update(m, d);
     return LEGSIM_OK;
   }
 #endif
   if (factor_ready && kern) {
     // the joint rows alone, their factor given: the generated solve, fused, with the
     // reactions (the same values as below)
-    layout_forces(sim, lay, d.q, d.qd);
-    const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
-    const legsim_status s = kern->factored(sim.model, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, d.force_q,
+    layout_forces(m, d, lay, d.q, d.qd);
+    const bool reactions = !(m.opt.disable & LEGSIM_DISABLE_REACTIONS);
+    const legsim_status s = kern->factored(m, lay.stops ? d.stop_drivers : d.drivers, d.q, d.qd, d.force_q,
                                            &d.trig, d.factor.a.data(), d.lambda, qdd, reactions ? d.reaction : nullptr);
     if (s != LEGSIM_OK) return s;
-    stop_forces_update(sim);
+    stop_forces_update(m, d);
     return LEGSIM_OK;
   }
-  if (factor_ready) rows_eval(sim.model, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
-  const bool reactions = !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS);
-  const legsim_status s = dynamics_solve(sim, d.dyn, d.q, d.qd, qdd, factor_ready, true, reactions ? d.reaction : nullptr);
+  if (factor_ready) rows_eval(m, d.dyn, d.stop_drivers, d.q, d.qd, d.rows, &d.trig);
+  const bool reactions = !(m.opt.disable & LEGSIM_DISABLE_REACTIONS);
+  const legsim_status s = dynamics_solve(m, d, d.dyn, d.q, d.qd, qdd, factor_ready, true, reactions ? d.reaction : nullptr);
   if (s != LEGSIM_OK) return s;
-  stop_forces_update(sim);
+  stop_forces_update(m, d);
   return LEGSIM_OK;
 }
 

@@ -27,15 +27,13 @@ int rows_bound(const Model &m) {
 }
 }  // namespace
 
-Snapshot::Snapshot(const Sim &sim)
-    : history(sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA), past_steps(sim.data.past_steps), newton_eta(sim.data.newton_eta), report(sim.data.report),
-      t(sim.data.t), origin_t(sim.data.origin_t), origin_step_s(sim.data.origin_step_s),
-      steps(sim.data.steps), origin_steps(sim.data.origin_steps), stroke_mask(sim.data.stroke_mask), stop_mask(sim.data.stop_mask),
-      assembled(sim.data.assembled), derivative_valid(sim.data.derivative_valid),
-      history_valid(sim.data.history_valid), forcing_only(sim.data.forcing_only),
-      end_projected(sim.data.end_projected) {
-  const Data &d = sim.data;
-  const Model &m = sim.model;
+Snapshot::Snapshot(const Model &m, const Data &d)
+    : history(m.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA), past_steps(d.past_steps), newton_eta(d.newton_eta), report(d.report),
+      t(d.t), origin_t(d.origin_t), origin_step_s(d.origin_step_s),
+      steps(d.steps), origin_steps(d.origin_steps), stroke_mask(d.stroke_mask), stop_mask(d.stop_mask),
+      assembled(d.assembled), derivative_valid(d.derivative_valid),
+      history_valid(d.history_valid), forcing_only(d.forcing_only),
+      end_projected(d.end_projected) {
   copy_head(q, d.q, m.nq);
   copy_head(qd, d.qd, m.nq);
   copy_head(qdd, d.qdd, m.nq);
@@ -57,9 +55,7 @@ Snapshot::Snapshot(const Sim &sim)
   }
 }
 
-void Snapshot::restore(Sim &sim) const {
-  Data &d = sim.data;
-  const Model &m = sim.model;
+void Snapshot::restore(const Model &m, Data &d) const {
   copy_head(d.q, q, m.nq);
   copy_head(d.qd, qd, m.nq);
   copy_head(d.qdd, qdd, m.nq);
@@ -87,7 +83,7 @@ void Snapshot::restore(Sim &sim) const {
   }
   if (rows_changed) {
     d.stop_mask = stop_mask;
-    stops_layout(sim);  // the same rows as before: cannot fail
+    stops_layout(m, d);  // the same rows as before: cannot fail
   }
   d.t = t;
   d.origin_t = origin_t;
@@ -135,9 +131,7 @@ real nan_unless_finite(const real *x, int n) {
 // each is (an infinity or a NaN anywhere makes it not). Exact: times 0, so that the rare
 // finite values whose sum overflows are told apart from a non-finite one.
 template <bool Exact>
-real outputs_sum(const Sim &sim) {
-  const Model &m = sim.model;
-  const Data &d = sim.data;
+real outputs_sum(const Model &m, const Data &d) {
   const auto sum = [](const real *x, int n) { return Exact ? nan_unless_finite(x, n) : block_sum(x, n); };
   const real o = Exact ? real(0) : real(1);
   // the multipliers a caller can read (legsim_multipliers: the joints' rows)
@@ -171,9 +165,8 @@ bool state_sane(const VecQ &q, const VecQ &qd, int n) {
 }
 
 // Once per call (per step): everything a caller can read is finite, the state sane.
-legsim_status outputs_check(const Sim &sim) {
-  const Data &d = sim.data;
-  const int n = sim.model.nq;
+legsim_status outputs_check(const Model &m, const Data &d) {
+  const int n = m.nq;
   // One pass over the coordinates, four at a time (partial sums in vector registers): |q|
   // and |qd| summed, and qdd. Every |x| is below its bound when their sum is (a NaN fails
   // that test too): the common case; past it, state_sane looks at each value.
@@ -193,9 +186,9 @@ legsim_status outputs_check(const Sim &sim) {
   }
   if (!(sq < real(LEGSIM_MAX_ABS_Q) && sv < real(LEGSIM_MAX_ABS_QD)) && !state_sane(d.q, d.qd, n))
     return LEGSIM_ERR_DIVERGED;
-  const real z = sa + outputs_sum<false>(sim);
+  const real z = sa + outputs_sum<false>(m, d);
   if (z - z == 0) return LEGSIM_OK;  // finite
-  const real exact = nan_unless_finite(qdd, n) + outputs_sum<true>(sim);
+  const real exact = nan_unless_finite(qdd, n) + outputs_sum<true>(m, d);
   return exact == exact ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 

@@ -108,17 +108,14 @@ LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd,
 constexpr real kEtaMin = real(0.01);
 }  // namespace
 
-legsim_status generalized_alpha_step(Sim &sim, real h) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol) {
   const int n = m.nq;
-  const real rho = real(sim.opt.rho_inf);
+  const real rho = real(m.opt.rho_inf);
   const real am = (2 * rho - 1) / (rho + 1), af = rho / (rho + 1);
   const real gam = real(0.5) + af - am;
   const real beta = real(0.25) * (gam + real(0.5)) * (gam + real(0.5));
   const real bprime = (1 - am) / (h * h * beta * (1 - af));
   const real gprime = gam / (h * beta);  // dv1 / dq1
-  const real tol = real(sim.opt.newton_tol);
 
   // predictor: qdd1 extrapolated, lambda1 = lambda0 (the first iteration corrects it
   // exactly: it enters linearly)
@@ -137,8 +134,8 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // the joint rows alone: each iteration's solve generated and fused (the same values)
   const Kernel *kern = lay.path.newton;
   if (kern) factor_order(lay, d.factor);  // the iterations write its entries
-  for (int it = 0; it < sim.opt.max_newton_iter; ++it) {
-    applied_forces(m, sim.opt.disable, d, q1, v1, d.force_q);
+  for (int it = 0; it < m.opt.max_newton_iter; ++it) {
+    applied_forces(m, m.opt.disable, d, q1, v1, d.force_q);
     VecQ tmp;
     if (kern) {
       const legsim_status s = kern->newton(m, d.stop_drivers, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,
@@ -201,10 +198,10 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // forces may depend on the projected velocities), nor with the reactions disabled (the
   // contacts' and stops' forces are then the iteration's, as on the general path).
   if (LEGSIM_WITH_CONTACT && m.nc > 0) d.end_solved = false;  // (never set without contacts)
-  if (LEGSIM_WITH_CONTACT && m.nc > 0 && !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
+  if (LEGSIM_WITH_CONTACT && m.nc > 0 && !(m.opt.disable & LEGSIM_DISABLE_PROJECTION)) {
 #if LEGSIM_KERNELS_REDUCED
-    const StagePlan plan = stage_plan(sim, lay);
-    if (kern && plan.kernel && plan.kernel->end_factored && !(sim.opt.disable & LEGSIM_DISABLE_REACTIONS)) {
+    const StagePlan plan = stage_plan(m, d, lay);
+    if (kern && plan.kernel && plan.kernel->end_factored && !(m.opt.disable & LEGSIM_DISABLE_REACTIONS)) {
       // its multipliers (acceleration level) into d.lambda, for the forces below; the
       // iteration's are put back after
       real drift;
@@ -232,9 +229,9 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
   // the ground's and the stops' forces: the end solve's where it ran (d.lambda holds its
   // multipliers), else the iteration's (generalized_alpha_reactions replaces them); the next
   // step starts from the iteration's multipliers either way
-  if (LEGSIM_WITH_CONTACT && d.end_solved) stop_forces_update(sim);
+  if (LEGSIM_WITH_CONTACT && d.end_solved) stop_forces_update(m, d);
   d.lambda = lambda;
-  if (!(LEGSIM_WITH_CONTACT && d.end_solved)) stop_forces_update(sim);
+  if (!(LEGSIM_WITH_CONTACT && d.end_solved)) stop_forces_update(m, d);
   return LEGSIM_OK;
 }
 
@@ -242,14 +239,13 @@ legsim_status generalized_alpha_step(Sim &sim, real h) {
 // beta' ~ 1/h^2 (about 1 N at h = 1 ms in float). The reactions reported are
 // those of the acceleration-level solve at the step's (q, qd): well conditioned,
 // the exact reactions of that state. Skipped when reactions are disabled.
-legsim_status generalized_alpha_reactions(Sim &sim) {
-  Data &d = sim.data;
+legsim_status generalized_alpha_reactions(const Model &m, Data &d) {
   if (LEGSIM_WITH_CONTACT && d.end_solved) {  // the step's end solve left them (and the actuators' forces)
     d.end_solved = false;
     return LEGSIM_OK;
   }
-  if (sim.opt.disable & LEGSIM_DISABLE_REACTIONS) {
-    actuator_forces_update(sim.model, sim.opt, d, d.q, d.qd);
+  if (m.opt.disable & LEGSIM_DISABLE_REACTIONS) {
+    actuator_forces_update(m, m.opt, d, d.q, d.qd);
     return LEGSIM_OK;
   }
   // the step's own multipliers seed the next step: keep them, so that
@@ -257,13 +253,13 @@ legsim_status generalized_alpha_reactions(Sim &sim) {
   const VecR lambda = d.lambda;
   VecQ qdd;
   // the last Newton iteration's factorization (at q within newton_tol) serves
-  const legsim_status s = dynamics_state_reactions(sim, qdd, true);  // and the stops' forces
+  const legsim_status s = dynamics_state_reactions(m, d, qdd, true);  // and the stops' forces
   d.lambda = lambda;
   return s;
 }
 #else
-legsim_status generalized_alpha_step(Sim &, real) { return LEGSIM_ERR_DISABLED; }
-legsim_status generalized_alpha_reactions(Sim &) { return LEGSIM_ERR_DISABLED; }
+legsim_status generalized_alpha_step(const Model &, Data &, real, real) { return LEGSIM_ERR_DISABLED; }
+legsim_status generalized_alpha_reactions(const Model &, Data &) { return LEGSIM_ERR_DISABLED; }
 #endif
 
 }  // namespace legsim

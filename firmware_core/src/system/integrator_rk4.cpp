@@ -63,17 +63,14 @@ namespace {
 // The step's end state (already in d.q, d.qd) committed, with its stop forces (the reactions
 // came with its solve); its end solve's factor is the state's unless the positions were
 // projected (assemble leaves the rows of its last iterate, not of the projected positions).
-legsim_status rk4_finish(Sim &sim, bool factor_kept = true) {
-  Data &d = sim.data;
+legsim_status rk4_finish(const Model &m, Data &d, bool factor_kept = true) {
   d.factor.of_state = factor_kept && !d.end_projected;
-  stop_forces_update(sim);
+  stop_forces_update(m, d);
   return LEGSIM_OK;
 }
 }  // namespace
 
-legsim_status rk4_step(Sim &sim, real h) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status rk4_step(const Model &m, Data &d, real h) {
   const int n = m.nq;
   const real h2 = h / 2, h6 = h / 6;
   VecQ &qs = d.tq[0], &vs = d.tq[1], &sum_v = d.tq[2], &sum_a = d.tq[3];
@@ -81,9 +78,9 @@ legsim_status rk4_step(Sim &sim, real h) {
   // stage 1: (v0, a0) at the start
   stage_first(n, h2, d.q.data(), d.qd.data(), d.qdd.data(), qs.data(), vs.data());
   // stages 2 and 3 at the midpoint (weight 2), 4 at the end
-  const StagePlan plan = stage_plan(sim, d.dyn);
+  const StagePlan plan = stage_plan(m, d, d.dyn);
   for (int stage = 0; stage < 3; ++stage) {
-    const legsim_status s = dynamics_stage(sim, plan, qs, vs, a);
+    const legsim_status s = dynamics_stage(m, d, plan, qs, vs, a);
     if (s != LEGSIM_OK) return s;
     if (stage == 0)
       stage_second(n, 2, h2, d.q.data(), d.qd.data(), d.qdd.data(), a.data(), qs.data(), vs.data(), sum_v.data(),
@@ -101,9 +98,9 @@ legsim_status rk4_step(Sim &sim, real h) {
   // also the next step's first stage.
   const Layout &lay = d.dyn;
   const DriverValues &dv = d.stop_drivers;
-  const bool projection = !(sim.opt.disable & LEGSIM_DISABLE_PROJECTION);
-  const real tol = real(sim.opt.newton_tol);
-  legsim_reaction *const reaction = sim.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
+  const bool projection = !(m.opt.disable & LEGSIM_DISABLE_PROJECTION);
+  const real tol = real(m.opt.newton_tol);
+  legsim_reaction *const reaction = m.opt.disable & LEGSIM_DISABLE_REACTIONS ? nullptr : d.reaction;
   d.report.iterations = 0;
   bool factor_ready = false;  // the rows and the factor at q1 kept, the positions on Phi = 0
 #if LEGSIM_KERNELS_REDUCED
@@ -115,10 +112,10 @@ legsim_status rk4_step(Sim &sim, real h) {
     // whose positions need projecting starts over below (no rows or factor kept), as after
     // the fused solve.
     real drift;
-    if (dynamics_end(sim, plan, q1, v1, d.qdd, d.lambda, reaction, projection ? tol : real(INFINITY), projection,
+    if (dynamics_end(m, d, plan, q1, v1, d.qdd, d.lambda, reaction, projection ? tol : real(INFINITY), projection,
                      d.report.residual, drift) == LEGSIM_OK &&
         (!projection || (d.report.residual <= tol && drift <= tol)))
-      return rk4_finish(sim, false);
+      return rk4_finish(m, d, false);
   } else
 #endif
   if (lay.path.dynamics && !(projection && d.end_projected)) {
@@ -128,11 +125,11 @@ legsim_status rk4_step(Sim &sim, real h) {
     // projection; else the sequence below starts over. The same values and statuses
     // either way. Not tried after a step whose positions needed projecting (large steps:
     // every one does).
-    if (dynamics_solve(sim, lay, q1, v1, d.qdd, false, true, reaction) == LEGSIM_OK) {
+    if (dynamics_solve(m, d, lay, q1, v1, d.qdd, false, true, reaction) == LEGSIM_OK) {
       d.report.residual = rows_max_residual(lay, d.rows);
-      if (!projection) return rk4_finish(sim);
+      if (!projection) return rk4_finish(m, d);
       if (d.report.residual <= tol) {
-        if (velocity_drift(lay, d.rows, v1, d.rhs) <= tol) return rk4_finish(sim);
+        if (velocity_drift(lay, d.rows, v1, d.rhs) <= tol) return rk4_finish(m, d);
         factor_ready = true;
       }
     }
@@ -147,7 +144,7 @@ legsim_status rk4_step(Sim &sim, real h) {
       d.end_projected = true;
       // M-weighted Newton, from the rows just evaluated at q1; it leaves the rows at the
       // projected q1 (Phi and the Jacobian serve below, its gamma is at zero velocity)
-      s = assemble(sim, lay, dv, q1, m.minv, AssemblyMode::Project, true);
+      s = assemble(m, d, lay, dv, q1, m.minv, AssemblyMode::Project, true);
       if (s != LEGSIM_OK) return s == LEGSIM_ERR_SINGULAR ? s : LEGSIM_ERR_DIVERGED;
 #if LEGSIM_KERNELS_REDUCED
       // The rest in the reduced system as a step that needed no position projection (its
@@ -156,9 +153,9 @@ legsim_status rk4_step(Sim &sim, real h) {
       // velocities), on with the general sequence from the rows at the projected q1.
       if (reduced_available(lay)) {
         real drift;
-        if (dynamics_end(sim, plan, q1, v1, d.qdd, d.lambda, reaction, tol, true, d.report.residual, drift) == LEGSIM_OK &&
+        if (dynamics_end(m, d, plan, q1, v1, d.qdd, d.lambda, reaction, tol, true, d.report.residual, drift) == LEGSIM_OK &&
             d.report.residual <= tol && drift <= tol)
-          return rk4_finish(sim, false);
+          return rk4_finish(m, d, false);
       }
 #endif
       gamma_ready = false;
@@ -173,13 +170,13 @@ legsim_status rk4_step(Sim &sim, real h) {
     gamma_ready = false;
   }
   if (!gamma_ready) rows_eval(m, lay, dv, q1, v1, d.rows, &d.trig);  // gamma at the final (q1, v1)
-  s = dynamics_solve(sim, lay, q1, v1, d.qdd, true, true, reaction);
+  s = dynamics_solve(m, d, lay, q1, v1, d.qdd, true, true, reaction);
   if (s != LEGSIM_OK) return s;
-  return rk4_finish(sim);
+  return rk4_finish(m, d);
 }
 
 #else
-legsim_status rk4_step(Sim &, real) { return LEGSIM_ERR_DISABLED; }
+legsim_status rk4_step(const Model &, Data &, real) { return LEGSIM_ERR_DISABLED; }
 #endif
 
 }  // namespace legsim

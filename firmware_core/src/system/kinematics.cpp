@@ -5,9 +5,7 @@
 
 namespace legsim {
 
-legsim_status velocity_solve(Sim &sim, const Layout &layout, VecQ &qd) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status velocity_solve(const Model &m, Data &d, const Layout &layout, VecQ &qd) {
   rows_eval(m, layout, layout.stops ? d.stop_drivers : d.drivers, d.q, qd, d.rows);
   const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
   d.report.condition = d.factor.condition;
@@ -23,9 +21,7 @@ real velocity_drift(const Layout &lay, const Rows &rows, const VecQ &v, VecR &jv
   return drift;
 }
 
-legsim_status acceleration_solve(Sim &sim, const Layout &layout, VecQ &qdd) {
-  const Model &m = sim.model;
-  Data &d = sim.data;
+legsim_status acceleration_solve(const Model &m, Data &d, const Layout &layout, VecQ &qdd) {
   rows_eval(m, layout, d.drivers, d.q, d.qd, d.rows);
   const legsim_status s = factor_build(layout, d.rows, m.minv, d.factor);
   d.report.condition = d.factor.condition;

@@ -21,15 +21,14 @@ namespace legsim {
 // same) and its predictor's past, shifted by the accelerations' jump (a step change of the
 // forcing moves them by about that much on either side of it): a controller that changes
 // its setpoint every step costs about one Newton iteration a step, not two.
-legsim_status state_refresh(Sim &sim, bool forcing_only) {
-  Data &d = sim.data;
+legsim_status state_refresh(const Model &m, Data &d, bool forcing_only) {
   d.modes_checked = false;  // (a step sets it again at its end)
   // the history is generalized-alpha's alone: RK4 calls leave it (Snapshot), and a change of
   // integrator restarts it (legsim_set_options)
-  const bool history = sim.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
+  const bool history = m.opt.integrator == LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
   VecQ before;
   if (forcing_only && history) before = d.qdd;
-  const legsim_status s = dynamics_state_reactions(sim, d.qdd, forcing_only && d.factor.of_state);
+  const legsim_status s = dynamics_state_reactions(m, d, d.qdd, forcing_only && d.factor.of_state);
   d.derivative_valid = s == LEGSIM_OK;
   d.history_valid = s == LEGSIM_OK;
   d.forcing_only = false;
@@ -37,7 +36,7 @@ legsim_status state_refresh(Sim &sim, bool forcing_only) {
   if (s == LEGSIM_OK) d.acc_aux = d.qdd;
   if (s == LEGSIM_OK && forcing_only) {
     for (int k = 0; k < d.past_steps && k < kPredictorOrder; ++k)
-      for (int i = 0; i < sim.model.nq; ++i) d.qdd_past[k][i] += d.qdd[i] - before[i];
+      for (int i = 0; i < m.nq; ++i) d.qdd_past[k][i] += d.qdd[i] - before[i];
   } else {
     d.past_steps = 0;  // the history starts here
     d.newton_eta = 1;
@@ -71,72 +70,70 @@ namespace {
 // contact mode or a command set) the contact modes are checked at once, at the step's start
 // time: a starting state that cannot hold (stuck feet on a slope steeper than the friction
 // allows) is resolved at t, not after the first step.
-inline legsim_status stage_start(Sim &s, bool rk4) {
-  Data &d = s.data;
+inline legsim_status stage_start(const Model &m, Data &d, bool rk4) {
   legsim_status r = LEGSIM_OK;
-  if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(s, d.forcing_only);
-  if (r != LEGSIM_OK || !s.model.nc || d.modes_checked) return r;
+  if (rk4 ? !d.derivative_valid : !d.history_valid) r = state_refresh(m, d, d.forcing_only);
+  if (r != LEGSIM_OK || !m.nc || d.modes_checked) return r;
   d.modes_checked = true;
   bool changed = false;
-  r = contact_transitions(s, changed, d.t);
-  return r == LEGSIM_OK && changed ? state_refresh(s) : r;
+  r = contact_transitions(m, d, changed, d.t);
+  return r == LEGSIM_OK && changed ? state_refresh(m, d) : r;
 }
 
-inline legsim_status stage_integrate(Sim &s, bool rk4, real h) {
-  return rk4 ? rk4_step(s, h) : generalized_alpha_step(s, h);
+inline legsim_status stage_integrate(const Model &m, Data &d, bool rk4, real h) {
+  return rk4 ? rk4_step(m, d, h) : generalized_alpha_step(m, d, h, real(m.opt.newton_tol));
 }
 
 // An actuator past an end of its stroke is put on its stop `into` s after the step's start
 // (an impact that changes q and qd: the derivative and reactions anew); else
 // generalized-alpha's reactions at its end (RK4 leaves its end derivative and reactions
 // itself). stops = false: the reactions alone (a part step whose stop arrivals are located).
-inline legsim_status stage_stroke_stops(Sim &s, bool rk4, bool stops, bool &stopped, real into) {
+inline legsim_status stage_stroke_stops(const Model &m, Data &d, bool rk4, bool stops, bool &stopped, real into) {
   stopped = false;
-  legsim_status r = stops ? stroke_limits_enforce(s, stopped, into) : LEGSIM_OK;
+  legsim_status r = stops ? stroke_limits_enforce(m, d, stopped, into) : LEGSIM_OK;
   if (r != LEGSIM_OK) return r;
-  if (stopped) return state_refresh(s);
-  return rk4 ? LEGSIM_OK : generalized_alpha_reactions(s);
+  if (stopped) return state_refresh(m, d);
+  return rk4 ? LEGSIM_OK : generalized_alpha_reactions(m, d);
 }
 
 // Touchdown, lift-off, stick and slip (contact.cpp) at time `at`, the located ones first; a
 // change solves the derivative anew (and restarts generalized-alpha's history). A touchdown
 // projects the state onto the feet's rows, which can push an actuator past a stroke end: the
 // stops are checked after it as after the integrator's projection.
-inline legsim_status stage_contacts(Sim &s, bool stops, double at,
+inline legsim_status stage_contacts(const Model &m, Data &d, bool stops, double at,
                                     const ContactEvents *located = nullptr) {
-  if (!s.model.nc) return LEGSIM_OK;
+  if (!m.nc) return LEGSIM_OK;
   bool changed = false;
-  legsim_status r = contact_transitions(s, changed, at, located);
+  legsim_status r = contact_transitions(m, d, changed, at, located);
   if (r == LEGSIM_OK && changed && stops) {
     bool stopped = false;
-    r = stroke_limits_enforce(s, stopped, real(at - s.data.t));
+    r = stroke_limits_enforce(m, d, stopped, real(at - d.t));
     if (r == LEGSIM_OK && stopped) {
       // a stop put on changes the ground forces: the contacts checked once more (a closed
       // foot that would now pull lifts off); the state refreshed again only if one changes
-      r = state_refresh(s);
+      r = state_refresh(m, d);
       bool again = false;
-      if (r == LEGSIM_OK) r = contact_transitions(s, again, at);
+      if (r == LEGSIM_OK) r = contact_transitions(m, d, again, at);
       if (r != LEGSIM_OK || !again) return r;
     }
   }
-  return r == LEGSIM_OK && changed ? state_refresh(s) : r;
+  return r == LEGSIM_OK && changed ? state_refresh(m, d) : r;
 }
 
 // A stop that would have to pull lets go. The ground forces change with it: the contacts are
 // checked again at the step's time plus `done` (a foot that the stop's force held on the
 // ground would pull now: it lifts off, rather than slide into the next step with N < 0, its
 // friction pushing along the slip, where no event function starts positive to find it).
-inline legsim_status stage_stops_release(Sim &s, bool stops, real done) {
+inline legsim_status stage_stops_release(const Model &m, Data &d, bool stops, real done) {
   if (!stops) return LEGSIM_OK;
   bool released = false;
-  legsim_status r = stroke_stops_release(s, released);
+  legsim_status r = stroke_stops_release(m, d, released);
   if (r != LEGSIM_OK || !released) return r;
-  r = state_refresh(s);
-  return r == LEGSIM_OK ? stage_contacts(s, stops, s.data.t + double(done)) : r;
+  r = state_refresh(m, d);
+  return r == LEGSIM_OK ? stage_contacts(m, d, stops, d.t + double(done)) : r;
 }
 
-inline void stage_advance(Sim &s, bool rk4) {
-  Data &d = s.data;
+inline void stage_advance(Data &d, bool rk4) {
   if (rk4) d.derivative_valid = true;  // its end derivative is the next step's start
   ++d.steps;
   d.t = d.origin_t + static_cast<double>(d.steps - d.origin_steps) * d.origin_step_s;
@@ -179,9 +176,8 @@ inline bool needs_forces(const ContactData &c, int j) {
 }
 
 // Function j of contact k (in c's mode) at (q, v) with ground forces N, T (those of its mode).
-real event_value(const Sim &s, int k, const ContactData &c, int j, const VecQ &q, const VecQ &v, real n_force,
+real event_value(const Model &m, int k, const ContactData &c, int j, const VecQ &q, const VecQ &v, real n_force,
                  real t_force) {
-  const Model &m = s.model;
   if (c.state == LEGSIM_CONTACT_FREE && j == 1) return kNoEvent;
   if (needs_forces(c, j)) return j == 0 ? n_force : m.mu_s * n_force - std::abs(t_force);
   Vec2 p, pv;
@@ -200,24 +196,23 @@ inline void stop_values(const Model &m, int a, const VecQ &q, TrigCache *trig, r
 // (contact) and the stops on (stop_mask): the sim's state, or a step's start kept in its
 // snapshot. The contact law PAPER decides stick to slip by its own rule (not one contact at a
 // time): not located. stops: the stroke stops are in force (their arrivals located).
-void event_values_of(Sim &s, bool stops, const VecQ &q, const VecQ &qd, const ContactData *contact,
+void event_values_of(const Model &m, Data &d, bool stops, const VecQ &q, const VecQ &qd, const ContactData *contact,
                      uint32_t stop_mask, EventValues &e) {
-  const bool cone = s.opt.contact_law != LEGSIM_CONTACT_PAPER;
+  const bool cone = m.opt.contact_law != LEGSIM_CONTACT_PAPER;
   for (real &g : e.g) g = kNoEvent;
-  for (int k = 0; k < s.model.nc; ++k) {
+  for (int k = 0; k < m.nc; ++k) {
     const ContactData &c = contact[k];
     for (int j = 0; j < 2; ++j)
       e.g[2 * k + j] = (j == 1 && c.state == LEGSIM_CONTACT_STUCK && !cone)
                            ? kNoEvent
-                           : event_value(s, k, c, j, q, qd, c.normal, c.tangential);
+                           : event_value(m, k, c, j, q, qd, c.normal, c.tangential);
   }
   if (!stops) return;
-  for (int a = 0; a < s.model.na; ++a)
-    if (!((stop_mask >> a) & 1u)) stop_values(s.model, a, q, &s.data.trig, &e.g[kActBase + 2 * a]);
+  for (int a = 0; a < m.na; ++a)
+    if (!((stop_mask >> a) & 1u)) stop_values(m, a, q, &d.trig, &e.g[kActBase + 2 * a]);
 }
-void event_values(Sim &s, bool stops, EventValues &e) {
-  const Data &d = s.data;
-  event_values_of(s, stops, d.q, d.qd, d.contact, d.stop_mask, e);
+void event_values(const Model &m, Data &d, bool stops, EventValues &e) {
+  event_values_of(m, d, stops, d.q, d.qd, d.contact, d.stop_mask, e);
 }
 // Whether a function is below zero (a crossing needs one at the (part) step's end).
 bool any_below_zero(const EventValues &e) {
@@ -242,8 +237,7 @@ struct StepEnd {
 // The step's dense output at theta in [0, 1]: the quintic Hermite interpolant of the start
 // (sim's state: q0, v0, a0) and end (q1, v1, a1) over hs seconds (local error O(hs^6) for
 // RK4's values, consistent to generalized-alpha's order for its), and its derivative.
-void dense_output(const Sim &s, const StepEnd &e, real hs, real th, VecQ &q, VecQ &v) {
-  const Data &d = s.data;
+void dense_output(const Model &m, const Data &d, const StepEnd &e, real hs, real th, VecQ &q, VecQ &v) {
   const real t2 = th * th, t3 = t2 * th, t4 = t3 * th, t5 = t4 * th;
   const real h0 = 1 - 10 * t3 + 15 * t4 - 6 * t5, h1 = th - 6 * t3 + 8 * t4 - 3 * t5;
   const real h2 = real(0.5) * (t2 - 3 * t3 + 3 * t4 - t5), h3 = 10 * t3 - 15 * t4 + 6 * t5;
@@ -252,7 +246,7 @@ void dense_output(const Sim &s, const StepEnd &e, real hs, real th, VecQ &q, Vec
   const real d2 = real(0.5) * (2 * th - 9 * t2 + 12 * t3 - 5 * t4), d3 = -d0;
   const real d4 = -12 * t2 + 28 * t3 - 15 * t4, d5 = real(0.5) * (3 * t2 - 8 * t3 + 5 * t4);
   const real hh = hs * hs;
-  for (int i = 0; i < s.model.nq; ++i) {
+  for (int i = 0; i < m.nq; ++i) {
     q[i] = h0 * d.q[i] + h3 * e.q[i] + hs * (h1 * d.qd[i] + h4 * e.v[i]) + hh * (h2 * d.qdd[i] + h5 * e.a[i]);
     v[i] = (d0 * d.q[i] + d3 * e.q[i]) / hs + d1 * d.qd[i] + d4 * e.v[i] + hs * (d2 * d.qdd[i] + d5 * e.a[i]);
   }
@@ -260,26 +254,26 @@ void dense_output(const Sim &s, const StepEnd &e, real hs, real th, VecQ &q, Vec
 
 // Function f at theta on the dense output; a function of the forces solves the dynamics of
 // the current modes there (its multipliers give N and T).
-legsim_status event_at(Sim &s, const StepEnd &e, real hs, int f, real th, real &g) {
+legsim_status event_at(const Model &m, Data &d, const StepEnd &e, real hs, int f, real th, real &g) {
   VecQ q, v, a;
-  dense_output(s, e, hs, th, q, v);
+  dense_output(m, d, e, hs, th, q, v);
   if (is_stop(f)) {
     real pair[2];
-    stop_values(s.model, stop_actuator(f), q, nullptr, pair);
+    stop_values(m, stop_actuator(f), q, nullptr, pair);
     g = pair[f % 2];
     return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
   }
   const int k = f / 2, j = f % 2;
   real n_force = 0, t_force = 0;
-  if (needs_forces(s.data.contact[k], j)) {
-    const legsim_status r = dynamics_solve(s, s.data.dyn, q, v, a, false, false, nullptr);
+  if (needs_forces(d.contact[k], j)) {
+    const legsim_status r = dynamics_solve(m, d, d.dyn, q, v, a, false, false, nullptr);
     if (r != LEGSIM_OK) return r;
     real normal[kMaxContacts], tangential[kMaxContacts];
-    contact_forces_of_layout(s.model, s.data.dyn, s.data.lambda, normal, tangential);
+    contact_forces_of_layout(m, d.dyn, d.lambda, normal, tangential);
     n_force = normal[k];
     t_force = tangential[k];
   }
-  g = event_value(s, k, s.data.contact[k], j, q, v, n_force, t_force);
+  g = event_value(m, k, d.contact[k], j, q, v, n_force, t_force);
   return std::isfinite(g) ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;
 }
 
@@ -287,7 +281,7 @@ legsim_status event_at(Sim &s, const StepEnd &e, real hs, int f, real th, real &
 // regula falsi, to kThetaTol in at most kLocateIterations evaluations. theta: the bracket's
 // late end (g <= 0: the event surely happened there); exact = false when the iterations ran
 // out (the bracket's late end all the same).
-legsim_status event_root(Sim &s, const StepEnd &e, real hs, int f, real g0, real g1, real &theta, bool &exact,
+legsim_status event_root(const Model &m, Data &d, const StepEnd &e, real hs, int f, real g0, real g1, real &theta, bool &exact,
                          real &slope) {
   real a = 0, b = 1, ga = g0, gb = g1;
   real fa = g0, fb = g1;  // the values at a and b (Illinois halves ga, gb)
@@ -298,7 +292,7 @@ legsim_status event_root(Sim &s, const StepEnd &e, real hs, int f, real g0, real
     real c = bisect ? real(0.5) * (a + b) : (a * gb - b * ga) / (gb - ga);
     if (!(c > a && c < b)) c = real(0.5) * (a + b);
     real gc;
-    const legsim_status r = event_at(s, e, hs, f, c, gc);
+    const legsim_status r = event_at(m, d, e, hs, f, c, gc);
     // a mode whose dynamics cannot be solved there (a sliding foot far past its lift-off:
     // the friction's coupling singular) has surely ended before: the late end, bisected
     bisect = r != LEGSIM_OK;
@@ -330,7 +324,7 @@ legsim_status event_root(Sim &s, const StepEnd &e, real hs, int f, real g0, real
 // theta, and the events within kThetaTol of it (simultaneous: a level drop lands both feet
 // at once) in ev (contacts) and arriving (bit a: actuator a reaches a stop).
 // first: the earliest function (f), slope: its dg / dtheta there.
-legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues &g0, const EventValues &g1,
+legsim_status events_locate(const Model &m, Data &d, const StepEnd &e, real hs, const EventValues &g0, const EventValues &g1,
                             EventBits cross, ContactEvents &ev, uint32_t &arriving, real &theta, bool &exact,
                             int &first, real &slope) {
   real at[kFunctions];
@@ -343,7 +337,7 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
     if (!((cross >> f) & 1u)) continue;
     bool ok;
     real dg;
-    const legsim_status r = event_root(s, e, hs, f, g0.g[f], g1.g[f], at[f], ok, dg);
+    const legsim_status r = event_root(m, d, e, hs, f, g0.g[f], g1.g[f], at[f], ok, dg);
     if (r != LEGSIM_OK) return r;
     if (at[f] < theta || first < 0) theta = at[f], first = f, slope = dg;
     exact = exact && ok;
@@ -352,8 +346,8 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
   for (int f = kActBase; f < kFunctions; ++f)
     if (at[f] <= theta + kThetaTol) arriving |= 1u << stop_actuator(f);
   ev = ContactEvents{0, 0, 0, 0};
-  for (int k = 0; k < s.model.nc; ++k) {
-    const ContactData &c = s.data.contact[k];
+  for (int k = 0; k < m.nc; ++k) {
+    const ContactData &c = d.contact[k];
     for (int j = 0; j < 2; ++j) {
       if (!(at[2 * k + j] <= theta + kThetaTol)) continue;
       const uint32_t bit = 1u << k;
@@ -372,8 +366,8 @@ legsim_status events_locate(Sim &s, const StepEnd &e, real hs, const EventValues
 // Whether function f, g0 > 0 at the part step's start, is a force whose bracket [fa, fb]
 // has both ends above |g0| once the refinements ran out: a pole, not a root (out of line:
 // step_with_events' plain step keeps its cost).
-[[gnu::noinline]] bool force_pole(const Sim &s, int f, real g0, real fa, real fb) {
-  return !is_stop(f) && needs_forces(s.data.contact[f / 2], f % 2) &&
+[[gnu::noinline]] bool force_pole(const Data &d, int f, real g0, real fa, real fb) {
+  return !is_stop(f) && needs_forces(d.contact[f / 2], f % 2) &&
          std::min(std::abs(fa), std::abs(fb)) > std::abs(g0);
 }
 
@@ -382,12 +376,12 @@ inline real tiny_step(real h) { return kThetaTol * h; }
 
 // A part step's start again: the snapshot, the derivative, and generalized-alpha's history
 // restarted (h enters it, and a part step's h is its own).
-legsim_status part_restart(Sim &s, bool rk4, const Snapshot &from) {
-  from.restore(s);
-  const legsim_status r = stage_start(s, rk4);
+legsim_status part_restart(const Model &m, Data &d, bool rk4, const Snapshot &from) {
+  from.restore(m, d);
+  const legsim_status r = stage_start(m, d, rk4);
   if (!rk4) {
-    s.data.acc_aux = s.data.qdd;
-    s.data.past_steps = 0;
+    d.acc_aux = d.qdd;
+    d.past_steps = 0;
   }
   return r;
 }
@@ -403,24 +397,23 @@ legsim_status part_restart(Sim &s, bool rk4, const Snapshot &from) {
 constexpr real kPartTol = real(1e-12);
 constexpr int kPartMaxSplit = 16;
 
-legsim_status part_steps(Sim &s, real dt, int n) {
+legsim_status part_steps(const Model &m, Data &d, real dt, int n) {
   legsim_status r = LEGSIM_OK;
-  for (int i = 0; i < n && r == LEGSIM_OK; ++i) r = stage_integrate(s, true, dt / real(n));
+  for (int i = 0; i < n && r == LEGSIM_OK; ++i) r = stage_integrate(m, d, true, dt / real(n));
   return r;
 }
 
-legsim_status part_integrate(Sim &s, bool rk4, real dt, const Snapshot &from, int &split) {
-  if (!rk4) return stage_integrate(s, false, dt);
-  Data &d = s.data;
-  const int nq = s.model.nq;
-  legsim_status r = part_steps(s, dt, split);
+legsim_status part_integrate(const Model &m, Data &d, bool rk4, real dt, const Snapshot &from, int &split) {
+  if (!rk4) return stage_integrate(m, d, false, dt);
+  const int nq = m.nq;
+  legsim_status r = part_steps(m, d, dt, split);
   while (r == LEGSIM_OK && split < kPartMaxSplit) {
     const VecQ coarse = d.q;
-    r = part_restart(s, true, from);
-    if (r == LEGSIM_OK) r = part_steps(s, dt, 2 * split);
+    r = part_restart(m, d, true, from);
+    if (r == LEGSIM_OK) r = part_steps(m, d, dt, 2 * split);
     if (r != LEGSIM_OK) {  // the finer try fails (a mode carried past its domain): the coarse
-      r = part_restart(s, true, from);
-      return r == LEGSIM_OK ? part_steps(s, dt, split) : r;
+      r = part_restart(m, d, true, from);
+      return r == LEGSIM_OK ? part_steps(m, d, dt, split) : r;
     }
     split *= 2;
     real change = 0;
@@ -457,21 +450,19 @@ constexpr real kGaMaxRescale = 64;  // the history rescaled to h from a sub-step
 // the many parts of a fast mode add up.
 // The history's acc_aux - qdd (about (am - af) h qdd') carried from a step of h_old to one
 // of f h_old.
-void ga_history_rescale(Sim &s, real f) {
-  Data &d = s.data;
-  for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
+void ga_history_rescale(const Model &m, Data &d, real f) {
+  for (int i = 0; i < m.nq; ++i) d.acc_aux[i] = d.qdd[i] + (d.acc_aux[i] - d.qdd[i]) * f;
 }
 
-legsim_status ga_part_restart(Sim &s, const Snapshot &from, real h_prev, real h_new, const VecQ *jerk) {
-  Data &d = s.data;
-  from.restore(s);
-  const legsim_status r = d.history_valid ? LEGSIM_OK : state_refresh(s);
+legsim_status ga_part_restart(const Model &m, Data &d, const Snapshot &from, real h_prev, real h_new, const VecQ *jerk) {
+  from.restore(m, d);
+  const legsim_status r = d.history_valid ? LEGSIM_OK : state_refresh(m, d);
   if (r == LEGSIM_OK && h_prev > 0) {
-    ga_history_rescale(s, h_new / h_prev);
+    ga_history_rescale(m, d, h_new / h_prev);
   } else if (r == LEGSIM_OK && jerk) {
-    const real rho = real(s.opt.rho_inf);
+    const real rho = real(m.opt.rho_inf);
     const real shift = (rho - 1) / (rho + 1) * h_new;  // (am - af) h_new
-    for (int i = 0; i < s.model.nq; ++i) d.acc_aux[i] = d.qdd[i] + shift * (*jerk)[i];
+    for (int i = 0; i < m.nq; ++i) d.acc_aux[i] = d.qdd[i] + shift * (*jerk)[i];
   } else {
     d.acc_aux = d.qdd;
   }
@@ -483,38 +474,35 @@ legsim_status ga_part_restart(Sim &s, const Snapshot &from, real h_prev, real h_
 // iteration's position tolerance into velocities over hs and accelerations over hs^2, so
 // the tolerance shrinks by (hs / h)^2 (the errors as at h), down to 64 round-offs. The
 // iteration's contraction (h^2 K / M) shrinks alike: about one iteration more.
-legsim_status ga_sub_step(Sim &s, real hs) {
-  const double tol = s.opt.newton_tol;
-  const double f = double(hs) / double(s.step_h);
-  s.opt.newton_tol = std::min(tol, std::max(tol * f * f, 64.0 * double(std::numeric_limits<real>::epsilon())));
-  const legsim_status r = stage_integrate(s, false, hs);
-  s.opt.newton_tol = tol;
-  return r;
+legsim_status ga_sub_step(const Model &m, Data &d, real hs) {
+  const double tol = m.opt.newton_tol;
+  const double f = double(hs) / double(m.step_h);
+  const double sub_tol = std::min(tol, std::max(tol * f * f, 64.0 * double(std::numeric_limits<real>::epsilon())));
+  return generalized_alpha_step(m, d, hs, real(sub_tol));
 }
 
 // One adaptive part step from `from` (see above). hs: the part step asked (in), taken (out);
 // h_prev, jerk: ga_part_restart's.
-legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_prev, const VecQ *jerk) {
-  Data &d = s.data;
-  const int nq = s.model.nq;
+legsim_status ga_part_adaptive(const Model &m, Data &d, real &hs, const Snapshot &from, real h_prev, const VecQ *jerk) {
+  const int nq = m.nq;
   // the difference asked, and never below what the coordinates' round-off allows (a float
   // build's 1e-7 m would be below a rounding step of a coordinate past 1 m: no try passes)
   real qmax = 0;
   for (int i = 0; i < nq; ++i) qmax = std::max(qmax, std::abs(from.q[i]));
-  const real tol = std::max(kGaPartTol * real(s.opt.newton_tol),
+  const real tol = std::max(kGaPartTol * real(m.opt.newton_tol),
                             real(64) * std::numeric_limits<real>::epsilon() * (1 + qmax));
-  legsim_status r = ga_part_restart(s, from, h_prev, hs, jerk);
+  legsim_status r = ga_part_restart(m, d, from, h_prev, hs, jerk);
   if (r != LEGSIM_OK) return r;
-  r = ga_sub_step(s, hs);
+  r = ga_sub_step(m, d, hs);
   bool coarse_ok = r == LEGSIM_OK;
   VecQ coarse = d.q, coarse_v = d.qd;
   for (int halving = 0;; ++halving) {
-    r = ga_part_restart(s, from, h_prev, real(0.5) * hs, jerk);
+    r = ga_part_restart(m, d, from, h_prev, real(0.5) * hs, jerk);
     if (r != LEGSIM_OK) return r;
-    legsim_status rf = ga_sub_step(s, real(0.5) * hs);
+    legsim_status rf = ga_sub_step(m, d, real(0.5) * hs);
     const bool half_ok = rf == LEGSIM_OK;
     const VecQ half = d.q, half_v = d.qd;
-    if (half_ok) rf = ga_sub_step(s, real(0.5) * hs);
+    if (half_ok) rf = ga_sub_step(m, d, real(0.5) * hs);
     real change = real(1e30);  // a failed try (a mode past its domain) halves on
     if (coarse_ok && rf == LEGSIM_OK) {
       change = 0;
@@ -545,18 +533,16 @@ legsim_status ga_part_adaptive(Sim &s, real &hs, const Snapshot &from, real h_pr
 // could be solved; a mode that cannot be solved a moment on is taken adaptively).
 constexpr real kGaImminent = 2;
 
-[[gnu::noinline]] bool ga_event_imminent(Sim &s, bool stops, EventBits fresh, real rest, VecQ &jerk, bool &jerk_ok) {
-  Data &d = s.data;
-  const Model &m = s.model;
-  const real dt_j = real(1e-4) * s.step_h;
+[[gnu::noinline]] bool ga_event_imminent(const Model &m, Data &d, bool stops, EventBits fresh, real rest, VecQ &jerk, bool &jerk_ok) {
+  const real dt_j = real(1e-4) * m.step_h;
   EventValues g0;
-  event_values(s, stops, g0);  // (the forces of the state's own solve)
+  event_values(m, d, stops, g0);  // (the forces of the state's own solve)
   VecQ q2, v2, a2;
   for (int i = 0; i < m.nq; ++i) {
     q2[i] = d.q[i] + dt_j * d.qd[i] + real(0.5) * dt_j * dt_j * d.qdd[i];
     v2[i] = d.qd[i] + dt_j * d.qdd[i];
   }
-  jerk_ok = dynamics_solve(s, d.dyn, q2, v2, a2, false, false, nullptr) == LEGSIM_OK;
+  jerk_ok = dynamics_solve(m, d, d.dyn, q2, v2, a2, false, false, nullptr) == LEGSIM_OK;
   if (!jerk_ok) return true;
   for (int i = 0; i < m.nq; ++i) jerk[i] = (a2[i] - d.qdd[i]) / dt_j;
   real normal[kMaxContacts], tangential[kMaxContacts];
@@ -564,7 +550,7 @@ constexpr real kGaImminent = 2;
   EventValues g1;
   for (real &g : g1.g) g = kNoEvent;
   for (int k = 0; k < m.nc; ++k)
-    for (int j = 0; j < 2; ++j) g1.g[2 * k + j] = event_value(s, k, d.contact[k], j, q2, v2, normal[k], tangential[k]);
+    for (int j = 0; j < 2; ++j) g1.g[2 * k + j] = event_value(m, k, d.contact[k], j, q2, v2, normal[k], tangential[k]);
   if (stops)
     for (int a = 0; a < m.na; ++a) stop_values(m, a, q2, nullptr, &g1.g[kActBase + 2 * a]);
   for (int f = 0; f < kFunctions; ++f) {
@@ -582,10 +568,9 @@ constexpr real kGaImminent = 2;
 // to LEGSIM_MAX_EVENTS_PER_STEP events; beyond, the rest are taken at the step's end with
 // LEGSIM_EVENT_EVENTS_DEFERRED). start: the state the step started from (all_or_nothing's).
 // A stop's release (its force would pull) is taken at the end of the (part) step.
-[[gnu::noinline]] legsim_status step_with_events(Sim &s, bool rk4, bool stops, const Snapshot &start) {
-  Data &d = s.data;
-  const real h = s.step_h;
-  const bool contacts = s.model.nc > 0;
+[[gnu::noinline]] legsim_status step_with_events(const Model &m, Data &d, bool rk4, bool stops, const Snapshot &start) {
+  const real h = m.step_h;
+  const bool contacts = m.nc > 0;
   real done = 0;  // the part of the step taken, s
   int located = 0, parts = 0;  // parts: halved part steps (kMaxParts)
   int ga_parts = 0;             // generalized-alpha's adaptive parts (kGaMaxParts), apart
@@ -618,40 +603,40 @@ constexpr real kGaImminent = 2;
   // step's end. Where stage_start changes nothing (the common step) the start is `start`
   // exactly: they are taken from it then, if at all; else at once, as at a part's start.
   bool g0_from_start = (rk4 ? d.derivative_valid : d.history_valid) && (d.modes_checked || !contacts);
-  legsim_status r = stage_start(s, rk4);
+  legsim_status r = stage_start(m, d, rk4);
   for (;;) {
     if (r != LEGSIM_OK) return r;
     EventValues g0;
     bool g0_known = !g0_from_start;
     g0_from_start = false;
-    if (g0_known) event_values(s, stops, g0);
+    if (g0_known) event_values(m, d, stops, g0);
     real hs = h - done;
     if (adapt && ga_parts >= kGaMaxParts) adapt = false;  // the rest whole (a bounded step)
     if (adapt) {
       hs = std::min(hs, kGaPartGrow * ga.hs_last);
-      r = ga_part_adaptive(s, hs, *from, ga.h_from, ga.jerk_ok ? &ga.jerk : nullptr);
+      r = ga_part_adaptive(m, d, hs, *from, ga.h_from, ga.jerk_ok ? &ga.jerk : nullptr);
       ga.hs_last = hs;
       ga.h_sub = real(0.5) * hs;  // the history's (sub-)step, for the next part or step
     } else {
-      r = stage_integrate(s, rk4, hs);
+      r = stage_integrate(m, d, rk4, hs);
     }
     // A mode carried far past its event can leave its domain (a sliding foot well past its
     // lift-off: the Newton iteration or the friction's coupling fails): the part step is
     // halved (at most kHalvings times) to find a state before that, from which it goes on.
     for (int halving = 0; r != LEGSIM_OK && contacts && halving < kHalvings && parts < kMaxParts; ++halving) {
-      r = part_restart(s, rk4, *from);
+      r = part_restart(m, d, rk4, *from);
       if (r != LEGSIM_OK) return r;
       hs /= 2;
-      r = stage_integrate(s, rk4, hs);
+      r = stage_integrate(m, d, rk4, hs);
       if (adapt) ga.h_sub = hs;  // (a plain part step: its history's step)
     }
     const bool partial = hs < h - done;  // the part step ends before the step
-    if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
+    if (r == LEGSIM_OK) r = stage_stroke_stops(m, d, rk4, false, stopped, 0);  // (the reactions)
     if (r != LEGSIM_OK) break;
     EventValues g1;
-    event_values(s, stops, g1);
+    event_values(m, d, stops, g1);
     if (!g0_known && locate && any_below_zero(g1)) {
-      event_values_of(s, stops, start.q, start.qd, start.contact, start.stop_mask, g0);
+      event_values_of(m, d, stops, start.q, start.qd, start.contact, start.stop_mask, g0);
       g0_known = true;
     }
     const EventBits cross = locate && g0_known ? crossings(g0, g1) & ~fresh : 0u;
@@ -665,15 +650,15 @@ constexpr real kGaImminent = 2;
       // the lengths already (an actuator past an end has a negative function)
       bool past = false;
       for (int f = kActBase; f < kFunctions; ++f) past = past || g1.g[f] < 0;
-      if (stops && past) r = stroke_limits_enforce(s, stopped, done + hs);
-      if (r == LEGSIM_OK && stopped) r = state_refresh(s);
+      if (stops && past) r = stroke_limits_enforce(m, d, stopped, done + hs);
+      if (r == LEGSIM_OK && stopped) r = state_refresh(m, d);
       if (r != LEGSIM_OK || !partial) break;
       if (adapt)
         ++ga_parts;
       else
         ++parts;
       done += hs;  // the rest of the step from here
-      from = new (&mid.at) Snapshot(s);
+      from = new (&mid.at) Snapshot(m, d);
       if (adapt) ga.h_from = ga.h_sub;  // the same modes go on (the history rescaled)
       if (!rk4) {
         d.acc_aux = d.qdd;
@@ -687,15 +672,15 @@ constexpr real kGaImminent = 2;
     // is better); before it, that state starts the rest of the step (located again from it)
     StepEnd end;
     end.q = d.q, end.v = d.qd, end.a = d.qdd;
-    from->restore(s);
-    r = stage_start(s, rk4);
+    from->restore(m, d);
+    r = stage_start(m, d, rk4);
     if (r != LEGSIM_OK) return r;
     ContactEvents ev;
     uint32_t arriving;
     real theta, slope;
     bool exact;
     int first;
-    r = events_locate(s, end, hs, g0, g1, cross, ev, arriving, theta, exact, first, slope);
+    r = events_locate(m, d, end, hs, g0, g1, cross, ev, arriving, theta, exact, first, slope);
     if (r != LEGSIM_OK) return r;
     if (!exact) raise_event(d, LEGSIM_EVENT_EVENT_INEXACT);
     // The part step to the root found, taken for real: the located function there must be 0
@@ -709,11 +694,11 @@ constexpr real kGaImminent = 2;
     bool short_of_root = false;
     for (int refine = 0;; ++refine) {
       // the start again (the location's solves and the last part step wrote over it)
-      r = adapt ? ga_part_restart(s, *from, ga.h_from, he, ga.jerk_ok ? &ga.jerk : nullptr) : part_restart(s, rk4, *from);
+      r = adapt ? ga_part_restart(m, d, *from, ga.h_from, he, ga.jerk_ok ? &ga.jerk : nullptr) : part_restart(m, d, rk4, *from);
       if (r != LEGSIM_OK) return r;
       if (!(he > tiny_step(h))) break;
-      r = adapt ? ga_sub_step(s, he) : part_integrate(s, rk4, he, *from, split);
-      if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, false, stopped, 0);  // (the reactions)
+      r = adapt ? ga_sub_step(m, d, he) : part_integrate(m, d, rk4, he, *from, split);
+      if (r == LEGSIM_OK) r = stage_stroke_stops(m, d, rk4, false, stopped, 0);  // (the reactions)
       if (r != LEGSIM_OK && refine < kRefinements) {  // past the mode's domain: bisected
         rb = he, side = 1;
         he = real(0.5) * (ra + rb);
@@ -721,7 +706,7 @@ constexpr real kGaImminent = 2;
       }
       if (r != LEGSIM_OK) return r;
       EventValues ge;
-      event_values(s, stops, ge);
+      event_values(m, d, stops, ge);
       const real gf = ge.g[first];
       // the distance to the root, by the slope of the interpolant (first) or of the last two
       // part steps' values (after), never steeper than the interpolant's: past its event a
@@ -738,7 +723,7 @@ constexpr real kGaImminent = 2;
         // Painleve's paradox): its mode has no usable solution there, and the part steps
         // towards it gain energy without bound. Refused; a shorter step meets the mode's end
         // before it (its modes check at a step's end)
-        if (force_pole(s, first, g0.g[first], fa, fb)) return LEGSIM_ERR_CONTACT;
+        if (force_pole(d, first, g0.g[first], fa, fb)) return LEGSIM_ERR_CONTACT;
         // still short of its root: the step's trial crossed where its part steps do not reach
         // (a motion the step does not resolve); the event is not taken here (a stop or a foot
         // put there would jump), the rest is located again from here
@@ -756,8 +741,8 @@ constexpr real kGaImminent = 2;
     done += he;
     ++located;
     if (short_of_root) {  // no event: the rest of the step from here, as after a part step
-      if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));
-      from = new (&mid.at) Snapshot(s);
+      if (!(h - done > tiny_step(h))) return stage_contacts(m, d, stops, d.t + double(h));
+      from = new (&mid.at) Snapshot(m, d);
       if (adapt) ga.h_from = he;  // (its one sub-step)
       if (!rk4) {
         d.acc_aux = d.qdd;
@@ -769,24 +754,24 @@ constexpr real kGaImminent = 2;
     // the stops first (the arriving ones, and any other past its end), then the contacts'
     // events and checks with the forces of the state on its stops
     if (stops) {
-      r = stroke_limits_enforce(s, stopped, done, arriving);
-      if (r == LEGSIM_OK && stopped) r = state_refresh(s);
+      r = stroke_limits_enforce(m, d, stopped, done, arriving);
+      if (r == LEGSIM_OK && stopped) r = state_refresh(m, d);
     }
-    if (r == LEGSIM_OK) r = stage_contacts(s, stops, t_event, &ev);
-    if (r == LEGSIM_OK) r = stage_stops_release(s, stops, done);
+    if (r == LEGSIM_OK) r = stage_contacts(m, d, stops, t_event, &ev);
+    if (r == LEGSIM_OK) r = stage_stops_release(m, d, stops, done);
     if (r != LEGSIM_OK) return r;
-    if (!(h - done > tiny_step(h))) return stage_contacts(s, stops, d.t + double(h));  // the event ends the step
-    for (int k = 0; k < s.model.nc; ++k)
+    if (!(h - done > tiny_step(h))) return stage_contacts(m, d, stops, d.t + double(h));  // the event ends the step
+    for (int k = 0; k < m.nc; ++k)
       if (((ev.touchdown | ev.slip | ev.stick) >> k) & 1u) fresh |= EventBits(1) << (2 * k + 1);
-    for (int a = 0; a < s.model.na; ++a)
+    for (int a = 0; a < m.na; ++a)
       if ((arriving >> a) & 1u) fresh |= EventBits(3) << (kActBase + 2 * a);
-    from = new (&mid.at) Snapshot(s);
+    from = new (&mid.at) Snapshot(m, d);
     if (!rk4) {  // the rest is a part step too
       d.acc_aux = d.qdd;
       d.past_steps = 0;
-      adapt = ga_parts < kGaMaxParts && ga_event_imminent(s, stops, fresh, h - done, ga.jerk, ga.jerk_ok);
+      adapt = ga_parts < kGaMaxParts && ga_event_imminent(m, d, stops, fresh, h - done, ga.jerk, ga.jerk_ok);
       if (!adapt) {  // the probe's solve wrote over the multipliers: the rest as before
-        mid.at.restore(s);
+        mid.at.restore(m, d);
         d.acc_aux = d.qdd;
         d.past_steps = 0;
       }
@@ -802,12 +787,12 @@ constexpr real kGaImminent = 2;
     // mostly the Newton iteration's noise, which the rescale would blow up: a restart instead
     const real f = h / ga.h_sub;
     if (f <= kGaMaxRescale)
-      ga_history_rescale(s, f);
+      ga_history_rescale(m, d, f);
     else
       d.acc_aux = d.qdd;
     d.past_steps = 0;
   }
-  return stage_contacts(s, stops, d.t + double(h));
+  return stage_contacts(m, d, stops, d.t + double(h));
 }
 
 #endif
@@ -818,15 +803,15 @@ constexpr real kGaImminent = 2;
 // taken again from its start with the arrival located (the rare step pays; the others pay a
 // branch); a build without it (LEGSIM_MAX_CONTACTS = 0: the Cortex-M4F leg image, whose flash
 // it does not fit) takes the arrival at the step's end.
-legsim_status step_whole(Sim &s, bool rk4, bool stops, const Snapshot &start) {
-  legsim_status r = stage_start(s, rk4);
-  if (r == LEGSIM_OK) r = stage_integrate(s, rk4, s.step_h);
+legsim_status step_whole(const Model &m, Data &d, bool rk4, bool stops, const Snapshot &start) {
+  legsim_status r = stage_start(m, d, rk4);
+  if (r == LEGSIM_OK) r = stage_integrate(m, d, rk4, m.step_h);
   bool stopped = false;
-  if (r == LEGSIM_OK) r = stage_stroke_stops(s, rk4, stops, stopped, s.step_h);
+  if (r == LEGSIM_OK) r = stage_stroke_stops(m, d, rk4, stops, stopped, m.step_h);
 #if LEGSIM_WITH_CONTACT
   if (r == LEGSIM_OK && stopped) {
-    start.restore(s);
-    r = step_with_events(s, rk4, stops, start);
+    start.restore(m, d);
+    r = step_with_events(m, d, rk4, stops, start);
   }
 #else
   (void)start;
@@ -836,29 +821,29 @@ legsim_status step_whole(Sim &s, bool rk4, bool stops, const Snapshot &start) {
 
 }  // namespace
 
-legsim_status contact_modes_check(Sim &s) {
-  const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
-  return all_or_nothing(s, [&] { return stage_start(s, rk4); });
+legsim_status contact_modes_check(const Model &m, Data &d) {
+  const bool rk4 = m.opt.integrator == LEGSIM_INTEGRATOR_RK4;
+  return all_or_nothing(m, d, [&] { return stage_start(m, d, rk4); });
 }
 
-legsim_status steps_run(Sim &s, int32_t n_steps) {
-  const bool rk4 = s.opt.integrator == LEGSIM_INTEGRATOR_RK4;
-  const bool stops = !(s.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
-  const bool events = s.model.nc > 0;  // a model with contacts has events to locate
+legsim_status steps_run(const Model &m, Data &d, int32_t n_steps) {
+  const bool rk4 = m.opt.integrator == LEGSIM_INTEGRATOR_RK4;
+  const bool stops = !(m.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
+  const bool events = m.nc > 0;  // a model with contacts has events to locate
   for (int32_t i = 0; i < n_steps; ++i) {
     // a failed step leaves the state of the last good one (all_or_nothing also
     // refuses a step whose state, accelerations, multipliers or report are not finite)
-    const legsim_status st = all_or_nothing(s, [&](const Snapshot &start) {
+    const legsim_status st = all_or_nothing(m, d, [&](const Snapshot &start) {
 #if LEGSIM_WITH_CONTACT
-      legsim_status r = events ? step_with_events(s, rk4, stops, start) : step_whole(s, rk4, stops, start);
+      legsim_status r = events ? step_with_events(m, d, rk4, stops, start) : step_whole(m, d, rk4, stops, start);
 #else
       (void)events;
-      legsim_status r = step_whole(s, rk4, stops, start);
+      legsim_status r = step_whole(m, d, rk4, stops, start);
 #endif
-      if (r == LEGSIM_OK) r = stage_stops_release(s, stops, s.step_h);
+      if (r == LEGSIM_OK) r = stage_stops_release(m, d, stops, m.step_h);
       if (r != LEGSIM_OK) return r;
-      s.data.modes_checked = true;
-      stage_advance(s, rk4);
+      d.modes_checked = true;
+      stage_advance(d, rk4);
       return LEGSIM_OK;
     });
     if (st != LEGSIM_OK) return st;
