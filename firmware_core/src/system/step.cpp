@@ -803,11 +803,11 @@ constexpr real kGaImminent = 2;
 // taken again from its start with the arrival located (the rare step pays; the others pay a
 // branch); a build without it (LEGSIM_MAX_CONTACTS = 0: the Cortex-M4F leg image, whose flash
 // it does not fit) takes the arrival at the step's end.
-legsim_status step_whole(const Model &m, Data &d, bool rk4, bool stops, const Snapshot &start) {
+legsim_status step_whole(const Model &m, Data &d, bool rk4, bool stops, real h, const Snapshot &start) {
   legsim_status r = stage_start(m, d, rk4);
-  if (r == LEGSIM_OK) r = stage_integrate(m, d, rk4, m.step_h);
+  if (r == LEGSIM_OK) r = stage_integrate(m, d, rk4, h);
   bool stopped = false;
-  if (r == LEGSIM_OK) r = stage_stroke_stops(m, d, rk4, stops, stopped, m.step_h);
+  if (r == LEGSIM_OK) r = stage_stroke_stops(m, d, rk4, stops, stopped, h);
 #if LEGSIM_WITH_CONTACT
   if (r == LEGSIM_OK && stopped) {
     start.restore(m, d);
@@ -830,17 +830,18 @@ legsim_status steps_run(const Model &m, Data &d, int32_t n_steps) {
   const bool rk4 = m.opt.integrator == LEGSIM_INTEGRATOR_RK4;
   const bool stops = !(m.opt.disable & LEGSIM_DISABLE_STROKE_LIMITS);
   const bool events = m.nc > 0;  // a model with contacts has events to locate
+  const real h = m.step_h;  // read once: Data's writes may alias the model's values
   for (int32_t i = 0; i < n_steps; ++i) {
     // a failed step leaves the state of the last good one (all_or_nothing also
     // refuses a step whose state, accelerations, multipliers or report are not finite)
     const legsim_status st = all_or_nothing(m, d, [&](const Snapshot &start) {
 #if LEGSIM_WITH_CONTACT
-      legsim_status r = events ? step_with_events(m, d, rk4, stops, start) : step_whole(m, d, rk4, stops, start);
+      legsim_status r = events ? step_with_events(m, d, rk4, stops, start) : step_whole(m, d, rk4, stops, h, start);
 #else
       (void)events;
-      legsim_status r = step_whole(m, d, rk4, stops, start);
+      legsim_status r = step_whole(m, d, rk4, stops, h, start);
 #endif
-      if (r == LEGSIM_OK) r = stage_stops_release(m, d, stops, m.step_h);
+      if (r == LEGSIM_OK) r = stage_stops_release(m, d, stops, h);
       if (r != LEGSIM_OK) return r;
       d.modes_checked = true;
       stage_advance(d, rk4);
