@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from built import legsim_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 try:
@@ -18,7 +19,7 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.scene import SceneError, cli_path, is_hexapod_scene, load_scene, shipped_scenes  # noqa: E402
+from legsim_bench.scene import SceneError, is_hexapod_scene, load_scene, shipped_scenes  # noqa: E402
 
 SCENES = ROOT / "scenes"
 HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop",
@@ -26,15 +27,9 @@ HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "h
                   "hexapod_section5"}
 
 
-def _cli():
-    p = cli_path(ROOT)
-    if not p.is_file():
-        pytest.skip(f"{p} not built (cmake --build --preset host --target legsim_cli, or LEGSIM_CLI)")
-    return p
-
 
 def _run(name, *args):
-    r = subprocess.run([str(_cli()), str(SCENES / f"{name}.toml"), *args], capture_output=True, text=True,
+    r = subprocess.run([str(legsim_cli()), str(SCENES / f"{name}.toml"), *args], capture_output=True, text=True,
                        timeout=300)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
@@ -54,7 +49,7 @@ def test_the_bench_lists_them_as_legsim_cli_s_and_refuses_to_run_them():
     bench = {p.stem for p in shipped_scenes(ROOT)}
     assert HEXAPOD_SCENES <= every and not HEXAPOD_SCENES & bench
     assert {p.stem for p in SCENES.glob("*.toml") if is_hexapod_scene(p)} == HEXAPOD_SCENES
-    _cli()
+    legsim_cli()
     with pytest.raises(SceneError, match="a hexapod scene: legsim_cli runs it"):
         load_scene(SCENES / "hexapod_walk.toml", ROOT)
 

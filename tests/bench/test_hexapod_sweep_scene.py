@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from built import legsim_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 try:
@@ -15,20 +16,13 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.scene import cli_path  # noqa: E402
 
 SCENE = ROOT / "scenes" / "hexapod_section5.toml"
 
 
-def _cli():
-    p = cli_path(ROOT)
-    if not p.is_file():
-        pytest.skip(f"{p} not built (cmake --build --preset host --target legsim_cli, or LEGSIM_CLI)")
-    return p
-
 
 def _run(scene):
-    r = subprocess.run([str(_cli()), str(scene)], capture_output=True, text=True, timeout=300)
+    r = subprocess.run([str(legsim_cli()), str(scene)], capture_output=True, text=True, timeout=300)
     return r, (json.loads(r.stdout) if r.returncode == 0 else None)
 
 

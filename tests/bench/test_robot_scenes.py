@@ -12,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from built import legsim_cli
 
 ROOT = Path(__file__).resolve().parents[2]
 try:
@@ -19,7 +20,6 @@ try:
 except ImportError:  # the bench is not installed: use the source tree
     sys.path.insert(0, str(ROOT / "bench"))
 
-from legsim_bench.scene import cli_path  # noqa: E402
 from legsim_bench.verdict.analyses import robot_arrays, robot_growth, robot_reference  # noqa: E402
 from legsim_bench.scene import SceneError, load_scene, parse_scene  # noqa: E402
 
@@ -29,9 +29,7 @@ ROBOT_SCENES = ["robot_stand_servo", "robot_stand_constant_force", "robot_fig7",
 
 
 def _cli():
-    p = cli_path(ROOT)
-    if not p.is_file():
-        pytest.skip(f"{p} not built (cmake --build --preset host --target legsim_cli, or LEGSIM_CLI)")
+    p = legsim_cli()
     r = subprocess.run([str(p), str(ROOT / "scenes" / "robot_fig7.toml"), "--check"], capture_output=True,
                        text=True, timeout=60)
     if r.returncode != 0 and "capacity" in r.stderr.lower():

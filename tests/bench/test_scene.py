@@ -11,6 +11,7 @@ import sys
 from pathlib import Path
 
 import pytest
+from built import legsim_cli
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
@@ -386,16 +387,9 @@ def test_boundaries_cover_the_run(h_us, n, every):
 
 # ---- the one schema, from both sides -------------------------------------------------------
 
-def _cli():
-    from legsim_bench.scene import cli_path
-    p = cli_path(ROOT)
-    if not p.is_file():
-        pytest.skip(f"{p} not built (cmake --build --preset host --target legsim_cli, or LEGSIM_CLI)")
-    return p
-
 
 def _cli_check(path):
-    r = subprocess.run([str(_cli()), str(path), "--check"], capture_output=True, text=True, timeout=60)
+    r = subprocess.run([str(legsim_cli()), str(path), "--check"], capture_output=True, text=True, timeout=60)
     return r.returncode, (json.loads(r.stdout) if r.returncode == 0 else None), r.stderr
 
 
@@ -518,7 +512,7 @@ def test_a_scene_with_its_own_model_file_resolves_it_next_to_the_scene():
 
 
 def _cli_json(path):
-    r = subprocess.run([str(_cli()), str(path)], capture_output=True, text=True, timeout=60)
+    r = subprocess.run([str(legsim_cli()), str(path)], capture_output=True, text=True, timeout=60)
     assert r.returncode == 0, r.stderr
     return json.loads(r.stdout)
 
@@ -544,7 +538,7 @@ def test_the_heavy_shank_changes_statics_as_its_weight_on_the_foot_line_says(tmp
 def test_the_bench_runs_a_statics_scene_of_its_own_model_in_legsim_cli_and_checks_it():
     from legsim_bench.verdict.checks import evaluate
     from legsim_bench.hil.runner import record
-    _cli()
+    legsim_cli()
     sc = load_scene(FIXTURES / "heavy_shank_statics.toml", ROOT)
     assert not sc.over_can
     rec = record(sc, link=None)
