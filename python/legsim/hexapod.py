@@ -221,7 +221,10 @@ class Hexapod:
                 plan_margin[0] = s["margin_m"]
             m.command_pose(sp["length_m"], sp["rowing_rad"], ff, fm)
 
-        command(sp)
+        # before every step the set-points at its end: the first's before the start's sample (as
+        # legsim_cli; a second command would restart generalized-alpha's history once more)
+        first = self.gait_setpoints(float(h_s), **gait)
+        command(first)
         n = int(round(float(t_end_s) / float(h_s)))
         out = {k: [] for k in ("t_s", "box_m", "box_quat", "foot_m", "foot_force_n", "foot_state",
                                "set_foot_box_m", "set_box_m", "com_m", "margin_m", "plan_margin_m", "body_pose",
@@ -249,8 +252,9 @@ class Hexapod:
         st = m.state()
         sample(st, sp)
         for i in range(n):
-            sp = self.gait_setpoints((i + 1) * float(h_s), **gait)
-            command(sp)
+            sp = self.gait_setpoints((i + 1) * float(h_s), **gait) if i else first
+            if i:
+                command(sp)
             m.step(1, h_s=h_s)
             st = m.state()
             events += st["events"]

@@ -23,7 +23,8 @@ from legsim_bench.scene import SceneError, is_hexapod_scene, load_scene, shipped
 
 SCENES = ROOT / "scenes"
 HEXAPOD_SCENES = {"hexapod_stand_tripod", "hexapod_fig7_six", "hexapod_walk", "hexapod_turn", "hexapod_drop",
-                  "hexapod_slope_up", "hexapod_slope_across", "hexapod_slip", "hexapod_inverse_walk",
+                  "hexapod_slope_up", "hexapod_slope_across", "hexapod_slope_turn", "hexapod_slip",
+                  "hexapod_inverse_walk",
                   "hexapod_section5"}
 
 
@@ -124,20 +125,23 @@ def _scene_checks(d):
     return {k: check_cli_output.hexapod_check(d, k, w) for k, w in d["checks"].items()}
 
 
-@pytest.mark.parametrize("name", ["hexapod_slope_up", "hexapod_slope_across"])
-def test_the_slope_walks_are_the_python_api_s(hexapod, name):
-    """hexapod_slope_up / _across (15 degrees, up the fall line and across it): the scene's checks
-    pass (progress against the plan, height over the ground below the box, tilt, the stuck feet
-    inside their cones, the stance's margin), and the run is legsim.Hexapod.walk's on the scene's
-    ground, sample for sample."""
+@pytest.mark.parametrize("name, degrees", [("hexapod_slope_up", 15), ("hexapod_slope_across", 15),
+                                           ("hexapod_slope_turn", 10)])
+def test_the_slope_walks_are_the_python_api_s(hexapod, name, degrees):
+    """hexapod_slope_up / _across (15 degrees, up the fall line and across it) and _turn (on the
+    spot on 10 degrees, generalized-alpha): the scene's checks pass (progress or yaw against the
+    plan, height over the ground below the box, tilt, the stuck feet inside their cones, the
+    stance's margin), and the run is legsim.Hexapod.walk's on the scene's ground, sample for
+    sample."""
     d = _run(name)
     got = _scene_checks(d)
     print(name, {k: v[0] for k, v in got.items()})
     assert all(ok for _, ok in got.values()), got
     g = d["gait"]
     n = d["ground"]["normal"]
-    assert abs(math.acos(n[2]) - math.radians(15)) < 1e-12
-    w = hexapod.walk(**g, t_end_s=d["duration"], h_s=d["step_s"], every=d["record_every"], ground=_ground(d))
+    assert abs(math.acos(n[2]) - math.radians(degrees)) < 1e-12
+    w = hexapod.walk(**g, t_end_s=d["duration"], h_s=d["step_s"], every=d["record_every"], ground=_ground(d),
+                     integrator=d["integrator"].replace("generalized_alpha", "galpha"))
     assert np.array_equal(np.array([s["box"] for s in d["samples"]]), w["box_m"])
     assert np.array_equal(np.array([[s["feet"][k]["x"] for k in d["legs"]] for s in d["samples"]]), w["foot_m"])
     assert np.allclose(np.array([s["com"] for s in d["samples"]]), w["com_m"], rtol=0, atol=1e-12)
