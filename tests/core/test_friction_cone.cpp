@@ -359,14 +359,13 @@ void test_bounded_on_a_hard_problem(void) {
   TEST_ASSERT_TRUE(rep.residual > none.tol);
 }
 
-
 // The last contact problem of the walk across 15 degrees with the box at 0.9 m before its step
 // from 1.809 s failed (scenes/hexapod_slope_across.toml at box_height_m = 0.9; captured at
 // t = 1.809313568 s): the right middle foot touching down (approaching at 1.2 mm/s) with the
-// right front and rear stuck and the left middle and rear sliding at 0.6 to 0.7 mm/s; the
+// right front and rear stuck and the left middle and rear sliding at 0.7 mm/s; the
 // impact's Delassus matrix (15 x 15, positive definite: eigenvalues 0.165 .. 1.73) and
 // velocities before it, mu_kinetic 0.5, exactly as the walk gave them (hex). A solvable problem
-// (W positive definite), solved: the step failed elsewhere (docs/design/spatial.md, "A walk's
+// (W positive definite), solved: the step failed elsewhere (docs/design/spatial.md, "The
 // contact problems at a failure").
 const double kWalkImpactW[225] = {
     0x1.554f4ed3ad339p-2, -0x1.9409487cadd2cp-6, -0x1.d54cdca216fa6p-2, 0x1.4a8e4fd8930e4p-7,
