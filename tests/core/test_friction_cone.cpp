@@ -359,6 +359,119 @@ void test_bounded_on_a_hard_problem(void) {
   TEST_ASSERT_TRUE(rep.residual > none.tol);
 }
 
+// The last contact problem of the walk across 15 degrees with the box at 0.9 m before its step
+// from 1.809 s failed (scenes/hexapod_slope_across.toml at box_height_m = 0.9; captured at
+// t = 1.809313568 s): the right middle foot touching down (approaching at 1.2 mm/s) with the
+// right front and rear stuck and the left middle and rear sliding at 0.7 mm/s; the
+// impact's Delassus matrix (15 x 15, positive definite: eigenvalues 0.165 .. 1.73) and
+// velocities before it, mu_kinetic 0.5, exactly as the walk gave them (hex). A solvable problem
+// (W positive definite), solved: the step failed elsewhere (docs/design/spatial.md, "The
+// contact problems at a failure").
+const double kWalkImpactW[225] = {
+    0x1.554f4ed3ad339p-2, -0x1.9409487cadd2cp-6, -0x1.d54cdca216fa6p-2, 0x1.4a8e4fd8930e4p-7,
+    0x1.5c6d17b635ed6p-8, -0x1.7b70a11af63c4p-9, -0x1.b51cedcc587fep-10, 0x1.e1096d169a7c2p-8,
+    -0x1.90af6af0298cdp-12, 0x1.a573318d24a0bp-10, 0x1.dd840b37639e4p-7, -0x1.ae0cf74ff0721p-9,
+    0x1.2d6f2eef716e4p-11, 0x1.0db06d7fa576ep-6, 0x1.b68e81f67042cp-9, -0x1.9409487cadd2cp-6,
+    0x1.af79a79ce8848p-2, 0x1.781697ae5108cp-4, 0x1.64eb2ae6e06e4p-12, 0x1.c9ac4e2fea7dap-6,
+    0x1.84debef943a76p-9, -0x1.095c4d05eb6cfp-8, 0x1.ebd09ed1dd3f2p-6, 0x1.bf043d4d7fd46p-9,
+    -0x1.0db6614141144p-14, 0x1.d4142ca3990bap-6, 0x1.892803ed5df3dp-9, 0x1.ea5dc36b4f168p-8,
+    0x1.d9bf806501127p-6, -0x1.5a69fee3d6c3p-9, -0x1.d54cdca216fa6p-2, 0x1.781697ae5108cp-4,
+    0x1.910d5b0eed665p+0, -0x1.b8b9290227e34p-9, -0x1.dadd703c3afd3p-8, 0x1.4488fc68f80f8p-10,
+    0x1.adf0314a9ae27p-15, -0x1.1518197f4d3f7p-7, 0x1.379c76f472de8p-11, 0x1.fdcc304d3ea84p-12,
+    -0x1.30c927cc885f6p-7, -0x1.936fdf96dd64ep-10, -0x1.64688b0e16a83p-10, -0x1.6379ea3e0a8efp-7,
+    -0x1.21f954b68492ep-10, 0x1.4a8e4fd8930e4p-7, 0x1.64eb2ae6e06e4p-12, -0x1.b8b9290227e34p-9,
+    0x1.4bfc003491e24p-2, 0x1.8c41dca366671p-5, -0x1.d661968416dd2p-2, 0x1.738326bd15937p-7,
+    0x1.88fa3c8419ec3p-13, -0x1.31f3652ac1c6fp-8, 0x1.b7a51b5a9e8e6p-10, -0x1.759661a9853fp-10,
+    -0x1.17298f06a008p-8, 0x1.c39b29a3f34dap-10, -0x1.405887e91e1d1p-12, -0x1.2d71f76d69237p-8,
+    0x1.5c6d17b635ed6p-8, 0x1.c9ac4e2fea7dap-6, -0x1.dadd703c3afd3p-8, 0x1.8c41dca366671p-5,
+    0x1.bb98b1f5b6e72p-2, -0x1.1399027f3940cp-3, -0x1.3d26f16f575e2p-8, 0x1.ed9cfaacca1cp-6,
+    0x1.064baade3445cp-8, -0x1.bac6f4d92e582p-11, 0x1.e68f6707bdcfap-6, 0x1.27edc576e1f64p-10,
+    0x1.c07cedfc0f606p-8, 0x1.d0eec5d66645ep-6, -0x1.2bbb1fdf22516p-8, -0x1.7b70a11af63c4p-9,
+    0x1.84debef943a76p-9, 0x1.4488fc68f80f8p-10, -0x1.d661968416dd2p-2, -0x1.1399027f3940cp-3,
+    0x1.8d19d011d114ep+0, -0x1.f6007f655bc27p-9, 0x1.a4633282b08eep-9, 0x1.67fa3849ecdebp-9,
+    0x1.285d31a05474ep-12, 0x1.0424986e413ep-8, -0x1.219f610893c1ap-11, 0x1.2468b20b0eb5ap-10,
+    0x1.3c04e3f61b622p-9, -0x1.164d13a232e72p-10, -0x1.b51cedcc587fep-10, -0x1.095c4d05eb6cfp-8,
+    0x1.adf0314a9ae27p-15, 0x1.738326bd15937p-7, -0x1.3d26f16f575e2p-8, -0x1.f6007f655bc27p-9,
+    0x1.4cba95a9021edp-2, -0x1.198489e459562p-5, -0x1.b29cff058437cp-2, 0x1.b8fa5f84a00c1p-10,
+    -0x1.8dbb568cd771cp-7, -0x1.4574ddad546d4p-8, 0x1.b787bf6540de6p-9, -0x1.87d01bbb6193p-7,
+    -0x1.74814adfac19cp-7, 0x1.e1096d169a7c2p-8, 0x1.ebd09ed1dd3f2p-6, -0x1.1518197f4d3f7p-7,
+    0x1.88fa3c8419ec3p-13, 0x1.ed9cfaacca1cp-6, 0x1.a4633282b08eep-9, -0x1.198489e459562p-5,
+    0x1.a8d7e1b08eff4p-2, 0x1.b3c30a78e2538p-4, -0x1.0b6c166815286p-13, 0x1.027b3b8492a6ep-5,
+    0x1.bcd91ca2186c4p-9, 0x1.09327aa4b1b87p-7, 0x1.05fd8b8db3a3cp-5, -0x1.4b9a8f6dce802p-9,
+    -0x1.90af6af0298cdp-12, 0x1.bf043d4d7fd46p-9, 0x1.379c76f472de8p-11, -0x1.31f3652ac1c6fp-8,
+    0x1.064baade3445cp-8, 0x1.67fa3849ecdebp-9, -0x1.b29cff058437cp-2, 0x1.b3c30a78e2538p-4,
+    0x1.92b2c471b455p+0, 0x1.4ce09ab4921c4p-13, 0x1.b774c4cfb25d7p-8, 0x1.9ed5730503ap-15,
+    0x1.6693d9babb324p-11, 0x1.5ebc3f87366a8p-8, 0x1.0a747aee9eadp-10, 0x1.a573318d24a0bp-10,
+    -0x1.0db6614141144p-14, 0x1.fdcc304d3ea84p-12, 0x1.b7a51b5a9e8e6p-10, -0x1.bac6f4d92e582p-11,
+    0x1.285d31a05474ep-12, 0x1.b8fa5f84a00c1p-10, -0x1.0b6c166815286p-13, 0x1.4ce09ab4921c4p-13,
+    0x1.d5c0cf5423c4dp-2, 0x1.c4c3dc09f448ap-6, -0x1.8a37865bcb5cp-2, 0x1.d391705905ecbp-10,
+    -0x1.9ab985cf3bd4dp-13, -0x1.691aacae3f73ep-11, 0x1.dd840b37639e4p-7, 0x1.d4142ca3990bap-6,
+    -0x1.30c927cc885f6p-7, -0x1.759661a9853fp-10, 0x1.e68f6707bdcfap-6, 0x1.0424986e413ep-8,
+    -0x1.8dbb568cd771cp-7, 0x1.027b3b8492a6ep-5, 0x1.b774c4cfb25d7p-8, 0x1.c4c3dc09f448ap-6,
+    0x1.3ae97fbadf447p-2, -0x1.58917511f595bp-4, 0x1.9611f97d439dp-8, 0x1.28d34f1048534p-5,
+    -0x1.e6ba1e3af318ep-12, -0x1.ae0cf74ff0721p-9, 0x1.892803ed5df3dp-9, -0x1.936fdf96dd64ep-10,
+    -0x1.17298f06a008p-8, 0x1.27edc576e1f64p-10, -0x1.219f610893c1ap-11, -0x1.4574ddad546d4p-8,
+    0x1.bcd91ca2186c4p-9, 0x1.9ed5730503ap-15, -0x1.8a37865bcb5cp-2, -0x1.58917511f595bp-4,
+    0x1.752b7bdd11b78p+0, -0x1.0d14a63ab8554p-13, 0x1.8362a31589574p-8, 0x1.38e4ccb1d8b11p-7,
+    0x1.2d6f2eef716e4p-11, 0x1.ea5dc36b4f168p-8, -0x1.64688b0e16a83p-10, 0x1.c39b29a3f34dap-10,
+    0x1.c07cedfc0f606p-8, 0x1.2468b20b0eb5ap-10, 0x1.b787bf6540de6p-9, 0x1.09327aa4b1b87p-7,
+    0x1.6693d9babb324p-11, 0x1.d391705905ecbp-10, 0x1.9611f97d439dp-8, -0x1.0d14a63ab8554p-13,
+    0x1.dbf142200dd2ep-2, -0x1.88f5470c88082p-5, -0x1.9005117ae8388p-2, 0x1.0db06d7fa576ep-6,
+    0x1.d9bf806501127p-6, -0x1.6379ea3e0a8efp-7, -0x1.405887e91e1d1p-12, 0x1.d0eec5d66645ep-6,
+    0x1.3c04e3f61b622p-9, -0x1.87d01bbb6193p-7, 0x1.05fd8b8db3a3cp-5, 0x1.5ebc3f87366a8p-8,
+    -0x1.9ab985cf3bd4dp-13, 0x1.28d34f1048534p-5, 0x1.8362a31589574p-8, -0x1.88f5470c88082p-5,
+    0x1.46f868609ad66p-2, 0x1.483ad330bab4dp-3, 0x1.b68e81f67042cp-9, -0x1.5a69fee3d6c3p-9,
+    -0x1.21f954b68492ep-10, -0x1.2d71f76d69237p-8, -0x1.2bbb1fdf22516p-8, -0x1.164d13a232e72p-10,
+    -0x1.74814adfac19cp-7, -0x1.4b9a8f6dce802p-9, 0x1.0a747aee9eadp-10, -0x1.691aacae3f73ep-11,
+    -0x1.e6ba1e3af318ep-12, 0x1.38e4ccb1d8b11p-7, -0x1.9005117ae8388p-2, 0x1.483ad330bab4dp-3,
+    0x1.7203ea0e41d32p+0};
+const double kWalkImpactQ[15] = {
+    -0x1.1ac8cdf81ad96p-60, 0x1p-57, 0x1.ff1e52361ef7ep-58, -0x1.43673f26c9957p-10,
+    0x1.95147808cfbp-11, -0x1.e51551e8d8d66p-13, 0x1.72ea5f5768f5p-62, 0x1.a79394c9e8a0ap-118,
+    0x1.8d8bca25c89d8p-64, 0x1.e8p-61, 0x1.08640e3bfd2p-11, -0x1.d8acad5c869afp-12, 0x1.4p-61,
+    0x1.2ac7e5ae63fp-11, -0x1.c110419c15175p-12};
+
+void test_walk_touchdown_impact(void) {
+  real W[225], q[15], r[15], u[15];
+  const real mu[5] = {real(0.5), real(0.5), real(0.5), real(0.5), real(0.5)};
+  for (int k = 0; k < 225; ++k) W[k] = real(kWalkImpactW[k]);
+  for (int k = 0; k < 15; ++k) q[k] = real(kWalkImpactQ[k]);
+  ConeReport rep;
+  solve_and_check(5, W, q, mu, r, u, rep);
+  TEST_ASSERT_TRUE(rep.iterations <= 10);
+  // against the mode's closed form: the touching foot (contact 1) stuck, r_1 = -W_11^-1 q_1
+  // (Cramer's rule), inside its cone; the others without an impulse, leaving at
+  // q_i + W_i1 r_1 (u_n > 0: slower than 0.1 mm/s, so the walk keeps them on the ground)
+  const real *w = W;
+  auto at = [&](int i, int j) { return w[15 * (3 + i) + 3 + j]; };
+  const real det = at(0, 0) * (at(1, 1) * at(2, 2) - at(1, 2) * at(2, 1)) -
+                   at(0, 1) * (at(1, 0) * at(2, 2) - at(1, 2) * at(2, 0)) +
+                   at(0, 2) * (at(1, 0) * at(2, 1) - at(1, 1) * at(2, 0));
+  real r1[3];
+  for (int c = 0; c < 3; ++c) {
+    real m[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) m[i][j] = j == c ? -q[3 + i] : at(i, j);
+    r1[c] = (m[0][0] * (m[1][1] * m[2][2] - m[1][2] * m[2][1]) - m[0][1] * (m[1][0] * m[2][2] - m[1][2] * m[2][0]) +
+             m[0][2] * (m[1][0] * m[2][1] - m[1][1] * m[2][0])) / det;
+  }
+  TEST_ASSERT_TRUE(std::hypot(r1[1], r1[2]) < real(0.5) * r1[0]);
+  for (int k = 0; k < 3; ++k) TEST_ASSERT_DOUBLE_WITHIN(1e-12, r1[k], r[3 + k]);
+  for (int i = 0; i < 5; ++i) {
+    if (i == 1) continue;
+    for (int k = 0; k < 3; ++k) {
+      TEST_ASSERT_EQUAL_DOUBLE(0, r[3 * i + k]);
+      const real ui = q[3 * i + k] + W[15 * (3 * i + k) + 3] * r1[0] + W[15 * (3 * i + k) + 4] * r1[1] +
+                      W[15 * (3 * i + k) + 5] * r1[2];
+      TEST_ASSERT_DOUBLE_WITHIN(1e-15, ui, u[3 * i + k]);
+    }
+    TEST_ASSERT_TRUE(u[3 * i] > 0 && u[3 * i] < real(1e-4));
+  }
+  printf("the walk's impact: %d iterations, residual %.1e; slips after it (m/s):", rep.iterations, double(rep.residual));
+  for (int i = 0; i < 5; ++i) printf(" %.2e", double(std::hypot(u[3 * i + 1], u[3 * i + 2])));
+  printf("\n");
+}
+
 }  // namespace
 
 int main(void) {
@@ -369,5 +482,6 @@ int main(void) {
   RUN_TEST(test_single_contacts_solved_or_reported);
   RUN_TEST(test_refused_inputs);
   RUN_TEST(test_bounded_on_a_hard_problem);
+  RUN_TEST(test_walk_touchdown_impact);
   return UNITY_END();
 }

@@ -207,7 +207,10 @@ def test_feedforward_is_the_statics_on_the_slope(hexapod):
     assert np.all(N > 0) and np.all(Ft < h.desc.mu_static * N)
 
 
-@pytest.mark.parametrize("uphill, height", [(0.0, 1.0), (np.pi / 2, 0.85)], ids=["up", "across"])
+# across at 0.9 m: a step from 1.809 s failed (LEGSIM_ERR_CONTACT: two slow slips' reversals
+# located at one jump of the friction's direction; docs/design/spatial.md)
+@pytest.mark.parametrize("uphill, height", [(0.0, 1.0), (np.pi / 2, 0.85), (np.pi / 2, 0.9)],
+                         ids=["up", "across", "across_0.9m"])
 def test_walks_on_a_slope(hexapod, uphill, height):
     ground = dict(slope_rad=SLOPE, uphill_rad=uphill)
     h = hexapod.on_ground(**ground)

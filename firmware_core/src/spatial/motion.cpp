@@ -649,8 +649,12 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
           if ((l != el || k != ek) && e[l][k] < -event_tolerance(robot, d, l, k) &&
               (e0[l][k] >= -event_tolerance(robot, d, l, k) || e[l][k] < e0[l][k] - event_tolerance(robot, d, l, k)))
             nl = l, nk = k;
+      // located where the last one was (to the search's precision): both cross at one point, a
+      // jump of the part's end in its length (a mode's rule switching in a stage): simultaneous,
+      // this one applied, the other met at the next part's start
+      const bool same = guard > 0 && (window - hi) * part <= by_precision(1e-13, 1e-6) * (1 + part);
       window = hi;
-      if (nl < 0) break;
+      if (nl < 0 || same) break;
       if (guard == kLegEvents * kMaxLegs - 1) return fail(LEGSIM_ERR_CONTACT);  // still one before it: not located
       el = nl, ek = nk;
     }
