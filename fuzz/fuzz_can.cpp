@@ -15,10 +15,13 @@
 //     2 rt tick:   Node::rt_tick(now)
 //     3 heartbeat: fill_heartbeat + encode_heartbeat
 // A STEP's Ctrl_NSteps inside the DBC's range is reduced to 1..max_steps (64, the hexapod
-// 16: its step costs ~20 of the leg's), a START_RT's Ctrl_RtStepsPerTick so to 1..4 on the
-// hexapod (the values are still valid; out-of-range values are left for the validation to
-// refuse), and at most max_ticks real-time ticks (256, the hexapod 32) run per input: the
-// run stays short.
+// 16), a START_RT's Ctrl_RtStepsPerTick so to 1..4 on the hexapod (the values are still
+// valid; out-of-range values are left for the validation to refuse), and at most max_ticks
+// real-time ticks (256, the hexapod 32) run per input. The hexapod's step costs 20 to 60 of the
+// leg's (180 us on a servoed stand, 510 us with actuators pushing against stuck feet), and 50
+// to 140 times that in the fuzz build (9 to 70 ms): its STEPs and ticks also share a budget of
+// 32 steps per input (a STEP past it is a STEP 0, a tick past it is not run), so that an input
+// stays within a few seconds of libFuzzer's 20 s timeout on a loaded machine.
 //
 // Invariants (a violation aborts, which libFuzzer records as a crash):
 // - every frame hil_sim sends is one of its DBC messages, 11-bit id, CAN FD, 64 bytes, and
@@ -140,16 +143,18 @@ struct Bus {
   uint32_t max_steps;           // per STEP frame
   uint32_t max_steps_per_tick;  // a START_RT's (0: the DBC's)
   int max_ticks;                // per input
+  uint32_t max_input_steps;     // STEPs' and ticks' steps per input (0: no budget)
   int sample_index(uint32_t id) const {
     for (int i = 0; i < n_sample; ++i)
       if (sample[i] == id) return i;
     return -1;
   }
 };
-const Bus kLegBus{Kind::kLeg, kIds, kNIds, kLegSample, static_cast<int>(std::size(kLegSample)), 64, 0, 256};
+const Bus kLegBus{Kind::kLeg, kIds, kNIds, kLegSample, static_cast<int>(std::size(kLegSample)), 64, 0, 256, 0};
 const Bus kRobotBus{Kind::kRobot, kRobotIds, kNRobotIds, kRobotSample, static_cast<int>(std::size(kRobotSample)),
-                    64, 0, 256};
-const Bus kHexBus{Kind::kHexapod, kHexIds, kNHexIds, kHexSample, static_cast<int>(std::size(kHexSample)), 16, 4, 32};
+                    64, 0, 256, 0};
+const Bus kHexBus{Kind::kHexapod, kHexIds, kNHexIds, kHexSample, static_cast<int>(std::size(kHexSample)),
+                  16, 4, 32, 32};
 
 [[noreturn]] void violated(const char *what, const std::string &detail) {
   std::fprintf(stderr, "fuzz_can: invariant violated: %s: %s\n", what, detail.c_str());
@@ -305,7 +310,8 @@ class Reader {
   size_t n_, i_ = 0;
 };
 
-hil::Frame read_frame(Reader &r, const Bus &bus) {
+// budget: the steps the input may still ask for (bus.max_input_steps), spent by STEP frames.
+hil::Frame read_frame(Reader &r, const Bus &bus, uint32_t *budget) {
   hil::Frame f;
   const uint8_t sel = r.byte();
   if (sel < 0xF0) {
@@ -329,8 +335,12 @@ hil::Frame read_frame(Reader &r, const Bus &bus) {
     uint8_t *p = f.data + LEGSIM_CAN_CONTROL_CTRL_N_STEPS_START_BIT / 8;
     uint32_t n = static_cast<uint32_t>(p[0]) | static_cast<uint32_t>(p[1]) << 8 |
                  static_cast<uint32_t>(p[2]) << 16 | static_cast<uint32_t>(p[3]) << 24;
-    if (legsim_can_control_ctrl_n_steps_is_in_range(n) && n > bus.max_steps) {
-      n = 1 + (n - 1) % bus.max_steps;
+    if (legsim_can_control_ctrl_n_steps_is_in_range(n)) {
+      if (n > bus.max_steps) n = 1 + (n - 1) % bus.max_steps;
+      if (bus.max_input_steps > 0) {
+        n = n < *budget ? n : *budget;
+        *budget -= n;
+      }
       for (int k = 0; k < 4; ++k) p[k] = static_cast<uint8_t>(n >> (8 * k));
     }
   }
@@ -366,12 +376,13 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   int64_t now_ns = 0;
   int ticks = 0;
   uint32_t hb_counter = 0;
+  uint32_t budget = bus.max_input_steps;
   while (r.more()) {
     const uint8_t op = r.byte();
     now_ns += static_cast<int64_t>(op >> 2) * 1000000;
     switch (op & 3) {
       case 0: {
-        const hil::Frame f = read_frame(r, bus);
+        const hil::Frame f = read_frame(r, bus, &budget);
         // The STEP before the frame is finished first (on_frame does so too): the frame's
         // own answer is then all that a.rec holds.
         a.finish_step();
@@ -407,6 +418,10 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
       }
       case 2:
         if (++ticks > bus.max_ticks) break;
+        if (bus.max_input_steps > 0) {  // a tick's steps, at most max_steps_per_tick
+          if (budget < bus.max_steps_per_tick) break;
+          budget -= bus.max_steps_per_tick;
+        }
         a.node->rt_tick(now_ns);
         b.node->rt_tick(now_ns);
         break;
