@@ -1,10 +1,12 @@
 // CTest hil_sim_hexapod: the hexapod's node (hil_sim --hexapod) in memory against its C API:
 // the tripod walk's set-points with the statics' feed-forward sent as frames step by step give
 // the C API's own run of the same commands bit for bit (box and feet in float64, the legs'
-// float32 values its float32 rounding); bad frames are refused with one FAULT naming the signal
-// and change nothing; each leg's command watchdog trips alone, its safe action the C API's
-// command with that leg's feed-forward zero; in the real run loop (an in-memory bus) a long
-// STEP keeps the heartbeat and gives the same answer as in one go.
+// float32 values its float32 rounding), and so do slots of mixed modes against
+// legsim_hexapod_command_each; bad frames (a mode past SERVO among them) are refused with one
+// FAULT naming the signal and change nothing; each leg's command watchdog trips alone, its
+// safe action the C API's command with that leg's feed-forward zero (and, a FORCE slot, its
+// force zero); in the real run loop (an in-memory bus) a long STEP keeps the heartbeat and
+// gives the same answer as in one go.
 #include <algorithm>
 #include <cmath>
 #include <csignal>
