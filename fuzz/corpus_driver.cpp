@@ -2,9 +2,10 @@
 // (recursively, in name order) without libFuzzer: the regression and seed corpora as plain
 // CTest tests in every build (host, asan). A violated invariant aborts (non-zero exit);
 // the last "run" line names the input. --min-robot N fails the run when fewer than N inputs
-// reached the two-leg robot's code (fuzz/reach.h): the check that a target reaches the robot.
+// reached the two-leg robot's code (fuzz/reach.h): the check that a target reaches the robot;
+// --min-hexapod N so for the hexapod's node (fuzz_can).
 //
-//   fuzz_<target>_corpus [--max-seconds S] [--min-robot N] PATH...
+//   fuzz_<target>_corpus [--max-seconds S] [--min-robot N] [--min-hexapod N] PATH...
 #include <algorithm>
 #include <chrono>
 #include <cstdint>
@@ -18,12 +19,13 @@
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size);
 extern "C" int64_t fuzz_robot_inputs();  // fuzz/reach.h
+extern "C" int64_t fuzz_hexapod_inputs();
 
 namespace fs = std::filesystem;
 
 int main(int argc, char **argv) {
   double max_seconds = 0;  // per input; 0: no limit
-  long long min_robot = 0;
+  long long min_robot = 0, min_hexapod = 0;
   std::vector<fs::path> inputs;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
@@ -33,6 +35,10 @@ int main(int argc, char **argv) {
     }
     if (a == "--min-robot" && i + 1 < argc) {
       min_robot = std::atoll(argv[++i]);
+      continue;
+    }
+    if (a == "--min-hexapod" && i + 1 < argc) {
+      min_hexapod = std::atoll(argv[++i]);
       continue;
     }
     std::error_code ec;
@@ -50,7 +56,8 @@ int main(int argc, char **argv) {
     }
   }
   if (inputs.empty()) {
-    std::fprintf(stderr, "%s: no inputs (usage: %s [--max-seconds S] PATH...)\n", argv[0], argv[0]);
+    std::fprintf(stderr, "%s: no inputs (usage: %s [--max-seconds S] [--min-robot N] [--min-hexapod N] PATH...)\n",
+                 argv[0], argv[0]);
     return 2;
   }
   int slow = 0;
@@ -68,9 +75,14 @@ int main(int argc, char **argv) {
     }
   }
   const long long robot = static_cast<long long>(fuzz_robot_inputs());
-  std::printf("%zu inputs, %d too slow, %lld reached the robot\n", inputs.size(), slow, robot);
+  const long long hexapod = static_cast<long long>(fuzz_hexapod_inputs());
+  std::printf("%zu inputs, %d too slow, %lld reached the robot, %lld the hexapod\n", inputs.size(), slow, robot,
+              hexapod);
   if (robot < min_robot)
     std::fprintf(stderr, "%s: %lld inputs reached the robot, fewer than --min-robot %lld\n", argv[0],
                  robot, min_robot);
-  return slow || robot < min_robot ? 1 : 0;
+  if (hexapod < min_hexapod)
+    std::fprintf(stderr, "%s: %lld inputs reached the hexapod, fewer than --min-hexapod %lld\n", argv[0],
+                 hexapod, min_hexapod);
+  return slow || robot < min_robot || hexapod < min_hexapod ? 1 : 0;
 }

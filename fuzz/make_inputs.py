@@ -2,7 +2,8 @@
 """Fuzz inputs made at build time (nothing large is committed):
 
   can-seeds DBC OUTDIR    seed sequences for fuzz_can, frames encoded from can/legsim.dbc
-                          with cantools (the input format: fuzz/README.md)
+                          with cantools (the input format: fuzz/README.md); the hexapod's
+                          in OUTDIR/hexapod
   toml-dict OUT FILE...   a libFuzzer dictionary for the TOML targets: TOML's own tokens
                           and every key and short string value of the given files
   deep-keys OUTDIR        issue 10's stack overflow in toml++ 3.3.0: a key and a table
@@ -22,7 +23,11 @@ import sys
 SEL = {'CONTROL': 0, 'ACT_CMD': 1, 'LOAD_CMD': 2, 'FAULT': 6, 'ST_POS': 7, 'HEARTBEAT': 9,
        'UNKNOWN': 12}
 ROBOT_SEL = dict(SEL, ACT_CMD_L1=13, LOAD_CMD_L1=14, ST_BOX=17, ST_CONTACT_L1=18, ST_STATUS_L1=19)
-LEG_BUS, ROBOT_BUS = 0, 1  # the input's first byte: hil_sim, hil_sim --robot
+# fuzz_can.cpp's kHexIds (hil_sim --hexapod's bus)
+HEX_SEL = dict({'CONTROL': 0, 'ACT_CMD': 14, 'LOAD_CMD': 15, 'START_CMD': 16, 'FAULT': 17, 'ST_STATUS': 18,
+                'HEARTBEAT': 19, 'HEX_BOX_POSE': 20, 'HEX_BOX_VEL': 21, 'HEX_LEG_H2': 22, 'HEX_FOOT_H5': 23,
+                'UNKNOWN': 26}, **{f'HEX_CMD_H{k}': 2 + k for k in range(6)})
+LEG_BUS, ROBOT_BUS, HEXAPOD_BUS = 0, 1, 2  # the input's first byte: hil_sim, --robot, --hexapod
 RESET, STEP, START_RT, STOP_RT = 1, 2, 3, 4
 KEEP, FORCE, LENGTH = 0, 1, 2
 FLT_MAX = struct.unpack('<f', struct.pack('<I', 0x7f7fffff))[0]  # the largest finite float32
@@ -44,7 +49,7 @@ class Seq:
 
     def __init__(self, db, bus=LEG_BUS):
         self.db = db
-        self.sel = ROBOT_SEL if bus == ROBOT_BUS else SEL
+        self.sel = {ROBOT_BUS: ROBOT_SEL, HEXAPOD_BUS: HEX_SEL}.get(bus, SEL)
         self.out = bytearray([bus])
 
     def op(self, what, ms=0):
@@ -80,6 +85,14 @@ class Seq:
     def load(self, seq, index, v1, v2=0.0, ms=0, leg=0):
         return self.frame('LOAD_CMD_L1' if leg else 'LOAD_CMD', {'Load_Seq': seq, 'Load_Index': index, 'Load_Value1': v1,
                                        'Load_Value2': v2}, ms)
+
+    def hex(self, leg, seq, upper=None, lower=None, rowing=None, ms=0):
+        """HEX_CMD_H<leg>: each slot None (KEEP) or (mode, set-point, feed-forward)."""
+        sig = {'Hc_Seq': seq}
+        for name, slot in (('upper', upper), ('lower', lower), ('rowing', rowing)):
+            mode, value, ff = (KEEP, 0.0, 0.0) if slot is None else slot
+            sig.update({f'Hc_Mode_{name}': mode, f'Hc_Setpoint_{name}': value, f'Hc_Ff_{name}': ff})
+        return self.frame(f'HEX_CMD_H{leg}', sig, ms)
 
     def work(self, n):
         self.op(1)
@@ -165,6 +178,54 @@ def can_seeds(db):
     }
 
 
+def hexapod_seeds(db):
+    """hil_sim --hexapod (models/hexapod.toml: strokes [0.40, 0.80] and [0.35, 0.70] m, max_force
+    1500 N; rowing [-0.6, 0.6] rad, max_torque 30 N m): the RESET's options, each slot in its own
+    mode, the held pose, a watchdog per leg, real time, bad frames."""
+    X = lambda: Seq(db, HEXAPOD_BUS)  # noqa: E731
+    nan, inf = math.nan, math.inf
+    SERVO = LENGTH
+    stand = dict(HexBoxHeight=1.0, HexStance=63)
+    return {
+        'hex_reset_step': X().control(1, RESET, ActInit=1, **stand).control(2, STEP, NSteps=16)
+        .control(3, STEP, NSteps=16).heartbeat(),
+        'hex_mixed_slots': X().control(1, RESET, ActInit=1, **stand)
+        .hex(0, 1, None, (FORCE, 300.0, 0.0), None).hex(1, 1, None, None, (FORCE, 5.0, 0.0))
+        .hex(2, 1, (SERVO, 0.6, 50.0), (FORCE, -200.0, 0.0), (SERVO, 0.1, 1.0))
+        .control(2, STEP, NSteps=16).hex(0, 2, None, (SERVO, 0.5, 100.0), (FORCE, -3.0, 0.0))
+        .hex(3, 1, (FORCE, 0.0, 0.0), (FORCE, 0.0, 0.0), (FORCE, 0.0, 0.0)).control(3, STEP, NSteps=16),
+        'hex_force_free_fall': X().control(1, RESET, ActInit=0, HexBoxHeight=1.3, HexStance=0, Integrator=1)
+        .hex(4, 1, (FORCE, 100.0, 0.0), (SERVO, 0.5, 0.0), None).control(2, STEP, NSteps=16)
+        .control(3, STEP, NSteps=16).work(2).heartbeat(),
+        'hex_held_pose': X().hex(0, 1, (SERVO, 0.62, 10.0), (SERVO, 0.52, -10.0), (SERVO, 0.05, 0.5))
+        .hex(5, 1, None, (SERVO, 0.5, 0.0), None).hex(5, 2, (FORCE, 50.0, 0.0), None, None)
+        .control(1, RESET, ActInit=1, UseLengths=1, **stand).control(2, STEP, NSteps=8),
+        'hex_watchdog_per_leg': X().control(1, RESET, ActInit=1, CmdTimeout=4, **stand)
+        .hex(0, 1).hex(1, 1, None, (FORCE, 100.0, 0.0)).control(2, STEP, NSteps=2).hex(0, 2)
+        .control(3, STEP, NSteps=3).hex(0, 3).control(4, STEP, NSteps=3).heartbeat()
+        .hex(1, 2, (SERVO, 0.6, 0.0)).control(5, STEP, NSteps=6),
+        'hex_realtime': X().control(1, RESET, ActInit=1, CmdTimeout=5, **stand)
+        .control(2, START_RT, RtStepsPerTick=2, RtDecimation=2).hex(2, 1, (FORCE, 10.0, 0.0))
+        .tick(2).tick(2).hex(2, 2, (FORCE, 20.0, 0.0)).tick(3).tick(3).heartbeat().control(3, STOP_RT),
+        'hex_bad_frames': X().control(1, STEP, NSteps=2).control(1, RESET, ActInit=1, **stand)
+        .hex(0, 1, (3, 0.6, 0.0)).hex(0, 2, None, (FORCE, 0.0, 0.0), (255, 0.0, 0.0))
+        .hex(1, 1, (SERVO, nan, 0.0)).hex(1, 2, (SERVO, 0.6, inf)).hex(1, 3, (SERVO, 0.85, 0.0))
+        .hex(2, 1, None, (FORCE, 1500.5, 0.0)).hex(2, 2, None, None, (SERVO, 0.61, 0.0))
+        .hex(2, 3, None, None, (FORCE, -30.5, 0.0)).hex(3, 1, (SERVO, 0.6, 1600.0)).hex(3, 1)
+        .hex(4, 1, (FORCE, FLT_MAX, 0.0)).hex(4, 2, (FORCE, 1.0, -FLT_MAX))
+        .frame('HEX_CMD_H5', {'Hc_Seq': 9}, flags=4, length=8).frame('HEX_CMD_H5', {'Hc_Seq': 10}, length=48)
+        .frame('HEX_CMD_H5', {'Hc_Seq': 11}, flags=1)
+        .act(1, FORCE, 1.0).load(1, 0, 1.0).frame('START_CMD', {'Start_Seq': 1})
+        .control(2, RESET, Variant=1, **stand).control(3, RESET, Pose=1, **stand)
+        .control(4, RESET, HexBoxHeight=0.0).control(5, RESET, HexBoxHeight=nan)
+        .control(6, RESET, ContactLaw=1, **stand).control(7, RESET, FreeContacts=1, **stand)
+        .control(8, RESET, HexBoxHeight=0.01, HexStance=0)
+        .frame('HEX_BOX_POSE', payload=b'\x01' * 64).frame('HEX_LEG_H2', payload=b'\x02' * 64)
+        .frame('ST_STATUS', payload=b'\x03' * 64).frame('UNKNOWN', payload=b'\xff' * 64)
+        .control(9, STEP, NSteps=3),
+    }
+
+
 def deep_keys(outdir, parts):
     key = '.'.join(['a'] * parts)
     files = {
@@ -238,6 +299,10 @@ def main():
         os.makedirs(args.outdir, exist_ok=True)
         for name, seq in can_seeds(db).items():
             write_if_changed(os.path.join(args.outdir, name + '.bin'), bytes(seq.out))
+        # the hexapod's in a folder of their own (fuzz_can_hexapod_seeds); read by the others too
+        os.makedirs(os.path.join(args.outdir, 'hexapod'), exist_ok=True)
+        for name, seq in hexapod_seeds(db).items():
+            write_if_changed(os.path.join(args.outdir, 'hexapod', name + '.bin'), bytes(seq.out))
     elif args.cmd == 'toml-dict':
         toml_dict(args.out, args.files)
     else:

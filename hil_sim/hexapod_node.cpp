@@ -69,7 +69,7 @@ void unpack_command(int leg, const uint8_t *data, HexCommand *c) {
 struct LegOut {
   uint32_t tick, seq;
   uint16_t status;
-  uint8_t foot_state, mode;
+  uint8_t foot_state, mode[kHexSlots];
   float length[2], rate[2], force[2], rowing, rowing_rate, rowing_torque;
   double foot[3], foot_force[3];
 };
@@ -79,7 +79,9 @@ void fill_leg(const LegOut &o, Leg *l, Foot *f) {
   l->hl_tick = o.tick;
   l->hl_status = o.status;
   l->hl_foot_state = o.foot_state;
-  l->hl_mode = o.mode;
+  l->hl_mode_upper = o.mode[0];
+  l->hl_mode_lower = o.mode[1];
+  l->hl_mode_rowing = o.mode[2];
   l->hl_seq = o.seq;
   l->hl_length_upper = o.length[0];
   l->hl_length_lower = o.length[1];
@@ -319,20 +321,19 @@ bool HexapodNode::check_command(int leg, const HexCommand &c, uint32_t id, Fault
   for (int s = 0; s < kHexSlots; ++s) k.real(c.setpoint[s], set_in[s], set_bit[s]);
   for (int s = 0; s < kHexSlots; ++s) k.real(c.ff[s], ff_in[s], ff_bit[s]);
   if (!k.ok()) return false;
-  // one mode for the whole robot while a session runs (the C API has no mixed command)
-  for (int s = 0; sim_ != nullptr && s < kHexSlots; ++s)
-    k.range(c.mode[s] == HexMode::kKeep || c.mode[s] == mode_, mode_bit[s], static_cast<double>(c.mode[s]));
-  // the file's limits: strokes and saturations, compared in double with no tolerance (the C
-  // API's own checks, so that an accepted command is never refused by the core)
+  // the file's limits for each slot's own mode: strokes and saturations, compared in double
+  // with no tolerance (legsim_hexapod_command_each's own checks, so that an accepted command
+  // is never refused by the core)
   const legsim_model_desc &m = desc_.leg[leg].leg;
   for (int s = 0; s < kHexSlots; ++s) {
     const double max = s < 2 ? m.actuator[s].max_force_n : desc_.rowing_max_torque_nm;
     const double lo = s < 2 ? m.actuator[s].stroke_min_m : desc_.rowing_stroke_rad[0];
     const double hi = s < 2 ? m.actuator[s].stroke_max_m : desc_.rowing_stroke_rad[1];
-    k.range(std::fabs(c.ff[s]) <= max, ff_bit[s], c.ff[s]);
     if (c.mode[s] == HexMode::kForce) k.range(std::fabs(c.setpoint[s]) <= max, set_bit[s], c.setpoint[s]);
-    if (c.mode[s] == HexMode::kServo)
+    if (c.mode[s] == HexMode::kServo) {
       k.range(c.setpoint[s] >= lo && c.setpoint[s] <= hi, set_bit[s], c.setpoint[s]);
+      k.range(std::fabs(c.ff[s]) <= max, ff_bit[s], c.ff[s]);
+    }
   }
   return k.ok();
 }
@@ -346,6 +347,7 @@ void HexapodNode::handle_command(int leg, const HexCommand &c, int64_t now_ns) {
       held_[leg].ff[s] = c.ff[s];
     }
     if (sim_ == nullptr) continue;
+    mode_[leg][s] = c.mode[s];
     value_[leg][s] = c.setpoint[s];
     ff_[leg][s] = c.mode[s] == HexMode::kServo ? c.ff[s] : 0.0;
     dirty_ = true;
@@ -508,8 +510,8 @@ legsim_status HexapodNode::reset(const HexReset &r) {
   step_ns_ = r.step_ns;
   integrator_ = r.integrator;
   steps_ = 0;
-  mode_ = r.servo ? HexMode::kServo : HexMode::kForce;
   for (int j = 0; j < kHexLegs; ++j) {
+    for (HexMode &m : mode_[j]) m = r.servo ? HexMode::kServo : HexMode::kForce;
     for (int a = 0; a < 2; ++a) {
       value_[j][a] = r.servo ? pose.length_m[j][a] : 0.0;
       ff_[j][a] = r.servo ? ff[j][a] : 0.0;
@@ -539,22 +541,23 @@ legsim_status HexapodNode::reset(const HexReset &r) {
 
 legsim_status HexapodNode::apply_commands() {
   if (!dirty_) return LEGSIM_OK;
-  double a[kHexLegs][2], s[kHexLegs], fa[kHexLegs][2], fs[kHexLegs];
-  for (int j = 0; j < kHexLegs; ++j) {
-    a[j][0] = value_[j][0], a[j][1] = value_[j][1], s[j] = value_[j][2];
-    fa[j][0] = ff_[j][0], fa[j][1] = ff_[j][1], fs[j] = ff_[j][2];
-  }
-  const legsim_status st = mode_ == HexMode::kServo ? legsim_hexapod_command_pose(sim_, a, s, fa, fs)
-                                                    : legsim_hexapod_command(sim_, a, s);
+  legsim_hexapod_commands c;
+  for (int j = 0; j < kHexLegs; ++j)
+    for (int s = 0; s < kHexSlots; ++s) {
+      c.mode[j][s] = static_cast<int32_t>(mode_[j][s]);
+      c.value[j][s] = value_[j][s];
+      c.feedforward[j][s] = ff_[j][s];
+    }
+  const legsim_status st = legsim_hexapod_command_each(sim_, &c);
   if (st == LEGSIM_OK) dirty_ = false;
   return st;
 }
 
-// The safe action of a leg whose commands stopped: its servos hold their set-points without
-// feed-forward (SERVO), or its forces and torque go to zero (FORCE).
+// The safe action of a leg whose commands stopped, slot by slot: a servo holds its set-point
+// without feed-forward (SERVO), a force or torque goes to zero (FORCE).
 void HexapodNode::safe_slots(int leg) {
   for (int s = 0; s < kHexSlots; ++s) {
-    if (mode_ == HexMode::kForce) value_[leg][s] = 0;
+    if (mode_[leg][s] == HexMode::kForce) value_[leg][s] = 0;
     ff_[leg][s] = 0;
   }
   dirty_ = true;
@@ -706,7 +709,7 @@ void HexapodNode::publish() {
     o.seq = cmd_seq_[j].last;
     o.status = static_cast<uint16_t>(status_bits(j));
     o.foot_state = static_cast<uint8_t>(x.foot_state[j]);
-    o.mode = static_cast<uint8_t>(mode_);
+    for (int a = 0; a < kHexSlots; ++a) o.mode[a] = static_cast<uint8_t>(mode_[j][a]);
     for (int a = 0; a < 2; ++a) {
       o.length[a] = static_cast<float>(x.length_m[j][a]);
       o.rate[a] = static_cast<float>(rate_[j][a]);

@@ -5,14 +5,15 @@
 // robot's. The only caller of the hexapod's C API in hil_sim. Layout and rules: can/README.md,
 // "The hexapod".
 //
-// The C API commands the whole robot at once, all forces (legsim_hexapod_command) or all
-// servos (legsim_hexapod_command_pose), so the robot is in one mode at a time, set by the
-// RESET (Ctrl_ActInit 0 FORCE, 1 SERVO); a leg's frame holds its three slots, and the six
-// legs' commands go to the core together before the next step, once per change (as
-// Hexapod.walk gives them: one command_pose, then the step).
+// Each slot (a leg's upper and lower actuators and its rowing motor) is in its own mode,
+// FORCE or SERVO: every slot's at the RESET (Ctrl_ActInit 0 FORCE, 1 SERVO), then each
+// HEX_CMD slot not KEEP sets its own, as a leg controller mixes them. A leg's frame holds its
+// three slots, and the six legs' slots go to the core together before the next step, once
+// per change (legsim_hexapod_command_each with every slot's mode: an all-SERVO robot gets
+// Hexapod.walk's command_pose bit for bit).
 //
 // Every frame is checked in this order: id and format, sequence counter, values (NaN/Inf,
-// DBC ranges, the robot's mode, the file's limits); the first failure is one FAULT frame
+// DBC ranges, the file's limits for each slot's mode); the first failure is one FAULT frame
 // and nothing changes. Nothing is allocated after init().
 #ifndef HIL_SIM_HEXAPOD_NODE_H
 #define HIL_SIM_HEXAPOD_NODE_H
@@ -120,8 +121,8 @@ class HexapodNode : public Node {
   int integrator_ = 0;
   uint64_t steps_ = 0;  // since the RESET
 
-  // the commands: the robot's mode, every leg's slots
-  HexMode mode_ = HexMode::kForce;
+  // the commands: every leg's slots, each in its own mode (never KEEP once a session runs)
+  HexMode mode_[kHexLegs][kHexSlots] = {};
   double value_[kHexLegs][kHexSlots] = {}, ff_[kHexLegs][kHexSlots] = {};
   bool dirty_ = false;  // changed since they were given to the core
   Held held_[kHexLegs];

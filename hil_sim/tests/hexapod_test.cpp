@@ -1,18 +1,18 @@
 // CTest hil_sim_hexapod: the hexapod's node (hil_sim --hexapod) in memory against its C API:
 // the tripod walk's set-points with the statics' feed-forward sent as frames step by step give
 // the C API's own run of the same commands bit for bit (box and feet in float64, the legs'
-// float32 values its float32 rounding); bad frames are refused with one FAULT naming the signal
-// and change nothing; each leg's command watchdog trips alone, its safe action the C API's
-// command with that leg's feed-forward zero; in the real run loop (an in-memory bus) a long
-// STEP keeps the heartbeat and gives the same answer as in one go.
+// float32 values its float32 rounding), and so do slots of mixed modes against
+// legsim_hexapod_command_each; bad frames (a mode past SERVO among them) are refused with one
+// FAULT naming the signal and change nothing; each leg's command watchdog trips alone, its
+// safe action the C API's command with that leg's feed-forward zero (and, a FORCE slot, its
+// force zero); in the real run loop (an in-memory bus) a long STEP keeps the heartbeat and
+// gives the same answer as in one go.
 #include <algorithm>
 #include <cmath>
 #include <csignal>
 #include <cstring>
-#include <deque>
 #include <vector>
 
-#include <sys/eventfd.h>
 #include <sys/signalfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -246,10 +246,18 @@ void test_walk() {
       bad.push_back({hex_cmd(2, seq, servo, past, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_UPPER_START_BIT});
       double row_past[3] = {set[0], set[1], g_desc.rowing_stroke_rad[1] + 1e-9};
       bad.push_back({hex_cmd(3, seq, servo, row_past, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_ROWING_START_BIT});
-      uint8_t mixed[3] = {2, 1, 2};  // a FORCE slot in the SERVO robot
-      bad.push_back({hex_cmd(4, seq, mixed, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT});
+      // modes past SERVO (the DBC's [0|2]), whatever the other slots
       uint8_t wrong[3] = {3, 2, 2};
       bad.push_back({hex_cmd(5, seq, wrong, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_UPPER_START_BIT});
+      uint8_t wrong_lower[3] = {1, 255, 0};
+      const double push[3] = {10, 0, 0};
+      bad.push_back({hex_cmd(4, seq, wrong_lower, push, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT});
+      uint8_t wrong_rowing[3] = {0, 0, 4};
+      bad.push_back({hex_cmd(3, seq, wrong_rowing, set, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_MODE_ROWING_START_BIT});
+      // a FORCE slot past its actuator's max_force in a leg of mixed slots
+      uint8_t mixed[3] = {2, 1, 2};
+      double too_much[3] = {set[0], -1.0001 * g_desc.leg[4].leg.actuator[1].max_force_n, set[2]};
+      bad.push_back({hex_cmd(4, seq, mixed, too_much, ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_SETPOINT_LOWER_START_BIT});
       double big_ff[3] = {g_desc.leg[0].leg.actuator[0].max_force_n * 1.01, 0, 0};
       bad.push_back({hex_cmd(0, seq, servo, set, big_ff), 4, LEGSIM_CAN_HEX_CMD_H0_HC_FF_UPPER_START_BIT});
       Frame short_frame = hex_cmd(1, seq, servo, set, ff);
@@ -327,7 +335,7 @@ void test_watchdog() {
   node.on_frame(reset(1, false, false, 0x3F, 1.0f, 5), 0);
   Decoded d = decode(rec.take());
   for (int l = 0; l < L; ++l) {
-    CHECK(d.leg[l].hl_mode == 1);
+    CHECK(d.leg[l].hl_mode_upper == 1 && d.leg[l].hl_mode_lower == 1 && d.leg[l].hl_mode_rowing == 1);
     CHECK(d.leg[l].hl_length_upper == static_cast<float>(node.stand_length(l, 0)));
   }
   const double push[3] = {100, -50, 2};
@@ -341,12 +349,116 @@ void test_watchdog() {
   CHECK(hil_test::fault_of(got).fault_code == 7 && hil_test::fault_of(got).fault_frame_id == hil::kHexCmdFrameId[0]);
   d = decode(got);
   CHECK(d.leg[0].hl_force_upper == 0.0f && d.leg[0].hl_rowing_torque == 0.0f);
-  // a SERVO slot in a FORCE robot is refused
-  const uint8_t servo[3] = {0, 2, 0};
-  node.on_frame(hex_cmd(1, 1, servo, zero, zero), 0);
-  CHECK(hil_test::fault_of(rec.take()).fault_detail == LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT);
 }
 
+
+// A frame per leg from the C API's per-slot command (its KEEP slots KEEP on the bus too).
+std::vector<Frame> each_frames(const legsim_hexapod_commands &cmd, uint32_t seq, int skip_leg = -1) {
+  std::vector<Frame> out;
+  for (int l = 0; l < L; ++l) {
+    if (l == skip_leg) continue;
+    const uint8_t mode[3] = {static_cast<uint8_t>(cmd.mode[l][0]), static_cast<uint8_t>(cmd.mode[l][1]),
+                             static_cast<uint8_t>(cmd.mode[l][2])};
+    out.push_back(hex_cmd(l, seq, mode, cmd.value[l], cmd.feedforward[l]));
+  }
+  return out;
+}
+
+// A leg controller's mix on the walk: some slots pushed by the force (or torque) the statics
+// give them, the others servoed, a slot switched from servo to force and one back, a slot
+// KEEP; the frames give the C API's legsim_hexapod_command_each of the same slots bit for bit,
+// each slot's mode in its HEX_LEG_Hj. A mode past SERVO is refused and changes nothing. Then a
+// mixed leg falls silent: slot by slot its forces go to zero and its servos hold their
+// set-points without feed-forward (the C API's command_each of that leg alone).
+void test_mixed() {
+  Recorder rec;
+  hil::HexapodNode node(g_desc, rec, hil::HexConfig{});
+  std::string err;
+  CHECK(node.init(&err));
+  const float height = static_cast<float>(kGait.box_height_m);
+  WalkCmd c = walk_command(0.0);
+  send(node, servo_frames(c, 1));
+  node.on_frame(reset(1, true, true, c.stance, height, 20), 0);  // 20 ms: 20 steps
+  Reference ref;
+  CHECK(ref.init(c, height) == LEGSIM_OK);
+  rec.take();
+  constexpr int32_t K = LEGSIM_HEXAPOD_KEEP, F = LEGSIM_HEXAPOD_FORCE, S = LEGSIM_HEXAPOD_SERVO;
+  const int n = 140, silent_leg = 3, silent_from = 100, timeout_steps = 20;
+  int equal = 0, modes_seen = 0, trips = 0, trip_step = -1, forced_equal = 0;
+  legsim_hexapod_commands last3 = {};  // leg 3's last command, for its safe action
+  uint32_t ctrl = 2;
+  for (int i = 0; i < n; ++i) {
+    c = walk_command((i + 1) * 1e-3);
+    const int32_t modes[L][3] = {{S, F, S},
+                                 {S, S, i < 60 ? F : S},
+                                 {S, S, S},
+                                 {F, F, S},
+                                 {i < 30 ? S : F, S, S},
+                                 {S, S, i == 0 ? S : K}};
+    legsim_hexapod_commands cmd = {};
+    for (int l = 0; l < L; ++l)
+      for (int k = 0; k < 3; ++k) {
+        const double set = k < 2 ? c.sp.length_m[l][k] : c.sp.rowing_rad[l];
+        const double load = k < 2 ? c.ff[l][k] : c.fm[l];
+        cmd.mode[l][k] = modes[l][k];
+        cmd.value[l][k] = modes[l][k] == F ? load : modes[l][k] == S ? set : 0.0;
+        cmd.feedforward[l][k] = modes[l][k] == S ? load : 0.0;
+      }
+    const bool silent = i >= silent_from;
+    send(node, each_frames(cmd, static_cast<uint32_t>(i + 2), silent ? silent_leg : -1));
+    if (i == 50) {  // a mode past SERVO among good slots: refused, nothing applied
+      const uint8_t bad[3] = {1, 3, 2};
+      const double set[3] = {c.ff[0][0], c.sp.length_m[0][1], c.sp.rowing_rad[0]};
+      const double ff[3] = {0, 0, 0};
+      node.on_frame(hex_cmd(0, 100000, bad, set, ff), 0);
+      const legsim_can_fault_t f = hil_test::fault_of(rec.take());
+      CHECK(f.fault_code == 4 && f.fault_detail == LEGSIM_CAN_HEX_CMD_H0_HC_MODE_LOWER_START_BIT &&
+            f.fault_frame_id == hil::kHexCmdFrameId[0] && f.fault_value == 3.0f);
+    }
+    if (silent)
+      for (int k = 0; k < 3; ++k) cmd.mode[silent_leg][k] = K;
+    else
+      last3 = cmd;
+    if (i == silent_from - 1 + timeout_steps)  // the silent leg's safe action, with this step's commands
+      for (int k = 0; k < 3; ++k) {
+        cmd.mode[silent_leg][k] = last3.mode[silent_leg][k];
+        cmd.value[silent_leg][k] = last3.mode[silent_leg][k] == F ? 0.0 : last3.value[silent_leg][k];
+        cmd.feedforward[silent_leg][k] = 0.0;
+      }
+    CHECK(legsim_hexapod_command_each(ref.sim, &cmd) == LEGSIM_OK);
+    step(node, ctrl++, 1);
+    CHECK(legsim_hexapod_step(ref.sim, 1e-3, 1) == LEGSIM_OK);
+    const std::vector<Frame> got = rec.take();
+    const legsim_can_fault_t fault = hil_test::fault_of(got);
+    if (fault.fault_code == 7) {
+      ++trips;
+      trip_step = i;
+      CHECK(fault.fault_frame_id == hil::kHexCmdFrameId[silent_leg]);
+    }
+    const Decoded d = decode(got);
+    const legsim_hexapod_state x = ref.state();
+    if (d.frames == hil::kHexSampleFrames + (fault.fault_code != 0) && same(d, x))
+      ++equal;
+    else
+      std::fprintf(stderr, "  mixed: sample after step %d differs from command_each's\n", i);
+    // each slot's mode as last given (leg 5's KEEP rowing still SERVO)
+    bool modes_ok = true;
+    for (int l = 0; l < L; ++l) {
+      const uint8_t m[3] = {d.leg[l].hl_mode_upper, d.leg[l].hl_mode_lower, d.leg[l].hl_mode_rowing};
+      for (int k = 0; k < 3; ++k) modes_ok = modes_ok && m[k] == (modes[l][k] == K ? S : modes[l][k]);
+    }
+    modes_seen += modes_ok;
+    // a FORCE slot's force is its command's: the statics' load, float32 (zero once tripped)
+    const double want = i >= silent_from - 1 + timeout_steps ? 0.0 : last3.value[silent_leg][1];
+    forced_equal += d.leg[silent_leg].hl_force_lower == static_cast<float>(want) &&
+                    x.actuator_force_n[silent_leg][1] == want;
+  }
+  std::printf("mixed slots over frames: %d of %d samples equal to command_each's, modes in %d, leg %d's forced "
+              "lower actuator as commanded in %d; leg %d tripped at step %d\n",
+              equal, n, modes_seen, silent_leg, forced_equal, silent_leg, trip_step);
+  CHECK(equal == n && modes_seen == n && forced_equal == n);
+  CHECK(trips == 1 && trip_step == silent_from - 1 + timeout_steps);
+}
 
 // Real time: a leg silent for more than the timeout of wall time trips alone, at the first tick
 // past it; a sample every decimation ticks; STOP_RT answers with one and goes back to lockstep.
@@ -390,59 +502,6 @@ void test_realtime_watchdog() {
   CHECK((d.leg[5].hl_status & hil::kStatusSafeState) && !(d.leg[4].hl_status & hil::kStatusSafeState));
 }
 
-int64_t mono_ns() {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
-// Nanoseconds this thread has waited for a CPU while runnable (the machine's time, not the
-// loop's: liveness_test.cpp's accounting); 0 if not available.
-int64_t run_delay_ns() {
-  long long on_cpu = 0, waited = 0;
-  FILE *f = std::fopen("/proc/thread-self/schedstat", "r");
-  if (f == nullptr) return 0;
-  if (std::fscanf(f, "%lld %lld", &on_cpu, &waited) != 2) waited = 0;
-  std::fclose(f);
-  return waited;
-}
-
-// The socket in memory (an eventfd says when frames are pending), as liveness_test.cpp's.
-class MemoryBus : public hil::Bus {
- public:
-  struct Sent {
-    int64_t t_ns, waited_ns;
-    Frame frame;
-  };
-  MemoryBus() : efd_(eventfd(0, EFD_SEMAPHORE | EFD_NONBLOCK | EFD_CLOEXEC)) {}
-  ~MemoryBus() override { ::close(efd_); }
-  void push(const Frame &f) {
-    in_.push_back(f);
-    uint64_t one = 1;
-    if (::write(efd_, &one, sizeof one) != sizeof one) std::perror("eventfd write");
-  }
-  int fd() const override { return efd_; }
-  int receive(Frame *out) override {
-    uint64_t v;
-    if (in_.empty() || ::read(efd_, &v, sizeof v) != sizeof v) return 0;
-    *out = in_.front();
-    in_.pop_front();
-    return 1;
-  }
-  bool send(const Frame &f) override {
-    sent.push_back({mono_ns(), run_delay_ns(), f});
-    if (f.id == LEGSIM_CAN_ST_STATUS_FRAME_ID && ++samples == stop_after) ::kill(::getpid(), SIGTERM);
-    return true;
-  }
-  void set_send_block_ms(int) override {}
-  uint32_t tx_errors() const override { return 0; }
-  std::vector<Sent> sent;
-  int samples = 0, stop_after = 0;
-
- private:
-  int efd_;
-  std::deque<Frame> in_;
-};
-
 // A STEP of about 0.5 s of CPU in the real loop: heartbeats all along (state LOCKSTEP, bit
 // STEPPING, the simulated time moving on), gaps within the period plus the leg's liveness
 // slack (200 ms, less the time spent waiting for a CPU), and the answer bit-identical to the
@@ -468,13 +527,16 @@ void test_liveness() {
   step(ref, 3, n);
   const std::vector<Frame> expected = rec.take();
 
-  MemoryBus bus;
+  hil_test::MemoryBus bus;
   hil::HexapodNode node(g_desc, bus, hil::HexConfig{});
   CHECK(node.init(&err));
   for (const Frame &f : in) bus.push(f);
   bus.push(hil_test::step(2, 50));
   bus.push(hil_test::step(3, n));
-  bus.stop_after = 3;  // RESET's, STEP 50's, the long STEP's samples
+  int samples = 0;  // the RESET's, the STEP 50's, the long STEP's: then SIGTERM
+  bus.on_send = [&samples](const hil_test::Sent &s) {
+    if (s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID && ++samples == 3) ::kill(::getpid(), SIGTERM);
+  };
   sigset_t mask;
   sigemptyset(&mask);
   sigaddset(&mask, SIGTERM);
@@ -483,13 +545,13 @@ void test_liveness() {
   hil::LoopConfig cfg;
   cfg.heartbeat_ms = 100;
   hil::JitterStats stats;
-  const int64_t t0 = mono_ns();
+  const int64_t t0 = hil_test::mono_ns();
   const hil::LoopResult res = hil::run_loop(bus, node, sfd, cfg, &stats);
-  const double secs = (mono_ns() - t0) / 1e9;
+  const double secs = (hil_test::mono_ns() - t0) / 1e9;
   ::close(sfd);
   CHECK(res.signal == SIGTERM && res.shutdown.safe_applied && !res.shutdown.step_cut);
   // the long STEP's window: from the STEP 50's answer to the long STEP's
-  std::vector<MemoryBus::Sent> w;
+  std::vector<hil_test::Sent> w;
   std::vector<Frame> answer;
   int statuses = 0, stepping = 0;
   for (const auto &s : bus.sent) {
@@ -507,18 +569,14 @@ void test_liveness() {
     if (statuses == 3 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) answer.push_back(s.frame);
     if (statuses == 3 && s.frame.id == LEGSIM_CAN_ST_STATUS_FRAME_ID) w.push_back(s);
   }
-  double max_wall = 0, max_own = 0;
-  for (size_t i = 1; i < w.size(); ++i) {
-    const double wall = (w[i].t_ns - w[i - 1].t_ns) / 1e6;
-    max_wall = std::max(max_wall, wall);
-    max_own = std::max(max_own, wall - (w[i].waited_ns - w[i - 1].waited_ns) / 1e6);
-  }
+  const hil_test::Gaps g = hil_test::gaps(w);
   const double step_s = (w.size() >= 2 ? (w.back().t_ns - w.front().t_ns) / 1e9 : 0);
-  std::printf("hexapod STEP %u (%.1f us a step) in the loop: %.2f s, %d heartbeats while stepping, max gap %.1f ms "
-              "(%.1f ms less CPU waits); loop %.2f s\n",
-              n, per_step * 1e6, step_s, stepping, max_wall, max_own, secs);
+  char what[96];
+  std::snprintf(what, sizeof what, "hexapod STEP %u (%.1f us a step) in the loop", n, per_step * 1e6);
+  hil_test::print_gaps(what, g, step_s);
+  std::printf("  %d heartbeats STEPPING; loop %.2f s\n", stepping, secs);
   CHECK(stepping >= 3);
-  CHECK(max_own <= 100 + 200);
+  CHECK(g.own_ms <= 100 + 200);
   bool same_answer = answer.size() == expected.size();
   for (size_t i = 0; same_answer && i < answer.size(); ++i)
     same_answer = answer[i].id == expected[i].id && std::memcmp(answer[i].data, expected[i].data, 64) == 0;
@@ -533,6 +591,7 @@ int main() {
     return 1;
   }
   test_walk();
+  test_mixed();
   test_watchdog();
   test_realtime_watchdog();
   test_liveness();

@@ -24,12 +24,10 @@
 #include <csignal>
 #include <cstdio>
 #include <cstring>
-#include <deque>
 #include <functional>
 #include <string>
 #include <vector>
 
-#include <sys/eventfd.h>
 #include <sys/signalfd.h>
 #include <time.h>
 #include <unistd.h>
@@ -51,62 +49,6 @@ using namespace hil_test;
 
 constexpr int64_t kPeriodMs = 100;  // hil_sim's default heartbeat
 constexpr int64_t kSlackMs = 200;   // see the top of the file
-
-int64_t mono_ns() {
-  struct timespec ts;
-  clock_gettime(CLOCK_MONOTONIC, &ts);
-  return static_cast<int64_t>(ts.tv_sec) * 1000000000 + ts.tv_nsec;
-}
-
-// Nanoseconds this thread has spent runnable but waiting for a CPU; 0 if not available.
-int64_t run_delay_ns() {
-  long long on_cpu = 0, waited = 0;
-  FILE *f = std::fopen("/proc/thread-self/schedstat", "r");
-  if (f == nullptr) return 0;
-  if (std::fscanf(f, "%lld %lld", &on_cpu, &waited) != 2) waited = 0;
-  std::fclose(f);
-  return waited;
-}
-
-struct Sent {
-  int64_t t_ns;
-  hil::Frame frame;
-  int64_t waited_ns = run_delay_ns();
-};
-
-// The socket in memory: frames queued by the test, frames sent with the time they left.
-class MemoryBus : public hil::Bus {
- public:
-  MemoryBus() : efd_(eventfd(0, EFD_SEMAPHORE | EFD_NONBLOCK | EFD_CLOEXEC)) {}
-  ~MemoryBus() override { ::close(efd_); }
-  void push(const hil::Frame &f) {
-    in_.push_back(f);
-    uint64_t one = 1;
-    if (::write(efd_, &one, sizeof one) != sizeof one) std::perror("eventfd write");
-  }
-  int fd() const override { return efd_; }
-  int receive(hil::Frame *out) override {
-    uint64_t v;
-    if (in_.empty() || ::read(efd_, &v, sizeof v) != sizeof v) return 0;
-    *out = in_.front();
-    in_.pop_front();
-    return 1;
-  }
-  bool send(const hil::Frame &f) override {
-    sent.push_back({mono_ns(), f});
-    if (on_send) on_send(sent.back());
-    return true;
-  }
-  void set_send_block_ms(int) override {}
-  uint32_t tx_errors() const override { return 0; }
-
-  std::vector<Sent> sent;
-  std::function<void(const Sent &)> on_send;
-
- private:
-  int efd_;
-  std::deque<hil::Frame> in_;
-};
 
 // ---- frames --------------------------------------------------------------------------
 
@@ -243,32 +185,6 @@ struct LoopRig {
     return out;
   }
 };
-
-// Gaps between consecutive frames of a window (its ends and the heartbeats between):
-// the largest as seen on the clock, and the largest less the time spent waiting for a CPU.
-struct Gaps {
-  double wall_ms = 0, own_ms = 0, waited_ms = 0;  // waited: in the gap with the largest wall
-  size_t heartbeats = 0;
-};
-Gaps gaps(const std::vector<Sent> &w) {
-  Gaps g;
-  g.heartbeats = w.size() >= 2 ? w.size() - 2 : 0;
-  for (size_t i = 1; i < w.size(); ++i) {
-    const double wall = (w[i].t_ns - w[i - 1].t_ns) / 1e6;
-    const double waited = (w[i].waited_ns - w[i - 1].waited_ns) / 1e6;
-    if (wall > g.wall_ms) {
-      g.wall_ms = wall;
-      g.waited_ms = waited;
-    }
-    g.own_ms = std::max(g.own_ms, wall - waited);
-  }
-  return g;
-}
-void print_gaps(const char *what, const Gaps &g, double secs) {
-  std::printf("%s (%.2f s): %zu heartbeats, max gap %.1f ms (%.1f ms of it waiting for a CPU), "
-              "max gap less CPU waits %.1f ms\n",
-              what, secs, g.heartbeats, g.wall_ms, g.waited_ms, g.own_ms);
-}
 
 int64_t process_cpu_ns() {
   struct timespec ts;

@@ -4,7 +4,9 @@ as Hexapod.walk sends them), one frame per leg and a STEP 1 per step, reports th
 feet of the in-process legsim.HexapodSim run on the same commands bit for bit (float64 on the
 bus), and the legs' lengths and forces to float32; a bad frame is refused with a FAULT naming
 its signal and changes nothing; a silent leg's watchdog trips alone, its safe action (its
-servos hold their set-points without feed-forward) the in-process sim's on the same step.
+servos hold their set-points without feed-forward) the in-process sim's on the same step; a
+walk of mixed slots (some actuators pushed by the statics' force, the others servoed) is the
+in-process HexapodSim.command_each's bit for bit, each slot's mode in its leg's frame.
 """
 from __future__ import annotations
 
@@ -70,7 +72,7 @@ def same(s, ref) -> bool:
 def test_the_walk_over_the_bus_is_the_in_process_walk(start_hil, vcan, hexapod):
     hx, m, s = start(start_hil, vcan, hexapod)
     try:
-        assert same(s, m.state()) and s.step_count == 0 and s.mode == HexMode.SERVO
+        assert same(s, m.state()) and s.step_count == 0 and s.modes == [(HexMode.SERVO,) * 3] * LEGS
         n = 200
         samples = [s]
         for i in range(n):
@@ -108,8 +110,9 @@ def test_a_bad_frame_is_refused_and_a_silent_leg_trips_alone(start_hil, vcan, he
                        strict=False), cl.FaultCode.NOT_FINITE, "Hc_Setpoint_lower"),
             (hx.encode("HEX_CMD_H3", {"Hc_Seq": 101, "Hc_Mode_upper": 2, "Hc_Setpoint_upper": 5.0}),
              cl.FaultCode.OUT_OF_RANGE, "Hc_Setpoint_upper"),            # past the stroke
-            (hx.encode("HEX_CMD_H3", {"Hc_Seq": 102, "Hc_Mode_rowing": 1, "Hc_Setpoint_rowing": 1.0}),
-             cl.FaultCode.OUT_OF_RANGE, "Hc_Mode_rowing"),               # FORCE in the SERVO robot
+            (hx.encode("HEX_CMD_H3", {"Hc_Seq": 102, "Hc_Mode_upper": 1, "Hc_Setpoint_upper": 10.0,
+                                      "Hc_Mode_rowing": 3}, strict=False),
+             cl.FaultCode.OUT_OF_RANGE, "Hc_Mode_rowing"),               # a mode past SERVO
         ]
         for msg, code, signal in bad:
             hx.send_raw(msg)
@@ -146,6 +149,42 @@ def test_a_bad_frame_is_refused_and_a_silent_leg_trips_alone(start_hil, vcan, he
         hx.close()
 
 
+def test_mixed_slots_over_the_bus_are_the_in_process_command_each(start_hil, vcan, hexapod):
+    """A leg controller's mix: the stance legs' lower actuators and leg 1's rowing motor pushed by
+    the statics' force and torque, leg 4's upper actuator switched from servo to force after 20
+    steps, the other slots servoed, leg 5's rowing KEEP after the first step."""
+    hx, m, _ = start(start_hil, vcan, hexapod)
+    try:
+        n = 60
+        for i in range(n):
+            sp, _, stance, ff, fm = walk_command(hexapod, (i + 1) * H)
+            mode = [["servo"] * 3 for _ in range(LEGS)]
+            for k in stance:
+                mode[k][1] = "force"
+            mode[1][2] = "force"
+            if i >= 20:
+                mode[4][0] = "force"
+            if i > 0:
+                mode[5][2] = "keep"
+            load = np.column_stack([ff, fm])
+            setpoint = np.column_stack([sp["length_m"], sp["rowing_rad"]])
+            forced = np.array([[x == "force" for x in row] for row in mode])
+            value = np.where(forced, load, setpoint)
+            feedforward = np.where(forced, 0.0, load)
+            hx.command_each(mode, value, feedforward)
+            s = hx.step(1)
+            m.command_each(mode, value, feedforward)
+            m.step(1, h_s=H)
+            assert same(s, m.state()), f"step {i + 1}"
+            want = [tuple(HexMode.SERVO if x == "keep" else HexMode[x.upper()] for x in row) for row in mode]
+            assert s.modes == want, f"step {i + 1}"
+            assert np.array_equal(s.actuator_force_n[forced[:, :2]], load[:, :2][forced[:, :2]].astype(np.float32))
+        assert not s.faults and s.step_count == n
+        print(f"hexapod mixed slots over vcan0: {n} steps equal to HexapodSim.command_each's")
+    finally:
+        hx.close()
+
+
 def test_the_link_assembles_a_sample_from_its_15_frames():
     """No bus needed: a sample's frames (python-can's virtual interface) decoded into a HexState."""
     import can
@@ -159,7 +198,8 @@ def test_the_link_assembles_a_sample_from_its_15_frames():
                                     "Hb_Qw": 1.0}),
                   ("HEX_BOX_VEL", {"Hv_Tick": tick, "Hv_Vx": 1e-9, "Hv_Impacts": 3, "Hv_Energy": 2.5})]
         for k in range(LEGS):
-            frames.append((f"HEX_LEG_H{k}", {"Hl_Tick": tick, "Hl_FootState": k % 3, "Hl_Mode": 2, "Hl_Seq": k,
+            frames.append((f"HEX_LEG_H{k}", {"Hl_Tick": tick, "Hl_FootState": k % 3, "Hl_Mode_upper": 2,
+                                             "Hl_Mode_lower": 1 + (k == 2), "Hl_Mode_rowing": 2, "Hl_Seq": k,
                                              "Hl_Length_upper": 0.7, "Hl_Status": int(cl.Status.SAFE_STATE) * (k == 4)}))
             frames.append((f"HEX_FOOT_H{k}", {"Hf_Tick": tick, "Hf_X": k + 0.1, "Hf_Fz": 100.0 + k}))
         frames.append(("ST_STATUS", {"St_Tick": tick, "St_Time": 0.007, "St_StepCount": tick, "St_State": 1,
@@ -169,7 +209,9 @@ def test_the_link_assembles_a_sample_from_its_15_frames():
         s = hx.read_state(timeout=2.0)
         assert (s.tick, s.t_s, s.step_count, s.ctrl_seq, s.impacts) == (7, 0.007, 7, 9, 3)
         assert s.box_m[2] == 1.0 + 2 ** -40 and s.box_velocity_mps[0] == 1e-9   # float64 end to end
-        assert s.foot_state == ["free", "stuck", "sliding"] * 2 and s.mode == HexMode.SERVO
+        assert s.foot_state == ["free", "stuck", "sliding"] * 2
+        assert s.modes == [(HexMode.SERVO, HexMode.SERVO if k == 2 else HexMode.FORCE, HexMode.SERVO)
+                           for k in range(LEGS)]
         assert list(s.foot_m[:, 0]) == [k + 0.1 for k in range(LEGS)] and s.foot_force_n[5, 2] == 105.0
         assert s.length_m[0, 0] == np.float32(0.7) and s.leg_seq == list(range(LEGS))
         assert cl.Status.SAFE_STATE in s.leg_status[4] and cl.Status.SAFE_STATE not in s.leg_status[3]

@@ -13,8 +13,9 @@ can/README.md, "The hexapod".
         print(s.t, s.box_m, s.foot_m[0], s.foot_state)
 
 Each leg is its own node: HEX_CMD_Hj carries its three slots (upper, lower, rowing: KEEP /
-FORCE / SERVO, set-point and feed-forward, float64), with its own sequence counter and command
-watchdog; a sample is HEX_BOX_POSE, HEX_BOX_VEL, per leg HEX_LEG_Hj and HEX_FOOT_Hj, then
+FORCE / SERVO, set-point and feed-forward, float64), each slot in its own mode whatever the
+others' (``command_each``: legsim.HexapodSim.command_each's arguments), with its own sequence
+counter and command watchdog; a sample is HEX_BOX_POSE, HEX_BOX_VEL, per leg HEX_LEG_Hj and HEX_FOOT_Hj, then
 ST_STATUS (complete when it arrives). The box and the feet are float64 (the C API's doubles
 bit for bit), the legs' lengths, rates, forces and rowing float32.
 """
@@ -78,7 +79,7 @@ class HexState:
     foot_force_n: np.ndarray      # (6, 3) float64
     leg_status: list              # each leg node's Status
     leg_seq: list                 # each leg's last accepted HEX_CMD counter
-    mode: HexMode
+    modes: list                   # each leg's (upper, lower, rowing) HexMode: FORCE or SERVO
     faults: list = field(default_factory=list)
 
 
@@ -130,14 +131,27 @@ class HexapodLink(HilLink):
         return self.command(leg, (HexMode.FORCE, forces[0], 0.0), (HexMode.FORCE, forces[1], 0.0),
                             (HexMode.FORCE, torque, 0.0))
 
+    def command_each(self, mode, value, feedforward=None, legs=range(LEGS)) -> None:
+        """Each slot on its own, one frame per leg of `legs`: legsim.HexapodSim.command_each's
+        arguments (6 x 3, per leg upper, lower, rowing; mode "keep" / "force" / "servo" or a
+        HexMode; value N, N m, m or rad; feedforward N or N m, None: 0)."""
+        value = np.asarray(value, float)
+        ff = np.zeros((LEGS, 3)) if feedforward is None else np.asarray(feedforward, float)
+        mode = [[HexMode[m.upper()] if isinstance(m, str) else HexMode(m) for m in row] for row in mode]
+        if value.shape != (LEGS, 3) or ff.shape != (LEGS, 3) or [len(r) for r in mode] != [3] * LEGS:
+            raise ValueError("mode, value, feedforward: 6 x 3 each (per leg: upper, lower, rowing)")
+        for k in legs:
+            self.command(k, *[None if mode[k][j] == HexMode.KEEP else (mode[k][j], value[k, j], ff[k, j])
+                              for j in range(3)])
+
     # ---- control -------------------------------------------------------------------------
 
     def reset(self, box_height: float, stance: int = 0b111111, *, servo: bool = True, use_held: bool = False,
               integrator: str | int = "rk4", step_s: float = 1e-3, cmd_timeout_ms: int | None = None) -> HexState:
         """New session: the box level at (0, 0, box_height) (float32 on the bus), each leg at its
         stand (or, use_held, at the SERVO set-points sent since the previous RESET), the feet of
-        `stance` (bit l: leg l) stuck; servo: the servos hold that pose (with the held
-        feed-forwards), else zero forces. cmd_timeout_ms: None = hil_sim's default, 0 = none."""
+        `stance` (bit l: leg l) stuck; servo: every slot SERVO, holding that pose (with the held
+        feed-forwards), else every slot FORCE at zero (each HEX_CMD slot then sets its own). cmd_timeout_ms: None = hil_sim's default, 0 = none."""
         timeout = CMD_TIMEOUT_DEFAULT if cmd_timeout_ms is None else \
             (CMD_TIMEOUT_NONE if cmd_timeout_ms == 0 else int(cmd_timeout_ms))
         sig = {"Ctrl_Integrator": _enum(Integrator, integrator), "Ctrl_StepSize": round(step_s * 1e9),
@@ -198,7 +212,7 @@ class HexapodLink(HilLink):
             foot_m=np.array([[f["Hf_X"], f["Hf_Y"], f["Hf_Z"]] for f in foot]),
             foot_force_n=np.array([[f["Hf_Fx"], f["Hf_Fy"], f["Hf_Fz"]] for f in foot]),
             leg_status=[Status(g["Hl_Status"]) for g in leg], leg_seq=[g["Hl_Seq"] for g in leg],
-            mode=HexMode(leg[0]["Hl_Mode"]))
+            modes=[tuple(HexMode(g[f"Hl_Mode_{name}"]) for name in SLOTS) for g in leg])
         s.faults, self._pending_faults = self._pending_faults, []
         return s
 
