@@ -26,6 +26,7 @@ extern "C" {
 
 #define LEGSIM_HEXAPOD_LEGS 6
 #define LEGSIM_HEXAPOD_MAX_LEG_BARS 8
+#define LEGSIM_HEXAPOD_MAX_BOX_CONTACTS 4
 
 typedef struct legsim_hexapod_leg_desc {
   char name[LEGSIM_NAME_LEN];
@@ -54,6 +55,11 @@ typedef struct legsim_hexapod_desc {
   legsim_hexapod_leg_desc leg[LEGSIM_HEXAPOD_LEGS];
   /* the ground plane: a point, its upward unit normal, Coulomb friction */
   double ground_point_m[3], ground_normal[3], mu_static, mu_kinetic;
+  /* the box's own contact points (box frame, from its centre; 0 .. LEGSIM_HEXAPOD_MAX_BOX_CONTACTS):
+   * where it touches the ground when the legs give way, on the feet's contact law (three hold
+   * it with independent normal rows; a fourth makes them redundant) */
+  int32_t n_box_contacts;
+  double box_contact_m[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS][3];
 } legsim_hexapod_desc;
 
 /* ---- standing (statics) ------------------------------------------------ */
