@@ -447,14 +447,14 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
   } else if (d.hold.sliding & bit) {
     d.hold.sliding &= ~bit;
     if (k == 1) d.hold.stuck |= bit, d.hold.anchor[l] = on_ground;  // slip to stick
-    // the box's points stop together when it stops translating: those at rest with it stick
-    // with it (one at a time, each would be held alone against the others' friction)
+    // the box's points stop together when it stops translating: those slipping as this one
+    // does stick with it (one at a time, each would be held alone against the others' friction)
     if (k == 1 && l >= robot.nlegs)
       for (int c = robot.nlegs; c < robot_contacts(robot); ++c) {
         if (!((d.hold.sliding >> c) & 1u)) continue;
         V3 pc, vc;
         foot_motion(robot, c, d.q, d.v, pc, vc);
-        if (!(norm(tangential(d.hold, vc)) <= by_precision(1e-9, 1e-5))) continue;
+        if (!(norm(tangential(d.hold, vc - pv)) <= by_precision(1e-9, 1e-5))) continue;
         d.hold.sliding &= ~(1u << c), d.hold.stuck |= 1u << c;
         d.hold.anchor[c] = pc - dot(pc - d.ground.point, d.ground.normal) * d.ground.normal;
       }
@@ -491,6 +491,12 @@ real slip_part(const SpatialRobot &robot, const RobotData &d) {
     if (!(speed > kSlipHold)) continue;  // its direction kept: nothing turns
     const V3 s = (1 / speed) * vt;
     rate = std::max(rate, norm(at - dot(at, s) * s) / speed);
+    // a box's point: its whole tangential acceleration, along the slip too. Slowing to a stop, a
+    // slip's direction is stiff (a turn of it away from the slip's comes back at about
+    // |a_t| / |v_t|): unresolved, it turns the box's path away from the fall line (the parts
+    // shrink toward the stop, to h / 256 at least, where a slip below kSlipHold keeps its
+    // direction)
+    if (l >= robot.nlegs) rate = std::max(rate, norm(at) / speed);
   }
   return rate > 0 ? kSlipTurn / rate : kNone;
 }
