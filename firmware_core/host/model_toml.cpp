@@ -1204,7 +1204,7 @@ std::vector<double> ranged3(Table t, const std::string &key, double lo, double h
 
 void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &h) {
   const std::string label0 = "hexapod";
-  check_keys(doc, {"name", "gravity", "box", "yoke", "rowing", "leg", "ground"}, label0);
+  check_keys(doc, {"name", "gravity", "box", "yoke", "rowing", "leg", "ground", "box_contact"}, label0);
   const std::string name = get_string(doc, "name", label0);
   check_name(name, label0);
   const std::vector<double> gravity = ranged_vec(get_vec(doc, "gravity", 3, label0), -LEGSIM_MAX_GRAVITY_MPS2,
@@ -1312,6 +1312,25 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
   h.mu_kinetic = ranged(get_nonnegative(gt, "mu_kinetic", "ground"), 0.0, kMaxFriction, "mu_kinetic", "ground");
   if (h.mu_kinetic > h.mu_static)
     fail("ground", "mu_kinetic " + g(h.mu_kinetic) + " > mu_static " + g(h.mu_static));
+
+  // the box's own contact points: on or inside the box (its skids are on its hull)
+  auto contact_tables = get_table_array(doc, "box_contact", label0);
+  if (contact_tables.size() > LEGSIM_HEXAPOD_MAX_BOX_CONTACTS)
+    fail(label0, std::to_string(contact_tables.size()) + " [[box_contact]] (at most " +
+                     std::to_string(LEGSIM_HEXAPOD_MAX_BOX_CONTACTS) + ", LEGSIM_HEXAPOD_MAX_BOX_CONTACTS)",
+         LEGSIM_ERR_CAPACITY);
+  for (size_t k = 0; k < contact_tables.size(); ++k) {
+    Table tc = contact_tables[k];
+    const std::string label = "box_contact #" + std::to_string(k + 1);
+    check_keys(tc, {"point"}, label);
+    const std::vector<double> p = get_vec(tc, "point", 3, label);
+    for (int i = 0; i < 3; ++i)
+      if (!(std::abs(p[i]) <= 0.5 * h.box_size_m[i]))
+        fail(label, "'point' must be on or inside the box, |x_i| <= size_i / 2 (got [" + exact(p[0]) + ", " +
+                        exact(p[1]) + ", " + exact(p[2]) + "])");
+    copy3(h.box_contact_m[k], p);
+  }
+  h.n_box_contacts = int32_t(contact_tables.size());
 }
 
 legsim_status parse_text(const std::string &text, const std::string &source, const char *variant,

@@ -256,6 +256,53 @@ void test_block_down_the_fall_line(void) {
   TEST_ASSERT_TRUE(ev < 1e-12 && ex < 1e-12);
 }
 
+// Dropped flat from H onto level ground moving at vx: its three points touch down together (one
+// impact on their cones: sliding after it, vx - mu_k g t0 left, t0 = sqrt(2 H / g)), then it
+// slides at mu_k g to a stop at t0 + (vx - mu_k g t0) / (mu_k g), and stays.
+void test_block_dropped_sliding(void) {
+  const double H = 0.01, vx = 1.0, mu = 0.5, h = 0.005;
+  const BoxDesc box = {kMass, {kMass / 12 * (0.09 + 0.01), kMass / 12 * (0.09 + 0.01), kMass / 12 * 0.18}};
+  SpatialRobot R;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift_block(box, -kG, R));
+  const double c30 = std::cos(3.14159265358979323846 / 6);
+  const V3 pts[3] = {{0, kRadius, -kHalfHeight},
+                     {-kRadius * c30, -kRadius / 2, -kHalfHeight},
+                     {kRadius * c30, -kRadius / 2, -kHalfHeight}};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_box_contacts(R, pts, 3));
+  const GroundPlane g = {{0, 0, 0}, {0, 0, 1}, 0.6, mu};
+  const double q[kBodyConfig] = {0, 0, kHalfHeight + H, 1, 0, 0, 0}, v[kBodyDof] = {vx, 0, 0, 0, 0, 0};
+  FeetHold hold;
+  hold.stuck = hold.sliding = 0;
+  auto d = std::make_unique<RobotData>();
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold, &g, *d));
+  const double t0 = std::sqrt(2 * H / kG), v1 = vx - mu * kG * t0, T = t0 + v1 / (mu * kG),
+               xs = vx * t0 + v1 * v1 / (2 * mu * kG);
+  int impacts = 0;
+  double t_touch = -1, x_touch = 0, worst = 0;
+  for (int i = 0; i < int(0.4 / h); ++i) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(R, *d, h));
+    if (d->impacts > impacts) {
+      impacts = d->impacts;
+      TEST_ASSERT_EQUAL_UINT32(7, d->hold.sliding);  // all three, one impact
+      t_touch = d->t, x_touch = d->q[0];
+    }
+    if (d->hold.sliding == 7) {  // sliding: x(t) and v(t) of the slide after the impact
+      const double s = d->t - t0;
+      worst = std::fmax(worst, std::abs(d->q[0] - (vx * t0 + v1 * s - mu * kG * s * s / 2)));
+      worst = std::fmax(worst, std::abs(d->v[0] - (v1 - mu * kG * s)));
+    }
+  }
+  printf("dropped %.3f m at %.1f m/s: %d impact (step ending %.4f s, the touchdown at %.6f s), slide |error| %.2e;"
+         " at rest at x %.12f m (closed form %.12f m, stop at %.6f s)\n",
+         H, vx, impacts, t_touch, t0, worst, d->q[0], xs, T);
+  TEST_ASSERT_EQUAL_INT(1, impacts);
+  TEST_ASSERT_EQUAL_UINT32(7, d->hold.stuck);
+  TEST_ASSERT_TRUE(worst < 1e-12);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-12, xs, d->q[0]);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-12, kHalfHeight, d->q[2]);
+  (void)x_touch;
+}
+
 // Bad input: past the contact points' capacity, a point not finite.
 void test_block_bad_input(void) {
   SpatialRobot R;
@@ -274,6 +321,7 @@ int main(void) {
   RUN_TEST(test_block_across_the_fall_line_mu_tan_alpha);
   RUN_TEST(test_block_across_the_fall_line_stops);
   RUN_TEST(test_block_down_the_fall_line);
+  RUN_TEST(test_block_dropped_sliding);
   RUN_TEST(test_block_bad_input);
   return UNITY_END();
 }

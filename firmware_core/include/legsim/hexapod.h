@@ -14,7 +14,9 @@
  *   kd [0, LEGSIM_MAX_DAMPING_NS_PER_M] N m s/rad; each leg file at most
  *   LEGSIM_HEXAPOD_MAX_LEG_BARS bodies and no slot joint (the spatial rows have none), its force
  *   elements not lifted (the hexapod's loads are its own); the ground's normal a unit vector within 1e-9 whose angle from z
- *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. */
+ *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION; at most
+ *   LEGSIM_HEXAPOD_MAX_BOX_CONTACTS box contact points ([[box_contact]] point = [x, y, z]), each on
+ *   or inside the box, |x_i| <= box_size_m[i] / 2. */
 #ifndef LEGSIM_HEXAPOD_H
 #define LEGSIM_HEXAPOD_H
 
@@ -212,8 +214,9 @@ typedef struct legsim_hexapod_sim legsim_hexapod_sim;
 /* Bytes of storage legsim_hexapod_sim_init needs (aligned to LEGSIM_STORAGE_ALIGN). */
 size_t legsim_hexapod_sim_size(void);
 
-/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l) stuck where the pose
- * puts them (on the ground or not: the caller's pose says), the others free, the commands zero.
+/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l; bit 6 + k: the box's
+ * contact point k) stuck where the pose puts them (on the ground or not: the caller's pose says),
+ * the others free, the commands zero.
  * Statuses as legsim_hexapod_statics' (its pose checks, a leg's assembly; LEGSIM_ERR_BAD_INPUT
  * also for a free foot more than 1e-9 m (float: 1e-5 m) under the ground), LEGSIM_ERR_SINGULAR /
  * _NOT_CONVERGED (the rows with the stuck feet cannot be met or solved). *out is written only on
@@ -301,6 +304,13 @@ typedef struct legsim_hexapod_state {
   int32_t stop_impacts;
   double length_rate_mps[LEGSIM_HEXAPOD_LEGS][2]; /* each actuator's rate (the servos' l') */
   double rowing_rate_radps[LEGSIM_HEXAPOD_LEGS];   /* each yoke's angle's rate */
+  /* the box's own contact points (legsim_hexapod_desc's box_contact_m, n_box_contacts of them;
+   * the rest 0), as the feet: each point (world), the ground's force on it (world; 0 when free),
+   * its legsim_contact_state */
+  int32_t n_box_contacts;
+  double box_contact_m[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS][3];
+  double box_contact_force_n[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS][3];
+  int32_t box_contact_state[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS];
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

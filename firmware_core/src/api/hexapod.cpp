@@ -67,6 +67,10 @@ legsim_status desc_check(const legsim_hexapod_desc &h) {
   if (!(std::abs(len - 1) <= 1e-9) || !(n[2] >= std::cos(LEGSIM_MAX_SLOPE_RAD))) return LEGSIM_ERR_BAD_INPUT;
   if (!within(h.mu_kinetic, 0, LEGSIM_MAX_FRICTION) || !within(h.mu_static, h.mu_kinetic, LEGSIM_MAX_FRICTION))
     return LEGSIM_ERR_BAD_INPUT;
+  if (h.n_box_contacts < 0 || h.n_box_contacts > LEGSIM_HEXAPOD_MAX_BOX_CONTACTS) return LEGSIM_ERR_CAPACITY;
+  for (int k = 0; k < h.n_box_contacts; ++k)
+    for (int i = 0; i < 3; ++i)
+      if (!(std::abs(h.box_contact_m[k][i]) <= 0.5 * h.box_size_m[i])) return LEGSIM_ERR_BAD_INPUT;
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
     const legsim_hexapod_leg_desc &L = h.leg[l];
     for (int i = 0; i < 3; ++i)
@@ -384,7 +388,8 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
                                       legsim_hexapod_sim **out) {
   if (!h || !pose || !storage || !out) return LEGSIM_ERR_NULL;
   if (storage_bytes < legsim_hexapod_sim_size()) return LEGSIM_ERR_STORAGE;
-  if (stuck_mask >> LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  if (h->n_box_contacts < 0 || h->n_box_contacts > LEGSIM_HEXAPOD_MAX_BOX_CONTACTS) return LEGSIM_ERR_CAPACITY;
+  if (stuck_mask >> (LEGSIM_HEXAPOD_LEGS + h->n_box_contacts)) return LEGSIM_ERR_BAD_INPUT;
   HexapodWork *wp = nullptr;
   legsim_status st = place_pose(*h, *pose, storage, storage_bytes, wp);
   if (st != LEGSIM_OK) return st;
@@ -396,7 +401,7 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
   spatial::FeetHold hold;
   hold.stuck = stuck_mask;
   hold.sliding = 0;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) hold.anchor[l] = spatial::robot_foot_position(w.robot, l, w.q);
+  for (int c = 0; c < spatial::robot_contacts(w.robot); ++c) hold.anchor[c] = spatial::robot_contact_position(w.robot, c, w.q);
   const spatial::GroundPlane ground = {
       {real(h->ground_point_m[0]), real(h->ground_point_m[1]), real(h->ground_point_m[2])},
       {real(h->ground_normal[0]), real(h->ground_normal[1]), real(h->ground_normal[2])},
@@ -542,6 +547,19 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
       else r.rowing_stop[l] = at;
     }
   r.stop_impacts = d.stop_impacts;
+  r.n_box_contacts = R.nbox_contacts;
+  for (int k = 0; k < LEGSIM_HEXAPOD_MAX_BOX_CONTACTS; ++k) {
+    const int c = R.nlegs + k;
+    const bool has = k < R.nbox_contacts;
+    const spatial::V3 p = has ? spatial::robot_contact_position(R, c, d.q) : spatial::V3{0, 0, 0};
+    const spatial::V3 F = has ? spatial::robot_foot_force(R, d, c) : spatial::V3{0, 0, 0};
+    r.box_contact_m[k][0] = p.x, r.box_contact_m[k][1] = p.y, r.box_contact_m[k][2] = p.z;
+    r.box_contact_force_n[k][0] = F.x, r.box_contact_force_n[k][1] = F.y, r.box_contact_force_n[k][2] = F.z;
+    r.box_contact_state[k] = !has                           ? LEGSIM_CONTACT_FREE
+                             : ((d.hold.stuck >> c) & 1u)   ? LEGSIM_CONTACT_STUCK
+                             : ((d.hold.sliding >> c) & 1u) ? LEGSIM_CONTACT_SLIDING
+                                                            : LEGSIM_CONTACT_FREE;
+  }
   *out = r;
   return LEGSIM_OK;
 }

@@ -459,7 +459,16 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
         d.hold.anchor[c] = pc - dot(pc - d.ground.point, d.ground.normal) * d.ground.normal;
       }
   } else {  // a touchdown: the impact of every foot in touch
-    const uint32_t touching = d.hold.stuck | d.hold.sliding | bit;
+    uint32_t touching = d.hold.stuck | d.hold.sliding | bit;
+    // the box's points at the ground with it (a flat face landing: one impact for them all)
+    if (l >= robot.nlegs)
+      for (int c = robot.nlegs; c < robot_contacts(robot); ++c) {
+        V3 pc, vc;
+        foot_motion(robot, c, d.q, d.v, pc, vc);
+        if (!((touching >> c) & 1u) && dot(pc - d.ground.point, d.ground.normal) <= by_precision(1e-9, 1e-5) &&
+            dot(vc, d.ground.normal) < 0)
+          touching |= 1u << c;
+      }
     for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
     const legsim_status st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse,
                                             d.impact, d.rows, d.factor, d.contact_work);
