@@ -116,14 +116,14 @@ Closed closed_form(double k, double t) {
 struct Run {
   double place, speed, work, normal, spin;
 };
-Run run_across(double k, double mu_s, double h, int n) {
+Run run_across(double k, double mu_s, double h, int n, Integrator integrator = Integrator::Rk4) {
   Block b;
   make(b, k, mu_s, kAcross);
   const double E0 = energy(b);
   double P[3] = {friction_power(b), 0, 0}, work = 0;
   Run r = {0, 0, 0, 0, 0};
   for (int i = 1; i <= n; ++i) {
-    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step_rk4(b.R, *b.d, h));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_step(b.R, *b.d, h, integrator));
     const RobotData &d = *b.d;
     TEST_ASSERT_EQUAL_UINT32(7, d.hold.sliding);
     const Closed c = closed_form(k, d.t);
@@ -175,6 +175,24 @@ void test_block_across_the_fall_line_mu_tan_alpha(void) {
     TEST_ASSERT_TRUE(std::log2(r[i - 1].speed / r[i].speed) > 3.5);
   }
   for (int i = 0; i < 4; ++i) TEST_ASSERT_TRUE(r[i].normal < 1e-11 && r[i].spin < 1e-12);
+}
+
+// The same with generalized-alpha: its order 2.
+void test_block_across_the_fall_line_galpha(void) {
+  const double hs[3] = {0.01, 0.005, 0.0025};
+  Run r[3];
+  for (int i = 0; i < 3; ++i) {
+    r[i] = run_across(1, 0.6, hs[i], int(std::lround(1.0 / hs[i])), Integrator::GeneralizedAlpha);
+    printf("generalized-alpha, h %.4f s, 1 s: place %.3e m, speed %.3e m/s, |sum N - m g cos| %.3e N, |omega| %.3e"
+           " rad/s\n",
+           hs[i], r[i].place, r[i].speed, r[i].normal, r[i].spin);
+  }
+  for (int i = 1; i < 3; ++i) {
+    const double op = std::log2(r[i - 1].place / r[i].place), ov = std::log2(r[i - 1].speed / r[i].speed);
+    printf("  order: place %.2f, speed %.2f\n", op, ov);
+    TEST_ASSERT_TRUE(op > 1.8 && op < 2.3 && ov > 1.8 && ov < 2.3);
+  }
+  for (int i = 0; i < 3; ++i) TEST_ASSERT_TRUE(r[i].normal < 1e-11 && r[i].spin < 1e-12);
 }
 
 // mu_k = 1.5 tan(alpha): it stops, at the closed form's time and place, and stays (tan(alpha) <
@@ -319,6 +337,7 @@ void test_block_bad_input(void) {
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_block_across_the_fall_line_mu_tan_alpha);
+  RUN_TEST(test_block_across_the_fall_line_galpha);
   RUN_TEST(test_block_across_the_fall_line_stops);
   RUN_TEST(test_block_down_the_fall_line);
   RUN_TEST(test_block_dropped_sliding);
