@@ -452,6 +452,7 @@ class Library:
                                                  C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
             "legsim_hexapod_step": (st, [P, C.c_double, C.c_int32]),
             "legsim_hexapod_set_integrator": (st, [P, C.c_int]),
+            "legsim_hexapod_set_velocity": (st, [P, C.POINTER(C.c_double), C.POINTER(C.c_double)]),
             "legsim_hexapod_get_state": (st, [P, C.POINTER(self.HexapodState)]),
             "legsim_hexapod_body_poses": (st, [P, C.POINTER(C.c_double), C.c_int32, C.POINTER(C.c_int32)]),
         }

@@ -25,7 +25,10 @@
 #include <cmath>
 #include <cstdio>
 #include <memory>
+#include <vector>
 
+#include "legsim/hexapod.h"
+#include "model_toml.hpp"
 #include "spatial/motion.hpp"
 #include "unity.h"
 
@@ -321,6 +324,59 @@ void test_block_dropped_sliding(void) {
   (void)x_touch;
 }
 
+// The same block as a file of no legs (tests/model/fixtures/good_block_incline.toml) through the C
+// API: loaded, started stuck on its three points, launched across the fall line at 1 m/s
+// (legsim_hexapod_set_velocity: its points slide), stepped, its state against the closed form.
+void test_block_through_the_c_api(void) {
+  auto h = std::make_unique<legsim_hexapod_desc>();
+  char msg[256] = {0};
+  TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK,
+                                legsim_hexapod_load_toml("tests/model/fixtures/good_block_incline.toml", h.get(), msg,
+                                                         sizeof msg),
+                                msg);
+  TEST_ASSERT_EQUAL_INT(0, h->n_legs);
+  TEST_ASSERT_EQUAL_INT(3, h->n_box_contacts);
+  std::vector<unsigned char> raw(legsim_hexapod_sim_size() + 64);
+  void *store = reinterpret_cast<void *>((reinterpret_cast<uintptr_t>(raw.data()) + 63) / 64 * 64);
+  legsim_hexapod_pose pose = {};
+  const V3 r0 = kHalfHeight * kN;
+  pose.box_m[0] = r0.x, pose.box_m[1] = r0.y, pose.box_m[2] = r0.z;
+  pose.box_quat[0] = std::cos(kAlpha / 2), pose.box_quat[1] = -std::sin(kAlpha / 2);
+  legsim_hexapod_sim *sim = nullptr;
+  // the analyses of legs refuse a block; its points are bits 6 + k, as a hexapod's
+  legsim_hexapod_standing sd;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_statics(h.get(), &pose, 0, nullptr, store,
+                                                                     legsim_hexapod_sim_size(), &sd));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_sim_init(store, legsim_hexapod_sim_size(), h.get(), &pose,
+                                                                      7, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_sim_init(store, legsim_hexapod_sim_size(), h.get(), &pose,
+                                                           7u << LEGSIM_HEXAPOD_LEGS, &sim));
+  legsim_hexapod_state x;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_get_state(sim, &x));
+  double N = 0;
+  for (int k = 0; k < 3; ++k) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_CONTACT_STUCK, x.box_contact_state[k]);
+    N += dot({x.box_contact_force_n[k][0], x.box_contact_force_n[k][1], x.box_contact_force_n[k][2]}, kN);
+  }
+  TEST_ASSERT_DOUBLE_WITHIN(1e-10, kMass * kG * std::cos(kAlpha), N);
+  const double v0[3] = {kV0, 0, 0}, w0[3] = {0, 0, 0}, bad[3] = {NAN, 0, 0};
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_set_velocity(sim, bad, w0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_set_velocity(sim, v0, w0));
+  const double h_s = 0.0025;
+  double worst = 0;
+  for (int i = 0; i < 400; ++i) {
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_step(sim, h_s, 1));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_get_state(sim, &x));
+    const Closed c = closed_form(1, x.t_s);
+    const V3 dr = V3{x.box_m[0], x.box_m[1], x.box_m[2]} - r0;
+    worst = std::fmax(worst, std::hypot(dot(dr, kAcross) - c.x, dot(dr, kDown) - c.y));
+    for (int k = 0; k < 3; ++k) TEST_ASSERT_EQUAL_INT(LEGSIM_CONTACT_SLIDING, x.box_contact_state[k]);
+  }
+  printf("through the C API, h %.4f s, 1 s: place %.2e m\n", h_s, worst);
+  TEST_ASSERT_TRUE(worst < 1e-9);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_set_velocity(sim, v0, w0));  // after a step
+}
+
 // Bad input: past the contact points' capacity, a point not finite.
 void test_block_bad_input(void) {
   SpatialRobot R;
@@ -341,6 +397,7 @@ int main(void) {
   RUN_TEST(test_block_across_the_fall_line_stops);
   RUN_TEST(test_block_down_the_fall_line);
   RUN_TEST(test_block_dropped_sliding);
+  RUN_TEST(test_block_through_the_c_api);
   RUN_TEST(test_block_bad_input);
   return UNITY_END();
 }

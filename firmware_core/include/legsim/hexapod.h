@@ -214,7 +214,7 @@ typedef struct legsim_hexapod_sim legsim_hexapod_sim;
 /* Bytes of storage legsim_hexapod_sim_init needs (aligned to LEGSIM_STORAGE_ALIGN). */
 size_t legsim_hexapod_sim_size(void);
 
-/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l; bit 6 + k: the box's
+/* The hexapod of h at pose (of a file of no legs, a block: the box's place alone), at rest, the feet of stuck_mask (bit l: leg l; bit 6 + k: the box's
  * contact point k) stuck where the pose puts them (on the ground or not: the caller's pose says),
  * the others free, the commands zero.
  * Statuses as legsim_hexapod_statics' (its pose checks, a leg's assembly; LEGSIM_ERR_BAD_INPUT
@@ -276,6 +276,14 @@ legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n
  * the rows: docs/design/spatial.md; a step may also fail with _NOT_CONVERGED when they do not
  * converge). LEGSIM_ERR_BAD_INPUT for another value (nothing changed). */
 legsim_status legsim_hexapod_set_integrator(legsim_hexapod_sim *sim, legsim_integrator integrator);
+
+/* A launch, before the first step: the box's velocity (m/s, world) and angular velocity (rad/s,
+ * its frame), every body carried with it rigidly; a contact point stuck at the start that this
+ * moves along the ground slides; the modes checked again as at legsim_hexapod_sim_init, the
+ * commands kept. LEGSIM_ERR_BAD_INPUT for a value not finite or past LEGSIM_MAX_RATE_MPS, or
+ * after a step; else as legsim_hexapod_sim_init's (the start then left as it was). */
+legsim_status legsim_hexapod_set_velocity(legsim_hexapod_sim *sim, const double velocity_mps[3],
+                                          const double omega_radps[3]);
 
 typedef struct legsim_hexapod_state {
   double t_s;

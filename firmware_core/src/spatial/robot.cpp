@@ -273,7 +273,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
 }
 
 legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out) {
-  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_MODEL;
+  if (h.n_legs != LEGSIM_HEXAPOD_LEGS && h.n_legs != 0) return LEGSIM_ERR_MODEL;
   YokeDesc yoke;
   yoke.mass_kg = h.yoke_mass_kg;
   for (int i = 0; i < 3; ++i) yoke.com_m[i] = h.yoke_com_m[i], yoke.inertia_kgm2[i] = h.yoke_inertia_kgm2[i];
@@ -290,7 +290,8 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out
     legs[l] = &h.leg[l].leg;
     hips[l] = {{h.leg[l].hip_m[0], h.leg[l].hip_m[1], h.leg[l].hip_m[2]}, h.leg[l].heading_rad};
   }
-  legsim_status s = robot_lift(legs, hips, LEGSIM_HEXAPOD_LEGS, yoke, &box, out);
+  legsim_status s = h.n_legs ? robot_lift(legs, hips, LEGSIM_HEXAPOD_LEGS, yoke, &box, out)
+                             : robot_lift_block(box, real(h.gravity_mps2[2]), out);
   if (s != LEGSIM_OK || h.n_box_contacts == 0) return s;
   if (h.n_box_contacts < 0 || h.n_box_contacts > kMaxBoxContacts) return LEGSIM_ERR_CAPACITY;
   V3 p[kMaxBoxContacts];

@@ -166,7 +166,8 @@ legsim_status robot_lift_block(const BoxDesc &box, real gravity_z, SpatialRobot 
 // point not finite, LEGSIM_ERR_MODEL on a fixed box (the world's points touch nothing).
 legsim_status robot_box_contacts(SpatialRobot &robot, const V3 *points, int n);
 
-// The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box.
+// The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box, its
+// box's contact points; a file of no legs: the box alone (robot_lift_block) on its points.
 legsim_status robot_lift_hexapod(const legsim_hexapod_desc &hexapod, SpatialRobot &out);
 
 // Where leg l must be for its foot at foot_box (box frame, m; the world for a fixed box): its
