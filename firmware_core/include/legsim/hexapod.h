@@ -16,7 +16,9 @@
  *   elements not lifted (the hexapod's loads are its own); the ground's normal a unit vector within 1e-9 whose angle from z
  *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION; at most
  *   LEGSIM_HEXAPOD_MAX_BOX_CONTACTS box contact points ([[box_contact]] point = [x, y, z]), each on
- *   or inside the box, |x_i| <= box_size_m[i] / 2. */
+ *   or inside the box, |x_i| <= box_size_m[i] / 2. A file of no [[leg]] (n_legs 0), [yoke] or
+ *   [rowing] and at least one [[box_contact]] is a block: the box alone on its points
+ *   (legsim_hexapod_sim_init and what follows it take it; the analyses of legs refuse it). */
 #ifndef LEGSIM_HEXAPOD_H
 #define LEGSIM_HEXAPOD_H
 
@@ -53,7 +55,7 @@ typedef struct legsim_hexapod_desc {
    * kp (angle_cmd - angle) - kd rate, saturated) */
   double rowing_gear_ratio, rowing_max_torque_nm, rowing_stroke_rad[2];
   double rowing_servo_kp_nm_per_rad, rowing_servo_kd_nms_per_rad;
-  int32_t n_legs; /* LEGSIM_HEXAPOD_LEGS */
+  int32_t n_legs; /* LEGSIM_HEXAPOD_LEGS; 0: a block (its box on its box contact points) */
   legsim_hexapod_leg_desc leg[LEGSIM_HEXAPOD_LEGS];
   /* the ground plane: a point, its upward unit normal, Coulomb friction */
   double ground_point_m[3], ground_normal[3], mu_static, mu_kinetic;
