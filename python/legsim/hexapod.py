@@ -506,6 +506,15 @@ class HexapodSim:
         self.library.check(self.library.cdll.legsim_hexapod_set_integrator(self._sim, codes[integrator]),
                            "legsim_hexapod_set_integrator")
 
+    def set_velocity(self, velocity_mps, omega_radps=(0.0, 0.0, 0.0)) -> None:
+        """A launch before the first step: the box's velocity (m/s, world) and angular velocity
+        (rad/s, its frame), every body carried with it; a point stuck at the start that this moves
+        along the ground slides (legsim_hexapod_set_velocity)."""
+        v = (C.c_double * 3)(*[float(x) for x in velocity_mps])
+        w = (C.c_double * 3)(*[float(x) for x in omega_radps])
+        self.library.check(self.library.cdll.legsim_hexapod_set_velocity(self._sim, v, w),
+                           "legsim_hexapod_set_velocity")
+
     def step(self, n: int = 1, *, h_s: float = 1e-3) -> None:
         self.library.check(self.library.cdll.legsim_hexapod_step(self._sim, float(h_s), int(n)),
                            "legsim_hexapod_step")
