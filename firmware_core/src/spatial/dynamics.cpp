@@ -161,7 +161,7 @@ void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *ro
     // -D_Lk = J_L X_k from the columns (D's lower triangle is the factor now)
     for (int i = 0; i < n; ++i)
       z[i] = F.live[i] ? row_dot(robot, rows[F.stop[i]], F.stop[i], F.stop_x[k]) : real(0);
-    for (int i = 0; i < n; ++i) {  // L y = D_Lk
+    for (int i = 0; i < n; ++i) {  // L y = -D_Lk
       if (!F.live[i]) continue;
       for (int m = 0; m < i; ++m)
         if (F.live[m]) z[i] -= D[n * i + m] * z[m];
