@@ -1187,7 +1187,7 @@ void parse_robot(Table doc, const std::string &base_dir, const std::string &vari
 }
 
 // ---- a hexapod file: six leg files on hip yokes on a free box (legsim/hexapod.h) ----
-bool is_hexapod(Table doc) { return has(doc, "yoke") || has(doc, "rowing"); }
+bool is_hexapod(Table doc) { return has(doc, "yoke") || has(doc, "rowing") || has(doc, "box_contact"); }
 
 // A table key of doc, required, as a table.
 Table req_table(Table doc, const std::string &key, const std::string &label) {
@@ -1204,7 +1204,7 @@ std::vector<double> ranged3(Table t, const std::string &key, double lo, double h
 
 void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &h) {
   const std::string label0 = "hexapod";
-  check_keys(doc, {"name", "gravity", "box", "yoke", "rowing", "leg", "ground"}, label0);
+  check_keys(doc, {"name", "gravity", "box", "yoke", "rowing", "leg", "ground", "box_contact"}, label0);
   const std::string name = get_string(doc, "name", label0);
   check_name(name, label0);
   const std::vector<double> gravity = ranged_vec(get_vec(doc, "gravity", 3, label0), -LEGSIM_MAX_GRAVITY_MPS2,
@@ -1222,80 +1222,89 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
   copy3(h.box_size_m, ranged3(bt, "size", LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD, "box"));
   copy3(h.box_inertia_kgm2, ranged3(bt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "box"));
 
-  Table yt = req_table(doc, "yoke", label0);
-  check_keys(yt, {"mass", "com", "inertia", "hip_offset", "bar_radius"}, "yoke");
-  h.yoke_mass_kg = ranged(get_positive(yt, "mass", "yoke"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "yoke");
-  copy3(h.yoke_com_m, ranged3(yt, "com", -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "yoke"));
-  copy3(h.yoke_inertia_kgm2, ranged3(yt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "yoke"));
-  h.hip_offset_m = ranged(get_positive(yt, "hip_offset", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
-                          "hip_offset", "yoke");
-  h.bar_radius_m = ranged(get_positive(yt, "bar_radius", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
-                          "bar_radius", "yoke");
+  // no [[leg]]: the box alone on its own contact points (a block), without yokes or motors
+  const bool block = !has(doc, "leg");
+  if (block) {
+    for (const char *k : {"yoke", "rowing"})
+      if (has(doc, k))
+        fail(label0, "[" + std::string(k) + "] needs the [[leg]]s (a file of none is a block on its [[box_contact]]s)");
+    if (!has(doc, "box_contact")) fail(label0, "needs 6 [[leg]], or none and a [[box_contact]] (a block)");
+  } else {
+    Table yt = req_table(doc, "yoke", label0);
+    check_keys(yt, {"mass", "com", "inertia", "hip_offset", "bar_radius"}, "yoke");
+    h.yoke_mass_kg = ranged(get_positive(yt, "mass", "yoke"), LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG, "mass", "yoke");
+    copy3(h.yoke_com_m, ranged3(yt, "com", -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "yoke"));
+    copy3(h.yoke_inertia_kgm2, ranged3(yt, "inertia", LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2, "yoke"));
+    h.hip_offset_m = ranged(get_positive(yt, "hip_offset", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
+                            "hip_offset", "yoke");
+    h.bar_radius_m = ranged(get_positive(yt, "bar_radius", "yoke"), LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD,
+                            "bar_radius", "yoke");
 
-  Table rt = req_table(doc, "rowing", label0);
-  check_keys(rt, {"gear_ratio", "max_torque", "stroke", "servo_kp", "servo_kd"}, "rowing");
-  h.rowing_gear_ratio = ranged(get_positive(rt, "gear_ratio", "rowing"), 1.0, 1e4, "gear_ratio", "rowing");
-  h.rowing_max_torque_nm = ranged(get_positive(rt, "max_torque", "rowing"), LEGSIM_MIN_FORCE_N,
-                                  LEGSIM_MAX_FORCE_N, "max_torque", "rowing");
-  const std::vector<double> stroke = get_vec(rt, "stroke", 2, "rowing");
-  if (!(stroke[0] > -M_PI && stroke[0] < 0 && stroke[1] > 0 && stroke[1] < M_PI))
-    fail("rowing", "'stroke' must be [min, max] with -pi < min < 0 < max < pi rad (got [" + exact(stroke[0]) + ", " +
-                       exact(stroke[1]) + "])");
-  h.rowing_stroke_rad[0] = stroke[0];
-  h.rowing_stroke_rad[1] = stroke[1];
-  h.rowing_servo_kp_nm_per_rad =
-      ranged(get_nonnegative(rt, "servo_kp", "rowing"), 0.0, LEGSIM_MAX_STIFFNESS_N_PER_M, "servo_kp", "rowing");
-  h.rowing_servo_kd_nms_per_rad =
-      ranged(get_nonnegative(rt, "servo_kd", "rowing"), 0.0, LEGSIM_MAX_DAMPING_NS_PER_M, "servo_kd", "rowing");
+    Table rt = req_table(doc, "rowing", label0);
+    check_keys(rt, {"gear_ratio", "max_torque", "stroke", "servo_kp", "servo_kd"}, "rowing");
+    h.rowing_gear_ratio = ranged(get_positive(rt, "gear_ratio", "rowing"), 1.0, 1e4, "gear_ratio", "rowing");
+    h.rowing_max_torque_nm = ranged(get_positive(rt, "max_torque", "rowing"), LEGSIM_MIN_FORCE_N,
+                                    LEGSIM_MAX_FORCE_N, "max_torque", "rowing");
+    const std::vector<double> stroke = get_vec(rt, "stroke", 2, "rowing");
+    if (!(stroke[0] > -M_PI && stroke[0] < 0 && stroke[1] > 0 && stroke[1] < M_PI))
+      fail("rowing", "'stroke' must be [min, max] with -pi < min < 0 < max < pi rad (got [" + exact(stroke[0]) + ", " +
+                         exact(stroke[1]) + "])");
+    h.rowing_stroke_rad[0] = stroke[0];
+    h.rowing_stroke_rad[1] = stroke[1];
+    h.rowing_servo_kp_nm_per_rad =
+        ranged(get_nonnegative(rt, "servo_kp", "rowing"), 0.0, LEGSIM_MAX_STIFFNESS_N_PER_M, "servo_kp", "rowing");
+    h.rowing_servo_kd_nms_per_rad =
+        ranged(get_nonnegative(rt, "servo_kd", "rowing"), 0.0, LEGSIM_MAX_DAMPING_NS_PER_M, "servo_kd", "rowing");
 
-  auto leg_tables = get_table_array(doc, "leg", label0);
-  if (leg_tables.size() != LEGSIM_HEXAPOD_LEGS)
-    fail(label0, "needs " + std::to_string(LEGSIM_HEXAPOD_LEGS) + " [[leg]] (got " +
-                     std::to_string(leg_tables.size()) + ")");
-  std::vector<std::string> names;
-  for (size_t k = 0; k < leg_tables.size(); ++k) {
-    Table tl = leg_tables[k];
-    std::string label = "leg #" + std::to_string(k + 1);
-    const std::string lname = get_string(tl, "name", label);
-    check_name(lname, label);
-    check_unique(lname, names, "leg", label);
-    names.push_back(lname);
-    label = "leg " + q(lname);
-    check_keys(tl, {"name", "file", "variant", "hip", "heading"}, label);
-    const std::string lfile = get_string(tl, "file", label);
-    const std::string lvariant = has(tl, "variant") ? get_string(tl, "variant", label) : kDefaultVariant;
-    legsim_hexapod_leg_desc &L = h.leg[k];
-    copy_name(L.name, lname);
-    copy3(L.hip_m, ranged_vec(get_vec(tl, "hip", 3, label), -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "hip", label));
-    L.heading_rad = ranged(get_real(tl, "heading", label), -M_PI, M_PI, "heading", label);
-    toml::table ldoc = read_leg_toml(path_join(base_dir, lfile), label, lfile);
-    if (is_robot(&ldoc) || is_hexapod(&ldoc)) fail(label, "file " + q(lfile) + " is not a leg file");
-    try {
-      parse_model(&ldoc, lvariant, L.leg);
-    } catch (Fail &f) {
-      f.message = label + ": " + lfile + ": " + f.message;
-      throw;
+    auto leg_tables = get_table_array(doc, "leg", label0);
+    if (leg_tables.size() != LEGSIM_HEXAPOD_LEGS)
+      fail(label0, "needs " + std::to_string(LEGSIM_HEXAPOD_LEGS) + " [[leg]] (got " +
+                       std::to_string(leg_tables.size()) + ")");
+    std::vector<std::string> names;
+    for (size_t k = 0; k < leg_tables.size(); ++k) {
+      Table tl = leg_tables[k];
+      std::string label = "leg #" + std::to_string(k + 1);
+      const std::string lname = get_string(tl, "name", label);
+      check_name(lname, label);
+      check_unique(lname, names, "leg", label);
+      names.push_back(lname);
+      label = "leg " + q(lname);
+      check_keys(tl, {"name", "file", "variant", "hip", "heading"}, label);
+      const std::string lfile = get_string(tl, "file", label);
+      const std::string lvariant = has(tl, "variant") ? get_string(tl, "variant", label) : kDefaultVariant;
+      legsim_hexapod_leg_desc &L = h.leg[k];
+      copy_name(L.name, lname);
+      copy3(L.hip_m, ranged_vec(get_vec(tl, "hip", 3, label), -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD, "hip", label));
+      L.heading_rad = ranged(get_real(tl, "heading", label), -M_PI, M_PI, "heading", label);
+      toml::table ldoc = read_leg_toml(path_join(base_dir, lfile), label, lfile);
+      if (is_robot(&ldoc) || is_hexapod(&ldoc)) fail(label, "file " + q(lfile) + " is not a leg file");
+      try {
+        parse_model(&ldoc, lvariant, L.leg);
+      } catch (Fail &f) {
+        f.message = label + ": " + lfile + ": " + f.message;
+        throw;
+      }
+  #if LEGSIM_MODEL_TOML_CORE_CHECK
+      char core_msg[256] = {0};
+      if (legsim_model_check(&L.leg, core_msg, sizeof core_msg) != LEGSIM_OK)
+        fail(label, lfile + ": " + core_msg);
+  #endif
+      // one gravity: a leg file that states another is refused, not ignored
+      if (L.leg.gravity_mps2[0] != 0 || L.leg.gravity_mps2[1] != gravity[2])
+        fail(label, "the gravity of " + q(lfile) + ", [" + g(L.leg.gravity_mps2[0]) + ", " +
+                        g(L.leg.gravity_mps2[1]) + "], is not the hexapod's [0, " + g(gravity[2]) +
+                        "] in its plane");
+      if (L.leg.foot_body < 0) fail(label, "file " + q(lfile) + " has no [foot]: a hexapod's feet are its legs'");
+      if (L.leg.n_bodies > LEGSIM_HEXAPOD_MAX_LEG_BARS)
+        fail(label, "file " + q(lfile) + " has " + std::to_string(L.leg.n_bodies) + " bodies (a hexapod's leg at most " +
+                        std::to_string(LEGSIM_HEXAPOD_MAX_LEG_BARS) + ")",
+             LEGSIM_ERR_CAPACITY);
+      for (int j = 0; j < L.leg.n_joints; ++j)
+        if (L.leg.joint[j].kind == LEGSIM_JOINT_SLOT)
+          fail(label, "joint " + q(L.leg.joint[j].name) + " of " + q(lfile) + " is a slot (no spatial rows for it)");
     }
-#if LEGSIM_MODEL_TOML_CORE_CHECK
-    char core_msg[256] = {0};
-    if (legsim_model_check(&L.leg, core_msg, sizeof core_msg) != LEGSIM_OK)
-      fail(label, lfile + ": " + core_msg);
-#endif
-    // one gravity: a leg file that states another is refused, not ignored
-    if (L.leg.gravity_mps2[0] != 0 || L.leg.gravity_mps2[1] != gravity[2])
-      fail(label, "the gravity of " + q(lfile) + ", [" + g(L.leg.gravity_mps2[0]) + ", " +
-                      g(L.leg.gravity_mps2[1]) + "], is not the hexapod's [0, " + g(gravity[2]) +
-                      "] in its plane");
-    if (L.leg.foot_body < 0) fail(label, "file " + q(lfile) + " has no [foot]: a hexapod's feet are its legs'");
-    if (L.leg.n_bodies > LEGSIM_HEXAPOD_MAX_LEG_BARS)
-      fail(label, "file " + q(lfile) + " has " + std::to_string(L.leg.n_bodies) + " bodies (a hexapod's leg at most " +
-                      std::to_string(LEGSIM_HEXAPOD_MAX_LEG_BARS) + ")",
-           LEGSIM_ERR_CAPACITY);
-    for (int j = 0; j < L.leg.n_joints; ++j)
-      if (L.leg.joint[j].kind == LEGSIM_JOINT_SLOT)
-        fail(label, "joint " + q(L.leg.joint[j].name) + " of " + q(lfile) + " is a slot (no spatial rows for it)");
+    h.n_legs = LEGSIM_HEXAPOD_LEGS;
   }
-  h.n_legs = LEGSIM_HEXAPOD_LEGS;
 
   Table gt = req_table(doc, "ground", label0);
   check_keys(gt, {"point", "normal", "mu_static", "mu_kinetic"}, "ground");
@@ -1312,6 +1321,25 @@ void parse_hexapod(Table doc, const std::string &base_dir, legsim_hexapod_desc &
   h.mu_kinetic = ranged(get_nonnegative(gt, "mu_kinetic", "ground"), 0.0, kMaxFriction, "mu_kinetic", "ground");
   if (h.mu_kinetic > h.mu_static)
     fail("ground", "mu_kinetic " + g(h.mu_kinetic) + " > mu_static " + g(h.mu_static));
+
+  // the box's own contact points: on or inside the box (its skids are on its hull)
+  auto contact_tables = get_table_array(doc, "box_contact", label0);
+  if (contact_tables.size() > LEGSIM_HEXAPOD_MAX_BOX_CONTACTS)
+    fail(label0, std::to_string(contact_tables.size()) + " [[box_contact]] (at most " +
+                     std::to_string(LEGSIM_HEXAPOD_MAX_BOX_CONTACTS) + ", LEGSIM_HEXAPOD_MAX_BOX_CONTACTS)",
+         LEGSIM_ERR_CAPACITY);
+  for (size_t k = 0; k < contact_tables.size(); ++k) {
+    Table tc = contact_tables[k];
+    const std::string label = "box_contact #" + std::to_string(k + 1);
+    check_keys(tc, {"point"}, label);
+    const std::vector<double> p = get_vec(tc, "point", 3, label);
+    for (int i = 0; i < 3; ++i)
+      if (!(std::abs(p[i]) <= 0.5 * h.box_size_m[i]))
+        fail(label, "'point' must be on or inside the box, |x_i| <= size_i / 2 (got [" + exact(p[0]) + ", " +
+                        exact(p[1]) + ", " + exact(p[2]) + "])");
+    copy3(h.box_contact_m[k], p);
+  }
+  h.n_box_contacts = int32_t(contact_tables.size());
 }
 
 legsim_status parse_text(const std::string &text, const std::string &source, const char *variant,
@@ -1448,7 +1476,8 @@ extern "C" legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexap
   return with_toml_file(path, msg, msg_len, [&](toml::table &doc) {
     auto h = std::make_unique<legsim_hexapod_desc>();
     try {
-      if (!is_hexapod(&doc)) fail("file", "not a hexapod file (no [yoke] or [rowing])", LEGSIM_ERR_BAD_INPUT);
+      if (!is_hexapod(&doc))
+        fail("file", "not a hexapod file (no [yoke], [rowing] or [[box_contact]])", LEGSIM_ERR_BAD_INPUT);
       parse_hexapod(&doc, dir_name(source), *h);
     } catch (Fail &f) {
       f.message = source + ": " + f.message;

@@ -279,7 +279,7 @@ class Library:
                         ("rowing_stroke_rad", d * 2), ("rowing_servo_kp_nm_per_rad", d),
                         ("rowing_servo_kd_nms_per_rad", d), ("n_legs", i32), ("leg", HexapodLegDesc * 6),
                         ("ground_point_m", d * 3), ("ground_normal", d * 3), ("mu_static", d),
-                        ("mu_kinetic", d)]
+                        ("mu_kinetic", d), ("n_box_contacts", i32), ("box_contact_m", (d * 3) * 4)]
 
         class HexapodPose(C.Structure):
             _fields_ = [("box_m", d * 3), ("box_quat", d * 4), ("rowing_rad", d * 6),
@@ -327,7 +327,9 @@ class Library:
                         ("kinetic_energy_j", d), ("events", i32), ("impacts", i32), ("cone_solved", i32),
                         ("cone_by_sweeps", i32), ("cone_max_iterations", i32), ("cone_max_residual", d),
                         ("actuator_stop", (i32 * 2) * 6), ("rowing_stop", i32 * 6), ("stop_impacts", i32), ("length_rate_mps", (d * 2) * 6),
-                        ("rowing_rate_radps", d * 6)]
+                        ("rowing_rate_radps", d * 6), ("n_box_contacts", i32),
+                        ("box_contact_m", (d * 3) * 4), ("box_contact_force_n", (d * 3) * 4),
+                        ("box_contact_state", i32 * 4)]
 
         self.HexapodState = HexapodState
         self.HexapodDesc, self.HexapodPose, self.HexapodStanding = HexapodDesc, HexapodPose, HexapodStanding
@@ -450,6 +452,7 @@ class Library:
                                                  C.POINTER(C.c_double * 2), C.POINTER(C.c_double)]),
             "legsim_hexapod_step": (st, [P, C.c_double, C.c_int32]),
             "legsim_hexapod_set_integrator": (st, [P, C.c_int]),
+            "legsim_hexapod_set_velocity": (st, [P, C.POINTER(C.c_double), C.POINTER(C.c_double)]),
             "legsim_hexapod_get_state": (st, [P, C.POINTER(self.HexapodState)]),
             "legsim_hexapod_body_poses": (st, [P, C.POINTER(C.c_double), C.c_int32, C.POINTER(C.c_int32)]),
         }

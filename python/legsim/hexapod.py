@@ -510,6 +510,15 @@ class HexapodSim:
         self.library.check(self.library.cdll.legsim_hexapod_set_integrator(self._sim, codes[integrator]),
                            "legsim_hexapod_set_integrator")
 
+    def set_velocity(self, velocity_mps, omega_radps=(0.0, 0.0, 0.0)) -> None:
+        """A launch before the first step: the box's velocity (m/s, world) and angular velocity
+        (rad/s, its frame), every body carried with it; a point stuck at the start that this moves
+        along the ground slides (legsim_hexapod_set_velocity)."""
+        v = (C.c_double * 3)(*[float(x) for x in velocity_mps])
+        w = (C.c_double * 3)(*[float(x) for x in omega_radps])
+        self.library.check(self.library.cdll.legsim_hexapod_set_velocity(self._sim, v, w),
+                           "legsim_hexapod_set_velocity")
+
     def step(self, n: int = 1, *, h_s: float = 1e-3) -> None:
         self.library.check(self.library.cdll.legsim_hexapod_step(self._sim, float(h_s), int(n)),
                            "legsim_hexapod_step")
@@ -522,7 +531,9 @@ class HexapodSim:
         in the last step), impacts (touchdowns since the start), cone (the contact problems on the
         cones since the start: solved, by_sweeps, max_iterations, max_residual), actuator_stop (6 x
         2) and rowing_stop (6): -1 on the stroke's min stop, 1 on its max, 0 inside; stop_impacts
-        (arrivals on a stop since the start); length_rate_mps (6 x 2) and rowing_rate_radps (6)."""
+        (arrivals on a stop since the start); length_rate_mps (6 x 2) and rowing_rate_radps (6);
+        the box's own contact points (the file's [[box_contact]], n of them) as the feet:
+        box_contact_m (n x 3, world), box_contact_force_n (n x 3), box_contact_state (n)."""
         out = self.library.HexapodState()
         self.library.check(self.library.cdll.legsim_hexapod_get_state(self._sim, C.byref(out)),
                            "legsim_hexapod_get_state")
@@ -541,4 +552,8 @@ class HexapodSim:
                 "actuator_stop": np.array([out.actuator_stop[k][:] for k in range(LEGS)]),
                 "rowing_stop": np.array(out.rowing_stop[:]), "stop_impacts": out.stop_impacts,
                 "length_rate_mps": np.array([out.length_rate_mps[k][:] for k in range(LEGS)]),
-                "rowing_rate_radps": np.array(out.rowing_rate_radps[:])}
+                "rowing_rate_radps": np.array(out.rowing_rate_radps[:]),
+                "box_contact_m": np.array([out.box_contact_m[k][:] for k in range(out.n_box_contacts)]).reshape(-1, 3),
+                "box_contact_force_n": np.array([out.box_contact_force_n[k][:]
+                                                 for k in range(out.n_box_contacts)]).reshape(-1, 3),
+                "box_contact_state": [_FOOT_STATES[out.box_contact_state[k]] for k in range(out.n_box_contacts)]}

@@ -401,6 +401,64 @@ void test_refusals(void) {
                  LEGSIM_ERR_MODEL, "'normal' must be a unit vector");
 }
 
+// The box's own contact points ([[box_contact]]): read, lifted (after the feet: contact 6 + k,
+// on the box), reported by the C API's state as the feet are; refused past the capacity, off the
+// box, not finite.
+void test_box_contacts(void) {
+  const std::string leg = read("models/leg.toml");
+  const std::string belly = "[[box_contact]]\npoint = [0.3, -0.2, -0.15]\n[[box_contact]]\npoint = [0.3, 0.2, -0.15]\n"
+                            "[[box_contact]]\npoint = [-0.3, 0.0, -0.15]\n\n[ground]";
+  {
+    const std::string dir = variant_dir(leg, "[ground]", belly), path = dir + "/hexapod.toml";
+    auto h = std::make_unique<legsim_hexapod_desc>();
+    char msg[256] = {0};
+    const legsim_status st = legsim_hexapod_load_toml(path.c_str(), h.get(), msg, sizeof msg);
+    for (const char *f : {"/hexapod.toml", "/leg.toml"}) std::remove((dir + f).c_str());
+    rmdir(dir.c_str());
+    TEST_ASSERT_EQUAL_INT_MESSAGE(LEGSIM_OK, st, msg);
+    TEST_ASSERT_EQUAL_INT(3, h->n_box_contacts);
+    TEST_ASSERT_EQUAL_DOUBLE(-0.3, h->box_contact_m[2][0]);
+    TEST_ASSERT_EQUAL_DOUBLE(0.2, h->box_contact_m[1][1]);
+    static SpatialRobot robot;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_lift_hexapod(*h, robot));
+    TEST_ASSERT_EQUAL_INT(3, robot.nbox_contacts);
+    TEST_ASSERT_EQUAL_INT(9, robot_contacts(robot));
+    // the C API: the standing robot, its box turned, the skids where the box puts them, free
+    Standing &s = standing();
+    alignas(16) static unsigned char store[1 << 21];
+    TEST_ASSERT_TRUE(legsim_hexapod_sim_size() <= sizeof store);
+    legsim_hexapod_pose pose = {};
+    const double c = std::cos(0.15), sn = std::sin(0.15);
+    pose.box_m[2] = 1.0, pose.box_quat[0] = c, pose.box_quat[3] = sn;  // 0.3 rad about z
+    for (int l = 0; l < 6; ++l) pose.length_m[l][0] = 0.6614378277661477, pose.length_m[l][1] = 0.6244997998398398;
+    (void)s;
+    legsim_hexapod_sim *sim = nullptr;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_ERR_BAD_INPUT, legsim_hexapod_sim_init(store, sizeof store, h.get(), &pose, 1u << 9, &sim));
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_sim_init(store, sizeof store, h.get(), &pose, 0, &sim));
+    legsim_hexapod_state st2;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_hexapod_get_state(sim, &st2));
+    TEST_ASSERT_EQUAL_INT(3, st2.n_box_contacts);
+    const double ca = std::cos(0.3), sa = std::sin(0.3);
+    for (int k = 0; k < 3; ++k) {
+      const double *p = h->box_contact_m[k];
+      TEST_ASSERT_DOUBLE_WITHIN(1e-14, ca * p[0] - sa * p[1], st2.box_contact_m[k][0]);
+      TEST_ASSERT_DOUBLE_WITHIN(1e-14, sa * p[0] + ca * p[1], st2.box_contact_m[k][1]);
+      TEST_ASSERT_DOUBLE_WITHIN(1e-14, 1.0 + p[2], st2.box_contact_m[k][2]);
+      TEST_ASSERT_EQUAL_INT(LEGSIM_CONTACT_FREE, st2.box_contact_state[k]);
+      TEST_ASSERT_EQUAL_DOUBLE(0.0, st2.box_contact_force_n[k][2]);
+    }
+    TEST_ASSERT_EQUAL_INT(LEGSIM_CONTACT_FREE, st2.box_contact_state[3]);
+  }
+  std::string five;
+  for (int k = 0; k < 5; ++k) five += "[[box_contact]]\npoint = [0.0, 0.0, -0.15]\n";
+  expect_refused(variant_dir(leg, "[ground]", five + "\n[ground]"), "hexapod.toml", LEGSIM_ERR_CAPACITY,
+                 "5 [[box_contact]] (at most 4");
+  expect_refused(variant_dir(leg, "[ground]", "[[box_contact]]\npoint = [0.0, 0.3, -0.15]\n\n[ground]"),
+                 "hexapod.toml", LEGSIM_ERR_MODEL, "'point' must be on or inside the box");
+  expect_refused(variant_dir(leg, "[ground]", "[[box_contact]]\npoint = [nan, 0.0, -0.15]\n\n[ground]"),
+                 "hexapod.toml", LEGSIM_ERR_MODEL, "'point' is not finite");
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_loads_six_legs_of_the_leg_file);
@@ -411,5 +469,6 @@ int main(void) {
   RUN_TEST(test_stance_that_cannot_stand);
   RUN_TEST(test_api_refuses_and_leaves_out);
   RUN_TEST(test_refusals);
+  RUN_TEST(test_box_contacts);
   return UNITY_END();
 }

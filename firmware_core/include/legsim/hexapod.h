@@ -14,7 +14,11 @@
  *   kd [0, LEGSIM_MAX_DAMPING_NS_PER_M] N m s/rad; each leg file at most
  *   LEGSIM_HEXAPOD_MAX_LEG_BARS bodies and no slot joint (the spatial rows have none), its force
  *   elements not lifted (the hexapod's loads are its own); the ground's normal a unit vector within 1e-9 whose angle from z
- *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION. */
+ *   is at most LEGSIM_MAX_SLOPE_RAD; 0 <= mu_kinetic <= mu_static <= LEGSIM_MAX_FRICTION; at most
+ *   LEGSIM_HEXAPOD_MAX_BOX_CONTACTS box contact points ([[box_contact]] point = [x, y, z]), each on
+ *   or inside the box, |x_i| <= box_size_m[i] / 2. A file of no [[leg]] (n_legs 0), [yoke] or
+ *   [rowing] and at least one [[box_contact]] is a block: the box alone on its points
+ *   (legsim_hexapod_sim_init and what follows it take it; the analyses of legs refuse it). */
 #ifndef LEGSIM_HEXAPOD_H
 #define LEGSIM_HEXAPOD_H
 
@@ -26,6 +30,7 @@ extern "C" {
 
 #define LEGSIM_HEXAPOD_LEGS 6
 #define LEGSIM_HEXAPOD_MAX_LEG_BARS 8
+#define LEGSIM_HEXAPOD_MAX_BOX_CONTACTS 4
 
 typedef struct legsim_hexapod_leg_desc {
   char name[LEGSIM_NAME_LEN];
@@ -50,10 +55,15 @@ typedef struct legsim_hexapod_desc {
    * kp (angle_cmd - angle) - kd rate, saturated) */
   double rowing_gear_ratio, rowing_max_torque_nm, rowing_stroke_rad[2];
   double rowing_servo_kp_nm_per_rad, rowing_servo_kd_nms_per_rad;
-  int32_t n_legs; /* LEGSIM_HEXAPOD_LEGS */
+  int32_t n_legs; /* LEGSIM_HEXAPOD_LEGS; 0: a block (its box on its box contact points) */
   legsim_hexapod_leg_desc leg[LEGSIM_HEXAPOD_LEGS];
   /* the ground plane: a point, its upward unit normal, Coulomb friction */
   double ground_point_m[3], ground_normal[3], mu_static, mu_kinetic;
+  /* the box's own contact points (box frame, from its centre; 0 .. LEGSIM_HEXAPOD_MAX_BOX_CONTACTS):
+   * where it touches the ground when the legs give way, on the feet's contact law (three hold
+   * it with independent normal rows; a fourth makes them redundant) */
+  int32_t n_box_contacts;
+  double box_contact_m[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS][3];
 } legsim_hexapod_desc;
 
 /* ---- standing (statics) ------------------------------------------------ */
@@ -206,8 +216,9 @@ typedef struct legsim_hexapod_sim legsim_hexapod_sim;
 /* Bytes of storage legsim_hexapod_sim_init needs (aligned to LEGSIM_STORAGE_ALIGN). */
 size_t legsim_hexapod_sim_size(void);
 
-/* The hexapod of h at pose, at rest, the feet of stuck_mask (bit l: leg l) stuck where the pose
- * puts them (on the ground or not: the caller's pose says), the others free, the commands zero.
+/* The hexapod of h at pose (of a file of no legs, a block: the box's place alone), at rest, the feet of stuck_mask (bit l: leg l; bit 6 + k: the box's
+ * contact point k) stuck where the pose puts them (on the ground or not: the caller's pose says),
+ * the others free, the commands zero.
  * Statuses as legsim_hexapod_statics' (its pose checks, a leg's assembly; LEGSIM_ERR_BAD_INPUT
  * also for a free foot more than 1e-9 m (float: 1e-5 m) under the ground), LEGSIM_ERR_SINGULAR /
  * _NOT_CONVERGED (the rows with the stuck feet cannot be met or solved). *out is written only on
@@ -268,6 +279,14 @@ legsim_status legsim_hexapod_step(legsim_hexapod_sim *sim, double h_s, int32_t n
  * converge). LEGSIM_ERR_BAD_INPUT for another value (nothing changed). */
 legsim_status legsim_hexapod_set_integrator(legsim_hexapod_sim *sim, legsim_integrator integrator);
 
+/* A launch, before the first step: the box's velocity (m/s, world) and angular velocity (rad/s,
+ * its frame), every body carried with it rigidly; a contact point stuck at the start that this
+ * moves along the ground slides; the modes checked again as at legsim_hexapod_sim_init, the
+ * commands kept. LEGSIM_ERR_BAD_INPUT for a value not finite or past LEGSIM_MAX_RATE_MPS, or
+ * after a step; else as legsim_hexapod_sim_init's (the start then left as it was). */
+legsim_status legsim_hexapod_set_velocity(legsim_hexapod_sim *sim, const double velocity_mps[3],
+                                          const double omega_radps[3]);
+
 typedef struct legsim_hexapod_state {
   double t_s;
   double box_m[3], box_quat[4];                  /* the box's centre (world) and rotation */
@@ -295,6 +314,13 @@ typedef struct legsim_hexapod_state {
   int32_t stop_impacts;
   double length_rate_mps[LEGSIM_HEXAPOD_LEGS][2]; /* each actuator's rate (the servos' l') */
   double rowing_rate_radps[LEGSIM_HEXAPOD_LEGS];   /* each yoke's angle's rate */
+  /* the box's own contact points (legsim_hexapod_desc's box_contact_m, n_box_contacts of them;
+   * the rest 0), as the feet: each point (world), the ground's force on it (world; 0 when free),
+   * its legsim_contact_state */
+  int32_t n_box_contacts;
+  double box_contact_m[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS][3];
+  double box_contact_force_n[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS][3];
+  int32_t box_contact_state[LEGSIM_HEXAPOD_MAX_BOX_CONTACTS];
 } legsim_hexapod_state;
 
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out);

@@ -39,35 +39,40 @@ constexpr double pi = 3.14159265358979323846;
 // The description's numbers in the ranges legsim/hexapod.h states (the loader's, checked again
 // here: a caller may build or change a description), each leg by legsim_model_check.
 legsim_status desc_check(const legsim_hexapod_desc &h) {
-  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  if (h.n_legs != LEGSIM_HEXAPOD_LEGS && h.n_legs != 0) return LEGSIM_ERR_BAD_INPUT;
+  const bool legs = h.n_legs != 0;
   if (h.gravity_mps2[0] != 0 || h.gravity_mps2[1] != 0 ||
       !within(h.gravity_mps2[2], -LEGSIM_MAX_GRAVITY_MPS2, LEGSIM_MAX_GRAVITY_MPS2))
     return LEGSIM_ERR_BAD_INPUT;
-  const double masses[2] = {h.box_mass_kg, h.yoke_mass_kg};
-  for (double m : masses)
-    if (!within(m, LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG)) return LEGSIM_ERR_BAD_INPUT;
+  if (!within(h.box_mass_kg, LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG)) return LEGSIM_ERR_BAD_INPUT;
   for (int i = 0; i < 3; ++i) {
     if (!within(h.box_inertia_kgm2[i], LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2) ||
-        !within(h.yoke_inertia_kgm2[i], LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2) ||
         !within(h.box_size_m[i], LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
-        !within(h.yoke_com_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD) ||
         !within(h.ground_point_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD))
       return LEGSIM_ERR_BAD_INPUT;
+    if (legs && (!within(h.yoke_inertia_kgm2[i], LEGSIM_MIN_INERTIA_KGM2, LEGSIM_MAX_INERTIA_KGM2) ||
+                 !within(h.yoke_com_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD)))
+      return LEGSIM_ERR_BAD_INPUT;
   }
-  if (!within(h.hip_offset_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
+  if (legs && (!within(h.yoke_mass_kg, LEGSIM_MIN_MASS_KG, LEGSIM_MAX_MASS_KG) ||
+               !within(h.hip_offset_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) ||
       !within(h.bar_radius_m, LEGSIM_MIN_LENGTH_M, LEGSIM_MAX_COORD) || !within(h.rowing_gear_ratio, 1, 1e4) ||
       !within(h.rowing_max_torque_nm, LEGSIM_MIN_FORCE_N, LEGSIM_MAX_FORCE_N) ||
       !(h.rowing_stroke_rad[0] > -pi && h.rowing_stroke_rad[0] < 0 && h.rowing_stroke_rad[1] > 0 &&
         h.rowing_stroke_rad[1] < pi) ||
       !within(h.rowing_servo_kp_nm_per_rad, 0, LEGSIM_MAX_STIFFNESS_N_PER_M) ||
-      !within(h.rowing_servo_kd_nms_per_rad, 0, LEGSIM_MAX_DAMPING_NS_PER_M))
+      !within(h.rowing_servo_kd_nms_per_rad, 0, LEGSIM_MAX_DAMPING_NS_PER_M)))
     return LEGSIM_ERR_BAD_INPUT;
   const double *n = h.ground_normal;
   const double len = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
   if (!(std::abs(len - 1) <= 1e-9) || !(n[2] >= std::cos(LEGSIM_MAX_SLOPE_RAD))) return LEGSIM_ERR_BAD_INPUT;
   if (!within(h.mu_kinetic, 0, LEGSIM_MAX_FRICTION) || !within(h.mu_static, h.mu_kinetic, LEGSIM_MAX_FRICTION))
     return LEGSIM_ERR_BAD_INPUT;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+  if (h.n_box_contacts < 0 || h.n_box_contacts > LEGSIM_HEXAPOD_MAX_BOX_CONTACTS) return LEGSIM_ERR_CAPACITY;
+  for (int k = 0; k < h.n_box_contacts; ++k)
+    for (int i = 0; i < 3; ++i)
+      if (!(std::abs(h.box_contact_m[k][i]) <= 0.5 * h.box_size_m[i])) return LEGSIM_ERR_BAD_INPUT;
+  for (int l = 0; l < h.n_legs; ++l) {
     const legsim_hexapod_leg_desc &L = h.leg[l];
     for (int i = 0; i < 3; ++i)
       if (!within(L.hip_m[i], -LEGSIM_MAX_COORD, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
@@ -78,12 +83,15 @@ legsim_status desc_check(const legsim_hexapod_desc &h) {
   return LEGSIM_OK;
 }
 
-// The storage checked and its work part built, the robot lifted from h.
-legsim_status work_begin(const legsim_hexapod_desc &h, void *storage, size_t bytes, HexapodWork *&w) {
+// The storage checked and its work part built, the robot lifted from h (a file of no legs, a
+// block, only where block_ok: the analyses of legs refuse it).
+legsim_status work_begin(const legsim_hexapod_desc &h, void *storage, size_t bytes, HexapodWork *&w,
+                         bool block_ok = false) {
   if (bytes < legsim_hexapod_storage_size() || reinterpret_cast<uintptr_t>(storage) % LEGSIM_STORAGE_ALIGN)
     return LEGSIM_ERR_STORAGE;
   const legsim_status st = desc_check(h);
   if (st != LEGSIM_OK) return st;
+  if (h.n_legs == 0 && !block_ok) return LEGSIM_ERR_BAD_INPUT;
   w = new (static_cast<unsigned char *>(storage) + sim_bytes()) HexapodWork;
   return spatial::robot_lift_hexapod(h, w->robot);
 }
@@ -108,19 +116,19 @@ void place_at_rest(HexapodWork &w, const real *box_q, const real *psi) {
 // The robot at pose, at rest (the pose's ranges checked, each leg assembled at its lengths from
 // its file's stand), in w.q, w.v.
 legsim_status place_pose(const legsim_hexapod_desc &h, const legsim_hexapod_pose &pose, void *storage, size_t bytes,
-                         HexapodWork *&wp) {
+                         HexapodWork *&wp, bool block_ok = false) {
   const double qn = std::sqrt(pose.box_quat[0] * pose.box_quat[0] + pose.box_quat[1] * pose.box_quat[1] +
                               pose.box_quat[2] * pose.box_quat[2] + pose.box_quat[3] * pose.box_quat[3]);
   if (!finite_within(pose.box_m, 3, LEGSIM_MAX_COORD) || !(std::abs(qn - 1) <= 1e-6)) return LEGSIM_ERR_BAD_INPUT;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+  for (int l = 0; l < h.n_legs; ++l) {
     const double psi = pose.rowing_rad[l];
     if (!(psi >= h.rowing_stroke_rad[0] && psi <= h.rowing_stroke_rad[1])) return LEGSIM_ERR_BAD_INPUT;
     if (!finite_within(pose.length_m[l], 2, LEGSIM_MAX_COORD)) return LEGSIM_ERR_BAD_INPUT;
   }
-  legsim_status st = work_begin(h, storage, bytes, wp);
+  legsim_status st = work_begin(h, storage, bytes, wp, block_ok);
   if (st != LEGSIM_OK) return st;
   HexapodWork &w = *wp;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+  for (int l = 0; l < h.n_legs; ++l) {
     legsim_sim *sim = nullptr;
     st = leg_at_stand(h, l, storage, sim);
     legsim_real len[2] = {legsim_real(pose.length_m[l][0]), legsim_real(pose.length_m[l][1])};
@@ -384,19 +392,24 @@ legsim_status legsim_hexapod_sim_init(void *storage, size_t storage_bytes, const
                                       legsim_hexapod_sim **out) {
   if (!h || !pose || !storage || !out) return LEGSIM_ERR_NULL;
   if (storage_bytes < legsim_hexapod_sim_size()) return LEGSIM_ERR_STORAGE;
-  if (stuck_mask >> LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_BAD_INPUT;
+  if (h->n_box_contacts < 0 || h->n_box_contacts > LEGSIM_HEXAPOD_MAX_BOX_CONTACTS) return LEGSIM_ERR_CAPACITY;
+  if (stuck_mask >> (LEGSIM_HEXAPOD_LEGS + h->n_box_contacts)) return LEGSIM_ERR_BAD_INPUT;
   HexapodWork *wp = nullptr;
-  legsim_status st = place_pose(*h, *pose, storage, storage_bytes, wp);
+  legsim_status st = place_pose(*h, *pose, storage, storage_bytes, wp, true);
   if (st != LEGSIM_OK) return st;
   HexapodWork &w = *wp;
   auto *sim = new (static_cast<unsigned char *>(storage) + hexapod_sim_offset()) legsim_hexapod_sim;
   sim->magic = 0;
   sim->robot = w.robot;
   sim->integrator = spatial::Integrator::Rk4;
+  // the mask's feet (bits 0 .. 5) and box points (bit 6 + k) as the robot's contact points (a
+  // block's first are its box's)
+  const uint32_t feet = stuck_mask & ((1u << LEGSIM_HEXAPOD_LEGS) - 1), box = stuck_mask >> LEGSIM_HEXAPOD_LEGS;
+  if (w.robot.nlegs == 0 && feet) return LEGSIM_ERR_BAD_INPUT;
   spatial::FeetHold hold;
-  hold.stuck = stuck_mask;
+  hold.stuck = feet | box << w.robot.nlegs;
   hold.sliding = 0;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) hold.anchor[l] = spatial::robot_foot_position(w.robot, l, w.q);
+  for (int c = 0; c < spatial::robot_contacts(w.robot); ++c) hold.anchor[c] = spatial::robot_contact_position(w.robot, c, w.q);
   const spatial::GroundPlane ground = {
       {real(h->ground_point_m[0]), real(h->ground_point_m[1]), real(h->ground_point_m[2])},
       {real(h->ground_normal[0]), real(h->ground_normal[1]), real(h->ground_normal[2])},
@@ -418,7 +431,7 @@ legsim_status legsim_hexapod_command_each(legsim_hexapod_sim *sim, const legsim_
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
     for (int k = 0; k < 3; ++k) {
       const int32_t mode = in.mode[l][k];
-      if (mode == LEGSIM_HEXAPOD_KEEP || (k < 2 && k >= R.leg[l].nactuators)) continue;
+      if (mode == LEGSIM_HEXAPOD_KEEP || l >= R.nlegs || (k < 2 && k >= R.leg[l].nactuators)) continue;
       if (mode != LEGSIM_HEXAPOD_FORCE && mode != LEGSIM_HEXAPOD_SERVO) return LEGSIM_ERR_BAD_INPUT;
       const double bound = k < 2 ? double(R.act[R.leg[l].first_actuator + k].max_force) : double(R.rowing_max_torque);
       const double x = in.value[l][k];
@@ -434,7 +447,7 @@ legsim_status legsim_hexapod_command_each(legsim_hexapod_sim *sim, const legsim_
   for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
     for (int k = 0; k < 3; ++k) {
       const int32_t mode = in.mode[l][k];
-      if (mode == LEGSIM_HEXAPOD_KEEP || (k < 2 && k >= R.leg[l].nactuators)) continue;
+      if (mode == LEGSIM_HEXAPOD_KEEP || l >= R.nlegs || (k < 2 && k >= R.leg[l].nactuators)) continue;
       const spatial::CommandMode m = mode == LEGSIM_HEXAPOD_FORCE ? spatial::CommandMode::Force : spatial::CommandMode::Servo;
       const real ff = mode == LEGSIM_HEXAPOD_SERVO ? real(in.feedforward[l][k]) : real(0);
       if (k < 2) {
@@ -499,16 +512,64 @@ legsim_status legsim_hexapod_set_integrator(legsim_hexapod_sim *sim, legsim_inte
   return LEGSIM_OK;
 }
 
+legsim_status legsim_hexapod_set_velocity(legsim_hexapod_sim *sim, const double velocity_mps[3],
+                                         const double omega_radps[3]) {
+  if (!sim || !velocity_mps || !omega_radps) return LEGSIM_ERR_NULL;
+  if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
+  if (!finite_within(velocity_mps, 3, LEGSIM_MAX_RATE_MPS) || !finite_within(omega_radps, 3, LEGSIM_MAX_RATE_MPS))
+    return LEGSIM_ERR_BAD_INPUT;
+  const spatial::SpatialRobot &R = sim->robot;
+  spatial::RobotData &d = sim->data;
+  if (d.t != 0 || d.impacts || d.stop_impacts) return LEGSIM_ERR_BAD_INPUT;  // a launch: before the first step
+  // every body on the box's rigid motion: v_b = v + w x (r_b - r_0), its omega in its own frame
+  const spatial::Rot Rb = spatial::rotation({d.q[3], d.q[4], d.q[5], d.q[6]});
+  const spatial::V3 v0 = {real(velocity_mps[0]), real(velocity_mps[1]), real(velocity_mps[2])};
+  const spatial::V3 w = spatial::rotate(Rb, spatial::V3{real(omega_radps[0]), real(omega_radps[1]), real(omega_radps[2])});
+  real v[spatial::kMaxRobotDof], v_before[spatial::kMaxRobotDof];
+  std::copy(d.v, d.v + spatial::kBodyDof * R.nb, v_before);
+  for (int b = 0; b < R.nb; ++b) {
+    const real *qb = d.q + spatial::kBodyConfig * b;
+    const spatial::V3 vb = v0 + spatial::cross(w, spatial::V3{qb[0] - d.q[0], qb[1] - d.q[1], qb[2] - d.q[2]});
+    const spatial::V3 wb = spatial::rotate_back(spatial::rotation({qb[3], qb[4], qb[5], qb[6]}), w);
+    const real vv[spatial::kBodyDof] = {vb.x, vb.y, vb.z, wb.x, wb.y, wb.z};
+    std::copy(vv, vv + spatial::kBodyDof, v + spatial::kBodyDof * b);
+  }
+  // a point held on the ground and moving along it slides
+  const spatial::FeetHold before = d.hold;
+  spatial::FeetHold hold = before;
+  for (int c = 0; c < spatial::robot_contacts(R); ++c) {
+    if (!((hold.stuck >> c) & 1u)) continue;
+    spatial::V3 p, pv;
+    spatial::foot_motion(R, c, d.q, v, p, pv);
+    const spatial::V3 vt = spatial::tangential(hold, pv);
+    if (spatial::dot(vt, vt) > 0) hold.stuck &= ~(1u << c), hold.sliding |= 1u << c;
+  }
+  const spatial::RobotCommands commands = d.command;
+  const spatial::GroundPlane ground = d.ground;
+  const bool has_ground = d.has_ground;
+  legsim_status st = spatial::robot_data_init(R, d.q, v, hold, has_ground ? &ground : nullptr, d);
+  if (st == LEGSIM_OK) {
+    d.command = commands;
+    st = spatial::robot_data_refresh(R, d);
+  }
+  if (st != LEGSIM_OK) {  // back to the start as it was (its init succeeded there)
+    spatial::robot_data_init(R, d.q, v_before, before, has_ground ? &ground : nullptr, d);
+    d.command = commands;
+    spatial::robot_data_refresh(R, d);
+  }
+  return st;
+}
+
 legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hexapod_state *out) {
   if (!sim || !out) return LEGSIM_ERR_NULL;
   if (sim->magic != kHexapodMagic) return LEGSIM_ERR_STORAGE;
   const spatial::SpatialRobot &R = sim->robot;
   const spatial::RobotData &d = sim->data;
-  legsim_hexapod_state r;
+  legsim_hexapod_state r = {};  // a block's legs' zeros
   r.t_s = d.t;
   for (int i = 0; i < 3; ++i) r.box_m[i] = d.q[i], r.box_velocity_mps[i] = d.v[i], r.box_omega_radps[i] = d.v[3 + i];
   for (int i = 0; i < 4; ++i) r.box_quat[i] = d.q[3 + i];
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+  for (int l = 0; l < R.nlegs; ++l) {
     const spatial::RobotLeg &L = R.leg[l];
     r.rowing_rad[l] = spatial::robot_rowing_angle(R, l, d.q);
     r.rowing_rate_radps[l] = spatial::robot_rowing_rate(R, l, d.q, d.v);
@@ -524,7 +585,7 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
                       : ((d.hold.sliding >> l) & 1u) ? LEGSIM_CONTACT_SLIDING
                                                      : LEGSIM_CONTACT_FREE;
   }
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l) {
+  for (int l = 0; l < R.nlegs; ++l) {
     const spatial::RobotLeg &L = R.leg[l];
     for (int a = 0; a < 2; ++a) r.actuator_force_n[l][a] = a < L.nactuators ? d.actuator_force[L.first_actuator + a] : 0.0;
     r.rowing_torque_nm[l] = d.rowing_torque[l];
@@ -534,7 +595,7 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
   r.impacts = d.impacts;
   r.cone_solved = d.cone_stats.solved, r.cone_by_sweeps = d.cone_stats.by_sweeps;
   r.cone_max_iterations = d.cone_stats.max_iterations, r.cone_max_residual = d.cone_stats.max_residual;
-  for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+  for (int l = 0; l < R.nlegs; ++l)
     for (int k = 0; k < spatial::kLegStops; ++k) {
       const uint32_t bit = 1u << (spatial::kLegStops * l + k);
       const int32_t at = (d.hold.stops & bit) ? ((d.hold.upper & bit) ? 1 : -1) : 0;
@@ -542,6 +603,19 @@ legsim_status legsim_hexapod_get_state(const legsim_hexapod_sim *sim, legsim_hex
       else r.rowing_stop[l] = at;
     }
   r.stop_impacts = d.stop_impacts;
+  r.n_box_contacts = R.nbox_contacts;
+  for (int k = 0; k < LEGSIM_HEXAPOD_MAX_BOX_CONTACTS; ++k) {
+    const int c = R.nlegs + k;
+    const bool has = k < R.nbox_contacts;
+    const spatial::V3 p = has ? spatial::robot_contact_position(R, c, d.q) : spatial::V3{0, 0, 0};
+    const spatial::V3 F = has ? spatial::robot_foot_force(R, d, c) : spatial::V3{0, 0, 0};
+    r.box_contact_m[k][0] = p.x, r.box_contact_m[k][1] = p.y, r.box_contact_m[k][2] = p.z;
+    r.box_contact_force_n[k][0] = F.x, r.box_contact_force_n[k][1] = F.y, r.box_contact_force_n[k][2] = F.z;
+    r.box_contact_state[k] = !has                           ? LEGSIM_CONTACT_FREE
+                             : ((d.hold.stuck >> c) & 1u)   ? LEGSIM_CONTACT_STUCK
+                             : ((d.hold.sliding >> c) & 1u) ? LEGSIM_CONTACT_SLIDING
+                                                            : LEGSIM_CONTACT_FREE;
+  }
   *out = r;
   return LEGSIM_OK;
 }

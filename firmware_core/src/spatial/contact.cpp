@@ -13,12 +13,12 @@ constexpr real kCapture = real(1e-4);    // m/s: a foot leaving an impact slower
 
 inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
-// The generalized force of a force f (world) at foot l's point: 6 per body, zero but its bar's.
+// The generalized force of a force f (world) at contact l's point: 6 per body, zero but its body's.
 void foot_force_column(const SpatialRobot &robot, int l, const real *q, const V3 &f, real *col) {
-  const int nv = kBodyDof * robot.nb, fb = robot.leg[l].foot_body;
+  const int nv = kBodyDof * robot.nb, fb = contact_body(robot, l);
   std::fill(col, col + nv, real(0));
   static const real zero_v[kBodyDof] = {0, 0, 0, 0, 0, 0};
-  point_coefficients(body_state(q + kBodyConfig * fb, zero_v), robot.leg[l].foot_point, f, 1,
+  point_coefficients(body_state(q + kBodyConfig * fb, zero_v), contact_point(robot, l), f, 1,
                      col + kBodyDof * fb);
 }
 
@@ -33,8 +33,8 @@ void ground_frame(const GroundPlane &g, FeetHold &hold) {
 }
 
 void foot_motion(const SpatialRobot &robot, int l, const real *q, const real *v, V3 &p, V3 &pv) {
-  const int fb = robot.leg[l].foot_body;
-  const PointJet j = point_jet(body_state(q + kBodyConfig * fb, v + kBodyDof * fb), robot.leg[l].foot_point);
+  const int fb = contact_body(robot, l);
+  const PointJet j = point_jet(body_state(q + kBodyConfig * fb, v + kBodyDof * fb), contact_point(robot, l));
   p = j.p, pv = j.pd;
 }
 
@@ -64,11 +64,11 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
   if (!hold.sliding) return LEGSIM_OK;
   // each sliding foot's friction per newton of its normal force, and what it does
   const int nv = kBodyDof * robot.nb;
-  int feet[kMaxLegs], s = 0;
-  for (int l = 0; l < robot.nlegs; ++l)
+  int feet[kMaxContacts], s = 0;
+  for (int l = 0; l < robot_contacts(robot); ++l)
     if ((hold.sliding >> l) & 1u) feet[s++] = l;
-  real(&x)[kMaxLegs][kMaxRobotDof] = w.x;
-  real(&m)[kMaxLegs][kMaxSystemRows] = w.m;
+  real(&x)[kMaxContacts][kMaxRobotDof] = w.x;
+  real(&m)[kMaxContacts][kMaxSystemRows] = w.m;
   real col[kMaxRobotDof];
   static const real zero_g[kMaxSystemRows] = {};
   for (int j = 0; j < s; ++j) {
@@ -77,7 +77,7 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
     robot_solve(robot, F, col, zero_g, x[j], m[j]);
   }
   // N_k = -lambda_n,k of the whole: (I + Lambda) N = -lambda0_n, Lambda_kj = lambda_n,k of column j
-  real A[kMaxLegs * kMaxLegs], N[kMaxLegs], scale = 1;
+  real A[kMaxContacts * kMaxContacts], N[kMaxContacts], scale = 1;
   for (int k = 0; k < s; ++k) {
     const int r = foot_row(robot, feet[k]);
     N[k] = -mu[r];
@@ -98,21 +98,22 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
 namespace {
 // Foot l's point's acceleration (world) from the bodies' accelerations a at (q, v).
 V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a) {
-  const int fb = robot.leg[l].foot_body;
+  const int fb = contact_body(robot, l);
+  const V3 &pt = contact_point(robot, l);
   const BodyState B = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
   const real *ab = a + kBodyDof * fb;
-  return V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, robot.leg[l].foot_point)) +
-         point_jet(B, robot.leg[l].foot_point).pq;
+  return V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, pt)) + point_jet(B, pt).pq;
 }
 }  // namespace
 
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
                             Row *rows, RobotFactor &F, ContactWork &w) {
-  int feet[kMaxLegs], n = 0;
-  for (int l = 0; l < robot.nlegs; ++l)
+  int feet[kMaxContacts], n = 0;
+  for (int l = 0; l < robot_contacts(robot); ++l)
     if ((hold.stuck >> l) & 1u) feet[n++] = l;
   if (n == 0) return LEGSIM_OK;
+  if (n > kConeMaxContacts) return LEGSIM_ERR_CAPACITY;
   FeetHold released = hold;
   released.stuck = 0;
   system_rows(robot, released, q, v, rows);
@@ -120,7 +121,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
   if (st != LEGSIM_OK) return st;
   const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
   const int nv = kBodyDof * robot.nb, nr = 3 * n;
-  real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs], Qc[kMaxRobotDof], col[kMaxRobotDof];
+  real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxContacts], Qc[kMaxRobotDof], col[kMaxRobotDof];
   // q: the feet's accelerations released; W: their change per newton along each axis (the
   // solve is affine in the applied forces: the differences are exact)
   real W[kConeMaxRows * kConeMaxRows], q0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows];
@@ -192,25 +193,26 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
   legsim_status st = robot_factor(robot, none, rows, F);
   if (st != LEGSIM_OK) return st;
   const int nv = kBodyDof * robot.nb;
-  int feet[kMaxLegs], n = 0;
-  for (int l = 0; l < robot.nlegs; ++l)
+  int feet[kMaxContacts], n = 0;
+  for (int l = 0; l < robot_contacts(robot); ++l)
     if ((touching >> l) & 1u) feet[n++] = l;
+  if (n > kConeMaxContacts) return LEGSIM_ERR_CAPACITY;
   const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
   // the velocity change per unit impulse along each contact's axes, and the Delassus matrix
-  real(&X)[3 * kMaxLegs][kMaxRobotDof] = w.X;
+  real(&X)[kConeMaxRows][kMaxRobotDof] = w.X;
   real mu_tmp[kMaxSystemRows], col[kMaxRobotDof];
   static const real zero_g[kMaxSystemRows] = {};
   real W[kConeMaxRows * kConeMaxRows], u0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows], mus[kConeMaxContacts];
-  real coef[kMaxLegs][3][kBodyDof];
+  real coef[kConeMaxContacts][3][kBodyDof];
   static const real zero_v[kBodyDof] = {0, 0, 0, 0, 0, 0};
   for (int i = 0; i < n; ++i) {
-    const int fb = robot.leg[feet[i]].foot_body;
+    const int fb = contact_body(robot, feet[i]);
     const BodyState B = body_state(q + kBodyConfig * fb, zero_v);
     V3 p, pv;
     foot_motion(robot, feet[i], q, v, p, pv);
     for (int k = 0; k < 3; ++k) {
       std::fill(coef[i][k], coef[i][k] + kBodyDof, real(0));
-      point_coefficients(B, robot.leg[feet[i]].foot_point, axes[k], 1, coef[i][k]);
+      point_coefficients(B, contact_point(robot, feet[i]), axes[k], 1, coef[i][k]);
       foot_force_column(robot, feet[i], q, axes[k], col);
       robot_solve(robot, F, col, zero_g, X[3 * i + k], mu_tmp);
       u0[3 * i + k] = dot(axes[k], pv);
@@ -219,7 +221,7 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
   }
   const int nr = 3 * n;
   for (int j = 0; j < n; ++j) {
-    const int fb = robot.leg[feet[j]].foot_body;
+    const int fb = contact_body(robot, feet[j]);
     for (int m = 0; m < 3; ++m)
       for (int c = 0; c < nr; ++c) {
         real w = 0;

@@ -1,5 +1,6 @@
 // The feet on the ground in space (docs/design/spatial.md, "Contact"): a plane with Coulomb's
-// circular cone. A foot is free, stuck (three rows hold it at its anchor) or sliding (the
+// circular cone. The box's own contact points (robot.hpp) are on the same law: a "foot" below
+// is any contact point c (robot_contacts: the feet, then the box's). A foot is free, stuck (three rows hold it at its anchor) or sliding (the
 // normal's row keeps it on the plane; friction mu_k N opposite its slip velocity, whose
 // direction may turn, is an applied force that depends on the normal force N). Its modes change
 // at events located inside the step (spatial/motion): a touchdown (an impact: the feet in touch
@@ -14,8 +15,8 @@ namespace legsim::spatial {
 
 // The contact solves' columns, too large for a stack (about 80 KB in double): kept in the data.
 struct ContactWork {
-  real x[kMaxLegs][kMaxRobotDof], m[kMaxLegs][kMaxSystemRows];  // a sliding foot's friction's response
-  real X[3 * kMaxLegs][kMaxRobotDof];  // an impact's velocity change per unit impulse
+  real x[kMaxContacts][kMaxRobotDof], m[kMaxContacts][kMaxSystemRows];  // a sliding point's friction's response
+  real X[kConeMaxRows][kMaxRobotDof];  // an impact's velocity change per unit impulse
 };
 
 // The ground: a point on it and its upward unit normal (world, m), friction coefficients.
@@ -27,7 +28,7 @@ struct GroundPlane {
 // The ground's frame for the feet's rows: its normal and two unit tangents (right-handed).
 void ground_frame(const GroundPlane &g, FeetHold &hold);
 
-// Foot l's point and its velocity (world) at (q, v).
+// Contact c's point and its velocity (world) at (q, v).
 void foot_motion(const SpatialRobot &robot, int l, const real *q, const real *v, V3 &p, V3 &pv);
 
 // The tangential part of a world vector in hold's frame.
@@ -63,7 +64,8 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 // the ground, the kinetic energy not above before). On return `hold` gives each touching foot's
 // mode after it: stuck where it stopped, sliding along its slip (slip_dir), free when it leaves
 // faster than 1e-4 m/s (slower it stays: the projection takes its normal velocity off); impulse[l] the ground's on foot l (N s, world). LEGSIM_ERR_NOT_CONVERGED
-// with cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor.
+// with cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor; LEGSIM_ERR_CAPACITY
+// for more points touching than one contact problem holds (kConeMaxContacts).
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
                              real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
                              RobotFactor &F, ContactWork &w);
@@ -78,7 +80,8 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
 // still at the edge, mu_kinetic = mu_static, slips against its force). A foot whose force
 // vanishes and whose point accelerates off the ground is let go. LEGSIM_ERR_NOT_CONVERGED with
 // the contact problem unsolved, LEGSIM_ERR_CONTACT when the modes and the coefficients do not
-// agree within a pass a foot; else as contact_accelerations.
+// agree within a pass a foot; LEGSIM_ERR_CAPACITY for more stuck points than kConeMaxContacts;
+// else as contact_accelerations.
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
                             Row *rows, RobotFactor &F, ContactWork &w);

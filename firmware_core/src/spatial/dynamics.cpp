@@ -58,13 +58,14 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
   robot_rows(robot, q, v, rows);
   const BodyState world = ground_state();
   const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
-  for (int l = 0; l < robot.nlegs; ++l) {
-    const int n = foot_rows(hold, l);
+  const int nc = robot_contacts(robot);
+  for (int c = 0; c < nc; ++c) {
+    const int n = foot_rows(hold, c);
     if (n == 0) continue;
-    const int fb = robot.leg[l].foot_body;
+    const int fb = contact_body(robot, c);
     const BodyState foot = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
     for (int k = 0; k < n; ++k)
-      rows[foot_row(robot, l) + k] = row_along(foot, robot.leg[l].foot_point, world, hold.anchor[l], axes[k]);
+      rows[foot_row(robot, c) + k] = row_along(foot, contact_point(robot, c), world, hold.anchor[c], axes[k]);
   }
   if (!hold.stops) return;
   for (int l = 0; l < robot.nlegs; ++l)
@@ -103,14 +104,19 @@ void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, 
 
 
 
-// The held stops' columns and their Delassus matrix D = -J_s X_s (positive semi-definite),
-// factored by Cholesky with a zero pivot's stop left out (its row implied by the others).
+// The columns (the held stops', the box's contacts') and their Delassus matrix D = -J_s X_s
+// (positive semi-definite), factored by Cholesky with a zero pivot's row left out (implied by
+// the others).
 void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
   static const real zero_g[kMaxSystemRows] = {};
   int n = 0;
   for (int s = 0; s < kLegStops * robot.nlegs; ++s)
     if ((hold.stops >> s) & 1u) F.stop[n++] = stop_row(robot, s / kLegStops, s % kLegStops);
+  const int n_stops = n;
+  for (int c = robot.nlegs; c < robot_contacts(robot); ++c)
+    for (int k = 0; k < foot_rows(hold, c); ++k) F.stop[n++] = foot_row(robot, c) + k;
   F.nstops = n;
+  F.nnull = 0;
   const int nv = kBodyDof * robot.nb;
   for (int j = 0; j < n; ++j) {
     real f[kMaxRobotDof];
@@ -146,6 +152,39 @@ void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *ro
       D[n * i + j] = t / d;
     }
   }
+  // a box contact's row left out: the null space of D, z_k = e_k - (D_LL^-1 D_Lk on the live
+  // rows), for the least-norm multipliers (the stuck points of a rigid body share its load
+  // evenly, not as the factor's order would have it)
+  for (int k = n_stops; k < n; ++k) {
+    if (F.live[k]) continue;
+    real *z = F.null[F.nnull++];
+    // -D_Lk = J_L X_k from the columns (D's lower triangle is the factor now)
+    for (int i = 0; i < n; ++i)
+      z[i] = F.live[i] ? row_dot(robot, rows[F.stop[i]], F.stop[i], F.stop_x[k]) : real(0);
+    for (int i = 0; i < n; ++i) {  // L y = -D_Lk
+      if (!F.live[i]) continue;
+      for (int m = 0; m < i; ++m)
+        if (F.live[m]) z[i] -= D[n * i + m] * z[m];
+      z[i] /= D[n * i + i];
+    }
+    for (int i = n - 1; i >= 0; --i) {  // L^T z = y
+      if (!F.live[i]) continue;
+      for (int m = i + 1; m < n; ++m)
+        if (F.live[m]) z[i] -= D[n * m + i] * z[m];
+      z[i] /= D[n * i + i];
+    }
+    z[k] = 1;
+  }
+  // Z^T Z, factored
+  const int nz = F.nnull;
+  real *G = F.null_gram;
+  for (int a = 0; a < nz; ++a)
+    for (int b = 0; b < nz; ++b) {
+      real t = 0;
+      for (int i = 0; i < n; ++i) t += F.null[a][i] * F.null[b][i];
+      G[nz * a + b] = t;
+    }
+  if (nz) dense_cholesky(nz, G, 0);
 }
 }  // namespace
 
@@ -231,7 +270,7 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     for (int i = 0; i < kBodyDof; ++i) scale = std::max(scale, A0[7 * i]);
     if (!dense_cholesky(kBodyDof, A0, by_precision(1e-12, 1e-6) * scale)) return LEGSIM_ERR_SINGULAR;
   }
-  if (hold.stops) factor_stops(robot, hold, rows, F);
+  if (hold.stops || box_held(robot, hold)) factor_stops(robot, hold, rows, F);
   return LEGSIM_OK;
 }
 
@@ -240,7 +279,7 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
   const int n = F.nstops;
   if (!n) return;
   // the stops' multipliers: D lambda = -(g_s - J_s x), then x and mu moved by their columns
-  real lam[kMaxHeldStops];
+  real lam[kMaxColumns];
   for (int i = 0; i < n; ++i) lam[i] = row_dot(robot, F.rows[F.stop[i]], F.stop[i], x) - g[F.stop[i]];
   const real *D = F.D;
   for (int i = 0; i < n; ++i) {
@@ -258,9 +297,21 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
       if (F.live[k]) lam[i] -= D[n * k + i] * lam[k];
     lam[i] /= D[n * i + i];
   }
+  // least norm: lam - Z (Z^T Z)^-1 Z^T lam
+  const int nz = F.nnull;
+  if (nz) {
+    real c[kMaxColumns];
+    for (int a = 0; a < nz; ++a) {
+      c[a] = 0;
+      for (int i = 0; i < n; ++i) c[a] += F.null[a][i] * lam[i];
+    }
+    cholesky_solve(nz, F.null_gram, c);
+    for (int a = 0; a < nz; ++a)
+      for (int i = 0; i < n; ++i) lam[i] -= c[a] * F.null[a][i];
+  }
   const int nv = kBodyDof * robot.nb;
   for (int j = 0; j < n; ++j) {
-    if (!F.live[j]) {
+    if (!F.live[j] && !(nz && F.stop[j] < robot.m + 3 * kMaxContacts)) {
       mu[F.stop[j]] = 0;
       continue;
     }

@@ -28,42 +28,50 @@
 
 namespace legsim::spatial {
 
-// The system's rows: the robot's joints' [0, robot.m), then three slots per leg for its foot
-// (robot.m + 3 l ..: the normal's, t1's, t2's), used as its mode says, then three per leg for
-// its stops (robot.m + 3 kMaxLegs + 3 l + k: its actuators' k = 0, 1, its rowing angle's k = 2).
-constexpr int kMaxSystemRows = kMaxRobotRows + 6 * kMaxLegs;
+// The system's rows: the robot's joints' [0, robot.m), then three slots per contact point for
+// its hold (robot.m + 3 c ..: the normal's, t1's, t2's; the feet, then the box's points), used as
+// its mode says, then three per leg for its stops (robot.m + 3 kMaxContacts + 3 l + k: its
+// actuators' k = 0, 1, its rowing angle's k = 2).
+constexpr int kMaxSystemRows = kMaxRobotRows + 3 * kMaxContacts + 3 * kMaxLegs;
 constexpr int kMaxRobotDof = kBodyDof * kMaxRobotBodies;
 
-// Which feet the ground holds (bit l: leg l) and how: stuck (held at anchor[l], world, m) or
+// Which contact points the ground holds (bit c: contact c, robot_contacts'; the feet first, bit l
+// leg l's) and how: stuck (held at anchor[l], world, m) or
 // sliding (held on the plane through anchor[l]); the ground's frame (world: unit normal, up, and
 // two unit tangents, right-handed). Which strokes sit on a stop (bit 3 l + k: leg l's actuator k
 // = 0, 1 or its rowing angle k = 2) and at which end (upper's bit: the max).
 struct FeetHold {
   uint32_t stuck, sliding;
-  V3 anchor[kMaxLegs];
+  V3 anchor[kMaxContacts];
   V3 normal = {0, 0, 1}, t1 = {1, 0, 0}, t2 = {0, 1, 0};
   uint32_t stops = 0, upper = 0;
 };
-// The number of rows foot l has in hold.
-inline int foot_rows(const FeetHold &hold, int l) {
-  return ((hold.stuck >> l) & 1u) ? 3 : ((hold.sliding >> l) & 1u) ? 1 : 0;
+// The number of rows contact c has in hold.
+inline int foot_rows(const FeetHold &hold, int c) {
+  return ((hold.stuck >> c) & 1u) ? 3 : ((hold.sliding >> c) & 1u) ? 1 : 0;
 }
-inline int foot_row(const SpatialRobot &robot, int l) { return robot.m + 3 * l; }
+inline int foot_row(const SpatialRobot &robot, int c) { return robot.m + 3 * c; }
+// The box's contact points held (their bits: those past the legs').
+inline uint32_t box_held(const SpatialRobot &robot, const FeetHold &hold) {
+  return (hold.stuck | hold.sliding) >> robot.nlegs;
+}
 constexpr int kLegStops = 3;
 constexpr int kMaxHeldStops = kLegStops * kMaxLegs;
-inline int stop_row(const SpatialRobot &robot, int l, int k) { return robot.m + 3 * kMaxLegs + kLegStops * l + k; }
+// The rows the factor takes as columns (dynamics.cpp): the held stops', the box's contacts'.
+constexpr int kMaxColumns = kMaxHeldStops + 3 * kMaxBoxContacts;
+inline int stop_row(const SpatialRobot &robot, int l, int k) { return robot.m + 3 * kMaxContacts + kLegStops * l + k; }
 // Leg l's held stops (bit k).
 inline uint32_t leg_stops(const FeetHold &hold, int l) { return (hold.stops >> (kLegStops * l)) & 7u; }
 
-// System row r's two bodies (-1: the world): a joint's, a foot's (its bar), a stop's (an
-// actuator's rod and cylinder; a rowing angle's yoke and box).
+// System row r's two bodies (-1: the world): a joint's, a contact's (a foot's bar, the box), a
+// stop's (an actuator's rod and cylinder; a rowing angle's yoke and box).
 inline void row_bodies(const SpatialRobot &robot, int r, int &a, int &b) {
   if (r < robot.m) {
     a = robot.row_body[r][0], b = robot.row_body[r][1];
-  } else if (r < robot.m + 3 * kMaxLegs) {
-    a = robot.leg[(r - robot.m) / 3].foot_body, b = -1;
+  } else if (r < robot.m + 3 * kMaxContacts) {
+    a = contact_body(robot, (r - robot.m) / 3), b = -1;
   } else {
-    const int s = r - robot.m - 3 * kMaxLegs, l = s / kLegStops, k = s % kLegStops;
+    const int s = r - robot.m - 3 * kMaxContacts, l = s / kLegStops, k = s % kLegStops;
     const RobotLeg &L = robot.leg[l];
     if (k < 2) {
       a = robot.act[L.first_actuator + k].rod, b = robot.act[L.first_actuator + k].cyl;
@@ -97,8 +105,9 @@ inline const LegLayout &leg_layout(const SpatialRobot &robot, const FeetHold &ho
 inline int system_used_rows(const SpatialRobot &robot, const FeetHold &hold, int *idx) {
   int n = 0;
   for (int r = 0; r < robot.m; ++r) idx[n++] = r;
-  for (int l = 0; l < robot.nlegs; ++l)
-    for (int k = 0; k < foot_rows(hold, l); ++k) idx[n++] = foot_row(robot, l) + k;
+  const int nc = robot_contacts(robot);
+  for (int c = 0; c < nc; ++c)
+    for (int k = 0; k < foot_rows(hold, c); ++k) idx[n++] = foot_row(robot, c) + k;
   if (hold.stops)
     for (int l = 0; l < robot.nlegs; ++l)
       for (int k = 0; k < kLegStops; ++k)
@@ -124,14 +133,18 @@ struct RobotFactor {
   real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];  // L_l in its envelope
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
-  // the held stops: their rows, their responses to a unit multiplier (accelerations and the
-  // other rows' multipliers), their Delassus matrix -J_s x_s factored (a stop whose row the others
-  // already imply, a zero pivot, carries nothing: live 0)
+  // the rows taken as columns (the held stops', the box's contacts' held): their rows, their
+  // responses to a unit multiplier (accelerations and the other rows' multipliers), their
+  // Delassus matrix -J_s x_s factored (a row the others already imply, a zero pivot, is left
+  // out of the factor: live 0). With rows left out the multipliers are the least-norm ones
+  // (a rigid body's stuck points share the load: null, the null space's basis, nnull of them)
   int nstops;
-  int stop[kMaxHeldStops];
-  real stop_x[kMaxHeldStops][kMaxRobotDof], stop_mu[kMaxHeldStops][kMaxSystemRows];
-  real D[kMaxHeldStops * kMaxHeldStops];
-  bool live[kMaxHeldStops];
+  int stop[kMaxColumns];
+  real stop_x[kMaxColumns][kMaxRobotDof], stop_mu[kMaxColumns][kMaxSystemRows];
+  real D[kMaxColumns * kMaxColumns];
+  bool live[kMaxColumns];
+  int nnull;
+  real null[kMaxColumns][kMaxColumns], null_gram[kMaxColumns * kMaxColumns];
 };
 
 // Factor the system for rows (kept by pointer: they must outlive the solves). LEGSIM_ERR_SINGULAR
@@ -150,11 +163,11 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
 legsim_status robot_accelerations(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v,
                                   const real *Q, real *a, real *mu, Row *rows, RobotFactor &F);
 
-// The ground's force on foot l (N, world) from the multipliers: 0 for a free foot, the normal
+// The ground's force on contact c (N, world) from the multipliers: 0 for a free one, the normal
 // force alone for a sliding one (its friction is an applied force).
-inline V3 foot_force(const SpatialRobot &robot, const FeetHold &hold, const real *mu, int l) {
-  const real *m = mu + foot_row(robot, l);
-  const int n = foot_rows(hold, l);
+inline V3 foot_force(const SpatialRobot &robot, const FeetHold &hold, const real *mu, int c) {
+  const real *m = mu + foot_row(robot, c);
+  const int n = foot_rows(hold, c);
   const V3 f = n == 0 ? V3{0, 0, 0} : -m[0] * hold.normal;
   return n == 3 ? f - m[1] * hold.t1 - m[2] * hold.t2 : f;
 }

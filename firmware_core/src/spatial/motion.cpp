@@ -11,7 +11,7 @@ inline real norm(const V3 &x) { return std::sqrt(dot(x, x)); }
 
 
 legsim_status hold_check(const SpatialRobot &robot, const FeetHold &hold) {
-  if ((hold.stuck | hold.sliding) >> robot.nlegs || (hold.stuck & hold.sliding)) return LEGSIM_ERR_BAD_INPUT;
+  if ((hold.stuck | hold.sliding) >> robot_contacts(robot) || (hold.stuck & hold.sliding)) return LEGSIM_ERR_BAD_INPUT;
   for (int l = 0; l < robot.nlegs; ++l) {
     if (foot_rows(hold, l) && robot.leg[l].foot_body < 0) return LEGSIM_ERR_BAD_INPUT;
     const uint32_t s = leg_stops(hold, l);
@@ -54,7 +54,7 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
       g[idx[i]] = -d.rows_work[idx[i]].phi;
       const real e = std::abs(g[idx[i]]);
       if (!(e <= worst)) worst = e;  // a NaN too
-      if (idx[i] >= robot.m + 3 * kMaxLegs) worst_stop = std::max(worst_stop, e);
+      if (idx[i] >= robot.m + 3 * kMaxContacts) worst_stop = std::max(worst_stop, e);
     }
     if (!std::isfinite(worst)) return LEGSIM_ERR_DIVERGED;
     // a stop's gap to round-off (while the others allow): one released with a gap at -tolerance
@@ -110,14 +110,14 @@ void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   std::copy(d.acc_aux, d.acc_aux + kBodyDof * robot.nb, c.acc_aux);
   c.acc_aux_h = d.acc_aux_h;
   std::copy(d.mu, d.mu + kMaxSystemRows, c.mu);
-  std::copy(d.normal_force, d.normal_force + kMaxLegs, c.N);
+  std::copy(d.normal_force, d.normal_force + kMaxContacts, c.N);
   c.hold = d.hold;
-  std::copy(d.slip_dir, d.slip_dir + kMaxLegs, c.slip_dir);
-  std::copy(d.slip_ref, d.slip_ref + kMaxLegs, c.slip_ref);
-  std::copy(d.slip_stage_min, d.slip_stage_min + kMaxLegs, c.slip_stage_min);
+  std::copy(d.slip_dir, d.slip_dir + kMaxContacts, c.slip_dir);
+  std::copy(d.slip_ref, d.slip_ref + kMaxContacts, c.slip_ref);
+  std::copy(d.slip_stage_min, d.slip_stage_min + kMaxContacts, c.slip_stage_min);
   std::copy(d.actuator_force, d.actuator_force + kMaxRobotActuators, c.actuator_force);
   std::copy(d.rowing_torque, d.rowing_torque + kMaxLegs, c.rowing_torque);
-  std::copy(d.impulse, d.impulse + kMaxLegs, c.impulse);
+  std::copy(d.impulse, d.impulse + kMaxContacts, c.impulse);
   c.impact = d.impact, c.modes = d.modes, c.cone_stats = d.cone_stats;
   c.projection_iterations = d.projection_iterations, c.impacts = d.impacts, c.stop_impacts = d.stop_impacts;
 }
@@ -129,14 +129,14 @@ void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   std::copy(c.acc_aux, c.acc_aux + kBodyDof * robot.nb, d.acc_aux);
   d.acc_aux_h = c.acc_aux_h;
   std::copy(c.mu, c.mu + kMaxSystemRows, d.mu);
-  std::copy(c.N, c.N + kMaxLegs, d.normal_force);
+  std::copy(c.N, c.N + kMaxContacts, d.normal_force);
   d.hold = c.hold;
-  std::copy(c.slip_dir, c.slip_dir + kMaxLegs, d.slip_dir);
-  std::copy(c.slip_ref, c.slip_ref + kMaxLegs, d.slip_ref);
-  std::copy(c.slip_stage_min, c.slip_stage_min + kMaxLegs, d.slip_stage_min);
+  std::copy(c.slip_dir, c.slip_dir + kMaxContacts, d.slip_dir);
+  std::copy(c.slip_ref, c.slip_ref + kMaxContacts, d.slip_ref);
+  std::copy(c.slip_stage_min, c.slip_stage_min + kMaxContacts, d.slip_stage_min);
   std::copy(c.actuator_force, c.actuator_force + kMaxRobotActuators, d.actuator_force);
   std::copy(c.rowing_torque, c.rowing_torque + kMaxLegs, d.rowing_torque);
-  std::copy(c.impulse, c.impulse + kMaxLegs, d.impulse);
+  std::copy(c.impulse, c.impulse + kMaxContacts, d.impulse);
   d.impact = c.impact, d.modes = c.modes, d.cone_stats = c.cone_stats;
   d.projection_iterations = c.projection_iterations, d.impacts = c.impacts, d.stop_impacts = c.stop_impacts;
 }
@@ -148,7 +148,7 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
   real q0[kBodyConfig * kMaxRobotBodies], v0[kMaxRobotDof];
   std::copy(d.q, d.q + kBodyConfig * nb, q0);
   std::copy(d.v, d.v + nv, v0);
-  real q[kBodyConfig * kMaxRobotBodies], th[kMaxRobotDof], v[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
+  real q[kBodyConfig * kMaxRobotBodies], th[kMaxRobotDof], v[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxContacts];
   real kth[4][kMaxRobotDof], kv[4][kMaxRobotDof];
   auto stage = [&](int s, const real *ths, const real *vs) {
     for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, ths + kBodyDof * b, q + kBodyConfig * b);
@@ -158,7 +158,7 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
       const V3 w = dexp_inv({tb[3], tb[4], tb[5]}, {vb[3], vb[4], vb[5]});
       o[0] = vb[0], o[1] = vb[1], o[2] = vb[2], o[3] = w.x, o[4] = w.y, o[5] = w.z;
     }
-    for (int l = 0; l < robot.nlegs; ++l) {
+    for (int l = 0; l < robot_contacts(robot); ++l) {
       if (!((d.hold.sliding >> l) & 1u)) continue;
       V3 p, pv;
       foot_motion(robot, l, q, vs, p, pv);
@@ -166,7 +166,7 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
     }
     return evaluate(robot, d, q, vs, kv[s], mu, N, false);
   };
-  for (int l = 0; l < robot.nlegs; ++l) d.slip_stage_min[l] = kNone;
+  for (int l = 0; l < robot_contacts(robot); ++l) d.slip_stage_min[l] = kNone;
   for (int k = 0; k < nv; ++k) kth[0][k] = v0[k], kv[0][k] = d.a[k];
   static const real c[3] = {real(0.5), real(0.5), real(1)};
   for (int s = 1; s < 4; ++s) {
@@ -206,7 +206,7 @@ legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
   // the history's lead over the accelerations, (am - af) h vd', to this part's length
   const real scale = d.acc_aux_h > 0 ? H / d.acc_aux_h : real(1);
   for (int k = 0; k < nv; ++k) x0[k] = a0[k] + scale * (d.acc_aux[k] - a0[k]);
-  real vd1[kMaxRobotDof], x1[kMaxRobotDof], th[kMaxRobotDof], f[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
+  real vd1[kMaxRobotDof], x1[kMaxRobotDof], th[kMaxRobotDof], f[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxContacts];
   // the predictor: the acceleration's rate from the history's lead, x0 - vd0 ~ (am - af) H vd'
   // (0.6 fewer iterations a step than the acceleration held; none at rho_inf = 1, where am = af)
   const real lead = am != af ? 1 / (am - af) : real(0);
@@ -251,7 +251,7 @@ legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
   }
   if (!converged) return LEGSIM_ERR_NOT_CONVERGED;
   state(d.q, d.v);
-  for (int l = 0; l < robot.nlegs; ++l) {
+  for (int l = 0; l < robot_contacts(robot); ++l) {
     d.slip_stage_min[l] = kNone;
     if (!((d.hold.sliding >> l) & 1u)) continue;
     V3 p, pv;
@@ -282,11 +282,11 @@ legsim_status take(const SpatialRobot &robot, RobotData &d, real H, Integrator i
 // the nearer end (m, rad); on a stop, the stop's push -lambda (N, N m).
 constexpr int kLegEvents = 2 + kLegStops;
 void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, real (*e)[kLegEvents]) {
-  for (int l = 0; l < robot.nlegs; ++l) {
+  for (int l = 0; l < robot_contacts(robot); ++l) {
     for (int k = 0; k < kLegStops; ++k) {
       real &f = e[l][2 + k];
       f = kNone;
-      if (k < 2 && k >= robot.leg[l].nactuators) continue;
+      if (l >= robot.nlegs || (k < 2 && k >= robot.leg[l].nactuators)) continue;
       if ((leg_stops(d.hold, l) >> k) & 1u) {
         f = -d.mu[stop_row(robot, l, k)];
       } else {
@@ -296,7 +296,7 @@ void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, 
       }
     }
     e[l][0] = e[l][1] = kNone;
-    if (!d.has_ground || robot.leg[l].foot_body < 0) continue;
+    if (!d.has_ground || contact_body(robot, l) < 0) continue;
     const uint32_t bit = 1u << l;
     const real *m = d.mu + foot_row(robot, l);
     if (d.hold.stuck & bit) {
@@ -343,7 +343,7 @@ void tally(ConeStats &s, const ConeReport &r) {
 // decide: the stuck feet's modes decided on their cones in the first round whatever their forces
 // (a located stick to slip, its function at its root: slipping, that foot's bit).
 legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false, uint32_t slipping = 0) {
-  for (int round = 0; round <= (2 + kLegStops) * robot.nlegs + 1; ++round) {
+  for (int round = 0; round <= 2 * robot_contacts(robot) + kLegStops * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
     if (st != LEGSIM_OK) return st;
@@ -362,7 +362,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       if (m > most) most = m, pull = s;
     }
     if (d.has_ground) {
-      for (int l = 0; l < robot.nlegs; ++l) {
+      for (int l = 0; l < robot_contacts(robot); ++l) {
         const uint32_t bit = 1u << l;
         const real *m = d.mu + foot_row(robot, l);
         if (d.hold.stuck & bit) {
@@ -416,7 +416,7 @@ legsim_status stop_arrival(const SpatialRobot &robot, RobotData &d, int l, int k
   for (int i = 0; i < kBodyDof * robot.nb; ++i) d.v[i] += dv[i];
   const uint32_t touching = d.hold.stuck | d.hold.sliding;
   if (d.has_ground && touching) {
-    for (int j = 0; j < robot.nlegs; ++j) d.impulse[j] = {0, 0, 0};
+    for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
     st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse, d.impact, d.rows,
                         d.factor, d.contact_work);
     if (st != LEGSIM_OK) return st;
@@ -447,9 +447,29 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
   } else if (d.hold.sliding & bit) {
     d.hold.sliding &= ~bit;
     if (k == 1) d.hold.stuck |= bit, d.hold.anchor[l] = on_ground;  // slip to stick
+    // the box's points stop together when it stops translating: those slipping as this one
+    // does stick with it (one at a time, each would be held alone against the others' friction)
+    if (k == 1 && l >= robot.nlegs)
+      for (int c = robot.nlegs; c < robot_contacts(robot); ++c) {
+        if (!((d.hold.sliding >> c) & 1u)) continue;
+        V3 pc, vc;
+        foot_motion(robot, c, d.q, d.v, pc, vc);
+        if (!(norm(tangential(d.hold, vc - pv)) <= by_precision(1e-9, 1e-5))) continue;
+        d.hold.sliding &= ~(1u << c), d.hold.stuck |= 1u << c;
+        d.hold.anchor[c] = pc - dot(pc - d.ground.point, d.ground.normal) * d.ground.normal;
+      }
   } else {  // a touchdown: the impact of every foot in touch
-    const uint32_t touching = d.hold.stuck | d.hold.sliding | bit;
-    for (int j = 0; j < robot.nlegs; ++j) d.impulse[j] = {0, 0, 0};
+    uint32_t touching = d.hold.stuck | d.hold.sliding | bit;
+    // the box's points at the ground with it (a flat face landing: one impact for them all)
+    if (l >= robot.nlegs)
+      for (int c = robot.nlegs; c < robot_contacts(robot); ++c) {
+        V3 pc, vc;
+        foot_motion(robot, c, d.q, d.v, pc, vc);
+        if (!((touching >> c) & 1u) && dot(pc - d.ground.point, d.ground.normal) <= by_precision(1e-9, 1e-5) &&
+            dot(vc, d.ground.normal) < 0)
+          touching |= 1u << c;
+      }
+    for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
     const legsim_status st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse,
                                             d.impact, d.rows, d.factor, d.contact_work);
     if (st != LEGSIM_OK) return st;
@@ -467,18 +487,25 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
 constexpr real kSlipTurn = real(0.05);  // rad per part
 real slip_part(const SpatialRobot &robot, const RobotData &d) {
   real rate = 0;
-  for (int l = 0; l < robot.nlegs; ++l) {
+  for (int l = 0; l < robot_contacts(robot); ++l) {
     if (!((d.hold.sliding >> l) & 1u)) continue;
-    const int fb = robot.leg[l].foot_body;
+    const int fb = contact_body(robot, l);
+    const V3 &pt = contact_point(robot, l);
     const BodyState B = body_state(d.q + kBodyConfig * fb, d.v + kBodyDof * fb);
-    const PointJet j = point_jet(B, robot.leg[l].foot_point);
+    const PointJet j = point_jet(B, pt);
     const real *ab = d.a + kBodyDof * fb;
-    const V3 pa = V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, robot.leg[l].foot_point)) + j.pq;
+    const V3 pa = V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, pt)) + j.pq;
     const V3 vt = tangential(d.hold, j.pd), at = tangential(d.hold, pa);
     const real speed = norm(vt);
     if (!(speed > kSlipHold)) continue;  // its direction kept: nothing turns
     const V3 s = (1 / speed) * vt;
     rate = std::max(rate, norm(at - dot(at, s) * s) / speed);
+    // a box's point: its whole tangential acceleration, along the slip too. Slowing to a stop, a
+    // slip's direction is stiff (a turn of it away from the slip's comes back at about
+    // |a_t| / |v_t|): unresolved, it turns the box's path away from the fall line (the parts
+    // shrink toward the stop, to h / 256 at least, where a slip below kSlipHold keeps its
+    // direction)
+    if (l >= robot.nlegs) rate = std::max(rate, norm(at) / speed);
   }
   return rate > 0 ? kSlipTurn / rate : kNone;
 }
@@ -497,16 +524,16 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
   if (ground) {
     d.ground = *ground;
     ground_frame(*ground, d.hold);
-    for (int l = 0; l < robot.nlegs; ++l) {
-      if (robot.leg[l].foot_body < 0 || foot_rows(hold, l)) continue;
-      const V3 p = robot_foot_position(robot, l, q);
+    for (int l = 0; l < robot_contacts(robot); ++l) {
+      if (contact_body(robot, l) < 0 || foot_rows(hold, l)) continue;
+      const V3 p = robot_contact_position(robot, l, q);
       if (dot(p - ground->point, ground->normal) < -by_precision(1e-9, 1e-5))
         return LEGSIM_ERR_BAD_INPUT;  // a free foot under it
     }
   } else {
     d.ground = {{0, 0, 0}, {0, 0, 1}, 0, 0};
   }
-  for (int l = 0; l < kMaxLegs; ++l) {
+  for (int l = 0; l < kMaxContacts; ++l) {
     d.slip_dir[l] = d.slip_ref[l] = d.hold.t1, d.slip_stage_min[l] = kNone;
     d.normal_force[l] = 0, d.impulse[l] = {0, 0, 0};
   }
@@ -526,8 +553,8 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
 legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
   legsim_status s = hold_check(robot, data.hold);
   if (s != LEGSIM_OK) return s;
-  real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxLegs];
-  std::copy(data.normal_force, data.normal_force + kMaxLegs, N);
+  real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxContacts];
+  std::copy(data.normal_force, data.normal_force + kMaxContacts, N);
   s = evaluate(robot, data, data.q, data.v, a, mu, N, false);
   if (s != LEGSIM_OK) return s;
   command_forces(robot, data.command, data.q, data.v, data.actuator_force, data.rowing_torque);
@@ -535,7 +562,7 @@ legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
   for (int k = 0; k < kBodyDof * robot.nb; ++k) data.acc_aux[k] += a[k] - data.a[k];
   std::copy(a, a + kBodyDof * robot.nb, data.a);
   std::copy(mu, mu + kMaxSystemRows, data.mu);
-  std::copy(N, N + kMaxLegs, data.normal_force);
+  std::copy(N, N + kMaxContacts, data.normal_force);
   return LEGSIM_OK;
 }
 
@@ -545,11 +572,11 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
   save(robot, d, start);
   // new commands (or a new state) may leave a foot pulling or off its cone: its modes first
   if (d.has_ground || d.hold.stops) {
-    V3 ref[kMaxLegs] = {};
-    real e[kMaxLegs][kLegEvents];
+    V3 ref[kMaxContacts] = {};
+    real e[kMaxContacts][kLegEvents];
     event_values(robot, d, ref, e);
     bool off = false;
-    for (int l = 0; l < robot.nlegs; ++l) {
+    for (int l = 0; l < robot_contacts(robot); ++l) {
       off = off || ((d.hold.stuck | d.hold.sliding) >> l & 1u && (e[l][0] < -force_tolerance(robot) ||
                                                                   ((d.hold.stuck >> l) & 1u && e[l][1] < -force_tolerance(robot))));
       for (int k = 0; k < kLegStops; ++k)
@@ -572,14 +599,14 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
   for (;;) {
     // the part's slip directions (kept below kSlipHold), set before its snapshot: its retakes
     // start from them
-    V3 ref[kMaxLegs];
-    for (int l = 0; l < robot.nlegs; ++l) {
+    V3 ref[kMaxContacts];
+    for (int l = 0; l < robot_contacts(robot); ++l) {
       ref[l] = ((d.hold.sliding >> l) & 1u) ? slip_direction(robot, d.hold, l, d.q, d.v, d.slip_dir[l]) : V3{0, 0, 0};
       if ((d.hold.sliding >> l) & 1u) d.slip_dir[l] = ref[l];
       d.slip_ref[l] = ref[l], d.slip_stage_min[l] = kNone;
     }
     save(robot, d, s0);
-    real e0[kMaxLegs][kLegEvents], e1[kMaxLegs][kLegEvents];
+    real e0[kMaxContacts][kLegEvents], e1[kMaxContacts][kLegEvents];
     event_values(robot, d, ref, e0);
     // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
     const real part = std::min(remaining, std::max(slip_part(robot, d), h / 256));
@@ -589,7 +616,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
     // the crossings: the earliest by the line through the two ends first
     int el = -1, ek = -1;
     real best = 2;
-    for (int l = 0; l < robot.nlegs; ++l)
+    for (int l = 0; l < robot_contacts(robot); ++l)
       for (int k = 0; k < kLegEvents; ++k) {
         const real tol = event_tolerance(robot, d, l, k);
         // a crossing; or a function already below at the start still falling (a free foot
@@ -607,12 +634,12 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
     // locate it: regula falsi (Illinois) on the fraction of the step; then check that no other
     // event crossed before it, else locate that one within the shorter window
     real window = 1;
-    for (int guard = 0; guard < kLegEvents * kMaxLegs; ++guard) {
+    for (int guard = 0; guard < kLegEvents * kMaxContacts; ++guard) {
       real lo = 0, hi = window, flo = std::max(e0[el][ek], real(0)), fhi = e1[el][ek];
       if (guard > 0) {  // the new event's value at the window's end
         load(robot, s0, d);
         if ((st = take(robot, d, hi * part, integrator)) != LEGSIM_OK) return fail(st);
-        real e[kMaxLegs][kLegEvents];
+        real e[kMaxContacts][kLegEvents];
         event_values(robot, d, ref, e);
         fhi = e[el][ek];
       }
@@ -622,7 +649,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
         if (!(th > lo && th < hi)) th = real(0.5) * (lo + hi);
         load(robot, s0, d);
         if ((st = take(robot, d, th * part, integrator)) != LEGSIM_OK) return fail(st);
-        real e[kMaxLegs][kLegEvents];
+        real e[kMaxContacts][kLegEvents];
         event_values(robot, d, ref, e);
         const real f = e[el][ek];
         if (f < 0) {
@@ -641,10 +668,10 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
       }
       load(robot, s0, d);
       if ((st = take(robot, d, hi * part, integrator)) != LEGSIM_OK) return fail(st);
-      real e[kMaxLegs][kLegEvents];
+      real e[kMaxContacts][kLegEvents];
       event_values(robot, d, ref, e);
       int nl = -1, nk = -1;
-      for (int l = 0; l < robot.nlegs; ++l)
+      for (int l = 0; l < robot_contacts(robot); ++l)
         for (int k = 0; k < kLegEvents; ++k)
           if ((l != el || k != ek) && e[l][k] < -event_tolerance(robot, d, l, k) &&
               (e0[l][k] >= -event_tolerance(robot, d, l, k) || e[l][k] < e0[l][k] - event_tolerance(robot, d, l, k)))
@@ -655,7 +682,7 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
       const bool same = guard > 0 && (window - hi) * part <= by_precision(1e-13, 1e-6) * (1 + part);
       window = hi;
       if (nl < 0 || same) break;
-      if (guard == kLegEvents * kMaxLegs - 1) return fail(LEGSIM_ERR_CONTACT);  // still one before it: not located
+      if (guard == kLegEvents * kMaxContacts - 1) return fail(LEGSIM_ERR_CONTACT);  // still one before it: not located
       el = nl, ek = nk;
     }
     st = apply_event(robot, d, el, ek);

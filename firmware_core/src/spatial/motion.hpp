@@ -54,13 +54,13 @@ struct RobotSnapshot {
   real t;
   real q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], a[kMaxRobotDof], mu[kMaxSystemRows];
   real acc_aux[kMaxRobotDof], acc_aux_h;
-  real N[kMaxLegs];
+  real N[kMaxContacts];
   FeetHold hold;
-  V3 slip_dir[kMaxLegs], slip_ref[kMaxLegs];
-  real slip_stage_min[kMaxLegs];
+  V3 slip_dir[kMaxContacts], slip_ref[kMaxContacts];
+  real slip_stage_min[kMaxContacts];
   // the report a failed step must leave as it was
   real actuator_force[kMaxRobotActuators], rowing_torque[kMaxLegs];
-  V3 impulse[kMaxLegs];
+  V3 impulse[kMaxContacts];
   ConeReport impact, modes;
   ConeStats cone_stats;
   int projection_iterations, impacts, stop_impacts;
@@ -73,13 +73,13 @@ struct RobotData {
   real acc_aux[kMaxRobotDof];  // generalized-alpha's auxiliary acceleration (its history)
   real acc_aux_h;              // s: the part it was taken over (0: none, acc_aux = a)
   real mu[kMaxSystemRows];    // the multipliers at (t, q, v)
-  real normal_force[kMaxLegs];  // N: each sliding foot's at (t, q, v)
+  real normal_force[kMaxContacts];  // N: each sliding foot's at (t, q, v)
   FeetHold hold;              // the feet's modes (and the ground's frame)
-  V3 slip_dir[kMaxLegs];      // a sliding foot's friction direction while its slip is below kSlipHold
+  V3 slip_dir[kMaxContacts];      // a sliding foot's friction direction while its slip is below kSlipHold
   // a sliding foot's slip direction at the (part) step's start, and its slip velocity's least
   // component along it over the last RK4 step's stages (a reversal the end can miss)
-  V3 slip_ref[kMaxLegs];
-  real slip_stage_min[kMaxLegs];
+  V3 slip_ref[kMaxContacts];
+  real slip_stage_min[kMaxContacts];
   bool has_ground;            // else the feet pass through (no contact events)
   GroundPlane ground;
   RobotCommands command;
@@ -93,7 +93,7 @@ struct RobotData {
   ConeReport impact;          // the last impact's contact problem
   ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
   ConeStats cone_stats;       // every contact problem's since data_init
-  V3 impulse[kMaxLegs];       // N s, world: the ground's on each foot at the last impact
+  V3 impulse[kMaxContacts];       // N s, world: the ground's on each foot at the last impact
   // work space: the rows at the last evaluation and their factor, the contact solves' columns,
   // the step's snapshots (not on the stack: about 110 KB together in double)
   Row rows[kMaxSystemRows], rows_work[kMaxSystemRows];

@@ -1,6 +1,7 @@
 #include "spatial/robot.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "spatial/dynamics.hpp"
 
@@ -142,6 +143,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
   SpatialRobot &R = out;
   R.free_box = box != nullptr;
   R.nlegs = nlegs;
+  R.nbox_contacts = 0;
   R.yoke_com = {real(yoke.com_m[0]), real(yoke.com_m[1]), real(yoke.com_m[2])};
   R.origin_x = real(yoke.hip_offset_m);
   R.rowing_max_torque = real(yoke.rowing_max_torque_nm);
@@ -271,7 +273,7 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
 }
 
 legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out) {
-  if (h.n_legs != LEGSIM_HEXAPOD_LEGS) return LEGSIM_ERR_MODEL;
+  if (h.n_legs != LEGSIM_HEXAPOD_LEGS && h.n_legs != 0) return LEGSIM_ERR_MODEL;
   YokeDesc yoke;
   yoke.mass_kg = h.yoke_mass_kg;
   for (int i = 0; i < 3; ++i) yoke.com_m[i] = h.yoke_com_m[i], yoke.inertia_kgm2[i] = h.yoke_inertia_kgm2[i];
@@ -288,7 +290,45 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &h, SpatialRobot &out
     legs[l] = &h.leg[l].leg;
     hips[l] = {{h.leg[l].hip_m[0], h.leg[l].hip_m[1], h.leg[l].hip_m[2]}, h.leg[l].heading_rad};
   }
-  return robot_lift(legs, hips, LEGSIM_HEXAPOD_LEGS, yoke, &box, out);
+  legsim_status s = h.n_legs ? robot_lift(legs, hips, LEGSIM_HEXAPOD_LEGS, yoke, &box, out)
+                             : robot_lift_block(box, real(h.gravity_mps2[2]), out);
+  if (s != LEGSIM_OK || h.n_box_contacts == 0) return s;
+  if (h.n_box_contacts < 0 || h.n_box_contacts > kMaxBoxContacts) return LEGSIM_ERR_CAPACITY;
+  V3 p[kMaxBoxContacts];
+  for (int k = 0; k < h.n_box_contacts; ++k)
+    p[k] = {real(h.box_contact_m[k][0]), real(h.box_contact_m[k][1]), real(h.box_contact_m[k][2])};
+  return robot_box_contacts(out, p, h.n_box_contacts);
+}
+
+legsim_status robot_lift_block(const BoxDesc &box, real gravity_z, SpatialRobot &out) {
+  const double m = box.mass_kg, *I = box.inertia_kgm2;
+  if (!(m > 0 && I[0] > 0 && I[1] > 0 && I[2] > 0 && std::isfinite(m) && std::isfinite(I[0]) &&
+        std::isfinite(I[1]) && std::isfinite(I[2]) && std::isfinite(gravity_z)))
+    return LEGSIM_ERR_BAD_INPUT;
+  SpatialRobot &R = out;
+  R.free_box = true;
+  R.nb = 1, R.nj = 0, R.m = 0, R.nlegs = 0, R.na = 0, R.nbox_contacts = 0;
+  R.mass[0] = real(m);
+  R.inertia[0] = {real(I[0]), real(I[1]), real(I[2])};
+  const real im[kBodyDof] = {1 / R.mass[0], 1 / R.mass[0], 1 / R.mass[0],
+                             1 / R.inertia[0].x, 1 / R.inertia[0].y, 1 / R.inertia[0].z};
+  for (int k = 0; k < kBodyDof; ++k) R.inverse_mass[0][k] = im[k];
+  R.gravity = {0, 0, gravity_z};
+  R.yoke_com = {0, 0, 0};
+  R.origin_x = 0, R.rowing_max_torque = 0, R.rowing_stroke[0] = R.rowing_stroke[1] = 0;
+  R.rowing_kp = R.rowing_kd = 0;
+  return LEGSIM_OK;
+}
+
+legsim_status robot_box_contacts(SpatialRobot &robot, const V3 *points, int n) {
+  if (n < 0 || n > kMaxBoxContacts) return LEGSIM_ERR_CAPACITY;
+  if (!robot.free_box) return LEGSIM_ERR_MODEL;
+  for (int k = 0; k < n; ++k)
+    if (!std::isfinite(points[k].x) || !std::isfinite(points[k].y) || !std::isfinite(points[k].z))
+      return LEGSIM_ERR_BAD_INPUT;
+  for (int k = 0; k < n; ++k) robot.box_contact[k] = points[k];
+  robot.nbox_contacts = n;
+  return LEGSIM_OK;
 }
 
 void leg_plane_target(const SpatialRobot &robot, int l, const V3 &foot_box, real &psi, real *foot_xy) {
@@ -311,6 +351,11 @@ V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q) {
   if (L.foot_body < 0) return {real(NAN), real(NAN), real(NAN)};  // (documented: none)
   const real *qb = q + kBodyConfig * L.foot_body;
   return V3{qb[0], qb[1], qb[2]} + rotate(rotation({qb[3], qb[4], qb[5], qb[6]}), L.foot_point);
+}
+
+V3 robot_contact_position(const SpatialRobot &robot, int c, const real *q) {
+  if (c < robot.nlegs) return robot_foot_position(robot, c, q);
+  return V3{q[0], q[1], q[2]} + rotate(rotation({q[3], q[4], q[5], q[6]}), robot.box_contact[c - robot.nlegs]);
 }
 
 void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v, const real *const *q_planar,

@@ -31,6 +31,12 @@ constexpr int kMaxLegJoints = 10;
 constexpr int kMaxRobotJoints = kMaxLegs * (1 + kMaxLegJoints);
 constexpr int kMaxRobotRows = 5 * kMaxRobotJoints;
 constexpr int kMaxRobotActuators = kMaxLegs * LEGSIM_MAX_ACTUATORS;
+// The box's own contact points (where it touches the ground when the legs give way: the belly's
+// skids; a block's feet), on the feet's contact law. Three on a rigid body hold it with
+// independent normal rows; a fourth would make them redundant.
+constexpr int kMaxBoxContacts = LEGSIM_HEXAPOD_MAX_BOX_CONTACTS;
+// The contact points: the legs' feet (contact l: leg l), then the box's (contact nlegs + k).
+constexpr int kMaxContacts = kMaxLegs + kMaxBoxContacts;
 
 // The hip yoke. The paper gives no yoke or hip numbers: these defaults are ASSUMPTIONS (the
 // spatial prototype's, firmware_core/tools/prototypes/spatial_leg.py).
@@ -133,7 +139,17 @@ struct SpatialRobot {
   V3 yoke_com;   // yoke frame, from the hip axis point
   real origin_x; // the leg's planar origin, yoke frame: out along x from the hip axis
   real rowing_max_torque, rowing_stroke[2], rowing_kp, rowing_kd;  // N m, rad, N m/rad, N m s/rad
+  int nbox_contacts;
+  V3 box_contact[kMaxBoxContacts];  // box frame, from its centre (m)
 };
+
+// The contact points: the feet, then the box's.
+inline int robot_contacts(const SpatialRobot &robot) { return robot.nlegs + robot.nbox_contacts; }
+// Contact c's body (-1: a leg without a foot) and its point on it (body frame, m).
+inline int contact_body(const SpatialRobot &robot, int c) { return c < robot.nlegs ? robot.leg[c].foot_body : 0; }
+inline const V3 &contact_point(const SpatialRobot &robot, int c) {
+  return c < robot.nlegs ? robot.leg[c].foot_point : robot.box_contact[c - robot.nlegs];
+}
 
 // nlegs legs (legs[k] placed at hips[k]) on the box (nullptr: fixed). LEGSIM_ERR_MODEL for a
 // slot joint, a prismatic joint closing a loop, or a gravity with a horizontal part or that
@@ -141,7 +157,17 @@ struct SpatialRobot {
 legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hips, int nlegs, const YokeDesc &yoke,
                          const BoxDesc *box, SpatialRobot &out);
 
-// The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box.
+// A robot of no legs: the free box alone (a block), falling at gravity_z (m/s^2, along z).
+// LEGSIM_ERR_BAD_INPUT for a mass or inertia not positive and finite, a gravity not finite.
+legsim_status robot_lift_block(const BoxDesc &box, real gravity_z, SpatialRobot &out);
+
+// The box's contact points (box frame, from its centre, m): n of them, replacing any before.
+// LEGSIM_ERR_CAPACITY for n past kMaxBoxContacts (or negative), LEGSIM_ERR_BAD_INPUT for a
+// point not finite, LEGSIM_ERR_MODEL on a fixed box (the world's points touch nothing).
+legsim_status robot_box_contacts(SpatialRobot &robot, const V3 *points, int n);
+
+// The hexapod of its file (legsim/hexapod.h): its six legs, their hips and yokes, its box, its
+// box's contact points; a file of no legs: the box alone (robot_lift_block) on its points.
 legsim_status robot_lift_hexapod(const legsim_hexapod_desc &hexapod, SpatialRobot &out);
 
 // Where leg l must be for its foot at foot_box (box frame, m; the world for a fixed box): its
@@ -151,8 +177,9 @@ legsim_status robot_lift_hexapod(const legsim_hexapod_desc &hexapod, SpatialRobo
 // place on its bar (its planar point) is where the lift put it: the planar leg's own.
 void leg_plane_target(const SpatialRobot &robot, int l, const V3 &foot_box, real &psi, real *foot_xy);
 
-// Leg l's foot point (world, m) at q; NaN for a leg without a foot.
+// Leg l's foot point (world, m) at q; NaN for a leg without a foot. Contact c's point.
 V3 robot_foot_position(const SpatialRobot &robot, int l, const real *q);
+V3 robot_contact_position(const SpatialRobot &robot, int c, const real *q);
 
 // The spatial state (q: 7 per body, v: 6 per body) of: the box at box_q (r, quaternion) moving
 // at box_v (v world, omega box frame), ignored for a fixed box; per leg k its planar state
