@@ -13,6 +13,9 @@
 
 namespace legsim::spatial {
 
+// every contact point of a robot can touch at once (the feet and the box's points)
+static_assert(kMaxContacts <= kConeMaxContacts, "one contact problem must hold every contact point");
+
 // The contact solves' columns, too large for a stack (about 80 KB in double): kept in the data.
 struct ContactWork {
   real x[kMaxContacts][kMaxRobotDof], m[kMaxContacts][kMaxSystemRows];  // a sliding point's friction's response
