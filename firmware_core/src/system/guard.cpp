@@ -3,6 +3,7 @@
 // Dimension-free: it copies the coordinates, multipliers and per-element results as arrays.
 #include <cstring>
 
+#include "planar/kernel.hpp"  // LEGSIM_KERNEL_TARGETS
 #include "sim.hpp"
 
 namespace legsim {
@@ -170,8 +171,9 @@ bool state_sane(const VecQ &q, const VecQ &qd, int n) {
   return true;
 }
 
-// Once per call (per step): everything a caller can read is finite, the state sane.
-legsim_status outputs_check(const Sim &sim) {
+// Once per call (per step): everything a caller can read is finite, the state sane. In
+// AVX's wider blocks where the CPU has them (the same tests: a sum's order does not matter).
+LEGSIM_KERNEL_TARGETS legsim_status outputs_check(const Sim &sim) {
   const Data &d = sim.data;
   const int n = sim.model.nq;
   // One pass over the coordinates, four at a time (partial sums in vector registers): |q|
