@@ -249,6 +249,7 @@ class Kernel:
         self.structure(mj)
         self.fused = True  # generate() decides
         self.reduced = True  # and this (RK4's reduced solves)
+        self.newton_fused = True  # and whether newton gives the forces and the residual itself
 
     def structure(self, mj, order=None):
         """The elimination order of the rows (rows mj.. kept last, in order; or the order
@@ -536,6 +537,31 @@ class Kernel:
         o.append("  }")
         return o
 
+    def forces_locals(self, store=True):
+        """Q as locals Q<n>: base (gravity and the force elements) and, where actuators, each
+        actuator's axial force Fa along its cylinder's axis (applied_forces' arithmetic in its
+        order, forces.cpp; actuator_force gives Fa from the command); with store, written to
+        data.force_q too (Data's Q of the step's end; every other reader writes it first)."""
+        nq = 3 * self.nb
+        q = [f"base[{n}]" for n in range(nq)]
+        o = []
+        for a, (n, cyl, rod) in enumerate(self.actuators):
+            o.append(f"  // actuator {a} (joint {n}: cylinder {cyl}, rod {rod})")
+            o.append(f"  const real Fa{a} = actuators ? actuator_force(model.act[{a}], data.act[{a}], data, s{cyl}, c{cyl}, "
+                     f"dx{n}, dy{n}, ddx{n}, ddy{n}, pose{cyl}.w) : real(0);")
+            o.append(f"  const real fs{a} = Fa{a} * s{cyl}, fc{a} = Fa{a} * c{cyl};")
+            i, j = 3 * cyl, 3 * rod
+            q[i] = f"{q[i]} - fs{a}"
+            q[i + 1] = f"{q[i + 1]} + fc{a}"
+            q[i + 2] = f"{q[i + 2]} + Fa{a} * dn{n}"
+            q[j] = f"{q[j]} + fs{a}"
+            q[j + 1] = f"{q[j + 1]} - fc{a}"
+        for n in range(nq):
+            o.append(f"  const real Q{n} = {q[n]};")
+            if store:
+                o.append(f"  data.force_q[{n}] = Q{n};")
+        return o
+
     def j_expr(self, i, x, local):
         dots = []
         for s in range(2):
@@ -629,14 +655,27 @@ class Kernel:
         # factor kept (the residual report, the reactions' solve); only where generalized-alpha
         # is compiled in (LEGSIM_KERNEL_NEWTON)
         o.append("#if LEGSIM_WITH_GENERALIZED_ALPHA")
-        o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
-                 "const VecQ &q, const VecQ &qd, "
-                 "const VecQ &force, TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, "
-                 "Rows &rows, real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda) {")
+        if self.newton_fused:  # Kernel::newton_fused: the forces and the residual too
+            o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+                     "const VecQ &q, const VecQ &qd, "
+                     "const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *qdd1, const VecR &lambda, "
+                     "real bprime, Rows &rows, real *a, real &condition, real &residual, real *res, VecR &dlambda, "
+                     "real *jt_dlambda) {")
+        else:  # Kernel::newton: Q given whole
+            o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+                     "const VecQ &q, const VecQ &qd, "
+                     "const VecQ &force, TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, "
+                     "Rows &rows, real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda) {")
         o.append("  const real *w = model.minv, *mass = model.mass;")
         o += self.rows_locals()
         o.append("  " + " ".join(f"(void)gam{i};" for i in range(m)) + "  // the position level: no gamma")
         o += [f"  rows.phi[{i}] = phi{i};" for i in range(m)]
+        if self.newton_fused:
+            # rows_max_residual's value (the same comparisons in row order), the forces
+            o.append("  real rmax = 0;")
+            o += [f"  if (!(std::abs(phi{i}) <= rmax)) rmax = std::abs(phi{i});" for i in range(m)]
+            o.append("  residual = rmax;")
+            o += self.forces_locals()
         o.append("  real max_diag = 0, pmin, pmax;")
         fail = "{ condition = real(INFINITY); return LEGSIM_ERR_SINGULAR; }"
         o += self.factor_locals(True, fail)
@@ -644,7 +683,7 @@ class Kernel:
         o.append("  condition = std::sqrt(pmax / pmin);")
         for n in range(nq):
             o.append(f"  const real r{n} = ({self.jt_expr(n, lambda i: f'lambda[{i}]', True)}) + "
-                     f"(mass[{n}] * qdd1[{n}] - force[{n}]);")
+                     f"(mass[{n}] * qdd1[{n}] - {f'Q{n}' if self.newton_fused else f'force[{n}]'});")
             o.append(f"  res[{n}] = r{n};")
             o.append(f"  const real t{n} = w[{n}] * r{n};")
         o += [f"  const real b{i} = bprime * phi{i} - ({self.j_expr(i, lambda n: f't{n}', True)});" for i in range(m)]
@@ -695,8 +734,9 @@ class Kernel:
                  f"{len(self.contacts)}, {sym}_contact, {len(self.actuators)}, {sym}_actuator, "
                  f"{self.m}, {sym}_perm, {sym}_first, {sym}_rows, {sym}_factor, {sym}_forward, {sym}_backward, "
                  f"{sym}_solve, {sym}_j_times, {sym}_jt_times, {dynamics}, "
-                 f"{newton if newton == 'nullptr' else f'LEGSIM_KERNEL_NEWTON({newton})'}, {factored}, "
-                 f"{reduced}}};")
+                 f"{'nullptr' if newton == 'nullptr' or self.newton_fused else f'LEGSIM_KERNEL_NEWTON({newton})'}, "
+                 f"{factored}, {reduced}, "
+                 f"{f'LEGSIM_KERNEL_NEWTON({newton})' if newton != 'nullptr' and self.newton_fused else 'nullptr'}}};")
         return "\n".join(o) + "\n"
 
 
@@ -982,31 +1022,6 @@ class Reduced(Kernel):
         o.append("  }")
         return o
 
-    def forces_locals(self, store=True):
-        """Q as locals Q<n>: base (gravity and the force elements) and, where actuators, each
-        actuator's axial force Fa along its cylinder's axis (applied_forces' arithmetic in its
-        order, forces.cpp; actuator_force gives Fa from the command); with store, written to
-        data.force_q too (Data's Q of the step's end; every other reader writes it first)."""
-        nq = 3 * self.nb
-        q = [f"base[{n}]" for n in range(nq)]
-        o = []
-        for a, (n, cyl, rod) in enumerate(self.actuators):
-            o.append(f"  // actuator {a} (joint {n}: cylinder {cyl}, rod {rod})")
-            o.append(f"  const real Fa{a} = actuators ? actuator_force(model.act[{a}], data.act[{a}], data, s{cyl}, c{cyl}, "
-                     f"dx{n}, dy{n}, ddx{n}, ddy{n}, pose{cyl}.w) : real(0);")
-            o.append(f"  const real fs{a} = Fa{a} * s{cyl}, fc{a} = Fa{a} * c{cyl};")
-            i, j = 3 * cyl, 3 * rod
-            q[i] = f"{q[i]} - fs{a}"
-            q[i + 1] = f"{q[i + 1]} + fc{a}"
-            q[i + 2] = f"{q[i + 2]} + Fa{a} * dn{n}"
-            q[j] = f"{q[j]} + fs{a}"
-            q[j + 1] = f"{q[j + 1]} - fc{a}"
-        for n in range(nq):
-            o.append(f"  const real Q{n} = {q[n]};")
-            if store:
-                o.append(f"  data.force_q[{n}] = Q{n};")
-        return o
-
     def shared_angles(self):
         """body -> the body whose angle a prismatic joint keeps equal to its own (the rod ->
         its cylinder), where that one's pair comes first (rows_locals' order)."""
@@ -1045,6 +1060,10 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
                 k.fused = ((stance or not model.get("contacts"))
                            and (fused_max_rows is None or k.m <= fused_max_rows))
                 k.reduced = reduced
+                # a cross build's newton takes Q and leaves the residual to its caller: on a
+                # Cortex-M4F they cost flash and instructions (1,016 B; the leg's step 8,040 ->
+                # 8,110); the core leaves its caller out there (LEGSIM_KERNELS_NEWTON_FUSED)
+                k.newton_fused = not default_only
                 if separator(k.rows) is not None:
                     continue  # the general path's Schur complement on the box serves it
                 if k.signature() not in seen:

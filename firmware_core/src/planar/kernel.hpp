@@ -106,7 +106,7 @@ struct Kernel {
   // the iterate's accelerations qdd1 and multipliers lambda, res = J^T lambda + M qdd1 -
   // force, dlambda from (J M^-1 J^T) dlambda = beta' Phi - J M^-1 res, jt_dlambda = J^T
   // dlambda; rows.phi and the factor (a, by position) kept. LEGSIM_ERR_SINGULAR (condition
-  // infinite) as factor_build.
+  // infinite) as factor_build. Cross builds' (flash); host builds have newton_fused instead.
   legsim_status (*newton)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd, const VecQ &force,
                           TrigCache *trig, const real *qdd1, const VecR &lambda, real bprime, Rows &rows,
                           real *a, real &condition, real *res, VecR &dlambda, real *jt_dlambda);
@@ -162,6 +162,16 @@ struct Kernel {
   legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
                                 const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
                                 real tol, real &drift, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+  // newton's iteration with the applied forces Q = base and, with actuators, the
+  // actuators' forces from the rows' own sin/cos (as accelerations'; written into
+  // data.force_q as applied_forces leaves it), which also gives the residual, the largest
+  // |Phi| (rows_max_residual's): applied_forces' and rows_max_residual's work (a tenth of
+  // the leg's step) in the iteration's own locals. Host builds' (a Cortex-M4F pays flash
+  // and instructions for it); nullptr with newton.
+  legsim_status (*newton_fused)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
+                                const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *qdd1,
+                                const VecR &lambda, real bprime, Rows &rows, real *a, real &condition,
+                                real &residual, real *res, VecR &dlambda, real *jt_dlambda);
 };
 
 // Whether RK4's solves on layout take the reduced system (dynamics_stage, dynamics_end: the

@@ -3,6 +3,7 @@
 // Dimension-free: it copies the coordinates, multipliers and per-element results as arrays.
 #include <cstring>
 
+#include "planar/kernel.hpp"  // LEGSIM_KERNEL_TARGETS
 #include "sim.hpp"
 
 namespace legsim {
@@ -164,8 +165,9 @@ bool state_sane(const VecQ &q, const VecQ &qd, int n) {
   return true;
 }
 
-// Once per call (per step): everything a caller can read is finite, the state sane.
-legsim_status outputs_check(const Model &m, const Data &d) {
+// Once per call (per step): everything a caller can read is finite, the state sane. In
+// AVX's wider blocks where the CPU has them (the same tests: a sum's order does not matter).
+LEGSIM_KERNEL_TARGETS legsim_status outputs_check(const Model &m, const Data &d) {
   const int n = m.nq;
   // One pass over the coordinates, four at a time (partial sums in vector registers): |q|
   // and |qd| summed, and qdd. Every |x| is below its bound when their sum is (a NaN fails

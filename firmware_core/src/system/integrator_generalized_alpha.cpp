@@ -134,12 +134,28 @@ legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol) 
   // the joint rows alone: each iteration's solve generated and fused (the same values)
   const Kernel *kern = lay.path.newton;
   if (kern) factor_order(lay, d.factor);  // the iterations write its entries
+  // the kernel's applied forces where it has them (Kernel::newton_fused): gravity and the
+  // actuators' from its own sin/cos, unless force elements act or gravity is off
+  // (applied_forces then, the kernel adding nothing); and its residual
+#if LEGSIM_KERNELS_NEWTON_FUSED
+  const bool kern_fused = kern && kern->newton_fused;
+#else
+  const bool kern_fused = false;  // (a cross build's kernels have none: its code left out)
+#endif
+  const bool kern_forces = kern_fused && !force_elements_act(d, m.opt.disable) &&
+                           !(m.opt.disable & LEGSIM_DISABLE_GRAVITY);
+  real kern_residual = 0;  // the kernel's largest |Phi|
   for (int it = 0; it < m.opt.max_newton_iter; ++it) {
-    applied_forces(m, m.opt.disable, d, q1, v1, d.force_q);
+    if (!kern_forces) applied_forces(m, m.opt.disable, d, q1, v1, d.force_q);
     VecQ tmp;
     if (kern) {
-      const legsim_status s = kern->newton(m, d.stop_drivers, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,
-                                           d.factor.a.data(), d.factor.condition, res.data(), d.rhs, tmp.data());
+      const legsim_status s =
+          kern_fused ? kern->newton_fused(m, d.stop_drivers, q1, v1, kern_forces ? m.gravity_force : d.force_q, d,
+                                          kern_forces && !(m.opt.disable & LEGSIM_DISABLE_ACTUATORS), &d.trig, qdd1.data(),
+                                          lambda, bprime, d.rows, d.factor.a.data(), d.factor.condition,
+                                          kern_residual, res.data(), d.rhs, tmp.data())
+                     : kern->newton(m, d.stop_drivers, q1, v1, d.force_q, &d.trig, qdd1.data(), lambda, bprime, d.rows,
+                                    d.factor.a.data(), d.factor.condition, res.data(), d.rhs, tmp.data());
       d.report.condition = d.factor.condition;
       if (s != LEGSIM_OK) return s;
     } else {
@@ -167,7 +183,7 @@ legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol) 
     }
     for (int i = 0; i < lay.m; ++i) lambda[i] += d.rhs[i];
     d.report.iterations = it + 1;
-    d.report.residual = rows_max_residual(lay, d.rows);  // before this iteration's correction
+    d.report.residual = kern_fused ? kern_residual : rows_max_residual(lay, d.rows);  // before this iteration's correction
     if (!std::isfinite(dq_max)) return LEGSIM_ERR_DIVERGED;
     if (it > 0) {  // this step's contraction (eta >= 1 once theta >= 1/2: none trusted)
       const real theta = dq_max / dq_before;

@@ -221,7 +221,11 @@ void layout_path(Layout &out) {
   // row, a stop, a driver would follow the block)
   const bool whole = k && out.m == k->mj;
   out.path.dynamics = whole && k->dynamics ? k : nullptr;
+#if LEGSIM_KERNELS_NEWTON_FUSED
+  out.path.newton = whole && (k->newton || k->newton_fused) ? k : nullptr;
+#else
   out.path.newton = whole && k->newton ? k : nullptr;
+#endif
   out.path.factored = whole && k->factored ? k : nullptr;
 #if LEGSIM_KERNELS_REDUCED
   out.path.reduced = whole && k->accelerations && k->end ? k : nullptr;
