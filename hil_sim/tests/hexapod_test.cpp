@@ -138,6 +138,7 @@ struct Reference {
   }
 };
 
+
 // A sample's frames decoded, and compared with the C API's state.
 struct Decoded {
   int frames = 0;
@@ -190,6 +191,17 @@ bool same(const Decoded &d, const legsim_hexapod_state &s) {
 void send(hil::HexapodNode &node, const std::vector<Frame> &v) {
   for (const Frame &f : v) node.on_frame(f, 0);
 }
+
+// A servoed walk's start: its pose at t = 0 held for a RESET whose watchdogs time out after
+// timeout_ms, the reference sim at the same start, the RESET's frames taken.
+void start_walk(hil::HexapodNode &node, Recorder &rec, const WalkCmd &c, float height, uint16_t timeout_ms,
+                Reference &ref) {
+  send(node, servo_frames(c, 1));
+  node.on_frame(reset(1, true, true, c.stance, height, timeout_ms), 0);
+  CHECK(ref.init(c, height) == LEGSIM_OK);
+  rec.take();
+}
+
 // A STEP worked to its end, as the run loop does in slices.
 void step(hil::HexapodNode &node, uint32_t seq, uint32_t n) {
   node.on_frame(hil_test::step(seq, n), 0);
@@ -298,11 +310,8 @@ void test_watchdog() {
   CHECK(node.init(&err));
   const float height = 1.0f;
   WalkCmd c = walk_command(0.0);
-  send(node, servo_frames(c, 1));
-  node.on_frame(reset(1, true, true, c.stance, height, 10), 0);  // 10 ms: 10 steps
   Reference ref;
-  CHECK(ref.init(c, height) == LEGSIM_OK);
-  rec.take();
+  start_walk(node, rec, c, height, 10, ref);  // 10 ms: 10 steps
   uint32_t ctrl = 2;
   int faults = 0;
   for (int i = 0; i < 30; ++i) {
@@ -377,11 +386,8 @@ void test_mixed() {
   CHECK(node.init(&err));
   const float height = static_cast<float>(kGait.box_height_m);
   WalkCmd c = walk_command(0.0);
-  send(node, servo_frames(c, 1));
-  node.on_frame(reset(1, true, true, c.stance, height, 20), 0);  // 20 ms: 20 steps
   Reference ref;
-  CHECK(ref.init(c, height) == LEGSIM_OK);
-  rec.take();
+  start_walk(node, rec, c, height, 20, ref);  // 20 ms: 20 steps
   constexpr int32_t K = LEGSIM_HEXAPOD_KEEP, F = LEGSIM_HEXAPOD_FORCE, S = LEGSIM_HEXAPOD_SERVO;
   const int n = 140, silent_leg = 3, silent_from = 100, timeout_steps = 20;
   int equal = 0, modes_seen = 0, trips = 0, trip_step = -1, forced_equal = 0;
