@@ -663,8 +663,8 @@ def load_scene(spec: str | os.PathLike, root: Path | None = None) -> Scene:
 
 
 def is_hexapod_scene(path: str | os.PathLike) -> bool:
-    """The scene's `model` is a hexapod file ([yoke] or [rowing], as legsim_cli and the model
-    loader tell one): legsim_cli runs it (scenes/README.md, "The hexapod"); the bench has no
+    """The scene's `model` is a hexapod file ([yoke], [rowing] or [[box_contact]]: a block's
+    included, as the model loader tells one, legsim_toml_is_hexapod_file): legsim_cli runs it (scenes/README.md, "The hexapod"); the bench has no
     hexapod (hil_sim has none, the reference models are planar). False for a file that does not
     parse (legsim_cli then says why)."""
     try:
@@ -674,7 +674,7 @@ def is_hexapod_scene(path: str | os.PathLike) -> bool:
             return False
         mp = Path(model) if Path(model).is_absolute() else Path(path).parent / model
         m = tomllib.loads(mp.read_text())
-        return "yoke" in m or "rowing" in m
+        return "yoke" in m or "rowing" in m or "box_contact" in m
     except (OSError, UnicodeDecodeError, tomllib.TOMLDecodeError):
         return False
 

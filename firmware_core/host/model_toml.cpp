@@ -1466,6 +1466,13 @@ extern "C" legsim_status legsim_model_toml_variants(const char *path, char (*nam
   });
 }
 
+extern "C" int legsim_toml_is_hexapod_file(const char *path) {
+  if (!path) return 0;
+  int kind = 0;
+  with_toml_file(path, nullptr, 0, [&](toml::table &doc) { kind = !is_hexapod(&doc) ? 0 : has(&doc, "leg") ? 1 : 2; });
+  return kind;
+}
+
 extern "C" legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexapod_desc *out, char *msg,
                                                   size_t msg_len) {
   if (!path || !out) {

@@ -64,6 +64,11 @@ legsim_status legsim_model_toml_variants(const char *path, char (*names)[LEGSIM_
  * Statuses and messages as legsim_model_load_toml's. */
 legsim_status legsim_hexapod_load_toml(const char *path, legsim_hexapod_desc *out, char *msg, size_t msg_len);
 
+/* What legsim_hexapod_load_toml reads (a file with [yoke], [rowing] or [[box_contact]]): 1 a
+ * hexapod (it has [[leg]]s), 2 a block (none); 0 anything else: a model file, or a file that
+ * cannot be read or does not parse (the loaders then say why). Only reads the file. */
+int legsim_toml_is_hexapod_file(const char *path);
+
 #ifdef __cplusplus
 }
 #endif

@@ -2,6 +2,7 @@
 // JSON. The keys, units, defaults and ranges: scenes/README.md, "The hexapod". Host only; the
 // hexapod's C API only (legsim/hexapod.h), the walk driven as legsim.Hexapod.walk drives it.
 #include "scene_hexapod.hpp"
+#include "scene_block.hpp"
 #include "scene_hexapod_common.hpp"
 #include "scene_hexapod_inverse.hpp"
 #include "scene_hexapod_sweep.hpp"
@@ -38,8 +39,6 @@ using scene_text::q;
 constexpr double kMaxBoxHeightM = 10.0;
 constexpr double kMaxLiftM = 1.0;
 constexpr double kMaxBoxLoadN = 1e6;
-constexpr int64_t kMaxSteps = 100000000;    // 1e8 steps
-constexpr int64_t kMaxRecordEvery = 10000000;
 constexpr const char *kWhich[3] = {"upper", "lower", "rowing"};
 constexpr const char *kFootState[3] = {"free", "stuck", "sliding"};  // legsim_contact_state
 
@@ -98,7 +97,7 @@ struct Offset {
 
 enum class HexAnalysis { kStatics, kDynamics };
 
-struct HexScene {
+struct HexScene : RunKeys, GroundKeys {
   std::string path, name, description, model, model_path;
   HexAnalysis analysis = HexAnalysis::kDynamics;
   bool has_box_height = false, has_rowing = false, has_lengths = false;
@@ -107,21 +106,14 @@ struct HexScene {
   std::vector<LegRef> stance;
   bool has_box_load = false;
   double box_load[3] = {0, 0, 0};
-  // dynamics
-  double step_s = 0.001;
-  legsim_integrator integrator = LEGSIM_INTEGRATOR_RK4;
-  int64_t step_ns = 1000000, n_steps = 0, record_every = 1;
-  double duration = 0, lift = 0;
+  // dynamics (RunKeys: step_s, integrator, duration, record_every)
+  double lift = 0;
   bool has_stuck = false;
   std::vector<LegRef> stuck;
   bool force_control = false;  // control = "force" (else "servo")
   std::vector<Offset> offsets;
   bool has_gait = false;
   legsim_hexapod_gait gait{};
-  // [ground]: the file's plane turned to slope (rad) rising toward uphill (rad about z from x),
-  // its friction replaced; each key left out keeps the file's
-  bool has_slope = false, has_mu_static = false, has_mu_kinetic = false;
-  double slope = 0, uphill = 0, mu_static = 0, mu_kinetic = 0;
   std::string checks_json = "null";  // [checks] resolved (tests/model/check_cli_output.py runs them)
   std::vector<LegRef> stuck_at_end;   // [checks] stuck_at_end, as written
   // bound against the file
@@ -130,18 +122,6 @@ struct HexScene {
 
 const std::vector<std::string> kCommonKeys = {"description", "name", "model", "analysis", "box_height", "rowing",
                                               "lengths", "ground", "checks"};
-
-// [checks]: a target `{ value, tolerance > 0 }` (the result within tolerance of value) or a bound.
-std::string target_json(Node v, const std::string &what) {
-  Table t = v ? v->as_table() : nullptr;
-  if (!t) fail(what + " must be { value, tolerance }");
-  check_keys(t, {"value", "tolerance"}, what + ": ");
-  if (!t->get("value") || !t->get("tolerance")) fail(what + " must be { value, tolerance }");
-  const double x = real_of(t->get("value"), what + ": 'value'");
-  const double tol = real_of(t->get("tolerance"), what + ": 'tolerance'");
-  if (!(tol > 0)) fail(what + ": 'tolerance' must be > 0 (got " + num(tol) + ")");
-  return "{\"value\": " + jnum(x) + ", \"tolerance\": " + jnum(tol) + "}";
-}
 
 std::string checks_of(Node v, bool statics, std::vector<LegRef> &stuck_at_end) {
   Table t = v->as_table();
@@ -248,57 +228,11 @@ HexScene parse(const toml::table &doc, const std::string &path) {
     for (int i = 0; i < 3; ++i)
       s.box_load[i] = ranged(a->get(i), "'box_load'[" + std::to_string(i) + "]", -kMaxBoxLoadN, kMaxBoxLoadN);
   }
-  if (Node v = t->get("ground")) {
-    Table g = v->as_table();
-    const std::string gw = "ground: ";
-    if (!g) fail("'ground' must be a table {slope, uphill, mu_static, mu_kinetic}");
-    check_keys(g, {"slope", "uphill", "mu_static", "mu_kinetic"}, gw);
-    if (Node x = g->get("slope")) s.has_slope = true, s.slope = ranged(x, gw + "'slope'", 0, LEGSIM_MAX_SLOPE_RAD);
-    if (Node x = g->get("uphill")) {
-      if (!s.has_slope) fail(gw + "'uphill' needs 'slope'");
-      s.uphill = ranged(x, gw + "'uphill'", -kPi, kPi);
-    }
-    if (Node x = g->get("mu_static"))
-      s.has_mu_static = true, s.mu_static = ranged(x, gw + "'mu_static'", 0, LEGSIM_MAX_FRICTION);
-    if (Node x = g->get("mu_kinetic"))
-      s.has_mu_kinetic = true, s.mu_kinetic = ranged(x, gw + "'mu_kinetic'", 0, LEGSIM_MAX_FRICTION);
-  }
+  static_cast<GroundKeys &>(s) = ground_keys(t->get("ground"));
   if (Node v = t->get("checks")) s.checks_json = checks_of(v, s.analysis == HexAnalysis::kStatics, s.stuck_at_end);
   if (s.analysis == HexAnalysis::kStatics) return s;
 
-  if (Node v = t->get("step_s")) {
-    s.step_s = ranged(v, "'step_s'", 1e-6, 0.1);
-    const double ns = s.step_s * 1e9;
-    if (std::fabs(ns - std::round(ns)) > 1e-6) fail("'step_s' must be a whole number of nanoseconds (got " + num(s.step_s) + ")");
-    s.step_ns = static_cast<int64_t>(std::llround(ns));
-  }
-  if (Node v = t->get("integrator")) {
-    const std::string in = string_of(v, "'integrator'");
-    if (in == "rk4") {
-      s.integrator = LEGSIM_INTEGRATOR_RK4;
-    } else if (in == "generalized_alpha") {
-      s.integrator = LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
-    } else {
-      fail("'integrator' of a hexapod must be rk4 or generalized_alpha (got " + q(in) + ")");
-    }
-  }
-  Node dv = t->get("duration");
-  if (!dv) fail("missing key 'duration'");
-  s.duration = ranged(dv, "'duration'", 0, 1e6, true);
-  const double steps = s.duration * 1e9 / static_cast<double>(s.step_ns);
-  s.n_steps = static_cast<int64_t>(std::llround(steps));
-  if (std::fabs(static_cast<double>(s.n_steps) * s.step_s - s.duration) > kGridTolS || s.n_steps < 1)
-    fail("'duration' " + num(s.duration) + " s is not a whole number of steps of " + num(s.step_s) + " s");
-  if (s.n_steps > kMaxSteps) fail("'duration' asks for more than " + std::to_string(kMaxSteps) + " steps");
-  if (Node v = t->get("record_every")) {
-    if (!v->is_integer()) fail("'record_every' must be an integer");
-    s.record_every = *v->value<int64_t>();
-    if (s.record_every < 1 || s.record_every > kMaxRecordEvery)
-      fail("'record_every' must be in 1.." + std::to_string(kMaxRecordEvery) + " (got " +
-           std::to_string(s.record_every) + ")");
-  }
-  if (s.n_steps / s.record_every + 1 > kMaxSamples)
-    fail("'duration' / ('step_s' x 'record_every') asks for more than " + std::to_string(kMaxSamples) + " samples");
+  static_cast<RunKeys &>(s) = run_keys(t);
   if (Node v = t->get("lift")) s.lift = ranged(v, "'lift'", 0, kMaxLiftM);
   if (Node v = t->get("stuck")) {
     s.has_stuck = true;
@@ -698,29 +632,33 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
 
 }  // namespace
 
-bool scene_is_hexapod(const std::string &text, const std::string &path) {
+namespace {
+// legsim_toml_is_hexapod_file of the scene's model: 1 a hexapod, 2 a block, 0 neither (or a
+// scene that does not parse).
+int scene_model_kind(const std::string &text, const std::string &path) {
   try {
     std::string why;
-    if (!toml_input_within_limits(text, why)) return false;
+    if (!toml_input_within_limits(text, why)) return 0;
     toml::table doc = toml::parse(text, path);
     Node m = doc.get("model");
-    if (!m || !m->is_string()) return false;
+    if (!m || !m->is_string()) return 0;
     const std::string model(*m->value<std::string_view>());
-    if (model.empty() || model.rfind("builtin:", 0) == 0) return false;
+    if (model.empty() || model.rfind("builtin:", 0) == 0) return 0;
     const std::string mp = model[0] == '/' ? model : dirname_of(path) + model;
-    std::string mtext;
-    if (!read_toml_file(mp.c_str(), mtext, why) || !toml_input_within_limits(mtext, why)) return false;
-    toml::table md = toml::parse(mtext, mp);
-    return md.contains("yoke") || md.contains("rowing");  // as the loader tells a hexapod file
+    return legsim_toml_is_hexapod_file(mp.c_str());
   } catch (...) {
-    return false;
+    return 0;
   }
 }
+}  // namespace
+
+bool scene_is_hexapod(const std::string &text, const std::string &path) { return scene_model_kind(text, path) != 0; }
 
 int run_hexapod_scene(const std::string &text, const std::string &path, bool check_only, HexapodOutput &out,
                       std::ostream &err) {
   if (scene_is_hexapod_inverse(text, path)) return run_hexapod_inverse_scene(text, path, check_only, out, err);
   if (scene_is_hexapod_sweep(text, path)) return run_hexapod_sweep_scene(text, path, check_only, out, err);
+  if (scene_model_kind(text, path) == 2) return run_block_scene(text, path, check_only, out, err);
   HexScene s;
   auto h = std::make_unique<legsim_hexapod_desc>();
   legsim_hexapod_pose pose{};
@@ -728,16 +666,7 @@ int run_hexapod_scene(const std::string &text, const std::string &path, bool che
   try {
     s = parse(scene_document(text, path), path);
     if (!load_scene_model(s.model_path, path, *h, err)) return 2;
-    // the scene's ground over the file's
-    if (s.has_slope) {
-      h->ground_normal[0] = -std::sin(s.slope) * std::cos(s.uphill);
-      h->ground_normal[1] = -std::sin(s.slope) * std::sin(s.uphill);
-      h->ground_normal[2] = std::cos(s.slope);
-    }
-    if (s.has_mu_static) h->mu_static = s.mu_static;
-    if (s.has_mu_kinetic) h->mu_kinetic = s.mu_kinetic;
-    if (!(h->mu_kinetic <= h->mu_static))
-      fail("ground: mu_kinetic " + num(h->mu_kinetic) + " must be at most mu_static " + num(h->mu_static));
+    ground_apply(s, *h);
     if (s.has_stance) s.stance_mask = bind_legs(s.stance, *h, "'stance'");
     if (s.has_stuck) s.stuck_mask = bind_legs(s.stuck, *h, "'stuck'");
     const size_t at = s.checks_json.find("@STUCK_AT_END@");

@@ -11,8 +11,8 @@
 
 namespace legsim_host {
 
-// True when the scene text (read as the file at path) names in `model` a hexapod file: a
-// regular file that parses and has [yoke] or [rowing], as legsim_hexapod_load_toml tells them.
+// True when the scene text (read as the file at path) names in `model` a hexapod file (a block's
+// included): legsim_toml_is_hexapod_file, the loader's own rule.
 // False for anything else, a scene or model that does not parse included (the planar reader
 // then says what is wrong).
 bool scene_is_hexapod(const std::string &text, const std::string &path);

@@ -127,6 +127,109 @@ inline toml::table scene_document(const std::string &text, const std::string &pa
   }
 }
 
+// [checks]' target `{ value, tolerance > 0 }` (the result within tolerance of value), as JSON.
+inline std::string target_json(scene_read::Node v, const std::string &what) {
+  scene_read::Table t = v ? v->as_table() : nullptr;
+  if (!t) scene_read::fail(what + " must be { value, tolerance }");
+  scene_read::check_keys(t, {"value", "tolerance"}, what + ": ");
+  if (!t->get("value") || !t->get("tolerance")) scene_read::fail(what + " must be { value, tolerance }");
+  const double x = scene_read::real_of(t->get("value"), what + ": 'value'");
+  const double tol = scene_read::real_of(t->get("tolerance"), what + ": 'tolerance'");
+  if (!(tol > 0)) scene_read::fail(what + ": 'tolerance' must be > 0 (got " + scene_text::num(tol) + ")");
+  return "{\"value\": " + jnum(x) + ", \"tolerance\": " + jnum(tol) + "}";
+}
+
+// The keys of a run in time (the hexapod's dynamics and the block's): step_s, integrator,
+// duration, record_every; units and ranges in scenes/README.md.
+struct RunKeys {
+  double step_s = 0.001, duration = 0;
+  legsim_integrator integrator = LEGSIM_INTEGRATOR_RK4;
+  int64_t step_ns = 1000000, n_steps = 0, record_every = 1;
+};
+constexpr int64_t kMaxSteps = 100000000;  // 1e8 steps
+constexpr int64_t kMaxRecordEvery = 10000000;
+
+inline RunKeys run_keys(scene_read::Table t) {
+  using scene_read::fail;
+  using scene_text::num;
+  RunKeys s;
+  if (scene_read::Node v = t->get("step_s")) {
+    s.step_s = ranged(v, "'step_s'", 1e-6, 0.1);
+    const double ns = s.step_s * 1e9;
+    if (std::fabs(ns - std::round(ns)) > 1e-6) fail("'step_s' must be a whole number of nanoseconds (got " + num(s.step_s) + ")");
+    s.step_ns = static_cast<int64_t>(std::llround(ns));
+  }
+  if (scene_read::Node v = t->get("integrator")) {
+    const std::string in = string_of(v, "'integrator'");
+    if (in == "rk4") {
+      s.integrator = LEGSIM_INTEGRATOR_RK4;
+    } else if (in == "generalized_alpha") {
+      s.integrator = LEGSIM_INTEGRATOR_GENERALIZED_ALPHA;
+    } else {
+      fail("'integrator' of a hexapod must be rk4 or generalized_alpha (got " + scene_text::q(in) + ")");
+    }
+  }
+  scene_read::Node dv = t->get("duration");
+  if (!dv) fail("missing key 'duration'");
+  s.duration = ranged(dv, "'duration'", 0, 1e6, true);
+  const double steps = s.duration * 1e9 / static_cast<double>(s.step_ns);
+  s.n_steps = static_cast<int64_t>(std::llround(steps));
+  if (std::fabs(static_cast<double>(s.n_steps) * s.step_s - s.duration) > kGridTolS || s.n_steps < 1)
+    fail("'duration' " + num(s.duration) + " s is not a whole number of steps of " + num(s.step_s) + " s");
+  if (s.n_steps > kMaxSteps) fail("'duration' asks for more than " + std::to_string(kMaxSteps) + " steps");
+  if (scene_read::Node v = t->get("record_every")) {
+    if (!v->is_integer()) fail("'record_every' must be an integer");
+    s.record_every = *v->value<int64_t>();
+    if (s.record_every < 1 || s.record_every > kMaxRecordEvery)
+      fail("'record_every' must be in 1.." + std::to_string(kMaxRecordEvery) + " (got " +
+           std::to_string(s.record_every) + ")");
+  }
+  if (s.n_steps / s.record_every + 1 > kMaxSamples)
+    fail("'duration' / ('step_s' x 'record_every') asks for more than " + std::to_string(kMaxSamples) + " samples");
+  return s;
+}
+
+// [ground]: the file's plane turned to slope (rad) rising toward uphill (rad about z from x),
+// its friction replaced; each key left out keeps the file's.
+struct GroundKeys {
+  bool has_slope = false, has_mu_static = false, has_mu_kinetic = false;
+  double slope = 0, uphill = 0, mu_static = 0, mu_kinetic = 0;
+};
+
+inline GroundKeys ground_keys(scene_read::Node v) {
+  using scene_read::fail;
+  GroundKeys s;
+  if (!v) return s;
+  scene_read::Table g = v->as_table();
+  const std::string gw = "ground: ";
+  if (!g) fail("'ground' must be a table {slope, uphill, mu_static, mu_kinetic}");
+  scene_read::check_keys(g, {"slope", "uphill", "mu_static", "mu_kinetic"}, gw);
+  if (scene_read::Node x = g->get("slope")) s.has_slope = true, s.slope = ranged(x, gw + "'slope'", 0, LEGSIM_MAX_SLOPE_RAD);
+  if (scene_read::Node x = g->get("uphill")) {
+    if (!s.has_slope) fail(gw + "'uphill' needs 'slope'");
+    s.uphill = ranged(x, gw + "'uphill'", -kPi, kPi);
+  }
+  if (scene_read::Node x = g->get("mu_static"))
+    s.has_mu_static = true, s.mu_static = ranged(x, gw + "'mu_static'", 0, LEGSIM_MAX_FRICTION);
+  if (scene_read::Node x = g->get("mu_kinetic"))
+    s.has_mu_kinetic = true, s.mu_kinetic = ranged(x, gw + "'mu_kinetic'", 0, LEGSIM_MAX_FRICTION);
+  return s;
+}
+
+// The scene's ground over the file's (h's); refused when mu_kinetic > mu_static.
+inline void ground_apply(const GroundKeys &s, legsim_hexapod_desc &h) {
+  if (s.has_slope) {
+    h.ground_normal[0] = -std::sin(s.slope) * std::cos(s.uphill);
+    h.ground_normal[1] = -std::sin(s.slope) * std::sin(s.uphill);
+    h.ground_normal[2] = std::cos(s.slope);
+  }
+  if (s.has_mu_static) h.mu_static = s.mu_static;
+  if (s.has_mu_kinetic) h.mu_kinetic = s.mu_kinetic;
+  if (!(h.mu_kinetic <= h.mu_static))
+    scene_read::fail("ground: mu_kinetic " + scene_text::num(h.mu_kinetic) + " must be at most mu_static " +
+                     scene_text::num(h.mu_static));
+}
+
 // The scene's hexapod file into h; false, the loader's message on err, when it is refused.
 inline bool load_scene_model(const std::string &model_path, const std::string &scene_path, legsim_hexapod_desc &h,
                              std::ostream &err) {

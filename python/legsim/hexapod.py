@@ -265,11 +265,21 @@ class Hexapod:
         res["cone"] = st["cone"]
         return res
 
-    def sim(self, pose: dict, stuck=range(LEGS), integrator: str = "rk4") -> "HexapodSim":
+    def sim(self, pose: dict, stuck=None, integrator: str = "rk4", *, box_stuck=()) -> "HexapodSim":
         """The robot moving from ``pose`` (as statics'), at rest, the feet of ``stuck`` (leg
-        indices) held where the pose puts them, the commands zero (legsim_hexapod_sim_init),
-        stepped by ``integrator`` (HexapodSim.set_integrator)."""
-        m = HexapodSim(self, pose, _mask(stuck, "stuck"))
+        indices; every leg the file has by default) and the box's own contact points of
+        ``box_stuck`` (indices of the file's [[box_contact]]s) held where the pose puts them, the
+        commands zero (legsim_hexapod_sim_init), stepped by ``integrator``
+        (HexapodSim.set_integrator). A block (a file of no legs) has no feet: its points are
+        ``box_stuck``."""
+        legs = range(self.desc.n_legs) if stuck is None else stuck
+        mask = _mask(legs, "stuck")
+        for k in box_stuck:
+            if not 0 <= int(k) < self.desc.n_box_contacts:
+                raise ValueError(f"box_stuck: the file has no box contact point {k} "
+                                 f"(0..{self.desc.n_box_contacts - 1})")
+            mask |= 1 << (LEGS + int(k))
+        m = HexapodSim(self, pose, mask)
         m.set_integrator(integrator)
         return m
 

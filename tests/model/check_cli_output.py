@@ -55,6 +55,9 @@ def check_good(cli, scene, outdir):
     if d.get("kind") == "hexapod":
         check_hexapod(cli, scene, spec, d, name)
         return
+    if d.get("kind") == "block":
+        check_block(cli, scene, spec, d, name)
+        return
     for key in ("scene", "model", "analysis", "integrator", "step_s", "record_every", "status", "status_code", "bodies",
                 "joints", "actuators", "samples"):
         check(key in d, f"{name}: JSON lacks '{key}'")
@@ -182,29 +185,25 @@ def below_z(d, x, y):
     return p[2] - (n[0] * (x - p[0]) + n[1] * (y - p[1])) / n[2]
 
 
-def hexapod_slip(d):
-    """The sliding feet between consecutive samples (record_every 1): the worst | |F_t| - mu_k N |
-    / N, the worst angle between the friction and the slip (the foot's displacement, against the
-    mean of the tangential forces at both ends; from the fourth step in a row it slides faster than
-    0.1 mm/s: slower, the core keeps a slip's direction (docs/design/spatial.md "Moving"), and a
-    slip from rest turns onto its velocity over its first steps), and
-    the energy balance as
-    tests/model/test_hexapod_contact.cpp's: the robot's energy (kinetic and gravity's, less the
-    commands' work) changes by the friction's work, | dE - W | / |W|, both works by the
-    trapezoid rule."""
+def slip_and_work(d, points, com, commands=0.0):
+    """The sliding contact points between consecutive samples (record_every 1; points(sample): name
+    -> {state, x, force}): the worst | |F_t| - mu_k N | / N, the worst angle between the friction
+    and the slip (the point's displacement, against the mean of the tangential forces at both
+    ends; from the fourth step in a row it slides faster than 0.1 mm/s: slower, the core keeps a
+    slip's direction (docs/design/spatial.md "Moving"), and a slip from rest turns onto its
+    velocity over its first steps), and the energy balance as
+    tests/model/test_hexapod_contact.cpp's: the energy (kinetic and gravity's at the centre of
+    mass com(sample), less the commands' work) changes by the friction's work, | dE - W | / |W|,
+    both works by the trapezoid rule."""
     mu_k, n = d["ground"]["mu_kinetic"], d["ground"]["normal"]
-    mu_off = angle = work = commands = 0.0
+    mu_off = angle = work = 0.0
     samples = d["samples"]
     slow = 1e-4 * d["step_s"] * d["record_every"]  # m a sample at 0.1 mm/s
-    fast = {k: 0 for k in d["legs"]}  # steps in a row it slid faster than that
+    fast = {k: 0 for k in points(samples[0])}  # steps in a row it slid faster than that
     for a, b in zip(samples, samples[1:]):
-        for j in range(6):
-            for i in range(2):
-                commands += (a["actuator_forces"][j][i] + b["actuator_forces"][j][i]) / 2 * \
-                    (b["lengths"][j][i] - a["lengths"][j][i])
-            commands += (a["rowing_torques"][j] + b["rowing_torques"][j]) / 2 * (b["rowing"][j] - a["rowing"][j])
-        for k in d["legs"]:
-            fa, fb = a["feet"][k], b["feet"][k]
+        pa, pb = points(a), points(b)
+        for k in fast:
+            fa, fb = pa[k], pb[k]
             dx = [q - p for p, q in zip(fa["x"], fb["x"])]
             f = [(p + q) / 2 for p, q in zip(fa["force"], fb["force"])]
             work += _dot(f, dx)
@@ -220,10 +219,80 @@ def hexapod_slip(d):
                 angle = max(angle, math.acos(max(-1.0, min(1.0, c))))
 
     def mechanical(s):
-        return s["kinetic_energy"] - d["mass"] * _dot(d["gravity"], s["com"])
+        return s["kinetic_energy"] - d["mass"] * _dot(d["gravity"], com(s))
 
     lost = mechanical(samples[-1]) - mechanical(samples[0]) - commands
     return mu_off, angle, abs(lost - work) / abs(work) if work else math.inf
+
+
+def hexapod_slip(d):
+    """slip_and_work over the hexapod's feet, the actuators' and rowing motors' work the commands'."""
+    commands = 0.0
+    samples = d["samples"]
+    for a, b in zip(samples, samples[1:]):
+        for j in range(6):
+            for i in range(2):
+                commands += (a["actuator_forces"][j][i] + b["actuator_forces"][j][i]) / 2 * \
+                    (b["lengths"][j][i] - a["lengths"][j][i])
+            commands += (a["rowing_torques"][j] + b["rowing_torques"][j]) / 2 * (b["rowing"][j] - a["rowing"][j])
+    return slip_and_work(d, lambda s: s["feet"], lambda s: s["com"], commands)
+
+
+def block_check(d, key, want):
+    """A block scene's [checks] key against its JSON (scenes/README.md, "A block"): (what the run
+    gave, passed)."""
+    samples, last = d["samples"], d["samples"][-1]
+    final = {"box_x_m": last["box"][0], "box_y_m": last["box"][1], "box_z_m": last["box"][2]}
+    if key in final:
+        return final[key], abs(final[key] - want["value"]) <= want["tolerance"]
+    if key == "rest_s":  # the first sample with every point stuck after one slid
+        slid = False
+        got = None
+        for s in samples:
+            states = [c["state"] for c in s["contacts"]]
+            slid = slid or "sliding" in states
+            if slid and all(x == "stuck" for x in states):
+                got = s["t"]
+                break
+        return got, got is not None and abs(got - want["value"]) <= want["tolerance"]
+    if key == "impacts_min":
+        return last["impacts"], last["impacts"] >= want
+    if key in ("slip_mu_off", "friction_work_off"):
+        r = slip_and_work(d, lambda s: dict(enumerate(s["contacts"])), lambda s: s["box"])
+        got = r[0] if key == "slip_mu_off" else r[2]
+        return got, got <= want
+    return None, False
+
+
+def check_block(cli, scene, spec, d, name):
+    """A block scene's JSON (scenes/README.md, "A block"): the run's samples on the step grid, its
+    points on or above the ground, the stuck ones on it and inside their cones, its checks; CSV
+    refused."""
+    check(d["status"] == "ok" and d["status_code"] == "LEGSIM_OK", f"{name}: status {d['status']}")
+    n, every, samples = d["n_steps"], d["record_every"], d["samples"]
+    check(len(samples) == n // every + 1 + (1 if n % every else 0), f"{name}: {len(samples)} samples")
+    check(abs(samples[-1]["t"] - spec["duration"]) < 1e-9, f"{name}: last t {samples[-1]['t']}")
+    mu = d["ground"]["mu_static"]
+    for s in samples:
+        check(len(s["contacts"]) == len(d["box_contacts"]) > 0, f"{name}: contacts at t = {s['t']}")
+        for k, c in enumerate(s["contacts"]):
+            check(over_ground(d, c["x"]) > -1e-9, f"{name}: point {k} under the ground at t = {s['t']}")
+            if c["state"] == "stuck":
+                check(abs(over_ground(d, c["x"])) < 1e-9, f"{name}: stuck point {k} off the ground at t = {s['t']}")
+                N, Ft = ground_split(d, c["force"])
+                check(Ft <= mu * N + 1e-9, f"{name}: stuck point {k} outside its cone at t = {s['t']}")
+            elif c["state"] == "free":
+                check(c["force"] == [0, 0, 0], f"{name}: free point {k} with a force at t = {s['t']}")
+        check(all(math.isfinite(v) for v in s["box"] + s["box_quat"]), f"{name}: box at t = {s['t']}")
+    check((d["checks"] is None) == ("checks" not in spec) and set(d["checks"] or {}) == set(spec.get("checks", {})),
+          f"{name}: checks {d['checks']}")
+    for key, want in (d["checks"] or {}).items():
+        got, ok = block_check(d, key, want)
+        check(ok, f"{name}: checks.{key}: got {got}, want {want}")
+    r = run(cli, scene, None, "csv")
+    check(r.returncode == 2 and "JSON only" in r.stderr, f"{name}: CSV not refused: {r.stderr.strip()}")
+    r = subprocess.run([cli, scene, "--check"], capture_output=True, text=True, timeout=60)
+    check(r.returncode == 0 and json.loads(r.stdout)["kind"] == "block", f"{name}: --check")
 
 
 def hexapod_check(d, key, want):
@@ -365,7 +434,7 @@ def check_bad(cli, table, outdir):
                     d = json.load(f)
                 check(d["status"] == "error" and d["status_code"].startswith("LEGSIM_ERR_") and d["error"],
                       f"{scene}: JSON status {d.get('status')}")
-            if d.get("kind") == "hexapod":  # JSON only (its CSV is refused: check_hexapod)
+            if d.get("kind") in ("hexapod", "block"):  # JSON only (its CSV is refused: check_hexapod)
                 continue
             # The same failed run as CSV: the samples up to the failure, every field a number
             # (no row of empty fields for the failure: that is in the exit status and stderr).
