@@ -11,7 +11,7 @@
     legsim-bench hexapod [--turn R] [--periods N]  the hexapod walking (in process), checked,
                                                 with its plot and 3D animation (--slope-deg D:
                                                 on a slope)
-    legsim-bench workprecision|options|stress|mcu|robot-peers|hexapod-peers   the benchmarks (their own options; results
+    legsim-bench workprecision|options|stress|mcu|robot-peers|hexapod-peers|block-peers   the benchmarks (their own options; results
                                                 in out/bench-results/, --update-results for
                                                 the committed bench/results/)
 
@@ -54,6 +54,8 @@ BENCHMARKS = {
                     "the two-leg robot in legsim, MuJoCo and Siconos: errors against the bench's reference and cost"),
     "hexapod-peers": ("legsim_bench.benchmarks.peers.hexapod_results",
                       "the hexapod in legsim and MuJoCo: errors against the bench's reference and cost"),
+    "block-peers": ("legsim_bench.benchmarks.peers.block_peers",
+                    "a block on an incline in legsim and MuJoCo: errors against the closed forms and cost"),
 }
 
 

@@ -1,17 +1,13 @@
 """The block's scenes (scenes/block_*.toml, scenes/README.md "A block"): legsim_cli runs a hexapod
 file of no legs (models/block.toml) through the hexapod's C API; here its JSON against the closed
-forms of a particle sliding on an inclined plane with Coulomb friction, and against the Python API's
-run of the same block (legsim.Hexapod.sim with its points stuck, set_velocity, step).
-
-The plane at alpha, mu_k = k tan(alpha), phi the angle between the velocity and the fall line, a
-launch across it (phi0 = pi / 2) at v0, u = tan(phi / 2) (tests/model/test_spatial_block.cpp derives
-them): k = 1: v = v0 (1 + u^2) / 2, t(u) = T0 (1/4 - ln(u) / 2 - u^2 / 4), across x(u) = L0 ((1 - u) / 2
-+ (1 - u^3) / 6), down y(u) = L0 (-ln(u) / 4 - (1 - u^4) / 16); k > 1 it stops at T = T0 k / (k^2 - 1),
-x_s = 2 k L0 / (4 k^2 - 1), y_s = L0 / (4 (k^2 - 1)); T0 = v0 / (g sin(alpha)), L0 = v0 T0. The
-block's centre of mass is over its points' centroid: it translates."""
+forms of a body sliding on an inclined plane with Coulomb friction (the bench's
+reference/block_incline.py: launched across the fall line, mu_k = k tan(alpha)), and against the
+Python API's run of the same block (legsim.Hexapod.sim with its points stuck, set_velocity, step).
+The block's centre of mass is over its points' centroid: it translates."""
 import json
 import math
 import subprocess
+import sys
 from pathlib import Path
 
 import numpy as np
@@ -19,8 +15,15 @@ import pytest
 from built import legsim_cli
 
 ROOT = Path(__file__).resolve().parents[2]
+try:
+    import legsim_bench  # noqa: F401
+except ImportError:  # the bench is not installed: use the source tree
+    sys.path.insert(0, str(ROOT / "bench"))
+
+from legsim_bench.reference import block_incline  # noqa: E402
+
 SCENES = ROOT / "scenes"
-G = 9.81
+G = block_incline.G0
 
 
 def _run(name):
@@ -37,29 +40,6 @@ def _plane(d):
     return alpha, down, np.cross(down, n)
 
 
-def _closed(k, alpha, v0, t):
-    """(across, down, speed) at t, u from t(u) = t by bisection (t(u) falls with u)."""
-    s = G * math.sin(alpha)
-    T0, L0 = v0 / s, v0 * v0 / s
-
-    def time(u):
-        if k == 1:
-            return T0 * (0.25 - 0.5 * math.log(u) - 0.25 * u * u)
-        return T0 / 2 * ((1 - u ** (k - 1)) / (k - 1) + (1 - u ** (k + 1)) / (k + 1))
-
-    lo, hi = 0.0, 1.0
-    for _ in range(200):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if time(mid) > t else (lo, mid)
-    u = 0.5 * (lo + hi)
-    if k == 1:
-        return (L0 * ((1 - u) / 2 + (1 - u ** 3) / 6), L0 * (-0.25 * math.log(u) - (1 - u ** 4) / 16),
-                v0 * (1 + u * u) / 2)
-    return (L0 / 2 * ((1 - u ** (2 * k - 1)) / (2 * k - 1) + (1 - u ** (2 * k + 1)) / (2 * k + 1)),
-            L0 / 4 * ((1 - u ** (2 * k - 2)) / (2 * k - 2) - (1 - u ** (2 * k + 2)) / (2 * k + 2)),
-            v0 * u ** (k - 1) * (1 + u * u) / 2)
-
-
 def test_across_the_fall_line_at_mu_tan_alpha_follows_the_closed_form():
     """block_incline_across: every sample's place (1e-8 m) and speed (1e-8 m/s) on the closed form
     (RK4 at 5 ms: tests/model/test_spatial_block.cpp measures 1.6e-9 m), the three points sliding
@@ -74,7 +54,7 @@ def test_across_the_fall_line_at_mu_tan_alpha_follows_the_closed_form():
     n = np.array(d["ground"]["normal"])
     worst_x = worst_v = worst_n = 0.0
     for s in d["samples"][1:]:
-        x, y, v = _closed(1, alpha, float(np.linalg.norm(v0)), s["t"])
+        x, y, v = block_incline.across(1, alpha, float(np.linalg.norm(v0)), s["t"])
         dr = np.array(s["box"]) - r0
         worst_x = max(worst_x, math.hypot(dr @ across - x, dr @ down - y))
         worst_v = max(worst_v, abs(np.linalg.norm(s["box_velocity"]) - v))
@@ -94,9 +74,7 @@ def test_with_more_friction_it_stops_where_and_when_the_closed_form_does():
     k = d["ground"]["mu_kinetic"] / math.tan(alpha)
     assert abs(k - 1.5) < 1e-14
     v0 = float(np.linalg.norm(d["velocity"]))
-    s_ = G * math.sin(alpha)
-    T = v0 / s_ * k / (k * k - 1)
-    xs, ys = 2 * k * v0 * v0 / s_ / (4 * k * k - 1), v0 * v0 / s_ / (4 * (k * k - 1))
+    T, xs, ys = block_incline.stop(k, alpha, v0)
     h = d["step_s"]
     r0 = np.array(d["samples"][0]["box"])
     rest = next(s for s in d["samples"] if all(c["state"] == "stuck" for c in s["contacts"]) and s["t"] > 0)
@@ -106,7 +84,7 @@ def test_with_more_friction_it_stops_where_and_when_the_closed_form_does():
         dr = np.array(s["box"]) - r0
         if s["t"] < rest["t"] - 1e-12:
             assert states == {"sliding"}
-            x, y, _ = _closed(k, alpha, v0, s["t"])
+            x, y, _ = block_incline.across(k, alpha, v0, s["t"])
             assert math.hypot(dr @ across - x, dr @ down - y) < 5e-8
         else:
             assert states == {"stuck"}
