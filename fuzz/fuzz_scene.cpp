@@ -1,4 +1,5 @@
-// Fuzz target: the scene loader (firmware_core/host/scene_parse.cpp, scene_toml.hpp), TOML text in.
+// Fuzz target: the scene loaders (firmware_core/host/scene_parse.cpp, scene_toml.hpp; a hexapod's or
+// a block's: scene_hexapod*.cpp, scene_block.cpp), TOML text in.
 //
 // The text is written to a scratch file (load_scene reads a path), read and checked,
 // bound against its model, written out resolved, and run on a short horizon (at most
@@ -15,6 +16,10 @@
 // - a scene that loads is accepted within the documented ranges (step counts, record
 //   interval): the run is streamed sample by sample (the 1e9-step regression);
 // - every sample of a run is finite (the C API's "never NaN on OK").
+// A scene whose model is a hexapod file (legsim_cli's scene_is_hexapod, the scene read as a file of
+// the first seed folder) goes to legsim_cli's hexapod reader instead: resolved (--check) and, when
+// it is a statics or asks for at most kMaxHexapodSteps steps, run; its exit status 0 (the JSON ends "ok"), 1 (a
+// failed run: "error", with a message) or 2 (refused, with a message, nothing written).
 #include <unistd.h>
 
 #include <cmath>
@@ -36,6 +41,7 @@
 #define FUZZ_SCENE_HAS_ROBOT 0
 #endif
 #include "reach.h"
+#include "scene_hexapod.hpp"
 #include "scene_toml.hpp"
 
 FUZZ_REACH_DEFINE
@@ -44,6 +50,7 @@ namespace {
 
 constexpr int64_t kMaxSteps = 100;
 constexpr int32_t kMaxGrid = 4;
+constexpr int64_t kMaxHexapodSteps = 20;
 
 [[noreturn]] void violated(const std::string &what) {
   std::fprintf(stderr, "fuzz_scene: invariant violated: %s\n", what.c_str());
@@ -161,6 +168,36 @@ const legsim_model_desc *model_of(const legsim_host::Scene &scene, bool *robot) 
   return variants[0].model;
 }
 
+struct StringOutput : legsim_host::HexapodOutput {
+  std::ostringstream s;
+  bool opened = false;
+  std::ostream *open() override {
+    opened = true;
+    return &s;
+  }
+};
+
+// legsim_cli's hexapod reader on the text (read as the file at path): its exit status, with the
+// invariants above checked.
+int hexapod_scene(const std::string &text, const std::string &path, bool check_only, std::string &json) {
+  StringOutput out;
+  std::ostringstream err;
+  const int rc = legsim_host::run_hexapod_scene(text, path, check_only, out, err);
+  json = out.s.str();
+  const std::string e = err.str();
+  if (rc == 2) {
+    if (e.rfind("legsim_cli: error: ", 0) != 0) violated("a hexapod scene refused without a message: " + e);
+    return rc;
+  }
+  if (rc != 0 && rc != 1) violated("hexapod scene exit status " + std::to_string(rc));
+  if (!out.opened) violated("a hexapod scene accepted without output");
+  const bool ok = json.find("\"status\": \"ok\"") != std::string::npos;
+  if (!check_only && (rc == 0) != ok) violated("hexapod scene exit " + std::to_string(rc) + " with its JSON's status");
+  if (rc == 1 && e.rfind("legsim_cli: error: ", 0) != 0) violated("a failed hexapod run without a message");
+  if (rc == 0 && !e.empty()) violated("a hexapod scene accepted with a message: " + e);
+  return rc;
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
@@ -170,6 +207,20 @@ extern "C" int LLVMFuzzerTestOneInput(const uint8_t *data, size_t size) {
   if (!f) violated("cannot write the scratch file " + path);
   if (size > 0 && std::fwrite(data, 1, size, f) != size) violated("short write to " + path);
   std::fclose(f);
+
+  const std::string text(reinterpret_cast<const char *>(data), size);
+  const std::string as_seed = std::string(kSeedFolders[0]) + "fuzz_input.toml";  // never read
+  if (legsim_host::scene_is_hexapod(text, as_seed)) {
+    std::string json;
+    if (hexapod_scene(text, as_seed, true, json) != 0) return 0;
+    fuzz_reach::hexapod();  // accepted by the hexapod's (or the block's) reader
+    // run the statics and, by the resolved header's step count, the short runs
+    const size_t at = json.find("\"n_steps\": ");
+    if (json.find("\"analysis\": \"statics\"") != std::string::npos ||
+        (at != std::string::npos && std::strtoll(json.c_str() + at + 11, nullptr, 10) <= kMaxHexapodSteps))
+      hexapod_scene(text, as_seed, false, json);
+    return 0;
+  }
 
   legsim_host::Scene scene;
   std::string err;

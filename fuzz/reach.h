@@ -1,5 +1,6 @@
 // What the fuzz targets reached: each entry point counts the inputs that reached the two-leg
-// robot's code (fuzz/README.md, "Reaching the robot") and, fuzz_can, the hexapod's node, prints
+// robot's code (fuzz/README.md, "Reaching the robot") and the hexapod's (fuzz_can: its node;
+// fuzz_scene: its scene reader), prints
 // the counts at exit, and gives them to the corpus driver (its --min-robot and --min-hexapod
 // checks).
 #ifndef LEGSIM_FUZZ_REACH_H
@@ -44,7 +45,7 @@ inline void robot() {
   ++g_counts.robot;
 }
 
-// The input in progress reached the hexapod's node (counted once per input).
+// The input in progress reached the hexapod's node or scene reader (counted once per input).
 inline void hexapod() {
   if (g_counts.hexapod_input == g_counts.inputs) return;
   g_counts.hexapod_input = g_counts.inputs;
