@@ -380,10 +380,11 @@ void test_stops_and_feet_in_one_impact(void) {
       touching |= std::fabs(dot(robot_foot_position(R, l, d->q) - gp, n)) < 1e-9 ? 1u << l : 0u;
     TEST_ASSERT_EQUAL_HEX32(0x3F, touching);
     FeetHold &H = d->hold;
+    uint32_t arriving = 0;
     double sign[5];  // the gap's rate per the stroke's: -1 at the max end
     for (int i = 0; i < 5; ++i) {
       const uint32_t bit = 1u << (kLegStops * stop_leg[i] + stop_k[i]);
-      H.stops |= bit;
+      H.stops |= bit, arriving |= bit;
       sign[i] = rate(stop_leg[i], stop_k[i], d->v) > 0 ? -1 : 1;
       if (sign[i] < 0) H.upper |= bit;
     }
@@ -393,7 +394,7 @@ void test_stops_and_feet_in_one_impact(void) {
     V3 imp[kMaxContacts];
     double simp[kMaxHeldStops] = {};
     legsim::ConeReport rep;
-    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, contact_impact(R, g, touching, 0, d->q, d->v, H, d->slip_dir, imp, simp, rep,
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, contact_impact(R, g, touching, arriving, 0, d->q, d->v, H, d->slip_dir, imp, simp, rep,
                                                     d->rows, d->factor, d->contact_work));
     TEST_ASSERT_TRUE(rep.converged);
     residual = std::fmax(residual, rep.residual);

@@ -184,12 +184,14 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
   return LEGSIM_OK;
 }
 
-legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, uint32_t near,
-                             const real *q, real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, real *stop_impulse,
-                             ConeReport &report, Row *rows, RobotFactor &F, ContactWork &w) {
-  // every contact of the problem released: the joints' rows alone in the factor
+legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching,
+                             uint32_t arriving, uint32_t near, const real *q, real *v, FeetHold &hold, V3 *slip_dir,
+                             V3 *impulse, real *stop_impulse, ConeReport &report, Row *rows, RobotFactor &F,
+                             ContactWork &w) {
+  // the problem's contacts released: the joints' rows and the other held stops in the factor
+  const uint32_t problem = arriving | near;
   FeetHold none = hold;
-  none.stuck = none.sliding = 0, none.stops = none.upper = 0;
+  none.stuck = none.sliding = 0, none.stops = hold.stops & ~problem, none.upper = hold.upper & ~problem;
   system_rows(robot, none, q, v, rows);
   legsim_status st = robot_factor(robot, none, rows, F);
   if (st != LEGSIM_OK) return st;
@@ -200,7 +202,7 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
   for (int l = 0; l < robot_contacts(robot); ++l)
     if ((touching >> l) & 1u) feet[n++] = l;
   for (int s = 0; s < kLegStops * robot.nlegs; ++s)
-    if ((hold.stops >> s) & 1u) stops[ns++] = s;
+    if ((problem >> s) & 1u) stops[ns++] = s;
   const int nf = n;
   n += ns;
   if (n == 0) return LEGSIM_OK;
@@ -294,12 +296,14 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
     }
   }
   // a stop: held while it pushes or leaves slower than kCapture (the modes' check lets it go if it
-  // pulls); one of `near` (at its end, not held before) only when it pushes
+  // pulls); one of `near` (at its end, not held before) when it pushes, or approached and leaves
+  // slower than kCapture (a grazing arrival: no impulse, the acceleration level decides)
   for (int i = nf; i < n; ++i) {
     const int s = stops[i - nf];
     const uint32_t bit = 1u << s;
     stop_impulse[s] = r[3 * i];
-    const bool held = (near >> s) & 1u ? r[3 * i] > 0 : !(u[3 * i] > std::max(tol_u, kCapture));
+    const bool leaves = u[3 * i] > std::max(tol_u, kCapture);
+    const bool held = (near >> s) & 1u ? r[3 * i] > 0 || (u0[3 * i] < 0 && !leaves) : !leaves;
     if (!held) hold.stops &= ~bit, hold.upper &= ~bit;
   }
   return LEGSIM_OK;

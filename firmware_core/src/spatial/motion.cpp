@@ -345,6 +345,7 @@ void tally(ConeStats &s, const ConeReport &r) {
 // decide: the stuck feet's modes decided on their cones in the first round whatever their forces
 // (a located stick to slip, its function at its root: slipping, that foot's bit).
 legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false, uint32_t slipping = 0) {
+  uint32_t let_go = 0, let_go_upper = 0;  // the stops let go here (still at their ends)
   for (int round = 0; round <= 2 * robot_contacts(robot) + kLegStops * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
@@ -355,6 +356,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     d.acc_aux_h = 0;
     const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
+    uint32_t past_edge = 0;  // stuck feet pressing with their force past the mu_s cone
     // the stop pulling most, let go once the feet's modes hold (a foot's mode changes the stops'
     // multipliers: a stop decided before the feet would be let go and hit again)
     int pull = -1;
@@ -370,6 +372,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
         if (d.hold.stuck & bit) {
           const real N = -m[0], Ft = std::hypot(m[1], m[2]);
           if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
+          if (N >= -tol && Ft > d.ground.mu_static * N + tol) past_edge |= bit;
         } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
           d.hold.sliding &= ~bit, changed = true;
         }
@@ -385,10 +388,28 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
         if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
         changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
         // the cone keeps what the multipliers refuse (unless a stop pulling is why)
+        // the cone keeps a foot stuck at its edge that the multipliers put past it (the two
+        // solves' round-off at the edge): it slips, as a located stick to slip does
+        if (!changed && past_edge && !(decide && round == 0) && pull < 0) {
+          st = contact_modes(robot, d.ground, d.q, d.v, Q, past_edge, d.hold, d.slip_dir, d.modes, d.rows, d.factor,
+                             d.contact_work);
+          if (st != LEGSIM_OK) return st;
+          tally(d.cone_stats, d.modes);
+          changed = d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
+        }
         if (!changed && !(decide && round == 0) && pull < 0) return LEGSIM_ERR_CONTACT;
       }
     }
-    if (!changed && pull >= 0) d.hold.stops &= ~(1u << pull), d.hold.upper &= ~(1u << pull), changed = true;
+    if (changed && let_go) {
+      // a foot's mode changed after a stop was let go for it: the stop held again and decided anew
+      // (with the foot held it pulled; with the foot let go it may push)
+      d.hold.stops |= let_go, d.hold.upper |= let_go_upper;
+      let_go = let_go_upper = 0;
+    } else if (!changed && pull >= 0) {
+      const uint32_t bit = 1u << pull;
+      let_go |= bit, let_go_upper |= d.hold.upper & bit;
+      d.hold.stops &= ~bit, d.hold.upper &= ~bit, changed = true;
+    }
     if (!changed) return LEGSIM_OK;
   }
   return LEGSIM_ERR_CONTACT;
@@ -413,18 +434,18 @@ uint32_t strokes_at_end(const SpatialRobot &robot, FeetHold &hold, const real *q
   return near;
 }
 
-// An impact at d's state: the feet of `touching` on their cones and the strokes on their stops (the
-// held ones, and those at an end, which count as arrivals when it pushes them) in one contact
-// problem (contact_impact).
-legsim_status impact(const SpatialRobot &robot, RobotData &d, uint32_t touching) {
-  const uint32_t near = strokes_at_end(robot, d.hold, d.q), before = d.hold.stops & ~near;
+// An impact at d's state: the feet of `touching` on their cones and the strokes of `arriving`
+// and those at an end (which count as arrivals when it pushes them) on their stops in one contact
+// problem, the held stops holding (contact_impact).
+legsim_status impact(const SpatialRobot &robot, RobotData &d, uint32_t touching, uint32_t arriving = 0) {
+  const uint32_t near = strokes_at_end(robot, d.hold, d.q);
   for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
   for (int s = 0; s < kMaxHeldStops; ++s) d.stop_impulse[s] = 0;
-  const legsim_status st = contact_impact(robot, d.ground, touching, near, d.q, d.v, d.hold, d.slip_dir, d.impulse,
-                                          d.stop_impulse, d.impact, d.rows, d.factor, d.contact_work);
+  const legsim_status st = contact_impact(robot, d.ground, touching, arriving, near, d.q, d.v, d.hold, d.slip_dir,
+                                          d.impulse, d.stop_impulse, d.impact, d.rows, d.factor, d.contact_work);
   if (st != LEGSIM_OK) return st;
   tally(d.cone_stats, d.impact);
-  for (uint32_t s = d.hold.stops & ~before; s; s &= s - 1) ++d.stop_impacts;  // arrivals
+  for (uint32_t s = d.hold.stops & near; s; s &= s - 1) ++d.stop_impacts;  // arrivals
   return LEGSIM_OK;
 }
 
@@ -450,7 +471,7 @@ legsim_status stop_arrival(const SpatialRobot &robot, RobotData &d, int l, int k
   // kCapture); a stop pulling at the acceleration level after it is let go by the modes' check
   d.hold.stops |= bit;
   if (hi - x < x - lo) d.hold.upper |= bit;
-  const legsim_status st = impact(robot, d, touching);
+  const legsim_status st = impact(robot, d, touching, bit);
   if (st != LEGSIM_OK) return st;
   ++d.stop_impacts;
   return settle(robot, d);
