@@ -328,10 +328,138 @@ void test_touchdown_and_stop_in_one_step(void) {
   TEST_ASSERT_EQUAL_INT(6, on);
 }
 
+void test_stops_and_feet_in_one_impact(void) {
+  // The stand with its six feet on the ground (free), the robot moving down (0.3 m/s), sideways
+  // (0 .. 0.25 m/s) and at random (each body's velocity +-0.2, projected onto the joints' rows:
+  // every leg's strokes moving), and five strokes on a stop at the end their rate approaches (the
+  // impact problem reads the rows' coefficients, not the gaps): one contact problem of the feet's
+  // cones and the stops, 24 such. Checked against what holds whatever solved it: the joints' rows
+  // still met, no foot approaching the ground and no stroke its stop (the strokes' rates from
+  // robot_*_rate, not the impact's rows), every foot's impulse in its cone (mu_k) and opposite its
+  // slip, every stop's impulse pushing (>= 0), complementarity for both, the kinetic energy not
+  // raised, and the ground's impulses alone changing the robot's momentum and its angular momentum
+  // (a stop's impulse is internal).
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  const legsim_hexapod_desc &h = s.desc;
+  const V3 n = {h.ground_normal[0], h.ground_normal[1], h.ground_normal[2]};
+  static double q[kBodyConfig * kMaxRobotBodies], v[kMaxRobotDof], v0[kMaxRobotDof];
+  std::memcpy(q, s.q, sizeof q);
+  double zmin = 1e9;
+  for (int l = 0; l < 6; ++l) zmin = std::fmin(zmin, dot(robot_foot_position(R, l, q), n));
+  const V3 gp = {0, 0, zmin};  // (n: the file's level ground)
+  const GroundPlane g = {gp, n, h.mu_static, h.mu_kinetic};
+  // leg 0's two actuators, leg 2's upper, legs 1 and 4's rowing angles
+  const int stop_leg[5] = {0, 0, 2, 1, 4}, stop_k[5] = {0, 1, 0, 2, 2};
+  auto d = std::make_unique<RobotData>();
+  auto rate = [&](int l, int k, const double *x) {
+    return k == 2 ? robot_rowing_rate(R, l, d->q, x) : robot_actuator_rate(R, R.leg[l].first_actuator + k, d->q, x);
+  };
+  auto momentum = [&](const double *x, V3 &P, V3 &L) {  // and about the origin
+    P = L = {0, 0, 0};
+    for (int b = 0; b < R.nb; ++b) {
+      const double *qb = d->q + kBodyConfig * b, *xb = x + kBodyDof * b;
+      const V3 p = R.mass[b] * V3{xb[0], xb[1], xb[2]};
+      const V3 &I = R.inertia[b];
+      P = P + p;
+      L = L + cross({qb[0], qb[1], qb[2]}, p) + rotate(body_state(qb, xb).R, {I.x * xb[3], I.y * xb[4], I.z * xb[5]});
+    }
+  };
+  double worst_T = -1, approach = 0, cone = 0, against = 0, comp = 0, neg = 0, into = 0, scomp = 0, jv = 0, eP = 0,
+         eL = 0, residual = 0;
+  int mixed = 0, pushing_stops = 0, most_iterations = 0, by_sweeps = 0;
+  srand(7);
+  for (int trial = 0; trial < 24; ++trial) {
+    for (int k = 0; k < kBodyDof * R.nb; ++k) v[k] = 0.4 * (double(rand()) / RAND_MAX - 0.5);
+    for (int b = 0; b < R.nb; ++b) v[kBodyDof * b] += 0.05 * (trial % 6), v[kBodyDof * b + 2] -= 0.3;
+    FeetHold hold;
+    hold.stuck = hold.sliding = 0;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, q, v, hold, &g, *d));  // v onto the joints' rows
+    uint32_t touching = 0;
+    for (int l = 0; l < 6; ++l)
+      touching |= std::fabs(dot(robot_foot_position(R, l, d->q) - gp, n)) < 1e-9 ? 1u << l : 0u;
+    TEST_ASSERT_EQUAL_HEX32(0x3F, touching);
+    FeetHold &H = d->hold;
+    uint32_t arriving = 0;
+    double sign[5];  // the gap's rate per the stroke's: -1 at the max end
+    for (int i = 0; i < 5; ++i) {
+      const uint32_t bit = 1u << (kLegStops * stop_leg[i] + stop_k[i]);
+      H.stops |= bit, arriving |= bit;
+      sign[i] = rate(stop_leg[i], stop_k[i], d->v) > 0 ? -1 : 1;
+      if (sign[i] < 0) H.upper |= bit;
+    }
+    std::memcpy(v0, d->v, sizeof v0);
+    V3 P0, L0, P1, L1;
+    momentum(v0, P0, L0);
+    V3 imp[kMaxContacts];
+    double simp[kMaxHeldStops] = {};
+    legsim::ConeReport rep;
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, contact_impact(R, g, touching, arriving, 0, d->q, d->v, H, d->slip_dir, imp, simp, rep,
+                                                    d->rows, d->factor, d->contact_work));
+    TEST_ASSERT_TRUE(rep.converged);
+    residual = std::fmax(residual, rep.residual);
+    most_iterations = std::max(most_iterations, rep.iterations);
+    by_sweeps += rep.method == legsim::ConeMethod::Sweeps;
+    const double T0 = robot_kinetic_energy(R, v0), T1 = robot_kinetic_energy(R, d->v);
+    worst_T = std::fmax(worst_T, T1 / T0);
+    momentum(d->v, P1, L1);
+    FeetHold none;
+    none.stuck = none.sliding = 0;
+    system_rows(R, none, d->q, d->v, d->rows);
+    for (int r = 0; r < R.m; ++r) jv = std::fmax(jv, std::fabs(row_dot(R, d->rows[r], r, d->v)));
+    V3 dP = {0, 0, 0}, dL = {0, 0, 0};
+    int sliding = 0, stuck = 0;
+    for (int l = 0; l < 6; ++l) {
+      V3 p, pv;
+      foot_motion(R, l, d->q, d->v, p, pv);
+      const double rn = dot(imp[l], n), un = dot(pv, n);
+      const V3 rt = imp[l] - rn * n, ut = pv - un * n;
+      const double art = std::sqrt(dot(rt, rt)), aut = std::sqrt(dot(ut, ut));
+      dP = dP + imp[l];
+      dL = dL + cross(p, imp[l]);
+      approach = std::fmax(approach, -un);
+      cone = std::fmax(cone, art - g.mu_kinetic * rn);
+      comp = std::fmax(comp, std::fabs(rn * un));
+      if (aut > 1e-9 && rn > 1e-12) {  // on the cone's edge, against the slip
+        ++sliding;
+        against = std::fmax(against, std::fabs(dot(rt, ut) / aut + g.mu_kinetic * rn));
+      } else if (rn > 1e-12) {
+        ++stuck;
+      }
+    }
+    for (int i = 0; i < 5; ++i) {
+      const int b = kLegStops * stop_leg[i] + stop_k[i];
+      const double gap_rate = sign[i] * rate(stop_leg[i], stop_k[i], d->v);
+      neg = std::fmin(neg, simp[b]);
+      into = std::fmax(into, -gap_rate);
+      scomp = std::fmax(scomp, std::fabs(simp[b] * gap_rate));
+      pushing_stops += simp[b] > 1e-9;
+    }
+    mixed += stuck > 0 && sliding > 0;
+    const V3 e1 = P1 - P0 - dP, e2 = L1 - L0 - dL;
+    eP = std::fmax(eP, std::sqrt(dot(e1, e1)));
+    eL = std::fmax(eL, std::sqrt(dot(e2, e2)));
+  }
+  printf("24 impacts of 6 feet and 5 stops: %d by sweeps, at most %d iterations, residual %.1e; kinetic energy "
+         "after / before at most %.4f; feet stuck and sliding in one impact %d times; feet approaching at most %.1e "
+         "m/s, off the cone %.1e N s, off the slip's opposite %.1e, r_n u_n %.1e; stops pushing %d of 120, least "
+         "impulse %.1e, into a stop %.1e, p u %.1e; J v %.1e; momentum less the ground's impulses %.1e N s, "
+         "%.1e N m s\n",
+         by_sweeps, most_iterations, residual, worst_T, mixed, approach, cone, against, comp, pushing_stops, neg, into,
+         scomp, jv, eP, eL);
+  TEST_ASSERT_TRUE(worst_T < 1);
+  TEST_ASSERT_TRUE(mixed >= 1 && pushing_stops >= 24);
+  TEST_ASSERT_TRUE(approach < 1e-9 && cone < 1e-9 && against < 1e-9 && comp < 1e-9);
+  TEST_ASSERT_TRUE(neg >= 0 && into < 1e-9 && scomp < 1e-9);
+  TEST_ASSERT_TRUE(jv < 1e-12);
+  TEST_ASSERT_TRUE(eP < 1e-10 && eL < 1e-10);
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_upper_actuator_into_its_min_stroke);
   RUN_TEST(test_rowing_motor_into_its_stroke_end);
   RUN_TEST(test_touchdown_and_stop_in_one_step);
+  RUN_TEST(test_stops_and_feet_in_one_impact);
   return UNITY_END();
 }

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 import importlib.util
 
+import numpy as np
 import pytest
 
 legsim = pytest.importorskip("legsim")
@@ -46,3 +47,25 @@ def test_driven_past_the_strokes_stops_hold_and_create_no_energy():
     # the state's report: strokes held on their stops at some steps' ends, each at its end
     assert sum(r["on_stop"] for r in res) >= 100
     assert max(r["off_stop"] for r in res) <= 1e-12
+
+
+def test_a_stop_and_a_foot_at_one_instant_take_no_turns():
+    """The campaign driven past the strokes at h = 1 ms (``hexapod_energy.py --past --runs 40 --seed 1
+    --steps 1000``), its run 6: at 0.429 s leg 1's lower actuator reaches its stop while its foot
+    slides, and the two took turns without end (the stop's impulse taken with the feet free threw the
+    foot off, its touchdown pulled the stroke off its stop, ...: LEGSIM_ERR_CONTACT, "too many
+    events", at step 430). One impact problem of the stop and the feet (spatial/contact's
+    contact_impact) runs its 1,000 steps, every stroke inside its stroke and no step's energy gain
+    above RK4's own error at this step (4.0e-6 J, as before it failed: below 1e-5 J)."""
+    h = legsim.Hexapod.from_toml(legsim.data_path("models/hexapod.toml"))
+    mass = hexapod_energy.bodies_mass(h)
+    rng = np.random.default_rng(1)
+    for _ in range(6):  # the earlier runs' draws
+        hexapod_energy.one_run(h, rng, 0, 1e-3, mass, past=True)
+    r = hexapod_energy.one_run(h, rng, 1000, 1e-3, mass, past=True)
+    print(f"run 6: {r['status']}, {r['steps']} steps, {r['events']} events, {r['impacts']} impacts, "
+          f"{r['stop_impacts']} arrivals on a stop, largest gain {r['gain']:.2e} J")
+    assert r["status"] == "ok" and r["steps"] == 1000
+    assert r["stop_impacts"] >= 20 and r["impacts"] >= 20
+    assert r["past"] <= 1e-12 and r["off_stop"] <= 1e-12
+    assert r["gain"] < 1e-5

@@ -184,54 +184,89 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
   return LEGSIM_OK;
 }
 
-legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
-                             real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
-                             RobotFactor &F, ContactWork &w) {
+legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching,
+                             uint32_t arriving, uint32_t near, const real *q, real *v, FeetHold &hold, V3 *slip_dir,
+                             V3 *impulse, real *stop_impulse, ConeReport &report, Row *rows, RobotFactor &F,
+                             ContactWork &w) {
+  // the problem's contacts released: the joints' rows and the other held stops in the factor
+  const uint32_t problem = arriving | near;
   FeetHold none = hold;
-  none.stuck = none.sliding = 0;
+  none.stuck = none.sliding = 0, none.stops = hold.stops & ~problem, none.upper = hold.upper & ~problem;
   system_rows(robot, none, q, v, rows);
   legsim_status st = robot_factor(robot, none, rows, F);
   if (st != LEGSIM_OK) return st;
   const int nv = kBodyDof * robot.nb;
-  int feet[kMaxContacts], n = 0;
+  // the problem's contacts: the feet (their cones, mu_k), then the stops (a cone of mu = 0: the
+  // normal's impulse alone, >= 0; its two tangential rows are decoupled placeholders)
+  int feet[kMaxContacts], stops[kMaxHeldStops], n = 0, ns = 0;
   for (int l = 0; l < robot_contacts(robot); ++l)
     if ((touching >> l) & 1u) feet[n++] = l;
+  for (int s = 0; s < kLegStops * robot.nlegs; ++s)
+    if ((problem >> s) & 1u) stops[ns++] = s;
+  const int nf = n;
+  n += ns;
+  if (n == 0) return LEGSIM_OK;
   if (n > kConeMaxContacts) return LEGSIM_ERR_CAPACITY;
   const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
-  // the velocity change per unit impulse along each contact's axes, and the Delassus matrix
+  // each row of the problem: its coefficients on its bodies (a foot's: one; a stop's: two), the
+  // velocity change per unit impulse along it (X), its rate before (u0)
+  struct ImpactRow {
+    int a, b;  // bodies (-1: none)
+    real ja[kBodyDof], jb[kBodyDof];
+  };
+  ImpactRow prow[kConeMaxRows];
   real(&X)[kConeMaxRows][kMaxRobotDof] = w.X;
   real mu_tmp[kMaxSystemRows], col[kMaxRobotDof];
   static const real zero_g[kMaxSystemRows] = {};
-  real W[kConeMaxRows * kConeMaxRows], u0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows], mus[kConeMaxContacts];
-  real coef[kConeMaxContacts][3][kBodyDof];
   static const real zero_v[kBodyDof] = {0, 0, 0, 0, 0, 0};
-  for (int i = 0; i < n; ++i) {
-    const int fb = contact_body(robot, feet[i]);
-    const BodyState B = body_state(q + kBodyConfig * fb, zero_v);
-    V3 p, pv;
-    foot_motion(robot, feet[i], q, v, p, pv);
-    for (int k = 0; k < 3; ++k) {
-      std::fill(coef[i][k], coef[i][k] + kBodyDof, real(0));
-      point_coefficients(B, contact_point(robot, feet[i]), axes[k], 1, coef[i][k]);
-      foot_force_column(robot, feet[i], q, axes[k], col);
-      robot_solve(robot, F, col, zero_g, X[3 * i + k], mu_tmp);
-      u0[3 * i + k] = dot(axes[k], pv);
-    }
-    mus[i] = ground.mu_kinetic;
-  }
+  real W[kConeMaxRows * kConeMaxRows], u0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows], mus[kConeMaxContacts];
   const int nr = 3 * n;
-  for (int j = 0; j < n; ++j) {
-    const int fb = contact_body(robot, feet[j]);
-    for (int m = 0; m < 3; ++m)
-      for (int c = 0; c < nr; ++c) {
-        real w = 0;
-        for (int k = 0; k < kBodyDof; ++k) w += coef[j][m][k] * X[c][kBodyDof * fb + k];
-        W[nr * (3 * j + m) + c] = w;
+  for (int i = 0; i < n; ++i)
+    for (int k = 0; k < 3; ++k) {
+      ImpactRow &p = prow[3 * i + k];
+      p.a = p.b = -1;
+      std::fill(p.ja, p.ja + kBodyDof, real(0));
+      std::fill(p.jb, p.jb + kBodyDof, real(0));
+      if (i < nf) {
+        p.a = contact_body(robot, feet[i]);
+        point_coefficients(body_state(q + kBodyConfig * p.a, zero_v), contact_point(robot, feet[i]), axes[k], 1, p.ja);
+      } else if (k == 0) {
+        const int s = stops[i - nf], l = s / kLegStops, ks = s % kLegStops;
+        const Row g = stop_gap_row(robot, l, ks, (hold.upper >> s) & 1u, q, v);
+        row_bodies(robot, stop_row(robot, l, ks), p.a, p.b);
+        std::copy(g.ja, g.ja + kBodyDof, p.ja);
+        std::copy(g.jb, g.jb + kBodyDof, p.jb);
       }
+    }
+  auto rate = [&](const ImpactRow &p, const real *x) {
+    real s = 0;
+    if (p.a >= 0)
+      for (int k = 0; k < kBodyDof; ++k) s += p.ja[k] * x[kBodyDof * p.a + k];
+    if (p.b >= 0)
+      for (int k = 0; k < kBodyDof; ++k) s += p.jb[k] * x[kBodyDof * p.b + k];
+    return s;
+  };
+  for (int c = 0; c < nr; ++c) {
+    const ImpactRow &p = prow[c];
+    std::fill(col, col + nv, real(0));
+    if (p.a >= 0) std::copy(p.ja, p.ja + kBodyDof, col + kBodyDof * p.a);
+    if (p.b >= 0)
+      for (int k = 0; k < kBodyDof; ++k) col[kBodyDof * p.b + k] += p.jb[k];
+    if (p.a >= 0) {
+      robot_solve(robot, F, col, zero_g, X[c], mu_tmp);
+    } else {
+      std::fill(X[c], X[c] + nv, real(0));
+    }
+    u0[c] = rate(p, v);
   }
+  for (int i = 0; i < n; ++i) mus[i] = i < nf ? ground.mu_kinetic : real(0);
+  for (int a = 0; a < nr; ++a)
+    for (int c = 0; c < nr; ++c) W[nr * a + c] = rate(prow[a], X[c]);
   // symmetric to round-off: make it so (the solver's contract)
   for (int i = 0; i < nr; ++i)
     for (int j = 0; j < i; ++j) W[nr * i + j] = W[nr * j + i] = real(0.5) * (W[nr * i + j] + W[nr * j + i]);
+  // a stop's placeholders: its normal's scale on the diagonal (the solver's scaling per contact)
+  for (int i = nf; i < n; ++i) W[nr * (3 * i + 1) + 3 * i + 1] = W[nr * (3 * i + 2) + 3 * i + 2] = W[nr * 3 * i + 3 * i];
   st = cone_solve(n, W, u0, mus, r, u, report);
   if (st != LEGSIM_OK) return st;
   for (int c = 0; c < nr; ++c)
@@ -239,7 +274,7 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
   real scale_u = 0;
   for (int c = 0; c < nr; ++c) scale_u = std::max(scale_u, std::abs(u0[c]));
   const real tol_u = by_precision(1e-8, 1e-4) * (1 + scale_u);
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < nf; ++i) {
     const int l = feet[i];
     const uint32_t bit = 1u << l;
     impulse[l] = r[3 * i] * axes[0] + r[3 * i + 1] * axes[1] + r[3 * i + 2] * axes[2];
@@ -259,6 +294,17 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
       hold.sliding |= bit;
       slip_dir[l] = (1 / norm(ut)) * ut;
     }
+  }
+  // a stop: held while it pushes or leaves slower than kCapture (the modes' check lets it go if it
+  // pulls); one of `near` (at its end, not held before) when it pushes, or approached and leaves
+  // slower than kCapture (a grazing arrival: no impulse, the acceleration level decides)
+  for (int i = nf; i < n; ++i) {
+    const int s = stops[i - nf];
+    const uint32_t bit = 1u << s;
+    stop_impulse[s] = r[3 * i];
+    const bool leaves = u[3 * i] > std::max(tol_u, kCapture);
+    const bool held = (near >> s) & 1u ? r[3 * i] > 0 || (u0[3 * i] < 0 && !leaves) : !leaves;
+    if (!held) hold.stops &= ~bit, hold.upper &= ~bit;
   }
   return LEGSIM_OK;
 }

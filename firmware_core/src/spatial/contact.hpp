@@ -62,16 +62,24 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
 V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const real *q, const real *v,
                   const V3 &fallback);
 
-// A touchdown's impact at (q, v): the feet of `touching` (bit l) take impulses on their cones
-// (mu_kinetic), the joints' rows holding; v becomes the velocity after it (no foot approaching
-// the ground, the kinetic energy not above before). On return `hold` gives each touching foot's
-// mode after it: stuck where it stopped, sliding along its slip (slip_dir), free when it leaves
-// faster than 1e-4 m/s (slower it stays: the projection takes its normal velocity off); impulse[l] the ground's on foot l (N s, world). LEGSIM_ERR_NOT_CONVERGED
-// with cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor; LEGSIM_ERR_CAPACITY
-// for more points touching than one contact problem holds (kConeMaxContacts).
-legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching, const real *q,
-                             real *v, FeetHold &hold, V3 *slip_dir, V3 *impulse, ConeReport &report, Row *rows,
-                             RobotFactor &F, ContactWork &w);
+// An impact at (q, v) (a touchdown, a stroke's arrival on its stop): one contact problem of the
+// feet of `touching` (bit l: impulses on their cones, mu_kinetic) and the strokes of `arriving`
+// and `near` (bit 3 l + k, on hold.stops at the end hold.upper says: an impulse along the stop's
+// gap that only pushes, a cone of mu = 0), the joints' rows and the other held stops' holding (as
+// bilateral rows); solved by cone_solve (its bounded iterations and report). v becomes the
+// velocity after it (no foot approaching the ground, no stroke of the problem its stop, the
+// kinetic energy not above before). On return `hold` gives each touching foot's mode after it:
+// stuck where it stopped, sliding along its slip (slip_dir), free when it leaves faster than 1e-4
+// m/s (slower it stays: the projection takes its normal velocity off); a stroke of `arriving`
+// held unless it leaves its stop faster than 1e-4 m/s (rad/s), one of `near` (at its end, not
+// held before) when its impulse pushes, or when it approached and leaves slower than that; impulse[l] the ground's on foot l (N s, world),
+// stop_impulse[3 l + k] each problem stroke's (N s, N m s; >= 0). LEGSIM_ERR_NOT_CONVERGED with
+// cone_solve's best iterate refused; LEGSIM_ERR_SINGULAR as robot_factor; LEGSIM_ERR_CAPACITY
+// for more feet and strokes than one contact problem holds (kConeMaxContacts).
+legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching,
+                             uint32_t arriving, uint32_t near, const real *q, real *v, FeetHold &hold, V3 *slip_dir,
+                             V3 *impulse, real *stop_impulse, ConeReport &report, Row *rows, RobotFactor &F,
+                             ContactWork &w);
 
 // The modes of the stuck feet decided on their cones at (q, v) under Q: the acceleration-level
 // contact problem of those feet (u = W r + q: r their ground forces, u their points'

@@ -25,8 +25,9 @@ using cone_real = legsim_real;
 
 // The most contacts one problem holds (the hexapod's six feet and its box's four points,
 // LEGSIM_HEXAPOD_MAX_BOX_CONTACTS: a robot whose legs give way lands on its belly with its feet
-// down): the solver's workspace is fixed at this size, on the stack (about 11 KB in double).
-constexpr int kConeMaxContacts = 10;
+// down; an impact's strokes on their stops, spatial/contact: six feet and ten stops): the
+// solver's workspace is fixed at this size, on the stack (about 24 KB in double).
+constexpr int kConeMaxContacts = 16;
 constexpr int kConeMaxRows = 3 * kConeMaxContacts;
 
 struct ConeOptions {

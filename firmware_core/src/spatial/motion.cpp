@@ -118,6 +118,7 @@ void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   std::copy(d.actuator_force, d.actuator_force + kMaxRobotActuators, c.actuator_force);
   std::copy(d.rowing_torque, d.rowing_torque + kMaxLegs, c.rowing_torque);
   std::copy(d.impulse, d.impulse + kMaxContacts, c.impulse);
+  std::copy(d.stop_impulse, d.stop_impulse + kMaxHeldStops, c.stop_impulse);
   c.impact = d.impact, c.modes = d.modes, c.cone_stats = d.cone_stats;
   c.projection_iterations = d.projection_iterations, c.impacts = d.impacts, c.stop_impacts = d.stop_impacts;
 }
@@ -137,6 +138,7 @@ void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   std::copy(c.actuator_force, c.actuator_force + kMaxRobotActuators, d.actuator_force);
   std::copy(c.rowing_torque, c.rowing_torque + kMaxLegs, d.rowing_torque);
   std::copy(c.impulse, c.impulse + kMaxContacts, d.impulse);
+  std::copy(c.stop_impulse, c.stop_impulse + kMaxHeldStops, d.stop_impulse);
   d.impact = c.impact, d.modes = c.modes, d.cone_stats = c.cone_stats;
   d.projection_iterations = c.projection_iterations, d.impacts = c.impacts, d.stop_impacts = c.stop_impacts;
 }
@@ -343,6 +345,7 @@ void tally(ConeStats &s, const ConeReport &r) {
 // decide: the stuck feet's modes decided on their cones in the first round whatever their forces
 // (a located stick to slip, its function at its root: slipping, that foot's bit).
 legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false, uint32_t slipping = 0) {
+  uint32_t let_go = 0, let_go_upper = 0;  // the stops let go here (still at their ends)
   for (int round = 0; round <= 2 * robot_contacts(robot) + kLegStops * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
@@ -353,6 +356,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     d.acc_aux_h = 0;
     const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
+    uint32_t past_edge = 0;  // stuck feet pressing with their force past the mu_s cone
     // the stop pulling most, let go once the feet's modes hold (a foot's mode changes the stops'
     // multipliers: a stop decided before the feet would be let go and hit again)
     int pull = -1;
@@ -368,6 +372,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
         if (d.hold.stuck & bit) {
           const real N = -m[0], Ft = std::hypot(m[1], m[2]);
           if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
+          if (N >= -tol && Ft > d.ground.mu_static * N + tol) past_edge |= bit;
         } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
           d.hold.sliding &= ~bit, changed = true;
         }
@@ -383,45 +388,91 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
         if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
         changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
         // the cone keeps what the multipliers refuse (unless a stop pulling is why)
+        // the cone keeps a foot stuck at its edge that the multipliers put past it (the two
+        // solves' round-off at the edge): it slips, as a located stick to slip does
+        if (!changed && past_edge && !(decide && round == 0) && pull < 0) {
+          st = contact_modes(robot, d.ground, d.q, d.v, Q, past_edge, d.hold, d.slip_dir, d.modes, d.rows, d.factor,
+                             d.contact_work);
+          if (st != LEGSIM_OK) return st;
+          tally(d.cone_stats, d.modes);
+          changed = d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
+        }
         if (!changed && !(decide && round == 0) && pull < 0) return LEGSIM_ERR_CONTACT;
       }
     }
-    if (!changed && pull >= 0) d.hold.stops &= ~(1u << pull), d.hold.upper &= ~(1u << pull), changed = true;
+    if (changed && let_go) {
+      // a foot's mode changed after a stop was let go for it: the stop held again and decided anew
+      // (with the foot held it pulled; with the foot let go it may push)
+      d.hold.stops |= let_go, d.hold.upper |= let_go_upper;
+      let_go = let_go_upper = 0;
+    } else if (!changed && pull >= 0) {
+      const uint32_t bit = 1u << pull;
+      let_go |= bit, let_go_upper |= d.hold.upper & bit;
+      d.hold.stops &= ~bit, d.hold.upper &= ~bit, changed = true;
+    }
     if (!changed) return LEGSIM_OK;
   }
   return LEGSIM_ERR_CONTACT;
 }
 
-// A stroke reaching its stop at d's state: the stop's row held from now on and an inelastic impact
-// on it. The stop joins the joints' rows: v projected onto them with the feet free (the stop's
-// impulse), then the feet on the ground take their impacts on their cones with the stop holding
-// (contact_impact): together the impact of the stop and the feet with the stop's row as a joint's.
+// The strokes at an end (to 1e-12 m, rad: their events' tolerance) that no stop holds: put on
+// hold's stops (at that end) for an impact's problem, which keeps those it pushes; their bits.
+// (A wider band would let an impact capture a stroke short of its end, and the projection onto
+// its end would then move the others, past theirs.)
+uint32_t strokes_at_end(const SpatialRobot &robot, FeetHold &hold, const real *q) {
+  uint32_t near = 0;
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < kLegStops; ++k) {
+      const uint32_t bit = 1u << (kLegStops * l + k);
+      if ((k < 2 && k >= robot.leg[l].nactuators) || (hold.stops & bit)) continue;
+      real lo, hi;
+      const real x = stroke_value(robot, l, k, q, lo, hi);
+      if (!(std::min(x - lo, hi - x) <= by_precision(1e-12, 1e-5))) continue;
+      near |= bit, hold.stops |= bit;
+      if (hi - x < x - lo) hold.upper |= bit;
+    }
+  return near;
+}
+
+// An impact at d's state: the feet of `touching` on their cones and the strokes of `arriving`
+// and those at an end (which count as arrivals when it pushes them) on their stops in one contact
+// problem, the held stops holding (contact_impact).
+legsim_status impact(const SpatialRobot &robot, RobotData &d, uint32_t touching, uint32_t arriving = 0) {
+  const uint32_t near = strokes_at_end(robot, d.hold, d.q);
+  for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
+  for (int s = 0; s < kMaxHeldStops; ++s) d.stop_impulse[s] = 0;
+  const legsim_status st = contact_impact(robot, d.ground, touching, arriving, near, d.q, d.v, d.hold, d.slip_dir,
+                                          d.impulse, d.stop_impulse, d.impact, d.rows, d.factor, d.contact_work);
+  if (st != LEGSIM_OK) return st;
+  tally(d.cone_stats, d.impact);
+  for (uint32_t s = d.hold.stops & near; s; s &= s - 1) ++d.stop_impacts;  // arrivals
+  return LEGSIM_OK;
+}
+
+// A stroke reaching its stop at d's state: an inelastic impact of the stop and the feet on the
+// ground (and any foot landing or stroke at its end at that instant) in one contact problem, the
+// stop's impulse only pushing; then its row held while it pushes.
 legsim_status stop_arrival(const SpatialRobot &robot, RobotData &d, int l, int k) {
-  static const real zero_f[kMaxRobotDof] = {};
   real lo, hi;
   const real x = stroke_value(robot, l, k, d.q, lo, hi);
   const uint32_t bit = 1u << (kLegStops * l + k);
+  uint32_t touching = 0;
+  if (d.has_ground) {
+    touching = d.hold.stuck | d.hold.sliding;
+    for (int c = 0; c < robot_contacts(robot); ++c) {
+      if (contact_body(robot, c) < 0 || ((touching >> c) & 1u)) continue;
+      V3 p, pv;
+      foot_motion(robot, c, d.q, d.v, p, pv);
+      if (dot(p - d.ground.point, d.ground.normal) <= by_precision(1e-9, 1e-5) && dot(pv, d.ground.normal) < 0)
+        touching |= 1u << c;  // landing at this instant
+    }
+  }
+  // the arriving stroke held as a stop from the impact on (unless it leaves it faster than
+  // kCapture); a stop pulling at the acceleration level after it is let go by the modes' check
   d.hold.stops |= bit;
   if (hi - x < x - lo) d.hold.upper |= bit;
-  FeetHold none = d.hold;
-  none.stuck = none.sliding = 0;
-  system_rows(robot, none, d.q, d.v, d.rows);
-  legsim_status st = robot_factor(robot, none, d.rows, d.factor);
+  const legsim_status st = impact(robot, d, touching, bit);
   if (st != LEGSIM_OK) return st;
-  int idx[kMaxSystemRows];
-  real g[kMaxSystemRows], dv[kMaxRobotDof], mu[kMaxSystemRows];
-  const int n = system_used_rows(robot, none, idx);
-  for (int i = 0; i < n; ++i) g[idx[i]] = -row_dot(robot, d.rows[idx[i]], idx[i], d.v);
-  robot_solve(robot, d.factor, zero_f, g, dv, mu);
-  for (int i = 0; i < kBodyDof * robot.nb; ++i) d.v[i] += dv[i];
-  const uint32_t touching = d.hold.stuck | d.hold.sliding;
-  if (d.has_ground && touching) {
-    for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
-    st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse, d.impact, d.rows,
-                        d.factor, d.contact_work);
-    if (st != LEGSIM_OK) return st;
-    tally(d.cone_stats, d.impact);
-  }
   ++d.stop_impacts;
   return settle(robot, d);
 }
@@ -469,12 +520,9 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
             dot(vc, d.ground.normal) < 0)
           touching |= 1u << c;
       }
-    for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
-    const legsim_status st = contact_impact(robot, d.ground, touching, d.q, d.v, d.hold, d.slip_dir, d.impulse,
-                                            d.impact, d.rows, d.factor, d.contact_work);
+    const legsim_status st = impact(robot, d, touching);
     if (st != LEGSIM_OK) return st;
     ++d.impacts;
-    tally(d.cone_stats, d.impact);
   }
   return settle(robot, d);
 }
@@ -544,6 +592,7 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
   std::fill(d.actuator_force, d.actuator_force + kMaxRobotActuators, real(0));
   std::fill(d.rowing_torque, d.rowing_torque + kMaxLegs, real(0));
   std::fill(d.mu, d.mu + kMaxSystemRows, real(0));
+  std::fill(d.stop_impulse, d.stop_impulse + kMaxHeldStops, real(0));
   d.projection_iterations = d.events = d.impacts = d.stop_impacts = 0;
   d.impact = d.modes = {true, ConeMethod::Newton, 0, 0};
   d.cone_stats = {0, 0, 0, 0};

@@ -61,6 +61,7 @@ struct RobotSnapshot {
   // the report a failed step must leave as it was
   real actuator_force[kMaxRobotActuators], rowing_torque[kMaxLegs];
   V3 impulse[kMaxContacts];
+  real stop_impulse[kMaxHeldStops];
   ConeReport impact, modes;
   ConeStats cone_stats;
   int projection_iterations, impacts, stop_impacts;
@@ -94,6 +95,7 @@ struct RobotData {
   ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
   ConeStats cone_stats;       // every contact problem's since data_init
   V3 impulse[kMaxContacts];       // N s, world: the ground's on each foot at the last impact
+  real stop_impulse[kMaxHeldStops];  // N s, N m s (>= 0): each stop's (bit 3 l + k) at the last impact
   // work space: the rows at the last evaluation and their factor, the contact solves' columns,
   // the step's snapshots (not on the stack: about 110 KB together in double)
   Row rows[kMaxSystemRows], rows_work[kMaxSystemRows];
