@@ -233,6 +233,25 @@ inline legsim_status dynamics_stage(const Model &m, Data &d, const StagePlan &pl
   return reduced_stage(m, d, *plan.kernel, *plan.dv, *plan.base, plan.actuators, q, qd, qdd);
 }
 
+// Two rows on one body whose coefficients there are E (1, 0, -s_y; 0, 1, s_x) with E an
+// invertible 2 x 2 matrix (a stuck contact's normal and tangential rows: E's rows are the
+// ground's normal and tangent) hold its point s still as a pin to the frame does: the pin
+// units of rows.hpp serve it with s (sx, sy) and the pin rows' gamma E^-1 (ga, gb) (g0, g1),
+// here from the rows' own coefficients (a: the first row's x, y, phi; b: the second's) and
+// gammas. RK4's reduced stages on a stance (kernel_codegen.py's Reduced).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void rows_pin(real a0, real a1, real a2, real b0, real b1, real b2, real ga, real gb, real &sx, real &sy,
+                     real &g0, real &g1) {
+  const real id = 1 / (a0 * b1 - a1 * b0);
+  // E^-1 (a2, b2) = (-s_y, s_x)
+  sx = (a0 * b2 - b0 * a2) * id;
+  sy = -(b1 * a2 - a1 * b2) * id;
+  g0 = (b1 * ga - a1 * gb) * id;
+  g1 = (a0 * gb - b0 * ga) * id;
+}
+
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr
 // (the general path).
 const Kernel *kernel_find(const Model &model, bool stance = false);
