@@ -287,13 +287,11 @@ class Kernel:
         self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
 
     def work(self):
-        """Multiplications of the factor (the entries of L and the pivots) and of a solve's
-        two triangular passes: the order's cost."""
-        n = 0
-        for p in range(self.m):
-            lp = self.l_nz[p]
-            n += sum(1 + sum(1 for k in lp if k < q and k in self.l_nz[q]) for q in lp) + len(lp)
-        return n + 2 * sum(len(x) for x in self.l_nz)
+        """The order's cost: over the factor's rows, l (l + 1) / 2 with l the row's entries
+        in L. It ranks the straight-line code's instructions better than the count of its
+        products (the robot's stage: 808 and 27,257 instructions a step under reverse
+        Cuthill-McKee, 984 and 27,398 under minimum degree, which has fewer products)."""
+        return sum(len(x) * (len(x) + 1) // 2 for x in self.l_nz)
 
     def coef(self, i, s, k, local=False):
         """(constant, [factor]) of a Jacobian entry: a constant, or the run-time value in
