@@ -25,7 +25,8 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
   and, where bodies are pinned to the frame (not with --no-reduced), RK4's solves in the
   reduced system where those bodies keep their angles alone (Reduced), applying the
   actuators' forces from their own sin/cos:
-  accelerations   a stage's accelerations;
+  accelerations   a stage's accelerations (on a stance also with each stuck foot as a pin
+                  to the ground: its two contact rows drop out, rows_pin in kernel.hpp);
   end             the step's end (and a restart): the projection test's residual and
                   drift, then the accelerations, every row's multiplier, the reactions and
                   the condition estimate.
@@ -778,7 +779,14 @@ class Reduced(Kernel):
     10. Not a factor the general path can use. The step's end (emit_accelerations with
     end) gets the pins' multipliers back from their bodies' x and y equations, and the
     whole factor's pivots as the reduced ones and the pin rows' own (eliminated before any
-    other row on their body: from their entries of J W J^T alone)."""
+    other row on their body: from their entries of J W J^T alone).
+    With contact_pins (a stance's stages), a stuck contact's two rows pin its foot the same
+    way: their coefficients on the foot are E (1, 0, -s_y; 0, 1, s_x), E the ground's normal
+    and tangent, so rows_pin (kernel.hpp) gives the pin's point s and its rows' gamma in the
+    world axes E^-1 gamma, and the pin units serve as for a joint's pin. The general path's
+    stance order does not eliminate the contact rows first, so these pivots are not the
+    whole factor's: the stages use their own order (work) and the end keeps the contact
+    rows (its condition estimate is the whole factor's)."""
 
     def __init__(self, k, contact_pins=False):
         self.name, self.nb, self.joints, self.contacts, self.actuators = k.name, k.nb, k.joints, k.contacts, k.actuators
