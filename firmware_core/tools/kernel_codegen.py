@@ -964,7 +964,8 @@ class Reduced(Kernel):
         if end:
             # the pins' multipliers from their bodies' x and y equations, M qdd + J^T lambda = Q
             assert not self.pin_defs  # (a joint pin's rows are its body's x and y equations)
-            for b, (*_, r, n) in sorted(self.pinned.items()):
+            for b, pin in sorted(self.pinned.items()):
+                r = pin.r
                 for e, axis in ((0, "x"), (1, "y")):
                     terms = []
                     for i in range(k.m):
