@@ -25,7 +25,8 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
   and, where bodies are pinned to the frame (not with --no-reduced), RK4's solves in the
   reduced system where those bodies keep their angles alone (Reduced), applying the
   actuators' forces from their own sin/cos:
-  accelerations   a stage's accelerations;
+  accelerations   a stage's accelerations (on a stance also with each stuck foot as a pin
+                  to the ground: its two contact rows drop out, rows_pin in kernel.hpp);
   end             the step's end (and a restart): the projection test's residual and
                   drift, then the accelerations, every row's multiplier, the reactions and
                   the condition estimate.
@@ -45,6 +46,7 @@ import argparse
 import json
 import os
 import sys
+from typing import NamedTuple
 
 KIND = {"revolute_to_frame": 0, "revolute": 1, "prismatic": 2, "slot": 3}
 NROWS = {"revolute_to_frame": 2, "revolute": 2, "prismatic": 2, "slot": 1}
@@ -208,6 +210,18 @@ def pins_first(order, rows, pinned, mj=None):
     return out + [k for k in order if pin[k] and k not in out]
 
 
+class Pin(NamedTuple):
+    """A pinned body's pin in the reduced system (Reduced): the C names of its point's offset
+    from the body's centre (sx, sy) and of its rows' gamma in the world axes (g0, g1), its
+    first row, and its joint (None: a stuck contact's rows)."""
+    sx: str
+    sy: str
+    g0: str
+    g1: str
+    r: int
+    n: int | None
+
+
 def product(terms):
     """C text of a signed sum of products [(constant, [factors])]; "0" when empty."""
     out = []
@@ -272,6 +286,13 @@ class Kernel:
                     lp[p].add(q)
         self.l_nz = [sorted(s) for s in lp]
         self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
+
+    def work(self):
+        """The order's cost: over the factor's rows, l (l + 1) / 2 with l the row's entries
+        in L. It ranks the straight-line code's instructions better than the count of its
+        products (the robot's stage: 808 and 27,257 instructions a step under reverse
+        Cuthill-McKee, 984 and 27,398 under minimum degree, which has fewer products)."""
+        return sum(len(x) * (len(x) + 1) // 2 for x in self.l_nz)
 
     def coef(self, i, s, k, local=False):
         """(constant, [factor]) of a Jacobian entry: a constant, or the run-time value in
@@ -706,9 +727,13 @@ class Kernel:
         o.append("}\n")
         # RK4's stages: the accelerations alone, in the reduced system (where a body is pinned)
         reduced = Reduced(self) if self.reduced else None
-        # (a structure without a pinned body, as the robot's: on all its rows)
+        # (a structure without a pinned body, as the robot's: on all its rows); a stance's
+        # stages with its stuck feet as pins besides (the robot's 36 rows become 32, 4
+        # coordinates fewer); its end keeps the contact rows: the condition estimate is the
+        # whole factor's, in the general path's order
         if reduced:
-            o += reduced.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
+            stage = Reduced(self, contact_pins=True) if self.contacts else reduced
+            o += stage.emit_accelerations(sym) + reduced.emit_accelerations(sym, end=True)
         fused = f"{sym}_accelerations, {sym}_end" if reduced else "nullptr, nullptr"
         # generalized-alpha's end on the Newton iteration's factor: where the reduced system
         # is the whole one (no pinned body: the factor's order and storage are the same)
@@ -754,9 +779,16 @@ class Reduced(Kernel):
     10. Not a factor the general path can use. The step's end (emit_accelerations with
     end) gets the pins' multipliers back from their bodies' x and y equations, and the
     whole factor's pivots as the reduced ones and the pin rows' own (eliminated before any
-    other row on their body: from their entries of J W J^T alone)."""
+    other row on their body: from their entries of J W J^T alone).
+    With contact_pins (a stance's stages), a stuck contact's two rows pin its foot the same
+    way: their coefficients on the foot are E (1, 0, -s_y; 0, 1, s_x), E the ground's normal
+    and tangent, so rows_pin (kernel.hpp) gives the pin's point s and its rows' gamma in the
+    world axes E^-1 gamma, and the pin units serve as for a joint's pin. The general path's
+    stance order does not eliminate the contact rows first, so these pivots are not the
+    whole factor's: the stages use their own order (work) and the end keeps the contact
+    rows (its condition estimate is the whole factor's)."""
 
-    def __init__(self, k):
+    def __init__(self, k, contact_pins=False):
         self.name, self.nb, self.joints, self.contacts, self.actuators = k.name, k.nb, k.joints, k.contacts, k.actuators
         self.full = k
         first_row, r = [], 0
@@ -764,9 +796,24 @@ class Reduced(Kernel):
             first_row.append(r)
             r += NROWS[j["kind"]]
         pinned = pinned_bodies(k.joints)
-        # body -> (its pin joint, the pin's first row)
-        self.pinned = {j["body"][0]: (n, first_row[n]) for n, j in enumerate(k.joints)
-                       if j["kind"] == "revolute_to_frame" and j["body"][0] in pinned}
+        # body -> its pin: the names of its point's offset (sx, sy) and of its rows' gamma in
+        # the world axes (g0, g1), its two rows, and (a joint's) the joint
+        self.pinned = {j["body"][0]: Pin(f"sax{n}", f"say{n}", f"gam{first_row[n]}", f"gam{first_row[n] + 1}",
+                                         first_row[n], n)
+                       for n, j in enumerate(k.joints) if j["kind"] == "revolute_to_frame" and j["body"][0] in pinned}
+        # with contact_pins, a stuck contact's two rows pin its foot's point to the ground
+        # (rows_pin, kernel.hpp): where its body has no pin and no other contact
+        self.pin_defs = []
+        if contact_pins:
+            feet = [c["body"] for c in k.contacts]
+            for c, b in enumerate(feet):
+                if b in self.pinned or feet.count(b) > 1:
+                    continue
+                r = sum(NROWS[j["kind"]] for j in k.joints) + 2 * c
+                self.pinned[b] = Pin(f"psx{c}", f"psy{c}", f"pg{c}_0", f"pg{c}_1", r, None)
+                a, e = [f"c{r}_0_{x}" for x in range(3)], [f"c{r + 1}_0_{x}" for x in range(3)]
+                self.pin_defs.append(f"  real psx{c}, psy{c}, pg{c}_0, pg{c}_1;  // contact {c} as a pin (body {b})")
+                self.pin_defs.append(f"  rows_pin({', '.join(a + e)}, gam{r}, gam{r + 1}, psx{c}, psy{c}, pg{c}_0, pg{c}_1);")
         self.orig = [i for i in range(k.m) if i not in self.full_pin_rows()]  # reduced row -> row
         self.rows, self.defs_e, self.defs_g = [], [], []  # the columns on the angles; the gammas
         for i in self.orig:
@@ -778,24 +825,39 @@ class Reduced(Kernel):
                     new.append(tuple(f"c{i}_{s}_{x}" if v is V else v for x, v in enumerate(slots[s]))
                                if b >= 0 else slots[s])
                     continue
-                n, r = self.pinned[b]
+                pin = self.pinned[b]
                 cx, cy, cp = (k.coef(i, s, x, True) for x in range(3))
                 if cx[0] == 0 and cy[0] == 0 and not cp[1]:
                     new.append((0, 0, cp[0]))  # on the angle alone: a constant still
                 else:
                     self.defs_e.append(f"  const real e{i}_{s} = "
-                                     f"{product([(cx[0], cx[1] + [f'say{n}']), (-cy[0], cy[1] + [f'sax{n}']), cp])};")
+                                     f"{product([(cx[0], cx[1] + [pin.sy]), (-cy[0], cy[1] + [pin.sx]), cp])};")
                     new.append((0, 0, f"e{i}_{s}"))
-                gamma += [(cx[0], cx[1] + [f"gam{r}"]), (cy[0], cy[1] + [f"gam{r + 1}"])]
+                gamma += [(cx[0], cx[1] + [pin.g0]), (cy[0], cy[1] + [pin.g1])]
             self.rows.append((bodies, tuple(new)))
             if any(c != 0 for c, _ in gamma):
                 self.defs_g.append(f"  const real gr{i} = gam{i} - ({product(gamma)});")
             else:
                 self.defs_g.append(f"  const real gr{i} = gam{i};")
         # the whole system's order without the pin rows (which it eliminates first): the
-        # same pivots after them, to round-off
+        # same pivots after them, to round-off. With contact pins the whole order does not
+        # eliminate them first (the general path's stance order): the reduced system's own
+        # order then, whichever of it, reverse Cuthill-McKee and minimum degree does the
+        # least work (a stage needs no pivot of the whole factor)
         at = {i: r for r, i in enumerate(self.orig)}
-        self.structure(len(self.rows), [at[i] for i in k.row_at if i in at])
+        whole = [at[i] for i in k.row_at if i in at]
+        if not self.pin_defs:
+            self.structure(len(self.rows), whole)
+            return
+        m = len(self.rows)
+        share = [[any(x >= 0 and x == y for x in self.rows[i][0] for y in self.rows[j][0])
+                  for j in range(m)] for i in range(m)]
+        best = None
+        for order in (whole, rcm_order(m, share), min_degree_order(m, share)):
+            self.structure(m, order)
+            if best is None or self.work() < best[0]:
+                best = (self.work(), order)
+        self.structure(m, best[1])
 
     def w_name(self, b, k):
         return f"wr{b}" if b in self.pinned else f"w[{3 * b + k}]"
@@ -819,10 +881,10 @@ class Reduced(Kernel):
         o.append("  const real *w = model.minv;")
         o.append("  [[maybe_unused]] const real *mass = model.mass;  // (the pins' terms)")
         # a pinned body on its angle alone (rows.hpp's pin units)
-        pinned_w = [f"  const real wr{b} = pin_inverse_inertia(mass + {3 * b}, XY{{sax{n}, say{n}}});  // body {b} on its pin (joint {n})"
-                    for b, (n, r) in sorted(self.pinned.items())]
-        pinned_f = [f"  const real fr{b} = pin_force(mass + {3 * b}, XY{{sax{n}, say{n}}}, gam{r}, gam{r + 1}, Q{3 * b}, Q{3 * b + 1}, Q{3 * b + 2});"
-                    for b, (n, r) in sorted(self.pinned.items())]
+        pinned_w = [f"  const real wr{b} = pin_inverse_inertia(mass + {3 * b}, XY{{{p.sx}, {p.sy}}});  // body {b} on its pin"
+                    for b, p in sorted(self.pinned.items())]
+        pinned_f = [f"  const real fr{b} = pin_force(mass + {3 * b}, XY{{{p.sx}, {p.sy}}}, {p.g0}, {p.g1}, Q{3 * b}, Q{3 * b + 1}, Q{3 * b + 2});"
+                    for b, p in sorted(self.pinned.items())]
         # the pivot floor from the whole system's largest diagonal entry (kPivotFloor times
         # the same number as dynamics' floor; the reduced one's are no larger)
         floor = ["  real max_diag = 0;"]
@@ -836,7 +898,7 @@ class Reduced(Kernel):
                                                       for x in range(3) if k.rows[i][0][s] >= 0
                                                       and k.rows[i][1][s][x] is V]
             o.append("  " + " ".join(f"(void){v};" for v in unused) + "  // not needed here")
-            o += self.forces_locals(store=False) + pinned_w + pinned_f + self.defs_e + self.defs_g + self.t_locals() + floor
+            o += self.forces_locals(store=False) + self.pin_defs + pinned_w + pinned_f + self.defs_e + self.defs_g + self.t_locals() + floor
             o += self.factor_locals(True, "return LEGSIM_ERR_SINGULAR;", range_if=False)
             lname = lambda i: f"l{i}"  # noqa: E731
         else:
@@ -891,9 +953,9 @@ class Reduced(Kernel):
                 o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({jt}));")
                 o.append(f"  z += qdd[{n}] * real(0);")
             elif x == 2:
-                pn, r = self.pinned[b]
+                p = self.pinned[b]
                 o.append(f"  const real pdd{b} = wr{b} * (fr{b} - ({jt}));")
-                o.append(f"  const XY acc{b} = pin_acceleration(XY{{sax{pn}, say{pn}}}, gam{r}, gam{r + 1}, pdd{b});")
+                o.append(f"  const XY acc{b} = pin_acceleration(XY{{{p.sx}, {p.sy}}}, {p.g0}, {p.g1}, pdd{b});")
                 o.append(f"  const real qx{b} = acc{b}.x, qy{b} = acc{b}.y;")
                 o.append(f"  qdd[{n - 2}] = qx{b};")
                 o.append(f"  qdd[{n - 1}] = qy{b};")
@@ -901,7 +963,9 @@ class Reduced(Kernel):
                 o.append(f"  z += pdd{b} * real(0) + qx{b} * real(0) + qy{b} * real(0);")
         if end:
             # the pins' multipliers from their bodies' x and y equations, M qdd + J^T lambda = Q
-            for b, (n, r) in sorted(self.pinned.items()):
+            assert not self.pin_defs  # (a joint pin's rows are its body's x and y equations)
+            for b, pin in sorted(self.pinned.items()):
+                r = pin.r
                 for e, axis in ((0, "x"), (1, "y")):
                     terms = []
                     for i in range(k.m):
@@ -1003,8 +1067,8 @@ class Reduced(Kernel):
         alpha's end on the Newton iteration's factor, a structure without a pinned body)."""
         assert lval == "L" or not self.pinned  # (a holds the whole system's factor)
         o = [f"  {guard}{{"]
-        for b, (n, r) in sorted(self.pinned.items()):
-            o.append(f"    const real ur{b} = pin_rate(mass + {3 * b}, XY{{sax{n}, say{n}}}, wr{b}, V{3 * b}, V{3 * b + 1}, V{3 * b + 2});")
+        for b, p in sorted(self.pinned.items()):
+            o.append(f"    const real ur{b} = pin_rate(mass + {3 * b}, XY{{{p.sx}, {p.sy}}}, wr{b}, V{3 * b}, V{3 * b + 1}, V{3 * b + 2});")
         u = lambda n: f"ur{n // 3}" if n // 3 in self.pinned else f"V{n}"  # noqa: E731
         o += [f"    const real pc{i} = {self.j_expr(i, u, True)};" for i in range(self.m)]
         o += ["  " + line for line in self.solve_locals(lambda i: f"pc{i}", lambda i: f"const real py{i}", lval=lval)]
@@ -1015,9 +1079,9 @@ class Reduced(Kernel):
                 if jt != "0":
                     o.append(f"    V{n} -= w[{n}] * ({jt});")
             elif x == 2:
-                pn, _ = self.pinned[b]
+                p = self.pinned[b]
                 o.append(f"    const real up{b} = ur{b} - wr{b} * ({jt});")
-                o.append(f"    const XY vel{b} = pin_velocity(XY{{sax{pn}, say{pn}}}, up{b});")
+                o.append(f"    const XY vel{b} = pin_velocity(XY{{{p.sx}, {p.sy}}}, up{b});")
                 o.append(f"    V{n - 2} = vel{b}.x, V{n - 1} = vel{b}.y, V{n} = up{b};")
         o.append("  }")
         return o
@@ -1030,7 +1094,7 @@ class Reduced(Kernel):
 
     def full_pin_rows(self):
         """The whole system's rows of the pins (those the reduced system leaves out)."""
-        return {r + e for _, r in self.pinned.values() for e in (0, 1)}
+        return {p.r + e for p in self.pinned.values() for e in (0, 1)}
 
 
 # Every generated function carries LEGSIM_KERNEL_TARGETS (kernel.hpp): on x86-64 with GCC

@@ -5,12 +5,14 @@
 // whole system by project (linear_solve.cpp), and the end's own projection, in the reduced
 // system where each pinned body keeps its angle alone, must give the same velocities,
 // accelerations, multipliers and reactions to round-off. Also what the end leaves alone:
-// the velocities unless it solves, and a step whose positions need projecting. Built only
-// where the core has the reduced solves, in double (tests/core/CMakeLists.txt).
+// the velocities unless it solves, and a step whose positions need projecting. And RK4's
+// stage on the robot's stuck feet, pinned to the ground by their contact rows (rows_pin).
+// Built only where the core has the reduced solves, in double (tests/core/CMakeLists.txt).
 #include <cmath>
 #include <cstdio>
 
 #include "planar/kernel.hpp"
+#include "planar/rows.hpp"
 #include "legsim/legsim.h"
 #include "legsim/models.h"
 #include "unity.h"
@@ -215,6 +217,73 @@ void test_no_projection_under_force_elements(void) {
   TEST_ASSERT_TRUE(drift > 100 * kTol);
   TEST_ASSERT_EQUAL_DOUBLE(0.0, max_abs(v_end.data(), v.data(), n));
 }
+// A stuck contact's two rows as a pin (rows_pin, kernel.hpp), on a ground at 0.3 rad: the
+// foot point's offset and the pin rows' gamma in the world axes must be those of a revolute
+// joint to the frame at that point (revolute_position's offset sa, revolute_gamma's w^2 sa).
+void test_contact_rows_as_a_pin(void) {
+  const real slope = real(0.3);
+  const Vec2 ground(0.1, -0.2), n(-std::sin(slope), std::cos(slope)), t(std::cos(slope), std::sin(slope));
+  VecQ q = VecQ::Zero();
+  q[0] = real(0.4), q[1] = real(-0.7), q[2] = real(0.9);
+  BodyPose p = body_pose(q, 0, std::sin(q[2]), std::cos(q[2]));
+  body_velocity(p, real(0.2), real(-0.1), real(1.7));
+  Joint pin{};
+  pin.kind = LEGSIM_JOINT_REVOLUTE_TO_FRAME;
+  pin.pa = Vec2(0.03, -0.25);
+  ContactRow cn, ct;
+  contact_row(pin.pa, ground, n, real(0), real(1), p, cn);
+  contact_row(pin.pa, ground, t, real(0.05), real(1), p, ct);
+  real sx, sy, g0, g1;
+  rows_pin(cn.coef[0], cn.coef[1], cn.coef[2], ct.coef[0], ct.coef[1], ct.coef[2], cn.gamma, ct.gamma, sx, sy, g0, g1);
+  JointRows ref;
+  revolute_position(pin, p, nullptr, ref);
+  revolute_gamma(p, nullptr, ref);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-15, ref.sa.x, sx);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-15, ref.sa.y, sy);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-14, ref.gamma[0], g0);
+  TEST_ASSERT_DOUBLE_WITHIN(1e-14, ref.gamma[1], g1);
+  TEST_ASSERT_TRUE(std::fabs(g0) > real(0.05) && std::fabs(g1) > real(0.05));  // not a trivial case
+}
+
+#ifdef HAVE_ROBOT
+// RK4's stage on the robot's stuck feet (Kernel::accelerations: the feet pinned to the ground,
+// 32 rows) against the whole system's solve (dynamics_solve, 36 rows) at a stage's state:
+// positions off Phi = 0 (half a step on) and velocities off J v = 0, on a sloped ground.
+void test_stage_with_feet_as_pins(void) {
+  legsim_model_desc robot = legsim_model_robot_revolute;
+  robot.ground.slope_rad = 0.2;
+  legsim_options opt = legsim_default_options();
+  opt.integrator = LEGSIM_INTEGRATOR_RK4;
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &robot, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, nullptr, 0.0));
+  legsim_real len[LEGSIM_MAX_ACTUATORS];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, len, nullptr));
+  for (int a = 0; a < 4; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 185.55));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, 100));
+  Sim &s = *reinterpret_cast<Sim *>(sim);
+  Data &d = s.data;
+  const Model &m = s.model;
+  const Layout &lay = d.dyn;
+  TEST_ASSERT_EQUAL_INT(2, m.nc);
+  TEST_ASSERT_TRUE_MESSAGE(reduced_available(lay), "the robot's stance layout has the reduced solves");
+  const StagePlan plan = stage_plan(m, d, lay);
+  TEST_ASSERT_NOT_NULL(plan.kernel);
+  const int n = m.nq;
+  const VecQ v = drifted(d.qd, n);
+  VecQ q = d.q;
+  for (int k = 0; k < n; ++k) q[k] += real(0.0005) * v[k];
+  VecQ qdd, qdd_ref;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_stage(m, d, plan, q, v, qdd));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_solve(m, d, lay, q, v, qdd_ref, false, false));
+  const real dqdd = max_abs(qdd.data(), qdd_ref.data(), n), qdds = max_abs(qdd_ref.data(), n);
+  std::printf("robot stage, feet as pins, slope 0.2 rad: qdd %.3g (of %.3g) from the whole system's\n", dqdd, qdds);
+  TEST_ASSERT_TRUE(qdds > 1);
+  TEST_ASSERT_TRUE(dqdd <= 1e-12 * qdds);
+}
+#endif
 }  // namespace
 
 int main(void) {
@@ -228,5 +297,9 @@ int main(void) {
 #endif
   RUN_TEST(test_leaves_alone_unless_it_solves);
   RUN_TEST(test_no_projection_under_force_elements);
+  RUN_TEST(test_contact_rows_as_a_pin);
+#ifdef HAVE_ROBOT
+  RUN_TEST(test_stage_with_feet_as_pins);
+#endif
   return UNITY_END();
 }

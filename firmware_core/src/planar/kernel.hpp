@@ -121,13 +121,15 @@ struct Kernel {
   // RK4's stage solve: the accelerations qdd alone of a system of the joint rows alone (a
   // stance kernel's: and its stuck contacts' rows), in fewer rows where a body is pinned to
   // the frame by one revolute joint: it keeps its angle alone (its pin's rows and
-  // multipliers drop out; kernel_codegen.py's Reduced says how; a structure without such a
-  // body, as the robot, keeps all its rows, and gains the stage copies and the forces). The
-  // same accelerations as dynamics' to round-off, not bit for bit; no multipliers, rows,
-  // factor or condition estimate. LEGSIM_ERR_SINGULAR on a pivot <= kPivotFloor times the
-  // whole J M^-1 J^T's largest diagonal entry (dynamics' floor: both paths order the pin
-  // rows so that the reduced pivots are the whole factor's later ones), LEGSIM_ERR_DIVERGED
-  // (qdd not finite). nullptr where not generated (dynamics serves).
+  // multipliers drop out; kernel_codegen.py's Reduced says how), and on a stance each stuck
+  // foot likewise, pinned to the ground by its two contact rows (rows_pin: the robot's 36
+  // rows become 32). The same accelerations as dynamics' to round-off, not bit for bit; no
+  // multipliers, rows, factor or condition estimate. LEGSIM_ERR_SINGULAR on a pivot <=
+  // kPivotFloor times the whole J M^-1 J^T's largest diagonal entry (dynamics' floor: both
+  // paths order a joint's pin rows so that the reduced pivots are the whole factor's later
+  // ones; a stance's stages factor in an order of their own, whose pivots are another
+  // elimination's of the same matrix), LEGSIM_ERR_DIVERGED (qdd not finite). nullptr where
+  // not generated (dynamics serves).
   // The applied forces: base (gravity and the force elements, applied_forces' without the
   // actuators) and, with actuators, each actuator's axial force from its command
   // (actuator_force: its force and events into data) from the solve's own sin/cos (grid_trig,
@@ -135,7 +137,8 @@ struct Kernel {
   // applied_forces would leave it (a stage's is read by no one).
   legsim_status (*accelerations)(const Model &model, const DriverValues &dv, const VecQ &q, const VecQ &qd,
                                  const VecQ &base, Data &data, bool actuators, TrigCache *trig, VecQ &qdd);
-  // RK4's end of a step (and its restart at a state) in the same reduced system: the largest
+  // RK4's end of a step (and its restart at a state) in the joints' reduced system (a stance's
+  // with its contact rows: the condition estimate is the whole factor's): the largest
   // |Phi| (residual, as rows_max_residual) and |J qd| (drift, as velocity_drift) for its
   // projection test. Where the residual is past tol, or the drift is and not project: no
   // more, LEGSIM_OK (the step starts over). Where the drift is past tol and project: qd
@@ -231,6 +234,25 @@ inline legsim_status reduced_stage(const Model &m, Data &d, const Kernel &kern, 
 inline legsim_status dynamics_stage(const Model &m, Data &d, const StagePlan &plan, const VecQ &q, const VecQ &qd, VecQ &qdd) {
   if (!plan.kernel) return dynamics_stage_solve(m, d, *plan.layout, q, qd, qdd);
   return reduced_stage(m, d, *plan.kernel, *plan.dv, *plan.base, plan.actuators, q, qd, qdd);
+}
+
+// Two rows on one body whose coefficients there are E (1, 0, -s_y; 0, 1, s_x) with E an
+// invertible 2 x 2 matrix (a stuck contact's normal and tangential rows: E's rows are the
+// ground's normal and tangent) hold its point s still as a pin to the frame does: the pin
+// units of rows.hpp serve it with s (sx, sy) and the pin rows' gamma E^-1 (ga, gb) (g0, g1),
+// here from the rows' own coefficients (a: the first row's x, y, phi; b: the second's) and
+// gammas. RK4's reduced stages on a stance (kernel_codegen.py's Reduced).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void rows_pin(real a0, real a1, real a2, real b0, real b1, real b2, real ga, real gb, real &sx, real &sy,
+                     real &g0, real &g1) {
+  const real id = 1 / (a0 * b1 - a1 * b0);
+  // E^-1 (a2, b2) = (-s_y, s_x)
+  sx = (a0 * b2 - b0 * a2) * id;
+  sy = -(b1 * a2 - a1 * b2) * id;
+  g0 = (b1 * ga - a1 * gb) * id;
+  g1 = (a0 * gb - b0 * ga) * id;
 }
 
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr
