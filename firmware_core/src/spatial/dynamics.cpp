@@ -127,7 +127,8 @@ void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *ro
     for (int k = 0; k < kBodyDof; ++k) f[kBodyDof * a + k] = -r.ja[k];
     if (b >= 0)
       for (int k = 0; k < kBodyDof; ++k) f[kBodyDof * b + k] -= r.jb[k];
-    std::fill(F.stop_mu[j], F.stop_mu[j] + kMaxSystemRows, real(0));  // the unused slots' too
+    // the legs' rows' slots, the unused ones too (robot_solve reads no others)
+    std::fill(F.stop_mu[j], F.stop_mu[j] + leg_rows_extent(robot), real(0));
     solve_rows(robot, F, f, zero_g, F.stop_x[j], F.stop_mu[j]);
   }
   real *D = F.D;
@@ -309,14 +310,15 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
     for (int a = 0; a < nz; ++a)
       for (int i = 0; i < n; ++i) lam[i] -= c[a] * F.null[a][i];
   }
-  const int nv = kBodyDof * robot.nb;
+  const int nv = kBodyDof * robot.nb, nr = leg_rows_extent(robot);
   for (int j = 0; j < n; ++j) {
     if (!F.live[j] && !(nz && F.stop[j] < robot.m + 3 * kMaxContacts)) {
       mu[F.stop[j]] = 0;
       continue;
     }
     for (int k = 0; k < nv; ++k) x[k] += lam[j] * F.stop_x[j][k];
-    for (int r = 0; r < kMaxSystemRows; ++r) mu[r] += lam[j] * F.stop_mu[j][r];
+    // a column moves the legs' rows' multipliers alone (solve_rows writes no others)
+    for (int r = 0; r < nr; ++r) mu[r] += lam[j] * F.stop_mu[j][r];
     mu[F.stop[j]] = lam[j];
   }
 }

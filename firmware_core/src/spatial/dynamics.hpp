@@ -60,6 +60,11 @@ constexpr int kMaxHeldStops = kLegStops * kMaxLegs;
 // The rows the factor takes as columns (dynamics.cpp): the held stops', the box's contacts'.
 constexpr int kMaxColumns = kMaxHeldStops + 3 * kMaxBoxContacts;
 inline int stop_row(const SpatialRobot &robot, int l, int k) { return robot.m + 3 * kMaxContacts + kLegStops * l + k; }
+// The rows' extent for this robot: past its legs' stops no row is ever used (loops and copies of
+// multipliers stop there, not at kMaxSystemRows).
+inline int system_rows_extent(const SpatialRobot &robot) { return stop_row(robot, robot.nlegs, 0); }
+// The legs' factors' rows (the joints', the feet's slots): the only multipliers solve_rows writes.
+inline int leg_rows_extent(const SpatialRobot &robot) { return foot_row(robot, robot.nlegs); }
 // Leg l's held stops (bit k).
 inline uint32_t leg_stops(const FeetHold &hold, int l) { return (hold.stops >> (kLegStops * l)) & 7u; }
 

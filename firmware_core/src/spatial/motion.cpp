@@ -109,7 +109,7 @@ void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   std::copy(d.a, d.a + kBodyDof * robot.nb, c.a);
   std::copy(d.acc_aux, d.acc_aux + kBodyDof * robot.nb, c.acc_aux);
   c.acc_aux_h = d.acc_aux_h;
-  std::copy(d.mu, d.mu + kMaxSystemRows, c.mu);
+  std::copy(d.mu, d.mu + system_rows_extent(robot), c.mu);
   std::copy(d.normal_force, d.normal_force + kMaxContacts, c.N);
   c.hold = d.hold;
   std::copy(d.slip_dir, d.slip_dir + kMaxContacts, c.slip_dir);
@@ -129,7 +129,7 @@ void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   std::copy(c.a, c.a + kBodyDof * robot.nb, d.a);
   std::copy(c.acc_aux, c.acc_aux + kBodyDof * robot.nb, d.acc_aux);
   d.acc_aux_h = c.acc_aux_h;
-  std::copy(c.mu, c.mu + kMaxSystemRows, d.mu);
+  std::copy(c.mu, c.mu + system_rows_extent(robot), d.mu);
   std::copy(c.N, c.N + kMaxContacts, d.normal_force);
   d.hold = c.hold;
   std::copy(c.slip_dir, c.slip_dir + kMaxContacts, d.slip_dir);
@@ -610,7 +610,7 @@ legsim_status robot_data_refresh(const SpatialRobot &robot, RobotData &data) {
   // generalized-alpha's history shifted by the jump (its lead over the accelerations kept)
   for (int k = 0; k < kBodyDof * robot.nb; ++k) data.acc_aux[k] += a[k] - data.a[k];
   std::copy(a, a + kBodyDof * robot.nb, data.a);
-  std::copy(mu, mu + kMaxSystemRows, data.mu);
+  std::copy(mu, mu + system_rows_extent(robot), data.mu);
   std::copy(N, N + kMaxContacts, data.normal_force);
   return LEGSIM_OK;
 }
