@@ -42,7 +42,7 @@ using RowIndex = uint16_t;
 // (LEGSIM_ERR_CAPACITY).
 constexpr int kFactorEntries =
     LEGSIM_FACTOR_ENTRIES > 0 ? LEGSIM_FACTOR_ENTRIES : kMaxRows * (kMaxRows + 1) / 2;
-static_assert(kFactorEntries <= 65535, "factor offsets (Layout::diag, Pair::aij) are 16-bit");
+static_assert(kFactorEntries <= 65535, "factor offsets (Layout::row, Pair::aij) are 16-bit");
 
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
@@ -121,7 +121,7 @@ struct RowSource {
 // flattened coefficient and matrix arrays are worked out once, at layout time.
 struct Pair {
   uint16_t ci, cj;  // (kBodyDof * (2 * row + slot)) of each side
-  uint16_t aij;     // entry (i, j) of the factor's storage (by position): Layout::diag[i] - i + j
+  uint16_t aij;     // entry (i, j) of the factor's storage (by position): Layout::row[i] + j
 };
 
 // Which equations make up the system and which entries of J W J^T can be
@@ -137,13 +137,12 @@ struct Layout {
   // factor fewer entries), which keeps the work small.
   RowIndex perm[kMaxRows];
   RowIndex first[kMaxRows];  // by position: the first non-zero column, the envelope
-  // The factor's packed storage (Factor::a) by position: entry (i, j) at diag[i] - i + j
-  // (the diagonal's own offset is the one a solve reads most), row i holding columns
-  // first[i] .. i; a row after a generated kernel's block that reaches into it holds columns
+  // The factor's packed storage (Factor::a) by position: entry (i, j) at row[i] + j, row i
+  // holding columns first[i] .. i; a row after a generated kernel's block that reaches into it holds columns
   // 0 .. i (eliminate's forward solve through the block writes them all). entries: the
   // storage it needs (with a separator, at least the full lower triangle of factor_build's
   // dense fallback), at most kFactorEntries.
-  uint16_t diag[kMaxRows];
+  uint16_t row[kMaxRows];
   int entries;
   // A body (the box of a robot on three or more legs) whose removal splits the rows into
   // groups that share no other body, or -1. With one, the pairs and the envelope are the
@@ -205,13 +204,17 @@ constexpr real kPivotFloor = real(1e-13);
 #endif
 
 // L D L^T factor of J W J^T (L below the diagonal in place, 1 / D on it) with its condition
-// estimate, packed: entry (i, j) (by position) at a[diag[i] - i + j], j in first[i] .. i.
+// estimate, packed: entry (i, j) (by position) at a[row[i] + j], j in first[i] .. i.
 struct Factor {
   std::array<real, kFactorEntries> a;
   int m;
   RowIndex perm[kMaxRows];   // row -> position, as in the layout
   RowIndex first[kMaxRows];  // the envelope (fill-in stays inside it)
-  uint16_t diag[kMaxRows];   // each position's diagonal in a, as in the layout
+  uint16_t row[kMaxRows];    // each position's offset into a, as in the layout
+  // 1 / D by position side by side, as a's diagonal (which is a gather): factor_build's
+  // (eliminate), for a system with rows after the kernel's block or without a kernel (m >
+  // the block's rows); a kernel's system alone (its fused solves write a only) has none.
+  real dinv[kMaxRows];
   real condition;
   // The rows the factorization dropped as dependent on the rows before them in its order
   // (at most Layout::surplus of them, by row index): 1 / D is 0 there, so a solve gives
@@ -436,7 +439,7 @@ void layout_path(Layout &out);
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
 legsim_status layout_finish(Layout &out, const DriverValues &drivers);
 // layout_finish's last step, with its order and envelope: the factor's storage by position
-// (Layout::diag, entries; positions before p0 are a generated kernel's block) and each pair's
+// (Layout::row, entries; positions before p0 are a generated kernel's block) and each pair's
 // offset into it, or LEGSIM_ERR_CAPACITY with out untouched where it needs more than
 // capacity entries.
 legsim_status layout_storage(Layout &out, int p0, int capacity);

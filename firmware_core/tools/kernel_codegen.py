@@ -274,7 +274,7 @@ class Kernel:
         self.first = [min(self.l_nz[p]) if self.l_nz[p] else p for p in range(m)]
 
     def at(self, p, q):
-        """Entry (p, q) of the factor's packed storage (Layout::diag, layout_storage: the
+        """Entry (p, q) of the factor's packed storage (Layout::row, layout_storage: the
         envelope row after row, the block's rows first)."""
         if not hasattr(self, "_row"):
             self._row, n = [], 0

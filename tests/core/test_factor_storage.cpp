@@ -1,4 +1,4 @@
-// The factor's packed storage (sim.hpp: Layout::diag, Factor): on the leg's and the robot's
+// The factor's packed storage (sim.hpp: Layout::row, Factor): on the leg's and the robot's
 // layouts (joint rows; the dynamics' after steps, with a generated kernel's block and the
 // general path alike) each position's columns tile the storage without gap or overlap, every
 // pair of J W J^T lands on its own entry, L D L^T read back from the packed factor is
@@ -45,8 +45,8 @@ void storage_tiles(const Layout &lay) {
   for (int p = 0; p < lay.m; ++p) {
     TEST_ASSERT_TRUE(lay.first[p] <= p);
     widened += stored_from(lay, p) < lay.first[p];
-    TEST_ASSERT_EQUAL_INT(next, lay.diag[p] - p + stored_from(lay, p));  // right after the row before
-    next = lay.diag[p] + 1;
+    TEST_ASSERT_EQUAL_INT(next, lay.row[p] + stored_from(lay, p));  // right after the row before
+    next = lay.row[p] + p + 1;
   }
   if (lay.separator < 0) TEST_ASSERT_EQUAL_INT(next, lay.entries);
   else TEST_ASSERT_EQUAL_INT(lay.m * (lay.m + 1) / 2, lay.entries);  // the dense fallback's room
@@ -55,7 +55,7 @@ void storage_tiles(const Layout &lay) {
     const Pair &pr = lay.pair[k];
     const int pi = lay.perm[pr.ci / (2 * kBodyDof)], pj = lay.perm[pr.cj / (2 * kBodyDof)];
     TEST_ASSERT_TRUE(pj <= pi && pj >= lay.first[pi]);
-    TEST_ASSERT_EQUAL_INT(lay.diag[pi] - pi + pj, pr.aij);
+    TEST_ASSERT_EQUAL_INT(lay.row[pi] + pj, pr.aij);
   }
 }
 
@@ -72,8 +72,8 @@ void factor_reproduces_the_system(const Sim &s, const Layout &lay) {
   long double dinv[kMaxRows];
   for (int p = 0; p < n; ++p) {
     for (int q = 0; q < n; ++q) l[p][q] = q == p ? 1 : 0;
-    for (int q = f.first[p]; q < p; ++q) l[p][q] = f.a[f.diag[p] - p + q];
-    dinv[p] = f.a[f.diag[p]];
+    for (int q = f.first[p]; q < p; ++q) l[p][q] = f.a[f.row[p] + q];
+    dinv[p] = f.a[f.row[p] + p];
   }
   long double worst = 0, scale = 0;
   for (int i = 0; i < n; ++i)

@@ -333,25 +333,25 @@ legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
 
 legsim_status layout_storage(Layout &out, int p0, int capacity) {
   const int m = out.m;
-  uint16_t diag[kMaxRows];
+  uint16_t row[kMaxRows];
   int n = 0;
   for (int p = 0; p < m; ++p) {
-    // a row after the kernel's block that reaches into it: from column 0 (Layout::diag)
+    // a row after the kernel's block that reaches into it: from column 0 (Layout::row)
     const int lo = p >= p0 && out.first[p] < p0 ? 0 : out.first[p];
+    row[p] = uint16_t(n - lo);  // n >= p >= lo: each position before holds its diagonal
     n += p - lo + 1;
     if (n > capacity) return LEGSIM_ERR_CAPACITY;
-    diag[p] = uint16_t(n - 1);
   }
   // factor_build's dense fallback with a separator: the whole lower triangle
   if (out.separator >= 0 && m * (m + 1) / 2 > n) n = m * (m + 1) / 2;
   if (n > capacity) return LEGSIM_ERR_CAPACITY;
-  for (int p = 0; p < m; ++p) out.diag[p] = diag[p];
+  for (int p = 0; p < m; ++p) out.row[p] = row[p];
   out.entries = n;
   constexpr int kRowCoef = 2 * kBodyDof;  // Pair::ci, cj: kBodyDof * (2 * row + slot)
   for (int k = 0; k < out.npairs; ++k) {
     Pair &pr = out.pair[k];
     const int pi = out.perm[pr.ci / kRowCoef], pj = out.perm[pr.cj / kRowCoef];
-    pr.aij = uint16_t(out.diag[pi] - pi + pj);
+    pr.aij = uint16_t(out.row[pi] + pj);
   }
   return LEGSIM_OK;
 }

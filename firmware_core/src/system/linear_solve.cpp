@@ -19,25 +19,23 @@ void factor_order(const Layout &layout, Factor &f) {
   f.separator = -1;  // factor_build sets it once B is factored
   std::memcpy(f.perm, layout.perm, sizeof f.perm);
   std::memcpy(f.first, layout.first, sizeof f.first);
-  std::memcpy(f.diag, layout.diag, sizeof f.diag);
+  std::memcpy(f.row, layout.row, sizeof f.row);
 }
 
 namespace {
 // Position i's row of the packed storage, indexed by column: row_of(f, i)[j] is entry (i, j).
-inline real *row_of(Factor &f, int i) { return f.a.data() + (f.diag[i] - i); }
-inline const real *row_of(const Factor &f, int i) { return f.a.data() + (f.diag[i] - i); }
+inline real *row_of(Factor &f, int i) { return f.a.data() + f.row[i]; }
+inline const real *row_of(const Factor &f, int i) { return f.a.data() + f.row[i]; }
 
 // L D L^T of the assembled envelope of f.a in place, positions mk .. m-1 (those before:
 // the kernel's block, already factored), its pivots' range into pmin, pmax; false at a
 // pivot at or below the floor.
 bool eliminate(Factor &f, int mk, int surplus, real max_diag, real &pmin, real &pmax) {
   const int m = f.m;
-  // 1 / D by position, side by side (the packed diagonal is a gather): the block's that the
-  // rows after it reach, then each pivot as it is found
-  real dinv[kMaxRows];
-  int lo = mk;
-  for (int i = mk; i < m; ++i) lo = f.first[i] < lo ? f.first[i] : lo;
-  for (int k = lo; k < mk; ++k) dinv[k] = f.a[f.diag[k]];
+  // 1 / D by position, side by side (Factor::dinv): the block's, then each pivot as found
+  real *dinv = f.dinv;
+  if (m > mk)
+    for (int k = 0; k < mk; ++k) dinv[k] = f.a[f.row[k] + k];
   real *row[kMaxRows];  // the rows eliminated here (the inner loop reads one per entry)
   for (int i = mk; i < m; ++i) row[i] = row_of(f, i);
   for (int i = mk; i < m; ++i) {
@@ -47,7 +45,7 @@ bool eliminate(Factor &f, int mk, int surplus, real max_diag, real &pmin, real &
     if (fi < mk) {
       // its columns in the kernel's block: L11 t = a by the kernel's sparse forward solve
       // (the same products in the same order as the loop below, less the zero ones; the
-      // row keeps columns from 0, Layout::diag)
+      // row keeps columns from 0, Layout::row)
       for (int j = 0; j < fi; ++j) ai[j] = 0;
       f.kernel->forward(f.a.data(), ai, fi);
       j0 = mk;
@@ -179,14 +177,14 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   pairs_add(layout, wflat, cflat, aflat);
   real max_diag = 0;
   for (int i = mk; i < m; ++i) {
-    const real aii = f.a[f.diag[i]];
+    const real aii = f.a[f.row[i] + i];
     max_diag = aii > max_diag ? aii : max_diag;
   }
   if (layout.separator >= 0) {
     // the pivot floor is relative to J W J^T's diagonal, B's plus the separator's share
     separator_coefficients(layout, rows, w, f);
     for (int i = 0; i < m; ++i) {
-      real d = f.a[f.diag[i]];
+      real d = f.a[f.row[i] + i];
       for (int e = 0; e < kBodyDof; ++e) d += f.u[i][e] * f.wb[e] * f.u[i][e];
       max_diag = d > max_diag ? d : max_diag;
     }
@@ -214,8 +212,8 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     // layout keeps room for the whole lower triangle, Layout::entries)
     for (int i = 0; i < m; ++i) {
       f.first[i] = 0;
-      f.diag[i] = uint16_t(i * (i + 1) / 2 + i);
-      for (int j = 0; j <= i; ++j) f.a[f.diag[i] - i + j] = 0;
+      f.row[i] = uint16_t(i * (i + 1) / 2);
+      for (int j = 0; j <= i; ++j) f.a[f.row[i] + j] = 0;
     }
     constexpr int kRowCoef = 2 * kBodyDof;  // Pair::ci, cj: kBodyDof * (2 * row + slot)
     for (int k = 0; k < layout.npairs; ++k) {  // pairs_add at the triangle's offsets
@@ -224,11 +222,11 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
       real dot = ci[0] * cj[0];
       for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
       const int pi = f.perm[p.ci / kRowCoef], pj = f.perm[p.cj / kRowCoef];
-      aflat[f.diag[pi] - pi + pj] += dot;
+      aflat[f.row[pi] + pj] += dot;
     }
     for (int i = 0; i < m; ++i)
       for (int j = 0; j <= i; ++j)
-        for (int e = 0; e < kBodyDof; ++e) f.a[f.diag[i] - i + j] += f.u[i][e] * f.wb[e] * f.u[j][e];
+        for (int e = 0; e < kBodyDof; ++e) f.a[f.row[i] + j] += f.u[i][e] * f.wb[e] * f.u[j][e];
     pmin = max_diag;
     pmax = 0;
     f.nredundant = 0;
@@ -251,18 +249,17 @@ namespace {
 void solve_envelope(const Factor &f, real *y) {
   const int m = f.m, mk = f.kernel ? f.kernel->mj : 0;
   if (mk) f.kernel->forward(f.a.data(), y, 0);
-  // D^-1 y: each row's value times its 1 / D as the row is done (the row at hand), kept
-  // aside until the rows after it have read the value unscaled
-  real scaled[kMaxRows];
   for (int i = mk; i < m; ++i) {
     const real *ai = row_of(f, i);
     real s = y[i];
     for (int k = f.first[i]; k < i; ++k) s -= ai[k] * y[k];
     y[i] = s;
-    scaled[i] = s * ai[i];
   }
-  for (int i = 0; i < mk; ++i) y[i] *= f.a[f.diag[i]];
-  if (m > mk) std::memcpy(y + mk, scaled + mk, sizeof(real) * (m - mk));
+  if (m > mk) {
+    for (int i = 0; i < m; ++i) y[i] *= f.dinv[i];
+  } else {
+    for (int i = 0; i < m; ++i) y[i] *= f.a[f.row[i] + i];
+  }
   for (int i = m - 1; i >= mk; --i) {
     const real *ai = row_of(f, i);
     const real yi = y[i];
@@ -302,7 +299,7 @@ void multiply(const Factor &f, const real *x, real *y) {
     t[i] += x[i];
   }
   for (int k = 0; k < m; ++k) {  // t = D t (0: dropped)
-    const real akk = f.a[f.diag[k]];
+    const real akk = f.a[f.row[k] + k];
     t[k] = akk != 0 ? t[k] / akk : real(0);
   }
   for (int i = 0; i < m; ++i) {  // y = L t
