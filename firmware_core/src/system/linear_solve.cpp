@@ -59,10 +59,11 @@ bool eliminate(Factor &f, int mk, int surplus, real max_diag, real &pmin, real &
       ai[j] = s;
     }
     real d = ai[i];
-    for (int k = fi; k < i; ++k) {
-      const real t = ai[k];
-      ai[k] = t * dinv[k];
-      d -= t * ai[k];
+    const real *dk = dinv + fi;
+    for (real *ak = ai + fi, *end = ai + i; ak < end; ++ak, ++dk) {  // k = fi .. i-1
+      const real t = *ak;
+      *ak = t * *dk;
+      d -= t * *ak;
     }
     if (!(d > kPivotFloor * max_diag)) {
       if (f.nredundant < surplus && d == d) {
