@@ -275,7 +275,10 @@ class Kernel:
 
     def at(self, p, q):
         """Entry (p, q) of the factor's packed storage (Layout::row, layout_storage: the
-        envelope row after row, the block's rows first)."""
+        envelope row after row, the block's rows first). A reduced system without a pinned
+        body reads its whole system's factor (the same order): the whole system's storage."""
+        if getattr(self, "full", self) is not self:
+            return self.full.at(p, q)
         if not hasattr(self, "_row"):
             self._row, n = [], 0
             for r in range(self.m):
