@@ -1,6 +1,7 @@
 // The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
 // the identity), assembled from the sparse rows, factored in place as L D L^T (L unit
-// lower triangular) in its envelope, packed row after row (Factor). Hand-written so that no Eigen path can fall back to the heap.
+// lower triangular) in its envelope, packed row after row (Factor). Hand-written so that no
+// Eigen path can fall back to the heap.
 // The factor's diagonal holds 1 / D_i: no square roots, and the only divisions are the m
 // reciprocals (a division's or a square root's latency is 4-10 multiplies', and the
 // factorization and its solves are chains of them).
