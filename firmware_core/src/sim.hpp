@@ -3,6 +3,7 @@
 // is fixed-size; the capacities come from legsim/config.h.
 #pragma once
 
+#include <array>
 #include <type_traits>
 
 #include <Eigen/Core>
@@ -33,10 +34,18 @@ constexpr int kMaxPairs = (LEGSIM_MAX_CONTACTS > 0 ? 8 : 6) * kMaxRows +
 // that body are kept with the factor. A smaller build keeps one slot.
 constexpr int kSeparatorRows = LEGSIM_MAX_CONTACTS >= 3 ? kMaxRows : 1;
 
+// A row's index or position.
+using RowIndex = uint16_t;
+// Entries of the factor's packed storage (Factor::a): L's envelope, row after row, of the
+// largest layout the build must hold (LEGSIM_FACTOR_ENTRIES; 0: the full lower triangle of
+// kMaxRows rows, which every layout fits). layout_finish refuses a layout that needs more
+// (LEGSIM_ERR_CAPACITY).
+constexpr int kFactorEntries =
+    LEGSIM_FACTOR_ENTRIES > 0 ? LEGSIM_FACTOR_ENTRIES : kMaxRows * (kMaxRows + 1) / 2;
+static_assert(kFactorEntries <= 65535, "factor offsets (Layout::row, Pair::aij) are 16-bit");
+
 using VecQ = Eigen::Matrix<real, kMaxCoords, 1>;
 using VecR = Eigen::Matrix<real, kMaxRows, 1>;
-// row-major: the factorization's inner products run along rows
-using MatR = Eigen::Matrix<real, kMaxRows, kMaxRows, Eigen::RowMajor>;
 
 struct Kernel;  // generated joint-block kernels (kernel.hpp)
 
@@ -112,7 +121,7 @@ struct RowSource {
 // flattened coefficient and matrix arrays are worked out once, at layout time.
 struct Pair {
   uint16_t ci, cj;  // (kBodyDof * (2 * row + slot)) of each side
-  uint16_t aij;     // i * kMaxRows + j
+  uint16_t aij;     // entry (i, j) of the factor's storage (by position): Layout::row[i] + j
 };
 
 // Which equations make up the system and which entries of J W J^T can be
@@ -126,8 +135,15 @@ struct Layout {
   // J W J^T is factored in an elimination order of its rows (row i sits at position
   // perm[i]; layout_finish: reverse Cuthill-McKee or minimum degree, whichever leaves the
   // factor fewer entries), which keeps the work small.
-  uint8_t perm[kMaxRows];
-  uint8_t first[kMaxRows];  // by position: the first non-zero column, the envelope
+  RowIndex perm[kMaxRows];
+  RowIndex first[kMaxRows];  // by position: the first non-zero column, the envelope
+  // The factor's packed storage (Factor::a) by position: entry (i, j) at row[i] + j, row i
+  // holding columns first[i] .. i; a row after a generated kernel's block that reaches into it holds columns
+  // 0 .. i (eliminate's forward solve through the block writes them all). entries: the
+  // storage it needs (with a separator, at least the full lower triangle of factor_build's
+  // dense fallback), at most kFactorEntries.
+  uint16_t row[kMaxRows];
+  int entries;
   // A body (the box of a robot on three or more legs) whose removal splits the rows into
   // groups that share no other body, or -1. With one, the pairs and the envelope are the
   // ones of B = J W J^T less the body's share U W_b U^T (U: each row's coefficients on it),
@@ -136,19 +152,20 @@ struct Layout {
   int8_t separator;
   // The rows ordered together (layout_finish): a stance's joint and contact rows (all
   // stuck, nothing else), or 0: the joint rows alone, the other rows after them.
-  uint8_t block;
+  RowIndex block;
   // Its actuator rows are stroke stops (Data::stop_drivers; the actuators still
   // push) rather than drivers that replace the actuators (Data::drivers).
   bool stops;
   // Sliding contacts (Data::dyn only): their normal row also carries the friction
   // force mu_k lambda_n along the tangent, which makes the system non-symmetric.
   uint8_t nslide;
-  uint8_t slide_contact[kMaxContacts], slide_row[kMaxContacts];
+  uint8_t slide_contact[kMaxContacts];
+  RowIndex slide_row[kMaxContacts];
   // Rows beyond the coordinates (Data::dyn only: max(0, m - nq), stops_layout): that many
   // rows must depend on the others (e.g. both feet stuck with all four stops: 40 rows on 39
   // coordinates, the self-stress of the stance), and factor_build drops that many dependent
   // rows (the basic solution: their multipliers 0); one more vanishing pivot is singular.
-  uint8_t surplus;
+  RowIndex surplus;
   const Kernel *kernel;  // the model's kernel serves rows 0 .. kernel->mj-1 (nullptr: none)
   // The path of each solve on this layout, chosen once when it is built (layout_path): the
   // kernel whose generated solve serves the whole system (its block is all the rows: the
@@ -187,18 +204,23 @@ constexpr real kPivotFloor = real(1e-13);
 #endif
 
 // L D L^T factor of J W J^T (L below the diagonal in place, 1 / D on it) with its condition
-// estimate.
+// estimate, packed: entry (i, j) (by position) at a[row[i] + j], j in first[i] .. i.
 struct Factor {
-  MatR a;
+  std::array<real, kFactorEntries> a;
   int m;
-  uint8_t perm[kMaxRows];   // row -> position, as in the layout
-  uint8_t first[kMaxRows];  // the envelope (fill-in stays inside it)
+  RowIndex perm[kMaxRows];   // row -> position, as in the layout
+  RowIndex first[kMaxRows];  // the envelope (fill-in stays inside it)
+  uint16_t row[kMaxRows];    // each position's offset into a, as in the layout
+  // 1 / D by position side by side, as a's diagonal (which is a gather): factor_build's
+  // (eliminate), for a system with rows after the kernel's block or without a kernel (m >
+  // the block's rows); a kernel's system alone (its fused solves write a only) has none.
+  real dinv[kMaxRows];
   real condition;
   // The rows the factorization dropped as dependent on the rows before them in its order
   // (at most Layout::surplus of them, by row index): 1 / D is 0 there, so a solve gives
   // them a zero multiplier and satisfies their equations through the others'.
   int nredundant;
-  uint8_t redundant[kMaxRows];
+  RowIndex redundant[kMaxRows];
   const Kernel *kernel;  // positions 0 .. kernel->mj-1 are the kernel's block (nullptr: none)
   // Layout::separator's body, or -1; with one, a holds the factor of B and, by position, u
   // the rows' coefficients on the body, z = B^-1 u, wb its weights and s the factor of
@@ -416,6 +438,11 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
 void layout_path(Layout &out);
 // Completes a layout once the coordinate drivers are known: lists the non-zeros of J W J^T.
 legsim_status layout_finish(Layout &out, const DriverValues &drivers);
+// layout_finish's last step, with its order and envelope: the factor's storage by position
+// (Layout::row, entries; positions before p0 are a generated kernel's block) and each pair's
+// offset into it, or LEGSIM_ERR_CAPACITY with out untouched where it needs more than
+// capacity entries.
+legsim_status layout_storage(Layout &out, int p0, int capacity);
 // Evaluates Phi, the Jacobian and the velocity/acceleration right-hand sides.
 // trig (optional): the sim's TrigCache.
 void rows_eval(const Model &model, const Layout &layout, const DriverValues &drivers, const VecQ &q,

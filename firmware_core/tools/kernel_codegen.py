@@ -294,6 +294,19 @@ class Kernel:
         Cuthill-McKee, 984 and 27,398 under minimum degree, which has fewer products)."""
         return sum(len(x) * (len(x) + 1) // 2 for x in self.l_nz)
 
+    def at(self, p, q):
+        """Entry (p, q) of the factor's packed storage (Layout::row, layout_storage: the
+        envelope row after row, the block's rows first). A reduced system without a pinned
+        body reads its whole system's factor (the same order): the whole system's storage."""
+        if getattr(self, "full", self) is not self:
+            return self.full.at(p, q)
+        if not hasattr(self, "_row"):
+            self._row, n = [], 0
+            for r in range(self.m):
+                self._row.append(n - self.first[r])
+                n += r - self.first[r] + 1
+        return self._row[p] + q
+
     def coef(self, i, s, k, local=False):
         """(constant, [factor]) of a Jacobian entry: a constant, or the run-time value in
         rows.coef (or in the fused functions' local c<row>_<slot>_<coordinate>)."""
@@ -506,14 +519,14 @@ class Kernel:
         for p in range(self.m):
             for q in range(self.first[p], p + 1):
                 v = f"iD{p}" if q == p else f"L{p}_{q}" if q in self.l_nz[p] else "0"
-                o.append(f"  {a}[{p} * kMaxRows + {q}] = {v};")
+                o.append(f"  {a}[{self.at(p, q)}] = {v};")
         return o
 
     def solve_locals(self, src, dst, lval="L"):
         """L D L^T y = b with b_p = src(row at p), into dst(row at p): factor_solve's
         permutation folded in, the same operations in the same order as its forward solve,
         scaling and backward solve."""
-        L = (lambda p, k: f"L{p}_{k}") if lval == "L" else (lambda p, k: f"a[{p} * kMaxRows + {k}]")
+        L = (lambda p, k: f"L{p}_{k}") if lval == "L" else (lambda p, k: f"a[{self.at(p, k)}]")
         iD = (lambda p: f"iD{p}") if lval == "L" else (lambda p: L(p, p))  # a's diagonal: 1 / D_p
         o = []
         for p in range(self.m):
@@ -603,9 +616,9 @@ class Kernel:
         return product(terms)
 
     def emit(self, sym):
-        m, R = self.m, "R"
+        m = self.m
         o = []
-        a = lambda p, q: f"a[{p} * {R} + {q}]"  # noqa: E731
+        a = lambda p, q: f"a[{self.at(p, q)}]"  # noqa: E731
         # rows: the row units (rows.hpp) called per joint, as the general path calls them (so
         # the same values to the last bit), one sin/cos pair per body
         o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_rows(const Model &model, [[maybe_unused]] const DriverValues &dv, const VecQ &q, "
@@ -621,7 +634,6 @@ class Kernel:
         o.append("}\n")
         # entered at position `from` (y zero before it: a row after the block, fill from there)
         o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_forward(const real *a, real *y, int from) {{")
-        o.append(f"  constexpr int {R} = kMaxRows;")
         o.append("  switch (from) {")
         for p in range(m):
             sub = "".join(f" - {a(p, k)} * y[{k}]" for k in self.l_nz[p])
@@ -630,7 +642,6 @@ class Kernel:
         o.append("  }")
         o.append("}\n")
         o.append(f"LEGSIM_KERNEL_TARGETS void {sym}_backward(const real *a, real *y) {{")
-        o.append(f"  constexpr int {R} = kMaxRows;")
         for p in reversed(range(m)):
             o += [f"  y[{k}] -= {a(p, k)} * y[{p}];" for k in self.l_nz[p]]
         o.append("}\n")

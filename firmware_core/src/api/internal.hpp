@@ -10,7 +10,8 @@
 #include "sim.hpp"
 
 static_assert(alignof(legsim::Sim) <= LEGSIM_STORAGE_ALIGN, "raise LEGSIM_STORAGE_ALIGN");
-static_assert(LEGSIM_MAX_ROWS <= 255, "row indices are stored in 8 bits");
+static_assert(LEGSIM_MAX_ROWS <= 65535, "row indices are stored in 16 bits (RowIndex)");
+static_assert(2 * legsim::kBodyDof * LEGSIM_MAX_ROWS <= 65535, "Pair::ci, cj (coefficient offsets) are 16-bit");
 static_assert(LEGSIM_MAX_ACTUATORS <= 31, "actuator sets are 32-bit masks");
 static_assert(sizeof(legsim_reaction) == 3 * sizeof(legsim_real), "a reaction is 3 reals, no padding");
 

@@ -20,7 +20,7 @@ legsim_status stops_layout(const Model &m, Data &d) {
   if (s == LEGSIM_OK) s = layout_finish(d.dyn, d.stop_drivers);
   d.dyn.stops = true;
   // more rows than coordinates: the surplus are dependent (factor_build drops them)
-  d.dyn.surplus = uint8_t(d.dyn.m > m.nq ? d.dyn.m - m.nq : 0);
+  d.dyn.surplus = RowIndex(d.dyn.m > m.nq ? d.dyn.m - m.nq : 0);
   contact_slides_mark(m, d, d.dyn);
   return s;
 }

@@ -165,7 +165,7 @@ legsim_status layout_build(const Model &model, uint32_t actuator_mask, int ncoor
   bool stance = LEGSIM_MAX_CONTACTS > 0 && model.nc > 0 && contacts && !mid && ncoord == 0 && actuator_mask == 0;
   for (int k = 0; stance && k < model.nc; ++k) stance = contacts[k] == kContactStuck;
   if (stance && model.stance_kernel) out.kernel = model.stance_kernel;
-  out.block = uint8_t(stance && (kernel_find(model, true) || !kernel_find(model)) ? m : 0);
+  out.block = RowIndex(stance && (kernel_find(model, true) || !kernel_find(model)) ? m : 0);
   out.npairs = 0;
   out.stops = false;
   out.nslide = 0;

@@ -33,7 +33,7 @@ void contact_slides_mark(const Model &model, const Data &d, Layout &layout) {
     const RowSource &r = layout.src[i];
     if (r.kind != RowKind::ContactNormal || d.contact[r.index].state != LEGSIM_CONTACT_SLIDING) continue;
     layout.slide_contact[layout.nslide] = r.index;
-    layout.slide_row[layout.nslide] = uint8_t(i);
+    layout.slide_row[layout.nslide] = RowIndex(i);
     ++layout.nslide;
   }
 }

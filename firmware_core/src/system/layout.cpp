@@ -250,7 +250,7 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
   if (k) {
     // the joint block in the kernel's order, the other rows after it as they come: their
     // rows of the factor are the Schur complement's on the kernel's factor
-    for (int i = 0; i < m; ++i) out.perm[i] = i < k->mj ? k->perm[i] : uint8_t(i);
+    for (int i = 0; i < m; ++i) out.perm[i] = i < k->mj ? RowIndex(k->perm[i]) : RowIndex(i);
     return layout_pairs(out, k->mj, k->first);
   }
   // The block (the joint rows, or a stance's joint and contact rows: Layout::block) in an
@@ -301,8 +301,8 @@ legsim_status layout_finish(Layout &out, const DriverValues &dv) {
     for (int p = 0; p < nb; ++p) rcm[p] = by_group[p];
     out.separator = int8_t(sep);
   }
-  for (int p = 0; p < nb; ++p) out.perm[rcm[p]] = uint8_t(p);
-  for (int i = nb; i < m; ++i) out.perm[i] = uint8_t(i);
+  for (int p = 0; p < nb; ++p) out.perm[rcm[p]] = RowIndex(p);
+  for (int i = nb; i < m; ++i) out.perm[i] = RowIndex(i);
   return layout_pairs(out, 0, nullptr);
 }
 
@@ -312,7 +312,7 @@ namespace {
 legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
   const int m = out.m;
   int np = 0;
-  for (int p = 0; p < m; ++p) out.first[p] = p < p0 ? first[p] : uint8_t(p);
+  for (int p = 0; p < m; ++p) out.first[p] = p < p0 ? RowIndex(first[p]) : RowIndex(p);
   for (int i = 0; i < m; ++i)
     for (int j = 0; j < m; ++j)
       for (int si = 0; si < 2; ++si)
@@ -323,13 +323,37 @@ legsim_status layout_pairs(Layout &out, int p0, const uint8_t *first) {
           if (out.body[i][si] < 0 || out.body[i][si] != out.body[j][sj]) continue;
           if (out.body[i][si] == out.separator) continue;  // B's entries only
           if (np >= kMaxPairs) return LEGSIM_ERR_CAPACITY;
-          out.pair[np++] = {uint16_t(kBodyDof * (2 * i + si)), uint16_t(kBodyDof * (2 * j + sj)),
-                            uint16_t(pi * kMaxRows + pj)};
-          if (pj < out.first[pi]) out.first[pi] = uint8_t(pj);
+          out.pair[np++] = {uint16_t(kBodyDof * (2 * i + si)), uint16_t(kBodyDof * (2 * j + sj)), 0};
+          if (pj < out.first[pi]) out.first[pi] = RowIndex(pj);
         }
   out.npairs = np;
-  return LEGSIM_OK;
+  return layout_storage(out, p0, kFactorEntries);
 }
 }  // namespace
+
+legsim_status layout_storage(Layout &out, int p0, int capacity) {
+  const int m = out.m;
+  uint16_t row[kMaxRows];
+  int n = 0;
+  for (int p = 0; p < m; ++p) {
+    // a row after the kernel's block that reaches into it: from column 0 (Layout::row)
+    const int lo = p >= p0 && out.first[p] < p0 ? 0 : out.first[p];
+    row[p] = uint16_t(n - lo);  // n >= p >= lo: each position before holds its diagonal
+    n += p - lo + 1;
+    if (n > capacity) return LEGSIM_ERR_CAPACITY;
+  }
+  // factor_build's dense fallback with a separator: the whole lower triangle
+  if (out.separator >= 0 && m * (m + 1) / 2 > n) n = m * (m + 1) / 2;
+  if (n > capacity) return LEGSIM_ERR_CAPACITY;
+  for (int p = 0; p < m; ++p) out.row[p] = row[p];
+  out.entries = n;
+  constexpr int kRowCoef = 2 * kBodyDof;  // Pair::ci, cj: kBodyDof * (2 * row + slot)
+  for (int k = 0; k < out.npairs; ++k) {
+    Pair &pr = out.pair[k];
+    const int pi = out.perm[pr.ci / kRowCoef], pj = out.perm[pr.cj / kRowCoef];
+    pr.aij = uint16_t(out.row[pi] + pj);
+  }
+  return LEGSIM_OK;
+}
 
 }  // namespace legsim

@@ -1,6 +1,7 @@
 // The one linear-algebra kernel of the core: J W J^T with W diagonal (M^-1 or
 // the identity), assembled from the sparse rows, factored in place as L D L^T (L unit
-// lower triangular). Hand-written so that no Eigen path can fall back to the heap.
+// lower triangular) in its envelope, packed row after row (Factor). Hand-written so that no
+// Eigen path can fall back to the heap.
 // The factor's diagonal holds 1 / D_i: no square roots, and the only divisions are the m
 // reciprocals (a division's or a square root's latency is 4-10 multiplies', and the
 // factorization and its solves are chains of them).
@@ -19,53 +20,66 @@ void factor_order(const Layout &layout, Factor &f) {
   f.separator = -1;  // factor_build sets it once B is factored
   std::memcpy(f.perm, layout.perm, sizeof f.perm);
   std::memcpy(f.first, layout.first, sizeof f.first);
+  std::memcpy(f.row, layout.row, sizeof f.row);
 }
 
 namespace {
-// L D L^T of the assembled lower triangle of f.a in place, positions mk .. m-1 (those before:
+// Position i's row of the packed storage, indexed by column: row_of(f, i)[j] is entry (i, j).
+inline real *row_of(Factor &f, int i) { return f.a.data() + f.row[i]; }
+inline const real *row_of(const Factor &f, int i) { return f.a.data() + f.row[i]; }
+
+// L D L^T of the assembled envelope of f.a in place, positions mk .. m-1 (those before:
 // the kernel's block, already factored), its pivots' range into pmin, pmax; false at a
 // pivot at or below the floor.
 bool eliminate(Factor &f, int mk, int surplus, real max_diag, real &pmin, real &pmax) {
   const int m = f.m;
+  // 1 / D by position, side by side (Factor::dinv): the block's, then each pivot as found
+  real *dinv = f.dinv;
+  if (m > mk)
+    for (int k = 0; k < mk; ++k) dinv[k] = f.a[f.row[k] + k];
+  real *row[kMaxRows];  // the rows eliminated here (the inner loop reads one per entry)
+  for (int i = mk; i < m; ++i) row[i] = row_of(f, i);
   for (int i = mk; i < m; ++i) {
     const int fi = f.first[i];
-    real *ai = &f.a(i, 0);
+    real *ai = row[i];
     int j0 = fi;
     if (fi < mk) {
       // its columns in the kernel's block: L11 t = a by the kernel's sparse forward solve
-      // (the same products in the same order as the loop below, less the zero ones)
+      // (the same products in the same order as the loop below, less the zero ones; the
+      // row keeps columns from 0, Layout::row)
       for (int j = 0; j < fi; ++j) ai[j] = 0;
       f.kernel->forward(f.a.data(), ai, fi);
       j0 = mk;
     }
     // row i as t_ij = L_ij D_j first (each from the ones before it), then L_ij = t_ij / D_j
     for (int j = j0; j < i; ++j) {
-      const real *aj = &f.a(j, 0);
+      const real *aj = row[j];
       const int k0 = fi > f.first[j] ? fi : f.first[j];
       real s = ai[j];
       for (int k = k0; k < j; ++k) s -= ai[k] * aj[k];
       ai[j] = s;
     }
     real d = ai[i];
-    for (int k = fi; k < i; ++k) {
-      const real t = ai[k];
-      ai[k] = t * f.a(k, k);
-      d -= t * ai[k];
+    const real *dk = dinv + fi;
+    for (real *ak = ai + fi, *end = ai + i; ak < end; ++ak, ++dk) {  // k = fi .. i-1
+      const real t = *ak;
+      *ak = t * *dk;
+      d -= t * *ak;
     }
     if (!(d > kPivotFloor * max_diag)) {
       if (f.nredundant < surplus && d == d) {
         // a row that depends on the ones before it: dropped (1 / D = 0 zeroes its
         // column of L in the rows after it and its multiplier in every solve)
         for (int r = 0; r < m; ++r)
-          if (f.perm[r] == i) f.redundant[f.nredundant++] = uint8_t(r);
-        ai[i] = 0;
+          if (f.perm[r] == i) f.redundant[f.nredundant++] = RowIndex(r);
+        ai[i] = dinv[i] = 0;
         continue;
       }
       return false;
     }
     pmin = d < pmin ? d : pmin;
     pmax = d > pmax ? d : pmax;
-    ai[i] = 1 / d;
+    ai[i] = dinv[i] = 1 / d;
   }
   return true;
 }
@@ -147,8 +161,10 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   // coordinates has them, and only that many (Layout::surplus)
   const int surplus = layout.stops ? layout.surplus : 0;
   factor_order(layout, f);
-  for (int i = mk; i < m; ++i)
-    for (int j = f.first[i]; j <= i; ++j) f.a(i, j) = 0;
+  for (int i = mk; i < m; ++i) {
+    real *ai = row_of(f, i);
+    for (int j = f.first[i]; j <= i; ++j) ai[j] = 0;
+  }
   // weight each row's coefficients once, then every non-zero entry is one dot product
   real wc[kMaxRows][2][kBodyDof];
   for (int i = mk; i < m; ++i)
@@ -162,12 +178,15 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   real *aflat = f.a.data();
   pairs_add(layout, wflat, cflat, aflat);
   real max_diag = 0;
-  for (int i = mk; i < m; ++i) max_diag = f.a(i, i) > max_diag ? f.a(i, i) : max_diag;
+  for (int i = mk; i < m; ++i) {
+    const real aii = f.a[f.row[i] + i];
+    max_diag = aii > max_diag ? aii : max_diag;
+  }
   if (layout.separator >= 0) {
     // the pivot floor is relative to J W J^T's diagonal, B's plus the separator's share
     separator_coefficients(layout, rows, w, f);
     for (int i = 0; i < m; ++i) {
-      real d = f.a(i, i);
+      real d = f.a[f.row[i] + i];
       for (int e = 0; e < kBodyDof; ++e) d += f.u[i][e] * f.wb[e] * f.u[i][e];
       max_diag = d > max_diag ? d : max_diag;
     }
@@ -191,15 +210,25 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
   bool ok = eliminate(f, mk, surplus, max_diag, pmin, pmax);
   if (!ok && layout.separator >= 0) {
     // B singular (a group whose rows fix its bodies with the separator held, e.g. a leg
-    // stretched straight) says nothing of J W J^T: factor the whole of it, dense
+    // stretched straight) says nothing of J W J^T: factor the whole of it, dense (the
+    // layout keeps room for the whole lower triangle, Layout::entries)
     for (int i = 0; i < m; ++i) {
       f.first[i] = 0;
-      for (int j = 0; j <= i; ++j) f.a(i, j) = 0;
+      f.row[i] = uint16_t(i * (i + 1) / 2);
+      for (int j = 0; j <= i; ++j) f.a[f.row[i] + j] = 0;
     }
-    pairs_add(layout, wflat, cflat, aflat);
+    constexpr int kRowCoef = 2 * kBodyDof;  // Pair::ci, cj: kBodyDof * (2 * row + slot)
+    for (int k = 0; k < layout.npairs; ++k) {  // pairs_add at the triangle's offsets
+      const Pair &p = layout.pair[k];
+      const real *ci = wflat + p.ci, *cj = cflat + p.cj;
+      real dot = ci[0] * cj[0];
+      for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
+      const int pi = f.perm[p.ci / kRowCoef], pj = f.perm[p.cj / kRowCoef];
+      aflat[f.row[pi] + pj] += dot;
+    }
     for (int i = 0; i < m; ++i)
       for (int j = 0; j <= i; ++j)
-        for (int e = 0; e < kBodyDof; ++e) f.a(i, j) += f.u[i][e] * f.wb[e] * f.u[j][e];
+        for (int e = 0; e < kBodyDof; ++e) f.a[f.row[i] + j] += f.u[i][e] * f.wb[e] * f.u[j][e];
     pmin = max_diag;
     pmax = 0;
     f.nredundant = 0;
@@ -223,14 +252,18 @@ void solve_envelope(const Factor &f, real *y) {
   const int m = f.m, mk = f.kernel ? f.kernel->mj : 0;
   if (mk) f.kernel->forward(f.a.data(), y, 0);
   for (int i = mk; i < m; ++i) {
-    const real *ai = &f.a(i, 0);
+    const real *ai = row_of(f, i);
     real s = y[i];
     for (int k = f.first[i]; k < i; ++k) s -= ai[k] * y[k];
     y[i] = s;
   }
-  for (int i = 0; i < m; ++i) y[i] *= f.a(i, i);
+  if (m > mk) {
+    for (int i = 0; i < m; ++i) y[i] *= f.dinv[i];
+  } else {
+    for (int i = 0; i < m; ++i) y[i] *= f.a[f.row[i] + i];
+  }
   for (int i = m - 1; i >= mk; --i) {
-    const real *ai = &f.a(i, 0);
+    const real *ai = row_of(f, i);
     const real yi = y[i];
     for (int k = f.first[i]; k < i; ++k) y[k] -= ai[k] * yi;
   }
@@ -263,13 +296,18 @@ void multiply(const Factor &f, const real *x, real *y) {
   real t[kMaxRows];
   for (int k = 0; k < m; ++k) t[k] = 0;
   for (int i = 0; i < m; ++i) {  // t = L^T x
-    for (int k = f.first[i]; k < i; ++k) t[k] += f.a(i, k) * x[i];
+    const real *ai = row_of(f, i);
+    for (int k = f.first[i]; k < i; ++k) t[k] += ai[k] * x[i];
     t[i] += x[i];
   }
-  for (int k = 0; k < m; ++k) t[k] = f.a(k, k) != 0 ? t[k] / f.a(k, k) : real(0);  // t = D t (0: dropped)
+  for (int k = 0; k < m; ++k) {  // t = D t (0: dropped)
+    const real akk = f.a[f.row[k] + k];
+    t[k] = akk != 0 ? t[k] / akk : real(0);
+  }
   for (int i = 0; i < m; ++i) {  // y = L t
+    const real *ai = row_of(f, i);
     real s = t[i];
-    for (int k = f.first[i]; k < i; ++k) s += f.a(i, k) * t[k];
+    for (int k = f.first[i]; k < i; ++k) s += ai[k] * t[k];
     y[i] = s;
   }
   if (f.separator < 0) return;
