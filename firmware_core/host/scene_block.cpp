@@ -40,18 +40,6 @@ struct BlockScene : RunKeys, GroundKeys {
   std::string checks_json = "null";
 };
 
-std::string dirname_of(const std::string &path) {
-  const size_t p = path.find_last_of('/');
-  return p == std::string::npos ? "" : path.substr(0, p + 1);
-}
-
-std::string stem_of(const std::string &path) {
-  const size_t s = path.find_last_of('/');
-  std::string b = s == std::string::npos ? path : path.substr(s + 1);
-  const size_t d = b.find_last_of('.');
-  return d == std::string::npos ? b : b.substr(0, d);
-}
-
 // [x, y, z], each within +-bound
 void vec3(Node v, const std::string &what, double bound, double (&out)[3]) {
   const toml::array *a = v ? v->as_array() : nullptr;
@@ -60,33 +48,8 @@ void vec3(Node v, const std::string &what, double bound, double (&out)[3]) {
 }
 
 std::string checks_of(Node v) {
-  Table t = v->as_table();
-  if (!t) fail("'checks' must be a table");
-  const std::vector<std::string> targets = {"box_x_m", "box_y_m", "box_z_m", "rest_s"};
-  const std::vector<std::string> bounds = {"slip_mu_off", "friction_work_off"};
-  std::vector<std::string> allowed = targets;
-  allowed.insert(allowed.end(), bounds.begin(), bounds.end());
-  allowed.push_back("impacts_min");
-  check_keys(t, allowed, "checks: ");
-  if (t->empty()) fail("checks: name something to check");
-  std::string o = "{";
-  for (auto &&kv : *t) {
-    const std::string key(kv.first.str());
-    const std::string what = "checks: " + q(key);
-    o += (o.size() > 1 ? ", " : "") + jstr(key) + ": ";
-    if (std::find(targets.begin(), targets.end(), key) != targets.end()) {
-      o += target_json(&kv.second, what);
-    } else if (key == "impacts_min") {
-      if (!kv.second.is_integer() || *kv.second.value<int64_t>() < 0 || *kv.second.value<int64_t>() > 1000000000)
-        fail(what + " must be an integer in 0..1000000000");
-      o += std::to_string(*kv.second.value<int64_t>());
-    } else {
-      const double x = scene_read::real_of(&kv.second, what);
-      if (!(x > 0)) fail(what + " must be > 0 (got " + num(x) + ")");
-      o += jnum(x);
-    }
-  }
-  return o + "}";
+  return checks_json(v, {"box_x_m", "box_y_m", "box_z_m", "rest_s"}, {"slip_mu_off", "friction_work_off"},
+                     {"impacts_min"}, [](const std::string &, Node) { return std::string(); });
 }
 
 BlockScene parse(const toml::table &doc, const std::string &path) {
@@ -97,13 +60,8 @@ BlockScene parse(const toml::table &doc, const std::string &path) {
              {"description", "name", "model", "analysis", "step_s", "integrator", "duration", "record_every", "lift",
               "velocity", "omega", "ground", "checks"},
              "a block's scene: ");
-  s.model = string_of(t->get("model"), "'model'");
-  s.model_path = s.model[0] == '/' ? s.model : dirname_of(path) + s.model;
-  s.name = t->get("name") ? string_of(t->get("name"), "'name'") : stem_of(path);
-  for (char c : s.name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
-      fail("'name' may hold letters, digits, '_', '-' and '.' only (got " + q(s.name) + ")");
-  if (t->get("description")) s.description = string_of(t->get("description"), "'description'");
+  const SceneHead head = scene_head(t, path);
+  s.model = head.model, s.model_path = head.model_path, s.name = head.name, s.description = head.description;
   if (t->get("analysis") && string_of(t->get("analysis"), "'analysis'") != "dynamics")
     fail("'analysis' of a block must be dynamics (a block has no legs to stand on)");
   static_cast<GroundKeys &>(s) = ground_keys(t->get("ground"));

@@ -50,18 +50,6 @@ using scene_read::real_of;
 using scene_read::Table;
 using Fail = scene_read::SceneError;
 
-std::string dirname_of(const std::string &path) {
-  const size_t p = path.find_last_of('/');
-  return p == std::string::npos ? "" : path.substr(0, p + 1);
-}
-
-std::string stem_of(const std::string &path) {
-  const size_t s = path.find_last_of('/');
-  std::string b = s == std::string::npos ? path : path.substr(s + 1);
-  const size_t d = b.find_last_of('.');
-  return d == std::string::npos ? b : b.substr(0, d);
-}
-
 // A leg as written: a name of the file's [[leg]]s or an index 0..5 (bound once the file is read).
 struct LegRef {
   std::string name;
@@ -124,8 +112,6 @@ const std::vector<std::string> kCommonKeys = {"description", "name", "model", "a
                                               "lengths", "ground", "checks"};
 
 std::string checks_of(Node v, bool statics, std::vector<LegRef> &stuck_at_end) {
-  Table t = v->as_table();
-  if (!t) fail("'checks' must be a table");
   const std::vector<std::string> targets =
       statics ? std::vector<std::string>{"margin_m"}
               : std::vector<std::string>{"box_x_m", "box_y_m", "box_z_m", "yaw_rad", "roll_rad", "touchdown_s"};
@@ -133,35 +119,12 @@ std::string checks_of(Node v, bool statics, std::vector<LegRef> &stuck_at_end) {
       statics ? std::vector<std::string>{}
               : std::vector<std::string>{"height_off_m", "tilt_max_rad", "settle_m", "margin_min_m", "friction_use_max",
                                          "slip_mu_off", "slip_angle_max_rad", "friction_work_off"};
-  std::vector<std::string> allowed = targets;
-  allowed.insert(allowed.end(), bounds.begin(), bounds.end());
-  if (!statics) {
-    allowed.push_back("impacts_min");
-    allowed.push_back("stuck_at_end");
-  }
-  check_keys(t, allowed, "checks: ");
-  if (t->empty()) fail("checks: name something to check");
-  std::string o = "{";
-  for (auto &&kv : *t) {
-    const std::string key(kv.first.str());
-    const std::string what = "checks: " + q(key);
-    o += (o.size() > 1 ? ", " : "") + jstr(key) + ": ";
-    if (std::find(targets.begin(), targets.end(), key) != targets.end()) {
-      o += target_json(&kv.second, what);
-    } else if (key == "impacts_min") {
-      if (!kv.second.is_integer() || *kv.second.value<int64_t>() < 0 || *kv.second.value<int64_t>() > 1000000000)
-        fail(what + " must be an integer in 0..1000000000");
-      o += std::to_string(*kv.second.value<int64_t>());
-    } else if (key == "stuck_at_end") {
-      stuck_at_end = leg_list(&kv.second, what);
-      o += "@STUCK_AT_END@";  // the names, once bound against the file
-    } else {
-      const double x = real_of(&kv.second, what);
-      if (!(x > 0)) fail(what + " must be > 0 (got " + num(x) + ")");
-      o += jnum(x);
-    }
-  }
-  return o + "}";
+  const std::vector<std::string> others =
+      statics ? std::vector<std::string>{} : std::vector<std::string>{"impacts_min", "stuck_at_end"};
+  return checks_json(v, targets, bounds, others, [&](const std::string &key, Node x) {
+    stuck_at_end = leg_list(x, "checks: " + q(key));
+    return std::string("@STUCK_AT_END@");  // the names, once bound against the file
+  });
 }
 const std::vector<std::string> kStaticsKeys = {"stance", "box_load"};
 const std::vector<std::string> kDynamicsKeys = {"step_s",  "duration", "record_every", "stuck", "lift",
@@ -171,13 +134,8 @@ HexScene parse(const toml::table &doc, const std::string &path) {
   HexScene s;
   s.path = path;
   Table t = &doc;
-  s.model = string_of(t->get("model"), "'model'");
-  s.model_path = s.model[0] == '/' ? s.model : dirname_of(path) + s.model;
-  s.name = t->get("name") ? string_of(t->get("name"), "'name'") : stem_of(path);
-  for (char c : s.name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
-      fail("'name' may hold letters, digits, '_', '-' and '.' only (got " + q(s.name) + ")");
-  if (t->get("description")) s.description = string_of(t->get("description"), "'description'");
+  const SceneHead head = scene_head(t, path);
+  s.model = head.model, s.model_path = head.model_path, s.name = head.name, s.description = head.description;
   const std::string an = t->get("analysis") ? string_of(t->get("analysis"), "'analysis'") : "dynamics";
   if (an == "statics") {
     s.analysis = HexAnalysis::kStatics;

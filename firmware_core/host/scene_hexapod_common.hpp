@@ -4,12 +4,14 @@
 #ifndef LEGSIM_HOST_SCENE_HEXAPOD_COMMON_HPP
 #define LEGSIM_HOST_SCENE_HEXAPOD_COMMON_HPP
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <new>
 #include <ostream>
 #include <string>
+#include <vector>
 
 #include "legsim/hexapod.h"
 #include "model_toml.hpp"
@@ -127,6 +129,40 @@ inline toml::table scene_document(const std::string &text, const std::string &pa
   }
 }
 
+// The folder of a path, with its '/' ("" for none).
+inline std::string dirname_of(const std::string &path) {
+  const size_t p = path.find_last_of('/');
+  return p == std::string::npos ? "" : path.substr(0, p + 1);
+}
+
+// The keys every scene of a hexapod file has: `model` (and its path, relative to the scene's
+// folder), `name` (the file's stem by default; letters, digits, '_', '-' and '.'), `description`.
+struct SceneHead {
+  std::string model, model_path, name, description;
+};
+
+inline SceneHead scene_head(scene_read::Table t, const std::string &path) {
+  SceneHead h;
+  h.model = string_of(t->get("model"), "'model'");
+  h.model_path = h.model[0] == '/' ? h.model : dirname_of(path) + h.model;
+  const size_t slash = path.find_last_of('/');  // npos + 1 == 0: no folder
+  h.name = path.substr(slash + 1);
+  h.name = h.name.substr(0, h.name.find_last_of('.'));
+  if (t->get("name")) h.name = string_of(t->get("name"), "'name'");
+  for (char c : h.name)
+    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
+      scene_read::fail("'name' may hold letters, digits, '_', '-' and '.' only (got " + scene_text::q(h.name) + ")");
+  if (t->get("description")) h.description = string_of(t->get("description"), "'description'");
+  return h;
+}
+
+// [checks] as JSON: targets `{ value, tolerance > 0 }`, bounds (numbers > 0), `impacts_min` (an
+// integer, when listed in `others`) and the other keys of `others` by other(key, value).
+template <class Other>
+std::string checks_json(scene_read::Node v, const std::vector<std::string> &targets,
+                        const std::vector<std::string> &bounds, const std::vector<std::string> &others,
+                        Other &&other);
+
 // [checks]' target `{ value, tolerance > 0 }` (the result within tolerance of value), as JSON.
 inline std::string target_json(scene_read::Node v, const std::string &what) {
   scene_read::Table t = v ? v->as_table() : nullptr;
@@ -137,6 +173,40 @@ inline std::string target_json(scene_read::Node v, const std::string &what) {
   const double tol = scene_read::real_of(t->get("tolerance"), what + ": 'tolerance'");
   if (!(tol > 0)) scene_read::fail(what + ": 'tolerance' must be > 0 (got " + scene_text::num(tol) + ")");
   return "{\"value\": " + jnum(x) + ", \"tolerance\": " + jnum(tol) + "}";
+}
+
+template <class Other>
+std::string checks_json(scene_read::Node v, const std::vector<std::string> &targets,
+                        const std::vector<std::string> &bounds, const std::vector<std::string> &others,
+                        Other &&other) {
+  using scene_read::fail;
+  scene_read::Table t = v->as_table();
+  if (!t) fail("'checks' must be a table");
+  std::vector<std::string> allowed = targets;
+  allowed.insert(allowed.end(), bounds.begin(), bounds.end());
+  allowed.insert(allowed.end(), others.begin(), others.end());
+  scene_read::check_keys(t, allowed, "checks: ");
+  if (t->empty()) fail("checks: name something to check");
+  std::string o = "{";
+  for (auto &&kv : *t) {
+    const std::string key(kv.first.str());
+    const std::string what = "checks: " + scene_text::q(key);
+    o += (o.size() > 1 ? ", " : "") + jstr(key) + ": ";
+    if (std::find(targets.begin(), targets.end(), key) != targets.end()) {
+      o += target_json(&kv.second, what);
+    } else if (std::find(bounds.begin(), bounds.end(), key) != bounds.end()) {
+      const double x = scene_read::real_of(&kv.second, what);
+      if (!(x > 0)) fail(what + " must be > 0 (got " + scene_text::num(x) + ")");
+      o += jnum(x);
+    } else if (key == "impacts_min") {
+      if (!kv.second.is_integer() || *kv.second.value<int64_t>() < 0 || *kv.second.value<int64_t>() > 1000000000)
+        fail(what + " must be an integer in 0..1000000000");
+      o += std::to_string(*kv.second.value<int64_t>());
+    } else {
+      o += other(key, &kv.second);
+    }
+  }
+  return o + "}";
 }
 
 // The keys of a run in time (the hexapod's dynamics and the block's): step_s, integrator,

@@ -84,16 +84,8 @@ SweepScene parse(const toml::table &doc, const std::string &path) {
              {"description", "name", "model", "analysis", "leg", "stance", "box_height", "distance", "n_distance",
               "heading", "n_heading", "part"},
              "");
-  s.model = string_of(t->get("model"), "'model'");
-  const size_t slash = path.find_last_of('/');  // npos + 1 == 0: no folder
-  s.model_path = s.model[0] == '/' ? s.model : path.substr(0, slash + 1) + s.model;
-  s.name = path.substr(slash + 1);
-  s.name = s.name.substr(0, s.name.find_last_of('.'));
-  if (t->get("name")) s.name = string_of(t->get("name"), "'name'");
-  for (char c : s.name)
-    if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '_' || c == '-' || c == '.'))
-      fail("'name' may hold letters, digits, '_', '-' and '.' only (got " + q(s.name) + ")");
-  if (t->get("description")) s.description = string_of(t->get("description"), "'description'");
+  const SceneHead head = scene_head(t, path);
+  s.model = head.model, s.model_path = head.model_path, s.name = head.name, s.description = head.description;
   if (Node v = t->get("leg")) s.leg = leg_ref(v, "'leg'");
   if (Node v = t->get("stance")) {
     const toml::array *a = v->as_array();

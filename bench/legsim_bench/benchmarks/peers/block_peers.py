@@ -27,7 +27,6 @@ from __future__ import annotations
 
 import argparse
 import math
-import re
 import shutil
 import sys
 import time
@@ -208,32 +207,12 @@ def compare(name: str, h: float, engine: str, repeats: int = 1, root=None) -> di
     return {"scene": name, "engine": engine, "h": h, "per_step_s": best["per_step_s"], **errors(sc, best)}
 
 
-# legsim_hexapod_step is entered from libffi, which callgrind does not name: count inside the
-# step it calls once a step (as mujoco_hexapod.TOGGLE)
-TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step(*Integrator)"}
-
-
 def instructions_per_step(engine: str, name: str, h: float) -> float:
     """Instructions per step (valgrind callgrind inside mj_step or legsim's robot_step) of one run."""
-    import os
-    import subprocess
-    import tempfile
-
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "cg.out"
-        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--toggle-collect={TOGGLE[engine]}",
-               sys.executable, "-m", "legsim_bench.benchmarks.peers.block_peers", "--once", engine, name, repr(h)]
-        for _ in range(2):  # one retry: valgrind's python now and then exits 1
-            run = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ))
-            if run.returncode == 0:
-                break
-        else:
-            raise RuntimeError(f"callgrind of {engine} {name} h={h}: {run.stderr[-2000:]}")
-        text = out.read_text()
-    m = re.search(r"^totals:\s*(\d+)", text, re.M) or re.search(r"^summary:\s*(\d+)", text, re.M)
-    sc = Scene(name)
+    total = peer_tables.callgrind_total(engine, "legsim_bench.benchmarks.peers.block_peers",
+                                        ["--once", engine, name, repr(h)])
     # legsim's run steps twice (sampled, then timed): count one
-    return int(m.group(1)) / int(round(sc.duration / h)) / (2 if engine == "legsim" else 1)
+    return total / int(round(Scene(name).duration / h)) / (2 if engine == "legsim" else 1)
 
 
 def collect(scenes=SCENES, hs=H, repeats: int = 3, callgrind: bool = True) -> list[dict]:

@@ -43,7 +43,7 @@ import numpy as np
 from ...reference.hexapod import LEGS, HexapodModel
 from ...scene import find_root
 from . import mujoco_hexapod as mh
-from .mujoco_hexapod import TOGGLE, VERSION, _rollout, mujoco
+from .mujoco_hexapod import VERSION, _rollout, mujoco
 
 SAMPLE_S = 4e-3                 # the errors' grid: a multiple of every step h used
 FOOT_RADIUS = 1e-4              # m
@@ -323,29 +323,18 @@ def _run_once(engine: str, h: float, t_end: float, plan_path: str) -> None:
 
 
 def instructions_per_step(engine: str, pl: Plan, h: float, t_end: float) -> float:
-    """Instructions per step (valgrind callgrind, collecting only inside TOGGLE[engine], once a
+    """Instructions per step (valgrind callgrind, collecting only inside peer_tables.TOGGLE[engine], once a
     step): one walk of t_end at step h, set-up, the commands and Python outside the count."""
-    import os
-    import re
-    import subprocess
-    import sys
     import tempfile
     from pathlib import Path
 
+    from .peer_tables import callgrind_total
+
     with tempfile.TemporaryDirectory() as tmp:
-        out, pp = Path(tmp) / "cg.out", Path(tmp) / "plan.npz"
+        pp = Path(tmp) / "plan.npz"
         pl.save(pp)
-        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--toggle-collect={TOGGLE[engine]}",
-               sys.executable, "-m", __name__, engine, repr(h), repr(t_end), str(pp)]
-        for _ in range(2):              # one retry: valgrind's python now and then exits 1
-            run = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ))
-            if run.returncode == 0:
-                break
-        else:
-            raise RuntimeError(f"callgrind of the {engine} walk h={h}: {run.stderr[-2000:]}")
-        text = out.read_text()
-    m = re.search(r"^totals:\s*(\d+)", text, re.M) or re.search(r"^summary:\s*(\d+)", text, re.M)
-    return int(m.group(1)) / int(round(t_end / h))
+        total = callgrind_total(engine, __name__, [engine, repr(h), repr(t_end), str(pp)])
+    return total / int(round(t_end / h))
 
 
 if __name__ == "__main__":

@@ -420,36 +420,14 @@ def _run_once(engine: str, name: str, h: float) -> None:
         legsim_run(sc, h)
 
 
-# legsim_hexapod_step is entered from libffi, which callgrind does not name: count inside the
-# step it calls once a step (its events and contact problems inside; the pattern leaves out its
-# [clone .part.0], whose nested toggle would stop the count)
-TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step(*Integrator)"}
-
-
 def instructions_per_step(engine: str, name: str, h: float) -> float:
     """Instructions per step (valgrind callgrind, collecting only inside mj_step, which
     mujoco.rollout calls once a step, or inside legsim's robot_step, which
     legsim_hexapod_step calls once a step): one run of the scene, set-up and Python outside
     the count."""
-    import os
-    import re
-    import subprocess
-    import sys
-    import tempfile
+    from .peer_tables import callgrind_total
 
-    with tempfile.TemporaryDirectory() as tmp:
-        out = Path(tmp) / "cg.out"
-        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}",
-               f"--toggle-collect={TOGGLE[engine]}", sys.executable, "-m", __name__, engine, name, repr(h)]
-        for _ in range(2):              # one retry: valgrind's python now and then exits 1
-            run = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ))
-            if run.returncode == 0:
-                break
-        else:
-            raise RuntimeError(f"callgrind of {engine} {name} h={h}: {run.stderr[-2000:]}")
-        text = out.read_text()
-    m = re.search(r"^totals:\s*(\d+)", text, re.M) or re.search(r"^summary:\s*(\d+)", text, re.M)
-    return int(m.group(1)) / int(round(T_END / h))
+    return callgrind_total(engine, __name__, [engine, name, repr(h)]) / int(round(T_END / h))
 
 
 if __name__ == "__main__":

@@ -3,6 +3,11 @@ Newton at a tight tolerance, no auto-reset, no islands) and writing a table betw
 of the machine's load."""
 from __future__ import annotations
 
+import os
+import re
+import subprocess
+import sys
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -40,3 +45,27 @@ def write(out, name: str, collect, markdown, **kw) -> Path:
     path = out / name
     path.write_text(markdown(rows, before, after))
     return path
+
+
+# legsim_hexapod_step is entered from libffi, which callgrind does not name: count inside the
+# step it calls once a step (its events and contact problems inside; the pattern leaves out its
+# [clone .part.0], whose nested toggle would stop the count)
+TOGGLE = {"mujoco": "mj_step", "legsim": "legsim::spatial::robot_step(*Integrator)"}
+
+
+def callgrind_total(engine: str, module: str, args: list[str]) -> int:
+    """Instructions valgrind's callgrind counts inside the engine's step (TOGGLE) over one run of
+    ``python -m module *args`` (set-up and Python outside the count)."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "cg.out"
+        cmd = ["valgrind", "--tool=callgrind", f"--callgrind-out-file={out}", f"--toggle-collect={TOGGLE[engine]}",
+               sys.executable, "-m", module, *args]
+        for _ in range(2):  # one retry: valgrind's python now and then exits 1
+            run = subprocess.run(cmd, capture_output=True, text=True, env=dict(os.environ))
+            if run.returncode == 0:
+                break
+        else:
+            raise RuntimeError(f"callgrind of {module} {' '.join(args)}: {run.stderr[-2000:]}")
+        text = out.read_text()
+    m = re.search(r"^totals:\s*(\d+)", text, re.M) or re.search(r"^summary:\s*(\d+)", text, re.M)
+    return int(m.group(1))
