@@ -127,11 +127,6 @@ void write_sample(std::ostream &o, const legsim_hexapod_state &x, int64_t events
     << ", \"impacts\": " << x.impacts << "}";
 }
 
-struct RunFail {
-  legsim_status status;
-  std::string message;
-};
-
 int run(const BlockScene &s, const legsim_hexapod_desc &h, const legsim_hexapod_pose &p, uint32_t stuck,
         std::ostream &o, std::ostream &err) {
   Storage sim_st(legsim_hexapod_sim_size());
@@ -162,13 +157,9 @@ int run(const BlockScene &s, const legsim_hexapod_desc &h, const legsim_hexapod_
       }
     }
   } catch (const RunFail &e) {
-    o << "\n  ],\n  \"status\": \"error\", \"status_code\": " << jstr(status_enum_name(e.status))
-      << ", \"error\": " << jstr(e.message) << ", \"failed_at\": " << jnum(t_fail) << "}\n";
-    err << "legsim_cli: error: " << s.path << ": " << e.message << "\n";
-    return 1;
+    return run_end(o, err, s.path, &e, t_fail);
   }
-  o << "\n  ],\n  \"status\": \"ok\", \"status_code\": \"LEGSIM_OK\"}\n";
-  return 0;
+  return run_end(o, err, s.path, nullptr, 0);
 }
 
 }  // namespace

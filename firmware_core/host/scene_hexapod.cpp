@@ -445,11 +445,6 @@ void write_state_sample(std::ostream &o, const legsim_hexapod_state &x, const le
     << ", \"impacts\": " << x.impacts << "}";
 }
 
-struct RunFail {
-  legsim_status status;
-  std::string message;
-};
-
 int run_statics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_hexapod_pose &p, Storage &st,
                 std::ostream &o, std::ostream &err) {
   legsim_hexapod_standing sd{};
@@ -579,13 +574,9 @@ int run_dynamics(const HexScene &s, const legsim_hexapod_desc &h, const legsim_h
       }
     }
   } catch (const RunFail &e) {
-    o << "\n  ],\n  \"status\": \"error\", \"status_code\": " << jstr(status_enum_name(e.status))
-      << ", \"error\": " << jstr(e.message) << ", \"failed_at\": " << jnum(t_fail) << "}\n";
-    err << "legsim_cli: error: " << s.path << ": " << e.message << "\n";
-    return 1;
+    return run_end(o, err, s.path, &e, t_fail);
   }
-  o << "\n  ],\n  \"status\": \"ok\", \"status_code\": \"LEGSIM_OK\"}\n";
-  return 0;
+  return run_end(o, err, s.path, nullptr, 0);
 }
 
 }  // namespace

@@ -209,6 +209,25 @@ std::string checks_json(scene_read::Node v, const std::vector<std::string> &targ
   return o + "}";
 }
 
+// A run's failure: its status and message.
+struct RunFail {
+  legsim_status status;
+  std::string message;
+};
+
+// The samples' list closed and the run's end written: "ok" (exit status 0), or the failure f at
+// t_fail (exit status 1: the JSON's status, code, error and failed_at; the message on err).
+inline int run_end(std::ostream &o, std::ostream &err, const std::string &path, const RunFail *f, double t_fail) {
+  if (!f) {
+    o << "\n  ],\n  \"status\": \"ok\", \"status_code\": \"LEGSIM_OK\"}\n";
+    return 0;
+  }
+  o << "\n  ],\n  \"status\": \"error\", \"status_code\": " << jstr(status_enum_name(f->status))
+    << ", \"error\": " << jstr(f->message) << ", \"failed_at\": " << jnum(t_fail) << "}\n";
+  err << "legsim_cli: error: " << path << ": " << f->message << "\n";
+  return 1;
+}
+
 // The keys of a run in time (the hexapod's dynamics and the block's): step_s, integrator,
 // duration, record_every; units and ranges in scenes/README.md.
 struct RunKeys {
