@@ -18,8 +18,9 @@
 // - every sample of a run is finite (the C API's "never NaN on OK").
 // A scene whose model is a hexapod file (legsim_cli's scene_is_hexapod, the scene read as a file of
 // the first seed folder) goes to legsim_cli's hexapod reader instead: resolved (--check) and, when
-// it is a statics or asks for at most kMaxHexapodSteps steps, run; its exit status 0 (the JSON ends "ok"), 1 (a
-// failed run: "error", with a message) or 2 (refused, with a message, nothing written).
+// it is a statics or asks for at most kMaxHexapodSteps steps, run; its exit status 0 (the JSON
+// ends "ok"), 1 (a failed run: "error", with a message) or 2 (refused, with a message, nothing
+// written).
 #include <unistd.h>
 
 #include <cmath>

@@ -33,11 +33,9 @@ def _run(name):
 
 
 def _plane(d):
-    """The incline's angle, its unit fall line (down) and the horizontal across it, from the JSON's ground."""
-    n = np.array(d["ground"]["normal"])
-    alpha = math.acos(n[2])
-    down = np.array([n[0], n[1], 0.0]) / math.hypot(n[0], n[1]) * math.cos(alpha) + np.array([0, 0, -math.sin(alpha)])
-    return alpha, down, np.cross(down, n)
+    """The incline's angle, its fall line (down) and the horizontal across it, from the JSON's ground."""
+    alpha, down, across = block_incline.plane_axes(d["ground"]["normal"])
+    return alpha, np.array(down), np.array(across)
 
 
 def test_across_the_fall_line_at_mu_tan_alpha_follows_the_closed_form():

@@ -23,9 +23,20 @@ from __future__ import annotations
 
 import math
 
-__all__ = ["G0", "across", "stop"]
+__all__ = ["G0", "plane_axes", "across", "stop"]
 
 G0 = 9.81  # m/s^2, the models' gravity
+
+
+def plane_axes(normal) -> tuple[float, tuple, tuple]:
+    """The incline of upward unit normal n (not level): its angle alpha, its unit fall line (down
+    the plane) and the horizontal across it (down x n), world axes."""
+    n = [float(x) for x in normal]
+    alpha = math.acos(n[2])
+    h = math.hypot(n[0], n[1])
+    down = (n[0] / h * math.cos(alpha), n[1] / h * math.cos(alpha), -math.sin(alpha))
+    across_ = (down[1] * n[2] - down[2] * n[1], down[2] * n[0] - down[0] * n[2], down[0] * n[1] - down[1] * n[0])
+    return alpha, down, across_
 
 
 def across(k: float, alpha: float, v0: float, t: float, g: float = G0) -> tuple[float, float, float]:

@@ -72,17 +72,15 @@ class Scene:
         root = Path(root or find_root())
         self.name = name
         spec = tomllib.loads((root / "scenes" / f"{name}.toml").read_text())
-        model = tomllib.loads((root / "scenes" / spec["model"]).resolve().read_text())
         self.model_path = (root / "scenes" / spec["model"]).resolve()
+        model = tomllib.loads(self.model_path.read_text())
         g = spec["ground"]
         s, up = g["slope"], g["uphill"]
         self.n = np.array([-math.sin(s) * math.cos(up), -math.sin(s) * math.sin(up), math.cos(s)])
-        self.alpha = s
-        self.down = np.array([self.n[0], self.n[1], 0.0]) / math.hypot(self.n[0], self.n[1]) * math.cos(s) \
-            + np.array([0.0, 0.0, -math.sin(s)])
-        self.across = np.cross(self.down, self.n)
+        _, down, across = block_incline.plane_axes(self.n)
+        self.alpha, self.down, self.across = s, np.array(down), np.array(across)
         self.mu_static, self.mu_kinetic = g["mu_static"], g["mu_kinetic"]
-        self.k = self.mu_kinetic / math.tan(s)
+        self.k = self.mu_kinetic / math.tan(s)  # k exactly 1 where mu_k = tan(slope)
         self.velocity = np.array(spec["velocity"], float)
         self.v0 = float(np.linalg.norm(self.velocity))
         self.duration = float(spec["duration"])
