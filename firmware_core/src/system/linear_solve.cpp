@@ -142,14 +142,16 @@ bool separator_complement(Factor &f) {
 namespace {
 // J W J^T's entries that can be non-zero (Layout::pair), added into the factor's storage
 // from the rows' coefficients weighted (wflat) and not (cflat).
+// A pair's entry of J W J^T: the weighted row's coefficients on its body dotted with the other's.
+inline real pair_dot(const Pair &p, const real *wflat, const real *cflat) {
+  const real *ci = wflat + p.ci, *cj = cflat + p.cj;
+  real dot = ci[0] * cj[0];
+  for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
+  return dot;
+}
+
 void pairs_add(const Layout &layout, const real *wflat, const real *cflat, real *aflat) {
-  for (int k = 0; k < layout.npairs; ++k) {
-    const Pair &p = layout.pair[k];
-    const real *ci = wflat + p.ci, *cj = cflat + p.cj;
-    real dot = ci[0] * cj[0];
-    for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
-    aflat[p.aij] += dot;
-  }
+  for (int k = 0; k < layout.npairs; ++k) aflat[layout.pair[k].aij] += pair_dot(layout.pair[k], wflat, cflat);
 }
 }  // namespace
 
@@ -220,11 +222,8 @@ legsim_status factor_build(const Layout &layout, const Rows &rows, const real *w
     constexpr int kRowCoef = 2 * kBodyDof;  // Pair::ci, cj: kBodyDof * (2 * row + slot)
     for (int k = 0; k < layout.npairs; ++k) {  // pairs_add at the triangle's offsets
       const Pair &p = layout.pair[k];
-      const real *ci = wflat + p.ci, *cj = cflat + p.cj;
-      real dot = ci[0] * cj[0];
-      for (int e = 1; e < kBodyDof; ++e) dot += ci[e] * cj[e];
       const int pi = f.perm[p.ci / kRowCoef], pj = f.perm[p.cj / kRowCoef];
-      aflat[f.row[pi] + pj] += dot;
+      aflat[f.row[pi] + pj] += pair_dot(p, wflat, cflat);
     }
     for (int i = 0; i < m; ++i)
       for (int j = 0; j <= i; ++j)
