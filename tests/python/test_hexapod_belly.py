@@ -1,0 +1,185 @@
+"""A belly landing of the hexapod (issue 24): scenes/models/hexapod_belly.toml is models/hexapod.toml
+with three skids under its box ([[box_contact]] at (0.35, -/+0.20, -0.15) and (-0.35, 0, -0.15) m),
+its legs raised (each leg's upper actuator 0.42 m, lower 0.66 m: its foot 0.165 m above the skids'
+plane, 1.34 m out from the box's centre line), held by their servos (the file's gains) at those
+lengths and at rowing 0. The references are independent of the spatial engine:
+
+- free fall: the box's height z0 - g t^2 / 2 and velocity -g t until the skids touch down at
+  t0 = sqrt(2 d / g), in the step holding t0; the servos' forces zero over the fall (the legs,
+  at their set-points at rest, fall with the box: the robot falls as one rigid body);
+- energy: kinetic + gravity's potential + the servos' springs (kp (l_cmd - l)^2 / 2, the rowing's
+  alike) less the feed-forward's work (a constant force: F_ff (l - l_switch)) never rises beyond
+  round-off: the servos' dampers and the impact only take energy out;
+- at rest: the servos' feed-forward is the planar leg's statics at the raised lengths
+  (legsim.Sim on the leg file alone: the leg's weight held from its frame), so each leg settles
+  on its set-point, and the skids' normal forces are the rigid body's on three points, the
+  centre of mass over the box's centre line at x = 0 by the legs' symmetry: m g (1/4, 1/4, 1/2);
+- a tilted plane below the static limit (tan alpha < mu_static): the skids stay stuck, the box
+  does not move, every skid inside its cone; above it (mu_static < tan alpha) they slide;
+- a slide launched at v0 on level ground (mu_kinetic 0.5): a rigid body on its skids stops at
+  T = v0 / (mu_k g) after x = v0^2 / (2 mu_k g); the legs sway on their servos (not rigid), so
+  the box's stop is compared to T (the step holding it) and its distance to x within the sway's
+  share, and the exact check is the energy's: its loss the friction's work plus the servos'
+  dampers' (both by the trapezoid rule over the steps).
+
+What the hexapod's API cannot show (no impact impulses in legsim_hexapod_state, no bodies'
+velocities): the impact's normal impulses themselves and the whole robot's momentum change
+against them; the skids' normal forces never pulling is checked at every step's end instead.
+"""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+legsim = pytest.importorskip("legsim")
+
+from conftest import ROOT  # noqa: E402
+
+BELLY = ROOT / "scenes" / "models" / "hexapod_belly.toml"
+G = 9.81
+RAISED = (0.42, 0.66)  # m: upper, lower of every leg
+
+
+@pytest.fixture(scope="module")
+def belly():
+    return legsim.Hexapod.from_toml(BELLY)
+
+
+def hold_forces(h) -> np.ndarray:
+    """Each leg's actuator forces (N, 6 x 2) holding it at RAISED against its weight from its
+    frame: the planar leg's statics (its file alone, assembled there from its stand in small
+    steps: a dead centre lies on the straight way)."""
+    out = []
+    for k in range(6):
+        s = legsim.Sim(h.leg_model(k))
+        s.assemble_pose(0)
+        l0 = s.actuator_lengths()[0]
+        for a in np.linspace(0.0, 1.0, 41)[1:]:
+            s.assemble(list((1 - a) * l0 + a * np.array(RAISED)))
+        s.set_force("foot_load", [0.0, 0.0])
+        out.append(s.statics())
+    return np.array(out)
+
+
+def raised_pose(h, box_m, quat=(1.0, 0.0, 0.0, 0.0)) -> dict:
+    pose = h.stand_pose(1.0)
+    pose.update(box_m=list(box_m), box_quat=list(quat), length_m=[list(RAISED)] * 6)
+    return pose
+
+
+class Energy:
+    """The robot's mechanical energy with the servos' springs, less the feed-forward's work."""
+
+    def __init__(self, h, m, pose):
+        self.m, self.masses = m, h.body_masses()
+        self.lc = np.array(pose["length_m"])
+        self.rc = np.array(pose["rowing_rad"])
+        leg = h.desc.leg[0].leg
+        self.kp = np.array([leg.actuator[j].servo_kp_n_per_m for j in range(2)])
+        self.kd = np.array([leg.actuator[j].servo_kd_ns_per_m for j in range(2)])
+        self.kpr, self.kdr = h.desc.rowing_servo_kp_nm_per_rad, h.desc.rowing_servo_kd_nms_per_rad
+        self.ff, self.l_ff = np.zeros((6, 2)), self.lc.copy()
+
+    def feedforward(self, ff, st):
+        """A constant feed-forward from now on: its work counts from the lengths now."""
+        self.ff, self.l_ff = np.array(ff), st["length_m"].copy()
+
+    def __call__(self, st) -> float:
+        dl, dr = st["length_m"] - self.lc, st["rowing_rad"] - self.rc
+        spring = 0.5 * (self.kp * dl ** 2).sum() + 0.5 * self.kpr * (dr ** 2).sum()
+        work_ff = (self.ff * (st["length_m"] - self.l_ff)).sum()
+        return st["kinetic_energy_j"] + G * self.masses @ self.m.body_poses()[:, 2] + spring - work_ff
+
+    def damping_power(self, st) -> float:
+        return (self.kd * st["length_rate_mps"] ** 2).sum() + self.kdr * (st["rowing_rate_radps"] ** 2).sum()
+
+
+DROP_M, H_S = 0.02, 1e-3
+
+
+@pytest.fixture(scope="module")
+def drop(belly):
+    """The drop: skids DROP_M over level ground, every foot and skid free, the servos at the
+    raised pose with no feed-forward over the fall (at rest at their set-points their forces
+    are zero), the hold forces as feed-forward from the step after the touchdown's; RK4 at 1
+    ms, each step's state for 0.6 s, then every 0.1 s to 4.5 s."""
+    h = belly
+    pose = raised_pose(h, (0.0, 0.0, 0.15 + DROP_M))
+    m = h.sim(pose, stuck=())
+    m.command_pose(pose["length_m"], pose["rowing_rad"])
+    energy = Energy(h, m, pose)
+    ff = hold_forces(h)
+    st = m.state()
+    run = {"st": [st], "E": [energy(st)], "switched_at": None}
+    for _ in range(600):
+        m.step(1, h_s=H_S)
+        st = m.state()
+        if st["impacts"] and run["switched_at"] is None:
+            m.command_pose(pose["length_m"], pose["rowing_rad"], ff, np.zeros(6))
+            energy.feedforward(ff, st)
+            run["switched_at"] = len(run["st"])
+        run["st"].append(st)
+        run["E"].append(energy(st))
+    while run["st"][-1]["t_s"] < 4.5 - H_S / 2:
+        m.step(100, h_s=H_S)
+        st = m.state()
+        run["st"].append(st)
+        run["E"].append(energy(st))
+    run.update(M=h.body_masses().sum(), ff=ff, pose=pose)
+    return run
+
+
+def test_free_fall_touches_down_at_the_closed_form(drop):
+    t0 = np.sqrt(2 * DROP_M / G)
+    sts = drop["st"]
+    k = next(i for i, st in enumerate(sts) if st["impacts"])
+    assert (k - 1) * H_S < t0 <= k * H_S, (k, t0)  # the step holding t0
+    assert sts[k]["impacts"] == 1 and sts[k]["events"] == 1
+    assert sts[-1]["impacts"] == 1  # the legs stay clear: no foot ever lands
+    z0 = 0.15 + DROP_M
+    z_off = max(abs(st["box_m"][2] - (z0 - 0.5 * G * st["t_s"] ** 2)) for st in sts[:k])
+    v_off = max(np.abs(st["box_velocity_mps"] - [0.0, 0.0, -G * st["t_s"]]).max() for st in sts[:k])
+    f_off = max(np.abs(st["actuator_force_n"]).max() for st in sts[:k])
+    print(f"touchdown in step {k} ({(k - 1) * H_S:.3f}, {k * H_S:.3f}] s, t0 = {t0:.6f} s; free fall: "
+          f"height {z_off:.1e} m, velocity {v_off:.1e} m/s, servos' forces {f_off:.1e} N")
+    assert z_off < 1e-13 and v_off < 1e-12 and f_off < 1e-9
+    for st in sts[:k]:
+        assert st["box_contact_state"] == ["free"] * 3 and st["foot_state"] == ["free"] * 6
+    # on its skids from the touchdown's step on: stuck, on the ground, the box stopped
+    for st in sts[k:]:
+        assert st["box_contact_state"] == ["stuck"] * 3
+        assert np.abs(st["box_contact_m"][:, 2]).max() < 1e-12
+        assert np.abs(st["box_velocity_mps"]).max() < 1e-12
+        assert st["foot_state"] == ["free"] * 6 and st["foot_m"][:, 2].min() > 0.05
+
+
+def test_no_energy_gained_and_no_pull(drop):
+    E, sts, k = np.array(drop["E"]), drop["st"], drop["switched_at"]
+    gain = np.diff(E)
+    scale = abs(E).max()
+    lost_at_impact = E[k - 1] - E[k]
+    # the impact's: the box's downward kinetic energy at t0 less what the legs keep moving
+    print(f"largest gain a step {gain.max():.1e} J (energies ~{scale:.0f} J); the impact's step loses "
+          f"{lost_at_impact:.4f} J; after it the dampers {E[k] - E[-1]:.4f} J; at 4.5 s kinetic "
+          f"{sts[-1]['kinetic_energy_j']:.1e} J")
+    assert gain.max() < 1e-12 * scale
+    assert lost_at_impact > 0.1
+    # the skids push, never pull, at every step's end
+    n = np.array([st["box_contact_force_n"][:, 2] for st in sts])
+    assert n.min() >= 0.0
+    assert n[k:].min() > 100.0
+
+
+def test_at_rest_the_skids_carry_the_weight(drop):
+    st, M = drop["st"][-1], drop["M"]
+    f = st["box_contact_force_n"]
+    w = M * G
+    ratio = f[:, 2] / w
+    print(f"at {st['t_s']:.1f} s: sum N / m g - 1 = {f[:, 2].sum() / w - 1:.1e}, N / m g = {ratio}, tangential "
+          f"{np.abs(f[:, :2]).max():.1e} N, lengths off the set-points {np.abs(st['length_m'] - RAISED).max():.1e} m")
+    assert abs(f[:, 2].sum() / w - 1) < 1e-9
+    assert np.abs(ratio - [0.25, 0.25, 0.5]).max() < 1e-9
+    assert np.abs(f[:, :2]).max() < 1e-9 * w
+    # each leg on its set-point: the planar statics' hold forces are the spatial leg's
+    assert np.abs(st["length_m"] - RAISED).max() < 1e-10
+    assert np.abs(st["actuator_force_n"] - drop["ff"]).max() < 1e-5
