@@ -183,3 +183,121 @@ def test_at_rest_the_skids_carry_the_weight(drop):
     # each leg on its set-point: the planar statics' hold forces are the spatial leg's
     assert np.abs(st["length_m"] - RAISED).max() < 1e-10
     assert np.abs(st["actuator_force_n"] - drop["ff"]).max() < 1e-5
+
+
+def on_slope(h, alpha, **friction):
+    """h over the plane through the origin rising along x at alpha, and the raised pose with its
+    skids on it (the box turned by -alpha about y, its centre 0.15 m along the plane's normal)."""
+    g = h.on_ground(slope_rad=alpha, **friction)
+    n = np.array([-np.sin(alpha), 0.0, np.cos(alpha)])
+    return g, n, raised_pose(g, 0.15 * n, (np.cos(alpha / 2), 0.0, -np.sin(alpha / 2), 0.0))
+
+
+def test_on_a_slope_below_the_static_limit_it_stays_stuck(belly):
+    """0.3 rad (tan 0.309 < mu_static 0.6), set on its skids stuck, the legs' servos as on level
+    ground (the hold forces for level ground: the legs sway to their slope's equilibrium): no
+    skid slips, the box does not move, each skid inside its cone at every step's end; at rest the
+    skids' forces sum to the weight and, the stated rule of stuck box points (least-norm
+    multipliers, docs/design/spatial.md), share the tangential load evenly."""
+    alpha = 0.3
+    h, n, pose = on_slope(belly, alpha)
+    m = h.sim(pose, stuck=(), box_stuck=(0, 1, 2))
+    m.command_pose(pose["length_m"], pose["rowing_rad"], hold_forces(belly), np.zeros(6))
+    st0 = m.state()
+    w = h.body_masses().sum() * G
+    use, drift, turn = 0.0, 0.0, 0.0
+    for _ in range(1500):
+        m.step(3, h_s=H_S)
+        st = m.state()
+        assert st["box_contact_state"] == ["stuck"] * 3 and st["foot_state"] == ["free"] * 6
+        f = st["box_contact_force_n"]
+        nn = f @ n
+        assert nn.min() > 0.0
+        use = max(use, (np.linalg.norm(f - np.outer(nn, n), axis=1) / nn).max())
+        drift = max(drift, np.abs(st["box_m"] - st0["box_m"]).max())
+        turn = max(turn, np.abs(st["box_quat"] - st0["box_quat"]).max())
+    f = st["box_contact_force_n"]
+    ft = np.linalg.norm(f - np.outer(f @ n, n), axis=1)
+    off = np.abs(f.sum(0) - [0.0, 0.0, w]).max() / w
+    print(f"slope {alpha} rad, {st['t_s']:.1f} s: box moved {drift:.1e} m, turned {turn:.1e}; friction use at most "
+          f"{use:.4f} (mu_static {h.desc.mu_static}); at rest sum F off the weight {off:.1e} of m g, each skid's "
+          f"tangential / (m g sin alpha / 3) - 1 = {np.abs(ft / (w * np.sin(alpha) / 3) - 1).max():.1e}")
+    assert drift < 1e-12 and turn < 1e-12
+    assert use < h.desc.mu_static
+    assert off < 1e-9
+    assert np.abs(ft / (w * np.sin(alpha) / 3) - 1).max() < 1e-9
+
+
+def test_on_a_slope_above_the_static_limit_it_slides(belly):
+    """mu_static 0.3 < tan 0.4 = 0.423 (mu_kinetic 0.25): every skid slides from the first step
+    and the box goes downhill (-x)."""
+    h, n, pose = on_slope(belly, 0.4, mu_static=0.3, mu_kinetic=0.25)
+    m = h.sim(pose, stuck=(), box_stuck=(0, 1, 2))
+    m.command_pose(pose["length_m"], pose["rowing_rad"], hold_forces(belly), np.zeros(6))
+    x0 = m.state()["box_m"]
+    m.step(1, h_s=H_S)
+    assert m.state()["box_contact_state"] == ["sliding"] * 3
+    m.step(99, h_s=H_S)
+    st = m.state()
+    assert st["box_contact_state"] == ["sliding"] * 3
+    assert st["box_m"][0] - x0[0] < -1e-3
+
+
+V0 = 1.0  # m/s
+
+
+def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
+    """Set on its skids on level ground (mu_kinetic 0.5), launched along x at V0 (every body with
+    the box: set_velocity), RK4 at 1 ms for 0.6 s: the skids slide, then stick together. A rigid
+    body would stop at T = V0 / (mu_k g) after V0^2 / (2 mu_k g); the legs sway on their servos
+    (the rowing servo's 2000 N m/rad about the hips' vertical axes), so the box stops in the step
+    holding T and its distance is the closed form's within the sway's (1.5 %, below). The exact
+    check: the energy lost (kinetic, gravity's, the servos' springs, less the feed-forward's work)
+    is the friction's work (F_t . the skid's displacement) plus the servos' dampers' (kd rate^2),
+    both by the trapezoid rule over the steps; and the centre of mass, on which only the skids'
+    forces and gravity act, follows the closed form while every skid slides."""
+    h = belly
+    mu = h.desc.mu_kinetic
+    pose = raised_pose(h, (0.0, 0.0, 0.15))
+    m = h.sim(pose, stuck=(), box_stuck=(0, 1, 2))
+    ff = hold_forces(h)
+    m.command_pose(pose["length_m"], pose["rowing_rad"], ff, np.zeros(6))
+    m.set_velocity([V0, 0.0, 0.0])
+    energy = Energy(h, m, pose)
+    energy.feedforward(ff, m.state())
+    masses = h.body_masses()
+    M = masses.sum()
+    T, X = V0 / (mu * G), V0 ** 2 / (2 * mu * G)
+    st = m.state()
+    x0, c0, E0 = st["box_m"][0], masses @ m.body_poses()[:, :3] / M, energy(st)
+    assert st["box_contact_state"] == ["sliding"] * 3
+    friction = damped = 0.0
+    com_off, stop = 0.0, None
+    for i in range(600):
+        prev = st
+        m.step(1, h_s=H_S)
+        st = m.state()
+        for a, b, fa, fb in zip(prev["box_contact_m"], st["box_contact_m"], prev["box_contact_force_n"],
+                                st["box_contact_force_n"]):
+            friction += 0.5 * (fa[:2] + fb[:2]) @ (b - a)[:2]
+        damped += 0.5 * (energy.damping_power(prev) + energy.damping_power(st)) * H_S
+        assert st["foot_state"] == ["free"] * 6
+        if st["box_contact_state"] == ["sliding"] * 3:
+            t = st["t_s"]
+            c = masses @ m.body_poses()[:, :3] / M - c0
+            com_off = max(com_off, abs(c[0] - (V0 * t - 0.5 * mu * G * t ** 2)), abs(c[1]))
+        elif stop is None:
+            stop = i + 1
+            assert st["box_contact_state"] == ["stuck"] * 3  # together
+            x_stop = st["box_m"][0] - x0
+    lost = E0 - energy(st)
+    print(f"stops in step {stop} ({(stop - 1) * H_S:.3f}, {stop * H_S:.3f}] s, T = {T:.6f} s; distance "
+          f"{x_stop:.6f} m, closed form {X:.6f} m ({x_stop / X - 1:+.2%}); centre of mass off the closed form "
+          f"{com_off:.1e} m while sliding; energy lost {lost:.6f} J, friction {-friction:.6f} J + dampers "
+          f"{damped:.6f} J: off by {abs(lost + friction - damped) / lost:.1e}")
+    assert (stop - 1) * H_S < T <= stop * H_S
+    assert abs(x_stop / X - 1) < 0.02
+    assert st["box_contact_state"] == ["stuck"] * 3  # stays
+    assert abs(st["box_m"][0] - x0 - x_stop) < 1e-12
+    assert com_off < 1e-5
+    assert abs(lost + friction - damped) < 2e-5 * lost
