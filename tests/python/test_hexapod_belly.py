@@ -1,4 +1,4 @@
-"""A belly landing of the hexapod (issue 24): scenes/models/hexapod_belly.toml is models/hexapod.toml
+"""A belly landing of the hexapod (issue 24): tests/python/fixtures/hexapod_belly.toml is models/hexapod.toml
 with three skids under its box ([[box_contact]] at (0.35, -/+0.20, -0.15) and (-0.35, 0, -0.15) m),
 its legs raised (each leg's upper actuator 0.42 m, lower 0.66 m: its foot 0.165 m above the skids'
 plane, 1.34 m out from the box's centre line), held by their servos (the file's gains) at those
@@ -35,7 +35,7 @@ legsim = pytest.importorskip("legsim")
 
 from conftest import ROOT  # noqa: E402
 
-BELLY = ROOT / "scenes" / "models" / "hexapod_belly.toml"
+BELLY = ROOT / "tests" / "python" / "fixtures" / "hexapod_belly.toml"
 G = 9.81
 RAISED = (0.42, 0.66)  # m: upper, lower of every leg
 
