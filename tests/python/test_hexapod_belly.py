@@ -328,3 +328,53 @@ def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
     assert abs(st["box_m"][0] - x0 - x_stop) < 1e-12
     assert com_off < 1e-5
     assert abs(lost + friction - damped) < 2e-5 * lost
+
+
+BLOCK = """name = "belly-block"
+gravity = [0.0, 0.0, -9.81]
+[box]
+mass = 30.0
+size = [0.90, 0.50, 0.30]
+inertia = [0.85, 2.25, 2.65]
+[[box_contact]]
+point = [0.35, -0.20, -0.15]
+[[box_contact]]
+point = [0.35, 0.20, -0.15]
+[[box_contact]]
+point = [-0.35, 0.0, -0.15]
+[ground]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 0.0, 1.0]
+mu_static = 0.6
+mu_kinetic = 0.5
+"""
+
+
+@pytest.mark.parametrize("alpha", [
+    0.30,
+    pytest.param(0.40, marks=pytest.mark.xfail(strict=True, raises=legsim.ContactError, reason=(
+        "the stuck skids share the tangential load evenly (least-norm multipliers), which puts the "
+        "front skids (the least loaded) past mu_static from about 0.38 rad (|F_t| / N = 0.64 there) "
+        "though a split in proportion to the normal loads holds each at tan(alpha): from 0.38 to "
+        "0.46 rad the first step fails with LEGSIM_ERR_CONTACT"))),
+    pytest.param(0.52, marks=pytest.mark.xfail(strict=True, reason=(
+        "as 0.40; from 0.48 rad the front skids slip (0.48, 0.50: the rear one stuck, the box still; "
+        "0.52, 0.54: all three slide, the box 2.7 mm downhill in 0.1 s) though tan(alpha) < "
+        "mu_static")))])
+def test_a_rigid_body_on_unequally_loaded_skids_sticks_below_the_static_limit(tmp_path, alpha):
+    """The box alone on the belly's skids (a block: the hexapod file's box, its three skids, no
+    legs), its centre of mass over x = 0: the front skids carry 1/4 of the normal load each, the
+    rear one 1/2 on level ground. Set stuck on a plane at alpha with tan(alpha) < mu_static = 0.6
+    (0.30, 0.40, 0.52 rad: tan 0.309, 0.423, 0.573), a rigid body must stay: its skids' forces in
+    proportion to their normal loads (each at tan(alpha)) are inside every cone."""
+    path = tmp_path / "block.toml"
+    path.write_text(BLOCK)
+    h = legsim.Hexapod.from_toml(path).on_ground(slope_rad=alpha)
+    n = np.array([-np.sin(alpha), 0.0, np.cos(alpha)])
+    pose = {"box_m": list(0.15 * n), "box_quat": [np.cos(alpha / 2), 0.0, -np.sin(alpha / 2), 0.0],
+            "rowing_rad": [0.0] * 6, "length_m": [[0.0, 0.0]] * 6}
+    m = h.sim(pose, stuck=(), box_stuck=(0, 1, 2))
+    m.step(100, h_s=H_S)
+    st = m.state()
+    assert st["box_contact_state"] == ["stuck"] * 3
+    assert np.abs(st["box_m"] - pose["box_m"]).max() < 1e-12
