@@ -104,13 +104,13 @@ class Energy:
 DROP_M, H_S = 0.02, 1e-3
 
 
-def run_drop(h):
+def run_drop(h, integrator="rk4"):
     """The drop: skids DROP_M over level ground, every foot and skid free, the servos at the
     raised pose with no feed-forward over the fall (at rest at their set-points their forces
     are zero), the hold forces as feed-forward from the step after the touchdown's; RK4 at 1
-    ms, each step's state for 0.6 s, then every 0.1 s to 4.5 s."""
+    ms (or generalized-alpha), each step's state for 0.6 s, then every 0.1 s to 4.5 s."""
     pose = raised_pose(h, (0.0, 0.0, 0.15 + DROP_M))
-    m = h.sim(pose, stuck=())
+    m = h.sim(pose, stuck=(), integrator=integrator)
     m.command_pose(pose["length_m"], pose["rowing_rad"])
     energy = Energy(h, m, pose)
     ff = hold_forces(h)
@@ -134,16 +134,9 @@ def run_drop(h):
     return run
 
 
-@pytest.fixture(scope="module")
-def drop(belly):
-    return run_drop(belly)
-
-
-@pytest.fixture(scope="module")
-def drop4(tmp_path_factory):
-    """The same robot on four skids, at the box's underside's corners less 0.1 m / 0.05 m
-    ((+-0.35, +-0.20, -0.15) m): four normal rows on a rigid body, one redundant (stuck, the
-    least-norm multipliers: docs/design/spatial.md)."""
+def four_skids(tmp_path_factory):
+    """The same robot on four skids, at (+-0.35, +-0.20, -0.15) m: four normal rows on a rigid
+    body, one redundant (stuck, the least-norm multipliers: docs/design/spatial.md)."""
     text = BELLY.read_text()
     text = text[:text.index("\n[[box_contact]]")] + "\n" + "".join(
         f"[[box_contact]]\npoint = [{x}, {y}, -0.15]\n\n" for x in (0.35, -0.35) for y in (-0.20, 0.20))
@@ -151,12 +144,17 @@ def drop4(tmp_path_factory):
     path.write_text(text.replace("../../../models/leg.toml", str(ROOT / "models" / "leg.toml")))
     h = legsim.Hexapod.from_toml(path)
     assert h.desc.n_box_contacts == 4
-    return run_drop(h)
+    return h
 
 
-@pytest.mark.parametrize("skids", ["drop", "drop4"])
-def test_free_fall_touches_down_at_the_closed_form(skids, request):
-    drop = request.getfixturevalue(skids)
+@pytest.fixture(scope="module", params=["3 skids, rk4", "3 skids, galpha", "4 skids, rk4"])
+def drop(request, belly, tmp_path_factory):
+    h = four_skids(tmp_path_factory) if request.param.startswith("4") else belly
+    integrator = request.param.split(", ")[1]
+    return run_drop(h, integrator)
+
+
+def test_free_fall_touches_down_at_the_closed_form(drop):
     t0 = np.sqrt(2 * DROP_M / G)
     sts = drop["st"]
     k = next(i for i, st in enumerate(sts) if st["impacts"])
@@ -180,9 +178,7 @@ def test_free_fall_touches_down_at_the_closed_form(skids, request):
         assert st["foot_state"] == ["free"] * 6 and st["foot_m"][:, 2].min() > 0.05
 
 
-@pytest.mark.parametrize("skids", ["drop", "drop4"])
-def test_no_energy_gained_and_no_pull(skids, request):
-    drop = request.getfixturevalue(skids)
+def test_no_energy_gained_and_no_pull(drop):
     E, sts, k = np.array(drop["E"]), drop["st"], drop["switched_at"]
     gain = np.diff(E)
     scale = abs(E).max()
@@ -201,9 +197,7 @@ def test_no_energy_gained_and_no_pull(skids, request):
     assert n[k:].min() > 100.0
 
 
-@pytest.mark.parametrize("skids", ["drop", "drop4"])
-def test_at_rest_the_skids_carry_the_weight(skids, request):
-    drop = request.getfixturevalue(skids)
+def test_at_rest_the_skids_carry_the_weight(drop):
     st, M = drop["st"][-1], drop["M"]
     f = st["box_contact_force_n"]
     w = M * G
