@@ -282,14 +282,16 @@ def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
     """Set on its skids on level ground (mu_kinetic 0.5), launched along x at V0 (every body with
     the box: set_velocity), RK4 at 1 ms for 0.6 s: the skids slide, then stick together. A rigid
     body would stop at T = V0 / (mu_k g) after V0^2 / (2 mu_k g); the legs sway on their servos
-    (the rowing servo's 2000 N m/rad about the hips' vertical axes), so the box stops in the step
-    holding T and its distance is the closed form's within the sway's (1.5 %, below). Exact:
+    (the rowing servo's 2000 N m/rad about the hips' vertical axes), so the box stops within a
+    step of T (0.2035 to 0.20375 s at h = 0.25 ms) and its distance is the closed form's within the
+    sway's (1.5 %, below). Exact:
     the whole robot's momentum against the ground's forces (its centre of mass c, on which only
     they and gravity act, the friction mu_k N against the slip along x: c_x + mu_k c_z = c_x(0)
     + mu_k c_z(0) + V0 t - mu_k g t^2 / 2 while every skid slides, whatever the normal forces);
     and the energy lost (kinetic, gravity's, the servos' springs, less the feed-forward's work)
     is the friction's work (F_t . the skid's displacement) plus the servos' dampers' (kd rate^2),
-    both by the trapezoid rule over the steps."""
+    both by the trapezoid rule over the steps (off by 2.8e-8, 2.7e-9, 1.2e-9 of the loss at h = 1,
+    0.5, 0.25 ms)."""
     h = belly
     mu = h.desc.mu_kinetic
     pose = raised_pose(h, (0.0, 0.0, 0.15))
@@ -306,13 +308,15 @@ def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
     assert st["box_contact_state"] == ["sliding"] * 3
     friction = damped = 0.0
     com_off, stop = 0.0, None
-    for i in range(600):
+    for i in range(int(round(0.6 / H_S))):
         prev = st
         m.step(1, h_s=H_S)
         st = m.state()
+        # the stop's step: the displacement all before the stop, under the sliding force
+        stuck = st["box_contact_state"] == ["stuck"] * 3
         for a, b, fa, fb in zip(prev["box_contact_m"], st["box_contact_m"], prev["box_contact_force_n"],
                                 st["box_contact_force_n"]):
-            friction += 0.5 * (fa[:2] + fb[:2]) @ (b - a)[:2]
+            friction += (fa[:2] if stuck else 0.5 * (fa[:2] + fb[:2])) @ (b - a)[:2]
         damped += 0.5 * (energy.damping_power(prev) + energy.damping_power(st)) * H_S
         assert st["foot_state"] == ["free"] * 6
         if st["box_contact_state"] == ["sliding"] * 3:
@@ -324,16 +328,16 @@ def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
             assert st["box_contact_state"] == ["stuck"] * 3  # together
             x_stop = st["box_m"][0] - x0
     lost = E0 - energy(st)
-    print(f"stops in step {stop} ({(stop - 1) * H_S:.3f}, {stop * H_S:.3f}] s, T = {T:.6f} s; distance "
+    print(f"stops in step {stop} ({(stop - 1) * H_S:.5f}, {stop * H_S:.5f}] s, T = {T:.6f} s; distance "
           f"{x_stop:.6f} m, closed form {X:.6f} m ({x_stop / X - 1:+.2%}); centre of mass off its closed form "
           f"{com_off:.1e} m while sliding; energy lost {lost:.6f} J, friction {-friction:.6f} J + dampers "
           f"{damped:.6f} J: off by {abs(lost + friction - damped) / lost:.1e}")
-    assert (stop - 1) * H_S < T <= stop * H_S
+    assert abs(stop * H_S - T) < 1e-3
     assert abs(x_stop / X - 1) < 0.02
     assert st["box_contact_state"] == ["stuck"] * 3  # stays
     assert abs(st["box_m"][0] - x0 - x_stop) < 1e-12
     assert com_off < 1e-10
-    assert abs(lost + friction - damped) < 2e-5 * lost
+    assert abs(lost + friction - damped) < 1e-6 * lost
 
 
 def test_a_landing_with_horizontal_velocity_slides_and_stops(belly):
