@@ -86,15 +86,17 @@ class Energy:
         self.kd = np.array([leg.actuator[j].servo_kd_ns_per_m for j in range(2)])
         self.kpr, self.kdr = h.desc.rowing_servo_kp_nm_per_rad, h.desc.rowing_servo_kd_nms_per_rad
         self.ff, self.l_ff = np.zeros((6, 2)), self.lc.copy()
+        self.ffr, self.r_ff = np.zeros(6), self.rc.copy()
 
-    def feedforward(self, ff, st):
-        """A constant feed-forward from now on: its work counts from the lengths now."""
+    def feedforward(self, ff, st, ff_rowing=np.zeros(6)):
+        """A constant feed-forward from now on: its work counts from the lengths and angles now."""
         self.ff, self.l_ff = np.array(ff), st["length_m"].copy()
+        self.ffr, self.r_ff = np.array(ff_rowing), st["rowing_rad"].copy()
 
     def __call__(self, st) -> float:
         dl, dr = st["length_m"] - self.lc, st["rowing_rad"] - self.rc
         spring = 0.5 * (self.kp * dl ** 2).sum() + 0.5 * self.kpr * (dr ** 2).sum()
-        work_ff = (self.ff * (st["length_m"] - self.l_ff)).sum()
+        work_ff = (self.ff * (st["length_m"] - self.l_ff)).sum() + self.ffr @ (st["rowing_rad"] - self.r_ff)
         return st["kinetic_energy_j"] + G * self.masses @ self.m.body_poses()[:, 2] + spring - work_ff
 
     def damping_power(self, st) -> float:
@@ -278,33 +280,44 @@ def com(m, masses) -> np.ndarray:
     return masses @ m.body_poses()[:, :3] / masses.sum()
 
 
-def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
+# the legs at rowing 0 on their servos; swept forward 0.6 rad onto their rowing stops (the right
+# legs' max, the left legs' min) with 20 N m into them, where the slide's deceleration presses them
+ROWING_ON_STOPS = np.array([0.6, 0.6, 0.6, -0.6, -0.6, -0.6])
+
+
+@pytest.mark.parametrize("on_stops", [False, True], ids=["rowing servo", "rowing on its stops"])
+def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly, on_stops):
     """Set on its skids on level ground (mu_kinetic 0.5), launched along x at V0 (every body with
     the box: set_velocity), RK4 at 1 ms for 0.6 s: the skids slide, then stick together. A rigid
-    body would stop at T = V0 / (mu_k g) after V0^2 / (2 mu_k g); the legs sway on their servos
-    (the rowing servo's 2000 N m/rad about the hips' vertical axes), so the box stops within a
-    step of T (0.2035 to 0.20375 s at h = 0.25 ms) and its distance is the closed form's within the
-    sway's (1.5 %, below). Exact:
+    body would stop at T = V0 / (mu_k g) after X = V0^2 / (2 mu_k g). At rowing 0 the legs sway
+    on their rowing servos (2000 N m/rad about the hips' vertical axes): the box stops within a
+    step of T (0.2035 to 0.20375 s at h = 0.25 ms), 1.5 % short of X (below). On their rowing
+    stops the legs sway only on their linear actuators' servos: in the step holding T, 0.07 % past
+    X. Exact:
     the whole robot's momentum against the ground's forces (its centre of mass c, on which only
     they and gravity act, the friction mu_k N against the slip along x: c_x + mu_k c_z = c_x(0)
     + mu_k c_z(0) + V0 t - mu_k g t^2 / 2 while every skid slides, whatever the normal forces);
     and the energy lost (kinetic, gravity's, the servos' springs, less the feed-forward's work)
     is the friction's work (F_t . the skid's displacement) plus the servos' dampers' (kd rate^2),
-    both by the trapezoid rule over the steps (off by 2.8e-8, 2.7e-9, 1.2e-9 of the loss at h = 1,
-    0.5, 0.25 ms)."""
+    both by the trapezoid rule over the steps from the first step's end (off by 2.0e-7 of the
+    loss on the rowing servos, 1.6e-6 on the stops, at h = 1 ms; the trapezoid's error, falling
+    as h^2)."""
     h = belly
     mu = h.desc.mu_kinetic
     pose = raised_pose(h, (0.0, 0.0, 0.15))
+    ff, ff_rowing = hold_forces(h), np.zeros(6)
+    if on_stops:
+        pose["rowing_rad"] = list(ROWING_ON_STOPS)
+        ff_rowing = 20.0 * np.sign(ROWING_ON_STOPS)
     m = h.sim(pose, stuck=(), box_stuck=(0, 1, 2))
-    ff = hold_forces(h)
-    m.command_pose(pose["length_m"], pose["rowing_rad"], ff, np.zeros(6))
+    m.command_pose(pose["length_m"], pose["rowing_rad"], ff, ff_rowing)
     m.set_velocity([V0, 0.0, 0.0])
     energy = Energy(h, m, pose)
-    energy.feedforward(ff, m.state())
+    energy.feedforward(ff, m.state(), ff_rowing)
     masses = h.body_masses()
     T, X = V0 / (mu * G), V0 ** 2 / (2 * mu * G)
     st = m.state()
-    x0, c0, E0 = st["box_m"][0], com(m, masses), energy(st)
+    x0, c0 = st["box_m"][0], com(m, masses)
     assert st["box_contact_state"] == ["sliding"] * 3
     friction = damped = 0.0
     com_off, stop = 0.0, None
@@ -312,6 +325,11 @@ def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
         prev = st
         m.step(1, h_s=H_S)
         st = m.state()
+        if i == 0:
+            # the works from the first step's end: on their stops the rowing angles are seated by
+            # the first step (six arrivals at zero speed), which moves the skids' forces at once
+            E0 = energy(st)
+            continue
         # the stop's step: the displacement all before the stop, under the sliding force
         stuck = st["box_contact_state"] == ["stuck"] * 3
         for a, b, fa, fb in zip(prev["box_contact_m"], st["box_contact_m"], prev["box_contact_force_n"],
@@ -332,12 +350,17 @@ def test_a_slide_on_the_skids_stops_as_friction_takes_the_energy(belly):
           f"{x_stop:.6f} m, closed form {X:.6f} m ({x_stop / X - 1:+.2%}); centre of mass off its closed form "
           f"{com_off:.1e} m while sliding; energy lost {lost:.6f} J, friction {-friction:.6f} J + dampers "
           f"{damped:.6f} J: off by {abs(lost + friction - damped) / lost:.1e}")
-    assert abs(stop * H_S - T) < 1e-3
-    assert abs(x_stop / X - 1) < 0.02
+    if on_stops:
+        assert (stop - 1) * H_S < T <= stop * H_S
+        assert np.abs(st["rowing_rad"] - ROWING_ON_STOPS).max() < 1e-12  # held on the stops throughout
+        assert abs(x_stop / X - 1) < 1e-3
+    else:
+        assert abs(stop * H_S - T) < 1e-3
+        assert abs(x_stop / X - 1) < 0.02
     assert st["box_contact_state"] == ["stuck"] * 3  # stays
     assert abs(st["box_m"][0] - x0 - x_stop) < 1e-12
     assert com_off < 1e-10
-    assert abs(lost + friction - damped) < 1e-6 * lost
+    assert abs(lost + friction - damped) < (1e-5 if on_stops else 1e-6) * lost
 
 
 def test_a_landing_with_horizontal_velocity_slides_and_stops(belly):
