@@ -1001,15 +1001,15 @@ class Reduced(Kernel):
         work on the factor given (a: the last Newton iteration's, at an iterate within tol of
         q, by position) instead of its own: |J qd| (drift), the velocities projected where it
         is past tol, once more where the first pass (on a factor not q's own) leaves it past
-        tol (the general path's two passes), then qdd, every row's multiplier and the joints'
-        reactions. For a structure without a pinned body only (its reduced system is the
-        whole one, in the same order)."""
+        tol (the general path's two passes), then every row's multiplier and the joints'
+        reactions (not qdd: the step keeps the iteration's). For a structure without a pinned
+        body only (its reduced system is the whole one, in the same order)."""
         assert not self.pinned
         k, nq = self.full, 3 * self.nb
         o = [f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_end_factored(const Model &model, "
              "[[maybe_unused]] const DriverValues &dv, const VecQ &q, VecQ &qd, const VecQ &base, "
              "Data &data, bool actuators, TrigCache *trig, const real *a, real tol, real &drift, VecR &lambda, "
-             "VecQ &qdd, legsim_reaction *reaction) {"]
+             "legsim_reaction *reaction) {"]
         o.append("  const real *w = model.minv;")
         o += k.rows_locals(part="q")
         o.append("  " + " ".join(f"(void)phi{i};" for i in range(k.m)) + "  // the velocity level: no Phi")
@@ -1032,10 +1032,11 @@ class Reduced(Kernel):
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
         o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{self.orig[i]}", lval="a")
+        # qdd = M^-1 (Q - J^T lambda) is the iteration's, not this: no caller reads the end's.
+        # It is finite where Q and the multipliers are (which it is made of), the status's test
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
-        for n in range(nq):
-            o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({self.jt_expr(n, lambda i: f'l{self.orig[i]}', True)}));")
-            o.append(f"  z += qdd[{n}] * real(0);")
+        o += [f"  z += Q{n} * real(0);" for n in range(nq)]
+        o += [f"  z += l{self.orig[i]} * real(0);" for i in range(self.m)]
         o += self.end_tail("the state's velocities now")
         o.append("}\n")
         return o

@@ -156,15 +156,16 @@ struct Kernel {
   // last Newton iteration's, at an iterate within tol of q) instead of its own, for a
   // structure whose reduced system is the whole one (no pinned body: the robot's). |J qd|
   // past tol: qd projected (M-weighted, onto J qd = 0), a second time where the first pass
-  // leaves it past tol (the factor is not q's own); drift: |J qd| after. Then qdd, every
-  // row's multiplier and, reaction not null, the joints' reactions; no condition estimate;
-  // qd written only when the whole call succeeds (the multipliers, reactions, data.force_q
-  // and the actuators' forces may be written before a failure: the caller's fallback writes
-  // them again). LEGSIM_ERR_DIVERGED (qdd not finite). nullptr elsewhere (and in a build
+  // leaves it past tol (the factor is not q's own); drift: |J qd| after. Then every row's
+  // multiplier and, reaction not null, the joints' reactions (not qdd: the step keeps the
+  // iteration's); no condition estimate; qd written only when the whole call succeeds (the
+  // multipliers, reactions, data.force_q and the actuators' forces may be written before a
+  // failure: the caller's fallback writes them again). LEGSIM_ERR_DIVERGED (Q or a
+  // multiplier not finite: the end's qdd would not be). nullptr elsewhere (and in a build
   // without generalized-alpha).
   legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
                                 const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
-                                real tol, real &drift, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+                                real tol, real &drift, VecR &lambda, legsim_reaction *reaction);
   // newton's iteration with the applied forces Q = base and, with actuators, the
   // actuators' forces from the rows' own sin/cos (as accelerations'; written into
   // data.force_q as applied_forces leaves it), which also gives the residual, the largest
