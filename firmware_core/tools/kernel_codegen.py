@@ -31,8 +31,9 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
                   drift, then the accelerations, every row's multiplier, the reactions and
                   the condition estimate.
 Every piece but the reduced ones does the general path's arithmetic in the same order, so
-both give the same numbers bit for bit; the reduced ones agree to round-off
-(tests/core/test_kernels.c).
+both give the same numbers bit for bit; the reduced ones agree to round-off, and a stance's
+newton and end_factored in their FMA copy (LEGSIM_STANCE_GA_TARGETS, kernel.hpp) to the
+Newton tolerance (tests/core/test_kernels.c).
 The geometry (joint points) is read from the Model at run time: the kernel depends on the
 structure only (the joints, the contacts' bodies and the actuators' joints), and
 kernel_find (in the generated file) picks it by that structure.
@@ -687,8 +688,9 @@ class Kernel:
         # factor kept (the residual report, the reactions' solve); only where generalized-alpha
         # is compiled in (LEGSIM_KERNEL_NEWTON)
         o.append("#if LEGSIM_WITH_GENERALIZED_ALPHA")
+        # a stance's in the FMA copy too where LEGSIM_STANCE_GA_TARGETS has it (kernel.hpp)
         if self.newton_fused:  # Kernel::newton_fused: the forces and the residual too
-            o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+            o.append(f"{'LEGSIM_STANCE_GA_TARGETS' if self.contacts else 'LEGSIM_KERNEL_TARGETS'} legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                      "const VecQ &q, const VecQ &qd, "
                      "const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *qdd1, const VecR &lambda, "
                      "real bprime, Rows &rows, real *a, real &condition, real &residual, real *res, VecR &dlambda, "
@@ -1001,15 +1003,17 @@ class Reduced(Kernel):
         work on the factor given (a: the last Newton iteration's, at an iterate within tol of
         q, by position) instead of its own: |J qd| (drift), the velocities projected where it
         is past tol, once more where the first pass (on a factor not q's own) leaves it past
-        tol (the general path's two passes), then qdd, every row's multiplier and the joints'
-        reactions. For a structure without a pinned body only (its reduced system is the
-        whole one, in the same order)."""
+        tol (the general path's two passes), then every row's multiplier and the joints'
+        reactions (not qdd: the step keeps the iteration's). For a structure without a pinned
+        body only (its reduced system is the whole one, in the same order)."""
         assert not self.pinned
         k, nq = self.full, 3 * self.nb
-        o = [f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_end_factored(const Model &model, "
+        # a stance's in the FMA copy too where LEGSIM_STANCE_GA_TARGETS has it (kernel.hpp)
+        targets = "LEGSIM_STANCE_GA_TARGETS" if self.contacts else "LEGSIM_KERNEL_TARGETS"
+        o = [f"{targets} legsim_status {sym}_end_factored(const Model &model, "
              "[[maybe_unused]] const DriverValues &dv, const VecQ &q, VecQ &qd, const VecQ &base, "
              "Data &data, bool actuators, TrigCache *trig, const real *a, real tol, real &drift, VecR &lambda, "
-             "VecQ &qdd, legsim_reaction *reaction) {"]
+             "legsim_reaction *reaction) {"]
         o.append("  const real *w = model.minv;")
         o += k.rows_locals(part="q")
         o.append("  " + " ".join(f"(void)phi{i};" for i in range(k.m)) + "  // the velocity level: no Phi")
@@ -1032,10 +1036,11 @@ class Reduced(Kernel):
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
         o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real l{self.orig[i]}", lval="a")
+        # qdd = M^-1 (Q - J^T lambda) is the iteration's, not this: no caller reads the end's.
+        # It is finite where Q and the multipliers are (which it is made of), the status's test
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
-        for n in range(nq):
-            o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({self.jt_expr(n, lambda i: f'l{self.orig[i]}', True)}));")
-            o.append(f"  z += qdd[{n}] * real(0);")
+        o += [f"  z += Q{n} * real(0);" for n in range(nq)]
+        o += [f"  z += l{self.orig[i]} * real(0);" for i in range(self.m)]
         o += self.end_tail("the state's velocities now")
         o.append("}\n")
         return o

@@ -37,7 +37,10 @@
 // rounding fewer per fused pair, 5 % fewer instructions per RK4 step of the leg. Not the
 // rest: generalized-alpha's Newton iteration stops at its tolerance, and one rounding more
 // or less anywhere moves its results by that tolerance (2e-7 relative over 1 s), not by
-// round-off.
+// round-off. Except, with LEGSIM_KERNEL_FMA_GA, its stance kernels' iteration and end
+// (LEGSIM_STANCE_GA_TARGETS: the robot on stuck feet, 2.75x -> 2.35x the leg's step): the
+// robot's generalized-alpha run on them then agrees with the general path to 2e-8 relative
+// over 1 s, and the number of Newton iterations of a step may differ (tests/core/test_kernels.c).
 #if LEGSIM_KERNEL_AVX && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
 #define LEGSIM_KERNEL_TARGETS __attribute__((target_clones("avx", "default")))
 #if LEGSIM_KERNEL_FMA
@@ -45,9 +48,15 @@
 #else
 #define LEGSIM_STAGE_TARGETS LEGSIM_KERNEL_TARGETS
 #endif
+#if LEGSIM_KERNEL_FMA && LEGSIM_KERNEL_FMA_GA
+#define LEGSIM_STANCE_GA_TARGETS LEGSIM_STAGE_TARGETS
+#else
+#define LEGSIM_STANCE_GA_TARGETS LEGSIM_KERNEL_TARGETS
+#endif
 #else
 #define LEGSIM_KERNEL_TARGETS
 #define LEGSIM_STAGE_TARGETS
+#define LEGSIM_STANCE_GA_TARGETS
 #endif
 
 namespace legsim {
@@ -156,15 +165,16 @@ struct Kernel {
   // last Newton iteration's, at an iterate within tol of q) instead of its own, for a
   // structure whose reduced system is the whole one (no pinned body: the robot's). |J qd|
   // past tol: qd projected (M-weighted, onto J qd = 0), a second time where the first pass
-  // leaves it past tol (the factor is not q's own); drift: |J qd| after. Then qdd, every
-  // row's multiplier and, reaction not null, the joints' reactions; no condition estimate;
-  // qd written only when the whole call succeeds (the multipliers, reactions, data.force_q
-  // and the actuators' forces may be written before a failure: the caller's fallback writes
-  // them again). LEGSIM_ERR_DIVERGED (qdd not finite). nullptr elsewhere (and in a build
+  // leaves it past tol (the factor is not q's own); drift: |J qd| after. Then every row's
+  // multiplier and, reaction not null, the joints' reactions (not qdd: the step keeps the
+  // iteration's); no condition estimate; qd written only when the whole call succeeds (the
+  // multipliers, reactions, data.force_q and the actuators' forces may be written before a
+  // failure: the caller's fallback writes them again). LEGSIM_ERR_DIVERGED (Q or a
+  // multiplier not finite: the end's qdd would not be). nullptr elsewhere (and in a build
   // without generalized-alpha).
   legsim_status (*end_factored)(const Model &model, const DriverValues &dv, const VecQ &q, VecQ &qd,
                                 const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *a,
-                                real tol, real &drift, VecR &lambda, VecQ &qdd, legsim_reaction *reaction);
+                                real tol, real &drift, VecR &lambda, legsim_reaction *reaction);
   // newton's iteration with the applied forces Q = base and, with actuators, the
   // actuators' forces from the rows' own sin/cos (as accelerations'; written into
   // data.force_q as applied_forces leaves it), which also gives the residual, the largest

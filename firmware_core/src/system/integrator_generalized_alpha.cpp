@@ -51,30 +51,44 @@ LEGSIM_KERNEL_TARGETS void correct(int n, real bprime, real gprime, const R_ min
     qdd1[k] += bprime * dq[k];
   }
 }
-// qdd1's prediction from qdd (this state's) and the past steps' (past of them used): the
-// polynomial through them, one step on. Separate loops, so an unknown past is never read.
-LEGSIM_KERNEL_TARGETS void predict(int n, int past, const R_ qdd, const R_ qdd_p1, const R_ qdd_p2, R_ qdd1) {
-  if (past >= 2) {
-    for (int k = 0; k < n; ++k) qdd1[k] = 3 * (qdd[k] - qdd_p1[k]) + qdd_p2[k];
-  } else if (past == 1) {
-    for (int k = 0; k < n; ++k) qdd1[k] = 2 * qdd[k] - qdd_p1[k];
-  } else {
-    for (int k = 0; k < n; ++k) qdd1[k] = qdd[k];
-  }
+// q1 and v1 of the step from qdd1 given (a1: the auxiliary acceleration it gives)
+[[gnu::always_inline]] inline void start_at(int k, real h, real af, real am, real beta, real gam, const R_ q,
+                                            const R_ qd, const R_ qdd, const R_ acc_aux, real qdd1, R_ q1, R_ v1) {
+  const real a1 = (af * qdd[k] + (1 - af) * qdd1 - am * acc_aux[k]) / (1 - am);
+  // q (+) h qd (+) h^2 (...): two increments, in the order of q + h qd + h^2 (...)
+  q1[k] = Bodies::config_add(Bodies::config_add(q[k], h * qd[k]), h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1));
+  v1[k] = qd[k] + h * ((1 - gam) * acc_aux[k] + gam * a1);
 }
-// q1 and v1 of the step from qdd1's prediction (a1: the auxiliary acceleration it gives)
-LEGSIM_KERNEL_TARGETS void start(int n, real h, real af, real am, real beta, real gam, const R_ q, const R_ qd,
-                                 const R_ qdd, const R_ acc_aux, const R_ qdd1, R_ q1, R_ v1) {
-  for (int k = 0; k < n; ++k) {
-    const real a1 = (af * qdd[k] + (1 - af) * qdd1[k] - am * acc_aux[k]) / (1 - am);
-    // q (+) h qd (+) h^2 (...): two increments, in the order of q + h qd + h^2 (...)
-    q1[k] = Bodies::config_add(Bodies::config_add(q[k], h * qd[k]), h * h * ((real(0.5) - beta) * acc_aux[k] + beta * a1));
-    v1[k] = qd[k] + h * ((1 - gam) * acc_aux[k] + gam * a1);
+// qdd1's prediction from qdd (this state's) and the past steps' (past of them used): the
+// polynomial through them, one step on; and q1, v1 from it in the same pass. A loop per
+// past, so that an unknown past is never read.
+LEGSIM_KERNEL_TARGETS void start(int n, int past, real h, real af, real am, real beta, real gam, const R_ q,
+                                 const R_ qd, const R_ qdd, const R_ acc_aux, const R_ qdd_p1, const R_ qdd_p2,
+                                 R_ qdd1, R_ q1, R_ v1) {
+  if (past >= 2) {
+    for (int k = 0; k < n; ++k) {
+      qdd1[k] = 3 * (qdd[k] - qdd_p1[k]) + qdd_p2[k];
+      start_at(k, h, af, am, beta, gam, q, qd, qdd, acc_aux, qdd1[k], q1, v1);
+    }
+  } else if (past == 1) {
+    for (int k = 0; k < n; ++k) {
+      qdd1[k] = 2 * qdd[k] - qdd_p1[k];
+      start_at(k, h, af, am, beta, gam, q, qd, qdd, acc_aux, qdd1[k], q1, v1);
+    }
+  } else {
+    for (int k = 0; k < n; ++k) {
+      qdd1[k] = qdd[k];
+      start_at(k, h, af, am, beta, gam, q, qd, qdd, acc_aux, qdd1[k], q1, v1);
+    }
   }
 }
 // the auxiliary acceleration's update at the end of the step
 LEGSIM_KERNEL_TARGETS void acc_aux_update(int n, real af, real am, const R_ qdd, const R_ qdd1, R_ acc_aux) {
   for (int k = 0; k < n; ++k) acc_aux[k] = (af * qdd[k] + (1 - af) * qdd1[k] - am * acc_aux[k]) / (1 - am);
+}
+// x += y
+LEGSIM_KERNEL_TARGETS void add_to(int n, R_ x, const R_ y) {
+  for (int k = 0; k < n; ++k) x[k] += y[k];
 }
 #undef R_
 
@@ -122,9 +136,8 @@ legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol) 
   VecQ &q1 = d.tq[0], &v1 = d.tq[1], &qdd1 = d.tq[2], &res = d.tq[3];
   VecR lambda = d.lambda;
   const int past = d.past_steps < kPredictorOrder ? d.past_steps : kPredictorOrder;
-  predict(n, past, d.qdd.data(), d.qdd_past[0].data(), d.qdd_past[kPastSlots - 1].data(), qdd1.data());
-  start(n, h, af, am, beta, gam, d.q.data(), d.qd.data(), d.qdd.data(), d.acc_aux.data(), qdd1.data(), q1.data(),
-        v1.data());
+  start(n, past, h, af, am, beta, gam, d.q.data(), d.qd.data(), d.qdd.data(), d.acc_aux.data(), d.qdd_past[0].data(),
+        d.qdd_past[kPastSlots - 1].data(), qdd1.data(), q1.data(), v1.data());
   const Layout &lay = d.dyn;
   bool converged = false;
   // the last step's contraction estimate, raised to 3/4 (1 stays 1: none)
@@ -181,7 +194,7 @@ legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol) 
       const real a = std::abs(dq[k]);
       dq_max = a > dq_max ? a : dq_max;
     }
-    for (int i = 0; i < lay.m; ++i) lambda[i] += d.rhs[i];
+    add_to(lay.m, lambda.data(), d.rhs.data());
     d.report.iterations = it + 1;
     d.report.residual = kern_fused ? kern_residual : rows_max_residual(lay, d.rows);  // before this iteration's correction
     if (!std::isfinite(dq_max)) return LEGSIM_ERR_DIVERGED;
@@ -221,10 +234,8 @@ legsim_status generalized_alpha_step(const Model &m, Data &d, real h, real tol) 
       // its multipliers (acceleration level) into d.lambda, for the forces below; the
       // iteration's are put back after
       real drift;
-      VecQ qdd_end;
       d.end_solved = plan.kernel->end_factored(m, d.stop_drivers, q1, v1, *plan.base, d, plan.actuators, &d.trig,
-                                               d.factor.a.data(), tol, drift, d.lambda, qdd_end,
-                                               d.reaction) == LEGSIM_OK;
+                                               d.factor.a.data(), tol, drift, d.lambda, d.reaction) == LEGSIM_OK;
     }
 #endif
     if (!d.end_solved) {
