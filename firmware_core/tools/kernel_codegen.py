@@ -688,9 +688,8 @@ class Kernel:
         # factor kept (the residual report, the reactions' solve); only where generalized-alpha
         # is compiled in (LEGSIM_KERNEL_NEWTON)
         o.append("#if LEGSIM_WITH_GENERALIZED_ALPHA")
-        # a stance's in the FMA copy too where LEGSIM_STANCE_GA_TARGETS has it (kernel.hpp)
         if self.newton_fused:  # Kernel::newton_fused: the forces and the residual too
-            o.append(f"{'LEGSIM_STANCE_GA_TARGETS' if self.contacts else 'LEGSIM_KERNEL_TARGETS'} legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
+            o.append(f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_newton(const Model &model, [[maybe_unused]] const DriverValues &dv, "
                      "const VecQ &q, const VecQ &qd, "
                      "const VecQ &base, Data &data, bool actuators, TrigCache *trig, const real *qdd1, const VecR &lambda, "
                      "real bprime, Rows &rows, real *a, real &condition, real &residual, real *res, VecR &dlambda, "
@@ -1008,9 +1007,7 @@ class Reduced(Kernel):
         body only (its reduced system is the whole one, in the same order)."""
         assert not self.pinned
         k, nq = self.full, 3 * self.nb
-        # a stance's in the FMA copy too where LEGSIM_STANCE_GA_TARGETS has it (kernel.hpp)
-        targets = "LEGSIM_STANCE_GA_TARGETS" if self.contacts else "LEGSIM_KERNEL_TARGETS"
-        o = [f"{targets} legsim_status {sym}_end_factored(const Model &model, "
+        o = [f"LEGSIM_KERNEL_TARGETS legsim_status {sym}_end_factored(const Model &model, "
              "[[maybe_unused]] const DriverValues &dv, const VecQ &q, VecQ &qd, const VecQ &base, "
              "Data &data, bool actuators, TrigCache *trig, const real *a, real tol, real &drift, VecR &lambda, "
              "legsim_reaction *reaction) {"]

@@ -37,10 +37,7 @@
 // rounding fewer per fused pair, 5 % fewer instructions per RK4 step of the leg. Not the
 // rest: generalized-alpha's Newton iteration stops at its tolerance, and one rounding more
 // or less anywhere moves its results by that tolerance (2e-7 relative over 1 s), not by
-// round-off. Except, with LEGSIM_KERNEL_FMA_GA, its stance kernels' iteration and end
-// (LEGSIM_STANCE_GA_TARGETS: the robot on stuck feet, 2.75x -> 2.35x the leg's step): the
-// robot's generalized-alpha run on them then agrees with the general path to 2e-8 relative
-// over 1 s, and the number of Newton iterations of a step may differ (tests/core/test_kernels.c).
+// round-off.
 #if LEGSIM_KERNEL_AVX && defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__) && defined(__GLIBC__)
 #define LEGSIM_KERNEL_TARGETS __attribute__((target_clones("avx", "default")))
 #if LEGSIM_KERNEL_FMA
@@ -48,15 +45,9 @@
 #else
 #define LEGSIM_STAGE_TARGETS LEGSIM_KERNEL_TARGETS
 #endif
-#if LEGSIM_KERNEL_FMA && LEGSIM_KERNEL_FMA_GA
-#define LEGSIM_STANCE_GA_TARGETS LEGSIM_STAGE_TARGETS
-#else
-#define LEGSIM_STANCE_GA_TARGETS LEGSIM_KERNEL_TARGETS
-#endif
 #else
 #define LEGSIM_KERNEL_TARGETS
 #define LEGSIM_STAGE_TARGETS
-#define LEGSIM_STANCE_GA_TARGETS
 #endif
 
 namespace legsim {
