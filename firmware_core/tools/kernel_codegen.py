@@ -31,9 +31,8 @@ both rows of every contact, all stuck), writes straight-line C++ for those rows:
                   drift, then the accelerations, every row's multiplier, the reactions and
                   the condition estimate.
 Every piece but the reduced ones does the general path's arithmetic in the same order, so
-both give the same numbers bit for bit; the reduced ones agree to round-off, and a stance's
-newton and end_factored in their FMA copy (LEGSIM_STANCE_GA_TARGETS, kernel.hpp) to the
-Newton tolerance (tests/core/test_kernels.c).
+both give the same numbers bit for bit; the reduced ones agree to round-off
+(tests/core/test_kernels.c).
 The geometry (joint points) is read from the Model at run time: the kernel depends on the
 structure only (the joints, the contacts' bodies and the actuators' joints), and
 kernel_find (in the generated file) picks it by that structure.
