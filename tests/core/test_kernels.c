@@ -9,9 +9,8 @@
  * for bit here, except RK4: its stages and its end solve the kernel's reduced system (on the
  * leg the bodies pinned to the frame on their angles alone; on the robot all its rows) in
  * another copy (FMA), which agrees to round-off (7.3e-12 relative over 1 s on the leg's stop,
- * where the multipliers of a stiff servo amplify it), and the robot's generalized-alpha
- * where its stance kernels take their FMA copy (LEGSIM_KERNEL_FMA_GA), which agrees to the
- * Newton tolerance. The tolerances allow for round-off (and that) only, and the sliding
+ * where the multipliers of a stiff servo amplify it). The tolerances allow for round-off
+ * only, and the sliding
  * robot's RK4 run is compared until the paths first take different contact modes after an
  * ambiguous or inconsistent mode choice (a pick that round-off can turn either way). */
 #include <math.h>
