@@ -64,8 +64,9 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
     if (n == 0) continue;
     const int fb = contact_body(robot, c);
     const BodyState foot = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
+    const PointJet pf = point_jet(foot, contact_point(robot, c)), pw = point_jet(world, hold.anchor[c]);
     for (int k = 0; k < n; ++k)
-      rows[foot_row(robot, c) + k] = row_along(foot, contact_point(robot, c), world, hold.anchor[c], axes[k]);
+      rows[foot_row(robot, c) + k] = row_along(foot, contact_point(robot, c), pf, world, hold.anchor[c], pw, axes[k]);
   }
   if (!hold.stops) return;
   for (int l = 0; l < robot.nlegs; ++l)
