@@ -135,7 +135,10 @@ struct RobotFactor {
   uint32_t stuck, sliding;
   const Row *rows;  // the rows it was built from (system_rows'), read by the solves
   const LegLayout *layout[kMaxLegs];  // each leg's rows and L_l's envelope (its foot's hold's)
-  real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];  // L_l in its envelope
+  // L_l in its envelope: entry k of leg l at L[lbase[l] + lstride[l] k]; two legs of one shape
+  // interleaved (stride 2, their pairs first and aligned), another alone (stride 1)
+  alignas(2 * sizeof(real)) real L[kMaxLegs * kMaxLegRows * (kMaxLegRows + 1) / 2];
+  int lbase[kMaxLegs], lstride[kMaxLegs];
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
   // the rows taken as columns (the held stops', the box's contacts' held): their rows, their

@@ -87,8 +87,12 @@ constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 // columns first[i] .. i, L(i, j) at off[i] + j; size in all); each leg body's rows (CSR:
 // on[on0[b] ..], in increasing order: a row's local index times 4, plus 2 for an orientation
 // row (its coefficients on v zero, rows.hpp's perpendicular), plus which of its two bodies).
+// shape: 3 l + h of the first leg l (robot_lift's order) whose layout for this hold h (its index
+// in RobotLeg::layout) is the same as this one but for the rows' numbers (its own leg's when
+// none before is): legs of one shape are factored two at a time, one in each lane of a pair of
+// reals.
 struct LegLayout {
-  int n, nh, size;
+  int n, nh, size, shape;
   int row[kMaxLegRows];  // the system's row numbers
   int first[kMaxLegRows], off[kMaxLegRows];
   int8_t body[kMaxLegRows][2];  // a row's two bodies from the leg's yoke (-1: off the leg)
