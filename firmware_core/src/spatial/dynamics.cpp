@@ -290,7 +290,7 @@ bool leg_factor(const SpatialRobot &robot, const Row *rows, const int *legs, con
   for (int b = 0; b < nbl; ++b) {
     const int p0 = Y.on0[b], np = Y.on0[b + 1] - p0;
     const int16_t *on = Y.on + p0;
-    T im[kBodyDof];
+    T im[kBodyDof] = {};
     for (int c = 0; c < N; ++c)
       for (int k = 0; k < kBodyDof; ++k) set_lane(im[k], c, robot.inverse_mass[b_lo[c] + b][k]);
     // each row's coefficients on the body (a pair of legs: gathered into lanes)
@@ -351,7 +351,7 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
   // the legs two at a time where their shapes agree (each in a lane: the same operations, in
   // the same order, as one alone), the pairs first in L (aligned), then the others alone
-  int unit[kMaxLegs][2], npairs = 0, nsingle = 0, single[kMaxLegs];
+  int unit[kMaxLegs / 2][2], npairs = 0, nsingle = 0, single[kMaxLegs];
   bool taken[kMaxLegs] = {};
   for (int l = 0; l < robot.nlegs; ++l) {
     F.layout[l] = &leg_layout(robot, hold, l);
@@ -365,8 +365,10 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
       single[nsingle++] = l;
     }
   }
+  F.npairs = npairs;
   int base = 0;
   for (int u = 0; u < npairs; ++u) {
+    F.pair[u][0] = unit[u][0], F.pair[u][1] = unit[u][1];
     const int l = unit[u][0], m = unit[u][1];
     F.lbase[l] = base, F.lbase[m] = base + 1, F.lstride[l] = F.lstride[m] = 2;
     if (!leg_factor<Pair2>(robot, rows, unit[u], F, reinterpret_cast<Pair2 *>(F.L + base)))
@@ -462,16 +464,50 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
 }
 
 namespace {
-// Row i of an envelope factor (entries St apart) against c: ci - sum L(i, k) c[k], k in order;
-// and its column's update lam[k] -= L(i, k) t.
-template <int St>
-inline real envelope_dot(const real *Li, int k0, int i, const real *c, real ci) {
-  for (int k = k0; k < i; ++k) ci -= Li[St * k] * c[k];
-  return ci;
+// L y = c (forward) or L^T y = c (backward) in place, L in its envelope (entries St apart), on
+// one leg (T real) or two in lanes (T Pair2, St 1 over the pairs).
+template <typename T>
+void envelope_forward(int n, const int *first, const int *off, const T *S, T *c) {
+  for (int i = 0; i < n; ++i) {
+    const T *Li = S + off[i];
+    T ci = c[i];
+    for (int k = first[i]; k < i; ++k) ci -= Li[k] * c[k];
+    c[i] = ci / Li[i];
+  }
 }
-template <int St>
-inline void envelope_axpy(const real *Li, int k0, int i, real t, real *lam) {
-  for (int k = k0; k < i; ++k) lam[k] -= Li[St * k] * t;
+template <typename T>
+void envelope_backward(int n, const int *first, const int *off, const T *S, T *c) {
+  // by columns of L's rows: row i's envelope is its column's reach upward
+  for (int i = n - 1; i >= 0; --i) {
+    const T *Li = S + off[i];
+    const T t = c[i] /= Li[i];
+    for (int k = first[i]; k < i; ++k) c[k] -= Li[k] * t;
+  }
+}
+// The legs' envelope solves: the pairs' in lanes (their y packed and back), the others' alone.
+void legs_envelope(const SpatialRobot &robot, const RobotFactor &F, real (*y)[kMaxLegRows], bool forward) {
+  bool paired[kMaxLegs] = {};
+  for (int u = 0; u < F.npairs; ++u) {
+    const int l = F.pair[u][0], m = F.pair[u][1];
+    paired[l] = paired[m] = true;
+    const LegLayout &Y = *F.layout[l];
+    Pair2 c[kMaxLegRows];
+    for (int i = 0; i < Y.n; ++i) c[i] = Pair2{y[l][i], y[m][i]};
+    const Pair2 *S = reinterpret_cast<const Pair2 *>(F.L + F.lbase[l]);
+    if (forward)
+      envelope_forward(Y.n, Y.first, Y.off, S, c);
+    else
+      envelope_backward(Y.n, Y.first, Y.off, S, c);
+    for (int i = 0; i < Y.n; ++i) y[l][i] = c[i][0], y[m][i] = c[i][1];
+  }
+  for (int l = 0; l < robot.nlegs; ++l) {
+    if (paired[l]) continue;
+    const LegLayout &Y = *F.layout[l];
+    if (forward)
+      envelope_forward(Y.n, Y.first, Y.off, F.L + F.lbase[l], y[l]);
+    else
+      envelope_backward(Y.n, Y.first, Y.off, F.L + F.lbase[l], y[l]);
+  }
 }
 
 void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
@@ -484,11 +520,9 @@ void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, 
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
     const LegLayout &Y = *F.layout[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
-    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n;
+    const int *ix = Y.row;
     const int8_t(*rb)[2] = Y.body;
-    const real *S = F.L + F.lbase[l];
-    const int st = F.lstride[l];
     // M_l^-1 f_l
     real mf[kMaxLegBodies][kBodyDof];
     for (int b = 0; b < nbl; ++b)
@@ -501,41 +535,36 @@ void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, 
         for (int k = 0; k < kBodyDof; ++k) ci += ri.ja[k] * mf[rb[i][0]][k];
       if (rb[i][1] >= 0)
         for (int k = 0; k < kBodyDof; ++k) ci += ri.jb[k] * mf[rb[i][1]][k];
-      const real *Li = S + st * off[i];
-      ci = st == 2 ? envelope_dot<2>(Li, first[i], i, c, ci) : envelope_dot<1>(Li, first[i], i, c, ci);
-      c[i] = ci / Li[st * i];
+      c[i] = ci;
     }
-    if (!box) continue;
-    for (int i = 0; i < nh; ++i)
-      for (int r = 0; r < kBodyDof; ++r) b0[r] -= F.W[l][kBodyDof * i + r] * c[n - nh + i];
   }
+  legs_envelope(robot, F, y, true);
+  if (box)
+    for (int l = 0; l < robot.nlegs; ++l) {
+      const int n = F.layout[l]->n, nh = F.layout[l]->nh;
+      for (int i = 0; i < nh; ++i)
+        for (int r = 0; r < kBodyDof; ++r) b0[r] -= F.W[l][kBodyDof * i + r] * y[l][n - nh + i];
+    }
   real a0[kBodyDof] = {0, 0, 0, 0, 0, 0};
   if (box) {
     cholesky_solve(kBodyDof, F.A0, b0);
     for (int k = 0; k < kBodyDof; ++k) a0[k] = x[k] = b0[k];
+    // each leg: lambda = L^-T (y + W a0)
+    for (int l = 0; l < robot.nlegs; ++l) {
+      const int n = F.layout[l]->n, nh = F.layout[l]->nh;
+      for (int i = 0; i < nh; ++i)
+        for (int k = 0; k < kBodyDof; ++k) y[l][n - nh + i] += F.W[l][kBodyDof * i + k] * a0[k];
+    }
   }
-  // each leg: lambda = L^-T (y + W a0), then its bodies' a = M^-1 (f - J^T lambda)
+  legs_envelope(robot, F, y, false);
+  // then its bodies' a = M^-1 (f - J^T lambda)
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
     const LegLayout &Y = *F.layout[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
-    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n;
+    const int *ix = Y.row;
     const int8_t(*rb)[2] = Y.body;
-    const real *S = F.L + F.lbase[l];
-    const int st = F.lstride[l];
-    real *lam = y[l];
-    if (box)
-      for (int i = 0; i < nh; ++i)
-        for (int k = 0; k < kBodyDof; ++k) lam[n - nh + i] += F.W[l][kBodyDof * i + k] * a0[k];
-    // L^T by columns of L's rows: row i's envelope is its column's reach upward
-    for (int i = n - 1; i >= 0; --i) {
-      const real *Li = S + st * off[i];
-      const real t = lam[i] /= Li[st * i];
-      if (st == 2)
-        envelope_axpy<2>(Li, first[i], i, t, lam);
-      else
-        envelope_axpy<1>(Li, first[i], i, t, lam);
-    }
+    const real *lam = y[l];
     // f - J^T lambda in a local array (no aliasing with the rows: kept in registers)
     real xb[kMaxLegBodies][kBodyDof];
     for (int b = 0; b < nbl; ++b)

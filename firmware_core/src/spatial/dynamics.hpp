@@ -139,6 +139,7 @@ struct RobotFactor {
   // interleaved (stride 2, their pairs first and aligned), another alone (stride 1)
   alignas(2 * sizeof(real)) real L[kMaxLegs * kMaxLegRows * (kMaxLegRows + 1) / 2];
   int lbase[kMaxLegs], lstride[kMaxLegs];
+  int npairs, pair[kMaxLegs / 2][2];  // the legs factored two at a time (stride 2: lanes 0, 1)
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
   // the rows taken as columns (the held stops', the box's contacts' held): their rows, their
