@@ -290,9 +290,13 @@ bool leg_factor(const SpatialRobot &robot, const Row *rows, const int *legs, con
   for (int b = 0; b < nbl; ++b) {
     const int p0 = Y.on0[b], np = Y.on0[b + 1] - p0;
     const int16_t *on = Y.on + p0;
-    T im[kBodyDof] = {};
-    for (int c = 0; c < N; ++c)
-      for (int k = 0; k < kBodyDof; ++k) set_lane(im[k], c, robot.inverse_mass[b_lo[c] + b][k]);
+    T im[kBodyDof];
+    for (int k = 0; k < kBodyDof; ++k) {
+      if constexpr (N == 1)
+        im[k] = robot.inverse_mass[b_lo[0] + b][k];
+      else
+        im[k] = T{robot.inverse_mass[b_lo[0] + b][k], robot.inverse_mass[b_lo[1] + b][k]};
+    }
     // each row's coefficients on the body (a pair of legs: gathered into lanes)
     const T *coef[2 * kMaxLegRows];
     T gathered[N == 1 ? 1 : 2 * kMaxLegRows][kBodyDof];
