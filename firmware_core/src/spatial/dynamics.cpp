@@ -86,6 +86,26 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
         rows[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, v);
 }
 
+void system_phi(const SpatialRobot &robot, const FeetHold &hold, const real *q, real *phi) {
+  robot_phi(robot, q, phi);
+  const BodyState world = ground_state();
+  const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
+  for (int c = 0; c < robot_contacts(robot); ++c) {
+    const int n = foot_rows(hold, c);
+    if (n == 0) continue;
+    const real *qf = q + kBodyConfig * contact_body(robot, c);
+    const V3 pf = V3{qf[0], qf[1], qf[2]} + rotate(rotation({qf[3], qf[4], qf[5], qf[6]}), contact_point(robot, c));
+    const V3 d = pf - (world.r + rotate(world.R, hold.anchor[c]));
+    for (int k = 0; k < n; ++k) phi[foot_row(robot, c) + k] = dot(axes[k], d);
+  }
+  if (!hold.stops) return;
+  static const real zero_v[kMaxRobotDof] = {};
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < kLegStops; ++k)
+      if ((leg_stops(hold, l) >> k) & 1u)
+        phi[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, zero_v).phi;
+}
+
 Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v) {
   const RobotLeg &L = robot.leg[l];
   Row r;

@@ -123,6 +123,9 @@ inline int system_used_rows(const SpatialRobot &robot, const FeetHold &hold, int
 // Every row of the system at (q, v): the joints' (robot_rows), the feet's on the ground, the
 // stops' held.
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows);
+// Their phi alone at q (system_rows' phi, the same values; the unused slots not written): what
+// a projection's residual needs, for a fifth of the rows' work.
+void system_phi(const SpatialRobot &robot, const FeetHold &hold, const real *q, real *phi);
 // Leg l's stop k's row at its lower or upper end (its gap, >= 0 inside the stroke).
 Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v);
 

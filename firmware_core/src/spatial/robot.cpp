@@ -417,6 +417,44 @@ void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *ou
   }
 }
 
+void robot_phi(const SpatialRobot &robot, const real *q, real *phi) {
+  // robot_rows' phi alone: the same expressions (points r + R s, axes R c, their dot products)
+  V3 r[kMaxRobotBodies];
+  Rot R[kMaxRobotBodies];
+  for (int b = 0; b < robot.nb; ++b) {
+    const real *qb = q + kBodyConfig * b;
+    r[b] = {qb[0], qb[1], qb[2]}, R[b] = rotation({qb[3], qb[4], qb[5], qb[6]});
+  }
+  const BodyState world = ground_state();
+  for (int k = 0; k < robot.nj; ++k) {
+    const LegJoint &j = robot.joint[k];
+    const V3 &ra = r[j.a], &rb = j.b < 0 ? world.r : r[j.b];
+    const Rot &Ra = R[j.a], &Rb = j.b < 0 ? world.R : R[j.b];
+    real *o = phi + j.row;
+    switch (j.kind) {
+      case LegJointKind::Revolute: {
+        const V3 d = (ra + rotate(Ra, j.sa)) - (rb + rotate(Rb, j.sb)), ka = rotate(Ra, j.ka);
+        o[0] = d.x, o[1] = d.y, o[2] = d.z;
+        o[3] = dot(ka, rotate(Rb, j.ub)), o[4] = dot(ka, rotate(Rb, j.nb));
+        break;
+      }
+      case LegJointKind::Cut: {
+        const V3 d = (ra + rotate(Ra, j.sa)) - (rb + rotate(Rb, j.sb));
+        o[0] = dot(d, rotate(Rb, j.ub)), o[1] = dot(d, rotate(Rb, j.nb));
+        break;
+      }
+      case LegJointKind::Prismatic: {
+        // prismatic_rows': the cylinder a's axes (u, n, k) = (ka, ub, nb), the rod b's (ub, nb)
+        const V3 ua = rotate(Ra, j.ka), na = rotate(Ra, j.ub), nb = rotate(Rb, j.ub), kb = rotate(Rb, j.nb);
+        const V3 d = (rb + rotate(Rb, j.sb)) - (ra + rotate(Ra, j.sa));
+        o[0] = dot(ua, nb), o[1] = dot(ua, kb), o[2] = dot(na, kb);
+        o[3] = dot(d, na), o[4] = dot(d, rotate(Ra, j.nb));
+        break;
+      }
+    }
+  }
+}
+
 real robot_rowing_angle(const SpatialRobot &robot, int l, const real *q) {
   const Rot Rb = robot.free_box ? rotation({q[3], q[4], q[5], q[6]}) : Rot{kX, kY, kZ};
   const real *qy = q + kBodyConfig * robot.leg[l].yoke;

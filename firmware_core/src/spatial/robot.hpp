@@ -196,6 +196,9 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
 // (its ja, jb).
 void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out);
 
+// Every row's phi at q (robot_rows' phi alone, the same values): phi[0 .. robot.m - 1].
+void robot_phi(const SpatialRobot &robot, const real *q, real *phi);
+
 // Leg l's rowing angle (rad, in [-pi, pi]) at q: its yoke's x in the box's frame, from its heading.
 real robot_rowing_angle(const SpatialRobot &robot, int l, const real *q);
 
