@@ -104,6 +104,8 @@ struct RobotLeg {
   int yoke, nbars;  // the yoke's body; its bars follow it
   int first_actuator, nactuators;  // its linear actuators in SpatialRobot::act
   int row0, nrows;  // its joints' rows (its hip's first): contiguous in the robot's row order
+  int joint0, njoints;  // its joints in SpatialRobot::joint (its hip's first)
+  int row_twin;     // the leg whose rows robot_rows evaluates with its own, in lanes (-1: none)
   int foot_body;    // its foot's bar (a body of the robot), or -1: the leg file has no [foot]
   V3 foot_point;    // on it, body frame
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
