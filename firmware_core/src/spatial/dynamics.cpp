@@ -291,15 +291,18 @@ bool envelope_cholesky_lanes(int n, const int *first, const int *off, T *A, cons
 
 // S = J_l M_l^-1 J_l^T of the legs of one shape (one per lane of T: legs[0 .. lanes)) in their
 // envelope at S, and its Cholesky factor; false when a leg's rows are dependent.
-template <typename T>
+template <typename T, bool Pad = false>
 bool leg_factor(const SpatialRobot &robot, const Row *rows, const int *legs, const RobotFactor &F, T *S) {
   constexpr int N = lanes(T{});
-  const LegLayout &Y = *F.layout[legs[0]];
+  const LegLayout &Y = *F.flayout[legs[0]];
   const int nbl = 1 + robot.leg[legs[0]].nbars, n = Y.n;
   const int *first = Y.first, *off = Y.off;
   const int *ix[N];
-  int b_lo[N];
-  for (int c = 0; c < N; ++c) ix[c] = F.layout[legs[c]]->row, b_lo[c] = robot.leg[legs[c]].yoke;
+  int b_lo[N], pad[N];
+  for (int c = 0; c < N; ++c)
+    ix[c] = F.flayout[legs[c]]->row, b_lo[c] = robot.leg[legs[c]].yoke, pad[c] = F.pad[legs[c]];
+  auto padded = [&](int c, int i) { return Pad && pad[c] >= 0 && i >= pad[c] && i < pad[c] + 3; };
+  static const real zero[kBodyDof] = {};
   // S in its envelope: the pairs of rows on a common body (its lower triangle; a body's rows in
   // increasing order), the rest zero
   for (int i = 0; i < n; ++i) {
@@ -325,8 +328,10 @@ bool leg_factor(const SpatialRobot &robot, const Row *rows, const int *legs, con
         const Row &r = rows[ix[0][on[p] >> 2]];
         coef[p] = on[p] & 1 ? r.jb : r.ja;
       } else {
-        const Row &r0 = rows[ix[0][on[p] >> 2]], &r1 = rows[ix[1][on[p] >> 2]];
-        const real *c0 = on[p] & 1 ? r0.jb : r0.ja, *c1 = on[p] & 1 ? r1.jb : r1.ja;
+        const int i = on[p] >> 2;
+        const Row &r0 = rows[ix[0][i]], &r1 = rows[ix[1][i]];
+        const real *c0 = padded(0, i) ? zero : on[p] & 1 ? r0.jb : r0.ja;
+        const real *c1 = padded(1, i) ? zero : on[p] & 1 ? r1.jb : r1.ja;
         for (int k = 0; k < kBodyDof; ++k) gathered[p][k] = T{c0[k], c1[k]};
         coef[p] = gathered[p];
       }
@@ -357,7 +362,11 @@ bool leg_factor(const SpatialRobot &robot, const Row *rows, const int *legs, con
   real floor[N];
   for (int c = 0; c < N; ++c) {
     real scale = 0;
-    for (int i = 0; i < n; ++i) scale = std::max(scale, lane(S[off[i] + i], c));
+    for (int i = 0; i < n; ++i)
+      if (padded(c, i))
+        set_lane(S[off[i] + i], c, 1);
+      else
+        scale = std::max(scale, lane(S[off[i] + i], c));
     floor[c] = by_precision(1e-12, 1e-6) * scale;
   }
   return envelope_cholesky_lanes(n, first, off, S, floor);
@@ -375,29 +384,49 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
   // the legs two at a time where their shapes agree (each in a lane: the same operations, in
   // the same order, as one alone), the pairs first in L (aligned), then the others alone
+  // A free foot's leg left over pairs with a stuck one's left over when its own stuck layout has
+  // that one's shape: its rows in that layout, the foot's three (not held) decoupled with unit
+  // pivots; its factor's other entries gain exact zeros only (the same values).
   int unit[kMaxLegs / 2][2], npairs = 0, nsingle = 0, single[kMaxLegs];
   bool taken[kMaxLegs] = {};
   for (int l = 0; l < robot.nlegs; ++l) {
-    F.layout[l] = &leg_layout(robot, hold, l);
-    if (taken[l]) continue;
-    int m = l + 1;
-    while (m < robot.nlegs && (taken[m] || leg_layout(robot, hold, m).shape != F.layout[l]->shape)) ++m;
-    if (m < robot.nlegs) {
-      taken[l] = taken[m] = true;
-      unit[npairs][0] = l, unit[npairs][1] = m, ++npairs;
-    } else {
-      single[nsingle++] = l;
-    }
+    F.layout[l] = F.flayout[l] = &leg_layout(robot, hold, l);
+    F.pad[l] = -1;
   }
+  auto stuck_shape = [&](int l) {
+    return foot_rows(hold, l) == 0 && robot.leg[l].foot_body >= 0 ? robot.leg[l].layout[2].shape : -1;
+  };
+  for (int pass = 0; pass < 2; ++pass)
+    for (int l = 0; l < robot.nlegs; ++l) {
+      if (taken[l]) continue;
+      for (int m = l + 1; m < robot.nlegs; ++m) {
+        if (taken[m]) continue;
+        const int sl = F.layout[l]->shape, sm = F.layout[m]->shape;
+        if (pass == 0 ? sl == sm : (stuck_shape(l) == sm) != (stuck_shape(m) == sl)) {
+          taken[l] = taken[m] = true;
+          unit[npairs][0] = l, unit[npairs][1] = m, ++npairs;
+          if (pass == 1) {
+            const int f = stuck_shape(l) == sm ? l : m;
+            F.flayout[f] = &robot.leg[f].layout[2];
+            F.pad[f] = robot.leg[f].foot_slot;
+          }
+          break;
+        }
+      }
+    }
+  for (int l = 0; l < robot.nlegs; ++l)
+    if (!taken[l]) single[nsingle++] = l;
   F.npairs = npairs;
   int base = 0;
   for (int u = 0; u < npairs; ++u) {
     F.pair[u][0] = unit[u][0], F.pair[u][1] = unit[u][1];
     const int l = unit[u][0], m = unit[u][1];
     F.lbase[l] = base, F.lbase[m] = base + 1, F.lstride[l] = F.lstride[m] = 2;
-    if (!leg_factor<Pair2>(robot, rows, unit[u], F, reinterpret_cast<Pair2 *>(F.L + base)))
+    Pair2 *S = reinterpret_cast<Pair2 *>(F.L + base);
+    if (!(F.pad[l] >= 0 || F.pad[m] >= 0 ? leg_factor<Pair2, true>(robot, rows, unit[u], F, S)
+                                         : leg_factor<Pair2>(robot, rows, unit[u], F, S)))
       return LEGSIM_ERR_SINGULAR;
-    base += 2 * F.layout[l]->size;
+    base += 2 * F.flayout[l]->size;
   }
   for (int u = 0; u < nsingle; ++u) {
     const int l = single[u];
@@ -406,7 +435,7 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
     base += F.layout[l]->size;
   }
   for (int l = 0; l < robot.nlegs; ++l) {
-    const LegLayout &Y = *F.layout[l];
+    const LegLayout &Y = *F.flayout[l];
     const int n = Y.n, nh = Y.nh;
     const int *ix = Y.row, *off = Y.off;
     const real *S = F.L + F.lbase[l];
@@ -514,15 +543,32 @@ void legs_envelope(const SpatialRobot &robot, const RobotFactor &F, real (*y)[kM
   for (int u = 0; u < F.npairs; ++u) {
     const int l = F.pair[u][0], m = F.pair[u][1];
     paired[l] = paired[m] = true;
-    const LegLayout &Y = *F.layout[l];
+    const LegLayout &Y = *F.flayout[l];
     Pair2 c[kMaxLegRows];
-    for (int i = 0; i < Y.n; ++i) c[i] = Pair2{y[l][i], y[m][i]};
+    // a padded leg's rows: its own before the foot's three, zeros on those, its own after
+    const bool pads = F.pad[l] >= 0 || F.pad[m] >= 0;
+    const int pl = F.pad[l] >= 0 ? F.pad[l] : Y.n, pm = F.pad[m] >= 0 ? F.pad[m] : Y.n;
+    auto at = [](int i, int p) { return i < p ? i : i >= p + 3 ? i - 3 : -1; };
+    if (!pads)
+      for (int i = 0; i < Y.n; ++i) c[i] = Pair2{y[l][i], y[m][i]};
+    else
+      for (int i = 0; i < Y.n; ++i) {
+        const int il = at(i, pl), im = at(i, pm);
+        c[i] = Pair2{il >= 0 ? y[l][il] : real(0), im >= 0 ? y[m][im] : real(0)};
+      }
     const Pair2 *S = reinterpret_cast<const Pair2 *>(F.L + F.lbase[l]);
     if (forward)
       envelope_forward(Y.n, Y.first, Y.off, S, c);
     else
       envelope_backward(Y.n, Y.first, Y.off, S, c);
-    for (int i = 0; i < Y.n; ++i) y[l][i] = c[i][0], y[m][i] = c[i][1];
+    if (!pads)
+      for (int i = 0; i < Y.n; ++i) y[l][i] = c[i][0], y[m][i] = c[i][1];
+    else
+      for (int i = 0; i < Y.n; ++i) {
+        const int il = at(i, pl), im = at(i, pm);
+        if (il >= 0) y[l][il] = c[i][0];
+        if (im >= 0) y[m][im] = c[i][1];
+      }
   }
   for (int l = 0; l < robot.nlegs; ++l) {
     if (paired[l]) continue;

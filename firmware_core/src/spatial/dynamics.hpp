@@ -143,6 +143,10 @@ struct RobotFactor {
   alignas(2 * sizeof(real)) real L[kMaxLegs * kMaxLegRows * (kMaxLegRows + 1) / 2];
   int lbase[kMaxLegs], lstride[kMaxLegs];
   int npairs, pair[kMaxLegs / 2][2];  // the legs factored two at a time (stride 2: lanes 0, 1)
+  // the layout L_l is stored in: its own, or for a free foot paired with a stuck one its stuck
+  // layout with the foot's three rows (from pad[l], else -1) decoupled, unit pivots
+  const LegLayout *flayout[kMaxLegs];
+  int pad[kMaxLegs];
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
   // the rows taken as columns (the held stops', the box's contacts' held): their rows, their
