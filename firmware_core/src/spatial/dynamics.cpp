@@ -383,10 +383,10 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
   if (box)
     for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
   // the legs two at a time where their shapes agree (each in a lane: the same operations, in
-  // the same order, as one alone), the pairs first in L (aligned), then the others alone
-  // A free foot's leg left over pairs with a stuck one's left over when its own stuck layout has
-  // that one's shape: its rows in that layout, the foot's three (not held) decoupled with unit
-  // pivots; its factor's other entries gain exact zeros only (the same values).
+  // the same order, as one alone), the pairs first in L (aligned), then the others alone. A free
+  // foot's leg left over pairs with a stuck one's left over when its own stuck layout has that
+  // one's shape: its rows in that layout, the foot's three (not held) decoupled with unit pivots;
+  // its factor's other entries gain exact zeros only (the same values).
   int unit[kMaxLegs / 2][2], npairs = 0, nsingle = 0, single[kMaxLegs];
   bool taken[kMaxLegs] = {};
   for (int l = 0; l < robot.nlegs; ++l) {
@@ -402,7 +402,7 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
       for (int m = l + 1; m < robot.nlegs; ++m) {
         if (taken[m]) continue;
         const int sl = F.layout[l]->shape, sm = F.layout[m]->shape;
-        if (pass == 0 ? sl == sm : (stuck_shape(l) == sm) != (stuck_shape(m) == sl)) {
+        if (pass == 0 ? sl == sm : stuck_shape(l) == sm || stuck_shape(m) == sl) {
           taken[l] = taken[m] = true;
           unit[npairs][0] = l, unit[npairs][1] = m, ++npairs;
           if (pass == 1) {
@@ -517,8 +517,8 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
 }
 
 namespace {
-// L y = c (forward) or L^T y = c (backward) in place, L in its envelope (entries St apart), on
-// one leg (T real) or two in lanes (T Pair2, St 1 over the pairs).
+// L y = c (forward) or L^T y = c (backward) in place, L in its envelope: one leg's (T real) or
+// two legs' in lanes (T Pair2).
 template <typename T>
 void envelope_forward(int n, const int *first, const int *off, const T *S, T *c) {
   for (int i = 0; i < n; ++i) {
