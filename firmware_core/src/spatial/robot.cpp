@@ -258,15 +258,20 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
     L.joint0 = j0, L.njoints = nj - j0;
     order_leg(R, l, j0, nj);
   }
-  // the legs whose joints are of the same kinds in the same order, two by two: robot_rows
-  // evaluates each such pair in lanes
+  // the legs whose joints are of the same kinds in the same order on the same bodies (counted
+  // from each leg's yoke; the box, the world), two by two: robot_rows evaluates each such pair in
+  // lanes
   for (int l = 0; l < nlegs; ++l) R.leg[l].row_twin = -1;
   for (int l = 0; l < nlegs; ++l) {
     RobotLeg &L = R.leg[l];
     for (int m = l + 1; m < nlegs && L.row_twin < 0; ++m) {
       RobotLeg &M = R.leg[m];
-      bool same = M.row_twin < 0 && M.njoints == L.njoints;
-      for (int k = 0; k < L.njoints && same; ++k) same = R.joint[L.joint0 + k].kind == R.joint[M.joint0 + k].kind;
+      bool same = M.row_twin < 0 && M.njoints == L.njoints && M.nbars == L.nbars;
+      for (int k = 0; k < L.njoints && same; ++k) {
+        const LegJoint &a = R.joint[L.joint0 + k], &b = R.joint[M.joint0 + k];
+        same = a.kind == b.kind && a.a - L.yoke == b.a - M.yoke &&
+               (a.b < L.yoke ? a.b == b.b : b.b >= M.yoke && a.b - L.yoke == b.b - M.yoke);
+      }
       if (same) L.row_twin = m, M.row_twin = l;
     }
   }
@@ -509,10 +514,8 @@ void spherical_rows(const Body2 &A, const V2 &sa, const Body2 &B, const V2 &sb, 
   }
 }
 
-// Joint j of leg l and its twin's (jt) on the bodies' states st (world: the ground's), in lanes.
-void joint_rows2(const LegJoint &j, const LegJoint &jt, const BodyState *st, const BodyState &world, Row *out) {
-  const Body2 A = pack(st[j.a], st[jt.a]);
-  const Body2 B = pack(j.b < 0 ? world : st[j.b], jt.b < 0 ? world : st[jt.b]);
+// Joint j of a leg and its twin's (jt) on their bodies A and B packed, in lanes.
+void joint_rows2(const LegJoint &j, const LegJoint &jt, const Body2 &A, const Body2 &B, Row *out) {
   const V2 sa = pack(j.sa, jt.sa), sb = pack(j.sb, jt.sb), ka = pack(j.ka, jt.ka), ub = pack(j.ub, jt.ub),
            nb = pack(j.nb, jt.nb);
   Row2 r[5];
@@ -556,7 +559,18 @@ void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *ou
     if (L.row_twin >= 0) {
       if (L.row_twin < l) continue;  // done with its twin
       const RobotLeg &T = robot.leg[L.row_twin];
-      for (int k = 0; k < L.njoints; ++k) joint_rows2(robot.joint[L.joint0 + k], robot.joint[T.joint0 + k], st, world, out);
+      // the two legs' bodies packed once: each joint's body by its offset from its leg's yoke
+      // (the box and the world past them)
+      Body2 b2[kMaxLegBodies + 2];
+      const int nl = 1 + L.nbars;
+      for (int b = 0; b < nl; ++b) b2[b] = pack(st[L.yoke + b], st[T.yoke + b]);
+      b2[nl] = pack(world, world);
+      if (robot.free_box) b2[nl + 1] = pack(st[0], st[0]);
+      auto at = [&](int body, int yoke) { return body < 0 ? nl : body < yoke ? nl + 1 : body - yoke; };
+      for (int k = 0; k < L.njoints; ++k) {
+        const LegJoint &j = robot.joint[L.joint0 + k];
+        joint_rows2(j, robot.joint[T.joint0 + k], b2[at(j.a, L.yoke)], b2[at(j.b, L.yoke)], out);
+      }
       continue;
     }
     for (int k = L.joint0; k < L.joint0 + L.njoints; ++k) {
