@@ -8,7 +8,9 @@
  *
  * Prints robot_step_cost's lines: the count of steps of each kind (all "stuck": the feet held)
  * and, with REPS, the min over REPS repetitions of the median step's wall time. Runs from the
- * source tree's root (the model file's path). */
+ * source tree's root (the model file's path). With HEXAPOD_STATE set in the environment it also
+ * prints every body's pose, the box's velocity and the feet's forces at the end to 17 digits
+ * (to compare two builds' trajectories). */
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
@@ -91,6 +93,15 @@ int main(int argc, char **argv) {
   if (sim) legsim_hexapod_get_state(sim, &s);
   printf("%s %s: %ld steps, status %s, t = %g s, box at z %+.6f m; steps by kind: stuck %ld\n", argv[1], argv[2], n,
          legsim_status_str(st), sim ? s.t_s : 0.0, sim ? s.box_m[2] : 0.0, n);
+  if (sim && getenv("HEXAPOD_STATE")) {
+    double pose[7 * 64];
+    int32_t nb = 0;
+    legsim_hexapod_body_poses(sim, pose, 64, &nb);
+    for (int i = 0; i < 7 * nb; ++i) printf("pose %d %.17g\n", i, pose[i]);
+    for (int i = 0; i < 3; ++i) printf("box v %.17g omega %.17g\n", s.box_velocity_mps[i], s.box_omega_radps[i]);
+    for (int l = 0; l < LEGSIM_HEXAPOD_LEGS; ++l)
+      for (int i = 0; i < 3; ++i) printf("foot %d force %.17g\n", l, s.foot_force_n[l][i]);
+  }
   if (reps > 0) printf("%s %s: wall us/step, min over %ld repetitions of each kind's median: stuck %.3f\n", argv[1],
                        argv[2], reps, best);
   return st == LEGSIM_OK ? 0 : 1;

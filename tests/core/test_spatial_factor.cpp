@@ -3,7 +3,8 @@
 // full-pivot LU) for right-hand sides of their own, on the paths the hexapod's tests do not
 // take: one leg of models/leg.toml on the fixed box (no hip rows on a box) with its foot free,
 // sliding and stuck, the same leg with its joints in another order, and six legs on a free box
-// with stuck, sliding and free feet. Each leg's layout (robot_lift's) holds each of its rows
+// with stuck, sliding and free feet, and on a tripod (the legs factored in pairs, a free foot's
+// leg in its stuck layout). Each leg's layout (robot_lift's) holds each of its rows
 // once, its foot's held ones and, on a free box, its hip's last.
 
 #include <cmath>
@@ -62,6 +63,10 @@ void check_against_dense(const SpatialRobot &R, const double *q, const int *mode
   for (int r = 0; r < R.m; ++r) idx[m++] = r;
   for (int l = 0; l < R.nlegs; ++l)
     for (int k = 0; k < foot_rows(hold, l); ++k) idx[m++] = foot_row(R, l) + k;
+  // the rows' phi alone (a projection's residual): the same values
+  static double phi[kMaxSystemRows];
+  system_phi(R, hold, q, phi);
+  for (int i = 0; i < m; ++i) TEST_ASSERT_TRUE(phi[idx[i]] == rows[idx[i]].phi);
   const int nv = kBodyDof * R.nb;
   for (int k = 0; k < nv; ++k) f[k] = 10 * std::sin(0.7 * k + 0.3);
   for (int i = 0; i < m; ++i) g[idx[i]] = std::cos(1.3 * i);
@@ -168,6 +173,9 @@ void test_six_legs_on_a_free_box(void) {
   robot_state(robot, box_q, box_v, qp, qdp, psi, psid, q, v);
   const int mixed[6] = {3, 0, 1, 3, 0, 3};
   check_against_dense(robot, q, mixed, "free box, feet stuck, free and sliding");
+  // legs 4 and 5 left over: the free foot's leg factored in its stuck layout beside the stuck one
+  const int tripod[6] = {3, 0, 3, 0, 3, 0};
+  check_against_dense(robot, q, tripod, "free box, a tripod");
 }
 
 int main(void) {

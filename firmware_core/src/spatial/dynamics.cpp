@@ -52,6 +52,17 @@ void leg_layout(const SpatialRobot &robot, int l, int nf, LegLayout &out) {
     for (int s = 0; s < 2; ++s)
       if (out.body[i][s] >= 0)
         out.on[non[out.body[i][s]]++] = int16_t(4 * i + (idx[i] < robot.m && turn[idx[i]] ? 2 : 0) + s);
+  // the first leg before this one laid out the same way for this hold
+  const int h = nf == 3 ? 2 : nf;
+  out.shape = 3 * l + h;
+  for (int m = 0; m < l && out.shape == 3 * l + h; ++m) {
+    const LegLayout &o = robot.leg[m].layout[h];
+    bool same = robot.leg[m].nbars == L.nbars && o.n == n && o.nh == out.nh && o.size == size &&
+                std::equal(o.first, o.first + n, out.first) && std::equal(o.off, o.off + n, out.off) &&
+                std::equal(o.on0, o.on0 + nbl + 1, out.on0) && std::equal(o.on, o.on + out.on0[nbl], out.on);
+    for (int i = 0; i < n && same; ++i) same = o.body[i][0] == out.body[i][0] && o.body[i][1] == out.body[i][1];
+    if (same) out.shape = o.shape;
+  }
 }
 
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows) {
@@ -64,14 +75,35 @@ void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q,
     if (n == 0) continue;
     const int fb = contact_body(robot, c);
     const BodyState foot = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
+    const PointJet pf = point_jet(foot, contact_point(robot, c)), pw = point_jet(world, hold.anchor[c]);
     for (int k = 0; k < n; ++k)
-      rows[foot_row(robot, c) + k] = row_along(foot, contact_point(robot, c), world, hold.anchor[c], axes[k]);
+      rows[foot_row(robot, c) + k] = row_along(foot, contact_point(robot, c), pf, world, hold.anchor[c], pw, axes[k]);
   }
   if (!hold.stops) return;
   for (int l = 0; l < robot.nlegs; ++l)
     for (int k = 0; k < kLegStops; ++k)
       if ((leg_stops(hold, l) >> k) & 1u)
         rows[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, v);
+}
+
+void system_phi(const SpatialRobot &robot, const FeetHold &hold, const real *q, real *phi) {
+  robot_phi(robot, q, phi);
+  const BodyState world = ground_state();
+  const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
+  for (int c = 0; c < robot_contacts(robot); ++c) {
+    const int n = foot_rows(hold, c);
+    if (n == 0) continue;
+    const real *qf = q + kBodyConfig * contact_body(robot, c);
+    const V3 pf = V3{qf[0], qf[1], qf[2]} + rotate(rotation({qf[3], qf[4], qf[5], qf[6]}), contact_point(robot, c));
+    const V3 d = pf - (world.r + rotate(world.R, hold.anchor[c]));
+    for (int k = 0; k < n; ++k) phi[foot_row(robot, c) + k] = dot(axes[k], d);
+  }
+  if (!hold.stops) return;
+  static const real zero_v[kMaxRobotDof] = {};
+  for (int l = 0; l < robot.nlegs; ++l)
+    for (int k = 0; k < kLegStops; ++k)
+      if ((leg_stops(hold, l) >> k) & 1u)
+        phi[stop_row(robot, l, k)] = stop_gap_row(robot, l, k, (hold.upper >> (kLegStops * l + k)) & 1u, q, zero_v).phi;
 }
 
 Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v) {
@@ -189,6 +221,158 @@ void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *ro
 }
 }  // namespace
 
+namespace {
+// Two reals, added, multiplied and divided lane by lane (GCC's and Clang's vector extension: one
+// SSE2 instruction on x86-64; each lane rounds as the scalar operation would).
+typedef real Pair2 __attribute__((vector_size(2 * sizeof(real))));
+constexpr int lanes(real) { return 1; }
+constexpr int lanes(Pair2) { return 2; }
+inline real lane(real x, int) { return x; }
+inline real lane(Pair2 x, int j) { return x[j]; }
+inline void set_lane(real &x, int, real v) { x = v; }
+inline void set_lane(Pair2 &x, int j, real v) { x[j] = v; }
+
+// envelope_cholesky (system/dense_solve.hpp) in lanes: its operations on each lane, in its order.
+template <typename T>
+bool envelope_cholesky_lanes(int n, const int *first, const int *off, T *A, const real *floor) {
+  if constexpr (lanes(T{}) == 1) {
+    return envelope_cholesky(n, first, off, A, floor[0]);
+  } else {
+    for (int i = 0; i < n; ++i) {
+      T *ri = A + off[i];
+      const int fi = first[i];
+      auto from = [&](int j) { return fi > first[j] ? fi : first[j]; };
+      T d = ri[i];
+      for (int j = fi; j < i;) {
+        const T *r0 = A + off[j];
+        const int k0 = from(j);
+        if (j + 3 < i && from(j + 1) == k0 && from(j + 2) == k0 && from(j + 3) == k0) {
+          const T *r1 = A + off[j + 1], *r2 = A + off[j + 2], *r3 = A + off[j + 3];
+          T s0 = ri[j], s1 = ri[j + 1], s2 = ri[j + 2], s3 = ri[j + 3];
+          for (int k = k0; k < j; ++k) {
+            const T a = ri[k];
+            s0 -= a * r0[k], s1 -= a * r1[k], s2 -= a * r2[k], s3 -= a * r3[k];
+          }
+          const T l0 = ri[j] = s0 / r0[j];
+          s1 -= l0 * r1[j], s2 -= l0 * r2[j], s3 -= l0 * r3[j];
+          const T l1 = ri[j + 1] = s1 / r1[j + 1];
+          s2 -= l1 * r2[j + 1], s3 -= l1 * r3[j + 1];
+          const T l2 = ri[j + 2] = s2 / r2[j + 2];
+          const T l3 = ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
+          d -= l0 * l0, d -= l1 * l1, d -= l2 * l2, d -= l3 * l3;
+          j += 4;
+        } else if (j + 1 < i && from(j + 1) == k0) {
+          const T *r1 = A + off[j + 1];
+          T s0 = ri[j], s1 = ri[j + 1];
+          for (int k = k0; k < j; ++k) {
+            const T a = ri[k];
+            s0 -= a * r0[k], s1 -= a * r1[k];
+          }
+          const T l0 = ri[j] = s0 / r0[j];
+          const T l1 = ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
+          d -= l0 * l0, d -= l1 * l1;
+          j += 2;
+        } else {
+          T s = ri[j];
+          for (int k = k0; k < j; ++k) s -= ri[k] * r0[k];
+          const T l0 = ri[j] = s / r0[j];
+          d -= l0 * l0;
+          ++j;
+        }
+      }
+      for (int c = 0; c < lanes(T{}); ++c) {
+        if (!(lane(d, c) > floor[c])) return false;
+        set_lane(ri[i], c, std::sqrt(lane(d, c)));
+      }
+    }
+    return true;
+  }
+}
+
+// S = J_l M_l^-1 J_l^T of the legs of one shape (one per lane of T: legs[0 .. lanes)) in their
+// envelope at S, and its Cholesky factor; false when a leg's rows are dependent.
+template <typename T, bool Pad = false>
+bool leg_factor(const SpatialRobot &robot, const Row *rows, const int *legs, const RobotFactor &F, T *S) {
+  constexpr int N = lanes(T{});
+  const LegLayout &Y = *F.flayout[legs[0]];
+  const int nbl = 1 + robot.leg[legs[0]].nbars, n = Y.n;
+  const int *first = Y.first, *off = Y.off;
+  const int *ix[N];
+  int b_lo[N], pad[N];
+  for (int c = 0; c < N; ++c)
+    ix[c] = F.flayout[legs[c]]->row, b_lo[c] = robot.leg[legs[c]].yoke, pad[c] = F.pad[legs[c]];
+  auto padded = [&](int c, int i) { return Pad && pad[c] >= 0 && i >= pad[c] && i < pad[c] + 3; };
+  static const real zero[kBodyDof] = {};
+  // S in its envelope: the pairs of rows on a common body (its lower triangle; a body's rows in
+  // increasing order), the rest zero
+  for (int i = 0; i < n; ++i) {
+    // row by row: short loops, not one long memset
+    T *Si = S + off[i];
+    for (int k = first[i]; k <= i; ++k) Si[k] = T{};
+  }
+  for (int b = 0; b < nbl; ++b) {
+    const int p0 = Y.on0[b], np = Y.on0[b + 1] - p0;
+    const int16_t *on = Y.on + p0;
+    T im[kBodyDof];
+    for (int k = 0; k < kBodyDof; ++k) {
+      if constexpr (N == 1)
+        im[k] = robot.inverse_mass[b_lo[0] + b][k];
+      else
+        im[k] = T{robot.inverse_mass[b_lo[0] + b][k], robot.inverse_mass[b_lo[1] + b][k]};
+    }
+    // each row's coefficients on the body (a pair of legs: gathered into lanes)
+    const T *coef[2 * kMaxLegRows];
+    T gathered[N == 1 ? 1 : 2 * kMaxLegRows][kBodyDof];
+    for (int p = 0; p < np; ++p) {
+      if constexpr (N == 1) {
+        const Row &r = rows[ix[0][on[p] >> 2]];
+        coef[p] = on[p] & 1 ? r.jb : r.ja;
+      } else {
+        const int i = on[p] >> 2;
+        const Row &r0 = rows[ix[0][i]], &r1 = rows[ix[1][i]];
+        const real *c0 = padded(0, i) ? zero : on[p] & 1 ? r0.jb : r0.ja;
+        const real *c1 = padded(1, i) ? zero : on[p] & 1 ? r1.jb : r1.ja;
+        for (int k = 0; k < kBodyDof; ++k) gathered[p][k] = T{c0[k], c1[k]};
+        coef[p] = gathered[p];
+      }
+    }
+    // with an orientation row the products on v are exact zeros: skipped
+    for (int p = 0; p < np; ++p) {
+      T sc[kBodyDof];
+      for (int k = 0; k < kBodyDof; ++k) sc[k] = coef[p][k] * im[k];
+      T *Si = S + off[on[p] >> 2];
+      if (on[p] & 2) {
+        for (int q = 0; q <= p; ++q) {
+          const T *cj = coef[q];
+          Si[on[q] >> 2] += sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+        }
+        continue;
+      }
+      for (int q = 0; q <= p; ++q) {
+        const T *cj = coef[q];
+        const T s_w = sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+        if (on[q] & 2) {
+          Si[on[q] >> 2] += s_w;
+        } else {
+          Si[on[q] >> 2] += sc[0] * cj[0] + sc[1] * cj[1] + sc[2] * cj[2] + s_w;
+        }
+      }
+    }
+  }
+  real floor[N];
+  for (int c = 0; c < N; ++c) {
+    real scale = 0;
+    for (int i = 0; i < n; ++i)
+      if (padded(c, i))
+        set_lane(S[off[i] + i], c, 1);
+      else
+        scale = std::max(scale, lane(S[off[i] + i], c));
+    floor[c] = by_precision(1e-12, 1e-6) * scale;
+  }
+  return envelope_cholesky_lanes(n, first, off, S, floor);
+}
+}  // namespace
+
 legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, const Row *rows, RobotFactor &F) {
   const bool box = robot.free_box;
   F.stuck = hold.stuck, F.sliding = hold.sliding;
@@ -198,66 +382,75 @@ legsim_status robot_factor(const SpatialRobot &robot, const FeetHold &hold, cons
   for (int i = 0; i < kBodyDof * kBodyDof; ++i) A0[i] = 0;
   if (box)
     for (int i = 0; i < kBodyDof; ++i) A0[7 * i] = 1 / robot.inverse_mass[0][i];
+  // the legs two at a time where their shapes agree (each in a lane: the same operations, in
+  // the same order, as one alone), the pairs first in L (aligned), then the others alone. A free
+  // foot's leg left over pairs with a stuck one's left over when its own stuck layout has that
+  // one's shape: its rows in that layout, the foot's three (not held) decoupled with unit pivots;
+  // its factor's other entries gain exact zeros only (the same values).
+  int unit[kMaxLegs / 2][2], npairs = 0, nsingle = 0, single[kMaxLegs];
+  bool taken[kMaxLegs] = {};
   for (int l = 0; l < robot.nlegs; ++l) {
-    const RobotLeg &L = robot.leg[l];
-    const LegLayout &Y = leg_layout(robot, hold, l);
-    F.layout[l] = &Y;
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
-    const int *ix = Y.row, *first = Y.first, *off = Y.off;
-    real *S = F.L[l];
-    // S = J_l M_l^-1 J_l^T in its envelope: the pairs of rows on a common body (its lower
-    // triangle; a body's rows in increasing order), the rest zero
-    for (int i = 0; i < n; ++i) {
-      // row by row: short loops, not one long memset
-      real *Si = S + off[i];
-      for (int k = first[i]; k <= i; ++k) Si[k] = 0;
-    }
-    for (int b = 0; b < nbl; ++b) {
-      const int p0 = Y.on0[b], np = Y.on0[b + 1] - p0;
-      const int16_t *on = Y.on + p0;
-      const real *im = robot.inverse_mass[b_lo + b];
-      const real *coef[2 * kMaxLegRows];
-      for (int p = 0; p < np; ++p) {
-        const Row &r = rows[ix[on[p] >> 2]];
-        coef[p] = on[p] & 1 ? r.jb : r.ja;
-      }
-      // with an orientation row the products on v are exact zeros: skipped
-      for (int p = 0; p < np; ++p) {
-        real sc[kBodyDof];
-        for (int k = 0; k < kBodyDof; ++k) sc[k] = coef[p][k] * im[k];
-        real *Si = S + off[on[p] >> 2];
-        if (on[p] & 2) {
-          for (int q = 0; q <= p; ++q) {
-            const real *cj = coef[q];
-            Si[on[q] >> 2] += sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
+    F.layout[l] = F.flayout[l] = &leg_layout(robot, hold, l);
+    F.pad[l] = -1;
+  }
+  auto stuck_shape = [&](int l) {
+    return foot_rows(hold, l) == 0 && robot.leg[l].foot_body >= 0 ? robot.leg[l].layout[2].shape : -1;
+  };
+  for (int pass = 0; pass < 2; ++pass)
+    for (int l = 0; l < robot.nlegs; ++l) {
+      if (taken[l]) continue;
+      for (int m = l + 1; m < robot.nlegs; ++m) {
+        if (taken[m]) continue;
+        const int sl = F.layout[l]->shape, sm = F.layout[m]->shape;
+        if (pass == 0 ? sl == sm : stuck_shape(l) == sm || stuck_shape(m) == sl) {
+          taken[l] = taken[m] = true;
+          unit[npairs][0] = l, unit[npairs][1] = m, ++npairs;
+          if (pass == 1) {
+            const int f = stuck_shape(l) == sm ? l : m;
+            F.flayout[f] = &robot.leg[f].layout[2];
+            F.pad[f] = robot.leg[f].foot_slot;
           }
-          continue;
-        }
-        for (int q = 0; q <= p; ++q) {
-          const real *cj = coef[q];
-          const real s_w = sc[3] * cj[3] + sc[4] * cj[4] + sc[5] * cj[5];
-          if (on[q] & 2) {
-            Si[on[q] >> 2] += s_w;
-          } else {
-            Si[on[q] >> 2] += sc[0] * cj[0] + sc[1] * cj[1] + sc[2] * cj[2] + s_w;
-          }
+          break;
         }
       }
     }
-    real scale = 0;
-    for (int i = 0; i < n; ++i) scale = std::max(scale, S[off[i] + i]);
-    if (!envelope_cholesky(n, first, off, S, by_precision(1e-12, 1e-6) * scale)) return LEGSIM_ERR_SINGULAR;
+  for (int l = 0; l < robot.nlegs; ++l)
+    if (!taken[l]) single[nsingle++] = l;
+  F.npairs = npairs;
+  int base = 0;
+  for (int u = 0; u < npairs; ++u) {
+    F.pair[u][0] = unit[u][0], F.pair[u][1] = unit[u][1];
+    const int l = unit[u][0], m = unit[u][1];
+    F.lbase[l] = base, F.lbase[m] = base + 1, F.lstride[l] = F.lstride[m] = 2;
+    Pair2 *S = reinterpret_cast<Pair2 *>(F.L + base);
+    if (!(F.pad[l] >= 0 || F.pad[m] >= 0 ? leg_factor<Pair2, true>(robot, rows, unit[u], F, S)
+                                         : leg_factor<Pair2>(robot, rows, unit[u], F, S)))
+      return LEGSIM_ERR_SINGULAR;
+    base += 2 * F.flayout[l]->size;
+  }
+  for (int u = 0; u < nsingle; ++u) {
+    const int l = single[u];
+    F.lbase[l] = base, F.lstride[l] = 1;
+    if (!leg_factor<real>(robot, rows, single + u, F, F.L + base)) return LEGSIM_ERR_SINGULAR;
+    base += F.layout[l]->size;
+  }
+  for (int l = 0; l < robot.nlegs; ++l) {
+    const LegLayout &Y = *F.flayout[l];
+    const int n = Y.n, nh = Y.nh;
+    const int *ix = Y.row, *off = Y.off;
+    const real *S = F.L + F.lbase[l];
+    const int st = F.lstride[l];
     if (!box) continue;
     // W = L^-1 B: B is zero above the hip's rows, so W is too; B^T S^-1 B = W^T W
     const int h0 = n - nh;
     real *Wl = F.W[l];
     for (int i = 0; i < nh; ++i) {
       const real *cb = rows[ix[h0 + i]].jb;  // the hip's rows: the box is their second body
-      const real *Li = S + off[h0 + i];
+      const real *Li = S + st * off[h0 + i];
       for (int k = 0; k < kBodyDof; ++k) {
         real t = cb[k];
-        for (int m = 0; m < i; ++m) t -= Li[h0 + m] * Wl[kBodyDof * m + k];
-        Wl[kBodyDof * i + k] = t / Li[h0 + i];
+        for (int m = 0; m < i; ++m) t -= Li[st * (h0 + m)] * Wl[kBodyDof * m + k];
+        Wl[kBodyDof * i + k] = t / Li[st * (h0 + i)];
       }
     }
     for (int i = 0; i < nh; ++i) {
@@ -324,6 +517,69 @@ void robot_solve(const SpatialRobot &robot, const RobotFactor &F, const real *f,
 }
 
 namespace {
+// L y = c (forward) or L^T y = c (backward) in place, L in its envelope: one leg's (T real) or
+// two legs' in lanes (T Pair2).
+template <typename T>
+void envelope_forward(int n, const int *first, const int *off, const T *S, T *c) {
+  for (int i = 0; i < n; ++i) {
+    const T *Li = S + off[i];
+    T ci = c[i];
+    for (int k = first[i]; k < i; ++k) ci -= Li[k] * c[k];
+    c[i] = ci / Li[i];
+  }
+}
+template <typename T>
+void envelope_backward(int n, const int *first, const int *off, const T *S, T *c) {
+  // by columns of L's rows: row i's envelope is its column's reach upward
+  for (int i = n - 1; i >= 0; --i) {
+    const T *Li = S + off[i];
+    const T t = c[i] /= Li[i];
+    for (int k = first[i]; k < i; ++k) c[k] -= Li[k] * t;
+  }
+}
+// The legs' envelope solves: the pairs' in lanes (their y packed and back), the others' alone.
+void legs_envelope(const SpatialRobot &robot, const RobotFactor &F, real (*y)[kMaxLegRows], bool forward) {
+  bool paired[kMaxLegs] = {};
+  for (int u = 0; u < F.npairs; ++u) {
+    const int l = F.pair[u][0], m = F.pair[u][1];
+    paired[l] = paired[m] = true;
+    const LegLayout &Y = *F.flayout[l];
+    Pair2 c[kMaxLegRows];
+    // a padded leg's rows: its own before the foot's three, zeros on those, its own after
+    const bool pads = F.pad[l] >= 0 || F.pad[m] >= 0;
+    const int pl = F.pad[l] >= 0 ? F.pad[l] : Y.n, pm = F.pad[m] >= 0 ? F.pad[m] : Y.n;
+    auto at = [](int i, int p) { return i < p ? i : i >= p + 3 ? i - 3 : -1; };
+    if (!pads)
+      for (int i = 0; i < Y.n; ++i) c[i] = Pair2{y[l][i], y[m][i]};
+    else
+      for (int i = 0; i < Y.n; ++i) {
+        const int il = at(i, pl), im = at(i, pm);
+        c[i] = Pair2{il >= 0 ? y[l][il] : real(0), im >= 0 ? y[m][im] : real(0)};
+      }
+    const Pair2 *S = reinterpret_cast<const Pair2 *>(F.L + F.lbase[l]);
+    if (forward)
+      envelope_forward(Y.n, Y.first, Y.off, S, c);
+    else
+      envelope_backward(Y.n, Y.first, Y.off, S, c);
+    if (!pads)
+      for (int i = 0; i < Y.n; ++i) y[l][i] = c[i][0], y[m][i] = c[i][1];
+    else
+      for (int i = 0; i < Y.n; ++i) {
+        const int il = at(i, pl), im = at(i, pm);
+        if (il >= 0) y[l][il] = c[i][0];
+        if (im >= 0) y[m][im] = c[i][1];
+      }
+  }
+  for (int l = 0; l < robot.nlegs; ++l) {
+    if (paired[l]) continue;
+    const LegLayout &Y = *F.layout[l];
+    if (forward)
+      envelope_forward(Y.n, Y.first, Y.off, F.L + F.lbase[l], y[l]);
+    else
+      envelope_backward(Y.n, Y.first, Y.off, F.L + F.lbase[l], y[l]);
+  }
+}
+
 void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, const real *g, real *x, real *mu) {
   const bool box = robot.free_box;
   const Row *rows = F.rows;
@@ -334,10 +590,9 @@ void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, 
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
     const LegLayout &Y = *F.layout[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
-    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n;
+    const int *ix = Y.row;
     const int8_t(*rb)[2] = Y.body;
-    const real *S = F.L[l];
     // M_l^-1 f_l
     real mf[kMaxLegBodies][kBodyDof];
     for (int b = 0; b < nbl; ++b)
@@ -350,37 +605,36 @@ void solve_rows(const SpatialRobot &robot, const RobotFactor &F, const real *f, 
         for (int k = 0; k < kBodyDof; ++k) ci += ri.ja[k] * mf[rb[i][0]][k];
       if (rb[i][1] >= 0)
         for (int k = 0; k < kBodyDof; ++k) ci += ri.jb[k] * mf[rb[i][1]][k];
-      const real *Li = S + off[i];
-      for (int k = first[i]; k < i; ++k) ci -= Li[k] * c[k];
-      c[i] = ci / Li[i];
+      c[i] = ci;
     }
-    if (!box) continue;
-    for (int i = 0; i < nh; ++i)
-      for (int r = 0; r < kBodyDof; ++r) b0[r] -= F.W[l][kBodyDof * i + r] * c[n - nh + i];
   }
+  legs_envelope(robot, F, y, true);
+  if (box)
+    for (int l = 0; l < robot.nlegs; ++l) {
+      const int n = F.layout[l]->n, nh = F.layout[l]->nh;
+      for (int i = 0; i < nh; ++i)
+        for (int r = 0; r < kBodyDof; ++r) b0[r] -= F.W[l][kBodyDof * i + r] * y[l][n - nh + i];
+    }
   real a0[kBodyDof] = {0, 0, 0, 0, 0, 0};
   if (box) {
     cholesky_solve(kBodyDof, F.A0, b0);
     for (int k = 0; k < kBodyDof; ++k) a0[k] = x[k] = b0[k];
+    // each leg: lambda = L^-T (y + W a0)
+    for (int l = 0; l < robot.nlegs; ++l) {
+      const int n = F.layout[l]->n, nh = F.layout[l]->nh;
+      for (int i = 0; i < nh; ++i)
+        for (int k = 0; k < kBodyDof; ++k) y[l][n - nh + i] += F.W[l][kBodyDof * i + k] * a0[k];
+    }
   }
-  // each leg: lambda = L^-T (y + W a0), then its bodies' a = M^-1 (f - J^T lambda)
+  legs_envelope(robot, F, y, false);
+  // then its bodies' a = M^-1 (f - J^T lambda)
   for (int l = 0; l < robot.nlegs; ++l) {
     const RobotLeg &L = robot.leg[l];
     const LegLayout &Y = *F.layout[l];
-    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n, nh = Y.nh;
-    const int *ix = Y.row, *first = Y.first, *off = Y.off;
+    const int b_lo = L.yoke, nbl = 1 + L.nbars, n = Y.n;
+    const int *ix = Y.row;
     const int8_t(*rb)[2] = Y.body;
-    const real *S = F.L[l];
-    real *lam = y[l];
-    if (box)
-      for (int i = 0; i < nh; ++i)
-        for (int k = 0; k < kBodyDof; ++k) lam[n - nh + i] += F.W[l][kBodyDof * i + k] * a0[k];
-    // L^T by columns of L's rows: row i's envelope is its column's reach upward
-    for (int i = n - 1; i >= 0; --i) {
-      const real *Li = S + off[i];
-      const real t = lam[i] /= Li[i];
-      for (int k = first[i]; k < i; ++k) lam[k] -= Li[k] * t;
-    }
+    const real *lam = y[l];
     // f - J^T lambda in a local array (no aliasing with the rows: kept in registers)
     real xb[kMaxLegBodies][kBodyDof];
     for (int b = 0; b < nbl; ++b)

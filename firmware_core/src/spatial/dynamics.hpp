@@ -123,6 +123,9 @@ inline int system_used_rows(const SpatialRobot &robot, const FeetHold &hold, int
 // Every row of the system at (q, v): the joints' (robot_rows), the feet's on the ground, the
 // stops' held.
 void system_rows(const SpatialRobot &robot, const FeetHold &hold, const real *q, const real *v, Row *rows);
+// Their phi alone at q (system_rows' phi, the same values; the unused slots not written): what
+// a projection's residual needs, for a fifth of the rows' work.
+void system_phi(const SpatialRobot &robot, const FeetHold &hold, const real *q, real *phi);
 // Leg l's stop k's row at its lower or upper end (its gap, >= 0 inside the stroke).
 Row stop_gap_row(const SpatialRobot &robot, int l, int k, bool upper, const real *q, const real *v);
 
@@ -135,7 +138,15 @@ struct RobotFactor {
   uint32_t stuck, sliding;
   const Row *rows;  // the rows it was built from (system_rows'), read by the solves
   const LegLayout *layout[kMaxLegs];  // each leg's rows and L_l's envelope (its foot's hold's)
-  real L[kMaxLegs][kMaxLegRows * (kMaxLegRows + 1) / 2];  // L_l in its envelope
+  // L_l in its envelope: entry k of leg l at L[lbase[l] + lstride[l] k]; two legs of one shape
+  // interleaved (stride 2, their pairs first and aligned), another alone (stride 1)
+  alignas(2 * sizeof(real)) real L[kMaxLegs * kMaxLegRows * (kMaxLegRows + 1) / 2];
+  int lbase[kMaxLegs], lstride[kMaxLegs];
+  int npairs, pair[kMaxLegs / 2][2];  // the legs factored two at a time (stride 2: lanes 0, 1)
+  // the layout L_l is stored in: its own, or for a free foot paired with a stuck one its stuck
+  // layout with the foot's three rows (from pad[l], else -1) decoupled, unit pivots
+  const LegLayout *flayout[kMaxLegs];
+  int pad[kMaxLegs];
   real W[kMaxLegs][5 * kBodyDof];
   real A0[kBodyDof * kBodyDof];  // the box's complement M_0 + sum_l W_l^T W_l, factored
   // the rows taken as columns (the held stops', the box's contacts' held): their rows, their

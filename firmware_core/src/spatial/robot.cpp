@@ -255,7 +255,25 @@ legsim_status robot_lift(const legsim_model_desc *const *legs, const HipDesc *hi
       }
     }
     L.nrows = row - L.row0;
+    L.joint0 = j0, L.njoints = nj - j0;
     order_leg(R, l, j0, nj);
+  }
+  // the legs whose joints are of the same kinds in the same order on the same bodies (counted
+  // from each leg's yoke; the box, the world), two by two: robot_rows evaluates each such pair in
+  // lanes
+  for (int l = 0; l < nlegs; ++l) R.leg[l].row_twin = -1;
+  for (int l = 0; l < nlegs; ++l) {
+    RobotLeg &L = R.leg[l];
+    for (int m = l + 1; m < nlegs && L.row_twin < 0; ++m) {
+      RobotLeg &M = R.leg[m];
+      bool same = M.row_twin < 0 && M.njoints == L.njoints && M.nbars == L.nbars;
+      for (int k = 0; k < L.njoints && same; ++k) {
+        const LegJoint &a = R.joint[L.joint0 + k], &b = R.joint[M.joint0 + k];
+        same = a.kind == b.kind && a.a - L.yoke == b.a - M.yoke &&
+               (a.b < L.yoke ? a.b == b.b : b.b >= M.yoke && a.b - L.yoke == b.b - M.yoke);
+      }
+      if (same) L.row_twin = m, M.row_twin = l;
+    }
   }
   R.nb = nb;
   for (int b = 0; b < nb; ++b) {
@@ -395,24 +413,219 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
   }
 }
 
+namespace {
+// rows.hpp's joint kinds on two legs at once, one in each lane of a pair of reals: the same
+// operations in the same order on each lane (the same values as rows.hpp's), one SSE2
+// instruction for two on x86-64.
+typedef real P2 __attribute__((vector_size(2 * sizeof(real))));
+struct V2 {
+  P2 x, y, z;
+};
+inline V2 operator+(const V2 &a, const V2 &b) { return {a.x + b.x, a.y + b.y, a.z + b.z}; }
+inline V2 operator-(const V2 &a, const V2 &b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
+inline V2 operator*(P2 s, const V2 &a) { return {s * a.x, s * a.y, s * a.z}; }
+inline P2 dot(const V2 &a, const V2 &b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
+inline V2 cross(const V2 &a, const V2 &b) {
+  return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x};
+}
+struct Rot2 {
+  V2 c0, c1, c2;
+};
+inline V2 rotate(const Rot2 &R, const V2 &s) { return s.x * R.c0 + s.y * R.c1 + s.z * R.c2; }
+inline V2 rotate_back(const Rot2 &R, const V2 &y) { return {dot(R.c0, y), dot(R.c1, y), dot(R.c2, y)}; }
+struct Body2 {
+  V2 r, v;
+  Rot2 R;
+  V2 w;
+};
+struct Jet2 {
+  V2 p, pd, pq;
+};
+struct Row2 {
+  P2 phi, gamma;
+  P2 ja[kBodyDof], jb[kBodyDof];
+};
+inline V2 pack(const V3 &a, const V3 &b) { return {P2{a.x, b.x}, P2{a.y, b.y}, P2{a.z, b.z}}; }
+inline Body2 pack(const BodyState &a, const BodyState &b) {
+  return {pack(a.r, b.r), pack(a.v, b.v), {pack(a.R.c0, b.R.c0), pack(a.R.c1, b.R.c1), pack(a.R.c2, b.R.c2)},
+          pack(a.w, b.w)};
+}
+inline void unpack(const Row2 &r, Row &a, Row &b) {
+  a.phi = r.phi[0], b.phi = r.phi[1], a.gamma = r.gamma[0], b.gamma = r.gamma[1];
+  for (int i = 0; i < kBodyDof; ++i) a.ja[i] = r.ja[i][0], b.ja[i] = r.ja[i][1];
+  for (int i = 0; i < kBodyDof; ++i) a.jb[i] = r.jb[i][0], b.jb[i] = r.jb[i][1];
+}
+inline Jet2 point_jet(const Body2 &B, const V2 &s) {
+  const V2 ws = cross(B.w, s);
+  return {B.r + rotate(B.R, s), B.v + rotate(B.R, ws), rotate(B.R, cross(B.w, ws))};
+}
+inline Jet2 axis_jet(const Body2 &B, const V2 &c) {
+  const V2 wc = cross(B.w, c);
+  return {rotate(B.R, c), rotate(B.R, wc), rotate(B.R, cross(B.w, wc))};
+}
+inline void point_coefficients(const Body2 &B, const V2 &s, const V2 &y, real sign, P2 *j) {
+  const V2 o = cross(s, rotate_back(B.R, y));
+  j[0] += sign * y.x, j[1] += sign * y.y, j[2] += sign * y.z;
+  j[3] += sign * o.x, j[4] += sign * o.y, j[5] += sign * o.z;
+}
+inline void axis_coefficients(const Body2 &B, const V2 &c, const V2 &y, P2 *j) {
+  const V2 o = cross(c, rotate_back(B.R, y));
+  j[3] += o.x, j[4] += o.y, j[5] += o.z;
+}
+inline Row2 row2_zero() { return Row2{}; }
+inline Row2 row_perpendicular(const Body2 &A, const V2 &ca, const Jet2 &a, const Body2 &B, const V2 &cb, const Jet2 &b) {
+  Row2 r = row2_zero();
+  r.phi = dot(a.p, b.p);
+  r.gamma = -(dot(a.pq, b.p) + real(2) * dot(a.pd, b.pd) + dot(a.p, b.pq));
+  axis_coefficients(A, ca, b.p, r.ja);
+  axis_coefficients(B, cb, a.p, r.jb);
+  return r;
+}
+inline Row2 row_along_axis(const Body2 &A, const V2 &sa, const Jet2 &pa, const Body2 &B, const V2 &sb, const Jet2 &pb,
+                           const V2 &c, const Jet2 &y) {
+  const V2 d = pa.p - pb.p, dd = pa.pd - pb.pd, dq = pa.pq - pb.pq;
+  Row2 r = row2_zero();
+  r.phi = dot(d, y.p);
+  r.gamma = -(dot(dq, y.p) + real(2) * dot(dd, y.pd) + dot(d, y.pq));
+  point_coefficients(A, sa, y.p, 1, r.ja);
+  point_coefficients(B, sb, y.p, -1, r.jb);
+  axis_coefficients(B, c, d, r.jb);
+  return r;
+}
+inline Row2 swapped(const Row2 &r) {
+  Row2 o = r;
+  for (int i = 0; i < kBodyDof; ++i) o.ja[i] = r.jb[i], o.jb[i] = r.ja[i];
+  return o;
+}
+void spherical_rows(const Body2 &A, const V2 &sa, const Body2 &B, const V2 &sb, Row2 *out) {
+  const Jet2 pa = point_jet(A, sa), pb = point_jet(B, sb);
+  const V2 d = pa.p - pb.p, dq = pa.pq - pb.pq;
+  const P2 dk[3] = {d.x, d.y, d.z}, dqk[3] = {dq.x, dq.y, dq.z};
+  const V2 ra[3] = {{A.R.c0.x, A.R.c1.x, A.R.c2.x}, {A.R.c0.y, A.R.c1.y, A.R.c2.y}, {A.R.c0.z, A.R.c1.z, A.R.c2.z}};
+  const V2 rb[3] = {{B.R.c0.x, B.R.c1.x, B.R.c2.x}, {B.R.c0.y, B.R.c1.y, B.R.c2.y}, {B.R.c0.z, B.R.c1.z, B.R.c2.z}};
+  for (int k = 0; k < 3; ++k) {
+    Row2 &r = out[k];
+    r.phi = dk[k];
+    r.gamma = -dqk[k];
+    const V2 oa = cross(sa, ra[k]), ob = cross(sb, rb[k]);
+    for (int i = 0; i < 3; ++i) r.ja[i] = P2{} + (i == k ? real(1) : real(0)), r.jb[i] = P2{} + (i == k ? real(-1) : real(0));
+    r.ja[3] = oa.x, r.ja[4] = oa.y, r.ja[5] = oa.z;
+    r.jb[3] = -ob.x, r.jb[4] = -ob.y, r.jb[5] = -ob.z;
+  }
+}
+
+// Joint j of a leg and its twin's (jt) on their bodies A and B packed, in lanes.
+void joint_rows2(const LegJoint &j, const LegJoint &jt, const Body2 &A, const Body2 &B, Row *out) {
+  const V2 sa = pack(j.sa, jt.sa), sb = pack(j.sb, jt.sb), ka = pack(j.ka, jt.ka), ub = pack(j.ub, jt.ub),
+           nb = pack(j.nb, jt.nb);
+  Row2 r[5];
+  switch (j.kind) {
+    case LegJointKind::Revolute: {
+      spherical_rows(A, sa, B, sb, r);
+      const Jet2 k = axis_jet(A, ka);
+      r[3] = row_perpendicular(A, ka, k, B, ub, axis_jet(B, ub));
+      r[4] = row_perpendicular(A, ka, k, B, nb, axis_jet(B, nb));
+      break;
+    }
+    case LegJointKind::Cut: {
+      const Jet2 pa = point_jet(A, sa), pb = point_jet(B, sb);
+      r[0] = row_along_axis(A, sa, pa, B, sb, pb, ub, axis_jet(B, ub));
+      r[1] = row_along_axis(A, sa, pa, B, sb, pb, nb, axis_jet(B, nb));
+      break;
+    }
+    case LegJointKind::Prismatic: {
+      // prismatic_rows(A, sa, u = ka, n = ub, k = nb, B, sb, n = ub, k = nb)
+      const V2 &ua = ka, &na = ub, &kka = nb, &nbb = ub, &kb = nb;
+      const Jet2 ja_u = axis_jet(A, ua), ja_n = axis_jet(A, na), jb_n = axis_jet(B, nbb), jb_k = axis_jet(B, kb);
+      r[0] = row_perpendicular(A, ua, ja_u, B, nbb, jb_n);
+      r[1] = row_perpendicular(A, ua, ja_u, B, kb, jb_k);
+      r[2] = row_perpendicular(A, na, ja_n, B, kb, jb_k);
+      const Jet2 pb = point_jet(B, sb), pa = point_jet(A, sa);
+      r[3] = swapped(row_along_axis(B, sb, pb, A, sa, pa, na, ja_n));
+      r[4] = swapped(row_along_axis(B, sb, pb, A, sa, pa, kka, axis_jet(A, kka)));
+      break;
+    }
+  }
+  for (int i = 0; i < j.nrows; ++i) unpack(r[i], out[j.row + i], out[jt.row + i]);
+}
+}  // namespace
+
 void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out) {
   BodyState st[kMaxRobotBodies];
   for (int b = 0; b < robot.nb; ++b) st[b] = body_state(q + kBodyConfig * b, v + kBodyDof * b);
   const BodyState world = ground_state();
+  for (int l = 0; l < robot.nlegs; ++l) {
+    const RobotLeg &L = robot.leg[l];
+    if (L.row_twin >= 0) {
+      if (L.row_twin < l) continue;  // done with its twin
+      const RobotLeg &T = robot.leg[L.row_twin];
+      // the two legs' bodies packed once: each joint's body by its offset from its leg's yoke
+      // (the box and the world past them)
+      Body2 b2[kMaxLegBodies + 2];
+      const int nl = 1 + L.nbars;
+      for (int b = 0; b < nl; ++b) b2[b] = pack(st[L.yoke + b], st[T.yoke + b]);
+      b2[nl] = pack(world, world);
+      if (robot.free_box) b2[nl + 1] = pack(st[0], st[0]);
+      auto at = [&](int body, int yoke) { return body < 0 ? nl : body < yoke ? nl + 1 : body - yoke; };
+      for (int k = 0; k < L.njoints; ++k) {
+        const LegJoint &j = robot.joint[L.joint0 + k];
+        joint_rows2(j, robot.joint[T.joint0 + k], b2[at(j.a, L.yoke)], b2[at(j.b, L.yoke)], out);
+      }
+      continue;
+    }
+    for (int k = L.joint0; k < L.joint0 + L.njoints; ++k) {
+      const LegJoint &j = robot.joint[k];
+      const BodyState &A = st[j.a], &B = j.b < 0 ? world : st[j.b];
+      Row *r = out + j.row;
+      switch (j.kind) {
+        case LegJointKind::Revolute:
+          revolute_rows(A, j.sa, j.ka, B, j.sb, j.ub, j.nb, r);
+          break;
+        case LegJointKind::Cut:
+          planar_cut_rows(A, j.sa, B, j.sb, j.ub, j.nb, r);
+          break;
+        case LegJointKind::Prismatic:
+          prismatic_rows(A, j.sa, j.ka, j.ub, j.nb, B, j.sb, j.ub, j.nb, r);
+          break;
+      }
+    }
+  }
+}
+
+void robot_phi(const SpatialRobot &robot, const real *q, real *phi) {
+  // robot_rows' phi alone: the same expressions (points r + R s, axes R c, their dot products)
+  V3 r[kMaxRobotBodies];
+  Rot R[kMaxRobotBodies];
+  for (int b = 0; b < robot.nb; ++b) {
+    const real *qb = q + kBodyConfig * b;
+    r[b] = {qb[0], qb[1], qb[2]}, R[b] = rotation({qb[3], qb[4], qb[5], qb[6]});
+  }
+  const BodyState world = ground_state();
   for (int k = 0; k < robot.nj; ++k) {
     const LegJoint &j = robot.joint[k];
-    const BodyState &A = st[j.a], &B = j.b < 0 ? world : st[j.b];
-    Row *r = out + j.row;
+    const V3 &ra = r[j.a], &rb = j.b < 0 ? world.r : r[j.b];
+    const Rot &Ra = R[j.a], &Rb = j.b < 0 ? world.R : R[j.b];
+    real *o = phi + j.row;
     switch (j.kind) {
-      case LegJointKind::Revolute:
-        revolute_rows(A, j.sa, j.ka, B, j.sb, j.ub, j.nb, r);
+      case LegJointKind::Revolute: {
+        const V3 d = (ra + rotate(Ra, j.sa)) - (rb + rotate(Rb, j.sb)), ka = rotate(Ra, j.ka);
+        o[0] = d.x, o[1] = d.y, o[2] = d.z;
+        o[3] = dot(ka, rotate(Rb, j.ub)), o[4] = dot(ka, rotate(Rb, j.nb));
         break;
-      case LegJointKind::Cut:
-        planar_cut_rows(A, j.sa, B, j.sb, j.ub, j.nb, r);
+      }
+      case LegJointKind::Cut: {
+        const V3 d = (ra + rotate(Ra, j.sa)) - (rb + rotate(Rb, j.sb));
+        o[0] = dot(d, rotate(Rb, j.ub)), o[1] = dot(d, rotate(Rb, j.nb));
         break;
-      case LegJointKind::Prismatic:
-        prismatic_rows(A, j.sa, j.ka, j.ub, j.nb, B, j.sb, j.ub, j.nb, r);
+      }
+      case LegJointKind::Prismatic: {
+        // prismatic_rows': the cylinder a's axes (u, n, k) = (ka, ub, nb), the rod b's (ub, nb)
+        const V3 ua = rotate(Ra, j.ka), na = rotate(Ra, j.ub), nb = rotate(Rb, j.ub), kb = rotate(Rb, j.nb);
+        const V3 d = (rb + rotate(Rb, j.sb)) - (ra + rotate(Ra, j.sa));
+        o[0] = dot(ua, nb), o[1] = dot(ua, kb), o[2] = dot(na, kb);
+        o[3] = dot(d, na), o[4] = dot(d, rotate(Ra, j.nb));
         break;
+      }
     }
   }
 }

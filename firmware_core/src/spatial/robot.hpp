@@ -87,8 +87,12 @@ constexpr int kMaxLegBodies = 1 + kMaxLegBars;
 // columns first[i] .. i, L(i, j) at off[i] + j; size in all); each leg body's rows (CSR:
 // on[on0[b] ..], in increasing order: a row's local index times 4, plus 2 for an orientation
 // row (its coefficients on v zero, rows.hpp's perpendicular), plus which of its two bodies).
+// shape: 3 l + h of the first leg l (robot_lift's order) whose layout for this hold h (its index
+// in RobotLeg::layout) is the same as this one but for the rows' numbers (its own leg's when
+// none before is): legs of one shape are factored two at a time, one in each lane of a pair of
+// reals.
 struct LegLayout {
-  int n, nh, size;
+  int n, nh, size, shape;
   int row[kMaxLegRows];  // the system's row numbers
   int first[kMaxLegRows], off[kMaxLegRows];
   int8_t body[kMaxLegRows][2];  // a row's two bodies from the leg's yoke (-1: off the leg)
@@ -100,6 +104,8 @@ struct RobotLeg {
   int yoke, nbars;  // the yoke's body; its bars follow it
   int first_actuator, nactuators;  // its linear actuators in SpatialRobot::act
   int row0, nrows;  // its joints' rows (its hip's first): contiguous in the robot's row order
+  int joint0, njoints;  // its joints in SpatialRobot::joint (its hip's first)
+  int row_twin;     // the leg whose rows robot_rows evaluates with its own, in lanes (-1: none)
   int foot_body;    // its foot's bar (a body of the robot), or -1: the leg file has no [foot]
   V3 foot_point;    // on it, body frame
   V3 hip;           // the hip axis point (box frame, from its centre; world if the box is fixed)
@@ -191,6 +197,9 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
 // Every row at (q, v): out[0 .. robot.m - 1]; row r of joint j acts on bodies joint[j].a, .b
 // (its ja, jb).
 void robot_rows(const SpatialRobot &robot, const real *q, const real *v, Row *out);
+
+// Every row's phi at q (robot_rows' phi alone, the same values): phi[0 .. robot.m - 1].
+void robot_phi(const SpatialRobot &robot, const real *q, real *phi);
 
 // Leg l's rowing angle (rad, in [-pi, pi]) at q: its yoke's x in the box's frame, from its heading.
 real robot_rowing_angle(const SpatialRobot &robot, int l, const real *q);

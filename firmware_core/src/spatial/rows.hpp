@@ -68,9 +68,10 @@ inline Row row_along(const BodyState &A, const V3 &sa, const BodyState &B, const
   return row_along(A, sa, point_jet(A, sa), B, sb, point_jet(B, sb), e);
 }
 
-// (R_a c_a) . (R_b c_b): axis c_a of body a and c_b of body b.
-inline Row row_perpendicular(const BodyState &A, const V3 &ca, const BodyState &B, const V3 &cb) {
-  const PointJet a = axis_jet(A, ca), b = axis_jet(B, cb);
+// (R_a c_a) . (R_b c_b): axis c_a of body a and c_b of body b (a, b their jets: a joint's rows
+// on the same axis share it).
+inline Row row_perpendicular(const BodyState &A, const V3 &ca, const PointJet &a, const BodyState &B, const V3 &cb,
+                             const PointJet &b) {
   Row r = row_zero();
   r.phi = dot(a.p, b.p);
   r.gamma = -(dot(a.pq, b.p) + 2 * dot(a.pd, b.pd) + dot(a.p, b.pq));
@@ -78,12 +79,14 @@ inline Row row_perpendicular(const BodyState &A, const V3 &ca, const BodyState &
   axis_coefficients(B, cb, a.p, r.jb);
   return r;
 }
+inline Row row_perpendicular(const BodyState &A, const V3 &ca, const BodyState &B, const V3 &cb) {
+  return row_perpendicular(A, ca, axis_jet(A, ca), B, cb, axis_jet(B, cb));
+}
 
 // (p_a - p_b) . (R_b c): point s_a of body a less point s_b of body b along body b's axis c (pa,
-// pb their jets, as row_along's).
+// pb, y their jets, as row_along's).
 inline Row row_along_axis(const BodyState &A, const V3 &sa, const PointJet &pa, const BodyState &B, const V3 &sb,
-                          const PointJet &pb, const V3 &c) {
-  const PointJet y = axis_jet(B, c);
+                          const PointJet &pb, const V3 &c, const PointJet &y) {
   const V3 d = pa.p - pb.p, dd = pa.pd - pb.pd, dq = pa.pq - pb.pq;
   Row r = row_zero();
   r.phi = dot(d, y.p);
@@ -92,6 +95,10 @@ inline Row row_along_axis(const BodyState &A, const V3 &sa, const PointJet &pa, 
   point_coefficients(B, sb, y.p, -1, r.jb);
   axis_coefficients(B, c, d, r.jb);
   return r;
+}
+inline Row row_along_axis(const BodyState &A, const V3 &sa, const PointJet &pa, const BodyState &B, const V3 &sb,
+                          const PointJet &pb, const V3 &c) {
+  return row_along_axis(A, sa, pa, B, sb, pb, c, axis_jet(B, c));
 }
 inline Row row_along_axis(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, const V3 &c) {
   return row_along_axis(A, sa, point_jet(A, sa), B, sb, point_jet(B, sb), c);
@@ -107,10 +114,23 @@ inline Row swapped(const Row &r) {
 // ---- joint kinds (the tree set's) ----
 constexpr V3 kWorldAxes[3] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
 
-// A spherical joint: point s_a of body a on point s_b of body b (3 rows, world x, y, z).
+// A spherical joint: point s_a of body a on point s_b of body b (3 rows, world x, y, z): row_along's
+// with e a world axis, whose products with e's zeros are left out (R^T e_k is R's row k).
 inline void spherical_rows(const BodyState &A, const V3 &sa, const BodyState &B, const V3 &sb, Row *out) {
   const PointJet pa = point_jet(A, sa), pb = point_jet(B, sb);
-  for (int k = 0; k < 3; ++k) out[k] = row_along(A, sa, pa, B, sb, pb, kWorldAxes[k]);
+  const V3 d = pa.p - pb.p, dq = pa.pq - pb.pq;
+  const real dk[3] = {d.x, d.y, d.z}, dqk[3] = {dq.x, dq.y, dq.z};
+  const V3 ra[3] = {{A.R.c0.x, A.R.c1.x, A.R.c2.x}, {A.R.c0.y, A.R.c1.y, A.R.c2.y}, {A.R.c0.z, A.R.c1.z, A.R.c2.z}};
+  const V3 rb[3] = {{B.R.c0.x, B.R.c1.x, B.R.c2.x}, {B.R.c0.y, B.R.c1.y, B.R.c2.y}, {B.R.c0.z, B.R.c1.z, B.R.c2.z}};
+  for (int k = 0; k < 3; ++k) {
+    Row &r = out[k];
+    r.phi = dk[k];
+    r.gamma = -dqk[k];
+    const V3 oa = cross(sa, ra[k]), ob = cross(sb, rb[k]);
+    for (int i = 0; i < 3; ++i) r.ja[i] = i == k ? real(1) : real(0), r.jb[i] = i == k ? real(-1) : real(0);
+    r.ja[3] = oa.x, r.ja[4] = oa.y, r.ja[5] = oa.z;
+    r.jb[3] = -ob.x, r.jb[4] = -ob.y, r.jb[5] = -ob.z;
+  }
 }
 
 // A revolute joint about body a's axis k_a (unit, body-fixed) at point s_a, on body b's point s_b
@@ -120,8 +140,9 @@ inline void spherical_rows(const BodyState &A, const V3 &sa, const BodyState &B,
 inline void revolute_rows(const BodyState &A, const V3 &sa, const V3 &ka, const BodyState &B, const V3 &sb,
                           const V3 &ub, const V3 &nb, Row *out) {
   spherical_rows(A, sa, B, sb, out);
-  out[3] = row_perpendicular(A, ka, B, ub);
-  out[4] = row_perpendicular(A, ka, B, nb);
+  const PointJet k = axis_jet(A, ka);
+  out[3] = row_perpendicular(A, ka, k, B, ub, axis_jet(B, ub));
+  out[4] = row_perpendicular(A, ka, k, B, nb, axis_jet(B, nb));
 }
 
 // A prismatic joint: body b (the rod) slides along body a's (the cylinder's) axis u_a, the two
@@ -130,13 +151,14 @@ inline void revolute_rows(const BodyState &A, const V3 &sa, const V3 &ka, const 
 // its point s_a (along n_a and k_a): 5 rows.
 inline void prismatic_rows(const BodyState &A, const V3 &sa, const V3 &ua, const V3 &na, const V3 &ka,
                            const BodyState &B, const V3 &sb, const V3 &nb, const V3 &kb, Row *out) {
-  out[0] = row_perpendicular(A, ua, B, nb);
-  out[1] = row_perpendicular(A, ua, B, kb);
-  out[2] = row_perpendicular(A, na, B, kb);
+  const PointJet ja_u = axis_jet(A, ua), ja_n = axis_jet(A, na), jb_n = axis_jet(B, nb), jb_k = axis_jet(B, kb);
+  out[0] = row_perpendicular(A, ua, ja_u, B, nb, jb_n);
+  out[1] = row_perpendicular(A, ua, ja_u, B, kb, jb_k);
+  out[2] = row_perpendicular(A, na, ja_n, B, kb, jb_k);
   // (p_b - p_a) . (R_a n_a): row_along_axis with the rod first, its coefficients put back in
   // (a, b) order
   const PointJet pb = point_jet(B, sb), pa = point_jet(A, sa);
-  out[3] = swapped(row_along_axis(B, sb, pb, A, sa, pa, na));
+  out[3] = swapped(row_along_axis(B, sb, pb, A, sa, pa, na, ja_n));
   out[4] = swapped(row_along_axis(B, sb, pb, A, sa, pa, ka));
 }
 
