@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
+#include "spatial/lanes.hpp"
 #include "system/dense_solve.hpp"
 
 namespace legsim::spatial {
@@ -222,9 +223,7 @@ void factor_stops(const SpatialRobot &robot, const FeetHold &hold, const Row *ro
 }  // namespace
 
 namespace {
-// Two reals, added, multiplied and divided lane by lane (GCC's and Clang's vector extension: one
-// SSE2 instruction on x86-64; each lane rounds as the scalar operation would).
-typedef real Pair2 __attribute__((vector_size(2 * sizeof(real))));
+// a real or a pair of them (lanes.hpp): the lane helpers let one template serve both
 constexpr int lanes(real) { return 1; }
 constexpr int lanes(Pair2) { return 2; }
 inline real lane(real x, int) { return x; }

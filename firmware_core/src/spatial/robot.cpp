@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "spatial/dynamics.hpp"
+#include "spatial/lanes.hpp"
 
 namespace legsim::spatial {
 
@@ -414,10 +415,9 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
 }
 
 namespace {
-// rows.hpp's joint kinds on two legs at once, one in each lane of a pair of reals: the same
-// operations in the same order on each lane (the same values as rows.hpp's), one SSE2
-// instruction for two on x86-64.
-typedef real P2 __attribute__((vector_size(2 * sizeof(real))));
+// rows.hpp's joint kinds on two legs at once, one in each lane of a pair of reals (lanes.hpp):
+// the same operations in the same order on each lane (the same values as rows.hpp's).
+using P2 = Pair2;
 struct V2 {
   P2 x, y, z;
 };
