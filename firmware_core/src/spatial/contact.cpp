@@ -111,7 +111,10 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
     }
   }
   if (pole_sign) *pole_sign = determinant_sign(s, A);
-  if (!dense_solve(s, A, N, by_precision(1e-9, 1e-5) * scale)) return LEGSIM_ERR_CONTACT;
+  if (!dense_solve(s, A, N, by_precision(1e-9, 1e-5) * scale)) {
+    if (pole_sign) *pole_sign = 0;  // on the pole
+    return LEGSIM_ERR_CONTACT;
+  }
   for (int j = 0; j < s; ++j) {
     for (int k = 0; k < nv; ++k) a[k] += N[j] * x[j][k];
     for (int i = 0; i < n; ++i) mu[idx[i]] += N[j] * m[j][idx[i]];
@@ -133,19 +136,20 @@ V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real
 
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
-                            Row *rows, RobotFactor &F, ContactWork &w) {
+                            Row *rows, RobotFactor &F, ContactWork &w, bool with_stops) {
   // the problem's contacts: the stuck feet (their cones), then the held stops (a cone of mu = 0:
   // the push alone, >= 0; two decoupled placeholder rows, as contact_impact's)
   int feet[kMaxContacts], stops[kMaxHeldStops], nf = 0, ns = 0;
   for (int l = 0; l < robot_contacts(robot); ++l)
     if ((hold.stuck >> l) & 1u) feet[nf++] = l;
-  for (int s = 0; s < kLegStops * robot.nlegs; ++s)
+  for (int s = 0; s < kLegStops * robot.nlegs && with_stops; ++s)
     if ((hold.stops >> s) & 1u) stops[ns++] = s;
   const int n = nf + ns;
   if (n == 0) return LEGSIM_OK;
   if (n > kConeMaxContacts) return LEGSIM_ERR_CAPACITY;
   FeetHold released = hold;
-  released.stuck = released.stops = released.upper = 0;
+  released.stuck = 0;
+  if (with_stops) released.stops = released.upper = 0;
   system_rows(robot, released, q, v, rows);
   legsim_status st = robot_factor(robot, released, rows, F);
   if (st != LEGSIM_OK) return st;

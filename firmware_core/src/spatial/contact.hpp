@@ -103,6 +103,6 @@ constexpr real kJamRate = real(1e-7);
 // else as contact_accelerations.
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
-                            Row *rows, RobotFactor &F, ContactWork &w);
+                            Row *rows, RobotFactor &F, ContactWork &w, bool with_stops = true);
 
 }  // namespace legsim::spatial

@@ -105,7 +105,11 @@ legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, c
   const legsim_status st = contact_accelerations(robot, d.hold, d.ground.mu_kinetic, fixed_dir ? fixed_dir : d.slip_dir,
                                                  q, v, Q, a, mu, N, d.rows, d.factor, d.contact_work, factored,
                                                  fixed_dir != nullptr, &sign);
-  if (st != LEGSIM_OK) return st;
+  if (st != LEGSIM_OK) {
+    // a stage on a pole (the normal forces' system singular): as one past it
+    if (within && d.pole_check && st == LEGSIM_ERR_CONTACT && sign == 0) d.pole_crossed = true;
+    return st;
+  }
   if (within && d.pole_check && d.hold.sliding && d.pole_set == d.hold.sliding && sign != d.pole_sign) {
     d.pole_crossed = true;
     return LEGSIM_ERR_CONTACT;
@@ -374,6 +378,12 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
   uint32_t let_go = 0, let_go_upper = 0;  // the stops let go here (still at their ends)
   uint32_t dropped = 0;                    // the sliding feet let go here (they pulled)
   uint32_t jam_done = 0;  // those that took an impact without collision here (once: else it is left free)
+  // the impact without collision of the feet of jammed (its problem's failure the check's)
+  auto jam_impact = [&](uint32_t jammed) {
+    const legsim_status s = impact(robot, d, d.hold.stuck | d.hold.sliding | jammed, 0, jammed);
+    if (s == LEGSIM_OK) ++d.impacts;
+    return s;
+  };
   for (int round = 0; round <= 2 * robot_contacts(robot) + kLegStops * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
@@ -417,9 +427,14 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
                          d.rows, d.factor, d.contact_work);
       // with sliding feet the problem may have no solution (their friction coupled in; Painleve's
-      // case): the stop pulling most let go alone, the sliding feet then decided (below)
-      const bool unsolved = (st == LEGSIM_ERR_CONTACT || st == LEGSIM_ERR_NOT_CONVERGED) && before.sliding && pull >= 0;
-      if (unsolved) d.hold = before, st = LEGSIM_OK;
+      // case): the stuck feet decided alone with the stops held, then the stop pulling most let
+      // go alone, the sliding feet decided after it (below)
+      const bool unsolved = (st == LEGSIM_ERR_CONTACT || st == LEGSIM_ERR_NOT_CONVERGED) && before.sliding;
+      if (unsolved) {  // the stuck feet alone, the stops held
+        d.hold = before;
+        st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
+                           d.rows, d.factor, d.contact_work, false);
+      }
       if (st != LEGSIM_OK) return st;
       if (before.stuck || before.stops) tally(d.cone_stats, d.modes);  // (none: no problem solved)
       const uint32_t freed = before.stops & ~d.hold.stops;
@@ -453,11 +468,8 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       // (contact_impact's jammed)
       const uint32_t jammed = before_round.sliding & ~d.hold.sliding & ~d.hold.stuck & ~jam_done;
       if (jammed && d.has_ground) {
-        jam_done |= jammed;
-        st = impact(robot, d, d.hold.stuck | d.hold.sliding | jammed, 0, jammed);
-        if (st != LEGSIM_OK) return st;
-        ++d.impacts;
-        dropped &= ~jammed;
+        jam_done |= jammed, dropped &= ~jammed;
+        if ((st = jam_impact(jammed)) != LEGSIM_OK) return st;
       } else {
         d.hold.stops |= let_go, d.hold.upper |= let_go_upper;
       }
@@ -482,9 +494,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       dropped = 0;
       jam_done |= jammed;
       if (jammed) {
-        st = impact(robot, d, d.hold.stuck | d.hold.sliding | jammed, 0, jammed);
-        if (st != LEGSIM_OK) return st;
-        ++d.impacts;
+        if ((st = jam_impact(jammed)) != LEGSIM_OK) return st;
         changed = true;
       }
     }
