@@ -643,7 +643,7 @@ real slip_part(const SpatialRobot &robot, const RobotData &d) {
     // |a_t| / |v_t|): unresolved, it turns the box's path away from the fall line (the parts
     // shrink toward the stop, to h / 256 at least, where a slip below kSlipHold keeps its
     // direction)
-    if (l >= robot.nlegs) rate = std::max(rate, norm(at) / speed);
+    rate = std::max(rate, norm(at) / speed);
   }
   return rate > 0 ? kSlipTurn / rate : kNone;
 }
