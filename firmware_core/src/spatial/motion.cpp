@@ -431,6 +431,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
       // go alone, the sliding feet decided after it (below)
       const bool unsolved = (st == LEGSIM_ERR_CONTACT || st == LEGSIM_ERR_NOT_CONVERGED) && before.sliding;
       if (unsolved) {  // the stuck feet alone, the stops held
+        if (st == LEGSIM_ERR_NOT_CONVERGED) tally(d.cone_stats, d.modes);  // (its residual in the statistics)
         d.hold = before;
         st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
                            d.rows, d.factor, d.contact_work, false);
