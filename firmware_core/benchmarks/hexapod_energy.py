@@ -74,7 +74,9 @@ def off_its_stop(st, lo, hi, row) -> float:
     return float(max([0.0] + [float(x.max()) for x in off if x.size]))
 
 
-def one_run(h, rng, steps, dt, mass, past=False):
+def one_run(h, rng, steps, dt, mass, past=False, check=None):
+    """One drop of `steps` steps (0: only its random draws); check(sim, state, gain), if given, after
+    each OK step."""
     import legsim
 
     base = h.stand_pose(1.0)
@@ -119,6 +121,8 @@ def one_run(h, rng, steps, dt, mass, past=False):
         out["over"] += gain > 1e-10 * size + 1e-12
         H, size = H1, size1
         st = sim.state()
+        if check is not None:
+            check(sim, st, gain)
         out["past"] = max(out["past"], past_stroke(st, lo, hi, row))
         out["on_stop"] += int(np.any(st["actuator_stop"]) or np.any(st["rowing_stop"]))
         out["off_stop"] = max(out["off_stop"], off_its_stop(st, lo, hi, row))

@@ -13,6 +13,9 @@
 // - both with generalized-alpha too (the same invariants);
 // - a touchdown and a stop arrival in one step: both located, no foot under the ground, no length
 //   or angle past its stroke, no energy gained.
+// - the stuck feet and the held stops decided in one acceleration-level problem (contact_modes):
+//   at the modes it returns every stuck foot in its cone, no foot pulling or accelerating into the
+//   ground, every stop kept pushing and every stop let go opening.
 // Runs from the source tree's root (legsim_add_unity_test's WORKING_DIRECTORY).
 #include <cmath>
 #include <cstdio>
@@ -455,11 +458,103 @@ void test_stops_and_feet_in_one_impact(void) {
   TEST_ASSERT_TRUE(eP < 1e-10 && eL < 1e-10);
 }
 
+void test_stops_and_feet_decided_in_one_problem(void) {
+  // The stand at rest with its six feet stuck on the ground and the five strokes of
+  // test_stops_and_feet_in_one_impact held on a stop (the acceleration-level problem reads the
+  // stops' rows, not their gaps), under random actuator forces (+-400 N) and rowing torques
+  // (+-20 N m): contact_modes decides the feet and the stops in one problem, 40 such. Checked with
+  // the modes it returns, by the robot's solve at them (not the problem's own numbers): every
+  // stuck foot's force in its mu_s cone, every sliding foot's normal force >= 0, every free foot's
+  // point not accelerating into the ground; every stop it keeps pushing (its multiplier <= 0:
+  // the stop's sign), every stop it lets go opening (its gap's acceleration >= 0).
+  const Standing &s = standing();
+  const SpatialRobot &R = s.robot;
+  const legsim_hexapod_desc &h = s.desc;
+  const V3 n = {h.ground_normal[0], h.ground_normal[1], h.ground_normal[2]};
+  double zmin = 1e9;
+  for (int l = 0; l < 6; ++l) zmin = std::fmin(zmin, dot(robot_foot_position(R, l, s.q), n));
+  const GroundPlane g = {{0, 0, zmin}, n, h.mu_static, h.mu_kinetic};
+  const int stop_leg[5] = {0, 0, 2, 1, 4}, stop_k[5] = {0, 1, 0, 2, 2};
+  auto d = std::make_unique<RobotData>();
+  static double v[kMaxRobotDof] = {};
+  double cone = 0, pull = 0, into = 0, stop_pull = 0, closing = 0;
+  int kept = 0, freed = 0, changed_feet = 0, trials_mixed = 0, modes[3] = {};  // stuck, sliding, free
+  srand(11);
+  for (int trial = 0; trial < 40; ++trial) {
+    FeetHold hold;
+    hold.stuck = 0x3F, hold.sliding = 0;
+    for (int l = 0; l < 6; ++l) hold.anchor[l] = robot_foot_position(R, l, s.q);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, robot_data_init(R, s.q, v, hold, &g, *d));
+    FeetHold &H = d->hold;
+    H.stuck = 0x3F, H.sliding = 0;
+    for (int l = 0; l < 6; ++l) H.anchor[l] = robot_foot_position(R, l, d->q);
+    for (int i = 0; i < 5; ++i) {
+      const uint32_t bit = 1u << (kLegStops * stop_leg[i] + stop_k[i]);
+      H.stops |= bit;
+      if (trial % 2) H.upper |= bit;
+    }
+    double F[kMaxRobotActuators], T[kMaxLegs], Q[kMaxRobotDof];
+    for (int a = 0; a < R.na; ++a) F[a] = 800.0 * (double(rand()) / RAND_MAX - 0.5);
+    for (int l = 0; l < R.nlegs; ++l) T[l] = 40.0 * (double(rand()) / RAND_MAX - 0.5);
+    robot_forces(R, d->q, d->v, F, T, Q);
+    const FeetHold before = H;
+    legsim::ConeReport rep;
+    const legsim_status st = contact_modes(R, g, d->q, d->v, Q, 0, H, d->slip_dir, rep, d->rows, d->factor,
+                                           d->contact_work);
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, st);
+    TEST_ASSERT_TRUE(rep.converged);
+    changed_feet += H.stuck != before.stuck;
+    // the robot's solve at the modes it returned
+    double a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxContacts] = {};
+    TEST_ASSERT_EQUAL_INT(LEGSIM_OK, contact_accelerations(R, H, g.mu_kinetic, d->slip_dir, d->q, d->v, Q, a, mu, N,
+                                                           d->rows, d->factor, d->contact_work));
+    for (int l = 0; l < 6; ++l) {
+      const double *m = mu + foot_row(R, l);
+      ++modes[(H.stuck >> l) & 1u ? 0 : (H.sliding >> l) & 1u ? 1 : 2];
+      if ((H.stuck >> l) & 1u) {
+        cone = std::fmax(cone, std::hypot(m[1], m[2]) - g.mu_static * -m[0]);
+        pull = std::fmax(pull, m[0]);
+      } else if ((H.sliding >> l) & 1u) {
+        pull = std::fmax(pull, -N[l]);
+      } else {
+        const int fb = contact_body(R, l);
+        const BodyState B = body_state(d->q + kBodyConfig * fb, d->v + kBodyDof * fb);
+        const double *ab = a + kBodyDof * fb;
+        const V3 &pt = contact_point(R, l);
+        const V3 pa = V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, pt)) + point_jet(B, pt).pq;
+        into = std::fmax(into, -dot(pa, n));
+      }
+    }
+    bool some_kept = false, some_freed = false;
+    for (int i = 0; i < 5; ++i) {
+      const int l = stop_leg[i], k = stop_k[i], b = kLegStops * l + k;
+      if ((H.stops >> b) & 1u) {
+        ++kept, some_kept = true;
+        stop_pull = std::fmax(stop_pull, mu[stop_row(R, l, k)]);
+      } else {
+        ++freed, some_freed = true;
+        const Row r = stop_gap_row(R, l, k, (before.upper >> b) & 1u, d->q, d->v);
+        closing = std::fmax(closing, -(row_dot(R, r, stop_row(R, l, k), a) - r.gamma));
+      }
+    }
+    trials_mixed += some_kept && some_freed;
+  }
+  printf("40 decisions of 6 stuck feet and 5 stops: feet's modes changed in %d (then %d stuck, %d sliding, %d "
+         "free); stops kept %d, let go %d (both in %d); at the modes returned: stuck feet off the cone %.1e N, pulling %.1e N, free feet into the ground "
+         "%.1e m/s^2; kept stops pulling %.1e, let-go stops closing %.1e\n",
+         changed_feet, modes[0], modes[1], modes[2], kept, freed, trials_mixed, cone, pull, into, stop_pull, closing);
+  TEST_ASSERT_TRUE(kept >= 20 && freed >= 20 && trials_mixed >= 10);
+  TEST_ASSERT_TRUE(modes[0] >= 20 && modes[1] >= 20 && modes[2] >= 20);
+  TEST_ASSERT_TRUE(cone < 1e-6 && pull < 1e-6 && into < 1e-8);
+  TEST_ASSERT_TRUE(stop_pull < 1e-6 && closing < 1e-8);
+}
+
 int main(void) {
   UNITY_BEGIN();
   RUN_TEST(test_upper_actuator_into_its_min_stroke);
   RUN_TEST(test_rowing_motor_into_its_stroke_end);
   RUN_TEST(test_touchdown_and_stop_in_one_step);
   RUN_TEST(test_stops_and_feet_in_one_impact);
+  RUN_TEST(test_stops_and_feet_decided_in_one_problem);
   return UNITY_END();
 }

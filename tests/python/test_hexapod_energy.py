@@ -69,3 +69,66 @@ def test_a_stop_and_a_foot_at_one_instant_take_no_turns():
     assert r["stop_impacts"] >= 20 and r["impacts"] >= 20
     assert r["past"] <= 1e-12 and r["off_stop"] <= 1e-12
     assert r["gain"] < 1e-5
+
+
+def _contact_invariants(h):
+    """A check for one_run: after every OK step each foot on its contact law (the ground's force on a
+    stuck foot in its mu_s cone, on a sliding foot on its mu_k cone's surface, none on a free foot; no
+    foot below the ground), and the largest violations kept."""
+    g = h.ground
+    n = np.array(g["normal"])
+    p0 = np.array(g["point"])
+    worst = {"pull": 0.0, "cone": 0.0, "slide": 0.0, "free": 0.0, "under": 0.0, "steps": 0, "sliding": 0}
+
+    def check(sim, st, gain):
+        worst["steps"] += 1
+        f, x = st["foot_force_n"], st["foot_m"]
+        for k, mode in enumerate(st["foot_state"]):
+            N = float(f[k] @ n)
+            ft = float(np.linalg.norm(f[k] - N * n))
+            worst["under"] = max(worst["under"], -float((x[k] - p0) @ n))
+            if mode == "free":
+                worst["free"] = max(worst["free"], float(np.linalg.norm(f[k])))
+                continue
+            worst["pull"] = max(worst["pull"], -N)
+            if mode == "stuck":
+                worst["cone"] = max(worst["cone"], ft - g["mu_static"] * N)
+            else:
+                worst["sliding"] += 1
+                worst["slide"] = max(worst["slide"], abs(ft - g["mu_kinetic"] * N) / max(N, 1.0))
+
+    return worst, check
+
+
+@pytest.mark.parametrize("run, what", [(17, "a sliding foot and a stop no mode keeps"),
+                                       (37, "the feet and the stops decided in one problem")])
+def test_campaign_runs_that_failed_now_run(run, what):
+    """The campaign driven past the strokes at h = 1 ms (``hexapod_energy.py --past --runs 40 --seed 1
+    --steps 1000``). Run 37 ended at 0.660 s (LEGSIM_ERR_CONTACT): the modes' check decided the stuck
+    feet on their cones and let the held stops go one at a time after them, and a foot and a stroke
+    at one instant found no order that settled; now the stuck feet and the held stops are one
+    acceleration-level contact problem (spatial/contact's contact_modes: a stop a cone of mu = 0,
+    its push >= 0). Run 17 ended at 0.452 s: leg 0's sliding foot pulls with its actuator's stop
+    held, the stop pulls with the foot on the ground, the foot let go accelerates into the ground
+    (Painleve's inconsistent case: the stop's push moves it into its stop through the foot's
+    friction); now an impact without collision of the foot and the strokes at their ends stops the
+    slip (contact_impact's jammed). Both run their 1,000 steps: every stroke inside its stroke,
+    a held one at its end, every foot on its contact law after every step, and no step's energy
+    gain above RK4's own error at this step (at most 3.9e-5 J over the campaign's OK steps before
+    the change)."""
+    h = legsim.Hexapod.from_toml(legsim.data_path("models/hexapod.toml"))
+    mass = hexapod_energy.bodies_mass(h)
+    rng = np.random.default_rng(1)
+    for _ in range(run):  # the earlier runs' draws
+        hexapod_energy.one_run(h, rng, 0, 1e-3, mass, past=True)
+    worst, check = _contact_invariants(h)
+    r = hexapod_energy.one_run(h, rng, 1000, 1e-3, mass, past=True, check=check)
+    print(f"run {run} ({what}): {r['status']}, {r['steps']} steps, {r['events']} events, {r['impacts']} impacts, "
+          f"{r['stop_impacts']} arrivals on a stop, largest gain {r['gain']:.2e} J; {worst}")
+    assert r["status"] == "ok" and r["steps"] == 1000
+    assert r["stop_impacts"] >= 20 and r["on_stop"] >= 500
+    assert r["past"] <= 1e-12 and r["off_stop"] <= 1e-12
+    assert r["gain"] < 1e-4
+    assert worst["steps"] == 1000 and worst["sliding"] > 0
+    assert worst["pull"] <= 1e-7 and worst["cone"] <= 1e-7 and worst["free"] == 0.0
+    assert worst["slide"] <= 1e-12 and worst["under"] <= 1e-9

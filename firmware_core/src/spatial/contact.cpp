@@ -22,6 +22,29 @@ void foot_force_column(const SpatialRobot &robot, int l, const real *q, const V3
                      col + kBodyDof * fb);
 }
 
+// The sign of det A (n x n row-major, kept), by elimination with partial pivoting on a copy.
+int determinant_sign(int n, const real *A) {
+  real B[kMaxContacts * kMaxContacts];
+  std::copy(A, A + n * n, B);
+  int sign = 1;
+  for (int c = 0; c < n; ++c) {
+    int p = c;
+    for (int i = c + 1; i < n; ++i)
+      if (std::abs(B[i * n + c]) > std::abs(B[p * n + c])) p = i;
+    if (B[p * n + c] == 0) return 0;
+    if (p != c) {
+      for (int j = 0; j < n; ++j) std::swap(B[c * n + j], B[p * n + j]);
+      sign = -sign;
+    }
+    if (B[c * n + c] < 0) sign = -sign;
+    for (int i = c + 1; i < n; ++i) {
+      const real f = B[i * n + c] / B[c * n + c];
+      for (int j = c; j < n; ++j) B[i * n + j] -= f * B[c * n + j];
+    }
+  }
+  return sign;
+}
+
 }  // namespace
 
 void ground_frame(const GroundPlane &g, FeetHold &hold) {
@@ -50,7 +73,8 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
                                     const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
                                     real *normal_force, Row *rows, RobotFactor &F, ContactWork &w, bool factored,
-                                    bool fixed_dir) {
+                                    bool fixed_dir, int *pole_sign) {
+  if (pole_sign) *pole_sign = 1;
   if (!factored) {
     system_rows(robot, hold, q, v, rows);
     const legsim_status st = robot_factor(robot, hold, rows, F);
@@ -86,7 +110,11 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
       scale = std::max(scale, std::abs(A[s * k + j]));
     }
   }
-  if (!dense_solve(s, A, N, by_precision(1e-9, 1e-5) * scale)) return LEGSIM_ERR_CONTACT;
+  if (pole_sign) *pole_sign = determinant_sign(s, A);
+  if (!dense_solve(s, A, N, by_precision(1e-9, 1e-5) * scale)) {
+    if (pole_sign) *pole_sign = 0;  // on the pole
+    return LEGSIM_ERR_CONTACT;
+  }
   for (int j = 0; j < s; ++j) {
     for (int k = 0; k < nv; ++k) a[k] += N[j] * x[j][k];
     for (int i = 0; i < n; ++i) mu[idx[i]] += N[j] * m[j][idx[i]];
@@ -108,55 +136,95 @@ V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real
 
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
-                            Row *rows, RobotFactor &F, ContactWork &w) {
-  int feet[kMaxContacts], n = 0;
+                            Row *rows, RobotFactor &F, ContactWork &w, bool with_stops) {
+  // the problem's contacts: the stuck feet (their cones), then the held stops (a cone of mu = 0:
+  // the push alone, >= 0; two decoupled placeholder rows, as contact_impact's)
+  int feet[kMaxContacts], stops[kMaxHeldStops], nf = 0, ns = 0;
   for (int l = 0; l < robot_contacts(robot); ++l)
-    if ((hold.stuck >> l) & 1u) feet[n++] = l;
+    if ((hold.stuck >> l) & 1u) feet[nf++] = l;
+  for (int s = 0; s < kLegStops * robot.nlegs && with_stops; ++s)
+    if ((hold.stops >> s) & 1u) stops[ns++] = s;
+  const int n = nf + ns;
   if (n == 0) return LEGSIM_OK;
   if (n > kConeMaxContacts) return LEGSIM_ERR_CAPACITY;
   FeetHold released = hold;
   released.stuck = 0;
+  if (with_stops) released.stops = released.upper = 0;
   system_rows(robot, released, q, v, rows);
   legsim_status st = robot_factor(robot, released, rows, F);
   if (st != LEGSIM_OK) return st;
   const V3 axes[3] = {hold.normal, hold.t1, hold.t2};
   const int nv = kBodyDof * robot.nb, nr = 3 * n;
+  // each stop's gap row (its coefficients on its two bodies, its gamma: gap'' = J a - gamma)
+  Row gap[kMaxHeldStops];
+  int ga[kMaxHeldStops], gb[kMaxHeldStops];
+  for (int i = 0; i < ns; ++i) {
+    const int s = stops[i], l = s / kLegStops, k = s % kLegStops;
+    gap[i] = stop_gap_row(robot, l, k, (hold.upper >> s) & 1u, q, v);
+    row_bodies(robot, stop_row(robot, l, k), ga[i], gb[i]);
+  }
   real a[kMaxRobotDof], mu[kMaxSystemRows], N[kMaxContacts], Qc[kMaxRobotDof], col[kMaxRobotDof];
-  // q: the feet's accelerations released; W: their change per newton along each axis (the
-  // solve is affine in the applied forces: the differences are exact)
-  real W[kConeMaxRows * kConeMaxRows], q0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows];
+  // the problem's rates at accelerations a: the feet's points' along the ground's axes, the
+  // stops' gaps' (their placeholders 0)
+  auto rates = [&](const real *acc, real *out) {
+    for (int i = 0; i < nf; ++i) {
+      const V3 pa = foot_acceleration(robot, feet[i], q, v, acc);
+      for (int k = 0; k < 3; ++k) out[3 * i + k] = dot(axes[k], pa);
+    }
+    for (int i = 0; i < ns; ++i) {
+      real x = -gap[i].gamma;
+      for (int k = 0; k < kBodyDof; ++k) x += gap[i].ja[k] * acc[kBodyDof * ga[i] + k];
+      if (gb[i] >= 0)
+        for (int k = 0; k < kBodyDof; ++k) x += gap[i].jb[k] * acc[kBodyDof * gb[i] + k];
+      out[3 * (nf + i)] = x, out[3 * (nf + i) + 1] = out[3 * (nf + i) + 2] = 0;
+    }
+  };
+  // q: the rates released; W: their change per unit force (a foot's along each axis, a stop's
+  // push along its gap's gradient; the solve is affine in the applied forces: the differences
+  // are exact)
+  real W[kConeMaxRows * kConeMaxRows] = {}, q0[kConeMaxRows], r[kConeMaxRows] = {}, u[kConeMaxRows], rc[kConeMaxRows];
   st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Q, a, mu, N, rows, F, w, true);
   if (st != LEGSIM_OK) return st;
-  for (int i = 0; i < n; ++i) {
-    const V3 pa = foot_acceleration(robot, feet[i], q, v, a);
-    for (int k = 0; k < 3; ++k) q0[3 * i + k] = dot(axes[k], pa);
-  }
+  rates(a, q0);
   for (int j = 0; j < n; ++j)
-    for (int m = 0; m < 3; ++m) {
-      foot_force_column(robot, feet[j], q, axes[m], col);
+    for (int m = 0; m < (j < nf ? 3 : 1); ++m) {
+      if (j < nf) {
+        foot_force_column(robot, feet[j], q, axes[m], col);
+      } else {
+        const int i = j - nf;
+        std::fill(col, col + nv, real(0));
+        for (int k = 0; k < kBodyDof; ++k) col[kBodyDof * ga[i] + k] = gap[i].ja[k];
+        if (gb[i] >= 0)
+          for (int k = 0; k < kBodyDof; ++k) col[kBodyDof * gb[i] + k] += gap[i].jb[k];
+      }
       for (int k = 0; k < nv; ++k) Qc[k] = Q[k] + col[k];
       st = contact_accelerations(robot, released, ground.mu_kinetic, slip_dir, q, v, Qc, a, mu, N, rows, F, w, true);
       if (st != LEGSIM_OK) return st;
-      for (int i = 0; i < n; ++i) {
-        const V3 pa = foot_acceleration(robot, feet[i], q, v, a);
-        for (int k = 0; k < 3; ++k) W[nr * (3 * i + k) + 3 * j + m] = dot(axes[k], pa) - q0[3 * i + k];
-      }
+      rates(a, rc);
+      for (int c = 0; c < nr; ++c) W[nr * c + 3 * j + m] = rc[c] - q0[c];
     }
+  // a stop's placeholders: its push's scale on the diagonal (the solver's scaling per contact)
+  for (int j = nf; j < n; ++j) W[nr * (3 * j + 1) + 3 * j + 1] = W[nr * (3 * j + 2) + 3 * j + 2] = W[nr * 3 * j + 3 * j];
   if (!hold.sliding)  // symmetric but for round-off (the solver's contract); sliding feet make it not
     for (int i = 0; i < nr; ++i)
       for (int j = 0; j < i; ++j) W[nr * i + j] = W[nr * j + i] = real(0.5) * (W[nr * i + j] + W[nr * j + i]);
+  // a contact whose own force moves it into the ground or its stop (the sliding feet's friction
+  // coupled in: Painleve's case): no solution of the problem need exist
+  for (int c = 0; c < nr; ++c)
+    if (!(W[nr * c + c] > 0)) return LEGSIM_ERR_CONTACT;
   real mus[kConeMaxContacts], scale = 0;
-  for (int i = 0; i < n; ++i) mus[i] = ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
+  for (int i = 0; i < n; ++i)
+    mus[i] = i >= nf ? real(0) : ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
   for (int c = 0; c < nr; ++c) scale = std::max(scale, std::abs(q0[c]));
   const real tol = by_precision(1e-9, 1e-4) * (1 + scale);
   // which stick (on mu_static), then the others' slip on mu_kinetic: until the coefficients
-  // are those the solution's modes ask (a foot changes once at most: n + 1 passes)
+  // are those the solution's modes ask (a foot changes once at most: nf + 1 passes)
   bool settled = false;
-  for (int pass = 0; pass <= n && !settled; ++pass) {
+  for (int pass = 0; pass <= nf && !settled; ++pass) {
     st = cone_solve(n, W, q0, mus, r, u, report);
     if (st != LEGSIM_OK) return st;
     bool changed = false;
-    for (int i = 0; i < n; ++i) {
+    for (int i = 0; i < nf; ++i) {
       const bool slips = std::hypot(u[3 * i + 1], u[3 * i + 2]) > tol && !(u[3 * i] > tol);
       const real want = slips || ((slipping >> feet[i]) & 1u) ? ground.mu_kinetic : ground.mu_static;
       if (want != mus[i]) mus[i] = want, changed = true;
@@ -164,7 +232,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
     settled = !changed;
   }
   if (!settled) return LEGSIM_ERR_CONTACT;
-  for (int i = 0; i < n; ++i) {
+  for (int i = 0; i < nf; ++i) {
     const int l = feet[i];
     const uint32_t bit = 1u << l;
     const V3 ut = u[3 * i + 1] * axes[1] + u[3 * i + 2] * axes[2];
@@ -181,13 +249,16 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
       slip_dir[l] = (-1 / norm(rt)) * rt;
     }
   }
+  // a stop whose push vanishes and whose gap opens is let go
+  for (int i = 0; i < ns; ++i)
+    if (u[3 * (nf + i)] > tol) hold.stops &= ~(1u << stops[i]), hold.upper &= ~(1u << stops[i]);
   return LEGSIM_OK;
 }
 
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching,
                              uint32_t arriving, uint32_t near, const real *q, real *v, FeetHold &hold, V3 *slip_dir,
                              V3 *impulse, real *stop_impulse, ConeReport &report, Row *rows, RobotFactor &F,
-                             ContactWork &w) {
+                             ContactWork &w, uint32_t jammed) {
   // the problem's contacts released: the joints' rows and the other held stops in the factor
   const uint32_t problem = arriving | near;
   FeetHold none = hold;
@@ -258,6 +329,7 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
       std::fill(X[c], X[c] + nv, real(0));
     }
     u0[c] = rate(p, v);
+    if (c % 3 == 0 && c / 3 < nf && ((jammed >> feet[c / 3]) & 1u)) u0[c] = std::min(u0[c], -kJamRate);
   }
   for (int i = 0; i < n; ++i) mus[i] = i < nf ? ground.mu_kinetic : real(0);
   for (int a = 0; a < nr; ++a)

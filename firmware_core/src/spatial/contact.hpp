@@ -51,11 +51,13 @@ constexpr real kSlipHold = real(1e-4);
 // else they are built here. LEGSIM_ERR_CONTACT when that system is singular (Painleve: friction
 // can make the normal force arbitrary); else as robot_factor. fixed_dir: slip_dir[l] is the
 // direction whatever the slip (an implicit step's iterations, where a slip turning back within
-// the step would flip it between iterates: that reversal is an event of its own).
+// the step would flip it between iterates: that reversal is an event of its own). pole_sign: the
+// sign of det (I + Lambda) (+1 without sliding feet): where it turns between two states of one
+// part, the N's went through a pole between them (Painleve's case, passed unseen by the stages).
 legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &hold, real mu_kinetic,
                                     const V3 *slip_dir, const real *q, const real *v, const real *Q, real *a, real *mu,
                                     real *normal_force, Row *rows, RobotFactor &F, ContactWork &w, bool factored = false,
-                                    bool fixed_dir = false);
+                                    bool fixed_dir = false, int *pole_sign = nullptr);
 
 // Sliding foot l's friction direction at (q, v) (unit, tangential): its slip velocity's, or
 // fallback's below kSlipHold.
@@ -79,7 +81,13 @@ V3 slip_direction(const SpatialRobot &robot, const FeetHold &hold, int l, const 
 legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &ground, uint32_t touching,
                              uint32_t arriving, uint32_t near, const real *q, real *v, FeetHold &hold, V3 *slip_dir,
                              V3 *impulse, real *stop_impulse, ConeReport &report, Row *rows, RobotFactor &F,
-                             ContactWork &w);
+                             ContactWork &w, uint32_t jammed = 0);
+
+// The normal rate (m/s) an impact takes for a foot of `jammed` (contact_impact): a sliding foot
+// that no mode of the acceleration level keeps on the ground or lets go (Painleve's inconsistent
+// case with a stop) meets it as if approaching this slowly, so that the problem's solution, if
+// the slip cannot go on, is the impulse that stops it (an impact without collision).
+constexpr real kJamRate = real(1e-7);
 
 // The modes of the stuck feet decided on their cones at (q, v) under Q: the acceleration-level
 // contact problem of those feet (u = W r + q: r their ground forces, u their points'
@@ -95,6 +103,6 @@ legsim_status contact_impact(const SpatialRobot &robot, const GroundPlane &groun
 // else as contact_accelerations.
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
-                            Row *rows, RobotFactor &F, ContactWork &w);
+                            Row *rows, RobotFactor &F, ContactWork &w, bool with_stops = true);
 
 }  // namespace legsim::spatial

@@ -89,8 +89,11 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
 
 // The accelerations, multipliers and sliding feet's normal forces at (q, v) under d's commands.
 // report: the state is data's own (the forces kept as its report).
+// within: (q, v) in the part from d's last state reached (an integrator's stage or iterate, its
+// end): refused when the sliding feet's det (I + Lambda) turned sign since (a pole between them).
 legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, const real *v, real *a, real *mu,
-                       real *N, bool factored, bool report = false, const V3 *fixed_dir = nullptr) {
+                       real *N, bool factored, bool report = false, const V3 *fixed_dir = nullptr,
+                       bool within = false) {
   real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
   command_forces(robot, d.command, q, v, F, T);
   robot_forces(robot, q, v, F, T, Q);
@@ -98,8 +101,21 @@ legsim_status evaluate(const SpatialRobot &robot, RobotData &d, const real *q, c
     std::copy(F, F + robot.na, d.actuator_force);
     std::copy(T, T + robot.nlegs, d.rowing_torque);
   }
-  return contact_accelerations(robot, d.hold, d.ground.mu_kinetic, fixed_dir ? fixed_dir : d.slip_dir, q, v, Q, a, mu,
-                               N, d.rows, d.factor, d.contact_work, factored, fixed_dir != nullptr);
+  int sign = 1;
+  const legsim_status st = contact_accelerations(robot, d.hold, d.ground.mu_kinetic, fixed_dir ? fixed_dir : d.slip_dir,
+                                                 q, v, Q, a, mu, N, d.rows, d.factor, d.contact_work, factored,
+                                                 fixed_dir != nullptr, &sign);
+  if (st != LEGSIM_OK) {
+    // a stage on a pole (the normal forces' system singular): as one past it
+    if (within && d.pole_check && st == LEGSIM_ERR_CONTACT && sign == 0) d.pole_crossed = true;
+    return st;
+  }
+  if (within && d.pole_check && d.hold.sliding && d.pole_set == d.hold.sliding && sign != d.pole_sign) {
+    d.pole_crossed = true;
+    return LEGSIM_ERR_CONTACT;
+  }
+  if (report) d.pole_sign = sign, d.pole_set = d.hold.sliding;
+  return LEGSIM_OK;
 }
 
 void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
@@ -121,6 +137,7 @@ void save(const SpatialRobot &robot, const RobotData &d, RobotSnapshot &c) {
   std::copy(d.stop_impulse, d.stop_impulse + kMaxHeldStops, c.stop_impulse);
   c.impact = d.impact, c.modes = d.modes, c.cone_stats = d.cone_stats;
   c.projection_iterations = d.projection_iterations, c.impacts = d.impacts, c.stop_impacts = d.stop_impacts;
+  c.pole_sign = d.pole_sign, c.pole_set = d.pole_set;
 }
 void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   d.t = c.t;
@@ -141,6 +158,7 @@ void load(const SpatialRobot &robot, const RobotSnapshot &c, RobotData &d) {
   std::copy(c.stop_impulse, c.stop_impulse + kMaxHeldStops, d.stop_impulse);
   d.impact = c.impact, d.modes = c.modes, d.cone_stats = c.cone_stats;
   d.projection_iterations = c.projection_iterations, d.impacts = c.impacts, d.stop_impacts = c.stop_impacts;
+  d.pole_sign = c.pole_sign, d.pole_set = c.pole_set;
 }
 
 // One RK4 step of H on d in place (d.a must be the accelerations at d's state); d part-way on
@@ -166,7 +184,7 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
       foot_motion(robot, l, q, vs, p, pv);
       d.slip_stage_min[l] = std::min(d.slip_stage_min[l], dot(tangential(d.hold, pv), d.slip_ref[l]));
     }
-    return evaluate(robot, d, q, vs, kv[s], mu, N, false);
+    return evaluate(robot, d, q, vs, kv[s], mu, N, false, false, nullptr, true);
   };
   for (int l = 0; l < robot_contacts(robot); ++l) d.slip_stage_min[l] = kNone;
   for (int k = 0; k < nv; ++k) kth[0][k] = v0[k], kv[0][k] = d.a[k];
@@ -182,7 +200,7 @@ legsim_status rk4(const SpatialRobot &robot, RobotData &d, real H) {
   }
   for (int b = 0; b < nb; ++b) config_add(q0 + kBodyConfig * b, th + kBodyDof * b, d.q + kBodyConfig * b);
   legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
-  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
+  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true, nullptr, true);
   if (st != LEGSIM_OK) return st;
   for (int k = 0; k < nv; ++k)
     if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
@@ -236,7 +254,7 @@ legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
     real last = kNone;
     for (int it = 0; it < kGalphaMaxIterations && !converged; ++it) {
       state(d.q, d.v);
-      const legsim_status st = evaluate(robot, d, d.q, d.v, f, mu, N, false, false, fixed);
+      const legsim_status st = evaluate(robot, d, d.q, d.v, f, mu, N, false, false, fixed, true);
       if (st != LEGSIM_OK) return st;
       real change = 0, size = 1;
       for (int k = 0; k < nv; ++k) {
@@ -263,7 +281,7 @@ legsim_status galpha(const SpatialRobot &robot, RobotData &d, real H) {
   std::copy(x1, x1 + nv, d.acc_aux);
   d.acc_aux_h = H;
   legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
-  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
+  if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true, nullptr, true);
   if (st != LEGSIM_OK) return st;
   for (int k = 0; k < nv; ++k)
     if (!std::isfinite(d.v[k]) || !std::isfinite(d.a[k])) return LEGSIM_ERR_DIVERGED;
@@ -283,6 +301,7 @@ legsim_status take(const SpatialRobot &robot, RobotData &d, real H, Integrator i
 // start (m/s). Then per stroke (its actuators', its rowing angle's) one: free, its distance to
 // the nearer end (m, rad); on a stop, the stop's push -lambda (N, N m).
 constexpr int kLegEvents = 2 + kLegStops;
+constexpr int kPoleParts = 30;  // halvings of a part whose stages straddle a pole
 void event_values(const SpatialRobot &robot, const RobotData &d, const V3 *ref, real (*e)[kLegEvents]) {
   for (int l = 0; l < robot_contacts(robot); ++l) {
     for (int k = 0; k < kLegStops; ++k) {
@@ -338,14 +357,33 @@ void tally(ConeStats &s, const ConeReport &r) {
   s.max_residual = std::max(s.max_residual, r.residual);
 }
 
+// Contact l's point's acceleration (world) from the bodies' accelerations a at (q, v).
+V3 contact_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a) {
+  const int fb = contact_body(robot, l);
+  const V3 &pt = contact_point(robot, l);
+  const BodyState B = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
+  const real *ab = a + kBodyDof * fb;
+  return V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, pt)) + point_jet(B, pt).pq;
+}
+
 // The modes checked against the cone at d's state (after an event or at the start): when a stuck
 // foot pulls or its force leaves its mu_s cone, the stuck feet's modes are decided on their cones
 // at once (contact_modes: stick, slip and which way, or leave); a sliding foot pulling is let go;
 // projected and evaluated again until none changes.
 // decide: the stuck feet's modes decided on their cones in the first round whatever their forces
 // (a located stick to slip, its function at its root: slipping, that foot's bit).
+legsim_status impact(const SpatialRobot &robot, RobotData &d, uint32_t touching, uint32_t arriving,
+                     uint32_t jammed);
 legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = false, uint32_t slipping = 0) {
   uint32_t let_go = 0, let_go_upper = 0;  // the stops let go here (still at their ends)
+  uint32_t dropped = 0;                    // the sliding feet let go here (they pulled)
+  uint32_t jam_done = 0;  // those that took an impact without collision here (once: else it is left free)
+  // the impact without collision of the feet of jammed (its problem's failure the check's)
+  auto jam_impact = [&](uint32_t jammed) {
+    const legsim_status s = impact(robot, d, d.hold.stuck | d.hold.sliding | jammed, 0, jammed);
+    if (s == LEGSIM_OK) ++d.impacts;
+    return s;
+  };
   for (int round = 0; round <= 2 * robot_contacts(robot) + kLegStops * robot.nlegs + 1; ++round) {
     legsim_status st = project(robot, d, d.q, d.v, d.projection_iterations);
     if (st == LEGSIM_OK) st = evaluate(robot, d, d.q, d.v, d.a, d.mu, d.normal_force, true, true);
@@ -356,6 +394,7 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
     d.acc_aux_h = 0;
     const real tol = force_tolerance(robot);
     bool off_cone = decide && round == 0, changed = false;
+    const FeetHold before_round = d.hold;
     uint32_t past_edge = 0;  // stuck feet pressing with their force past the mu_s cone
     // the stop pulling most, let go once the feet's modes hold (a foot's mode changes the stops'
     // multipliers: a stop decided before the feet would be let go and hit again)
@@ -374,41 +413,91 @@ legsim_status settle(const SpatialRobot &robot, RobotData &d, bool decide = fals
           if (N < -tol || Ft > d.ground.mu_static * N + tol) off_cone = true;
           if (N >= -tol && Ft > d.ground.mu_static * N + tol) past_edge |= bit;
         } else if ((d.hold.sliding & bit) && d.normal_force[l] < -tol) {
-          d.hold.sliding &= ~bit, changed = true;
+          d.hold.sliding &= ~bit, changed = true, dropped |= bit;
         }
-      }
-      if (off_cone) {
-        const FeetHold before = d.hold;
-        real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
-        command_forces(robot, d.command, d.q, d.v, F, T);
-        robot_forces(robot, d.q, d.v, F, T, Q);
-        st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
-                           d.rows, d.factor, d.contact_work);
-        if (st != LEGSIM_OK) return st;
-        if (before.stuck) tally(d.cone_stats, d.modes);  // (no stuck foot: no problem solved)
-        changed = changed || d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
-        // the cone keeps what the multipliers refuse (unless a stop pulling is why)
-        // the cone keeps a foot stuck at its edge that the multipliers put past it (the two
-        // solves' round-off at the edge): it slips, as a located stick to slip does
-        if (!changed && past_edge && !(decide && round == 0) && pull < 0) {
-          st = contact_modes(robot, d.ground, d.q, d.v, Q, past_edge, d.hold, d.slip_dir, d.modes, d.rows, d.factor,
-                             d.contact_work);
-          if (st != LEGSIM_OK) return st;
-          tally(d.cone_stats, d.modes);
-          changed = d.hold.stuck != before.stuck || d.hold.sliding != before.sliding;
-        }
-        if (!changed && !(decide && round == 0) && pull < 0) return LEGSIM_ERR_CONTACT;
       }
     }
-    if (changed && let_go) {
-      // a foot's mode changed after a stop was let go for it: the stop held again and decided anew
-      // (with the foot held it pulled; with the foot let go it may push)
-      d.hold.stops |= let_go, d.hold.upper |= let_go_upper;
+    // a stuck foot off its cone or a stop pulling: the stuck feet and the held stops decided in
+    // one problem (a stop's push changes the feet's forces and a foot's mode the stops')
+    if (off_cone || pull >= 0) {
+      const FeetHold before = d.hold;
+      real Q[kMaxRobotDof], F[kMaxRobotActuators], T[kMaxLegs];
+      command_forces(robot, d.command, d.q, d.v, F, T);
+      robot_forces(robot, d.q, d.v, F, T, Q);
+      st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
+                         d.rows, d.factor, d.contact_work);
+      // with sliding feet the problem may have no solution (their friction coupled in; Painleve's
+      // case): the stuck feet decided alone with the stops held, then the stop pulling most let
+      // go alone, the sliding feet decided after it (below)
+      const bool unsolved = (st == LEGSIM_ERR_CONTACT || st == LEGSIM_ERR_NOT_CONVERGED) && before.sliding;
+      if (unsolved) {  // the stuck feet alone, the stops held
+        if (st == LEGSIM_ERR_NOT_CONVERGED) tally(d.cone_stats, d.modes);  // (its residual in the statistics)
+        d.hold = before;
+        st = contact_modes(robot, d.ground, d.q, d.v, Q, round == 0 ? slipping : 0u, d.hold, d.slip_dir, d.modes,
+                           d.rows, d.factor, d.contact_work, false);
+      }
+      if (st != LEGSIM_OK) return st;
+      if (before.stuck || before.stops) tally(d.cone_stats, d.modes);  // (none: no problem solved)
+      const uint32_t freed = before.stops & ~d.hold.stops;
+      let_go |= freed, let_go_upper |= before.upper & freed;
+      bool decided = d.hold.stuck != before.stuck || d.hold.sliding != before.sliding || freed;
+      // the cone keeps a foot stuck at its edge that the multipliers put past it (the two
+      // solves' round-off at the edge): it slips, as a located stick to slip does
+      if (!decided && !unsolved && past_edge && !(decide && round == 0)) {
+        st = contact_modes(robot, d.ground, d.q, d.v, Q, past_edge, d.hold, d.slip_dir, d.modes, d.rows, d.factor,
+                           d.contact_work);
+        if (st != LEGSIM_OK) return st;
+        tally(d.cone_stats, d.modes);
+        const uint32_t freed2 = before.stops & ~d.hold.stops;
+        let_go |= freed2, let_go_upper |= before.upper & freed2;
+        decided = d.hold.stuck != before.stuck || d.hold.sliding != before.sliding || freed2;
+      }
+      if (!decided && !changed && !(decide && round == 0) && pull < 0) return LEGSIM_ERR_CONTACT;
+      if (decided) {
+        changed = true;
+      } else if (pull >= 0 && !changed) {
+        // the problem keeps a stop its multiplier puts pulling (the two solves' round-off): let go
+        const uint32_t bit = 1u << pull;
+        let_go |= bit, let_go_upper |= d.hold.upper & bit;
+        d.hold.stops &= ~bit, d.hold.upper &= ~bit, changed = true;
+      }
+    } else if (changed && let_go) {
+      // a sliding foot let go after stops were let go for it: with the foot on the ground the
+      // stops pulled, with them let go the foot pulls (Painleve's inconsistent case, a stop's
+      // push moving it into its stop through the foot's friction): an impact without collision
+      // of those feet and stops (still at their ends) in one problem, the feet as if approaching
+      // (contact_impact's jammed)
+      const uint32_t jammed = before_round.sliding & ~d.hold.sliding & ~d.hold.stuck & ~jam_done;
+      if (jammed && d.has_ground) {
+        jam_done |= jammed, dropped &= ~jammed;
+        if ((st = jam_impact(jammed)) != LEGSIM_OK) return st;
+      } else {
+        d.hold.stops |= let_go, d.hold.upper |= let_go_upper;
+      }
       let_go = let_go_upper = 0;
-    } else if (!changed && pull >= 0) {
-      const uint32_t bit = 1u << pull;
-      let_go |= bit, let_go_upper |= d.hold.upper & bit;
-      d.hold.stops &= ~bit, d.hold.upper &= ~bit, changed = true;
+    }
+    if (!changed && dropped && d.has_ground) {
+      // a sliding foot let go here (it pulled) that, let go, accelerates into the ground from
+      // rest on it: no mode keeps it (Painleve's inconsistent case, with a stop or the others'
+      // friction): an impact without collision of it and the feet and strokes at their ends in
+      // one problem, it as if approaching (contact_impact's jammed); the slip it cannot keep is
+      // stopped by its impulse
+      uint32_t jammed = 0;
+      for (uint32_t b = dropped & ~jam_done; b; b &= b - 1) {
+        const int l = __builtin_ctz(b);
+        V3 p, pv;
+        foot_motion(robot, l, d.q, d.v, p, pv);
+        if (dot(p - d.ground.point, d.ground.normal) <= by_precision(1e-9, 1e-5) &&
+            dot(pv, d.ground.normal) <= by_precision(1e-9, 1e-5) &&
+            dot(contact_acceleration(robot, l, d.q, d.v, d.a), d.ground.normal) < -by_precision(1e-9, 1e-4))
+          jammed |= 1u << l;
+      }
+      dropped = 0;
+      jam_done |= jammed;
+      if (jammed) {
+        if ((st = jam_impact(jammed)) != LEGSIM_OK) return st;
+        changed = true;
+      }
     }
     if (!changed) return LEGSIM_OK;
   }
@@ -437,12 +526,14 @@ uint32_t strokes_at_end(const SpatialRobot &robot, FeetHold &hold, const real *q
 // An impact at d's state: the feet of `touching` on their cones and the strokes of `arriving`
 // and those at an end (which count as arrivals when it pushes them) on their stops in one contact
 // problem, the held stops holding (contact_impact).
-legsim_status impact(const SpatialRobot &robot, RobotData &d, uint32_t touching, uint32_t arriving = 0) {
+legsim_status impact(const SpatialRobot &robot, RobotData &d, uint32_t touching, uint32_t arriving,
+                     uint32_t jammed) {
   const uint32_t near = strokes_at_end(robot, d.hold, d.q);
   for (int j = 0; j < robot_contacts(robot); ++j) d.impulse[j] = {0, 0, 0};
   for (int s = 0; s < kMaxHeldStops; ++s) d.stop_impulse[s] = 0;
   const legsim_status st = contact_impact(robot, d.ground, touching, arriving, near, d.q, d.v, d.hold, d.slip_dir,
-                                          d.impulse, d.stop_impulse, d.impact, d.rows, d.factor, d.contact_work);
+                                          d.impulse, d.stop_impulse, d.impact, d.rows, d.factor, d.contact_work,
+                                          jammed);
   if (st != LEGSIM_OK) return st;
   tally(d.cone_stats, d.impact);
   for (uint32_t s = d.hold.stops & near; s; s &= s - 1) ++d.stop_impacts;  // arrivals
@@ -471,7 +562,7 @@ legsim_status stop_arrival(const SpatialRobot &robot, RobotData &d, int l, int k
   // kCapture); a stop pulling at the acceleration level after it is let go by the modes' check
   d.hold.stops |= bit;
   if (hi - x < x - lo) d.hold.upper |= bit;
-  const legsim_status st = impact(robot, d, touching, bit);
+  const legsim_status st = impact(robot, d, touching, bit, 0);
   if (st != LEGSIM_OK) return st;
   ++d.stop_impacts;
   return settle(robot, d);
@@ -520,7 +611,7 @@ legsim_status apply_event(const SpatialRobot &robot, RobotData &d, int l, int k)
             dot(vc, d.ground.normal) < 0)
           touching |= 1u << c;
       }
-    const legsim_status st = impact(robot, d, touching);
+    const legsim_status st = impact(robot, d, touching, 0, 0);
     if (st != LEGSIM_OK) return st;
     ++d.impacts;
   }
@@ -553,7 +644,7 @@ real slip_part(const SpatialRobot &robot, const RobotData &d) {
     // |a_t| / |v_t|): unresolved, it turns the box's path away from the fall line (the parts
     // shrink toward the stop, to h / 256 at least, where a slip below kSlipHold keeps its
     // direction)
-    if (l >= robot.nlegs) rate = std::max(rate, norm(at) / speed);
+    rate = std::max(rate, norm(at) / speed);
   }
   return rate > 0 ? kSlipTurn / rate : kNone;
 }
@@ -596,6 +687,7 @@ legsim_status robot_data_init(const SpatialRobot &robot, const real *q, const re
   d.projection_iterations = d.events = d.impacts = d.stop_impacts = 0;
   d.impact = d.modes = {true, ConeMethod::Newton, 0, 0};
   d.cone_stats = {0, 0, 0, 0};
+  d.pole_sign = 1, d.pole_set = 0, d.pole_check = true;
   return settle(robot, d);
 }
 
@@ -658,8 +750,22 @@ legsim_status robot_step(const SpatialRobot &robot, RobotData &d, real h, Integr
     real e0[kMaxContacts][kLegEvents], e1[kMaxContacts][kLegEvents];
     event_values(robot, d, ref, e0);
     // this part: the rest of the step, or what a slow slip allows (at least 1/256 of the step)
-    const real part = std::min(remaining, std::max(slip_part(robot, d), h / 256));
-    legsim_status st = take(robot, d, part, integrator);
+    real part = std::min(remaining, std::max(slip_part(robot, d), h / 256));
+    // a part whose stages straddle a sliding foot's pole (Painleve's case): shorter, so that the
+    // slip stopped before it (the normal force growing toward it) is located as its event
+    legsim_status st = LEGSIM_OK;
+    d.pole_check = true;
+    for (int halving = 0;; ++halving) {
+      d.pole_crossed = false;
+      st = take(robot, d, part, integrator);
+      if (st == LEGSIM_OK || !d.pole_crossed) break;
+      load(robot, s0, d);
+      // still at the part's start after kPoleParts halvings: not a pole the normal forces grow
+      // toward but a jump of the sign there (a slip's direction switching to its kept one at
+      // kSlipHold): the part taken, its normal forces' jump an event as any
+      if (halving == kPoleParts) d.pole_check = false;
+      else part *= real(0.5);
+    }
     if (st != LEGSIM_OK) return fail(st);
     event_values(robot, d, ref, e1);
     // the crossings: the earliest by the line through the two ends first

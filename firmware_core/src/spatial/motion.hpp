@@ -65,6 +65,8 @@ struct RobotSnapshot {
   ConeReport impact, modes;
   ConeStats cone_stats;
   int projection_iterations, impacts, stop_impacts;
+  int pole_sign;
+  uint32_t pole_set;
 };
 
 struct RobotData {
@@ -91,6 +93,12 @@ struct RobotData {
   int events;                 // contact events located in it
   int impacts;                // touchdowns since data_init
   int stop_impacts;           // arrivals on a stroke's stop since data_init
+  // the sign of the sliding feet's det (I + Lambda) at the last state a part reached, and those
+  // feet (contact_accelerations): a part whose stages find it turned passed a pole (refused)
+  int pole_sign;
+  uint32_t pole_set;
+  bool pole_crossed;          // the last refusal was that turn
+  bool pole_check;            // the turn refused (robot_step's parts)
   ConeReport impact;          // the last impact's contact problem
   ConeReport modes;           // the last decision of the stuck feet's modes (contact_modes)
   ConeStats cone_stats;       // every contact problem's since data_init
