@@ -48,10 +48,10 @@ legsim_status project(const SpatialRobot &robot, RobotData &d, real *q, real *v,
   bool factored = false;
   iterations = 0;
   for (;;) {
-    system_rows(robot, d.hold, q, zero_v, d.rows_work);
+    system_phi(robot, d.hold, q, g);  // the residual needs the rows' phi alone
     real worst = 0, worst_stop = 0;
     for (int i = 0; i < n; ++i) {
-      g[idx[i]] = -d.rows_work[idx[i]].phi;
+      g[idx[i]] = -g[idx[i]];
       const real e = std::abs(g[idx[i]]);
       if (!(e <= worst)) worst = e;  // a NaN too
       if (idx[i] >= robot.m + 3 * kMaxContacts) worst_stop = std::max(worst_stop, e);

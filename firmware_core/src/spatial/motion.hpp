@@ -106,7 +106,7 @@ struct RobotData {
   real stop_impulse[kMaxHeldStops];  // N s, N m s (>= 0): each stop's (bit 3 l + k) at the last impact
   // work space: the rows at the last evaluation and their factor, the contact solves' columns,
   // the step's snapshots (not on the stack: about 110 KB together in double)
-  Row rows[kMaxSystemRows], rows_work[kMaxSystemRows];
+  Row rows[kMaxSystemRows];
   RobotFactor factor;
   ContactWork contact_work;
   RobotSnapshot snapshot[2];
