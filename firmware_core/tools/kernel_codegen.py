@@ -527,7 +527,7 @@ class Kernel:
                 o.append(f"  {a}[{self.at(p, q)}] = {v};")
         return o
 
-    def solve_locals(self, src, dst, lval="L", tmp="u"):
+    def solve_locals(self, src, dst, lval="L", tmp="u", zero=()):
         """L D L^T y = b with b_p = src(row at p), into dst(row at p): factor_solve's
         permutation folded in, the same operations in the same order as its forward solve,
         scaling and backward solve."""
@@ -535,6 +535,8 @@ class Kernel:
         iD = (lambda p: f"iD{p}") if lval == "L" else (lambda p: L(p, p))  # a's diagonal: 1 / D_p
         o = []
         u = tmp
+        if zero:
+            return self.sparse_solve_locals(src, dst, L, iD, u, zero)
         for p in range(self.m):
             sub = "".join(f" - {L(p, k)} * {u}{k}" for k in self.l_nz[p])
             o.append(f"  real {u}{p} = {src(self.row_at[p])}{sub};")
@@ -542,6 +544,29 @@ class Kernel:
         for p in reversed(range(self.m)):
             o += [f"  {u}{k} -= {L(p, k)} * {u}{p};" for k in self.l_nz[p]]
         o += [f"  {dst(self.row_at[p])} = {u}{p};" for p in range(self.m)]
+        return o
+
+    def sparse_solve_locals(self, src, dst, L, iD, u, zero):
+        """solve_locals' with the rows in zero known to be zero on the right: the entries of
+        y still zero are left out (0 - x for a first term: x's value to the sign of a zero)."""
+        nz, o = set(), []
+        for p in range(self.m):
+            sub = "".join(f" - {L(p, k)} * {u}{k}" for k in self.l_nz[p] if k in nz)
+            if self.row_at[p] in zero and not sub:
+                continue
+            nz.add(p)
+            o.append(f"  real {u}{p} = {'real(0)' if self.row_at[p] in zero else src(self.row_at[p])}{sub};")
+        o += [f"  {u}{p} *= {iD(p)};" for p in range(self.m) if p in nz]
+        for p in reversed(range(self.m)):
+            if p not in nz:
+                continue
+            for k in self.l_nz[p]:
+                if k in nz:
+                    o.append(f"  {u}{k} -= {L(p, k)} * {u}{p};")
+                else:
+                    nz.add(k)
+                    o.append(f"  real {u}{k} = real(0) - {L(p, k)} * {u}{p};")
+        o += [f"  {dst(self.row_at[p])} = {u + str(p) if p in nz else 'real(0)'};" for p in range(self.m)]
         return o
 
     def accelerations_locals(self, lval):
@@ -1032,11 +1057,15 @@ class Reduced(Kernel):
         o = [f"  real fc[3];  // contact {c}'s friction column, on body {bs}",
              f"  friction_column_trig(model, data, {c}, s{bs}, c{bs}, fc);"]
         o += [f"  const real mf{x} = -(w[{3 * bs + x}] * fc[{x}]);" for x in range(3)]
+        zero = set()
         for i in range(self.m):
             dots = [product([(self.coef(i, s, x, True)[0], self.coef(i, s, x, True)[1] + [f"mf{x}"]) for x in range(3)])
                     for s in range(2) if self.rows[i][0][s] == bs]
-            o.append(f"  const real v{i} = {group(dots) if dots else 'real(0)'};")
-        o += self.solve_locals(lambda i: f"v{i}", lambda i: f"const real zz{i}", tmp="y")
+            if dots:
+                o.append(f"  const real v{i} = {group(dots)};")
+            else:
+                zero.add(i)
+        o += self.solve_locals(lambda i: f"v{i}", lambda i: f"const real zz{i}", tmp="y", zero=zero)
         o.append(f"  const real cs = 1 + zz{rn};")
         o.append("  if (!(std::abs(cs) > real(1e-9))) return LEGSIM_ERR_CONTACT;  // woodbury's floor (Painleve)")
         o.append(f"  const real ys = x{rn} / cs;")

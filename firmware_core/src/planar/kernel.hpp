@@ -208,12 +208,19 @@ struct StagePlan {
 // by the joints' structure; a sliding stance's also needs the model's stance kernel (its
 // actuators' joints checked: the stages apply their forces).
 inline bool stage_available(const Model &m, const Layout &layout) {
-#if LEGSIM_KERNELS_REDUCED
+#if LEGSIM_KERNELS_REDUCED && LEGSIM_MAX_CONTACTS >= 2
   return layout.path.stage && (layout.path.stage == layout.path.reduced || m.stance_kernel);
 #else
   (void)m;
-  (void)layout;
-  return false;
+  return reduced_available(layout);
+#endif
+}
+// Its kernel where stage_available.
+inline const Kernel *stage_kernel(const Layout &layout) {
+#if LEGSIM_MAX_CONTACTS >= 2
+  return layout.path.stage;
+#else
+  return layout.path.reduced;
 #endif
 }
 inline StagePlan stage_plan(const Model &m, Data &d, const Layout &layout) {
@@ -221,7 +228,7 @@ inline StagePlan stage_plan(const Model &m, Data &d, const Layout &layout) {
   if (!stage_available(m, layout)) return p;
   const uint32_t disable = layout_disable(m, layout);
   if (force_elements_act(d, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
-  p.kernel = layout.path.stage;
+  p.kernel = stage_kernel(layout);
   p.dv = layout.stops ? &d.stop_drivers : &d.drivers;
   p.base = &m.gravity_force;
   p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);

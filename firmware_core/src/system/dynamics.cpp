@@ -76,7 +76,7 @@ legsim_status dynamics_stage_solve(const Model &m, Data &d, const Layout &layout
   if (stage_available(m, layout)) {
     bool actuators, elements;
     const VecQ &base = reduced_base(m, d, layout, q, qd, actuators, elements);
-    return reduced_stage(m, d, *layout.path.stage, layout.stops ? d.stop_drivers : d.drivers, base, actuators,
+    return reduced_stage(m, d, *stage_kernel(layout), layout.stops ? d.stop_drivers : d.drivers, base, actuators,
                          q, qd, qdd);
   }
 #endif

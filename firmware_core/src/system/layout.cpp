@@ -229,6 +229,7 @@ void layout_path(Layout &out) {
   out.path.factored = whole && k->factored ? k : nullptr;
 #if LEGSIM_KERNELS_REDUCED
   out.path.reduced = whole && k->accelerations && k->end ? k : nullptr;
+#if LEGSIM_MAX_CONTACTS >= 2
   out.path.stage = out.path.reduced;
   // after the joint kernel's block, every contact's rows in contact order, one contact's
   // normal row alone (sliding: Data::dyn's rows follow the contacts' states) and the others'
@@ -252,9 +253,12 @@ void layout_path(Layout &out) {
       ok = s->nc == c && out.body[r][0] == s->contact_body[out.src[r].index];
     if (s && ok && c == s->nc && s->mj == out.m) out.path.stage = s;
   }
+#endif
 #else
   out.path.reduced = nullptr;  // a build without them leaves their callers out too
+#if LEGSIM_MAX_CONTACTS >= 2
   out.path.stage = nullptr;
+#endif
 #endif
 }
 
