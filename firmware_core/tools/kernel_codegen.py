@@ -245,7 +245,8 @@ def group(dots):
 
 class Kernel:
     """The kernel of one structure: its joint rows (a joint kernel), or its joint rows and
-    both rows of every contact, all stuck (a stance kernel: the robot standing)."""
+    both rows of every contact, all stuck (a stance kernel: the robot standing), or with
+    slide that contact's normal row alone (RK4's stages with one foot sliding, emit_slide)."""
 
     def __init__(self, name, model, stance=False, slide=None):
         self.name = name
@@ -999,7 +1000,8 @@ class Reduced(Kernel):
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
         slide = self.slide is not None and not end
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {'x' if slide else 'l'}{i}" if slide else f"const real {lname(i)}")
+        # with a sliding foot, x = A^-1 b first (friction_locals gives the multipliers)
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real x{i}" if slide else f"const real {lname(i)}")
         if slide:
             o += self.friction_locals()
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
