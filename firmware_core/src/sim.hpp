@@ -176,6 +176,11 @@ struct Layout {
     const Kernel *newton;    // Kernel::newton, generalized-alpha's Newton iteration
     const Kernel *factored;  // Kernel::factored, the solve with a given factor
     const Kernel *reduced;   // Kernel::accelerations and Kernel::end, RK4 in the reduced system
+#if LEGSIM_MAX_CONTACTS >= 2
+    // Kernel::accelerations, RK4's stages: reduced's, or with one contact sliding and the
+    // others stuck after the joint rows, that stance's (kernel_find_slide)
+    const Kernel *stage;
+#endif
   } path;
 };
 

@@ -245,10 +245,14 @@ def group(dots):
 
 class Kernel:
     """The kernel of one structure: its joint rows (a joint kernel), or its joint rows and
-    both rows of every contact, all stuck (a stance kernel: the robot standing)."""
+    both rows of every contact, all stuck (a stance kernel: the robot standing), or with
+    slide that contact's normal row alone (RK4's stages with one foot sliding, emit_slide)."""
 
-    def __init__(self, name, model, stance=False):
+    def __init__(self, name, model, stance=False, slide=None):
         self.name = name
+        # slide: a stance's contact that slides (its normal row alone, mu_k N along the
+        # ground on its normal multiplier: RK4's stages only, Reduced)
+        self.slide = slide
         self.nb = len(model["bodies"])
         self.joints = model["joints"]
         self.contacts = model.get("contacts", []) if stance else []
@@ -256,8 +260,10 @@ class Kernel:
         self.actuators = [(a["joint"], *self.joints[a["joint"]]["body"]) for a in model.get("actuators", [])]
         self.rows = joint_rows(self.joints)
         mj = len(self.rows)
-        for c in self.contacts:  # normal then tangential row, on the foot's body alone
-            self.rows += [((c["body"], -1), ((V, V, V), (0, 0, 0)))] * 2
+        self.contact_row = []  # per contact: its first row
+        for n, c in enumerate(self.contacts):  # normal then tangential row, on the foot's body alone
+            self.contact_row.append(len(self.rows))
+            self.rows += [((c["body"], -1), ((V, V, V), (0, 0, 0)))] * (1 if n == slide else 2)
         # the joint rows in reverse Cuthill-McKee order, the contact rows after them as the
         # general path places rows after a joint kernel's block (so both factor alike)
         self.structure(mj)
@@ -413,18 +419,18 @@ class Kernel:
             o += self.joint_locals(n, j, r, part)
             r += NROWS[j["kind"]]
         for k, c in enumerate(self.contacts):
-            o += self.contact_locals(k, c["body"], r, part)
-            r += 2
+            o += self.contact_locals(k, c["body"], r, part, stuck=k != self.slide)
+            r += 2 if k != self.slide else 1
         return o
 
     @staticmethod
-    def contact_locals(k, b, r, part=None):
+    def contact_locals(k, b, r, part=None, stuck=True):
         """A stuck contact's two rows from contact_row (rows.hpp), as the general path sums
         them (rows_eval: onto 0): the gap along the ground's normal, the offset along its
         tangent from the stick point. part: as joint_locals' (the unit called in each part,
         its gamma taken in "v", once the pose has its velocity)."""
-        o = [f"  // contact {k}: stuck, rows {r}.."]
-        for e, row, target in (("ground_n", r, "real(0)"), ("ground_t", r + 1, f"dv.stick[{k}]")):
+        o = [f"  // contact {k}: {'stuck' if stuck else 'sliding'}, rows {r}.."]
+        for e, row, target in (("ground_n", r, "real(0)"), ("ground_t", r + 1, f"dv.stick[{k}]"))[:2 if stuck else 1]:
             if part != "v":
                 o.append(f"  real phi{row}, " + ", ".join(f"c{row}_0_{x}" for x in range(3)) + ";")
             if part != "q":
@@ -522,20 +528,46 @@ class Kernel:
                 o.append(f"  {a}[{self.at(p, q)}] = {v};")
         return o
 
-    def solve_locals(self, src, dst, lval="L"):
+    def solve_locals(self, src, dst, lval="L", tmp="u", zero=()):
         """L D L^T y = b with b_p = src(row at p), into dst(row at p): factor_solve's
         permutation folded in, the same operations in the same order as its forward solve,
         scaling and backward solve."""
         L = (lambda p, k: f"L{p}_{k}") if lval == "L" else (lambda p, k: f"a[{self.at(p, k)}]")
         iD = (lambda p: f"iD{p}") if lval == "L" else (lambda p: L(p, p))  # a's diagonal: 1 / D_p
         o = []
+        u = tmp
+        if zero:
+            return self.sparse_solve_locals(src, dst, L, iD, u, zero)
         for p in range(self.m):
-            sub = "".join(f" - {L(p, k)} * u{k}" for k in self.l_nz[p])
-            o.append(f"  real u{p} = {src(self.row_at[p])}{sub};")
-        o += [f"  u{p} *= {iD(p)};" for p in range(self.m)]
+            sub = "".join(f" - {L(p, k)} * {u}{k}" for k in self.l_nz[p])
+            o.append(f"  real {u}{p} = {src(self.row_at[p])}{sub};")
+        o += [f"  {u}{p} *= {iD(p)};" for p in range(self.m)]
         for p in reversed(range(self.m)):
-            o += [f"  u{k} -= {L(p, k)} * u{p};" for k in self.l_nz[p]]
-        o += [f"  {dst(self.row_at[p])} = u{p};" for p in range(self.m)]
+            o += [f"  {u}{k} -= {L(p, k)} * {u}{p};" for k in self.l_nz[p]]
+        o += [f"  {dst(self.row_at[p])} = {u}{p};" for p in range(self.m)]
+        return o
+
+    def sparse_solve_locals(self, src, dst, L, iD, u, zero):
+        """solve_locals' with the rows in zero known to be zero on the right: the entries of
+        y still zero are left out (0 - x for a first term: x's value to the sign of a zero)."""
+        nz, o = set(), []
+        for p in range(self.m):
+            sub = "".join(f" - {L(p, k)} * {u}{k}" for k in self.l_nz[p] if k in nz)
+            if self.row_at[p] in zero and not sub:
+                continue
+            nz.add(p)
+            o.append(f"  real {u}{p} = {'real(0)' if self.row_at[p] in zero else src(self.row_at[p])}{sub};")
+        o += [f"  {u}{p} *= {iD(p)};" for p in range(self.m) if p in nz]
+        for p in reversed(range(self.m)):
+            if p not in nz:
+                continue
+            for k in self.l_nz[p]:
+                if k in nz:
+                    o.append(f"  {u}{k} -= {L(p, k)} * {u}{p};")
+                else:
+                    nz.add(k)
+                    o.append(f"  real {u}{k} = real(0) - {L(p, k)} * {u}{p};")
+        o += [f"  {dst(self.row_at[p])} = {u + str(p) if p in nz else 'real(0)'};" for p in range(self.m)]
         return o
 
     def accelerations_locals(self, lval):
@@ -756,6 +788,17 @@ class Kernel:
         return "\n".join(o) + "\n" + self.emit_tables(sym, f"{sym}_dynamics", f"{sym}_newton", f"{sym}_factored",
                                                     fused)
 
+    def emit_slide(self, sym):
+        """A stance with one sliding foot (slide): RK4's stage solve alone (Kernel::accelerations,
+        Reduced with the stuck feet as pins and the friction as one column); the rest of the
+        table empty (the layout's joint kernel serves every other solve)."""
+        stage = Reduced(self, contact_pins=True)
+        o = stage.emit_accelerations(sym)
+        t = self.emit_tables(sym, "nullptr", "nullptr", "nullptr", f"{sym}_accelerations, nullptr, nullptr")
+        for f in ("rows", "factor", "forward", "backward", "solve", "j_times", "jt_times"):
+            t = t.replace(f"{sym}_{f},", "nullptr,")
+        return "\n".join(o) + "\n" + t
+
     def emit_tables(self, sym, dynamics, newton, factored, reduced="nullptr, nullptr, nullptr"):
         o = []
         sig = ", ".join(f"{{{KIND[j['kind']]}, {j['body'][0]}, {j['body'][1]}}}" for j in self.joints)
@@ -801,6 +844,7 @@ class Reduced(Kernel):
 
     def __init__(self, k, contact_pins=False):
         self.name, self.nb, self.joints, self.contacts, self.actuators = k.name, k.nb, k.joints, k.contacts, k.actuators
+        self.slide = k.slide
         self.full = k
         first_row, r = [], 0
         for j in k.joints:
@@ -818,9 +862,9 @@ class Reduced(Kernel):
         if contact_pins:
             feet = [c["body"] for c in k.contacts]
             for c, b in enumerate(feet):
-                if b in self.pinned or feet.count(b) > 1:
+                if b in self.pinned or feet.count(b) > 1 or c == k.slide:
                     continue
-                r = sum(NROWS[j["kind"]] for j in k.joints) + 2 * c
+                r = k.contact_row[c]
                 self.pinned[b] = Pin(f"psx{c}", f"psy{c}", f"pg{c}_0", f"pg{c}_1", r, None)
                 a, e = [f"c{r}_0_{x}" for x in range(3)], [f"c{r + 1}_0_{x}" for x in range(3)]
                 self.pin_defs.append(f"  real psx{c}, psy{c}, pg{c}_0, pg{c}_1;  // contact {c} as a pin (body {b})")
@@ -955,12 +999,18 @@ class Reduced(Kernel):
             lname = lambda i: f"l{self.orig[i]}"  # noqa: E731  (the whole system's row)
         o += [f"  const real b{i} = {self.j_expr(i, lambda n: f't{n}', True)} - gr{self.orig[i]};"
               for i in range(self.m)]
-        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real {lname(i)}")
+        slide = self.slide is not None and not end
+        # with a sliding foot, x = A^-1 b first (friction_locals gives the multipliers)
+        o += self.solve_locals(lambda i: f"b{i}", lambda i: f"const real x{i}" if slide else f"const real {lname(i)}")
+        if slide:
+            o += self.friction_locals()
         o.append("  real z = 0;  // x * 0 is NaN for an infinite or NaN x only")
         for n in range(nq):
             b, x = divmod(n, 3)
             jt = self.jt_expr(n, lambda i: lname(i), True)
-            if b not in self.pinned:
+            if slide and b == k.contacts[self.slide]["body"]:
+                o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({jt}) + fc[{x}] * ln);")
+            elif b not in self.pinned:
                 o.append(f"  qdd[{n}] = w[{n}] * (Q{n} - ({jt}));")
                 o.append(f"  z += qdd[{n}] * real(0);")
             elif x == 2:
@@ -994,6 +1044,35 @@ class Reduced(Kernel):
         else:
             o.append("  return z == z ? LEGSIM_OK : LEGSIM_ERR_DIVERGED;")
         o.append("}\n")
+        return o
+
+    def friction_locals(self):
+        """The sliding contact's friction (mu_k N along the ground: M qdd = Q - J^T l + f l_n,
+        f its friction column) as one Sherman-Morrison column, the general path's woodbury
+        with one column: with x = A^-1 b (x<i>) and zz = A^-1 u, u = -J W f, l = x - zz x_n /
+        (1 + zz_n) (l<i>, ln: the normal row's). Its body moves on its own coordinates."""
+        k = self.full
+        c = self.slide
+        bs = k.contacts[c]["body"]
+        assert bs not in self.pinned
+        rn = self.orig.index(k.contact_row[c])
+        o = [f"  real fc[3];  // contact {c}'s friction column, on body {bs}",
+             f"  friction_column_trig(model, data, {c}, s{bs}, c{bs}, fc);"]
+        o += [f"  const real mf{x} = -(w[{3 * bs + x}] * fc[{x}]);" for x in range(3)]
+        zero = set()
+        for i in range(self.m):
+            dots = [product([(self.coef(i, s, x, True)[0], self.coef(i, s, x, True)[1] + [f"mf{x}"]) for x in range(3)])
+                    for s in range(2) if self.rows[i][0][s] == bs]
+            if dots:
+                o.append(f"  const real v{i} = {group(dots)};")
+            else:
+                zero.add(i)
+        o += self.solve_locals(lambda i: f"v{i}", lambda i: f"const real zz{i}", tmp="y", zero=zero)
+        o.append(f"  const real cs = 1 + zz{rn};")
+        o.append("  if (!(std::abs(cs) > real(1e-9))) return LEGSIM_ERR_CONTACT;  // woodbury's floor (Painleve)")
+        o.append(f"  const real ys = x{rn} / cs;")
+        o += [f"  const real l{i} = x{i} - zz{i} * ys;" for i in range(self.m)]
+        o.append(f"  const real ln = l{rn};")
         return o
 
     def emit_end_factored(self, sym):
@@ -1126,7 +1205,7 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
     fused_max_rows, only to kernels of at most that many rows: each is straight-line code
     whose size grows with the square of the factor's fill (the robot's stance kernel's
     pair is about 120 KB on a Cortex-M7)."""
-    kernels, seen = [], set()
+    kernels, seen, slides, sym_of = [], set(), [], {}
     for path in paths:
         stem = os.path.splitext(os.path.basename(path))[0]
         variants = load_structure(path)
@@ -1144,7 +1223,18 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
                     continue  # the general path's Schur complement on the box serves it
                 if k.signature() not in seen:
                     seen.add(k.signature())
-                    kernels.append((f"kernel_{stem}_{variant}" + ("_stance" if stance else ""), k))
+                    sym_of[k.signature()] = f"kernel_{stem}_{variant}" + ("_stance" if stance else "")
+                    kernels.append((sym_of[k.signature()], k))
+                    # RK4's stages with one foot sliding, the others stuck (a robot's: two
+                    # contacts or more, on bodies no joint pins)
+                    pinned = pinned_bodies(k.joints)
+                    if stance and reduced and len(k.contacts) > 1:
+                        for c, con in enumerate(k.contacts):
+                            if con["body"] not in pinned:
+                                ks = Kernel(f"{k.name} slide {c}", model, True, slide=c)
+                                joints = sym_of.get(Kernel("", model).signature())
+                                if joints:
+                                    slides.append((f"kernel_{stem}_{variant}_slide{c}", ks, joints))
     o = ["// Generated by firmware_core/tools/kernel_codegen.py from "
          + (", ".join(os.path.basename(p) for p in paths) or "no model (LEGSIM_KERNELS=OFF)")
          + ". Do not edit.",
@@ -1166,6 +1256,12 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
                  f"{nl} of its factor")
         o.append(k.emit(sym))
         o.append("#endif\n")
+    for sym, k, _ in slides:
+        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)} && "
+                 f"LEGSIM_MAX_CONTACTS >= {len(k.contacts)} && LEGSIM_KERNELS_REDUCED")
+        o.append(f"// {k.name}: RK4's stage alone, {k.m} rows")
+        o.append(k.emit_slide(sym))
+        o.append("#endif\n")
     o.append("const Kernel *const kKernels[] = {")
     for sym, k in kernels:
         o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)} && "
@@ -1173,7 +1269,22 @@ def generate(paths, default_only=False, stance_kernels=True, fused_max_rows=None
         o.append(f"    &{sym},")
         o.append("#endif")
     o.append("    nullptr};")
+    o.append("// a joint kernel -> its stance's stages with contact `slide` sliding")
+    o.append("struct Slide { const Kernel *joints; int slide; const Kernel *stage; };")
+    o.append("const Slide kSlides[] = {")
+    for sym, k, stance in slides:
+        o.append(f"#if LEGSIM_MAX_BODIES >= {k.nb} && LEGSIM_MAX_JOINTS >= {len(k.joints)} && "
+                 f"LEGSIM_MAX_CONTACTS >= {len(k.contacts)} && LEGSIM_KERNELS_REDUCED")
+        o.append(f"    {{&{stance}, {k.slide}, &{sym}}},")
+        o.append("#endif")
+    o.append("    {nullptr, -1, nullptr}};")
     o.append("}  // namespace\n")
+    o.append("""const Kernel *kernel_find_slide(const Kernel *joints, int slide) {
+  for (const Slide *s = kSlides; s->joints; ++s)
+    if (s->joints == joints && s->slide == slide) return s->stage;
+  return nullptr;
+}
+""")
     o.append("""const Kernel *kernel_find(const Model &model, bool stance) {
   const int nc = stance ? model.nc : 0;
   if (stance && nc == 0) return nullptr;

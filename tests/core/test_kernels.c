@@ -7,8 +7,9 @@
  * and the robot (feet stuck; on slippery ground, where a foot slides and one lifts off).
  * The general path factors the joint block in the kernel's order, so the two agree bit
  * for bit here, except RK4: its stages and its end solve the kernel's reduced system (on the
- * leg the bodies pinned to the frame on their angles alone; on the robot all its rows) in
- * another copy (FMA), which agrees to round-off (7.3e-12 relative over 1 s on the leg's stop,
+ * leg the bodies pinned to the frame on their angles alone; on the robot all its rows; its
+ * stages with one foot sliding the stance's with the stuck foot as a pin and the friction as
+ * one Sherman-Morrison column) in another copy (FMA), which agrees to round-off (7.3e-12 relative over 1 s on the leg's stop,
  * where the multipliers of a stiff servo amplify it). The tolerances allow for round-off
  * only, and the sliding
  * robot's RK4 run is compared until the paths first take different contact modes after an

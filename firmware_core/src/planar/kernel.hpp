@@ -203,12 +203,32 @@ struct StagePlan {
   const VecQ *base;
   bool actuators;
 };
+// Whether RK4's stages on layout take a generated solve (Kernel::accelerations: the reduced
+// system's, or a stance's with one foot sliding): layout.path.stage, chosen when it was built
+// by the joints' structure; a sliding stance's also needs the model's stance kernel (its
+// actuators' joints checked: the stages apply their forces).
+inline bool stage_available(const Model &m, const Layout &layout) {
+#if LEGSIM_KERNELS_REDUCED && LEGSIM_MAX_CONTACTS >= 2
+  return layout.path.stage && (layout.path.stage == layout.path.reduced || m.stance_kernel);
+#else
+  (void)m;
+  return reduced_available(layout);
+#endif
+}
+// Its kernel where stage_available.
+inline const Kernel *stage_kernel(const Layout &layout) {
+#if LEGSIM_MAX_CONTACTS >= 2
+  return layout.path.stage;
+#else
+  return layout.path.reduced;
+#endif
+}
 inline StagePlan stage_plan(const Model &m, Data &d, const Layout &layout) {
   StagePlan p{&layout, nullptr, nullptr, nullptr, false};
-  if (!reduced_available(layout)) return p;
+  if (!stage_available(m, layout)) return p;
   const uint32_t disable = layout_disable(m, layout);
   if (force_elements_act(d, disable) || (disable & LEGSIM_DISABLE_GRAVITY)) return p;
-  p.kernel = layout.path.reduced;
+  p.kernel = stage_kernel(layout);
   p.dv = layout.stops ? &d.stop_drivers : &d.drivers;
   p.base = &m.gravity_force;
   p.actuators = !(disable & LEGSIM_DISABLE_ACTUATORS);
@@ -256,9 +276,29 @@ inline void rows_pin(real a0, real a1, real a2, real b0, real b1, real b2, real 
   g1 = (a0 * gb - b0 * ga) * id;
 }
 
+// A sliding contact k's friction column (friction_column's arithmetic, contact.cpp) from its
+// body's sin s and cos c (the stages' own pair: no sin/cos of its own).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void friction_column_trig(const Model &m, const Data &d, int k, real s, real c, real (&f)[kBodyDof]) {
+  const Vec2 &p = m.contact[k].point;
+  // p.x u + p.y n, u = (s, -c), n = (c, s)
+  const real spx = p.x() * s + p.y() * c, spy = p.x() * -c + p.y() * s;
+  const real g = real(d.contact[k].slip_dir) * m.mu_k;
+  f[0] = g * m.ground_t.x();
+  f[1] = g * m.ground_t.y();
+  f[2] = g * (m.ground_t.x() * -spy + m.ground_t.y() * spx);
+}
+
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr
 // (the general path).
 const Kernel *kernel_find(const Model &model, bool stance = false);
+// The stages (Kernel::accelerations alone) of the stance of joint kernel joints' structure
+// with contact slide sliding (its normal row alone, mu_k N along the ground on its
+// multiplier: one Sherman-Morrison column, the general path's woodbury) and the others
+// stuck, or nullptr.
+const Kernel *kernel_find_slide(const Kernel *joints, int slide);
 
 }  // namespace legsim
 

@@ -73,10 +73,10 @@ legsim_status dynamics_solve(const Model &m, Data &d, const Layout &layout, cons
 
 legsim_status dynamics_stage_solve(const Model &m, Data &d, const Layout &layout, const VecQ &q, const VecQ &qd, VecQ &qdd) {
 #if LEGSIM_KERNELS_REDUCED
-  if (reduced_available(layout)) {
+  if (stage_available(m, layout)) {
     bool actuators, elements;
     const VecQ &base = reduced_base(m, d, layout, q, qd, actuators, elements);
-    return reduced_stage(m, d, *layout.path.reduced, layout.stops ? d.stop_drivers : d.drivers, base, actuators,
+    return reduced_stage(m, d, *stage_kernel(layout), layout.stops ? d.stop_drivers : d.drivers, base, actuators,
                          q, qd, qdd);
   }
 #endif

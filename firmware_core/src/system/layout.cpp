@@ -229,8 +229,36 @@ void layout_path(Layout &out) {
   out.path.factored = whole && k->factored ? k : nullptr;
 #if LEGSIM_KERNELS_REDUCED
   out.path.reduced = whole && k->accelerations && k->end ? k : nullptr;
+#if LEGSIM_MAX_CONTACTS >= 2
+  out.path.stage = out.path.reduced;
+  // after the joint kernel's block, every contact's rows in contact order, one contact's
+  // normal row alone (sliding: Data::dyn's rows follow the contacts' states) and the others'
+  // both (stuck): the stages of that stance with the sliding foot
+  if (!out.path.stage && k && k->nc == 0) {
+    int slide = -1, c = 0, i = k->mj;
+    bool ok = true;
+    while (ok && i < out.m) {
+      ok = out.src[i].kind == RowKind::ContactNormal && out.src[i].index == c;
+      if (ok && i + 1 < out.m && out.src[i + 1].kind == RowKind::ContactTangent && out.src[i + 1].index == c) {
+        i += 2;
+      } else {
+        ok = ok && slide < 0;
+        slide = c;
+        ++i;
+      }
+      ++c;
+    }
+    const Kernel *s = ok && slide >= 0 ? kernel_find_slide(k, slide) : nullptr;
+    for (int r = k->mj; s && ok && r < out.m; ++r)  // on the stance's feet
+      ok = s->nc == c && out.body[r][0] == s->contact_body[out.src[r].index];
+    if (s && ok && c == s->nc && s->mj == out.m) out.path.stage = s;
+  }
+#endif
 #else
   out.path.reduced = nullptr;  // a build without them leaves their callers out too
+#if LEGSIM_MAX_CONTACTS >= 2
+  out.path.stage = nullptr;
+#endif
 #endif
 }
 
