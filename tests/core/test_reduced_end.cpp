@@ -6,7 +6,8 @@
 // system where each pinned body keeps its angle alone, must give the same velocities,
 // accelerations, multipliers and reactions to round-off. Also what the end leaves alone:
 // the velocities unless it solves, and a step whose positions need projecting. And RK4's
-// stage on the robot's stuck feet, pinned to the ground by their contact rows (rows_pin).
+// stage on the robot's stuck feet, pinned to the ground by their contact rows (rows_pin),
+// and with one foot sliding (the generated one-slide stage, kernel_find_slide).
 // Built only where the core has the reduced solves, in double (tests/core/CMakeLists.txt).
 #include <cmath>
 #include <cstdio>
@@ -283,6 +284,82 @@ void test_stage_with_feet_as_pins(void) {
   TEST_ASSERT_TRUE(qdds > 1);
   TEST_ASSERT_TRUE(dqdd <= 1e-12 * qdds);
 }
+
+// The robot on slippery ground (mu 0.1) under the Fig. 7 push (test_kernels.c's sliding
+// scene) after n steps: contact 1 slides from step 14, contact 0 too from step 56.
+legsim_model_desc slippery;  // outlives the sim
+Sim &slippery_robot(int n) {
+  slippery = legsim_model_robot_revolute;
+  slippery.ground.mu_static = slippery.ground.mu_kinetic = 0.1;
+  legsim_options opt = legsim_default_options();
+  opt.integrator = LEGSIM_INTEGRATOR_RK4;
+  legsim_sim *sim = nullptr;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &slippery, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, nullptr, 0.0));
+  legsim_real len[LEGSIM_MAX_ACTUATORS];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, len, nullptr));
+  for (int a = 1; a < 4; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 185.55));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
+  Sim &s = *reinterpret_cast<Sim *>(sim);
+  TEST_ASSERT_EQUAL_INT(2, s.model.nc);
+  return s;
+}
+void expect_states(Sim &s, legsim_contact_state c0, legsim_contact_state c1) {
+  legsim_contact c[2];
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_contacts(reinterpret_cast<legsim_sim *>(&s), c));
+  TEST_ASSERT_EQUAL_INT(c0, c[0].state);
+  TEST_ASSERT_EQUAL_INT(c1, c[1].state);
+}
+
+// RK4's stage with one foot sliding and the other stuck: the layout's stage path is the
+// generated one-slide kernel (kernel_find_slide), and its qdd at a stage's state (as
+// test_stage_with_feet_as_pins) is the general path's (legsim_kernel_use off). The stage
+// gives no multipliers (Kernel::accelerations): qdd alone is compared. With both feet stuck
+// or both sliding, the stage path is not a one-slide kernel.
+void test_stage_with_one_foot_sliding(void) {
+  Sim &s = slippery_robot(30);
+  expect_states(s, LEGSIM_CONTACT_STUCK, LEGSIM_CONTACT_SLIDING);
+  Data &d = s.data;
+  const Model &m = s.model;
+  TEST_ASSERT_NOT_NULL(m.kernel);
+  const Kernel *slide1 = kernel_find_slide(m.kernel, 1);
+  TEST_ASSERT_NOT_NULL(slide1);
+  TEST_ASSERT_TRUE(slide1 != kernel_find_slide(m.kernel, 0));
+  TEST_ASSERT_EQUAL_PTR(slide1, d.dyn.path.stage);
+  TEST_ASSERT_NULL(d.dyn.path.reduced);  // not the whole system's: the sliding foot's one row
+  const StagePlan plan = stage_plan(m, d, d.dyn);
+  TEST_ASSERT_EQUAL_PTR(slide1, plan.kernel);
+
+  const int n = m.nq;
+  const VecQ v = drifted(d.qd, n);
+  VecQ q = d.q;
+  for (int k = 0; k < n; ++k) q[k] += real(0.0005) * v[k];
+  VecQ qdd, qdd_ref;
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_stage(m, d, plan, q, v, qdd));
+  TEST_ASSERT_EQUAL_INT(0, legsim_kernel_use(reinterpret_cast<legsim_sim *>(&s), 0));
+  TEST_ASSERT_NULL(d.dyn.path.stage);
+  const StagePlan general = stage_plan(m, d, d.dyn);
+  TEST_ASSERT_NULL(general.kernel);
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_stage(m, d, general, q, v, qdd_ref));
+  const real dqdd = max_abs(qdd.data(), qdd_ref.data(), n), qdds = max_abs(qdd_ref.data(), n);
+  std::printf("robot stage, foot 1 sliding, foot 0 stuck: qdd %.3g (of %.3g) from the general path's\n", dqdd, qdds);
+  TEST_ASSERT_TRUE(qdds > 1);
+  TEST_ASSERT_TRUE(dqdd <= 1e-10 * qdds);
+
+  // both stuck: the reduced system's kernel; both sliding: the general path
+  Sim &stuck = moving_robot(30);
+  expect_states(stuck, LEGSIM_CONTACT_STUCK, LEGSIM_CONTACT_STUCK);
+  TEST_ASSERT_NOT_NULL(stuck.data.dyn.path.stage);
+  TEST_ASSERT_EQUAL_PTR(stuck.data.dyn.path.reduced, stuck.data.dyn.path.stage);
+  TEST_ASSERT_TRUE(stuck.data.dyn.path.stage != kernel_find_slide(stuck.model.kernel, 0));
+  TEST_ASSERT_TRUE(stuck.data.dyn.path.stage != kernel_find_slide(stuck.model.kernel, 1));
+  Sim &both = slippery_robot(100);
+  expect_states(both, LEGSIM_CONTACT_SLIDING, LEGSIM_CONTACT_SLIDING);
+  TEST_ASSERT_NULL(both.data.dyn.path.stage);
+  TEST_ASSERT_NULL(stage_plan(both.model, both.data, both.data.dyn).kernel);
+}
 #endif
 }  // namespace
 
@@ -300,6 +377,7 @@ int main(void) {
   RUN_TEST(test_contact_rows_as_a_pin);
 #ifdef HAVE_ROBOT
   RUN_TEST(test_stage_with_feet_as_pins);
+  RUN_TEST(test_stage_with_one_foot_sliding);
 #endif
   return UNITY_END();
 }
