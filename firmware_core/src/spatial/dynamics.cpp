@@ -237,54 +237,13 @@ bool envelope_cholesky_lanes(int n, const int *first, const int *off, T *A, cons
   if constexpr (lanes(T{}) == 1) {
     return envelope_cholesky(n, first, off, A, floor[0]);
   } else {
-    for (int i = 0; i < n; ++i) {
-      T *ri = A + off[i];
-      const int fi = first[i];
-      auto from = [&](int j) { return fi > first[j] ? fi : first[j]; };
-      T d = ri[i];
-      for (int j = fi; j < i;) {
-        const T *r0 = A + off[j];
-        const int k0 = from(j);
-        if (j + 3 < i && from(j + 1) == k0 && from(j + 2) == k0 && from(j + 3) == k0) {
-          const T *r1 = A + off[j + 1], *r2 = A + off[j + 2], *r3 = A + off[j + 3];
-          T s0 = ri[j], s1 = ri[j + 1], s2 = ri[j + 2], s3 = ri[j + 3];
-          for (int k = k0; k < j; ++k) {
-            const T a = ri[k];
-            s0 -= a * r0[k], s1 -= a * r1[k], s2 -= a * r2[k], s3 -= a * r3[k];
-          }
-          const T l0 = ri[j] = s0 / r0[j];
-          s1 -= l0 * r1[j], s2 -= l0 * r2[j], s3 -= l0 * r3[j];
-          const T l1 = ri[j + 1] = s1 / r1[j + 1];
-          s2 -= l1 * r2[j + 1], s3 -= l1 * r3[j + 1];
-          const T l2 = ri[j + 2] = s2 / r2[j + 2];
-          const T l3 = ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
-          d -= l0 * l0, d -= l1 * l1, d -= l2 * l2, d -= l3 * l3;
-          j += 4;
-        } else if (j + 1 < i && from(j + 1) == k0) {
-          const T *r1 = A + off[j + 1];
-          T s0 = ri[j], s1 = ri[j + 1];
-          for (int k = k0; k < j; ++k) {
-            const T a = ri[k];
-            s0 -= a * r0[k], s1 -= a * r1[k];
-          }
-          const T l0 = ri[j] = s0 / r0[j];
-          const T l1 = ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
-          d -= l0 * l0, d -= l1 * l1;
-          j += 2;
-        } else {
-          T s = ri[j];
-          for (int k = k0; k < j; ++k) s -= ri[k] * r0[k];
-          const T l0 = ri[j] = s / r0[j];
-          d -= l0 * l0;
-          ++j;
-        }
-      }
+    return envelope_cholesky_with(n, first, off, A, [floor](T d, T &l) {
       for (int c = 0; c < lanes(T{}); ++c) {
         if (!(lane(d, c) > floor[c])) return false;
-        set_lane(ri[i], c, std::sqrt(lane(d, c)));
+        set_lane(l, c, std::sqrt(lane(d, c)));
       }
-    }
-    return true;
+      return true;
+    });
   }
 }
 

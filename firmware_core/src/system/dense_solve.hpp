@@ -59,58 +59,69 @@ inline bool dense_cholesky(int n, legsim_real *A, legsim_real floor) {
 
 // dense_cholesky in envelope storage: row i of A holds its columns first[i] .. i at A + off[i]
 // (A(i, j) = A[off[i] + j]), L there on return. Row i of L is zero left of first[i] (no fill
-// outside the envelope), so the sums skip only zeros: dense_cholesky's result.
-inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_real *A, legsim_real floor) {
+// outside the envelope), so the sums skip only zeros: dense_cholesky's result. T: a real, or
+// several in the lanes of a vector (each lane the scalar's operations in its order: the spatial
+// module's legs two at a time); pivot(d, L_ii) sets L_ii from row i's remaining diagonal d and
+// returns false where d is not above its floor.
+template <typename T, typename Pivot>
+inline bool envelope_cholesky_with(int n, const int *first, const int *off, T *A, Pivot pivot) {
   for (int i = 0; i < n; ++i) {
-    legsim_real *ri = A + off[i];
+    T *ri = A + off[i];
     const int fi = first[i];
     // the first column of row i's sum with row j (both envelopes)
     auto from = [&](int j) { return fi > first[j] ? fi : first[j]; };
-    legsim_real d = ri[i];  // less the squares of the row's entries, as they come
+    T d = ri[i];  // less the squares of the row's entries, as they come
     for (int j = fi; j < i;) {
-      const legsim_real *r0 = A + off[j];
+      const T *r0 = A + off[j];
       const int k0 = from(j);
       // four columns, then two, at a time when their sums start together (then run over
       // [k0, j) together and each over its own tail, each in k's order): each ri[k] loaded
       // once for them all
       if (j + 3 < i && from(j + 1) == k0 && from(j + 2) == k0 && from(j + 3) == k0) {
-        const legsim_real *r1 = A + off[j + 1], *r2 = A + off[j + 2], *r3 = A + off[j + 3];
-        legsim_real s0 = ri[j], s1 = ri[j + 1], s2 = ri[j + 2], s3 = ri[j + 3];
+        const T *r1 = A + off[j + 1], *r2 = A + off[j + 2], *r3 = A + off[j + 3];
+        T s0 = ri[j], s1 = ri[j + 1], s2 = ri[j + 2], s3 = ri[j + 3];
         for (int k = k0; k < j; ++k) {
-          const legsim_real a = ri[k];
+          const T a = ri[k];
           s0 -= a * r0[k], s1 -= a * r1[k], s2 -= a * r2[k], s3 -= a * r3[k];
         }
-        const legsim_real l0 = ri[j] = s0 / r0[j];
+        const T l0 = ri[j] = s0 / r0[j];
         s1 -= l0 * r1[j], s2 -= l0 * r2[j], s3 -= l0 * r3[j];
-        const legsim_real l1 = ri[j + 1] = s1 / r1[j + 1];
+        const T l1 = ri[j + 1] = s1 / r1[j + 1];
         s2 -= l1 * r2[j + 1], s3 -= l1 * r3[j + 1];
-        const legsim_real l2 = ri[j + 2] = s2 / r2[j + 2];
-        const legsim_real l3 = ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
+        const T l2 = ri[j + 2] = s2 / r2[j + 2];
+        const T l3 = ri[j + 3] = (s3 - l2 * r3[j + 2]) / r3[j + 3];
         d -= l0 * l0, d -= l1 * l1, d -= l2 * l2, d -= l3 * l3;
         j += 4;
       } else if (j + 1 < i && from(j + 1) == k0) {
-        const legsim_real *r1 = A + off[j + 1];
-        legsim_real s0 = ri[j], s1 = ri[j + 1];
+        const T *r1 = A + off[j + 1];
+        T s0 = ri[j], s1 = ri[j + 1];
         for (int k = k0; k < j; ++k) {
-          const legsim_real a = ri[k];
+          const T a = ri[k];
           s0 -= a * r0[k], s1 -= a * r1[k];
         }
-        const legsim_real l0 = ri[j] = s0 / r0[j];
-        const legsim_real l1 = ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
+        const T l0 = ri[j] = s0 / r0[j];
+        const T l1 = ri[j + 1] = (s1 - l0 * r1[j]) / r1[j + 1];
         d -= l0 * l0, d -= l1 * l1;
         j += 2;
       } else {
-        legsim_real s = ri[j];
+        T s = ri[j];
         for (int k = k0; k < j; ++k) s -= ri[k] * r0[k];
-        const legsim_real l0 = ri[j] = s / r0[j];
+        const T l0 = ri[j] = s / r0[j];
         d -= l0 * l0;
         ++j;
       }
     }
-    if (!(d > floor)) return false;
-    ri[i] = std::sqrt(d);
+    if (!pivot(d, ri[i])) return false;
   }
   return true;
+}
+
+inline bool envelope_cholesky(int n, const int *first, const int *off, legsim_real *A, legsim_real floor) {
+  return envelope_cholesky_with(n, first, off, A, [floor](legsim_real d, legsim_real &l) {
+    if (!(d > floor)) return false;
+    l = std::sqrt(d);
+    return true;
+  });
 }
 
 // L L^T x = b with dense_cholesky's L; b becomes x.
