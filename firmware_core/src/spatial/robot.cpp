@@ -415,8 +415,9 @@ void robot_state(const SpatialRobot &robot, const real *box_q, const real *box_v
 }
 
 namespace {
-// rows.hpp's joint kinds on two legs at once, one in each lane of a pair of reals (lanes.hpp):
-// the same operations in the same order on each lane (the same values as rows.hpp's).
+// Two legs' bodies at once, one in each lane of a pair of reals (lanes.hpp): the vector
+// arithmetic rows.hpp's joint kinds call, each lane doing the scalar's operations in its order
+// (the same values as on one leg).
 using P2 = Pair2;
 struct V2 {
   P2 x, y, z;
@@ -438,13 +439,8 @@ struct Body2 {
   Rot2 R;
   V2 w;
 };
-struct Jet2 {
-  V2 p, pd, pq;
-};
-struct Row2 {
-  P2 phi, gamma;
-  P2 ja[kBodyDof], jb[kBodyDof];
-};
+using Jet2 = JetOf<V2>;
+using Row2 = RowOf<P2>;
 inline V2 pack(const V3 &a, const V3 &b) { return {P2{a.x, b.x}, P2{a.y, b.y}, P2{a.z, b.z}}; }
 inline Body2 pack(const BodyState &a, const BodyState &b) {
   return {pack(a.r, b.r), pack(a.v, b.v), {pack(a.R.c0, b.R.c0), pack(a.R.c1, b.R.c1), pack(a.R.c2, b.R.c2)},
@@ -455,96 +451,22 @@ inline void unpack(const Row2 &r, Row &a, Row &b) {
   for (int i = 0; i < kBodyDof; ++i) a.ja[i] = r.ja[i][0], b.ja[i] = r.ja[i][1];
   for (int i = 0; i < kBodyDof; ++i) a.jb[i] = r.jb[i][0], b.jb[i] = r.jb[i][1];
 }
-inline Jet2 point_jet(const Body2 &B, const V2 &s) {
-  const V2 ws = cross(B.w, s);
-  return {B.r + rotate(B.R, s), B.v + rotate(B.R, ws), rotate(B.R, cross(B.w, ws))};
-}
-inline Jet2 axis_jet(const Body2 &B, const V2 &c) {
-  const V2 wc = cross(B.w, c);
-  return {rotate(B.R, c), rotate(B.R, wc), rotate(B.R, cross(B.w, wc))};
-}
-inline void point_coefficients(const Body2 &B, const V2 &s, const V2 &y, real sign, P2 *j) {
-  const V2 o = cross(s, rotate_back(B.R, y));
-  j[0] += sign * y.x, j[1] += sign * y.y, j[2] += sign * y.z;
-  j[3] += sign * o.x, j[4] += sign * o.y, j[5] += sign * o.z;
-}
-inline void axis_coefficients(const Body2 &B, const V2 &c, const V2 &y, P2 *j) {
-  const V2 o = cross(c, rotate_back(B.R, y));
-  j[3] += o.x, j[4] += o.y, j[5] += o.z;
-}
-inline Row2 row2_zero() { return Row2{}; }
-inline Row2 row_perpendicular(const Body2 &A, const V2 &ca, const Jet2 &a, const Body2 &B, const V2 &cb, const Jet2 &b) {
-  Row2 r = row2_zero();
-  r.phi = dot(a.p, b.p);
-  r.gamma = -(dot(a.pq, b.p) + real(2) * dot(a.pd, b.pd) + dot(a.p, b.pq));
-  axis_coefficients(A, ca, b.p, r.ja);
-  axis_coefficients(B, cb, a.p, r.jb);
-  return r;
-}
-inline Row2 row_along_axis(const Body2 &A, const V2 &sa, const Jet2 &pa, const Body2 &B, const V2 &sb, const Jet2 &pb,
-                           const V2 &c, const Jet2 &y) {
-  const V2 d = pa.p - pb.p, dd = pa.pd - pb.pd, dq = pa.pq - pb.pq;
-  Row2 r = row2_zero();
-  r.phi = dot(d, y.p);
-  r.gamma = -(dot(dq, y.p) + real(2) * dot(dd, y.pd) + dot(d, y.pq));
-  point_coefficients(A, sa, y.p, 1, r.ja);
-  point_coefficients(B, sb, y.p, -1, r.jb);
-  axis_coefficients(B, c, d, r.jb);
-  return r;
-}
-inline Row2 swapped(const Row2 &r) {
-  Row2 o = r;
-  for (int i = 0; i < kBodyDof; ++i) o.ja[i] = r.jb[i], o.jb[i] = r.ja[i];
-  return o;
-}
-void spherical_rows(const Body2 &A, const V2 &sa, const Body2 &B, const V2 &sb, Row2 *out) {
-  const Jet2 pa = point_jet(A, sa), pb = point_jet(B, sb);
-  const V2 d = pa.p - pb.p, dq = pa.pq - pb.pq;
-  const P2 dk[3] = {d.x, d.y, d.z}, dqk[3] = {dq.x, dq.y, dq.z};
-  const V2 ra[3] = {{A.R.c0.x, A.R.c1.x, A.R.c2.x}, {A.R.c0.y, A.R.c1.y, A.R.c2.y}, {A.R.c0.z, A.R.c1.z, A.R.c2.z}};
-  const V2 rb[3] = {{B.R.c0.x, B.R.c1.x, B.R.c2.x}, {B.R.c0.y, B.R.c1.y, B.R.c2.y}, {B.R.c0.z, B.R.c1.z, B.R.c2.z}};
-  for (int k = 0; k < 3; ++k) {
-    Row2 &r = out[k];
-    r.phi = dk[k];
-    r.gamma = -dqk[k];
-    const V2 oa = cross(sa, ra[k]), ob = cross(sb, rb[k]);
-    for (int i = 0; i < 3; ++i) r.ja[i] = P2{} + (i == k ? real(1) : real(0)), r.jb[i] = P2{} + (i == k ? real(-1) : real(0));
-    r.ja[3] = oa.x, r.ja[4] = oa.y, r.ja[5] = oa.z;
-    r.jb[3] = -ob.x, r.jb[4] = -ob.y, r.jb[5] = -ob.z;
-  }
-}
 
 // Joint j of a leg and its twin's (jt) on their bodies A and B packed, in lanes.
 void joint_rows2(const LegJoint &j, const LegJoint &jt, const Body2 &A, const Body2 &B, Row *out) {
   const V2 sa = pack(j.sa, jt.sa), sb = pack(j.sb, jt.sb), ka = pack(j.ka, jt.ka), ub = pack(j.ub, jt.ub),
            nb = pack(j.nb, jt.nb);
   Row2 r[5];
-  switch (j.kind) {
-    case LegJointKind::Revolute: {
-      spherical_rows(A, sa, B, sb, r);
-      const Jet2 k = axis_jet(A, ka);
-      r[3] = row_perpendicular(A, ka, k, B, ub, axis_jet(B, ub));
-      r[4] = row_perpendicular(A, ka, k, B, nb, axis_jet(B, nb));
+  switch (j.kind) {  // robot_rows' calls, on the lanes
+    case LegJointKind::Revolute:
+      revolute_rows(A, sa, ka, B, sb, ub, nb, r);
       break;
-    }
-    case LegJointKind::Cut: {
-      const Jet2 pa = point_jet(A, sa), pb = point_jet(B, sb);
-      r[0] = row_along_axis(A, sa, pa, B, sb, pb, ub, axis_jet(B, ub));
-      r[1] = row_along_axis(A, sa, pa, B, sb, pb, nb, axis_jet(B, nb));
+    case LegJointKind::Cut:
+      planar_cut_rows(A, sa, B, sb, ub, nb, r);
       break;
-    }
-    case LegJointKind::Prismatic: {
-      // prismatic_rows(A, sa, u = ka, n = ub, k = nb, B, sb, n = ub, k = nb)
-      const V2 &ua = ka, &na = ub, &kka = nb, &nbb = ub, &kb = nb;
-      const Jet2 ja_u = axis_jet(A, ua), ja_n = axis_jet(A, na), jb_n = axis_jet(B, nbb), jb_k = axis_jet(B, kb);
-      r[0] = row_perpendicular(A, ua, ja_u, B, nbb, jb_n);
-      r[1] = row_perpendicular(A, ua, ja_u, B, kb, jb_k);
-      r[2] = row_perpendicular(A, na, ja_n, B, kb, jb_k);
-      const Jet2 pb = point_jet(B, sb), pa = point_jet(A, sa);
-      r[3] = swapped(row_along_axis(B, sb, pb, A, sa, pa, na, ja_n));
-      r[4] = swapped(row_along_axis(B, sb, pb, A, sa, pa, kka, axis_jet(A, kka)));
+    case LegJointKind::Prismatic:
+      prismatic_rows(A, sa, ka, ub, nb, B, sb, ub, nb, r);
       break;
-    }
   }
   for (int i = 0; i < j.nrows; ++i) unpack(r[i], out[j.row + i], out[jt.row + i]);
 }
