@@ -582,6 +582,19 @@ legsim_status dynamics_state_factored(const Model &m, Data &d);
 void friction_add(const Model &m, const Data &d, const Layout &layout, const VecQ &q, const VecR &lambda,
                   real sign, VecQ &y);
 void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (&f)[kBodyDof]);
+// friction_column from its body's sin s and cos c (a generated stage passes its own pair):
+// mu_k dir (t, t . perp(p_x u + p_y n)), u = (s, -c), n = (c, s).
+#if defined(__GNUC__)
+__attribute__((always_inline))
+#endif
+inline void friction_column_at(const Model &m, const Data &d, int k, real s, real c, real (&f)[kBodyDof]) {
+  const Vec2 &p = m.contact[k].point;
+  const real spx = p.x() * s + p.y() * c, spy = p.x() * -c + p.y() * s;
+  const real g = real(d.contact[k].slip_dir) * m.mu_k;
+  f[0] = g * m.ground_t.x();
+  f[1] = g * m.ground_t.y();
+  f[2] = g * (m.ground_t.x() * -spy + m.ground_t.y() * spx);
+}
 // Solves (J M^-1 J^T - J M^-1 F E^T) x = rhs in place with the factor of J M^-1 J^T (F: the
 // sliding contacts' friction columns, E: their normal rows) by the Woodbury identity: one
 // extra solve per sliding contact. LEGSIM_ERR_CONTACT when the coupled matrix is singular.

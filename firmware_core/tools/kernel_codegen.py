@@ -1057,7 +1057,7 @@ class Reduced(Kernel):
         assert bs not in self.pinned
         rn = self.orig.index(k.contact_row[c])
         o = [f"  real fc[3];  // contact {c}'s friction column, on body {bs}",
-             f"  friction_column_trig(model, data, {c}, s{bs}, c{bs}, fc);"]
+             f"  friction_column_at(model, data, {c}, s{bs}, c{bs}, fc);"]
         o += [f"  const real mf{x} = -(w[{3 * bs + x}] * fc[{x}]);" for x in range(3)]
         zero = set()
         for i in range(self.m):

@@ -666,13 +666,9 @@ legsim_status contact_transitions(const Model &m, Data &d, bool &changed, double
 // f_i: the generalized force of the friction dir mu_k t at sliding contact i's foot, per
 // unit normal multiplier (the force on the foot is mu_k dir lambda_n t = -dir mu_k N t).
 void friction_column(const Model &m, const Data &d, int k, const VecQ &q, real (&f)[kBodyDof]) {
-  const Contact &c = m.contact[k];
-  const real phi = q[3 * c.body + 2];
-  const Vec2 sp = c.point.x() * axis_u(phi) + c.point.y() * normal_n(phi);
-  const real g = real(d.contact[k].slip_dir) * m.mu_k;
-  f[0] = g * m.ground_t.x();
-  f[1] = g * m.ground_t.y();
-  f[2] = g * m.ground_t.dot(perp(sp));
+  real s, c;
+  sincos_any(q[3 * m.contact[k].body + 2], s, c);  // axis_u's and normal_n's pair
+  friction_column_at(m, d, k, s, c, f);
 }
 
 void friction_add(const Model &m, const Data &d, const Layout &layout, const VecQ &q, const VecR &lambda,

@@ -276,21 +276,6 @@ inline void rows_pin(real a0, real a1, real a2, real b0, real b1, real b2, real 
   g1 = (a0 * gb - b0 * ga) * id;
 }
 
-// A sliding contact k's friction column (friction_column's arithmetic, contact.cpp) from its
-// body's sin s and cos c (the stages' own pair: no sin/cos of its own).
-#if defined(__GNUC__)
-__attribute__((always_inline))
-#endif
-inline void friction_column_trig(const Model &m, const Data &d, int k, real s, real c, real (&f)[kBodyDof]) {
-  const Vec2 &p = m.contact[k].point;
-  // p.x u + p.y n, u = (s, -c), n = (c, s)
-  const real spx = p.x() * s + p.y() * c, spy = p.x() * -c + p.y() * s;
-  const real g = real(d.contact[k].slip_dir) * m.mu_k;
-  f[0] = g * m.ground_t.x();
-  f[1] = g * m.ground_t.y();
-  f[2] = g * (m.ground_t.x() * -spy + m.ground_t.y() * spx);
-}
-
 // The generated kernel for this model's structure (stance: its stance kernel), or nullptr
 // (the general path).
 const Kernel *kernel_find(const Model &model, bool stance = false);
