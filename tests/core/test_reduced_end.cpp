@@ -69,11 +69,13 @@ Sim &moving_leg(const legsim_model_desc *model = &legsim_model_leg_revolute, Dri
 #ifdef HAVE_ROBOT
 // The robot on stuck feet (its stance: joint and contact rows, no pinned body, all its rows
 // in the "reduced" system), three servos holding and the Fig. 7 push, after n steps.
-Sim &moving_robot(int n = 200) {
+// The robot of desc on the ground by RK4, three servos holding and the Fig. 7 push on actuator
+// 0, after n steps.
+Sim &pushed_robot(const legsim_model_desc *desc, int n) {
   legsim_options opt = legsim_default_options();
   opt.integrator = LEGSIM_INTEGRATOR_RK4;
   legsim_sim *sim = nullptr;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &legsim_model_robot_revolute, &opt, &sim));
+  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, desc, &opt, &sim));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, nullptr, 0.0));
   legsim_real len[LEGSIM_MAX_ACTUATORS];
@@ -81,7 +83,10 @@ Sim &moving_robot(int n = 200) {
   for (int a = 1; a < 4; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 185.55));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
-  Sim &s = *reinterpret_cast<Sim *>(sim);
+  return *reinterpret_cast<Sim *>(sim);
+}
+Sim &moving_robot(int n = 200) {
+  Sim &s = pushed_robot(&legsim_model_robot_revolute, n);
   TEST_ASSERT_TRUE_MESSAGE(reduced_available(s.data.dyn), "the robot's stance layout has the reduced solves");
   TEST_ASSERT_EQUAL_INT(2, s.model.nc);
   return s;
@@ -291,18 +296,7 @@ legsim_model_desc slippery;  // outlives the sim
 Sim &slippery_robot(int n) {
   slippery = legsim_model_robot_revolute;
   slippery.ground.mu_static = slippery.ground.mu_kinetic = 0.1;
-  legsim_options opt = legsim_default_options();
-  opt.integrator = LEGSIM_INTEGRATOR_RK4;
-  legsim_sim *sim = nullptr;
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_init(storage, sizeof storage, &slippery, &opt, &sim));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_pose(sim, 0));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_assemble_on_ground(sim, nullptr, 0.0));
-  legsim_real len[LEGSIM_MAX_ACTUATORS];
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_actuator_lengths(sim, len, nullptr));
-  for (int a = 1; a < 4; ++a) TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_length(sim, a, len[a]));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_command_force(sim, 0, 185.55));
-  TEST_ASSERT_EQUAL_INT(LEGSIM_OK, legsim_step(sim, n));
-  Sim &s = *reinterpret_cast<Sim *>(sim);
+  Sim &s = pushed_robot(&slippery, n);
   TEST_ASSERT_EQUAL_INT(2, s.model.nc);
   return s;
 }

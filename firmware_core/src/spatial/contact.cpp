@@ -123,16 +123,13 @@ legsim_status contact_accelerations(const SpatialRobot &robot, const FeetHold &h
   return LEGSIM_OK;
 }
 
-namespace {
-// Foot l's point's acceleration (world) from the bodies' accelerations a at (q, v).
-V3 foot_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a) {
+V3 contact_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a) {
   const int fb = contact_body(robot, l);
   const V3 &pt = contact_point(robot, l);
   const BodyState B = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
   const real *ab = a + kBodyDof * fb;
   return V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, pt)) + point_jet(B, pt).pq;
 }
-}  // namespace
 
 legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground, const real *q, const real *v,
                             const real *Q, uint32_t slipping, FeetHold &hold, V3 *slip_dir, ConeReport &report,
@@ -168,7 +165,7 @@ legsim_status contact_modes(const SpatialRobot &robot, const GroundPlane &ground
   // stops' gaps' (their placeholders 0)
   auto rates = [&](const real *acc, real *out) {
     for (int i = 0; i < nf; ++i) {
-      const V3 pa = foot_acceleration(robot, feet[i], q, v, acc);
+      const V3 pa = contact_acceleration(robot, feet[i], q, v, acc);
       for (int k = 0; k < 3; ++k) out[3 * i + k] = dot(axes[k], pa);
     }
     for (int i = 0; i < ns; ++i) {

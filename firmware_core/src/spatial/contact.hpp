@@ -34,6 +34,9 @@ void ground_frame(const GroundPlane &g, FeetHold &hold);
 // Contact c's point and its velocity (world) at (q, v).
 void foot_motion(const SpatialRobot &robot, int l, const real *q, const real *v, V3 &p, V3 &pv);
 
+// Contact c's point's acceleration (world) from the bodies' accelerations a at (q, v).
+V3 contact_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a);
+
 // The tangential part of a world vector in hold's frame.
 inline V3 tangential(const FeetHold &hold, const V3 &x) { return x - dot(x, hold.normal) * hold.normal; }
 

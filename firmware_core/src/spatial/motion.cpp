@@ -357,15 +357,6 @@ void tally(ConeStats &s, const ConeReport &r) {
   s.max_residual = std::max(s.max_residual, r.residual);
 }
 
-// Contact l's point's acceleration (world) from the bodies' accelerations a at (q, v).
-V3 contact_acceleration(const SpatialRobot &robot, int l, const real *q, const real *v, const real *a) {
-  const int fb = contact_body(robot, l);
-  const V3 &pt = contact_point(robot, l);
-  const BodyState B = body_state(q + kBodyConfig * fb, v + kBodyDof * fb);
-  const real *ab = a + kBodyDof * fb;
-  return V3{ab[0], ab[1], ab[2]} + rotate(B.R, cross({ab[3], ab[4], ab[5]}, pt)) + point_jet(B, pt).pq;
-}
-
 // The modes checked against the cone at d's state (after an event or at the start): when a stuck
 // foot pulls or its force leaves its mu_s cone, the stuck feet's modes are decided on their cones
 // at once (contact_modes: stick, slip and which way, or leave); a sliding foot pulling is let go;
