@@ -69,6 +69,13 @@ Sim &moving_leg(const legsim_model_desc *model = &legsim_model_leg_revolute, Dri
 #ifdef HAVE_ROBOT
 // The robot on stuck feet (its stance: joint and contact rows, no pinned body, all its rows
 // in the "reduced" system), three servos holding and the Fig. 7 push, after n steps.
+// A stage's positions: q moved half a 1 ms step on at v.
+VecQ half_step_on(const VecQ &q0, const VecQ &v, int n) {
+  VecQ q = q0;
+  for (int k = 0; k < n; ++k) q[k] += real(0.0005) * v[k];
+  return q;
+}
+
 // The robot of desc on the ground by RK4, three servos holding and the Fig. 7 push on actuator
 // 0, after n steps.
 Sim &pushed_robot(const legsim_model_desc *desc, int n) {
@@ -279,8 +286,7 @@ void test_stage_with_feet_as_pins(void) {
   TEST_ASSERT_NOT_NULL(plan.kernel);
   const int n = m.nq;
   const VecQ v = drifted(d.qd, n);
-  VecQ q = d.q;
-  for (int k = 0; k < n; ++k) q[k] += real(0.0005) * v[k];
+  const VecQ q = half_step_on(d.q, v, n);
   VecQ qdd, qdd_ref;
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_stage(m, d, plan, q, v, qdd));
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_solve(m, d, lay, q, v, qdd_ref, false, false));
@@ -328,8 +334,7 @@ void test_stage_with_one_foot_sliding(void) {
 
   const int n = m.nq;
   const VecQ v = drifted(d.qd, n);
-  VecQ q = d.q;
-  for (int k = 0; k < n; ++k) q[k] += real(0.0005) * v[k];
+  const VecQ q = half_step_on(d.q, v, n);
   VecQ qdd, qdd_ref;
   TEST_ASSERT_EQUAL_INT(LEGSIM_OK, dynamics_stage(m, d, plan, q, v, qdd));
   TEST_ASSERT_EQUAL_INT(0, legsim_kernel_use(reinterpret_cast<legsim_sim *>(&s), 0));

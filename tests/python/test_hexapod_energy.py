@@ -58,17 +58,23 @@ def test_a_stop_and_a_foot_at_one_instant_take_no_turns():
     contact_impact) runs its 1,000 steps, every stroke inside its stroke and no step's energy gain
     above RK4's own error at this step (4.0e-6 J, as before it failed: below 1e-5 J)."""
     h = legsim.Hexapod.from_toml(legsim.data_path("models/hexapod.toml"))
-    mass = hexapod_energy.bodies_mass(h)
-    rng = np.random.default_rng(1)
-    for _ in range(6):  # the earlier runs' draws
-        hexapod_energy.one_run(h, rng, 0, 1e-3, mass, past=True)
-    r = hexapod_energy.one_run(h, rng, 1000, 1e-3, mass, past=True)
+    r = _campaign_run(h, 6)
     print(f"run 6: {r['status']}, {r['steps']} steps, {r['events']} events, {r['impacts']} impacts, "
           f"{r['stop_impacts']} arrivals on a stop, largest gain {r['gain']:.2e} J")
     assert r["status"] == "ok" and r["steps"] == 1000
     assert r["stop_impacts"] >= 20 and r["impacts"] >= 20
     assert r["past"] <= 1e-12 and r["off_stop"] <= 1e-12
     assert r["gain"] < 1e-5
+
+
+def _campaign_run(h, run, check=None):
+    """Run `run` of the campaign (seed 1, h = 1 ms, past the strokes): its 1,000 steps after the
+    earlier runs' draws."""
+    mass = hexapod_energy.bodies_mass(h)
+    rng = np.random.default_rng(1)
+    for _ in range(run):  # the earlier runs' draws
+        hexapod_energy.one_run(h, rng, 0, 1e-3, mass, past=True)
+    return hexapod_energy.one_run(h, rng, 1000, 1e-3, mass, past=True, check=check)
 
 
 def _contact_invariants(h):
@@ -117,12 +123,8 @@ def test_campaign_runs_that_failed_now_run(run, what):
     gain above RK4's own error at this step (at most 3.9e-5 J over the campaign's OK steps before
     the change)."""
     h = legsim.Hexapod.from_toml(legsim.data_path("models/hexapod.toml"))
-    mass = hexapod_energy.bodies_mass(h)
-    rng = np.random.default_rng(1)
-    for _ in range(run):  # the earlier runs' draws
-        hexapod_energy.one_run(h, rng, 0, 1e-3, mass, past=True)
     worst, check = _contact_invariants(h)
-    r = hexapod_energy.one_run(h, rng, 1000, 1e-3, mass, past=True, check=check)
+    r = _campaign_run(h, run, check)
     print(f"run {run} ({what}): {r['status']}, {r['steps']} steps, {r['events']} events, {r['impacts']} impacts, "
           f"{r['stop_impacts']} arrivals on a stop, largest gain {r['gain']:.2e} J; {worst}")
     assert r["status"] == "ok" and r["steps"] == 1000
